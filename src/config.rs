@@ -1,0 +1,973 @@
+//! The daemon's configuration: RON, strict, validated, with errors that point.
+//!
+//! `config/crowdtouch.ron` is the documented default and is embedded in the binary
+//! ([`Config::embedded_default`]). Unknown fields are errors; every range is checked;
+//! every error names the file, the line and column, and the field. Reads are
+//! size-capped ([`MAX_CONFIG_BYTES`]).
+//!
+//! # Search path (`run` without `--config`)
+//! 1. `$CROWDTOUCH_CONFIG`
+//! 2. `$XDG_CONFIG_HOME/crowdtouch/crowdtouch.ron` (or `~/.config/crowdtouch/crowdtouch.ron`)
+//! 3. `/etc/crowdtouch/crowdtouch.ron`
+//! 4. the embedded default.
+
+use crate::geom::{Rect, Vec2};
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// The config format version this build reads.
+pub const CONFIG_VERSION: u32 = 1;
+/// Largest config file read (bytes).
+pub const MAX_CONFIG_BYTES: u64 = 1 << 20;
+/// Most agents the daemon accepts.
+pub const MAX_AGENTS: u32 = 20_000;
+
+/// The embedded default config text (`config/crowdtouch.ron`).
+pub const DEFAULT_CONFIG_RON: &str = include_str!("../config/crowdtouch.ron");
+
+/// One problem in a config.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ConfigIssue {
+    /// Dotted path of the field (`crowd.agents`), or empty for syntax errors.
+    pub field: String,
+    /// 1-based line, 0 when unknown.
+    pub line: usize,
+    /// 1-based column, 0 when unknown.
+    pub column: usize,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// Why a config could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The file could not be read.
+    #[error("{path}: cannot read config: {source}")]
+    Io {
+        /// File.
+        path: PathBuf,
+        /// Cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is larger than [`MAX_CONFIG_BYTES`].
+    #[error("{path}: config is {size} bytes, more than the {max} byte limit")]
+    TooLarge {
+        /// File.
+        path: PathBuf,
+        /// Its size.
+        size: u64,
+        /// The limit.
+        max: u64,
+    },
+    /// The text is not a valid config; every problem found is listed.
+    #[error("{}", format_issues(.path, .issues))]
+    Invalid {
+        /// File (or `<embedded>` / `<text>`).
+        path: PathBuf,
+        /// Problems, in file order.
+        issues: Vec<ConfigIssue>,
+    },
+}
+
+fn format_issues(path: &Path, issues: &[ConfigIssue]) -> String {
+    let mut s = String::new();
+    for (i, is) in issues.iter().enumerate() {
+        if i > 0 {
+            s.push('\n');
+        }
+        let field = if is.field.is_empty() {
+            String::new()
+        } else {
+            format!(" field `{}`:", is.field)
+        };
+        s.push_str(&format!(
+            "{}:{}:{}:{} {}",
+            path.display(),
+            is.line,
+            is.column,
+            field,
+            is.message
+        ));
+    }
+    s
+}
+
+/// Log verbosity.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LogLevel {
+    /// Errors only.
+    Error,
+    /// Warnings and errors.
+    Warn,
+    /// Normal operation.
+    Info,
+    /// Developer detail.
+    Debug,
+    /// Everything.
+    Trace,
+}
+
+impl LogLevel {
+    /// As a `log` filter.
+    pub fn filter(self) -> log::LevelFilter {
+        match self {
+            LogLevel::Error => log::LevelFilter::Error,
+            LogLevel::Warn => log::LevelFilter::Warn,
+            LogLevel::Info => log::LevelFilter::Info,
+            LogLevel::Debug => log::LevelFilter::Debug,
+            LogLevel::Trace => log::LevelFilter::Trace,
+        }
+    }
+}
+
+/// One input source.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum InputConfig {
+    /// Replay recordings (the recorded-input simulator), through the same thread and
+    /// queue a device uses.
+    Replay {
+        /// Recording files, played in order (relative paths are relative to the config file).
+        files: Vec<PathBuf>,
+        /// Start again after the last file.
+        #[serde(default)]
+        looped: bool,
+        /// Pause between files (ms).
+        #[serde(default = "default_gap_ms")]
+        gap_ms: u64,
+        /// Reset the crowd (agents walk back) before each file.
+        #[serde(default)]
+        reset_between: bool,
+    },
+}
+
+fn default_gap_ms() -> u64 {
+    1000
+}
+
+/// How the touch surface maps onto the world.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceConfig {
+    /// The world rectangle the whole surface shows (m).
+    pub world: Rect,
+    /// Physical size of the surface (mm), used when the device does not report its
+    /// resolution. `None` assumes 1 mm per 1/1000 of the width.
+    #[serde(default)]
+    pub size_mm: Option<(f64, f64)>,
+}
+
+/// The crowd.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CrowdConfig {
+    /// Number of agents.
+    pub agents: u32,
+    /// Agent radius (m); agents push each other apart below twice this distance.
+    pub agent_radius_m: f64,
+    /// Maximum agent speed (m/s).
+    pub max_speed_m_s: f64,
+    /// Maximum agent acceleration (m/s²).
+    pub max_accel_m_s2: f64,
+    /// Proportional gain of the PD controller towards the goal (1/s²).
+    pub kp_per_s2: f64,
+    /// Derivative gain of the PD controller (1/s).
+    pub kd_per_s: f64,
+    /// Stiffness of the spring-mass push-back between overlapping agents (1/s²).
+    pub push_stiffness_per_s2: f64,
+    /// Initial formation: rectangle the crowd fills at start and after a reset (m).
+    pub formation: Rect,
+}
+
+/// The deformable mesh.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshConfig {
+    /// Vertices along x.
+    pub cols: u32,
+    /// Vertices along y.
+    pub rows: u32,
+    /// Weight of a finger's own vertex in the ARAP solve (hard-ish constraint).
+    pub handle_weight: f64,
+    /// Weight of supplementary line/area points (soft constraints).
+    pub soft_weight: f64,
+}
+
+/// Grouping touches into controls and gestures.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControlsConfig {
+    /// Fingers landing within this window of a control's first finger join it (ms).
+    pub group_window_ms: u64,
+    /// ...and only if within this distance of one of its fingers on the surface (mm).
+    pub hand_span_mm: f64,
+    /// A touch grabs the crowd if it lands within this distance of the mesh (m).
+    pub grab_radius_m: f64,
+    /// A gesture ends this long after its last finger lifts (ms).
+    pub gesture_grace_ms: u64,
+    /// Spacing of check points along a finger's trajectory (m).
+    pub checkpoint_spacing_m: f64,
+    /// Fastest a constraint may move towards its finger (m/s).
+    pub max_constraint_speed_m_s: f64,
+    /// Gain of the opposing force that slows constraints while agents lag (1/s):
+    /// force = gain × mean agent-to-goal distance, never more than the constraint speed.
+    pub opposing_gain_per_s: f64,
+}
+
+/// Cost of sending an agent to a goal.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum AssignmentCost {
+    /// Squared Euclidean distance: stable, crossing-free assignments (default).
+    SquaredDistance,
+    /// Euclidean distance (the paper's travel length with no scene).
+    Distance,
+}
+
+/// How often the optimal assignment is refreshed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AssignmentConfig {
+    /// Cost function.
+    pub cost: AssignmentCost,
+    /// Solve on a worker thread; the control thread uses the newest result (true), or
+    /// solve inside the tick (false; replays always solve inside the tick).
+    pub worker: bool,
+}
+
+/// Per-stage budgets (µs): overruns are counted, logged at a rate limit and published.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BudgetsConfig {
+    /// Kernel timestamp → frame on the queue.
+    pub input_us: u64,
+    /// Frame on the queue → control thread picks it up.
+    pub queue_us: u64,
+    /// One control tick (segment + deform + step + snapshot).
+    pub control_us: u64,
+    /// Serialising a snapshot.
+    pub publish_us: u64,
+    /// Kernel timestamp → snapshot bytes written to a client.
+    pub end_to_end_us: u64,
+    /// One assignment solve on the worker.
+    pub assignment_us: u64,
+}
+
+/// Threads and queues.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PipelineConfig {
+    /// Control ticks per second when no input arrives (input frames also tick).
+    pub tick_hz: f64,
+    /// Capacity of the input → control queue (frames).
+    pub queue_frames: u32,
+    /// Stage budgets.
+    pub budgets: BudgetsConfig,
+    /// How often `stats` is published (ms).
+    pub stats_interval_ms: u64,
+}
+
+/// The Unix socket.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SocketConfig {
+    /// Socket path; `None` uses `$RUNTIME_DIRECTORY/crowdtouch.sock` under systemd,
+    /// else `$XDG_RUNTIME_DIR/crowdtouch.sock`, else `/tmp/crowdtouch-$UID.sock`.
+    #[serde(default)]
+    pub path: Option<PathBuf>,
+    /// File mode of the socket, octal as a string ("0660").
+    pub mode: String,
+    /// Group owning the socket, `None` to keep the process's group.
+    #[serde(default)]
+    pub group: Option<String>,
+    /// Snapshots queued per client before the oldest are dropped.
+    pub client_queue: u32,
+    /// Most clients at once.
+    pub max_clients: u32,
+}
+
+impl SocketConfig {
+    /// The socket mode as a number.
+    pub fn mode_bits(&self) -> u32 {
+        u32::from_str_radix(self.mode.trim_start_matches("0o"), 8).unwrap_or(0o660)
+    }
+
+    /// The socket path this config resolves to in the current environment.
+    pub fn resolved_path(&self) -> PathBuf {
+        if let Some(p) = &self.path {
+            return p.clone();
+        }
+        if let Some(dir) = std::env::var_os("RUNTIME_DIRECTORY") {
+            // systemd may list several directories separated by ':'.
+            let first = dir.to_string_lossy().split(':').next().unwrap_or("").to_string();
+            if !first.is_empty() {
+                return PathBuf::from(first).join("crowdtouch.sock");
+            }
+        }
+        if let Some(dir) = std::env::var_os("XDG_RUNTIME_DIR") {
+            return PathBuf::from(dir).join("crowdtouch.sock");
+        }
+        PathBuf::from(format!("/tmp/crowdtouch-{}.sock", nix::unistd::getuid()))
+    }
+}
+
+/// The whole config.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    /// Format version; must be [`CONFIG_VERSION`].
+    pub version: u32,
+    /// Log verbosity (`RUST_LOG` overrides).
+    pub log_level: LogLevel,
+    /// Input sources.
+    pub inputs: Vec<InputConfig>,
+    /// Surface to world mapping.
+    pub surface: SurfaceConfig,
+    /// The crowd.
+    pub crowd: CrowdConfig,
+    /// The deformable mesh.
+    pub mesh: MeshConfig,
+    /// Controls and gestures.
+    pub controls: ControlsConfig,
+    /// Agent-to-goal assignment.
+    pub assignment: AssignmentConfig,
+    /// Threads, queues and budgets.
+    pub pipeline: PipelineConfig,
+    /// The Unix socket.
+    pub socket: SocketConfig,
+}
+
+impl Config {
+    /// The embedded default (`config/crowdtouch.ron`).
+    pub fn embedded_default() -> Config {
+        match Config::from_str(DEFAULT_CONFIG_RON, Path::new("<embedded>")) {
+            Ok(c) => c,
+            // The shipped file is checked by tests; reaching this is a build defect.
+            Err(e) => panic!("embedded default config is invalid: {e}"),
+        }
+    }
+
+    /// Reads and validates a config file. Relative input paths are resolved against
+    /// the file's directory.
+    ///
+    /// # Errors
+    /// [`Error::Io`], [`Error::TooLarge`] or [`Error::Invalid`] with every problem.
+    pub fn load(path: &Path) -> Result<Config, Error> {
+        let meta = std::fs::metadata(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        if meta.len() > MAX_CONFIG_BYTES {
+            return Err(Error::TooLarge {
+                path: path.to_path_buf(),
+                size: meta.len(),
+                max: MAX_CONFIG_BYTES,
+            });
+        }
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut cfg = Config::from_str(&text, path)?;
+        let base = path.parent().unwrap_or(Path::new("."));
+        cfg.resolve_paths(base);
+        Ok(cfg)
+    }
+
+    /// Parses and validates config text; `path` is used in messages only.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] listing every problem with line, column and field.
+    #[allow(clippy::should_implement_trait)]
+    pub fn from_str(text: &str, path: &Path) -> Result<Config, Error> {
+        let cfg: Config = match ron::Options::default().from_str(text) {
+            Ok(c) => c,
+            Err(e) => {
+                let field = field_of_ron_error(&e.code, text, e.position);
+                return Err(Error::Invalid {
+                    path: path.to_path_buf(),
+                    issues: vec![ConfigIssue {
+                        field,
+                        line: e.position.line,
+                        column: e.position.col,
+                        message: e.code.to_string(),
+                    }],
+                });
+            }
+        };
+        let problems = cfg.validate();
+        if problems.is_empty() {
+            Ok(cfg)
+        } else {
+            let mut issues: Vec<ConfigIssue> = problems
+                .into_iter()
+                .map(|(field, message)| {
+                    let (line, column) = locate_field(text, &field).unwrap_or((0, 0));
+                    ConfigIssue { field, line, column, message }
+                })
+                .collect();
+            issues.sort_by_key(|i| (i.line, i.column));
+            Err(Error::Invalid {
+                path: path.to_path_buf(),
+                issues,
+            })
+        }
+    }
+
+    fn resolve_paths(&mut self, base: &Path) {
+        for input in &mut self.inputs {
+            match input {
+                InputConfig::Replay { files, .. } => {
+                    for f in files.iter_mut() {
+                        if f.is_relative() {
+                            *f = base.join(&*f);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Range checks; returns `(field path, message)` for every problem.
+    pub fn validate(&self) -> Vec<(String, String)> {
+        let mut p = Vec::new();
+        let mut check = |ok: bool, field: &str, msg: String| {
+            if !ok {
+                p.push((field.to_string(), msg));
+            }
+        };
+        check(
+            self.version == CONFIG_VERSION,
+            "version",
+            format!("version {} is not supported (this build reads version {CONFIG_VERSION})", self.version),
+        );
+        let w = &self.surface.world;
+        check(
+            finite_rect(w) && w.width() > 0.0 && w.height() > 0.0,
+            "surface.world",
+            format!("world rectangle must have finite min < max, got {:?} .. {:?}", w.min, w.max),
+        );
+        if let Some((mw, mh)) = self.surface.size_mm {
+            check(
+                mw.is_finite() && mh.is_finite() && mw > 0.0 && mh > 0.0,
+                "surface.size_mm",
+                format!("surface size must be positive millimetres, got ({mw}, {mh})"),
+            );
+        }
+        let c = &self.crowd;
+        check(
+            (1..=MAX_AGENTS).contains(&c.agents),
+            "crowd.agents",
+            format!("agent count must be 1..={MAX_AGENTS}, got {}", c.agents),
+        );
+        check(
+            c.agent_radius_m > 0.0 && c.agent_radius_m <= 5.0,
+            "crowd.agent_radius_m",
+            format!("agent radius must be in (0, 5] m, got {}", c.agent_radius_m),
+        );
+        check(
+            c.max_speed_m_s > 0.0 && c.max_speed_m_s <= 50.0,
+            "crowd.max_speed_m_s",
+            format!("max speed must be in (0, 50] m/s, got {}", c.max_speed_m_s),
+        );
+        check(
+            c.max_accel_m_s2 > 0.0 && c.max_accel_m_s2 <= 1000.0,
+            "crowd.max_accel_m_s2",
+            format!("max acceleration must be in (0, 1000] m/s², got {}", c.max_accel_m_s2),
+        );
+        check(
+            c.kp_per_s2 > 0.0 && c.kp_per_s2.is_finite(),
+            "crowd.kp_per_s2",
+            format!("kp must be positive, got {}", c.kp_per_s2),
+        );
+        check(
+            c.kd_per_s >= 0.0 && c.kd_per_s.is_finite(),
+            "crowd.kd_per_s",
+            format!("kd must be zero or positive, got {}", c.kd_per_s),
+        );
+        check(
+            c.push_stiffness_per_s2 >= 0.0 && c.push_stiffness_per_s2.is_finite(),
+            "crowd.push_stiffness_per_s2",
+            format!("push stiffness must be zero or positive, got {}", c.push_stiffness_per_s2),
+        );
+        let f = &c.formation;
+        check(
+            finite_rect(f) && f.width() > 0.0 && f.height() > 0.0,
+            "crowd.formation",
+            format!("formation rectangle must have finite min < max, got {:?} .. {:?}", f.min, f.max),
+        );
+        let m = &self.mesh;
+        check(
+            (2..=200).contains(&m.cols),
+            "mesh.cols",
+            format!("mesh columns must be 2..=200, got {}", m.cols),
+        );
+        check(
+            (2..=200).contains(&m.rows),
+            "mesh.rows",
+            format!("mesh rows must be 2..=200, got {}", m.rows),
+        );
+        check(
+            m.handle_weight > 0.0 && m.handle_weight.is_finite(),
+            "mesh.handle_weight",
+            format!("handle weight must be positive, got {}", m.handle_weight),
+        );
+        check(
+            m.soft_weight > 0.0 && m.soft_weight.is_finite(),
+            "mesh.soft_weight",
+            format!("soft weight must be positive, got {}", m.soft_weight),
+        );
+        let k = &self.controls;
+        check(
+            k.group_window_ms <= 5_000,
+            "controls.group_window_ms",
+            format!("group window must be at most 5000 ms, got {}", k.group_window_ms),
+        );
+        check(
+            k.hand_span_mm > 0.0 && k.hand_span_mm.is_finite(),
+            "controls.hand_span_mm",
+            format!("hand span must be positive millimetres, got {}", k.hand_span_mm),
+        );
+        check(
+            k.grab_radius_m >= 0.0 && k.grab_radius_m.is_finite(),
+            "controls.grab_radius_m",
+            format!("grab radius must be zero or positive, got {}", k.grab_radius_m),
+        );
+        check(
+            k.gesture_grace_ms <= 10_000,
+            "controls.gesture_grace_ms",
+            format!("gesture grace must be at most 10000 ms, got {}", k.gesture_grace_ms),
+        );
+        check(
+            k.checkpoint_spacing_m > 0.0 && k.checkpoint_spacing_m.is_finite(),
+            "controls.checkpoint_spacing_m",
+            format!("check point spacing must be positive, got {}", k.checkpoint_spacing_m),
+        );
+        check(
+            k.max_constraint_speed_m_s > 0.0 && k.max_constraint_speed_m_s.is_finite(),
+            "controls.max_constraint_speed_m_s",
+            format!("max constraint speed must be positive, got {}", k.max_constraint_speed_m_s),
+        );
+        check(
+            k.opposing_gain_per_s >= 0.0 && k.opposing_gain_per_s.is_finite(),
+            "controls.opposing_gain_per_s",
+            format!("opposing gain must be zero or positive, got {}", k.opposing_gain_per_s),
+        );
+        let pl = &self.pipeline;
+        check(
+            pl.tick_hz >= 1.0 && pl.tick_hz <= 2000.0,
+            "pipeline.tick_hz",
+            format!("tick rate must be 1..=2000 Hz, got {}", pl.tick_hz),
+        );
+        check(
+            (2..=65_536).contains(&pl.queue_frames),
+            "pipeline.queue_frames",
+            format!("queue must hold 2..=65536 frames, got {}", pl.queue_frames),
+        );
+        check(
+            (100..=3_600_000).contains(&pl.stats_interval_ms),
+            "pipeline.stats_interval_ms",
+            format!("stats interval must be 100..=3600000 ms, got {}", pl.stats_interval_ms),
+        );
+        let b = &pl.budgets;
+        for (name, v) in [
+            ("input_us", b.input_us),
+            ("queue_us", b.queue_us),
+            ("control_us", b.control_us),
+            ("publish_us", b.publish_us),
+            ("end_to_end_us", b.end_to_end_us),
+            ("assignment_us", b.assignment_us),
+        ] {
+            check(
+                v > 0,
+                &format!("pipeline.budgets.{name}"),
+                "budget must be positive microseconds".to_string(),
+            );
+        }
+        let s = &self.socket;
+        check(
+            u32::from_str_radix(s.mode.trim_start_matches("0o"), 8)
+                .map(|m| m <= 0o777)
+                .unwrap_or(false),
+            "socket.mode",
+            format!("socket mode must be octal like \"0660\", got {:?}", s.mode),
+        );
+        check(
+            (1..=4096).contains(&s.client_queue),
+            "socket.client_queue",
+            format!("client queue must be 1..=4096 snapshots, got {}", s.client_queue),
+        );
+        check(
+            (1..=1024).contains(&s.max_clients),
+            "socket.max_clients",
+            format!("max clients must be 1..=1024, got {}", s.max_clients),
+        );
+        if let Some(g) = &s.group {
+            check(!g.is_empty(), "socket.group", "group name is empty".to_string());
+        }
+        for (i, input) in self.inputs.iter().enumerate() {
+            match input {
+                InputConfig::Replay { files, .. } => check(
+                    !files.is_empty(),
+                    &format!("inputs[{i}].files"),
+                    "a replay input needs at least one file".to_string(),
+                ),
+            }
+        }
+        p
+    }
+
+    /// Metres in the world per millimetre on the surface, per axis.
+    pub fn world_per_mm(&self, surface_mm: Option<(f64, f64)>) -> Vec2 {
+        let (w_mm, h_mm) = surface_mm
+            .or(self.surface.size_mm)
+            .unwrap_or((1000.0, 1000.0 * self.surface.world.height() / self.surface.world.width()));
+        Vec2::new(
+            self.surface.world.width() / w_mm,
+            self.surface.world.height() / h_mm,
+        )
+    }
+}
+
+fn finite_rect(r: &Rect) -> bool {
+    r.min.iter().chain(r.max.iter()).all(|v| v.is_finite())
+}
+
+/// Best-effort field name for a ron parse error.
+fn field_of_ron_error(code: &ron::error::Error, text: &str, pos: ron::error::Position) -> String {
+    use ron::error::Error as E;
+    match code {
+        E::NoSuchStructField { found, .. } => {
+            let path = enclosing_path(text, pos.line, pos.col);
+            if path == *found || path.ends_with(&format!(".{found}")) {
+                path
+            } else {
+                join_path(&path, found)
+            }
+        }
+        E::MissingStructField { field, .. } | E::DuplicateStructField { field, .. } => {
+            let path = enclosing_path(text, pos.line, pos.col);
+            join_path(&path, field)
+        }
+        _ => enclosing_path(text, pos.line, pos.col),
+    }
+}
+
+fn join_path(parent: &str, field: &str) -> String {
+    if parent.is_empty() {
+        field.to_string()
+    } else {
+        format!("{parent}.{field}")
+    }
+}
+
+/// A token of the RON text with its position: identifiers followed by `:` open a
+/// field, brackets nest.
+struct Scanner<'a> {
+    text: &'a str,
+}
+
+#[derive(Debug, Clone)]
+enum Tok {
+    Field(String),
+    Open(char),
+    Close,
+    Comma,
+}
+
+impl<'a> Scanner<'a> {
+    /// Tokens (fields, brackets, commas) with 1-based line/column, skipping strings and comments.
+    fn tokens(&self) -> Vec<(Tok, usize, usize)> {
+        let mut out = Vec::new();
+        let chars: Vec<char> = self.text.chars().collect();
+        let (mut i, mut line, mut col) = (0usize, 1usize, 1usize);
+        fn adv(chars: &[char], i: &mut usize, line: &mut usize, col: &mut usize) {
+            let c = chars[*i];
+            *i += 1;
+            if c == '\n' {
+                *line += 1;
+                *col = 1;
+            } else {
+                *col += 1;
+            }
+        }
+        while i < chars.len() {
+            let c = chars[i];
+            if c == '/' && chars.get(i + 1) == Some(&'/') {
+                while i < chars.len() && chars[i] != '\n' {
+                    adv(&chars, &mut i, &mut line, &mut col);
+                }
+                continue;
+            }
+            if c == '/' && chars.get(i + 1) == Some(&'*') {
+                while i < chars.len() && !(chars[i] == '*' && chars.get(i + 1) == Some(&'/')) {
+                    adv(&chars, &mut i, &mut line, &mut col);
+                }
+                for _ in 0..2 {
+                    if i < chars.len() {
+                        adv(&chars, &mut i, &mut line, &mut col);
+                    }
+                }
+                continue;
+            }
+            if c == '"' {
+                adv(&chars, &mut i, &mut line, &mut col);
+                while i < chars.len() && chars[i] != '"' {
+                    if chars[i] == '\\' {
+                        adv(&chars, &mut i, &mut line, &mut col);
+                    }
+                    if i < chars.len() {
+                        adv(&chars, &mut i, &mut line, &mut col);
+                    }
+                }
+                if i < chars.len() {
+                    adv(&chars, &mut i, &mut line, &mut col);
+                }
+                continue;
+            }
+            if c.is_alphabetic() || c == '_' {
+                let (sl, sc) = (line, col);
+                let mut ident = String::new();
+                while i < chars.len() && (chars[i].is_alphanumeric() || chars[i] == '_') {
+                    ident.push(chars[i]);
+                    adv(&chars, &mut i, &mut line, &mut col);
+                }
+                let mut j = i;
+                while j < chars.len() && (chars[j] == ' ' || chars[j] == '\t') {
+                    j += 1;
+                }
+                if chars.get(j) == Some(&':') {
+                    out.push((Tok::Field(ident), sl, sc));
+                }
+                continue;
+            }
+            match c {
+                '(' | '[' | '{' => out.push((Tok::Open(c), line, col)),
+                ')' | ']' | '}' => out.push((Tok::Close, line, col)),
+                ',' => out.push((Tok::Comma, line, col)),
+                _ => {}
+            }
+            adv(&chars, &mut i, &mut line, &mut col);
+        }
+        out
+    }
+}
+
+/// Walks the token stream, yielding `(path, line, col)` for every field.
+fn field_positions(text: &str) -> Vec<(String, usize, usize)> {
+    let toks = Scanner { text }.tokens();
+    // Stack of (field name for this nesting level, list index when inside [ ]).
+    let mut stack: Vec<(Option<String>, Option<usize>)> = Vec::new();
+    let mut pending: Option<String> = None;
+    let mut out = Vec::new();
+    let path_of = |stack: &[(Option<String>, Option<usize>)]| -> String {
+        let mut s = String::new();
+        for (name, idx) in stack {
+            if let Some(n) = name {
+                if !s.is_empty() {
+                    s.push('.');
+                }
+                s.push_str(n);
+            }
+            if let Some(i) = idx {
+                s.push_str(&format!("[{i}]"));
+            }
+        }
+        s
+    };
+    for (tok, line, col) in toks {
+        match tok {
+            Tok::Field(name) => {
+                let parent = path_of(&stack);
+                out.push((join_path(&parent, &name), line, col));
+                pending = Some(name);
+            }
+            Tok::Open(ch) => {
+                let idx = if ch == '[' { Some(0) } else { None };
+                stack.push((pending.take(), idx));
+            }
+            Tok::Close => {
+                stack.pop();
+                pending = None;
+            }
+            Tok::Comma => {
+                pending = None;
+                if let Some((_, Some(i))) = stack.last_mut() {
+                    *i += 1;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Line and column of a field given by its dotted path (`crowd.agents`), or of its
+/// nearest enclosing field that appears in the text.
+pub fn locate_field(text: &str, path: &str) -> Option<(usize, usize)> {
+    let fields = field_positions(text);
+    let mut p = path.to_string();
+    loop {
+        if let Some((_, l, c)) = fields.iter().find(|(fp, _, _)| *fp == p) {
+            return Some((*l, *c));
+        }
+        // Strip the last component ("a.b[2].c" -> "a.b[2]" -> "a.b" -> "a").
+        if let Some(i) = p.rfind(['.', '[']) {
+            p.truncate(i);
+        } else {
+            return None;
+        }
+    }
+}
+
+/// Dotted path of the innermost field enclosing a position.
+fn enclosing_path(text: &str, line: usize, col: usize) -> String {
+    let toks = Scanner { text }.tokens();
+    let mut stack: Vec<(Option<String>, Option<usize>)> = Vec::new();
+    let mut pending: Option<String> = None;
+    for (tok, l, c) in toks {
+        if (l, c) >= (line, col) {
+            break;
+        }
+        match tok {
+            Tok::Field(name) => pending = Some(name),
+            Tok::Open(ch) => stack.push((pending.take(), (ch == '[').then_some(0))),
+            Tok::Close => {
+                stack.pop();
+                pending = None;
+            }
+            Tok::Comma => {
+                pending = None;
+                if let Some((_, Some(i))) = stack.last_mut() {
+                    *i += 1;
+                }
+            }
+        }
+    }
+    let mut s = String::new();
+    for (name, idx) in &stack {
+        if let Some(n) = name {
+            if !s.is_empty() {
+                s.push('.');
+            }
+            s.push_str(n);
+        }
+        if let Some(i) = idx {
+            s.push_str(&format!("[{i}]"));
+        }
+    }
+    if let Some(n) = pending {
+        s = join_path(&s, &n);
+    }
+    s
+}
+
+/// Where `run` looks for its config when `--config` is not given, in order.
+pub fn search_path() -> Vec<PathBuf> {
+    let mut v = Vec::new();
+    if let Some(p) = std::env::var_os("CROWDTOUCH_CONFIG") {
+        v.push(PathBuf::from(p));
+    }
+    if let Some(d) = std::env::var_os("XDG_CONFIG_HOME") {
+        v.push(PathBuf::from(d).join("crowdtouch/crowdtouch.ron"));
+    } else if let Some(h) = std::env::var_os("HOME") {
+        v.push(PathBuf::from(h).join(".config/crowdtouch/crowdtouch.ron"));
+    }
+    v.push(PathBuf::from("/etc/crowdtouch/crowdtouch.ron"));
+    v
+}
+
+impl fmt::Display for ConfigIssue {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}: field `{}`: {}", self.line, self.column, self.field, self.message)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn issues(text: &str) -> Vec<ConfigIssue> {
+        match Config::from_str(text, Path::new("t.ron")) {
+            Err(Error::Invalid { issues, .. }) => issues,
+            other => panic!("expected invalid, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn embedded_default_is_valid() {
+        let c = Config::embedded_default();
+        assert_eq!(c.crowd.agents, 100);
+        assert_eq!(c.controls.group_window_ms, 150);
+    }
+
+    #[test]
+    fn out_of_range_values_name_field_line_and_column() {
+        let text = DEFAULT_CONFIG_RON.replacen("agents: 100", "agents: 0", 1);
+        let is = issues(&text);
+        assert_eq!(is.len(), 1, "{is:?}");
+        assert_eq!(is[0].field, "crowd.agents");
+        let expect_line = text.lines().position(|l| l.contains("agents: 0")).unwrap() + 1;
+        assert_eq!(is[0].line, expect_line);
+        assert!(is[0].column > 1);
+        assert!(is[0].message.contains("1..="), "{}", is[0].message);
+    }
+
+    #[test]
+    fn every_range_problem_is_reported() {
+        let text = DEFAULT_CONFIG_RON
+            .replacen("agents: 100", "agents: 0", 1)
+            .replacen("tick_hz: 120.0", "tick_hz: 0.0", 1)
+            .replacen("mode: \"0660\"", "mode: \"rw\"", 1);
+        let fields: Vec<String> = issues(&text).into_iter().map(|i| i.field).collect();
+        assert_eq!(fields, vec!["crowd.agents", "pipeline.tick_hz", "socket.mode"]);
+    }
+
+    #[test]
+    fn unknown_field_is_an_error_with_its_place() {
+        let text = DEFAULT_CONFIG_RON.replacen("agents: 100,", "agents: 100,\n        agnets: 5,", 1);
+        let is = issues(&text);
+        assert_eq!(is.len(), 1);
+        assert_eq!(is[0].field, "crowd.agnets");
+        let expect_line = text.lines().position(|l| l.contains("agnets")).unwrap() + 1;
+        assert_eq!(is[0].line, expect_line);
+        assert!(is[0].message.contains("agnets"), "{}", is[0].message);
+    }
+
+    #[test]
+    fn syntax_error_has_position() {
+        let is = issues("(version: 1,, )");
+        assert_eq!(is[0].line, 1);
+        assert!(is[0].column > 0);
+    }
+
+    #[test]
+    fn missing_field_is_named() {
+        let text = DEFAULT_CONFIG_RON.replacen("max_speed_m_s: 1.5,", "", 1);
+        let is = issues(&text);
+        assert!(is[0].field.ends_with("max_speed_m_s"), "{is:?}");
+        assert!(is[0].message.contains("max_speed_m_s"));
+    }
+
+    #[test]
+    fn missing_file_names_the_path() {
+        let e = Config::load(Path::new("/nonexistent/crowdtouch.ron")).unwrap_err();
+        assert!(e.to_string().contains("/nonexistent/crowdtouch.ron"), "{e}");
+    }
+
+    #[test]
+    fn locate_finds_nested_fields_and_list_items() {
+        let t = "(\n a: (\n  b: 1,\n ),\n l: [\n  X(f: 1),\n  Y(f: 2),\n ],\n)";
+        assert_eq!(locate_field(t, "a.b"), Some((3, 3)));
+        assert_eq!(locate_field(t, "l[1].f"), Some((7, 5)));
+        assert_eq!(locate_field(t, "a.zz"), Some((2, 2)));
+    }
+
+    #[test]
+    fn garbage_never_panics() {
+        for t in ["", "(", ")", "((((", "\"", "/*", "(version: \"x\")", "[1,2", "\u{0}"] {
+            assert!(Config::from_str(t, Path::new("g")).is_err());
+        }
+    }
+}

@@ -1,0 +1,8 @@
+//! The crowd: agents, the deformable mesh, assignment, and the controllers.
+//!
+//! Pure geometry and numerics: nothing here knows about threads, sockets or devices.
+
+pub mod arap;
+pub mod assign;
+pub mod mesh;
+pub mod mvc;

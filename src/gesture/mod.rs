@@ -1,0 +1,1 @@
+//! Turning touch frames into controls (touches on the crowd) and gestures (in open space).

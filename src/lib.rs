@@ -1,0 +1,17 @@
+//! crowdtouch: a multi-touch table daemon that drives a crowd.
+//!
+//! Touches come in (`input`), are segmented into controls and gestures (`gesture`),
+//! deform a mesh over the crowd and move its agents (`crowd`), and leave as snapshots
+//! over a Unix socket (`publish`). `pipeline` wires the threads and queues between
+//! them. See `docs/` and the README for the architecture.
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+#![deny(rustdoc::broken_intra_doc_links)]
+
+pub mod config;
+pub mod crowd;
+pub mod geom;
+pub mod gesture;
+pub mod input;
+pub mod snapshot;
+pub mod time;
