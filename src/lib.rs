@@ -13,5 +13,6 @@ pub mod crowd;
 pub mod geom;
 pub mod gesture;
 pub mod input;
+pub mod publish;
 pub mod snapshot;
 pub mod time;
