@@ -301,7 +301,12 @@ impl SocketConfig {
         }
         if let Some(dir) = std::env::var_os("RUNTIME_DIRECTORY") {
             // systemd may list several directories separated by ':'.
-            let first = dir.to_string_lossy().split(':').next().unwrap_or("").to_string();
+            let first = dir
+                .to_string_lossy()
+                .split(':')
+                .next()
+                .unwrap_or("")
+                .to_string();
             if !first.is_empty() {
                 return PathBuf::from(first).join("crowdtouch.sock");
             }
@@ -405,7 +410,12 @@ impl Config {
                 .into_iter()
                 .map(|(field, message)| {
                     let (line, column) = locate_field(text, &field).unwrap_or((0, 0));
-                    ConfigIssue { field, line, column, message }
+                    ConfigIssue {
+                        field,
+                        line,
+                        column,
+                        message,
+                    }
                 })
                 .collect();
             issues.sort_by_key(|i| (i.line, i.column));
@@ -441,13 +451,19 @@ impl Config {
         check(
             self.version == CONFIG_VERSION,
             "version",
-            format!("version {} is not supported (this build reads version {CONFIG_VERSION})", self.version),
+            format!(
+                "version {} is not supported (this build reads version {CONFIG_VERSION})",
+                self.version
+            ),
         );
         let w = &self.surface.world;
         check(
             finite_rect(w) && w.width() > 0.0 && w.height() > 0.0,
             "surface.world",
-            format!("world rectangle must have finite min < max, got {:?} .. {:?}", w.min, w.max),
+            format!(
+                "world rectangle must have finite min < max, got {:?} .. {:?}",
+                w.min, w.max
+            ),
         );
         if let Some((mw, mh)) = self.surface.size_mm {
             check(
@@ -475,7 +491,10 @@ impl Config {
         check(
             c.max_accel_m_s2 > 0.0 && c.max_accel_m_s2 <= 1000.0,
             "crowd.max_accel_m_s2",
-            format!("max acceleration must be in (0, 1000] m/s², got {}", c.max_accel_m_s2),
+            format!(
+                "max acceleration must be in (0, 1000] m/s², got {}",
+                c.max_accel_m_s2
+            ),
         );
         check(
             c.kp_per_s2 > 0.0 && c.kp_per_s2.is_finite(),
@@ -490,13 +509,19 @@ impl Config {
         check(
             c.push_stiffness_per_s2 >= 0.0 && c.push_stiffness_per_s2.is_finite(),
             "crowd.push_stiffness_per_s2",
-            format!("push stiffness must be zero or positive, got {}", c.push_stiffness_per_s2),
+            format!(
+                "push stiffness must be zero or positive, got {}",
+                c.push_stiffness_per_s2
+            ),
         );
         let f = &c.formation;
         check(
             finite_rect(f) && f.width() > 0.0 && f.height() > 0.0,
             "crowd.formation",
-            format!("formation rectangle must have finite min < max, got {:?} .. {:?}", f.min, f.max),
+            format!(
+                "formation rectangle must have finite min < max, got {:?} .. {:?}",
+                f.min, f.max
+            ),
         );
         let m = &self.mesh;
         check(
@@ -523,37 +548,58 @@ impl Config {
         check(
             k.group_window_ms <= 5_000,
             "controls.group_window_ms",
-            format!("group window must be at most 5000 ms, got {}", k.group_window_ms),
+            format!(
+                "group window must be at most 5000 ms, got {}",
+                k.group_window_ms
+            ),
         );
         check(
             k.hand_span_mm > 0.0 && k.hand_span_mm.is_finite(),
             "controls.hand_span_mm",
-            format!("hand span must be positive millimetres, got {}", k.hand_span_mm),
+            format!(
+                "hand span must be positive millimetres, got {}",
+                k.hand_span_mm
+            ),
         );
         check(
             k.grab_radius_m >= 0.0 && k.grab_radius_m.is_finite(),
             "controls.grab_radius_m",
-            format!("grab radius must be zero or positive, got {}", k.grab_radius_m),
+            format!(
+                "grab radius must be zero or positive, got {}",
+                k.grab_radius_m
+            ),
         );
         check(
             k.gesture_grace_ms <= 10_000,
             "controls.gesture_grace_ms",
-            format!("gesture grace must be at most 10000 ms, got {}", k.gesture_grace_ms),
+            format!(
+                "gesture grace must be at most 10000 ms, got {}",
+                k.gesture_grace_ms
+            ),
         );
         check(
             k.checkpoint_spacing_m > 0.0 && k.checkpoint_spacing_m.is_finite(),
             "controls.checkpoint_spacing_m",
-            format!("check point spacing must be positive, got {}", k.checkpoint_spacing_m),
+            format!(
+                "check point spacing must be positive, got {}",
+                k.checkpoint_spacing_m
+            ),
         );
         check(
             k.max_constraint_speed_m_s > 0.0 && k.max_constraint_speed_m_s.is_finite(),
             "controls.max_constraint_speed_m_s",
-            format!("max constraint speed must be positive, got {}", k.max_constraint_speed_m_s),
+            format!(
+                "max constraint speed must be positive, got {}",
+                k.max_constraint_speed_m_s
+            ),
         );
         check(
             k.opposing_gain_per_s >= 0.0 && k.opposing_gain_per_s.is_finite(),
             "controls.opposing_gain_per_s",
-            format!("opposing gain must be zero or positive, got {}", k.opposing_gain_per_s),
+            format!(
+                "opposing gain must be zero or positive, got {}",
+                k.opposing_gain_per_s
+            ),
         );
         let pl = &self.pipeline;
         check(
@@ -569,7 +615,10 @@ impl Config {
         check(
             (100..=3_600_000).contains(&pl.stats_interval_ms),
             "pipeline.stats_interval_ms",
-            format!("stats interval must be 100..=3600000 ms, got {}", pl.stats_interval_ms),
+            format!(
+                "stats interval must be 100..=3600000 ms, got {}",
+                pl.stats_interval_ms
+            ),
         );
         let b = &pl.budgets;
         for (name, v) in [
@@ -597,7 +646,10 @@ impl Config {
         check(
             (1..=4096).contains(&s.client_queue),
             "socket.client_queue",
-            format!("client queue must be 1..=4096 snapshots, got {}", s.client_queue),
+            format!(
+                "client queue must be 1..=4096 snapshots, got {}",
+                s.client_queue
+            ),
         );
         check(
             (1..=1024).contains(&s.max_clients),
@@ -605,7 +657,11 @@ impl Config {
             format!("max clients must be 1..=1024, got {}", s.max_clients),
         );
         if let Some(g) = &s.group {
-            check(!g.is_empty(), "socket.group", "group name is empty".to_string());
+            check(
+                !g.is_empty(),
+                "socket.group",
+                "group name is empty".to_string(),
+            );
         }
         for (i, input) in self.inputs.iter().enumerate() {
             match input {
@@ -621,9 +677,10 @@ impl Config {
 
     /// Metres in the world per millimetre on the surface, per axis.
     pub fn world_per_mm(&self, surface_mm: Option<(f64, f64)>) -> Vec2 {
-        let (w_mm, h_mm) = surface_mm
-            .or(self.surface.size_mm)
-            .unwrap_or((1000.0, 1000.0 * self.surface.world.height() / self.surface.world.width()));
+        let (w_mm, h_mm) = surface_mm.or(self.surface.size_mm).unwrap_or((
+            1000.0,
+            1000.0 * self.surface.world.height() / self.surface.world.width(),
+        ));
         Vec2::new(
             self.surface.world.width() / w_mm,
             self.surface.world.height() / h_mm,
@@ -880,7 +937,11 @@ pub fn search_path() -> Vec<PathBuf> {
 
 impl fmt::Display for ConfigIssue {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}:{}: field `{}`: {}", self.line, self.column, self.field, self.message)
+        write!(
+            f,
+            "{}:{}: field `{}`: {}",
+            self.line, self.column, self.field, self.message
+        )
     }
 }
 
@@ -921,12 +982,16 @@ mod tests {
             .replacen("tick_hz: 120.0", "tick_hz: 0.0", 1)
             .replacen("mode: \"0660\"", "mode: \"rw\"", 1);
         let fields: Vec<String> = issues(&text).into_iter().map(|i| i.field).collect();
-        assert_eq!(fields, vec!["crowd.agents", "pipeline.tick_hz", "socket.mode"]);
+        assert_eq!(
+            fields,
+            vec!["crowd.agents", "pipeline.tick_hz", "socket.mode"]
+        );
     }
 
     #[test]
     fn unknown_field_is_an_error_with_its_place() {
-        let text = DEFAULT_CONFIG_RON.replacen("agents: 100,", "agents: 100,\n        agnets: 5,", 1);
+        let text =
+            DEFAULT_CONFIG_RON.replacen("agents: 100,", "agents: 100,\n        agnets: 5,", 1);
         let is = issues(&text);
         assert_eq!(is.len(), 1);
         assert_eq!(is[0].field, "crowd.agnets");
@@ -966,7 +1031,17 @@ mod tests {
 
     #[test]
     fn garbage_never_panics() {
-        for t in ["", "(", ")", "((((", "\"", "/*", "(version: \"x\")", "[1,2", "\u{0}"] {
+        for t in [
+            "",
+            "(",
+            ")",
+            "((((",
+            "\"",
+            "/*",
+            "(version: \"x\")",
+            "[1,2",
+            "\u{0}",
+        ] {
             assert!(Config::from_str(t, Path::new("g")).is_err());
         }
     }

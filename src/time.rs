@@ -11,7 +11,9 @@ use std::fmt;
 use std::ops::{Add, Sub};
 
 /// A point in time on CLOCK_MONOTONIC (or a virtual clock in replays), in microseconds.
-#[derive(Copy, Clone, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[derive(
+    Copy, Clone, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize,
+)]
 #[serde(transparent)]
 pub struct Micros(pub u64);
 

@@ -2,6 +2,7 @@
 //!
 //! Pure geometry and numerics: nothing here knows about threads, sockets or devices.
 
+pub mod agents;
 pub mod arap;
 pub mod assign;
 pub mod mesh;

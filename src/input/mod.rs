@@ -26,7 +26,9 @@ use serde::{Deserialize, Serialize};
 pub const MAX_CONTACTS: usize = 64;
 
 /// A contact identifier, unique across devices and never reused while the daemon runs.
-#[derive(Copy, Clone, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[derive(
+    Copy, Clone, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize,
+)]
 #[serde(transparent)]
 pub struct ContactId(pub u32);
 
@@ -290,7 +292,11 @@ mod tests {
         b.push(c(3, 0.4, ContactFlags::DOWN)).unwrap();
         a.merge_later(&b).unwrap();
         assert_eq!(a.t, Micros(20));
-        let got: Vec<_> = a.contacts().iter().map(|c| (c.id.0, c.x, c.flags)).collect();
+        let got: Vec<_> = a
+            .contacts()
+            .iter()
+            .map(|c| (c.id.0, c.x, c.flags))
+            .collect();
         assert_eq!(
             got,
             vec![
@@ -313,7 +319,11 @@ mod tests {
 
     #[test]
     fn axis_normalises_and_clamps() {
-        let a = AxisRange { min: 42.0, max: 1981.0, resolution: 0.0 };
+        let a = AxisRange {
+            min: 42.0,
+            max: 1981.0,
+            resolution: 0.0,
+        };
         assert_eq!(a.normalise(42.0), 0.0);
         assert_eq!(a.normalise(1981.0), 1.0);
         assert_eq!(a.normalise(5000.0), 1.0);

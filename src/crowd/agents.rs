@@ -1,0 +1,400 @@
+//! Agents: point masses that follow their goals with a PD controller and push each
+//! other apart.
+//!
+//! mesh-formation-control section 6.2.1: "The characters then move to their
+//! corresponding target locations with a simple PD controller. A maximum speed is
+//! defined to avoid unnatural fast movement." Overlap is resolved as in
+//! gesture-driven-crowd-motion section 7.3: each character is a cylinder and a
+//! spring-mass model pushes penetrating characters apart with a force proportional
+//! to the penetration depth, along the line between their centres.
+
+use crate::geom::Vec2;
+
+/// Tunables of agent motion.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct AgentParams {
+    /// Body radius (m).
+    pub radius_m: f64,
+    /// Speed limit (m/s).
+    pub max_speed_m_s: f64,
+    /// Acceleration limit (m/s²).
+    pub max_accel_m_s2: f64,
+    /// PD proportional gain (1/s²).
+    pub kp_per_s2: f64,
+    /// PD derivative gain (1/s).
+    pub kd_per_s: f64,
+    /// Push-back stiffness per metre of penetration (1/s², unit mass).
+    pub push_stiffness_per_s2: f64,
+}
+
+/// Longest time step integrated at once (s); longer ticks are split.
+pub const MAX_SUBSTEP_S: f64 = 1.0 / 60.0;
+
+/// The agents and the workspace their step reuses.
+#[derive(Clone, Debug, Default)]
+pub struct Agents {
+    pos: Vec<Vec2>,
+    vel: Vec<Vec2>,
+    acc: Vec<Vec2>,
+    grid: NeighbourGrid,
+}
+
+impl Agents {
+    /// Agents at `positions`, at rest.
+    pub fn new(positions: &[Vec2]) -> Agents {
+        Agents {
+            pos: positions.to_vec(),
+            vel: vec![Vec2::zeros(); positions.len()],
+            acc: vec![Vec2::zeros(); positions.len()],
+            grid: NeighbourGrid::default(),
+        }
+    }
+
+    /// Number of agents.
+    pub fn len(&self) -> usize {
+        self.pos.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.pos.is_empty()
+    }
+
+    /// Positions (m).
+    pub fn positions(&self) -> &[Vec2] {
+        &self.pos
+    }
+
+    /// Velocities (m/s).
+    pub fn velocities(&self) -> &[Vec2] {
+        &self.vel
+    }
+
+    /// Moves every agent to `positions` and stops it (hard reset).
+    pub fn teleport(&mut self, positions: &[Vec2]) {
+        self.pos.clear();
+        self.pos.extend_from_slice(positions);
+        self.vel.clear();
+        self.vel.resize(positions.len(), Vec2::zeros());
+        self.acc.resize(positions.len(), Vec2::zeros());
+    }
+
+    /// Mean distance from each agent to its goal (m): the lag that drives the
+    /// opposing force of mesh-formation-control section 4.1.
+    pub fn mean_goal_distance(&self, goals: &[Vec2], goal_of: &[u32]) -> f64 {
+        if self.pos.is_empty() {
+            return 0.0;
+        }
+        let sum: f64 = self
+            .pos
+            .iter()
+            .zip(goal_of)
+            .map(|(p, &g)| (goals[g as usize] - p).norm())
+            .sum();
+        sum / self.pos.len() as f64
+    }
+
+    /// Advances the agents by `dt_s` towards `goals[goal_of[i]]`.
+    ///
+    /// # Formula
+    /// Per agent, unit mass: `a = kp (g − x) − kd v + Σ_j k (2r − d_ij) n̂_ij` over
+    /// neighbours closer than `2r` (gesture-driven section 7.3 push-back), `|a|`
+    /// clamped to `max_accel`, semi-implicit Euler `v += a dt; |v| ≤ max_speed;
+    /// x += v dt`, in substeps of at most [`MAX_SUBSTEP_S`].
+    ///
+    /// # Complexity
+    /// O(n) expected with the uniform neighbour grid; no allocation once the grid
+    /// has grown to the crowd's size.
+    pub fn step(&mut self, goals: &[Vec2], goal_of: &[u32], dt_s: f64, p: &AgentParams) {
+        if !(dt_s > 0.0) || self.pos.is_empty() {
+            return;
+        }
+        let substeps = (dt_s / MAX_SUBSTEP_S).ceil().clamp(1.0, 64.0) as usize;
+        let h = dt_s / substeps as f64;
+        for _ in 0..substeps {
+            self.substep(goals, goal_of, h, p);
+        }
+    }
+
+    fn substep(&mut self, goals: &[Vec2], goal_of: &[u32], h: f64, p: &AgentParams) {
+        let n = self.pos.len();
+        for i in 0..n {
+            let g = goals[goal_of[i] as usize];
+            self.acc[i] = (g - self.pos[i]) * p.kp_per_s2 - self.vel[i] * p.kd_per_s;
+        }
+        let two_r = 2.0 * p.radius_m;
+        if p.push_stiffness_per_s2 > 0.0 && two_r > 0.0 {
+            self.grid.build(&self.pos, two_r);
+            let (pos, acc, grid) = (&self.pos, &mut self.acc, &self.grid);
+            grid.for_each_pair(pos, two_r, |i, j, d, n_ij| {
+                // n_ij points from j to i; both get pushed apart equally.
+                let f = n_ij * (p.push_stiffness_per_s2 * (two_r - d));
+                acc[i] += f;
+                acc[j] -= f;
+            });
+        }
+        let amax = p.max_accel_m_s2;
+        let vmax = p.max_speed_m_s;
+        for i in 0..n {
+            let mut a = self.acc[i];
+            let an = a.norm();
+            if an > amax {
+                a *= amax / an;
+            }
+            let mut v = self.vel[i] + a * h;
+            let vn = v.norm();
+            if vn > vmax {
+                v *= vmax / vn;
+            }
+            self.vel[i] = v;
+            self.pos[i] += v * h;
+        }
+    }
+}
+
+/// A uniform grid for fixed-radius neighbour queries, rebuilt each step in place.
+#[derive(Clone, Debug, Default)]
+pub struct NeighbourGrid {
+    origin: Vec2,
+    cell_m: f64,
+    nx: usize,
+    ny: usize,
+    cell_start: Vec<u32>,
+    items: Vec<u32>,
+    cell_of: Vec<u32>,
+}
+
+/// Most grid cells per agent; a sparse crowd gets coarser cells instead of more.
+const MAX_CELLS_PER_AGENT: usize = 4;
+
+impl NeighbourGrid {
+    /// Buckets `pos` into cells of at least `radius` (counting sort; no allocation
+    /// once capacity suffices).
+    pub fn build(&mut self, pos: &[Vec2], radius: f64) {
+        let n = pos.len();
+        let (mut lo, mut hi) = (Vec2::repeat(f64::INFINITY), Vec2::repeat(f64::NEG_INFINITY));
+        for p in pos {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        if n == 0
+            || !lo.x.is_finite()
+            || !hi.x.is_finite()
+            || !lo.y.is_finite()
+            || !hi.y.is_finite()
+        {
+            self.nx = 0;
+            self.ny = 0;
+            self.items.clear();
+            self.cell_start.clear();
+            return;
+        }
+        let ext = hi - lo;
+        let mut cell = radius.max(1e-6);
+        let max_cells = (MAX_CELLS_PER_AGENT * n).max(16);
+        while ((ext.x / cell) as usize + 1) * ((ext.y / cell) as usize + 1) > max_cells {
+            cell *= 2.0;
+        }
+        self.origin = lo;
+        self.cell_m = cell;
+        self.nx = (ext.x / cell) as usize + 1;
+        self.ny = (ext.y / cell) as usize + 1;
+        let cells = self.nx * self.ny;
+        self.cell_start.clear();
+        self.cell_start.resize(cells + 1, 0);
+        self.cell_of.clear();
+        for p in pos {
+            let c = self.cell_index(*p);
+            self.cell_of.push(c as u32);
+            self.cell_start[c + 1] += 1;
+        }
+        for c in 0..cells {
+            self.cell_start[c + 1] += self.cell_start[c];
+        }
+        self.items.clear();
+        self.items.resize(n, 0);
+        // Fill using a running cursor per cell, stored temporarily in cell_start.
+        for (i, &c) in self.cell_of.iter().enumerate() {
+            let slot = self.cell_start[c as usize];
+            self.items[slot as usize] = i as u32;
+            self.cell_start[c as usize] += 1;
+        }
+        // Restore starts: shift right by one bucket.
+        for c in (1..=cells).rev() {
+            self.cell_start[c] = self.cell_start[c - 1];
+        }
+        self.cell_start[0] = 0;
+    }
+
+    fn cell_xy(&self, p: Vec2) -> (usize, usize) {
+        let q = (p - self.origin) / self.cell_m;
+        let cx = (q.x.max(0.0) as usize).min(self.nx - 1);
+        let cy = (q.y.max(0.0) as usize).min(self.ny - 1);
+        (cx, cy)
+    }
+
+    fn cell_index(&self, p: Vec2) -> usize {
+        let (cx, cy) = self.cell_xy(p);
+        cy * self.nx + cx
+    }
+
+    /// Calls `f(i, j, distance, unit vector from j to i)` once for every pair
+    /// `i < j` closer than `radius` (pairs at the same point get a fixed direction).
+    pub fn for_each_pair(
+        &self,
+        pos: &[Vec2],
+        radius: f64,
+        mut f: impl FnMut(usize, usize, f64, Vec2),
+    ) {
+        if self.nx == 0 {
+            return;
+        }
+        let r2 = radius * radius;
+        for cy in 0..self.ny {
+            for cx in 0..self.nx {
+                let c = cy * self.nx + cx;
+                let (a0, a1) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
+                if a0 == a1 {
+                    continue;
+                }
+                // This cell and the four "forward" neighbours, so each pair is seen once.
+                for (dx, dy) in [(0i64, 0i64), (1, 0), (-1, 1), (0, 1), (1, 1)] {
+                    let (ox, oy) = (cx as i64 + dx, cy as i64 + dy);
+                    if ox < 0 || oy < 0 || ox >= self.nx as i64 || oy >= self.ny as i64 {
+                        continue;
+                    }
+                    let o = oy as usize * self.nx + ox as usize;
+                    let (b0, b1) = (self.cell_start[o] as usize, self.cell_start[o + 1] as usize);
+                    for ai in a0..a1 {
+                        let i = self.items[ai] as usize;
+                        let start = if o == c { ai + 1 } else { b0 };
+                        for bj in start..b1 {
+                            let j = self.items[bj] as usize;
+                            let d = pos[i] - pos[j];
+                            let d2 = d.norm_squared();
+                            if d2 < r2 {
+                                let dist = d2.sqrt();
+                                let n = if dist > 1e-12 {
+                                    d / dist
+                                } else {
+                                    // Coincident: separate along a direction fixed by the indices.
+                                    let a = (i.min(j) as f64) * 2.399963;
+                                    let s = if i < j { 1.0 } else { -1.0 };
+                                    Vec2::new(a.cos(), a.sin()) * s
+                                };
+                                f(i, j, dist, n);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn params() -> AgentParams {
+        AgentParams {
+            radius_m: 0.15,
+            max_speed_m_s: 1.5,
+            max_accel_m_s2: 6.0,
+            kp_per_s2: 16.0,
+            kd_per_s: 8.0,
+            push_stiffness_per_s2: 200.0,
+        }
+    }
+
+    #[test]
+    fn single_agent_reaches_goal_without_exceeding_max_speed() {
+        let mut a = Agents::new(&[Vec2::new(0.0, 0.0)]);
+        let goals = [Vec2::new(3.0, 4.0)];
+        let mut vmax: f64 = 0.0;
+        for _ in 0..(8 * 120) {
+            a.step(&goals, &[0], 1.0 / 120.0, &params());
+            vmax = vmax.max(a.velocities()[0].norm());
+        }
+        assert!(
+            (a.positions()[0] - goals[0]).norm() < 1e-3,
+            "{:?}",
+            a.positions()[0]
+        );
+        assert!(vmax <= 1.5 + 1e-9);
+        // 5 m at 1.5 m/s cannot take less than 3.33 s.
+        let mut b = Agents::new(&[Vec2::new(0.0, 0.0)]);
+        for _ in 0..(3 * 120) {
+            b.step(&goals, &[0], 1.0 / 120.0, &params());
+        }
+        assert!((b.positions()[0] - goals[0]).norm() > 0.4);
+    }
+
+    #[test]
+    fn overlapping_agents_separate_to_two_radii() {
+        let mut a = Agents::new(&[Vec2::new(0.0, 0.0), Vec2::new(0.05, 0.0)]);
+        let goals = [Vec2::new(0.0, 0.0)];
+        let mut p = params();
+        p.kp_per_s2 = 0.0;
+        for _ in 0..600 {
+            a.step(&goals, &[0, 0], 1.0 / 120.0, &p);
+        }
+        let d = (a.positions()[0] - a.positions()[1]).norm();
+        assert!(d >= 0.3 - 1e-3, "{d}");
+    }
+
+    #[test]
+    fn coincident_agents_still_separate() {
+        let mut a = Agents::new(&[Vec2::new(1.0, 1.0); 3]);
+        let mut p = params();
+        p.kp_per_s2 = 0.0;
+        for _ in 0..600 {
+            a.step(&[Vec2::new(1.0, 1.0)], &[0, 0, 0], 1.0 / 120.0, &p);
+        }
+        for i in 0..3 {
+            for j in i + 1..3 {
+                assert!((a.positions()[i] - a.positions()[j]).norm() > 0.25);
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        /// The grid finds exactly the pairs brute force finds.
+        #[test]
+        fn grid_pairs_equal_brute_force(pts in proptest::collection::vec((-5.0f64..5.0, -5.0f64..5.0), 0..80), r in 0.05f64..2.0) {
+            let pos: Vec<Vec2> = pts.iter().map(|&(x, y)| Vec2::new(x, y)).collect();
+            let mut g = NeighbourGrid::default();
+            g.build(&pos, r);
+            let mut got = vec![];
+            g.for_each_pair(&pos, r, |i, j, _, _| got.push((i.min(j), i.max(j))));
+            got.sort();
+            let mut want = vec![];
+            for i in 0..pos.len() {
+                for j in i + 1..pos.len() {
+                    if (pos[i] - pos[j]).norm_squared() < r * r {
+                        want.push((i, j));
+                    }
+                }
+            }
+            prop_assert_eq!(got, want);
+        }
+
+        /// Push-back forces are antisymmetric: with no goal pull, momentum is conserved.
+        #[test]
+        fn push_back_conserves_momentum(pts in proptest::collection::vec((-0.5f64..0.5, -0.5f64..0.5), 2..30)) {
+            let pos: Vec<Vec2> = pts.iter().map(|&(x, y)| Vec2::new(x, y)).collect();
+            let mut a = Agents::new(&pos);
+            let mut p = params();
+            p.kp_per_s2 = 0.0;
+            p.kd_per_s = 0.0;
+            p.max_accel_m_s2 = 1e9;
+            p.max_speed_m_s = 1e9;
+            let goal_of = vec![0u32; pos.len()];
+            a.step(&[Vec2::zeros()], &goal_of, 1.0 / 240.0, &p);
+            let m: Vec2 = a.velocities().iter().sum();
+            prop_assert!(m.norm() < 1e-9);
+        }
+    }
+}
