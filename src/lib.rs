@@ -10,9 +10,12 @@
 
 pub mod config;
 pub mod crowd;
+pub mod engine;
 pub mod geom;
 pub mod gesture;
 pub mod input;
+pub mod pipeline;
 pub mod publish;
 pub mod snapshot;
+pub mod stats;
 pub mod time;

@@ -231,6 +231,9 @@ pub struct StatsReport {
     pub controls: u32,
     /// Resident memory of the process (bytes), when known.
     pub rss_bytes: Option<u64>,
+    /// The most recent control or gesture, described for people (`"area control, 3
+    /// fingers"`).
+    pub last_gesture: Option<String>,
 }
 
 /// A command a client may send (protocol `command` message).

@@ -5,5 +5,7 @@
 pub mod agents;
 pub mod arap;
 pub mod assign;
+pub mod assigner;
+pub mod direct;
 pub mod mesh;
 pub mod mvc;

@@ -1,0 +1,595 @@
+//! The control core: one tick of segment → deform → assign → step → snapshot.
+//!
+//! The engine owns the world (segmenter, mesh controller, agents) and knows nothing
+//! about threads or clocks: it is given frames and `now`. The control thread drives it
+//! in real time (`pipeline`); `replay` drives it on a virtual clock, which makes
+//! replays deterministic.
+
+use crate::config::{Config, MAX_AGENTS};
+use crate::crowd::agents::{AgentParams, Agents};
+use crate::crowd::assigner::Assigner;
+use crate::crowd::direct::{DirectController, DirectParams};
+use crate::crowd::mesh::TriMesh;
+use crate::geom::{Rect, Vec2};
+use crate::gesture::segment::{Segment, SegmentParams, Segmenter, TouchPoint};
+use crate::input::{ContactFlags, TouchFrame};
+use crate::snapshot::{AgentView, Command, Event, MeshView, Snapshot, TouchView};
+use crate::time::Micros;
+use std::sync::Arc;
+
+/// Longest time step the engine integrates in one tick (s); a longer gap (a stall,
+/// a paused replay) is treated as this long.
+pub const MAX_TICK_S: f64 = 0.1;
+/// Fraction of the mean goal spacing an agent's radius may take when the formation
+/// is too small for the configured radius.
+pub const RADIUS_FIT: f64 = 0.45;
+/// Pooled snapshots kept for reuse.
+const POOL_CAP: usize = 32;
+
+/// Why the engine could not be built or reconfigured.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The agent count is out of range.
+    #[error("agent count {count} is out of range 1..={max}")]
+    AgentCount {
+        /// Requested.
+        count: u32,
+        /// Maximum.
+        max: u32,
+    },
+}
+
+/// What one tick produced.
+pub struct TickOutput<'a> {
+    /// The new snapshot.
+    pub snapshot: Arc<Snapshot>,
+    /// The mesh, when it changed this tick.
+    pub mesh: Option<Arc<MeshView>>,
+    /// Events of this tick.
+    pub events: &'a [Event],
+}
+
+/// A recycling pool of `Arc`s: an item is reused once every other holder dropped it.
+struct ArcPool<T> {
+    items: Vec<Arc<T>>,
+}
+
+impl<T: Default + Clone> ArcPool<T> {
+    fn new() -> Self {
+        ArcPool {
+            items: Vec::with_capacity(POOL_CAP),
+        }
+    }
+    fn acquire(&mut self) -> Arc<T> {
+        match self
+            .items
+            .iter()
+            .position(|a| Arc::strong_count(a) == 1 && Arc::weak_count(a) == 0)
+        {
+            Some(i) => self.items.swap_remove(i),
+            None => Arc::new(T::default()),
+        }
+    }
+    fn keep(&mut self, a: &Arc<T>) {
+        if self.items.len() < POOL_CAP {
+            self.items.push(Arc::clone(a));
+        }
+    }
+}
+
+/// Counters the engine keeps.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub struct EngineCounters {
+    /// Ticks.
+    pub ticks: u64,
+    /// Assignments applied.
+    pub assignments: u64,
+    /// Assignment results discarded because the crowd changed meanwhile.
+    pub stale_assignments: u64,
+    /// Deformation failures.
+    pub deform_errors: u64,
+    /// Assignment failures.
+    pub assign_errors: u64,
+}
+
+/// The control core.
+pub struct Engine {
+    world: Rect,
+    glass_mm: Vec2,
+    grab_radius_m: f64,
+    formation: Rect,
+    agent_params: AgentParams,
+    configured_radius_m: f64,
+    segmenter: Segmenter,
+    direct: DirectController,
+    agents: Agents,
+    goal_of: Vec<u32>,
+    assignment_seq: u64,
+    generation: u64,
+    inline: Option<Assigner>,
+    seq: u64,
+    last_t: Option<Micros>,
+    pending_input_t: Option<Micros>,
+    paused: bool,
+    seg_out: Vec<Segment>,
+    events: Vec<Event>,
+    touches: Vec<TouchView>,
+    snapshots: ArcPool<Snapshot>,
+    meshes: ArcPool<MeshView>,
+    triangles: Arc<Vec<[u32; 3]>>,
+    outline: Arc<Vec<u32>>,
+    topology: u64,
+    counters: EngineCounters,
+}
+
+impl Engine {
+    /// An engine for `cfg`. `glass_mm` is the surface's physical size when the device
+    /// reports it (else the config's). `inline_assignment` solves the assignment
+    /// inside every tick (replays) instead of accepting results from a worker.
+    pub fn new(cfg: &Config, glass_mm: Option<(f64, f64)>, inline_assignment: bool) -> Engine {
+        let mesh = TriMesh::grid(
+            cfg.crowd.formation,
+            cfg.mesh.cols as usize,
+            cfg.mesh.rows as usize,
+        );
+        let agents_n = cfg.crowd.agents as usize;
+        let direct = DirectController::new(mesh, agents_n, direct_params(cfg));
+        let agents = Agents::new(direct.goals());
+        let triangles = Arc::new(direct.mesh().triangles().to_vec());
+        let outline = Arc::new(direct.mesh().outline().to_vec());
+        let (gw, gh) = glass_mm.or(cfg.surface.size_mm).unwrap_or_else(|| {
+            let w = cfg.surface.world;
+            (1000.0, 1000.0 * w.height() / w.width())
+        });
+        let mut e = Engine {
+            world: cfg.surface.world,
+            glass_mm: Vec2::new(gw, gh),
+            grab_radius_m: cfg.controls.grab_radius_m,
+            formation: cfg.crowd.formation,
+            agent_params: agent_params(cfg),
+            configured_radius_m: cfg.crowd.agent_radius_m,
+            segmenter: Segmenter::new(segment_params(cfg)),
+            direct,
+            agents,
+            goal_of: (0..agents_n as u32).collect(),
+            assignment_seq: 0,
+            generation: 0,
+            inline: inline_assignment.then(|| Assigner::new(cfg.assignment.cost)),
+            seq: 0,
+            last_t: None,
+            pending_input_t: None,
+            paused: false,
+            seg_out: Vec::with_capacity(64),
+            events: Vec::with_capacity(64),
+            touches: Vec::with_capacity(64),
+            snapshots: ArcPool::new(),
+            meshes: ArcPool::new(),
+            triangles,
+            outline,
+            topology: 1,
+            counters: EngineCounters::default(),
+        };
+        e.fit_radius();
+        e
+    }
+
+    /// Applies a reloaded config's tunables. The crowd size, formation, mesh and world
+    /// mapping need a restart (or `set_agent_count`); returns the names of changed
+    /// settings that were not applied.
+    pub fn reconfigure(&mut self, cfg: &Config) -> Vec<&'static str> {
+        let mut ignored = Vec::new();
+        if cfg.surface.world != self.world {
+            ignored.push("surface.world");
+        }
+        if cfg.crowd.formation != self.formation {
+            ignored.push("crowd.formation");
+        }
+        if cfg.mesh.cols as usize * cfg.mesh.rows as usize != self.direct.mesh().vertex_count() {
+            ignored.push("mesh.cols/rows");
+        }
+        self.grab_radius_m = cfg.controls.grab_radius_m;
+        self.configured_radius_m = cfg.crowd.agent_radius_m;
+        self.agent_params = agent_params(cfg);
+        self.segmenter.set_params(segment_params(cfg));
+        self.direct.set_params(direct_params(cfg));
+        self.fit_radius();
+        ignored
+    }
+
+    /// Counters.
+    pub fn counters(&self) -> EngineCounters {
+        self.counters
+    }
+
+    /// Number of agents.
+    pub fn agent_count(&self) -> usize {
+        self.agents.len()
+    }
+
+    /// Live controls.
+    pub fn control_count(&self) -> usize {
+        self.segmenter.controls().len()
+    }
+
+    /// The agent radius in use (m): the configured one, shrunk to fit the formation.
+    pub fn agent_radius_m(&self) -> f64 {
+        self.agent_params.radius_m
+    }
+
+    /// The world rectangle (m).
+    pub fn world(&self) -> Rect {
+        self.world
+    }
+
+    /// Identifies the current crowd; assignment results for another generation are stale.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Sequence number of the last tick.
+    pub fn seq(&self) -> u64 {
+        self.seq
+    }
+
+    /// Agent positions (m).
+    pub fn agent_positions(&self) -> &[Vec2] {
+        self.agents.positions()
+    }
+
+    /// Goal positions (m).
+    pub fn goals(&self) -> &[Vec2] {
+        self.direct.goals()
+    }
+
+    /// The current mesh as published.
+    pub fn mesh_view(&self) -> MeshView {
+        MeshView {
+            seq: self.seq,
+            vertices: self.direct.vertices().to_vec(),
+            triangles: Arc::clone(&self.triangles),
+            outline: Arc::clone(&self.outline),
+            topology: self.topology,
+        }
+    }
+
+    fn fit_radius(&mut self) {
+        let n = self.agents.len().max(1) as f64;
+        let area = self.formation.width() * self.formation.height();
+        let fit = RADIUS_FIT * (area / n).sqrt();
+        self.agent_params.radius_m = self.configured_radius_m.min(fit);
+    }
+
+    fn to_world(&self, x: f32, y: f32) -> Vec2 {
+        Vec2::new(
+            self.world.min[0] + x as f64 * self.world.width(),
+            self.world.min[1] + y as f64 * self.world.height(),
+        )
+    }
+
+    /// Feeds one input frame (segmentation happens at the frame's own time stamp).
+    pub fn push_frame(&mut self, frame: &TouchFrame) {
+        let t = frame.t;
+        for c in frame.contacts() {
+            let world = self.to_world(c.x, c.y);
+            let tp = TouchPoint {
+                id: c.id,
+                world,
+                glass_mm: Vec2::new(c.x as f64 * self.glass_mm.x, c.y as f64 * self.glass_mm.y),
+                flags: c.flags,
+            };
+            let on_crowd =
+                c.flags.contains(ContactFlags::DOWN) && self.direct.hits(world, self.grab_radius_m);
+            self.segmenter.touch(t, &tp, on_crowd, &mut self.seg_out);
+            if c.flags.ended() {
+                self.touches.retain(|v| v.id != c.id.0);
+            } else if let Some(v) = self.touches.iter_mut().find(|v| v.id == c.id.0) {
+                v.pos = world;
+            } else if !c.flags.contains(ContactFlags::PALM) {
+                self.touches.push(TouchView {
+                    id: c.id.0,
+                    pos: world,
+                    control: None,
+                });
+            }
+        }
+        self.pending_input_t = Some(self.pending_input_t.map_or(t, |p| p.max(t)));
+    }
+
+    /// Applies a client command at `now`.
+    ///
+    /// # Errors
+    /// A message for the client when the command cannot be applied.
+    pub fn command(&mut self, cmd: &Command, now: Micros) -> Result<(), String> {
+        match cmd {
+            Command::Reset { hard } => {
+                self.reset(*hard, now);
+                Ok(())
+            }
+            Command::SetAgentCount { count } => {
+                self.set_agent_count(*count, now).map_err(|e| e.to_string())
+            }
+            Command::Pause => {
+                if !self.paused {
+                    self.paused = true;
+                    self.events.push(Event::Paused {
+                        paused: true,
+                        t: now,
+                    });
+                }
+                Ok(())
+            }
+            Command::Resume => {
+                if self.paused {
+                    self.paused = false;
+                    self.events.push(Event::Paused {
+                        paused: false,
+                        t: now,
+                    });
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// Mesh back to rest; controls end. `hard` teleports agents to their goals.
+    pub fn reset(&mut self, hard: bool, now: Micros) {
+        self.segmenter.cancel_all(now, &mut self.seg_out);
+        self.direct.reset();
+        if hard {
+            self.agents.teleport(self.direct.goals());
+            self.goal_of.clear();
+            self.goal_of.extend(0..self.agents.len() as u32);
+            self.generation += 1;
+            if let Some(a) = &mut self.inline {
+                a.forget();
+            }
+        }
+        self.events.push(Event::Reset {
+            agents: self.agents.len() as u32,
+            hard,
+            t: now,
+        });
+    }
+
+    /// New crowd size: agents are placed on the new goals of the current mesh.
+    ///
+    /// # Errors
+    /// [`Error::AgentCount`] when out of range.
+    pub fn set_agent_count(&mut self, count: u32, now: Micros) -> Result<(), Error> {
+        if count == 0 || count > MAX_AGENTS {
+            return Err(Error::AgentCount {
+                count,
+                max: MAX_AGENTS,
+            });
+        }
+        self.direct.set_agent_count(count as usize);
+        self.agents = Agents::new(self.direct.goals());
+        self.goal_of.clear();
+        self.goal_of.extend(0..count);
+        self.generation += 1;
+        if let Some(a) = &mut self.inline {
+            a.forget();
+        }
+        self.fit_radius();
+        self.events.push(Event::Reset {
+            agents: count,
+            hard: true,
+            t: now,
+        });
+        Ok(())
+    }
+
+    /// Uses an assignment solved elsewhere on the state of tick `seq` of `generation`.
+    /// Returns false (and ignores it) when the crowd has changed since.
+    pub fn apply_assignment(&mut self, generation: u64, seq: u64, goal_of: &[u32]) -> bool {
+        if generation != self.generation
+            || goal_of.len() != self.agents.len()
+            || seq < self.assignment_seq
+        {
+            self.counters.stale_assignments += 1;
+            return false;
+        }
+        self.goal_of.clear();
+        self.goal_of.extend_from_slice(goal_of);
+        self.assignment_seq = seq;
+        self.counters.assignments += 1;
+        true
+    }
+
+    /// One tick at `now`.
+    pub fn tick(&mut self, now: Micros) -> TickOutput<'_> {
+        let dt = match self.last_t {
+            Some(t0) => now.saturating_since(t0).as_secs_f64().min(MAX_TICK_S),
+            None => 0.0,
+        };
+        self.last_t = Some(now);
+        self.seq += 1;
+        self.segmenter.tick(now, &mut self.seg_out);
+        let lag = self
+            .agents
+            .mean_goal_distance(self.direct.goals(), &self.goal_of);
+        if let Err(e) = self.direct.update(self.segmenter.controls(), dt, lag) {
+            self.counters.deform_errors += 1;
+            if self.counters.deform_errors.is_power_of_two() {
+                log::warn!(
+                    "internal: mesh deformation failed ({} times): {e}",
+                    self.counters.deform_errors
+                );
+            }
+        }
+        if !self.paused {
+            self.agents
+                .step(self.direct.goals(), &self.goal_of, dt, &self.agent_params);
+        }
+        self.translate_segments(now);
+        for v in &mut self.touches {
+            v.control = self
+                .segmenter
+                .control_of(crate::input::ContactId(v.id))
+                .map(|c| c.id);
+        }
+        let mesh = if self.direct.take_changed() {
+            let mut m = self.meshes.acquire();
+            {
+                let mv = Arc::make_mut(&mut m);
+                mv.seq = self.seq;
+                mv.vertices.clear();
+                mv.vertices.extend_from_slice(self.direct.vertices());
+                mv.triangles = Arc::clone(&self.triangles);
+                mv.outline = Arc::clone(&self.outline);
+                mv.topology = self.topology;
+            }
+            self.meshes.keep(&m);
+            Some(m)
+        } else {
+            None
+        };
+        let mut snap = self.snapshots.acquire();
+        {
+            let s = Arc::make_mut(&mut snap);
+            s.seq = self.seq;
+            s.t = now;
+            s.input_t = self.pending_input_t.take();
+            s.agents.clear();
+            s.agents.extend(
+                self.agents
+                    .positions()
+                    .iter()
+                    .zip(self.agents.velocities())
+                    .zip(&self.goal_of)
+                    .map(|((&pos, &vel), &goal)| AgentView { pos, vel, goal }),
+            );
+            s.goals.clear();
+            s.goals.extend_from_slice(self.direct.goals());
+            s.assignment_seq = self.assignment_seq;
+            s.touches.clear();
+            s.touches.extend_from_slice(&self.touches);
+            s.paused = self.paused;
+        }
+        self.snapshots.keep(&snap);
+        self.counters.ticks += 1;
+        // Inline assignment: solved on this tick's state, used from the next tick.
+        if let Some(a) = &mut self.inline {
+            match a.solve(
+                self.agents.positions(),
+                self.direct.goals(),
+                &mut self.goal_of,
+            ) {
+                Ok(()) => {
+                    self.assignment_seq = self.seq;
+                    self.counters.assignments += 1;
+                }
+                Err(e) => {
+                    self.counters.assign_errors += 1;
+                    if self.counters.assign_errors.is_power_of_two() {
+                        log::warn!(
+                            "internal: assignment failed ({} times): {e}",
+                            self.counters.assign_errors
+                        );
+                    }
+                }
+            }
+        }
+        TickOutput {
+            snapshot: snap,
+            mesh,
+            events: &self.events,
+        }
+    }
+
+    /// Clears the events of the last tick (call after publishing them).
+    pub fn clear_events(&mut self) {
+        self.events.clear();
+    }
+
+    fn translate_segments(&mut self, now: Micros) {
+        for s in self.seg_out.drain(..) {
+            let ev = match s {
+                Segment::ControlBegin(id) | Segment::ControlUpdate(id) => {
+                    let fingers = self
+                        .segmenter
+                        .controls()
+                        .iter()
+                        .find(|c| c.id == id)
+                        .map(|c| c.fingers.iter().map(|f| f.id.0).collect::<Vec<_>>())
+                        .unwrap_or_default();
+                    let kind = crate::snapshot::ControlKind::for_fingers(fingers.len());
+                    let vertices = self.direct.handle_vertices(id);
+                    if matches!(s, Segment::ControlBegin(_)) {
+                        Event::ControlBegin {
+                            id,
+                            kind,
+                            fingers,
+                            vertices,
+                            t: now,
+                        }
+                    } else {
+                        Event::ControlUpdate {
+                            id,
+                            kind,
+                            fingers,
+                            vertices,
+                            t: now,
+                        }
+                    }
+                }
+                Segment::ControlEnd {
+                    id,
+                    kind,
+                    cancelled,
+                } => Event::ControlEnd {
+                    id,
+                    kind,
+                    cancelled,
+                    t: now,
+                },
+                Segment::GestureBegin(id) => Event::GestureBegin { id, t: now },
+                Segment::GestureEnd {
+                    id,
+                    fingers,
+                    contacts,
+                    duration,
+                    cancelled,
+                } => Event::GestureEnd {
+                    id,
+                    fingers,
+                    contacts,
+                    duration_us: duration.0,
+                    cancelled,
+                    t: now,
+                },
+            };
+            self.events.push(ev);
+        }
+    }
+}
+
+fn agent_params(cfg: &Config) -> AgentParams {
+    let c = &cfg.crowd;
+    AgentParams {
+        radius_m: c.agent_radius_m,
+        max_speed_m_s: c.max_speed_m_s,
+        max_accel_m_s2: c.max_accel_m_s2,
+        kp_per_s2: c.kp_per_s2,
+        kd_per_s: c.kd_per_s,
+        push_stiffness_per_s2: c.push_stiffness_per_s2,
+    }
+}
+
+fn segment_params(cfg: &Config) -> SegmentParams {
+    SegmentParams {
+        group_window: Micros(cfg.controls.group_window_ms * 1000),
+        hand_span_mm: cfg.controls.hand_span_mm,
+        gesture_grace: Micros(cfg.controls.gesture_grace_ms * 1000),
+    }
+}
+
+fn direct_params(cfg: &Config) -> DirectParams {
+    DirectParams {
+        handle_weight: cfg.mesh.handle_weight,
+        soft_weight: cfg.mesh.soft_weight,
+        checkpoint_spacing_m: cfg.controls.checkpoint_spacing_m,
+        max_constraint_speed_m_s: cfg.controls.max_constraint_speed_m_s,
+        opposing_gain_per_s: cfg.controls.opposing_gain_per_s,
+    }
+}
