@@ -10,6 +10,7 @@
 
 pub mod config;
 pub mod crowd;
+pub mod embedded;
 pub mod engine;
 pub mod geom;
 pub mod gesture;

@@ -1,1 +1,8 @@
-fn main() {}
+//! The `crowdtouch` command: the daemon and its tools.
+#![forbid(unsafe_code)]
+
+mod cli;
+
+fn main() {
+    std::process::exit(cli::main());
+}

@@ -18,7 +18,7 @@ use crate::config::{Config, InputConfig};
 use crate::crowd::assigner::Assigner;
 use crate::engine::Engine;
 use crate::geom::Vec2;
-use crate::input::recording::{read_recording, OnBadFrame, RecordingError};
+use crate::input::recording::{OnBadFrame, RecordingError};
 use crate::input::replay::{Pacing, ReplayItem, ReplaySource};
 use crate::input::{FrameSink, TouchFrame};
 use crate::publish::{HelloInfo, PublisherStats, Server};
@@ -199,8 +199,8 @@ pub struct AssignJob {
 pub struct ControlStats {
     /// When.
     pub t: Micros,
-    /// Stages timed on the control thread.
-    pub stages: Vec<StageStats>,
+    /// Stages timed on the control thread, with their histograms for the interval.
+    pub stages: Vec<StageTimer>,
     /// Ticks since start.
     pub ticks: u64,
     /// Assignments applied since start.
@@ -252,7 +252,7 @@ pub fn sources_from_config(cfg: &Config) -> Result<Vec<SourceSpec>, Error> {
                 let mut items = Vec::new();
                 let mut glass = None;
                 for f in files {
-                    let rec = read_recording(f, OnBadFrame::Stop)?;
+                    let rec = crate::embedded::load_recording(f, OnBadFrame::Stop)?;
                     if glass.is_none() {
                         glass = rec.surface.size_mm();
                     }
@@ -300,6 +300,7 @@ pub struct Daemon {
     reload: Sender<Arc<Config>>,
     e2e: StageTimer,
     encode: StageTimer,
+    totals: Vec<StageTimer>,
     interval_us: u64,
     last_report: Micros,
 }
@@ -443,6 +444,7 @@ impl Daemon {
             reload: reload_tx,
             e2e: StageTimer::new("end_to_end", b.end_to_end_us),
             encode: StageTimer::new("publish", b.publish_us),
+            totals: Vec::new(),
             interval_us: cfg.pipeline.stats_interval_ms * 1000,
             last_report: monotonic_now(),
         })
@@ -484,9 +486,18 @@ impl Daemon {
         let now = monotonic_now();
         self.e2e.absorb(&self.publisher.take_end_to_end());
         self.encode.absorb(&self.publisher.take_encode());
-        let mut stages = cs.stages.clone();
-        stages.push(self.encode.take());
-        stages.push(self.e2e.take());
+        let mut timers = cs.stages;
+        timers.push(self.encode.clone());
+        timers.push(self.e2e.clone());
+        self.encode.take();
+        self.e2e.take();
+        for t in &timers {
+            match self.totals.iter_mut().find(|x| x.name() == t.name()) {
+                Some(total) => total.absorb(t.histogram()),
+                None => self.totals.push(t.clone()),
+            }
+        }
+        let stages: Vec<StageStats> = timers.iter().map(StageTimer::peek).collect();
         let interval_us = now.saturating_since(self.last_report).0.max(1);
         self.last_report = now;
         for s in &stages {
@@ -542,6 +553,11 @@ impl Daemon {
                 log::error!("internal bug: the {name} thread panicked");
             }
         }
+    }
+
+    /// Every stage's figures since start (p50/p99/max over the whole run).
+    pub fn totals(&self) -> Vec<StageStats> {
+        self.totals.iter().map(StageTimer::peek).collect()
     }
 
     /// Stats interval (µs).
@@ -769,12 +785,21 @@ impl ControlLoop {
             let c = self.engine.counters();
             let cs = ControlStats {
                 t: end,
-                stages: vec![
-                    self.t_input.take(),
-                    self.t_queue.take(),
-                    self.t_control.take(),
-                    self.t_assign.take(),
-                ],
+                // Once per interval: the histograms are copied (an allocation the
+                // control thread allows itself at this rate) and restarted.
+                stages: [
+                    &mut self.t_input,
+                    &mut self.t_queue,
+                    &mut self.t_control,
+                    &mut self.t_assign,
+                ]
+                .into_iter()
+                .map(|t| {
+                    let copy = t.clone();
+                    t.take();
+                    copy
+                })
+                .collect(),
                 ticks: c.ticks,
                 assignments: c.assignments,
                 agents: self.engine.agent_count() as u32,

@@ -53,3 +53,21 @@ impl Server {
         unimplemented!()
     }
 }
+pub mod protocol {
+    #![allow(missing_docs, unused)]
+    use crate::snapshot::*;
+    pub struct FieldSet;
+    impl FieldSet {
+        pub const ALL: FieldSet = FieldSet;
+    }
+    pub fn encode_snapshot_json(
+        s: &Snapshot,
+        latency_us: Option<u64>,
+        dropped: u64,
+        fields: &FieldSet,
+        out: &mut Vec<u8>,
+    ) {
+    }
+    pub fn encode_mesh_json(m: &MeshView, with_triangles: bool, out: &mut Vec<u8>) {}
+    pub fn encode_event(e: &Event, out: &mut Vec<u8>) {}
+}

@@ -1,0 +1,462 @@
+//! Command-line interface: the daemon (`run`, `demo`) and its tools.
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Parser, Subcommand};
+use crowdtouch::config::{self, Config};
+use crowdtouch::engine::Engine;
+use crowdtouch::input::recording::OnBadFrame;
+use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
+use crowdtouch::publish::protocol::{
+    encode_event, encode_mesh_json, encode_snapshot_json, FieldSet,
+};
+use crowdtouch::snapshot::StatsReport;
+use crowdtouch::time::{monotonic_now, Micros};
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+mod bench;
+mod watch;
+
+/// crowdtouch — a multi-touch table daemon that drives a crowd.
+///
+/// Touches on the table are segmented into controls (1 finger: point, 2: line, 3+:
+/// area) that deform a mesh over the crowd; agents follow the mesh; renderers read
+/// the crowd from a Unix socket (see docs/protocol.md).
+#[derive(Parser, Debug)]
+#[command(name = "crowdtouch", version, about, long_about = None, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Cmd,
+}
+
+#[derive(Subcommand, Debug)]
+enum Cmd {
+    /// Run the daemon: inputs and socket from the config.
+    ///
+    /// Without --config the first file found is used: $CROWDTOUCH_CONFIG,
+    /// $XDG_CONFIG_HOME/crowdtouch/crowdtouch.ron (~/.config/...),
+    /// /etc/crowdtouch/crowdtouch.ron, else the embedded default. SIGHUP reloads the
+    /// config (an invalid one is reported and the old one keeps running);
+    /// SIGTERM/SIGINT stop cleanly. Under systemd (Type=notify) READY is sent once the
+    /// socket is bound and inputs are open, and the watchdog is fed while the
+    /// pipeline ticks.
+    Run(RunArgs),
+    /// The main job on the embedded default: replays the shipped recordings (looped)
+    /// through the full daemon, serves the socket, prints a status line every second.
+    Demo(DemoArgs),
+    /// Play a recording through the engine and write snapshots as JSON Lines.
+    ///
+    /// Reads our JSON Lines recordings, `evemu-record` text and `libinput record` YAML.
+    /// By default runs on a virtual clock as fast as possible: the same recording and
+    /// config give byte-identical output.
+    Replay(ReplayArgs),
+    /// Draw the crowd live in the terminal from the daemon's socket.
+    Watch(WatchArgs),
+    /// Validate a config file; every error is reported with file:line:column and field.
+    CheckConfig {
+        /// Config file.
+        file: PathBuf,
+    },
+    /// Measure the standard workloads on this machine (p50/p99/max).
+    Bench(bench::BenchArgs),
+    /// Regenerate the shipped recordings (deterministic).
+    SynthRecordings {
+        /// Output directory.
+        #[arg(long, default_value = "config/recordings")]
+        out: PathBuf,
+    },
+}
+
+#[derive(Args, Debug)]
+struct RunArgs {
+    /// Config file (default: the search path above).
+    #[arg(long, short)]
+    config: Option<PathBuf>,
+    /// Socket path (overrides the config).
+    #[arg(long)]
+    socket: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+struct DemoArgs {
+    /// Number of agents.
+    #[arg(long)]
+    agents: Option<u32>,
+    /// Socket path (default: $XDG_RUNTIME_DIR/crowdtouch.sock).
+    #[arg(long)]
+    socket: Option<PathBuf>,
+    /// Stop after this many seconds (default: run until Ctrl-C).
+    #[arg(long)]
+    seconds: Option<f64>,
+}
+
+#[derive(Args, Debug)]
+struct ReplayArgs {
+    /// Recording (.jsonl, evemu, libinput record YAML).
+    file: PathBuf,
+    /// Config (default: the embedded default).
+    #[arg(long, short)]
+    config: Option<PathBuf>,
+    /// Number of agents (overrides the config).
+    #[arg(long)]
+    agents: Option<u32>,
+    /// Play at the recording's own pace instead of as fast as possible.
+    #[arg(long)]
+    realtime: bool,
+    /// Skip bad frames (with a warning naming the line) instead of stopping.
+    #[arg(long)]
+    skip_bad_frames: bool,
+    /// Keep ticking this long after the last frame so the crowd settles (s).
+    #[arg(long, default_value_t = 2.0)]
+    settle: f64,
+    /// Output file (default: stdout).
+    #[arg(long, short)]
+    out: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+struct WatchArgs {
+    /// Socket path (default: as the daemon resolves it).
+    #[arg(long)]
+    socket: Option<PathBuf>,
+    /// Redraws per second.
+    #[arg(long, default_value_t = 20.0)]
+    fps: f64,
+    /// Stop after this many seconds.
+    #[arg(long)]
+    seconds: Option<f64>,
+}
+
+/// Entry point; returns the process exit code.
+pub fn main() -> i32 {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Cmd::Run(a) => run(a),
+        Cmd::Demo(a) => demo(a),
+        Cmd::Replay(a) => replay(a),
+        Cmd::Watch(a) => watch::watch(a.socket, a.fps, a.seconds),
+        Cmd::CheckConfig { file } => return check_config(&file),
+        Cmd::Bench(a) => bench::bench(a),
+        Cmd::SynthRecordings { out } => synth(&out),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("crowdtouch: error: {e:#}");
+            1
+        }
+    }
+}
+
+fn init_logging(level: config::LogLevel) {
+    let mut b = env_logger::Builder::new();
+    b.filter_level(level.filter());
+    if let Ok(spec) = std::env::var("RUST_LOG") {
+        b.parse_filters(&spec);
+    }
+    b.format_target(false);
+    let _ = b.try_init();
+}
+
+fn find_config(explicit: Option<&Path>) -> Result<(Config, Option<PathBuf>)> {
+    if let Some(p) = explicit {
+        return Ok((Config::load(p)?, Some(p.to_path_buf())));
+    }
+    for p in config::search_path() {
+        if p.exists() {
+            return Ok((Config::load(&p)?, Some(p)));
+        }
+    }
+    Ok((Config::embedded_default(), None))
+}
+
+fn check_config(file: &Path) -> i32 {
+    match Config::load(file) {
+        Ok(c) => {
+            println!(
+                "{}: ok ({} agents, {} input{}, socket {})",
+                file.display(),
+                c.crowd.agents,
+                c.inputs.len(),
+                if c.inputs.len() == 1 { "" } else { "s" },
+                c.socket.resolved_path().display()
+            );
+            0
+        }
+        Err(e) => {
+            eprintln!("{e}");
+            1
+        }
+    }
+}
+
+/// Signal flags of a running daemon.
+struct Signals {
+    stop: Arc<AtomicBool>,
+    reload: Arc<AtomicBool>,
+}
+
+fn signals() -> Result<Signals> {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let s = Signals {
+        stop: Arc::new(AtomicBool::new(false)),
+        reload: Arc::new(AtomicBool::new(false)),
+    };
+    for sig in [SIGINT, SIGTERM] {
+        signal_hook::flag::register(sig, Arc::clone(&s.stop))
+            .context("installing signal handlers")?;
+    }
+    signal_hook::flag::register(SIGHUP, Arc::clone(&s.reload))
+        .context("installing SIGHUP handler")?;
+    Ok(s)
+}
+
+/// The supervisor loop shared by `run` and `demo`.
+fn supervise(
+    mut daemon: Daemon,
+    config_path: Option<PathBuf>,
+    until: Option<Micros>,
+    mut on_report: impl FnMut(&StatsReport),
+) -> Result<()> {
+    let sig = signals()?;
+    let mut watchdog_us = 0u64;
+    let watchdog = sd_notify::watchdog_enabled(false, &mut watchdog_us);
+    let _ = sd_notify::notify(false, &[sd_notify::NotifyState::Ready]);
+    let mut last_ping = monotonic_now();
+    loop {
+        if sig.stop.load(Ordering::Relaxed) || until.is_some_and(|u| monotonic_now() >= u) {
+            break;
+        }
+        if sig.reload.swap(false, Ordering::Relaxed) {
+            match &config_path {
+                Some(p) => match Config::load(p) {
+                    Ok(c) => {
+                        log::info!("SIGHUP: reloading {}", p.display());
+                        daemon.reload(c);
+                    }
+                    Err(e) => {
+                        log::error!("SIGHUP: new config rejected, the old one keeps running:\n{e}")
+                    }
+                },
+                None => {
+                    log::warn!("SIGHUP: running on the embedded default config; nothing to reload")
+                }
+            }
+        }
+        if let Some(r) = daemon.next_report(Duration::from_millis(200)) {
+            on_report(&r);
+        }
+        // Feed the watchdog only while the control thread is ticking.
+        if watchdog && monotonic_now().saturating_since(last_ping).0 * 2 >= watchdog_us {
+            if daemon.heartbeat_age() < Micros(watchdog_us / 2) {
+                let _ = sd_notify::notify(false, &[sd_notify::NotifyState::Watchdog]);
+            } else {
+                log::error!(
+                    "control thread stalled for {} — not feeding the watchdog",
+                    daemon.heartbeat_age()
+                );
+            }
+            last_ping = monotonic_now();
+        }
+    }
+    let _ = sd_notify::notify(false, &[sd_notify::NotifyState::Stopping]);
+    log::info!("stopping");
+    daemon.shutdown();
+    Ok(())
+}
+
+fn run(a: RunArgs) -> Result<()> {
+    let (cfg, path) = find_config(a.config.as_deref())?;
+    init_logging(cfg.log_level);
+    match &path {
+        Some(p) => log::info!("config {}", p.display()),
+        None => log::info!(
+            "no config file found (looked in {}); using the embedded default",
+            config::search_path()
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+    let socket = a.socket.unwrap_or_else(|| cfg.socket.resolved_path());
+    let sources = sources_from_config(&cfg)?;
+    let daemon = Daemon::start(
+        cfg,
+        sources,
+        DaemonOptions {
+            socket_path: socket,
+        },
+    )?;
+    log::info!("listening on {}", daemon.socket_path().display());
+    supervise(daemon, path, None, |r| {
+        log::debug!("{}", status_line(r));
+    })
+}
+
+fn demo(a: DemoArgs) -> Result<()> {
+    let mut cfg = Config::embedded_default();
+    init_logging(cfg.log_level);
+    if let Some(n) = a.agents {
+        cfg.crowd.agents = n;
+        if let Some((field, msg)) = cfg.validate().into_iter().next() {
+            bail!("--agents: {field}: {msg}");
+        }
+    }
+    let socket = a.socket.unwrap_or_else(|| cfg.socket.resolved_path());
+    let sources = sources_from_config(&cfg)?;
+    let daemon = Daemon::start(
+        cfg,
+        sources,
+        DaemonOptions {
+            socket_path: socket,
+        },
+    )?;
+    let path = daemon.socket_path().display().to_string();
+    println!("crowdtouch demo: serving the crowd on {path}");
+    println!("  watch it:   crowdtouch watch --socket {path}   (or: cargo run --release -- watch --socket {path})");
+    println!("  raw stream: socat - UNIX-CONNECT:{path}");
+    println!("  Ctrl-C stops.");
+    let until = a
+        .seconds
+        .map(|s| monotonic_now() + Micros::from_secs_f64(s));
+    supervise(daemon, None, until, |r| {
+        println!("{}", status_line(r));
+        let _ = std::io::stdout().flush();
+    })
+}
+
+/// One status line: agents, controls, last gesture, latency, drops.
+pub fn status_line(r: &StatsReport) -> String {
+    let e2e = r.stages.iter().find(|s| s.stage == "end_to_end");
+    let (p50, p99) = e2e.map(|s| (s.p50_us, s.p99_us)).unwrap_or((0, 0));
+    let assign_per_s = r
+        .stages
+        .iter()
+        .find(|s| s.stage == "assignment")
+        .map(|s| s.count)
+        .unwrap_or(0) as f64
+        / (r.interval_us as f64 * 1e-6);
+    format!(
+        "agents {:>5} | controls {} | last: {:<28} | latency p50 {:>5.2} ms p99 {:>5.2} ms | assign {:>4.0}/s | clients {} | dropped snapshots {} touches {}",
+        r.agents,
+        r.controls,
+        r.last_gesture.as_deref().unwrap_or("-"),
+        p50 as f64 / 1000.0,
+        p99 as f64 / 1000.0,
+        assign_per_s,
+        r.clients,
+        r.snapshots_dropped,
+        r.transitions_lost,
+    )
+}
+
+fn replay(a: ReplayArgs) -> Result<()> {
+    let (mut cfg, _) = match &a.config {
+        Some(p) => (Config::load(p)?, Some(p.clone())),
+        None => (Config::embedded_default(), None),
+    };
+    init_logging(cfg.log_level);
+    if let Some(n) = a.agents {
+        cfg.crowd.agents = n;
+        if let Some((field, msg)) = cfg.validate().into_iter().next() {
+            bail!("--agents: {field}: {msg}");
+        }
+    }
+    let on_bad = if a.skip_bad_frames {
+        OnBadFrame::Skip
+    } else {
+        OnBadFrame::Stop
+    };
+    let rec = crowdtouch::embedded::load_recording(&a.file, on_bad)?;
+    for w in &rec.warnings {
+        eprintln!("{}:{}: skipped: {}", a.file.display(), w.line, w.message);
+    }
+    let mut out: Box<dyn Write> = match &a.out {
+        Some(p) => Box::new(std::io::BufWriter::new(
+            std::fs::File::create(p).with_context(|| format!("creating {}", p.display()))?,
+        )),
+        None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
+    };
+    let mut engine = Engine::new(&cfg, rec.surface.size_mm(), true);
+    let period = Micros((1e6 / cfg.pipeline.tick_hz) as u64);
+    let settle = Micros::from_secs_f64(a.settle.max(0.0));
+    let mut buf = Vec::with_capacity(1 << 16);
+    let start_wall = monotonic_now();
+    let mut t = Micros::ZERO;
+    let mut emit = |engine: &mut Engine, now: Micros, buf: &mut Vec<u8>| -> Result<()> {
+        let o = engine.tick(now);
+        buf.clear();
+        for e in o.events {
+            encode_event(e, buf);
+        }
+        if let Some(m) = &o.mesh {
+            encode_mesh_json(m, m.seq == 1, buf);
+        }
+        encode_snapshot_json(&o.snapshot, None, 0, &FieldSet::ALL, buf);
+        engine.clear_events();
+        out.write_all(buf).context("writing snapshots")?;
+        Ok(())
+    };
+    let pace = |t: Micros| {
+        if a.realtime {
+            let due = start_wall + t;
+            let now = monotonic_now();
+            if due > now {
+                std::thread::sleep(Duration::from_micros((due - now).0));
+            }
+        }
+    };
+    for f in &rec.frames {
+        // Timer ticks between frames, as the daemon does when no touch arrives.
+        while t + period < f.t {
+            t = t + period;
+            pace(t);
+            emit(&mut engine, t, &mut buf)?;
+        }
+        t = f.t;
+        pace(t);
+        engine.push_frame(f);
+        emit(&mut engine, t, &mut buf)?;
+    }
+    let end = t + settle;
+    while t + period <= end {
+        t = t + period;
+        pace(t);
+        emit(&mut engine, t, &mut buf)?;
+    }
+    out.flush().context("writing snapshots")?;
+    Ok(())
+}
+
+fn synth(out: &Path) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let files = crowdtouch::input::synth::write_shipped(out)
+        .with_context(|| format!("writing into {}", out.display()))?;
+    for f in files {
+        println!("{}", f.display());
+    }
+    Ok(())
+}
+
+/// Reads lines from a Unix socket client, for the tools.
+pub fn connect(socket: Option<PathBuf>) -> Result<BufReader<std::os::unix::net::UnixStream>> {
+    let path = socket.unwrap_or_else(|| Config::embedded_default().socket.resolved_path());
+    let s = std::os::unix::net::UnixStream::connect(&path).with_context(|| {
+        format!(
+            "connecting to {} (is the daemon running? try `crowdtouch demo`)",
+            path.display()
+        )
+    })?;
+    Ok(BufReader::new(s))
+}
+
+/// Reads one line; `None` at end of stream.
+pub fn read_line(r: &mut impl BufRead, buf: &mut String) -> Result<Option<()>> {
+    buf.clear();
+    let n = r.read_line(buf).context("reading from the socket")?;
+    Ok((n > 0).then_some(()))
+}

@@ -1,0 +1,277 @@
+//! `crowdtouch bench`: the standard workloads, measured on this machine.
+
+use anyhow::{Context, Result};
+use clap::{Args, ValueEnum};
+use crowdtouch::config::Config;
+use crowdtouch::crowd::arap::{Arap, Constraint};
+use crowdtouch::crowd::mesh::TriMesh;
+use crowdtouch::engine::Engine;
+use crowdtouch::geom::{Rect, Vec2};
+use crowdtouch::input::{Contact, ContactFlags, ContactId, TouchFrame};
+use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
+use crowdtouch::snapshot::StageStats;
+use crowdtouch::time::{monotonic_now, Micros};
+use serde::Serialize;
+use std::io::BufRead;
+use std::time::{Duration, Instant};
+
+/// Which workload to run.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Workload {
+    /// Every workload.
+    All,
+    /// End-to-end latency: the full daemon replaying at 120 Hz to a socket client.
+    E2e,
+    /// One ARAP deformation step, 20×20 mesh with an area control.
+    Arap,
+    /// One control tick (segment + deform + step), without the assignment worker.
+    Tick,
+}
+
+/// Arguments of `bench`.
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Workload.
+    #[arg(value_enum, default_value_t = Workload::All)]
+    workload: Workload,
+    /// Agents for the end-to-end and tick workloads.
+    #[arg(long, default_value_t = 1000)]
+    agents: u32,
+    /// Duration of the end-to-end run (s).
+    #[arg(long, default_value_t = 10.0)]
+    seconds: f64,
+    /// Machine-readable output.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize, Debug)]
+struct Row {
+    workload: String,
+    samples: u64,
+    p50_us: f64,
+    p99_us: f64,
+    max_us: f64,
+    note: String,
+}
+
+fn quantiles(mut v: Vec<f64>) -> (f64, f64, f64) {
+    if v.is_empty() {
+        return (0.0, 0.0, 0.0);
+    }
+    v.sort_by(f64::total_cmp);
+    let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+    (q(0.5), q(0.99), v[v.len() - 1])
+}
+
+fn row_from_samples(name: &str, samples: Vec<f64>, note: String) -> Row {
+    let n = samples.len() as u64;
+    let (p50, p99, max) = quantiles(samples);
+    Row {
+        workload: name.into(),
+        samples: n,
+        p50_us: p50,
+        p99_us: p99,
+        max_us: max,
+        note,
+    }
+}
+
+fn row_from_stage(name: &str, s: Option<&StageStats>, note: String) -> Row {
+    let s = s.cloned().unwrap_or_default();
+    Row {
+        workload: name.into(),
+        samples: s.count,
+        p50_us: s.p50_us as f64,
+        p99_us: s.p99_us as f64,
+        max_us: s.max_us as f64,
+        note,
+    }
+}
+
+/// Runs the chosen workloads and prints a table (or JSON).
+pub fn bench(a: BenchArgs) -> Result<()> {
+    let mut rows = Vec::new();
+    if matches!(a.workload, Workload::All | Workload::Arap) {
+        rows.push(arap_step());
+    }
+    if matches!(a.workload, Workload::All | Workload::Tick) {
+        rows.push(control_tick(a.agents));
+    }
+    if matches!(a.workload, Workload::All | Workload::E2e) {
+        rows.extend(end_to_end(a.agents, a.seconds)?);
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+    } else {
+        println!(
+            "{:<28} {:>8} {:>10} {:>10} {:>10}  note",
+            "workload", "samples", "p50 µs", "p99 µs", "max µs"
+        );
+        for r in &rows {
+            println!(
+                "{:<28} {:>8} {:>10.1} {:>10.1} {:>10.1}  {}",
+                r.workload, r.samples, r.p50_us, r.p99_us, r.max_us, r.note
+            );
+        }
+    }
+    Ok(())
+}
+
+/// One ARAP step on a 20×20 mesh with a four-finger area control.
+fn arap_step() -> Row {
+    let mesh = TriMesh::grid(
+        Rect {
+            min: [0.0, 0.0],
+            max: [4.0, 4.0],
+        },
+        20,
+        20,
+    );
+    let rest = mesh.rest().to_vec();
+    let mut arap = Arap::new(&mesh);
+    // Handles at four vertices around the centre; every vertex inside their square
+    // is a supplementary point.
+    let handles = [(6usize, 6usize), (13, 6), (13, 13), (6, 13)];
+    let mut cons = Vec::new();
+    for r in 6..=13 {
+        for c in 6..=13 {
+            let h = handles.contains(&(c, r));
+            cons.push(Constraint {
+                vertex: (r * 20 + c) as u32,
+                weight: if h { 1000.0 } else { 100.0 },
+            });
+        }
+    }
+    if let Err(e) = arap.set_constraints(&cons) {
+        return row_from_samples("arap_step 20x20 area", vec![], format!("failed: {e}"));
+    }
+    let centre = Vec2::new(2.0, 2.0);
+    let mut targets = vec![Vec2::zeros(); cons.len()];
+    let mut out = rest.clone();
+    let mut samples = Vec::with_capacity(3000);
+    for k in 0..3000 {
+        let th = 0.3 * ((k % 200) as f64 / 200.0);
+        let (s, c) = th.sin_cos();
+        for (t, con) in targets.iter_mut().zip(&cons) {
+            let d = rest[con.vertex as usize] - centre;
+            *t = centre + Vec2::new(c * d.x - s * d.y, s * d.x + c * d.y);
+        }
+        let t0 = Instant::now();
+        let _ = arap.solve(&targets, &rest, &mut out);
+        samples.push(t0.elapsed().as_secs_f64() * 1e6);
+    }
+    row_from_samples(
+        "arap_step 20x20 area",
+        samples,
+        format!("{} constraints", cons.len()),
+    )
+}
+
+/// One control tick for `agents` agents with a three-finger area control moving.
+fn control_tick(agents: u32) -> Row {
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = agents;
+    let mut engine = Engine::new(&cfg, cfg.surface.size_mm, false);
+    let mut samples = Vec::with_capacity(2400);
+    let period = 8_333u64;
+    let fingers = [(0.48f32, 0.45f32), (0.52, 0.45), (0.50, 0.52)];
+    for k in 0..2400u64 {
+        let t = Micros(k * period);
+        let mut f = TouchFrame::new(t);
+        let phase = k % 600;
+        let dx = 0.08 * (phase as f32 / 600.0);
+        for (i, &(x, y)) in fingers.iter().enumerate() {
+            let flags = match phase {
+                0 => ContactFlags::DOWN,
+                599 => ContactFlags::UP,
+                _ => ContactFlags::NONE,
+            };
+            let id = ContactId((k / 600) as u32 * 10 + i as u32 + 1);
+            let _ = f.push(Contact {
+                id,
+                x: x + dx,
+                y,
+                flags,
+                ..Contact::default()
+            });
+        }
+        let t0 = Instant::now();
+        engine.push_frame(&f);
+        let o = engine.tick(t);
+        drop(o);
+        engine.clear_events();
+        samples.push(t0.elapsed().as_secs_f64() * 1e6);
+    }
+    row_from_samples(
+        &format!("control_tick {agents} agents"),
+        samples,
+        "segment + ARAP + goals + agent step + snapshot".into(),
+    )
+}
+
+/// The full daemon replaying the shipped recordings at 120 Hz to one socket client.
+fn end_to_end(agents: u32, seconds: f64) -> Result<Vec<Row>> {
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = agents;
+    cfg.log_level = crowdtouch::config::LogLevel::Error;
+    let sock = std::env::temp_dir().join(format!("crowdtouch-bench-{}.sock", std::process::id()));
+    let sources = sources_from_config(&cfg)?;
+    let mut daemon = Daemon::start(
+        cfg,
+        sources,
+        DaemonOptions {
+            socket_path: sock.clone(),
+        },
+    )?;
+    let stream =
+        std::os::unix::net::UnixStream::connect(&sock).context("connecting the bench client")?;
+    let reader = std::thread::spawn(move || {
+        let mut r = std::io::BufReader::new(stream);
+        let mut line = String::new();
+        let mut snapshots = 0u64;
+        while r.read_line(&mut line).map(|n| n > 0).unwrap_or(false) {
+            if line.starts_with("{\"type\":\"snapshot\"") {
+                snapshots += 1;
+            }
+            line.clear();
+        }
+        snapshots
+    });
+    let start = monotonic_now();
+    let until = start + Micros::from_secs_f64(seconds);
+    while monotonic_now() < until {
+        let _ = daemon.next_report(Duration::from_millis(200));
+    }
+    let elapsed = monotonic_now().saturating_since(start).as_secs_f64();
+    let totals = daemon.totals();
+    let input = daemon.input_counters();
+    let lost = input
+        .transitions_lost
+        .load(std::sync::atomic::Ordering::Relaxed);
+    let coalesced = input.coalesced.load(std::sync::atomic::Ordering::Relaxed);
+    let dropped = daemon.publisher_stats().snapshots_dropped();
+    let rss = crowdtouch::stats::rss_bytes().unwrap_or(0);
+    daemon.shutdown();
+    let snapshots = reader.join().unwrap_or(0);
+    let find = |n: &str| totals.iter().find(|s| s.stage == n);
+    let assign = find("assignment");
+    let refresh = assign.map(|s| s.count).unwrap_or(0) as f64 / elapsed;
+    Ok(vec![
+        row_from_stage(
+            &format!("end_to_end {agents} agents"),
+            find("end_to_end"),
+            format!(
+                "input timestamp -> bytes written; {snapshots} snapshots read, {dropped} dropped, touch transitions lost {lost}, motion frames coalesced {coalesced}, RSS {:.1} MB",
+                rss as f64 / 1e6
+            ),
+        ),
+        row_from_stage(&format!("control {agents} agents"), find("control"), "control thread tick, in the daemon".into()),
+        row_from_stage(
+            &format!("assignment {agents} agents"),
+            assign,
+            format!("worker solve; refreshed {refresh:.1} times/s"),
+        ),
+        row_from_stage("publish (encode)", find("publish"), "snapshot serialisation".into()),
+    ])
+}
