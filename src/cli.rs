@@ -3,7 +3,7 @@
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
 use crowdtouch::config::{self, Config};
-use crowdtouch::engine::Engine;
+use crowdtouch::engine::{replay_virtual, Engine};
 use crowdtouch::input::recording::OnBadFrame;
 use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
 use crowdtouch::publish::protocol::{
@@ -386,48 +386,38 @@ fn replay(a: ReplayArgs) -> Result<()> {
     let settle = Micros::from_secs_f64(a.settle.max(0.0));
     let mut buf = Vec::with_capacity(1 << 16);
     let start_wall = monotonic_now();
-    let mut t = Micros::ZERO;
-    let mut emit = |engine: &mut Engine, now: Micros, buf: &mut Vec<u8>| -> Result<()> {
-        let o = engine.tick(now);
-        buf.clear();
-        for e in o.events {
-            encode_event(e, buf);
-        }
-        if let Some(m) = &o.mesh {
-            encode_mesh_json(m, m.seq == 1, buf);
-        }
-        encode_snapshot_json(&o.snapshot, None, 0, &FieldSet::ALL, buf);
-        engine.clear_events();
-        out.write_all(buf).context("writing snapshots")?;
-        Ok(())
-    };
+    let t0 = rec.frames.first().map_or(Micros::ZERO, |f| f.t);
+    let realtime = a.realtime;
+    let mut sent_topology = 0;
     let pace = |t: Micros| {
-        if a.realtime {
-            let due = start_wall + t;
+        if realtime {
+            let due = start_wall + t.saturating_since(t0);
             let now = monotonic_now();
             if due > now {
                 std::thread::sleep(Duration::from_micros((due - now).0));
             }
         }
     };
-    for f in &rec.frames {
-        // Timer ticks between frames, as the daemon does when no touch arrives.
-        while t + period < f.t {
-            t = t + period;
-            pace(t);
-            emit(&mut engine, t, &mut buf)?;
-        }
-        t = f.t;
-        pace(t);
-        engine.push_frame(f);
-        emit(&mut engine, t, &mut buf)?;
-    }
-    let end = t + settle;
-    while t + period <= end {
-        t = t + period;
-        pace(t);
-        emit(&mut engine, t, &mut buf)?;
-    }
+    replay_virtual(
+        &mut engine,
+        &rec.frames,
+        period,
+        settle,
+        pace,
+        |o| -> Result<()> {
+            buf.clear();
+            for e in o.events {
+                encode_event(e, &mut buf);
+            }
+            if let Some(m) = &o.mesh {
+                encode_mesh_json(m, m.topology != sent_topology, &mut buf);
+                sent_topology = m.topology;
+            }
+            encode_snapshot_json(&o.snapshot, None, 0, &FieldSet::ALL, &mut buf);
+            out.write_all(&buf).context("writing snapshots")?;
+            Ok(())
+        },
+    )?;
     out.flush().context("writing snapshots")?;
     Ok(())
 }
