@@ -1,0 +1,237 @@
+//! The `crowdtouch` binary: replay determinism, bad input, config checking, demo.
+
+mod common;
+
+use std::io::{BufRead, BufReader, Write};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_crowdtouch"))
+}
+
+#[test]
+fn help_lists_every_subcommand() {
+    let out = bin().arg("--help").output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    for sub in [
+        "run",
+        "demo",
+        "replay",
+        "watch",
+        "check-config",
+        "bench",
+        "synth-recordings",
+    ] {
+        assert!(text.contains(sub), "--help misses {sub}:\n{text}");
+    }
+}
+
+#[test]
+fn replay_output_is_byte_identical_across_runs() {
+    let rec = common::shipped("04-area-drag.jsonl");
+    let run = || {
+        bin()
+            .arg("replay")
+            .arg(&rec)
+            .arg("--agents")
+            .arg("60")
+            .output()
+            .unwrap()
+    };
+    let (a, b) = (run(), run());
+    assert!(a.status.success(), "{}", String::from_utf8_lossy(&a.stderr));
+    assert_eq!(a.stdout, b.stdout);
+    let text = String::from_utf8(a.stdout).unwrap();
+    let mut types = std::collections::BTreeSet::new();
+    for line in text.lines() {
+        let v: serde_json::Value = serde_json::from_str(line).unwrap();
+        types.insert(v["type"].as_str().unwrap().to_string());
+    }
+    assert!(
+        types.contains("snapshot") && types.contains("control") && types.contains("mesh"),
+        "{types:?}"
+    );
+}
+
+fn write_tmp(dir: &tempfile::TempDir, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.path().join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn corrupt_recording(dir: &tempfile::TempDir) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(common::shipped("01-point-drag.jsonl")).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    // Line 6 truncated mid-object.
+    let l = lines[5].clone();
+    lines[5] = l[..l.len() / 2].to_string();
+    write_tmp(dir, "bad.jsonl", &(lines.join("\n") + "\n"))
+}
+
+#[test]
+fn a_corrupt_recording_line_is_named_and_replay_stops() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = corrupt_recording(&dir);
+    let out = bin().arg("replay").arg(&bad).output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.jsonl") && err.contains(":6"),
+        "error should name file and line 6: {err}"
+    );
+}
+
+#[test]
+fn skip_bad_frames_replays_the_rest_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = corrupt_recording(&dir);
+    let out = bin()
+        .arg("replay")
+        .arg(&bad)
+        .arg("--skip-bad-frames")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(":6") && err.contains("skipped"), "{err}");
+    assert!(!out.stdout.is_empty());
+}
+
+#[test]
+fn check_config_reports_every_error_with_place_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = crowdtouch::config::DEFAULT_CONFIG_RON;
+    let ok = write_tmp(&dir, "ok.ron", good);
+    let out = bin().arg("check-config").arg(&ok).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bad = write_tmp(
+        &dir,
+        "bad.ron",
+        &good.replacen("agents: 100", "agents: 0", 1).replacen(
+            "max_speed_m_s: 1.5",
+            "max_speed_m_s: -1.0",
+            1,
+        ),
+    );
+    let out = bin().arg("check-config").arg(&bad).output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 2, "{err}");
+    assert!(
+        lines[0].contains("bad.ron:") && lines[0].contains("crowd.agents"),
+        "{err}"
+    );
+    assert!(lines[1].contains("crowd.max_speed_m_s"), "{err}");
+    let missing = bin()
+        .arg("check-config")
+        .arg(dir.path().join("nope.ron"))
+        .output()
+        .unwrap();
+    assert!(!missing.status.success());
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("nope.ron"));
+}
+
+#[test]
+fn demo_serves_the_socket_and_prints_status() {
+    let dir = tempfile::tempdir().unwrap();
+    let sock = dir.path().join("demo.sock");
+    let mut child = bin()
+        .args(["demo", "--seconds", "4", "--socket"])
+        .arg(&sock)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut first = String::new();
+    out.read_line(&mut first).unwrap();
+    assert!(
+        first.contains(&sock.display().to_string()),
+        "first line names the socket: {first}"
+    );
+    let mut r = BufReader::new(std::os::unix::net::UnixStream::connect(&sock).unwrap());
+    let mut line = String::new();
+    let mut snapshots = 0;
+    let t0 = Instant::now();
+    while snapshots < 50 && t0.elapsed() < Duration::from_secs(3) {
+        line.clear();
+        if r.read_line(&mut line).unwrap() == 0 {
+            break;
+        }
+        if line.starts_with("{\"type\":\"snapshot\"") {
+            snapshots += 1;
+        }
+    }
+    assert!(snapshots >= 50);
+    let rest: Vec<String> = out.lines().map_while(Result::ok).collect();
+    let status = rest
+        .iter()
+        .filter(|l| l.contains("agents") && l.contains("latency"))
+        .count();
+    assert!(status >= 2, "status lines: {rest:?}");
+    assert!(child.wait().unwrap().success());
+}
+
+#[test]
+fn sighup_with_a_bad_config_keeps_the_old_one_running() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg_path = dir.path().join("crowdtouch.ron");
+    let rec = common::shipped("07-open-space-swipe.jsonl");
+    let base = crowdtouch::config::DEFAULT_CONFIG_RON;
+    let a = base.find("inputs: [").unwrap();
+    let b = a + base[a..].find("\n    ],\n").unwrap() + "\n    ],\n".len();
+    let text = format!(
+        "{}inputs: [Replay(files: [{:?}], looped: true)],\n{}",
+        &base[..a],
+        rec.display().to_string(),
+        &base[b..]
+    );
+    std::fs::write(&cfg_path, &text).unwrap();
+    let check = bin().arg("check-config").arg(&cfg_path).output().unwrap();
+    assert!(
+        check.status.success(),
+        "{}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+    let sock = dir.path().join("run.sock");
+    let child = bin()
+        .args(["run", "--config"])
+        .arg(&cfg_path)
+        .arg("--socket")
+        .arg(&sock)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while !sock.exists() && t0.elapsed() < Duration::from_secs(5) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::fs::write(&cfg_path, "(version: 1, oops").unwrap();
+    let pid = nix::unistd::Pid::from_raw(child.id() as i32);
+    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGHUP).unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    // Still serving.
+    let mut r = BufReader::new(std::os::unix::net::UnixStream::connect(&sock).unwrap());
+    let mut line = String::new();
+    r.read_line(&mut line).unwrap();
+    assert!(line.contains("\"hello\""));
+    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGTERM).unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success());
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        log.contains("rejected") && log.contains("crowdtouch.ron:1"),
+        "{log}"
+    );
+    let _ = std::io::stderr().flush();
+}

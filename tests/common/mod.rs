@@ -1,0 +1,135 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use crowdtouch::config::Config;
+use crowdtouch::engine::{replay_virtual, Engine};
+use crowdtouch::geom::Vec2;
+use crowdtouch::input::recording::{OnBadFrame, Recording};
+use crowdtouch::snapshot::{Event, MeshView, Snapshot};
+use crowdtouch::time::Micros;
+use std::convert::Infallible;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Path of a shipped recording.
+pub fn shipped(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("config/recordings")
+        .join(name)
+}
+
+/// Loads a shipped recording.
+pub fn load(name: &str) -> Recording {
+    crowdtouch::embedded::load_recording(&shipped(name), OnBadFrame::Stop)
+        .expect("shipped recording loads")
+}
+
+/// Everything a replay produced.
+pub struct Run {
+    pub snapshots: Vec<Arc<Snapshot>>,
+    pub events: Vec<Event>,
+    pub meshes: Vec<Arc<MeshView>>,
+}
+
+impl Run {
+    pub fn last(&self) -> &Snapshot {
+        self.snapshots.last().expect("at least one snapshot")
+    }
+    pub fn first_mesh(&self) -> &MeshView {
+        self.meshes.first().expect("a mesh")
+    }
+    pub fn last_mesh(&self) -> &MeshView {
+        self.meshes.last().expect("a mesh")
+    }
+    /// Snapshot with sequence number `seq`.
+    pub fn at(&self, seq: u64) -> &Snapshot {
+        &self.snapshots[(seq - 1) as usize]
+    }
+}
+
+/// Replays a shipped recording through the engine on a virtual clock with inline
+/// (exact, every tick) assignment, then lets the crowd settle.
+pub fn replay(name: &str, cfg: &Config, settle_s: f64) -> Run {
+    let rec = load(name);
+    let mut engine = Engine::new(cfg, rec.surface.size_mm(), true);
+    let mut run = Run {
+        snapshots: vec![],
+        events: vec![],
+        meshes: vec![],
+    };
+    let period = Micros((1e6 / cfg.pipeline.tick_hz) as u64);
+    replay_virtual(
+        &mut engine,
+        &rec.frames,
+        period,
+        Micros::from_secs_f64(settle_s),
+        |_| {},
+        |o| {
+            run.snapshots.push(Arc::new((*o.snapshot).clone()));
+            run.events.extend(o.events.iter().cloned());
+            if let Some(m) = &o.mesh {
+                run.meshes.push(Arc::new((**m).clone()));
+            }
+            Ok::<(), Infallible>(())
+        },
+    )
+    .unwrap();
+    run
+}
+
+pub fn centroid(ps: impl IntoIterator<Item = Vec2>) -> Vec2 {
+    let (mut s, mut n) = (Vec2::zeros(), 0.0);
+    for p in ps {
+        s += p;
+        n += 1.0;
+    }
+    s / n
+}
+
+/// Minimum total cost of assigning `agents` to `goals` with squared-distance cost,
+/// computed by an independent solver (pathfinding's Kuhn–Munkres on costs scaled to
+/// integers), in the same units as the sum of squared distances.
+pub fn reference_optimal_cost(agents: &[Vec2], goals: &[Vec2]) -> f64 {
+    const SCALE: f64 = 1e6;
+    let n = agents.len();
+    let mut data = Vec::with_capacity(n * goals.len());
+    for a in agents {
+        for g in goals {
+            data.push(-((a - g).norm_squared() * SCALE).round() as i64);
+        }
+    }
+    let m = pathfinding::matrix::Matrix::from_vec(n, goals.len(), data).expect("matrix");
+    let (total, _) = pathfinding::kuhn_munkres::kuhn_munkres(&m);
+    -(total as f64) / SCALE
+}
+
+/// Total squared-distance cost of an assignment.
+pub fn assignment_cost(agents: &[Vec2], goals: &[Vec2], goal_of: impl Iterator<Item = u32>) -> f64 {
+    agents
+        .iter()
+        .zip(goal_of)
+        .map(|(a, g)| (a - goals[g as usize]).norm_squared())
+        .sum()
+}
+
+/// Best rigid transform (rotation + translation) from `a` to `b` (2-D Procrustes);
+/// returns (angle in radians, max residual in metres).
+pub fn rigid_fit(a: &[Vec2], b: &[Vec2]) -> (f64, f64) {
+    let ca = centroid(a.iter().copied());
+    let cb = centroid(b.iter().copied());
+    let (mut sxx, mut sxy) = (0.0, 0.0);
+    for (p, q) in a.iter().zip(b) {
+        let (p, q) = (p - ca, q - cb);
+        sxx += p.x * q.x + p.y * q.y;
+        sxy += p.x * q.y - p.y * q.x;
+    }
+    let th = sxy.atan2(sxx);
+    let (s, c) = th.sin_cos();
+    let mut worst: f64 = 0.0;
+    for (p, q) in a.iter().zip(b) {
+        let d = p - ca;
+        let r = cb + Vec2::new(c * d.x - s * d.y, s * d.x + c * d.y);
+        worst = worst.max((r - q).norm());
+    }
+    (th, worst)
+}

@@ -1,0 +1,296 @@
+//! The whole daemon: a recording replayed in real time through the input thread,
+//! queue, control thread and publisher, read by socket clients.
+
+mod common;
+
+use common::*;
+use crowdtouch::config::Config;
+use crowdtouch::geom::Vec2;
+use crowdtouch::input::replay::ReplayItem;
+use crowdtouch::pipeline::{Daemon, DaemonOptions, SourceSpec};
+use crowdtouch::time::Micros;
+use serde_json::Value;
+use std::io::{BufRead, BufReader, Write};
+use std::os::unix::net::UnixStream;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+fn sock(dir: &tempfile::TempDir) -> PathBuf {
+    dir.path().join("ct.sock")
+}
+
+fn source(names: &[&str], looped: bool) -> SourceSpec {
+    let items = names
+        .iter()
+        .map(|n| ReplayItem {
+            name: n.to_string(),
+            frames: load(n).frames,
+        })
+        .collect();
+    SourceSpec::Replay {
+        items,
+        looped,
+        gap: Micros(200_000),
+        reset_between: false,
+        glass_mm: load(names[0]).surface.size_mm(),
+    }
+}
+
+fn start(cfg: Config, names: &[&str], path: &Path) -> Daemon {
+    Daemon::start(
+        cfg,
+        vec![source(names, false)],
+        DaemonOptions {
+            socket_path: path.to_path_buf(),
+        },
+    )
+    .expect("daemon starts")
+}
+
+/// Reads JSON lines until `until` returns true or the time is up.
+fn read_until(
+    r: &mut BufReader<UnixStream>,
+    secs: f64,
+    mut until: impl FnMut(&Value) -> bool,
+) -> Vec<Value> {
+    r.get_ref()
+        .set_read_timeout(Some(Duration::from_millis(200)))
+        .unwrap();
+    let end = Instant::now() + Duration::from_secs_f64(secs);
+    let mut out = vec![];
+    let mut line = String::new();
+    while Instant::now() < end {
+        match r.read_line(&mut line) {
+            Ok(0) => break,
+            Ok(_) => {
+                let v: Value = serde_json::from_str(&line)
+                    .unwrap_or_else(|e| panic!("bad line {line:?}: {e}"));
+                line.clear();
+                let stop = until(&v);
+                out.push(v);
+                if stop {
+                    break;
+                }
+            }
+            Err(e)
+                if e.kind() == std::io::ErrorKind::WouldBlock
+                    || e.kind() == std::io::ErrorKind::TimedOut => {}
+            Err(e) => panic!("read: {e}"),
+        }
+    }
+    out
+}
+
+fn pairs(v: &Value) -> Vec<Vec2> {
+    v.as_array()
+        .unwrap()
+        .chunks_exact(2)
+        .map(|c| Vec2::new(c[0].as_f64().unwrap(), c[1].as_f64().unwrap()))
+        .collect()
+}
+
+#[test]
+fn a_reading_client_sees_the_crowd_follow_a_point_drag() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = sock(&dir);
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = 40;
+    let daemon = start(cfg, &["01-point-drag.jsonl"], &path);
+    let mut r = BufReader::new(UnixStream::connect(&path).unwrap());
+    // Like `socat - UNIX-CONNECT:...`: sends nothing, gets hello then the stream.
+    let mut ended_at: Option<Instant> = None;
+    let msgs = read_until(&mut r, 12.0, |v| {
+        if v["type"] == "control" && v["phase"] == "end" {
+            ended_at = Some(Instant::now());
+        }
+        ended_at.is_some_and(|t| t.elapsed() > Duration::from_secs(4))
+    });
+    daemon.shutdown();
+    assert_eq!(msgs[0]["type"], "hello");
+    assert_eq!(msgs[0]["protocol"], 1);
+    let snaps: Vec<&Value> = msgs.iter().filter(|v| v["type"] == "snapshot").collect();
+    assert!(snaps.len() > 300, "only {} snapshots", snaps.len());
+    let seqs: Vec<u64> = snaps.iter().map(|s| s["seq"].as_u64().unwrap()).collect();
+    assert!(
+        seqs.windows(2).all(|w| w[1] > w[0]),
+        "snapshots out of order"
+    );
+    let kinds: Vec<(&str, &str)> = msgs
+        .iter()
+        .filter(|v| v["type"] == "control")
+        .map(|v| (v["phase"].as_str().unwrap(), v["kind"].as_str().unwrap()))
+        .collect();
+    assert_eq!(kinds, vec![("begin", "point"), ("end", "point")]);
+    // Snapshots driven by touches carry their latency.
+    assert!(snaps.iter().any(|s| s["latency_us"].is_u64()));
+    let before = centroid(pairs(&snaps[0]["positions"]));
+    let after = centroid(pairs(&snaps.last().unwrap()["positions"]));
+    assert!(
+        after.x - before.x > 2.0,
+        "crowd moved from {before} to {after}"
+    );
+    // Agents are at (or very near) the goals they were sent to.
+    let last = snaps.last().unwrap();
+    let (pos, goals) = (pairs(&last["positions"]), pairs(&last["goals"]));
+    let assign: Vec<u64> = last["assignment"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| g.as_u64().unwrap())
+        .collect();
+    for (p, g) in pos.iter().zip(&assign) {
+        assert!((p - goals[*g as usize]).norm() < 0.1);
+    }
+}
+
+#[test]
+fn the_worker_assignment_is_optimal_for_the_state_it_was_solved_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = sock(&dir);
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = 80;
+    let daemon = start(cfg, &["05-area-twist.jsonl"], &path);
+    let mut r = BufReader::new(UnixStream::connect(&path).unwrap());
+    let msgs = read_until(&mut r, 4.0, |_| false);
+    daemon.shutdown();
+    let snaps: Vec<&Value> = msgs.iter().filter(|v| v["type"] == "snapshot").collect();
+    let by_seq = |seq: u64| snaps.iter().find(|s| s["seq"] == seq);
+    let mut checked = 0;
+    for s in snaps.iter().step_by(10) {
+        let Some(solved_on) = by_seq(s["assignment_seq"].as_u64().unwrap()) else {
+            continue;
+        };
+        if s["assignment_seq"] == 0 {
+            continue;
+        }
+        let (agents, goals) = (pairs(&solved_on["positions"]), pairs(&solved_on["goals"]));
+        let assign = s["assignment"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|g| g.as_u64().unwrap() as u32);
+        let ours = assignment_cost(&agents, &goals, assign);
+        let best = reference_optimal_cost(&agents, &goals);
+        // Positions on the wire are rounded to the millimetre.
+        assert!(
+            ours <= best + 1e-3 * agents.len() as f64 * 0.01,
+            "seq {}: {ours} vs {best}",
+            s["seq"]
+        );
+        checked += 1;
+    }
+    assert!(checked >= 10, "checked {checked}");
+}
+
+#[test]
+fn commands_reset_resize_and_pause() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = sock(&dir);
+    let daemon = start(Config::embedded_default(), &["01-point-drag.jsonl"], &path);
+    let stream = UnixStream::connect(&path).unwrap();
+    let mut w = stream.try_clone().unwrap();
+    let mut r = BufReader::new(stream);
+    read_until(&mut r, 2.0, |v| v["type"] == "hello");
+    writeln!(
+        w,
+        r#"{{"type":"command","id":7,"name":"set_agent_count","count":50}}"#
+    )
+    .unwrap();
+    let msgs = read_until(&mut r, 3.0, |v| {
+        v["type"] == "snapshot" && v["agents"] == 50
+    });
+    assert!(
+        msgs.iter().any(|v| v["type"] == "ack" && v["id"] == 7),
+        "no ack: {:?}",
+        msgs.iter().map(|v| &v["type"]).collect::<Vec<_>>()
+    );
+    writeln!(w, r#"{{"type":"command","id":"p","name":"pause"}}"#).unwrap();
+    let msgs = read_until(&mut r, 3.0, |v| {
+        v["type"] == "snapshot" && v["paused"] == true
+    });
+    assert!(msgs.iter().any(|v| v["type"] == "ack" && v["id"] == "p"));
+    writeln!(
+        w,
+        r#"{{"type":"command","id":8,"name":"set_agent_count","count":0}}"#
+    )
+    .unwrap();
+    let msgs = read_until(&mut r, 3.0, |v| v["type"] == "error");
+    let err = msgs.last().unwrap();
+    assert_eq!(err["id"], 8);
+    assert!(
+        err["message"].as_str().unwrap().contains("out of range"),
+        "{err}"
+    );
+    writeln!(
+        w,
+        r#"{{"type":"command","id":9,"name":"reset","hard":true}}"#
+    )
+    .unwrap();
+    let msgs = read_until(&mut r, 3.0, |v| v["type"] == "ack");
+    assert_eq!(msgs.last().unwrap()["id"], 9);
+    daemon.shutdown();
+}
+
+#[test]
+fn a_live_socket_is_refused_and_a_stale_one_replaced() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = sock(&dir);
+    // A stale socket file: bound once, its listener gone.
+    drop(std::os::unix::net::UnixListener::bind(&path).unwrap());
+    assert!(path.exists());
+    let daemon = start(
+        Config::embedded_default(),
+        &["07-open-space-swipe.jsonl"],
+        &path,
+    );
+    let second = Daemon::start(
+        Config::embedded_default(),
+        vec![source(&["07-open-space-swipe.jsonl"], false)],
+        DaemonOptions {
+            socket_path: path.clone(),
+        },
+    );
+    let err = second
+        .err()
+        .expect("a second daemon on a live socket must fail")
+        .to_string();
+    assert!(err.contains(&path.display().to_string()), "{err}");
+    // The first daemon still serves.
+    let mut r = BufReader::new(UnixStream::connect(&path).unwrap());
+    let msgs = read_until(&mut r, 2.0, |v| v["type"] == "snapshot");
+    assert_eq!(msgs.last().unwrap()["type"], "snapshot");
+    daemon.shutdown();
+    assert!(!path.exists(), "socket file removed on shutdown");
+}
+
+#[test]
+fn shutdown_says_bye_and_nothing_is_left_down() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = sock(&dir);
+    let daemon = start(Config::embedded_default(), &["06-two-hands.jsonl"], &path);
+    let mut r = BufReader::new(UnixStream::connect(&path).unwrap());
+    // Stop in the middle of the recording, fingers down.
+    let msgs = read_until(&mut r, 5.0, |v| {
+        v["type"] == "control" && v["kind"] == "area"
+    });
+    assert!(msgs.iter().any(|v| v["type"] == "control"));
+    daemon.shutdown();
+    let rest = read_until(&mut r, 3.0, |v| v["type"] == "bye");
+    assert_eq!(rest.last().unwrap()["type"], "bye");
+    let last_snap = rest
+        .iter()
+        .rev()
+        .find(|v| v["type"] == "snapshot")
+        .expect("a final snapshot");
+    assert_eq!(
+        last_snap["touches"].as_array().unwrap().len(),
+        0,
+        "touches left down: {}",
+        last_snap["touches"]
+    );
+    let ends = rest
+        .iter()
+        .filter(|v| v["type"] == "control" && v["phase"] == "end")
+        .count();
+    assert!(ends >= 1);
+}
