@@ -201,6 +201,9 @@ impl NeighbourGrid {
         self.ny = (ext.y / cell) as usize + 1;
         let cells = self.nx * self.ny;
         self.cell_start.clear();
+        // Reserve the most cells this crowd size can use, so moving crowds never
+        // make the grid grow again.
+        self.cell_start.reserve(max_cells + 1);
         self.cell_start.resize(cells + 1, 0);
         self.cell_of.clear();
         for p in pos {

@@ -1,0 +1,137 @@
+//! Real-time properties, proven by counting heap allocations on the calling thread:
+//! the input path (decode + queue) and the control tick allocate nothing in steady
+//! state.
+
+use crowdtouch::config::Config;
+use crowdtouch::engine::Engine;
+use crowdtouch::input::mt::{MtAxes, MtDecoder, EV_ABS, EV_SYN};
+use crowdtouch::input::{AxisRange, Contact, ContactFlags, ContactId, TouchFrame};
+use crowdtouch::pipeline::{FrameQueue, InputCounters};
+use crowdtouch::time::Micros;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::sync::Arc;
+
+struct Counting;
+
+thread_local! {
+    static ARMED: Cell<bool> = const { Cell::new(false) };
+    static COUNT: Cell<u64> = const { Cell::new(0) };
+}
+
+// SAFETY: forwards to the system allocator; only counts calls made on threads that
+// armed the counter (thread-locals with const initialisers never allocate).
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        if ARMED.with(Cell::get) {
+            COUNT.with(|c| c.set(c.get() + 1));
+        }
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(l) }
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(p, l) }
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
+        if ARMED.with(Cell::get) {
+            COUNT.with(|c| c.set(c.get() + 1));
+        }
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(p, l, n) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Allocations made by `f` on this thread.
+fn allocations(f: impl FnOnce()) -> u64 {
+    COUNT.with(|c| c.set(0));
+    ARMED.with(|a| a.set(true));
+    f();
+    ARMED.with(|a| a.set(false));
+    COUNT.with(Cell::get)
+}
+
+const ABS_MT_SLOT: u16 = 0x2f;
+const ABS_MT_POSITION_X: u16 = 0x35;
+const ABS_MT_POSITION_Y: u16 = 0x36;
+const ABS_MT_TRACKING_ID: u16 = 0x39;
+
+#[test]
+fn input_decode_and_queue_do_not_allocate() {
+    let axes = MtAxes {
+        x: AxisRange { min: 0.0, max: 4095.0, resolution: 10.0 },
+        y: AxisRange { min: 0.0, max: 4095.0, resolution: 10.0 },
+        slots: 10,
+        pressure: None,
+        touch_major: None,
+        touch_minor: None,
+    };
+    let mut dec = MtDecoder::new(axes, 1);
+    let (tx, rx) = crossbeam_channel::bounded(64);
+    let mut q = FrameQueue::new(tx, 0, Arc::new(InputCounters::default()));
+    let mut frame = TouchFrame::default();
+    // Warm-up: fingers down.
+    let mut t = 0u64;
+    let mut feed = |dec: &mut MtDecoder, q: &mut FrameQueue, frame: &mut TouchFrame, t: u64, k: i32| {
+        for slot in 0..5 {
+            dec.event(Micros(t), EV_ABS, ABS_MT_SLOT, slot, frame);
+            if k == 0 {
+                dec.event(Micros(t), EV_ABS, ABS_MT_TRACKING_ID, 100 + slot, frame);
+            }
+            dec.event(Micros(t), EV_ABS, ABS_MT_POSITION_X, 100 + slot * 500 + k % 1000, frame);
+            dec.event(Micros(t), EV_ABS, ABS_MT_POSITION_Y, 2000 - k % 1000, frame);
+        }
+        if dec.event(Micros(t), EV_SYN, 0, 0, frame) {
+            crowdtouch::input::FrameSink::push(q, frame);
+        }
+    };
+    feed(&mut dec, &mut q, &mut frame, t, 0);
+    while rx.try_recv().is_ok() {}
+    let n = allocations(|| {
+        for k in 1..20_000 {
+            t += 8_333;
+            feed(&mut dec, &mut q, &mut frame, t, k);
+            // A consumer that keeps up most of the time, and sometimes falls behind
+            // so the backlog and coalescing paths run too.
+            if k % 100 < 90 {
+                while rx.try_recv().is_ok() {}
+            }
+        }
+    });
+    assert_eq!(n, 0, "the input path allocated {n} times");
+}
+
+#[test]
+fn a_steady_control_tick_does_not_allocate() {
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = 500;
+    let mut engine = Engine::new(&cfg, None, false);
+    let fingers = [(0.48f32, 0.45f32), (0.52, 0.45), (0.50, 0.52)];
+    let frame_at = |k: u64, flags: ContactFlags| {
+        let mut f = TouchFrame::new(Micros(k * 8_333));
+        for (i, &(x, y)) in fingers.iter().enumerate() {
+            let c = Contact { id: ContactId(i as u32 + 1), x: x + k as f32 * 1e-4, y, flags, ..Contact::default() };
+            f.push(c).unwrap();
+        }
+        f
+    };
+    // Warm-up: the control begins, the window closes, buffers reach their size.
+    for k in 0..120u64 {
+        engine.push_frame(&frame_at(k, if k == 0 { ContactFlags::DOWN } else { ContactFlags::NONE }));
+        drop(engine.tick(Micros(k * 8_333)));
+        engine.clear_events();
+    }
+    let n = allocations(|| {
+        for k in 120..600u64 {
+            engine.push_frame(&frame_at(k, ContactFlags::NONE));
+            let out = engine.tick(Micros(k * 8_333));
+            assert!(out.events.is_empty());
+            drop(out);
+            engine.clear_events();
+        }
+    });
+    assert_eq!(n, 0, "480 control ticks allocated {n} times");
+}
