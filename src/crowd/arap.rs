@@ -1,7 +1,7 @@
 //! As-rigid-as-possible deformation of the crowd mesh.
 //!
 //! The two-step method of Igarashi, Moscovich and Hughes 2005, "As-Rigid-As-Possible
-//! Shape Manipulation" (cited as mesh-formation-control reference [28], section 4.1),
+//! Shape Manipulation" (cited as mesh-formation-control reference \[28\], section 4.1),
 //! with soft constraints:
 //!
 //! 1. **Similarity step.** Each triangle edge `(i, j)` expresses the opposite vertex `k`
@@ -246,13 +246,26 @@ mod envelope {
             for i in 0..n {
                 let fi = self.first[i];
                 let row = &self.vals[self.start[i]..self.start[i + 1]];
-                let (mut s0, mut s1) = (b[i][0], b[i][1]);
-                for (l, bk) in row[..i - fi].iter().zip(&b[fi..i]) {
-                    s0 -= l * bk[0];
-                    s1 -= l * bk[1];
+                let (done, rest) = b.split_at_mut(i);
+                // Two accumulator pairs: four independent dependency chains.
+                let mut acc = [0.0; 4];
+                let mut rows = row[..i - fi].chunks_exact(2);
+                let mut xs = done[fi..].chunks_exact(2);
+                for (l, x) in (&mut rows).zip(&mut xs) {
+                    acc[0] += l[0] * x[0][0];
+                    acc[1] += l[0] * x[0][1];
+                    acc[2] += l[1] * x[1][0];
+                    acc[3] += l[1] * x[1][1];
+                }
+                for (l, x) in rows.remainder().iter().zip(xs.remainder()) {
+                    acc[0] += l * x[0];
+                    acc[1] += l * x[1];
                 }
                 let d = row[i - fi];
-                b[i] = [s0 / d, s1 / d];
+                rest[0] = [
+                    (rest[0][0] - (acc[0] + acc[2])) / d,
+                    (rest[0][1] - (acc[1] + acc[3])) / d,
+                ];
             }
             for i in (0..n).rev() {
                 let fi = self.first[i];
@@ -695,12 +708,13 @@ impl Arap {
     ///
     /// # Formula
     /// Igarashi, Moscovich, Hughes 2005, sections 4.1–4.2 (mesh-formation-control
-    /// reference [28]), with soft constraints:
-    /// step 1 `min Σ_t Σ_(i,j,k) ‖v_k - v_i - x_ij (v_j - v_i) - y_ij R90 (v_j - v_i)‖²
-    /// + Σ_c w_c ‖v_c - q_c‖² + ANCHOR_WEIGHT Σ_v ‖v - T(a_v)‖²`;
-    /// step 2 `min Σ_t Σ_(i,j) ‖(v_j - v_i) - R_t (r_j - r_i)‖² + (same constraint and
-    /// anchor terms)`, with `R_t` the rotation of the similarity that best maps the rest
-    /// triangle onto its step-1 image.
+    /// reference \[28\]), with soft constraints:
+    /// step 1 minimises
+    /// `Σ_t Σ_(i,j,k) ‖v_k - v_i - x_ij (v_j - v_i) - y_ij R90 (v_j - v_i)‖²`
+    /// `+ Σ_c w_c ‖v_c - q_c‖² + ANCHOR_WEIGHT Σ_v ‖v - T(a_v)‖²`;
+    /// step 2 minimises `Σ_t Σ_(i,j) ‖(v_j - v_i) - R_t (r_j - r_i)‖²` plus the same
+    /// constraint and anchor terms, with `R_t` the rotation of the similarity that best
+    /// maps the rest triangle onto its step-1 image.
     ///
     /// # Units
     /// Positions in metres; weights dimensionless.
@@ -769,7 +783,7 @@ impl Arap {
             abar += anchor[c.vertex as usize] * c.weight;
             qbar += q * c.weight;
         }
-        if !(wsum > 0.0) {
+        if wsum.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return RigidMotion::IDENTITY;
         }
         abar /= wsum;
@@ -882,18 +896,20 @@ impl RigidMotion {
 /// `a = Σ p_c · q̃_c`, `b = Σ p_c × q̃_c` (the common factor `1 / Σ‖p_c‖²` cancels in the
 /// normalisation); Igarashi et al. 2005, section 4.2 (fitting step).
 fn fit_rotation(p: &[Vec2; 3], q: &[Vec2; 3]) -> (f64, f64) {
-    let qbar = (q[0] + q[1] + q[2]) / 3.0;
+    // The p_c are centred, so Σ p_c · (q_c - q̄) = Σ p_c · q_c (same for the cross).
     let (mut a, mut b, mut pp, mut qq) = (0.0, 0.0, 0.0, 0.0);
+    let qbar = (q[0] + q[1] + q[2]) / 3.0;
     for (pc, qc) in p.iter().zip(q) {
         let qc = qc - qbar;
-        a += pc.dot(&qc);
+        a += pc.x * qc.x + pc.y * qc.y;
         b += pc.x * qc.y - pc.y * qc.x;
-        pp += pc.norm_squared();
-        qq += qc.norm_squared();
+        pp += pc.x * pc.x + pc.y * pc.y;
+        qq += qc.x * qc.x + qc.y * qc.y;
     }
-    let norm = a.hypot(b);
-    if norm > ROTATION_FIT_EPS * (pp * qq).sqrt() && norm.is_finite() {
-        (a / norm, b / norm)
+    let norm2 = a * a + b * b;
+    if norm2 > ROTATION_FIT_EPS * ROTATION_FIT_EPS * pp * qq && norm2.is_finite() {
+        let inv = 1.0 / norm2.sqrt();
+        (a * inv, b * inv)
     } else {
         (1.0, 0.0)
     }

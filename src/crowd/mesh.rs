@@ -115,6 +115,14 @@ fn cross(u: Vec2, v: Vec2) -> f64 {
     u.x * v.y - u.y * v.x
 }
 
+/// `‖a - b‖²`, spelled out (the sampling loops run it millions of times, also in
+/// debug builds).
+#[inline]
+fn dist2(a: Vec2, b: Vec2) -> f64 {
+    let (dx, dy) = (a.x - b.x, a.y - b.y);
+    dx * dx + dy * dy
+}
+
 /// Directed edges of a triangle, in its own winding: `(0,1)`, `(1,2)`, `(2,0)`.
 fn tri_edges(t: &[u32; 3]) -> [(u32, u32); 3] {
     [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]
@@ -432,7 +440,7 @@ impl TriMesh {
 pub fn nearest_vertex(positions: &[Vec2], p: Vec2) -> (usize, f64) {
     let mut best = (0, f64::INFINITY);
     for (i, q) in positions.iter().enumerate() {
-        let d2 = (q - p).norm_squared();
+        let d2 = dist2(*q, p);
         if d2 < best.1 {
             best = (i, d2);
         }
@@ -806,8 +814,8 @@ impl BucketGrid {
                     }
                     for &i in self.cell(cx, cy) {
                         let i = i as usize;
-                        let d2 = (points[i] - q).norm_squared();
-                        if best.is_none_or(|(bd, bi)| d2 < bd || (d2 == bd && i < bi)) {
+                        let d2 = dist2(points[i], q);
+                        if best.map_or(true, |(bd, bi)| d2 < bd || (d2 == bd && i < bi)) {
                             best = Some((d2, i));
                         }
                     }
@@ -864,7 +872,7 @@ fn farthest_point_sampling(cands: &[Candidate], n: usize, first: usize) -> Optio
                     if taken[ci] {
                         continue;
                     }
-                    let e = (cands[ci].p - q).norm_squared();
+                    let e = dist2(cands[ci].p, q);
                     if e < d2[ci] {
                         d2[ci] = e;
                         heap.push(HeapEntry {
@@ -959,8 +967,8 @@ fn lloyd_relax(
     let mut best: Vec<Option<(f64, usize)>> = vec![None; n];
     for (ci, c) in cands.iter().enumerate() {
         let s = owner[ci] as usize;
-        let d2 = (c.p - sites[s]).norm_squared();
-        if best[s].is_none_or(|(bd, _)| d2 < bd) {
+        let d2 = dist2(c.p, sites[s]);
+        if best[s].map_or(true, |(bd, _)| d2 < bd) {
             best[s] = Some((d2, ci));
         }
     }

@@ -67,7 +67,7 @@ fn orient(a: Vec2, b: Vec2, c: Vec2) -> f64 {
 /// `v_{i+1} - p`. `tan(α/2)` is evaluated as `A / (r r' + D)` when `D ≥ 0`, else as
 /// `(r r' - D) / A` (`A` = cross, `D` = dot product of the two vectors, `r, r'` their
 /// lengths), which is stable for both small and nearly straight angles.
-/// mesh-formation-control section 4.2 (reference [29]).
+/// mesh-formation-control section 4.2 (reference \[29\]).
 ///
 /// # Units
 /// Positions in metres; coordinates dimensionless.
@@ -112,7 +112,7 @@ pub fn mean_value_coordinates(poly: &[Vec2], p: Vec2, out: &mut [f64]) -> Result
         hi = hi.sup(v);
     }
     let scale = (hi - lo).norm();
-    if !(scale > 0.0) {
+    if scale.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(MvcError::Degenerate);
     }
     // At a vertex: one-hot.
@@ -408,6 +408,14 @@ mod tests {
             Vec2::new(0.0, 1.0),
         ];
         assert_eq!(convex_hull(&with_nan), vec![0, 2, 3]);
+        // -0.0 and 0.0 are the same coordinate.
+        let signed_zero = [
+            Vec2::new(-0.0, 0.0),
+            Vec2::new(-0.0, 1.0),
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+        ];
+        assert_eq!(convex_hull(&signed_zero), vec![0, 3, 1]);
     }
 
     /// Extreme points by brute force: a point is on the hull iff it is not in a
