@@ -149,6 +149,8 @@ mod envelope {
         first: Vec<usize>,
         start: Vec<usize>,
         pub(super) vals: Vec<f64>,
+        /// `1 / L[i][i]` after a successful [`Envelope::factor`].
+        inv_diag: Vec<f64>,
     }
 
     impl Envelope {
@@ -162,7 +164,12 @@ mod envelope {
                 start.push(start[i] + (i - f + 1));
             }
             let vals = vec![0.0; start[n]];
-            Envelope { first, start, vals }
+            Envelope {
+                first,
+                start,
+                vals,
+                inv_diag: vec![0.0; n],
+            }
         }
 
         /// Matrix order.
@@ -216,23 +223,34 @@ mod envelope {
                     return Err(i);
                 }
                 row_i[i - fi] = d.sqrt();
+                self.inv_diag[i] = 1.0 / row_i[i - fi];
             }
             Ok(())
         }
 
         /// Solves `L Lᵀ x = b` in place (after [`Envelope::factor`]).
+        ///
+        /// The forward pass adds the entry next to the diagonal last and both passes
+        /// multiply by the stored reciprocal pivots, which keeps the row-to-row
+        /// dependency chain short (it bounds the speed of a triangular solve).
         pub(super) fn solve(&self, b: &mut [f64]) {
             let n = self.dim().min(b.len());
             for i in 0..n {
                 let fi = self.first[i];
+                let m = i - fi;
                 let row = &self.vals[self.start[i]..self.start[i + 1]];
-                let s = b[i] - dot(&row[..i - fi], &b[fi..i]);
-                b[i] = s / row[i - fi];
+                let s = if m > 0 {
+                    let head = dot(&row[..m - 1], &b[fi..i - 1]);
+                    (b[i] - head) - row[m - 1] * b[i - 1]
+                } else {
+                    b[i]
+                };
+                b[i] = s * self.inv_diag[i];
             }
             for i in (0..n).rev() {
                 let fi = self.first[i];
                 let row = &self.vals[self.start[i]..self.start[i + 1]];
-                let xi = b[i] / row[i - fi];
+                let xi = b[i] * self.inv_diag[i];
                 b[i] = xi;
                 for (bk, l) in b[fi..i].iter_mut().zip(&row[..i - fi]) {
                     *bk -= l * xi;
@@ -245,33 +263,39 @@ mod envelope {
             let n = self.dim().min(b.len());
             for i in 0..n {
                 let fi = self.first[i];
+                let m = i - fi;
                 let row = &self.vals[self.start[i]..self.start[i + 1]];
                 let (done, rest) = b.split_at_mut(i);
-                // Two accumulator pairs: four independent dependency chains.
-                let mut acc = [0.0; 4];
-                let mut rows = row[..i - fi].chunks_exact(2);
-                let mut xs = done[fi..].chunks_exact(2);
-                for (l, x) in (&mut rows).zip(&mut xs) {
-                    acc[0] += l[0] * x[0][0];
-                    acc[1] += l[0] * x[0][1];
-                    acc[2] += l[1] * x[1][0];
-                    acc[3] += l[1] * x[1][1];
+                let mut s = rest[0];
+                if m > 0 {
+                    // Two accumulator pairs: four independent dependency chains.
+                    let mut acc = [0.0; 4];
+                    let mut rows = row[..m - 1].chunks_exact(2);
+                    let mut xs = done[fi..i - 1].chunks_exact(2);
+                    for (l, x) in (&mut rows).zip(&mut xs) {
+                        acc[0] += l[0] * x[0][0];
+                        acc[1] += l[0] * x[0][1];
+                        acc[2] += l[1] * x[1][0];
+                        acc[3] += l[1] * x[1][1];
+                    }
+                    for (l, x) in rows.remainder().iter().zip(xs.remainder()) {
+                        acc[0] += l * x[0];
+                        acc[1] += l * x[1];
+                    }
+                    let (l, x) = (row[m - 1], done[i - 1]);
+                    s = [
+                        (s[0] - (acc[0] + acc[2])) - l * x[0],
+                        (s[1] - (acc[1] + acc[3])) - l * x[1],
+                    ];
                 }
-                for (l, x) in rows.remainder().iter().zip(xs.remainder()) {
-                    acc[0] += l * x[0];
-                    acc[1] += l * x[1];
-                }
-                let d = row[i - fi];
-                rest[0] = [
-                    (rest[0][0] - (acc[0] + acc[2])) / d,
-                    (rest[0][1] - (acc[1] + acc[3])) / d,
-                ];
+                let r = self.inv_diag[i];
+                rest[0] = [s[0] * r, s[1] * r];
             }
             for i in (0..n).rev() {
                 let fi = self.first[i];
                 let row = &self.vals[self.start[i]..self.start[i + 1]];
-                let d = row[i - fi];
-                let x = [b[i][0] / d, b[i][1] / d];
+                let r = self.inv_diag[i];
+                let x = [b[i][0] * r, b[i][1] * r];
                 b[i] = x;
                 for (bk, l) in b[fi..i].iter_mut().zip(&row[..i - fi]) {
                     bk[0] -= l * x[0];
@@ -445,8 +469,6 @@ pub struct Arap {
     tris: Vec<[u32; 3]>,
     /// Rest corners minus the rest centroid, per triangle (for the rotation fit).
     rest_centered: Vec<[Vec2; 3]>,
-    /// Rest edge vectors `r[(c+1)%3] - r[c]`, per triangle and corner `c`.
-    rest_edges: Vec<[Vec2; 3]>,
     /// Step-1 matrix without constraint weights (envelope layout of `fac1`).
     base1: Vec<f64>,
     fac1: Envelope,
@@ -537,12 +559,10 @@ impl Arap {
             .map(|t| t.map(|v| inv[v as usize]))
             .collect();
         let mut rest_centered = Vec::with_capacity(tris_orig.len());
-        let mut rest_edges = Vec::with_capacity(tris_orig.len());
         for (t, tp) in tris_orig.iter().zip(&tris) {
             let p = t.map(|v| rest[v as usize]);
             let centroid = (p[0] + p[1] + p[2]) / 3.0;
             rest_centered.push(p.map(|q| q - centroid));
-            rest_edges.push([p[1] - p[0], p[2] - p[1], p[0] - p[2]]);
             // Step 1: three (edge, opposite vertex) relations per triangle.
             for c in 0..3 {
                 let corners = [c, (c + 1) % 3, (c + 2) % 3];
@@ -585,7 +605,6 @@ impl Arap {
             inv,
             tris,
             rest_centered,
-            rest_edges,
             base1: fac1.vals.clone(),
             fac1,
             base2: fac2.vals.clone(),
@@ -839,23 +858,16 @@ impl Arap {
             b[0] += c.weight * q.x;
             b[1] += c.weight * q.y;
         }
+        // Σ over the triangle's edges of ±R (r_j - r_i) lands on corner c as
+        // R (e_{c-1} - e_c) = R (2 r_c - r_{c-1} - r_{c+1}) = 3 R (r_c - r̄).
         let u = &self.rhs1;
-        for ((t, pc), edges) in self
-            .tris
-            .iter()
-            .zip(&self.rest_centered)
-            .zip(&self.rest_edges)
-        {
+        for (t, pc) in self.tris.iter().zip(&self.rest_centered) {
             let q = t.map(|p| Vec2::new(u[2 * p as usize], u[2 * p as usize + 1]));
             let (cos, sin) = fit_rotation(pc, &q);
-            for c in 0..3 {
-                let e = edges[c];
-                let f = [cos * e.x - sin * e.y, sin * e.x + cos * e.y];
-                let (i, j) = (t[c] as usize, t[(c + 1) % 3] as usize);
-                self.rhs2[j][0] += f[0];
-                self.rhs2[j][1] += f[1];
-                self.rhs2[i][0] -= f[0];
-                self.rhs2[i][1] -= f[1];
+            for (&v, g) in t.iter().zip(pc) {
+                let b = &mut self.rhs2[v as usize];
+                b[0] += 3.0 * (cos * g.x - sin * g.y);
+                b[1] += 3.0 * (sin * g.x + cos * g.y);
             }
         }
         self.fac2.solve2(&mut self.rhs2);
