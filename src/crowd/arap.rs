@@ -24,7 +24,7 @@
 //! The sparse factorisation is a reverse Cuthill–McKee ordering of the vertices followed
 //! by an envelope (skyline, profile) Cholesky factorisation, which suits the banded
 //! matrices of grid-like meshes: for a `c × r` grid the envelope has about
-//! `2 · 2n · 2 min(c, r)` entries in step 1.
+//! `2n · 2 min(c, r)` entries in step 1 and `n · min(c, r)` in step 2.
 
 use crate::crowd::mesh::TriMesh;
 use crate::geom::Vec2;
@@ -440,8 +440,9 @@ fn sim_entry((a, b): (f64, f64), r: usize, s: usize) -> f64 {
     }
 }
 
-/// As-rigid-as-possible solver for one mesh: precomputed per-triangle step-1
-/// coefficients, step-2 rest edges, the two factorised systems and workspaces.
+/// As-rigid-as-possible solver for one mesh: the vertex ordering, the step-1 and
+/// step-2 matrices (assembled from the per-triangle coefficients) and their factors,
+/// the centred rest triangles for the rotation fit, and the solve workspaces.
 ///
 /// ```
 /// use crowdtouch::crowd::arap::{Arap, Constraint};
