@@ -576,7 +576,7 @@ impl Ord for HeapEntry {
 /// # Complexity
 /// About O(K n (log(K n) + L)) time for `L` Lloyd sweeps and O(K n) memory, with bucket
 /// grids for the nearest-sample queries and a lazy max-heap for the selection (about
-/// 45 ms for n = 1000 in release). Not for the per-frame path.
+/// 30–45 ms for n = 1000 in release on a loaded 2-core machine). Not for the per-frame path.
 ///
 /// # Errors
 /// None. Deterministic for given inputs. A mesh with no triangles gives an empty vector;
