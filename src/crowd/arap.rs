@@ -1,36 +1,1531 @@
-//! STUB (uncommitted)
-#![allow(missing_docs, unused)]
-use super::mesh::TriMesh;
+//! As-rigid-as-possible deformation of the crowd mesh.
+//!
+//! The two-step method of Igarashi, Moscovich and Hughes 2005, "As-Rigid-As-Possible
+//! Shape Manipulation" (cited as mesh-formation-control reference \[28\], section 4.1),
+//! with soft constraints:
+//!
+//! 1. **Similarity step.** Each triangle edge `(i, j)` expresses the opposite vertex `k`
+//!    in the edge's local frame, `v_k = v_i + x (v_j - v_i) + y R90 (v_j - v_i)`, with
+//!    `(x, y)` taken from the rest pose. Minimising the squared violation of these
+//!    relations over all triangles and edges, plus the weighted constraint and anchor
+//!    terms, is one sparse SPD linear system in the `2n` interleaved unknowns
+//!    `(x_0, y_0, x_1, y_1, …)`. Its solution allows rotation and uniform scaling.
+//! 2. **Rotation fitting and scale adjustment.** Every rest triangle is fitted to its
+//!    step-1 image by a similarity (closed-form Procrustes) whose scale is then removed,
+//!    leaving a rotation `R_t`. Minimising `Σ_t Σ_edges ‖(v_j - v_i) - R_t (r_j - r_i)‖²`
+//!    plus the constraint and anchor terms gives one `n × n` SPD matrix (a weighted graph
+//!    Laplacian) shared by the x and y coordinates.
+//!
+//! Both matrices depend only on the mesh and on the constraint *set* (vertices and
+//! weights), not on the targets, so they are factorised once per constraint set by
+//! [`Arap::set_constraints`]. [`Arap::solve`] then costs two right-hand-side
+//! assemblies and three pairs of triangular solves, with no allocation.
+//!
+//! The sparse factorisation is a reverse Cuthill–McKee ordering of the vertices followed
+//! by an envelope (skyline, profile) Cholesky factorisation, which suits the banded
+//! matrices of grid-like meshes: for a `c × r` grid the envelope has about
+//! `2n · 2 min(c, r)` entries in step 1 and `n · min(c, r)` in step 2.
+
+use crate::crowd::mesh::TriMesh;
 use crate::geom::Vec2;
+
+/// Weight of the anchor term `ANCHOR_WEIGHT · ‖v - T(a_v)‖²` on every vertex, relative
+/// to the unit weight of each rigidity (edge) term (see [`Arap::solve`] for the rigid
+/// motion `T`). Keeps both systems positive definite with zero or one constraint and
+/// resolves the free rotation and scale; small enough not to be felt next to handle
+/// weights (≥ 1).
+pub const ANCHOR_WEIGHT: f64 = 1e-4;
+
+/// Largest accepted constraint weight; larger weights make the systems ill-conditioned
+/// against [`ANCHOR_WEIGHT`] (condition number about `MAX / ANCHOR_WEIGHT`).
+pub const MAX_CONSTRAINT_WEIGHT: f64 = 1e9;
+
+/// Relative size below which a triangle's similarity fit is treated as degenerate
+/// (collapsed step-1 triangle) and the identity rotation is used instead.
+const ROTATION_FIT_EPS: f64 = 1e-12;
+
+/// One constrained vertex and its weight in the least-squares solve (large = hard handle,
+/// smaller = soft supplementary point).
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct Constraint {
+    /// Vertex index in the mesh.
     pub vertex: u32,
+    /// Weight of `‖v - target‖²` relative to a rigidity term (dimensionless, finite,
+    /// in `(0, MAX_CONSTRAINT_WEIGHT]`).
     pub weight: f64,
 }
+
+/// Which caller buffer an [`ArapError`] is about.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum ArapBuffer {
+    /// The `targets` argument of [`Arap::solve`].
+    Targets,
+    /// The `anchor` argument of [`Arap::solve`].
+    Anchor,
+    /// The `out` argument of [`Arap::solve`].
+    Out,
+}
+
+impl std::fmt::Display for ArapBuffer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            ArapBuffer::Targets => "targets",
+            ArapBuffer::Anchor => "anchor",
+            ArapBuffer::Out => "out",
+        })
+    }
+}
+
+/// Errors of the ARAP solver.
 #[derive(Copy, Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ArapError {
-    #[error("x")]
+    /// A constraint names a vertex the mesh does not have.
+    #[error("constraint on vertex {vertex}, but the mesh has {vertex_count} vertices")]
+    VertexOutOfRange {
+        /// The offending vertex index.
+        vertex: u32,
+        /// Number of mesh vertices.
+        vertex_count: usize,
+    },
+    /// A constraint weight is not finite or outside `(0, MAX_CONSTRAINT_WEIGHT]`.
+    #[error("constraint on vertex {vertex} has unusable weight {weight}")]
+    BadWeight {
+        /// The constrained vertex.
+        vertex: u32,
+        /// The rejected weight.
+        weight: f64,
+    },
+    /// A buffer has the wrong length.
+    #[error("{buffer} has {got} entries, expected {expected}")]
+    LengthMismatch {
+        /// Which buffer.
+        buffer: ArapBuffer,
+        /// Required length.
+        expected: usize,
+        /// Given length.
+        got: usize,
+    },
+    /// An input position is NaN or infinite.
+    #[error("{buffer}[{index}] is not finite")]
+    NonFinite {
+        /// Which buffer.
+        buffer: ArapBuffer,
+        /// Index of the first bad entry.
+        index: usize,
+    },
+    /// The Cholesky factorisation failed (a non-positive pivot: degenerate mesh or
+    /// extreme weights); [`Arap::solve`] refuses until a set factorises.
+    #[error("ARAP system is not positive definite (degenerate mesh or weights)")]
     Degenerate,
 }
-pub struct Arap {
-    c: Vec<Constraint>,
+
+/// Envelope (skyline) storage of the lower triangle of a symmetric matrix, factorised in
+/// place into its Cholesky factor `L` (`A = L Lᵀ`).
+mod envelope {
+    /// Dot product with four accumulators (lets the compiler vectorise).
+    #[inline]
+    pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
+        let n = a.len().min(b.len());
+        let (a, b) = (&a[..n], &b[..n]);
+        let mut acc = [0.0; 4];
+        let mut ca = a.chunks_exact(4);
+        let mut cb = b.chunks_exact(4);
+        for (x, y) in (&mut ca).zip(&mut cb) {
+            acc[0] += x[0] * y[0];
+            acc[1] += x[1] * y[1];
+            acc[2] += x[2] * y[2];
+            acc[3] += x[3] * y[3];
+        }
+        let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+        for (x, y) in ca.remainder().iter().zip(cb.remainder()) {
+            s += x * y;
+        }
+        s
+    }
+
+    /// Row `i` stores columns `first[i]..=i` contiguously at `vals[start[i]..start[i+1]]`.
+    #[derive(Clone, Debug)]
+    pub(super) struct Envelope {
+        first: Vec<usize>,
+        start: Vec<usize>,
+        pub(super) vals: Vec<f64>,
+        /// `1 / L[i][i]` after a successful [`Envelope::factor`].
+        inv_diag: Vec<f64>,
+    }
+
+    impl Envelope {
+        /// Zero matrix with the given first stored column per row (`first[i] <= i`).
+        pub(super) fn new(first: Vec<usize>) -> Envelope {
+            let n = first.len();
+            let first: Vec<usize> = first.iter().enumerate().map(|(i, &f)| f.min(i)).collect();
+            let mut start = Vec::with_capacity(n + 1);
+            start.push(0);
+            for (i, &f) in first.iter().enumerate() {
+                start.push(start[i] + (i - f + 1));
+            }
+            let vals = vec![0.0; start[n]];
+            Envelope {
+                first,
+                start,
+                vals,
+                inv_diag: vec![0.0; n],
+            }
+        }
+
+        /// Matrix order.
+        pub(super) fn dim(&self) -> usize {
+            self.first.len()
+        }
+
+        /// Number of stored entries (the profile, diagonal included).
+        pub(super) fn stored(&self) -> usize {
+            self.vals.len()
+        }
+
+        /// Adds `v` to entry `(i, j)` and its mirror; `false` if outside the envelope.
+        pub(super) fn add(&mut self, i: usize, j: usize, v: f64) -> bool {
+            let (i, j) = if i >= j { (i, j) } else { (j, i) };
+            if i >= self.dim() || j < self.first[i] {
+                return false;
+            }
+            self.vals[self.start[i] + j - self.first[i]] += v;
+            true
+        }
+
+        /// Entry `(i, j)` of the stored lower triangle (0 outside the envelope).
+        #[cfg(test)]
+        pub(super) fn get(&self, i: usize, j: usize) -> f64 {
+            let (i, j) = if i >= j { (i, j) } else { (j, i) };
+            if i >= self.dim() || j < self.first[i] {
+                return 0.0;
+            }
+            self.vals[self.start[i] + j - self.first[i]]
+        }
+
+        /// In-place Cholesky factorisation (row-oriented envelope algorithm; the fill
+        /// stays inside the envelope). `Err(row)` at the first non-positive or
+        /// non-finite pivot.
+        pub(super) fn factor(&mut self) -> Result<(), usize> {
+            for i in 0..self.dim() {
+                let fi = self.first[i];
+                let (done, rest) = self.vals.split_at_mut(self.start[i]);
+                let row_i = &mut rest[..i - fi + 1];
+                for j in fi..i {
+                    let fj = self.first[j];
+                    let k0 = fi.max(fj);
+                    let row_j = &done[self.start[j]..self.start[j + 1]];
+                    let s = row_i[j - fi] - dot(&row_i[k0 - fi..j - fi], &row_j[k0 - fj..j - fj]);
+                    row_i[j - fi] = s / row_j[j - fj];
+                }
+                let off = &row_i[..i - fi];
+                let d = row_i[i - fi] - dot(off, off);
+                if !(d > 0.0 && d.is_finite()) {
+                    return Err(i);
+                }
+                row_i[i - fi] = d.sqrt();
+                self.inv_diag[i] = 1.0 / row_i[i - fi];
+            }
+            Ok(())
+        }
+
+        /// Solves `L Lᵀ x = b` in place (after [`Envelope::factor`]).
+        ///
+        /// The forward pass adds the entry next to the diagonal last and both passes
+        /// multiply by the stored reciprocal pivots, which keeps the row-to-row
+        /// dependency chain short (it bounds the speed of a triangular solve).
+        pub(super) fn solve(&self, b: &mut [f64]) {
+            let n = self.dim().min(b.len());
+            for i in 0..n {
+                let fi = self.first[i];
+                let m = i - fi;
+                let row = &self.vals[self.start[i]..self.start[i + 1]];
+                let s = if m > 0 {
+                    let head = dot(&row[..m - 1], &b[fi..i - 1]);
+                    (b[i] - head) - row[m - 1] * b[i - 1]
+                } else {
+                    b[i]
+                };
+                b[i] = s * self.inv_diag[i];
+            }
+            for i in (0..n).rev() {
+                let fi = self.first[i];
+                let row = &self.vals[self.start[i]..self.start[i + 1]];
+                let xi = b[i] * self.inv_diag[i];
+                b[i] = xi;
+                for (bk, l) in b[fi..i].iter_mut().zip(&row[..i - fi]) {
+                    *bk -= l * xi;
+                }
+            }
+        }
+
+        /// Solves `L Lᵀ X = B` in place for two right-hand sides stored as pairs.
+        pub(super) fn solve2(&self, b: &mut [[f64; 2]]) {
+            let n = self.dim().min(b.len());
+            for i in 0..n {
+                let fi = self.first[i];
+                let m = i - fi;
+                let row = &self.vals[self.start[i]..self.start[i + 1]];
+                let (done, rest) = b.split_at_mut(i);
+                let mut s = rest[0];
+                if m > 0 {
+                    // Two accumulator pairs: four independent dependency chains.
+                    let mut acc = [0.0; 4];
+                    let mut rows = row[..m - 1].chunks_exact(2);
+                    let mut xs = done[fi..i - 1].chunks_exact(2);
+                    for (l, x) in (&mut rows).zip(&mut xs) {
+                        acc[0] += l[0] * x[0][0];
+                        acc[1] += l[0] * x[0][1];
+                        acc[2] += l[1] * x[1][0];
+                        acc[3] += l[1] * x[1][1];
+                    }
+                    for (l, x) in rows.remainder().iter().zip(xs.remainder()) {
+                        acc[0] += l * x[0];
+                        acc[1] += l * x[1];
+                    }
+                    let (l, x) = (row[m - 1], done[i - 1]);
+                    s = [
+                        (s[0] - (acc[0] + acc[2])) - l * x[0],
+                        (s[1] - (acc[1] + acc[3])) - l * x[1],
+                    ];
+                }
+                let r = self.inv_diag[i];
+                rest[0] = [s[0] * r, s[1] * r];
+            }
+            for i in (0..n).rev() {
+                let fi = self.first[i];
+                let row = &self.vals[self.start[i]..self.start[i + 1]];
+                let r = self.inv_diag[i];
+                let x = [b[i][0] * r, b[i][1] * r];
+                b[i] = x;
+                for (bk, l) in b[fi..i].iter_mut().zip(&row[..i - fi]) {
+                    bk[0] -= l * x[0];
+                    bk[1] -= l * x[1];
+                }
+            }
+        }
+    }
 }
+
+use envelope::Envelope;
+
+/// Reverse Cuthill–McKee ordering of a graph in CSR form (`adj_start`, `adj`): returns
+/// `perm` with `perm[new] = old`. Each connected component starts from a
+/// pseudo-peripheral vertex (George–Liu); neighbours are visited by increasing degree.
+fn reverse_cuthill_mckee(adj_start: &[usize], adj: &[u32]) -> Vec<u32> {
+    let n = adj_start.len().saturating_sub(1);
+    let degree = |v: usize| adj_start[v + 1] - adj_start[v];
+    let neighbours = |v: usize| {
+        adj[adj_start[v]..adj_start[v + 1]]
+            .iter()
+            .map(|&w| w as usize)
+    };
+    let mut level = vec![usize::MAX; n];
+    let mut queue: Vec<usize> = Vec::with_capacity(n);
+    // BFS from `root`: (eccentricity, min-degree vertex of the last level).
+    let mut bfs = |root: usize, level: &mut Vec<usize>| -> (usize, usize) {
+        queue.clear();
+        queue.push(root);
+        level[root] = 0;
+        let mut head = 0;
+        while head < queue.len() {
+            let v = queue[head];
+            head += 1;
+            for w in neighbours(v) {
+                if level[w] == usize::MAX {
+                    level[w] = level[v] + 1;
+                    queue.push(w);
+                }
+            }
+        }
+        let ecc = level[*queue.last().unwrap_or(&root)];
+        let mut best = root;
+        let mut best_deg = usize::MAX;
+        for &v in queue.iter().rev() {
+            if level[v] != ecc {
+                break;
+            }
+            if degree(v) < best_deg || (degree(v) == best_deg && v < best) {
+                best = v;
+                best_deg = degree(v);
+            }
+        }
+        for &v in queue.iter() {
+            level[v] = usize::MAX;
+        }
+        (ecc, best)
+    };
+    let mut visited = vec![false; n];
+    let mut order: Vec<usize> = Vec::with_capacity(n);
+    let mut nbrs: Vec<usize> = Vec::new();
+    for seed in 0..n {
+        if visited[seed] {
+            continue;
+        }
+        let mut root = seed;
+        let (mut ecc, mut cand) = bfs(root, &mut level);
+        loop {
+            let (e2, c2) = bfs(cand, &mut level);
+            if e2 > ecc {
+                root = cand;
+                ecc = e2;
+                cand = c2;
+            } else {
+                if cand != root && e2 == ecc && degree(cand) < degree(root) {
+                    root = cand;
+                }
+                break;
+            }
+        }
+        let begin = order.len();
+        order.push(root);
+        visited[root] = true;
+        let mut head = begin;
+        while head < order.len() {
+            let v = order[head];
+            head += 1;
+            nbrs.clear();
+            nbrs.extend(neighbours(v).filter(|&w| !visited[w]));
+            nbrs.sort_unstable_by_key(|&w| (degree(w), w));
+            nbrs.dedup();
+            for &w in &nbrs {
+                visited[w] = true;
+                order.push(w);
+            }
+        }
+    }
+    order.reverse();
+    order.into_iter().map(|v| v as u32).collect()
+}
+
+/// First column of each row's envelope for the vertex graph `pairs` (both directions)
+/// under the ordering `inv[vertex] = position`.
+fn envelope_first(pairs: &[(u32, u32)], inv: &[u32]) -> Vec<usize> {
+    let mut first: Vec<usize> = (0..inv.len()).collect();
+    for &(a, b) in pairs {
+        let (pa, pb) = (inv[a as usize] as usize, inv[b as usize] as usize);
+        if pb < first[pa] {
+            first[pa] = pb;
+        }
+    }
+    first
+}
+
+/// Step-1 coefficient matrix of one (edge, opposite vertex) relation, as the 2×2
+/// similarity blocks `M = α I + β R90` for corners `(i, j, k)`:
+/// residual `= M_i v_i + M_j v_j + M_k v_k` (Igarashi et al. 2005, section 4.1).
+fn step1_blocks(vi: Vec2, vj: Vec2, vk: Vec2) -> Option<[(f64, f64); 3]> {
+    let e = vj - vi;
+    let l2 = e.norm_squared();
+    if !(l2 > 0.0 && l2.is_finite()) {
+        return None;
+    }
+    let d = vk - vi;
+    let x = d.dot(&e) / l2;
+    let y = d.dot(&r90(e)) / l2;
+    // v_k - v_i - x (v_j - v_i) - y R90 (v_j - v_i)
+    Some([(x - 1.0, y), (-x, -y), (1.0, 0.0)])
+}
+
+/// Rotation by +90°: `R90 (x, y) = (-y, x)`.
+fn r90(v: Vec2) -> Vec2 {
+    Vec2::new(-v.y, v.x)
+}
+
+/// Entry `(r, s)` of the 2×2 matrix `α I + β R90 = [[α, -β], [β, α]]`.
+fn sim_entry((a, b): (f64, f64), r: usize, s: usize) -> f64 {
+    match (r, s) {
+        (0, 0) | (1, 1) => a,
+        (0, 1) => -b,
+        _ => b,
+    }
+}
+
+/// As-rigid-as-possible solver for one mesh: the vertex ordering, the step-1 and
+/// step-2 matrices (assembled from the per-triangle coefficients) and their factors,
+/// the centred rest triangles for the rotation fit, and the solve workspaces.
+///
+/// ```
+/// use crowdtouch::crowd::arap::{Arap, Constraint};
+/// use crowdtouch::crowd::mesh::TriMesh;
+/// use crowdtouch::geom::{Rect, Vec2};
+/// let mesh = TriMesh::grid(Rect { min: [0.0, 0.0], max: [4.0, 3.0] }, 5, 4);
+/// let mut arap = Arap::new(&mesh);
+/// let handles = [Constraint { vertex: 0, weight: 1000.0 }, Constraint { vertex: 19, weight: 1000.0 }];
+/// arap.set_constraints(&handles).unwrap();
+/// // Translate both handles by (1, 2): the whole mesh follows rigidly.
+/// let d = Vec2::new(1.0, 2.0);
+/// let targets = [mesh.rest()[0] + d, mesh.rest()[19] + d];
+/// let mut out = vec![Vec2::zeros(); mesh.vertex_count()];
+/// arap.solve(&targets, mesh.rest(), &mut out).unwrap();
+/// for (p, r) in out.iter().zip(mesh.rest()) {
+///     assert!((p - r - d).norm() < 1e-3);
+/// }
+/// ```
+#[derive(Clone, Debug)]
+pub struct Arap {
+    n: usize,
+    /// `inv[vertex]` = position of the vertex in the RCM ordering.
+    inv: Vec<u32>,
+    /// Triangles with permuted vertex indices.
+    tris: Vec<[u32; 3]>,
+    /// Rest corners minus the rest centroid, per triangle (for the rotation fit).
+    rest_centered: Vec<[Vec2; 3]>,
+    /// Step-1 matrix without constraint weights (envelope layout of `fac1`).
+    base1: Vec<f64>,
+    fac1: Envelope,
+    /// Step-2 matrix without constraint weights (envelope layout of `fac2`).
+    base2: Vec<f64>,
+    fac2: Envelope,
+    constraints: Vec<Constraint>,
+    /// Sum of constraint weights per permuted vertex in the current factorisation.
+    diag_weight: Vec<f64>,
+    scratch_weight: Vec<f64>,
+    factored: bool,
+    factorizations: u64,
+    /// Step-1 right-hand side, then solution (permuted, interleaved x, y).
+    rhs1: Vec<f64>,
+    /// Step-2 right-hand sides, then solutions (permuted, `[x, y]`).
+    rhs2: Vec<[f64; 2]>,
+}
+
 impl Arap {
+    /// Precomputes the solver for `mesh` (rest shape = the mesh's rest pose): the vertex
+    /// ordering, both system matrices, and a first factorisation with no constraints.
+    ///
+    /// # Complexity
+    /// O(T) assembly plus one factorisation, O(Σ_i bandwidth_i²) (about O(n · b²) for
+    /// bandwidth `b`; for a `c × r` grid `b ≈ 2 min(c, r)` in step 1). Allocates.
+    ///
+    /// # Errors
+    /// None here: triangles with out-of-range vertices are ignored and zero-length rest
+    /// edges contribute nothing; if the resulting systems are not positive definite,
+    /// [`Arap::solve`] returns [`ArapError::Degenerate`].
     pub fn new(mesh: &TriMesh) -> Arap {
-        unimplemented!()
+        let n = mesh.vertex_count();
+        let rest = mesh.rest();
+        let tris_orig: Vec<[u32; 3]> = mesh
+            .triangles()
+            .iter()
+            .copied()
+            .filter(|t| t.iter().all(|&v| (v as usize) < n))
+            .collect();
+
+        // Vertex graph in CSR form.
+        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(tris_orig.len() * 6);
+        for t in &tris_orig {
+            for c in 0..3 {
+                let (a, b) = (t[c], t[(c + 1) % 3]);
+                if a != b {
+                    pairs.push((a, b));
+                    pairs.push((b, a));
+                }
+            }
+        }
+        pairs.sort_unstable();
+        pairs.dedup();
+        let mut adj_start = vec![0usize; n + 1];
+        for &(a, _) in &pairs {
+            adj_start[a as usize + 1] += 1;
+        }
+        for i in 0..n {
+            adj_start[i + 1] += adj_start[i];
+        }
+        let adj: Vec<u32> = pairs.iter().map(|&(_, b)| b).collect();
+
+        // RCM, unless the given order already has a smaller envelope (row-major grids
+        // with fewer columns than rows do).
+        let rcm = reverse_cuthill_mckee(&adj_start, &adj);
+        let mut inv = vec![0u32; n];
+        for (new, &old) in rcm.iter().enumerate() {
+            inv[old as usize] = new as u32;
+        }
+        let identity: Vec<u32> = (0..n as u32).collect();
+        let (rcm_first, ident_first) = (
+            envelope_first(&pairs, &inv),
+            envelope_first(&pairs, &identity),
+        );
+        let profile = |first: &[usize]| first.iter().enumerate().map(|(i, f)| i - f).sum::<usize>();
+        let first_v = if profile(&ident_first) < profile(&rcm_first) {
+            inv = identity;
+            ident_first
+        } else {
+            rcm_first
+        };
+        let first1: Vec<usize> = first_v.iter().flat_map(|&f| [2 * f, 2 * f]).collect();
+        let mut fac1 = Envelope::new(first1);
+        let mut fac2 = Envelope::new(first_v);
+
+        let tris: Vec<[u32; 3]> = tris_orig
+            .iter()
+            .map(|t| t.map(|v| inv[v as usize]))
+            .collect();
+        let mut rest_centered = Vec::with_capacity(tris_orig.len());
+        for (t, tp) in tris_orig.iter().zip(&tris) {
+            let p = t.map(|v| rest[v as usize]);
+            let centroid = (p[0] + p[1] + p[2]) / 3.0;
+            rest_centered.push(p.map(|q| q - centroid));
+            // Step 1: three (edge, opposite vertex) relations per triangle.
+            for c in 0..3 {
+                let corners = [c, (c + 1) % 3, (c + 2) % 3];
+                let Some(blocks) = step1_blocks(p[corners[0]], p[corners[1]], p[corners[2]]) else {
+                    continue;
+                };
+                for (ma, &ca) in blocks.iter().zip(&corners) {
+                    for (mb, &cb) in blocks.iter().zip(&corners) {
+                        let (va, vb) = (tp[ca] as usize, tp[cb] as usize);
+                        // (M_aᵀ M_b)[r][s] = Σ_m M_a[m][r] M_b[m][s]
+                        for r in 0..2 {
+                            for s in 0..2 {
+                                let (row, col) = (2 * va + r, 2 * vb + s);
+                                if row < col {
+                                    continue;
+                                }
+                                let v = sim_entry(*ma, 0, r) * sim_entry(*mb, 0, s)
+                                    + sim_entry(*ma, 1, r) * sim_entry(*mb, 1, s);
+                                fac1.add(row, col, v);
+                            }
+                        }
+                    }
+                }
+            }
+            // Step 2: edge differences, unit weight per triangle edge.
+            for c in 0..3 {
+                let (a, b) = (tp[c] as usize, tp[(c + 1) % 3] as usize);
+                fac2.add(a, a, 1.0);
+                fac2.add(b, b, 1.0);
+                fac2.add(a, b, -1.0);
+            }
+        }
+        for p in 0..n {
+            fac1.add(2 * p, 2 * p, ANCHOR_WEIGHT);
+            fac1.add(2 * p + 1, 2 * p + 1, ANCHOR_WEIGHT);
+            fac2.add(p, p, ANCHOR_WEIGHT);
+        }
+        let mut arap = Arap {
+            n,
+            inv,
+            tris,
+            rest_centered,
+            base1: fac1.vals.clone(),
+            fac1,
+            base2: fac2.vals.clone(),
+            fac2,
+            constraints: Vec::new(),
+            diag_weight: vec![0.0; n],
+            scratch_weight: vec![0.0; n],
+            factored: false,
+            factorizations: 0,
+            rhs1: vec![0.0; 2 * n],
+            rhs2: vec![[0.0; 2]; n],
+        };
+        // A failure is reported by `solve` as `Degenerate`.
+        let _ = arap.refactor();
+        arap
     }
-    pub fn set_constraints(&mut self, constraints: &[Constraint]) -> Result<(), ArapError> {
-        unimplemented!()
+
+    /// Number of mesh vertices.
+    pub fn vertex_count(&self) -> usize {
+        self.n
     }
+
+    /// The current constraint set (as last given to [`Arap::set_constraints`]).
     pub fn constraints(&self) -> &[Constraint] {
-        &self.c
+        &self.constraints
     }
+
+    /// How many numeric factorisations have run (one in [`Arap::new`], one per effective
+    /// constraint-set change). For tests and stats.
+    pub fn factorizations(&self) -> u64 {
+        self.factorizations
+    }
+
+    /// Stored entries of the step-1 and step-2 factors (profile sizes, for diagnostics).
+    pub fn factor_sizes(&self) -> (usize, usize) {
+        (self.fac1.stored(), self.fac2.stored())
+    }
+
+    /// Sets the constraint set and refactors both systems.
+    ///
+    /// Nothing is refactored if the set is identical to the current one, or if it only
+    /// differs in order or in how equal per-vertex weight sums are split (the matrices
+    /// depend only on the sum of weights per vertex); the stored list (which fixes the
+    /// meaning of `targets` in [`Arap::solve`]) is still updated. Several constraints on
+    /// one vertex are allowed and add up.
+    ///
+    /// # Complexity
+    /// O(n + k) to compare; a refactorisation is O(Σ_i bandwidth_i²), no allocation
+    /// unless the constraint list outgrows its capacity.
+    ///
+    /// # Errors
+    /// [`ArapError::VertexOutOfRange`], [`ArapError::BadWeight`] (the state is then
+    /// unchanged), or [`ArapError::Degenerate`] if the factorisation fails (the set is
+    /// stored, and [`Arap::solve`] fails until a set factorises).
+    pub fn set_constraints(&mut self, constraints: &[Constraint]) -> Result<(), ArapError> {
+        for c in constraints {
+            if c.vertex as usize >= self.n {
+                return Err(ArapError::VertexOutOfRange {
+                    vertex: c.vertex,
+                    vertex_count: self.n,
+                });
+            }
+            if !(c.weight > 0.0 && c.weight <= MAX_CONSTRAINT_WEIGHT) {
+                return Err(ArapError::BadWeight {
+                    vertex: c.vertex,
+                    weight: c.weight,
+                });
+            }
+        }
+        if self.factored && constraints == self.constraints.as_slice() {
+            return Ok(());
+        }
+        self.scratch_weight.fill(0.0);
+        for c in constraints {
+            self.scratch_weight[self.inv[c.vertex as usize] as usize] += c.weight;
+        }
+        self.constraints.clear();
+        self.constraints.extend_from_slice(constraints);
+        if self.factored && self.scratch_weight == self.diag_weight {
+            return Ok(());
+        }
+        std::mem::swap(&mut self.diag_weight, &mut self.scratch_weight);
+        self.refactor()
+    }
+
+    /// Rebuilds both factorisations from the base matrices and `diag_weight`.
+    fn refactor(&mut self) -> Result<(), ArapError> {
+        self.factorizations += 1;
+        self.fac1.vals.copy_from_slice(&self.base1);
+        self.fac2.vals.copy_from_slice(&self.base2);
+        for (p, &w) in self.diag_weight.iter().enumerate() {
+            if w != 0.0 {
+                self.fac1.add(2 * p, 2 * p, w);
+                self.fac1.add(2 * p + 1, 2 * p + 1, w);
+                self.fac2.add(p, p, w);
+            }
+        }
+        self.factored = self.fac1.factor().is_ok() && self.fac2.factor().is_ok();
+        if self.factored {
+            Ok(())
+        } else {
+            Err(ArapError::Degenerate)
+        }
+    }
+
+    /// Two-step ARAP deformation.
+    ///
+    /// `targets[k]` is the target of `constraints()[k]`; `anchor` (one per vertex) is the
+    /// pose the anchor term pulls towards (the mesh pose when the constraint set last
+    /// changed); the result is written to `out` (one per vertex). Rest shape = the
+    /// mesh's rest pose.
+    ///
+    /// The anchor pose is first carried along by the rigid motion `T` (rotation and
+    /// translation, weighted least squares) that best maps the constrained vertices'
+    /// anchor positions onto their targets: the identity without constraints, a pure
+    /// translation with one. So the anchor only settles what the constraints leave free
+    /// (with one handle: the rotation and scale about it), dragging one handle
+    /// translates the mesh, and a rigid motion of all targets moves the mesh exactly
+    /// rigidly instead of being held back by the old pose.
+    ///
+    /// # Formula
+    /// Igarashi, Moscovich, Hughes 2005, sections 4.1–4.2 (mesh-formation-control
+    /// reference \[28\]), with soft constraints:
+    /// step 1 minimises
+    /// `Σ_t Σ_(i,j,k) ‖v_k - v_i - x_ij (v_j - v_i) - y_ij R90 (v_j - v_i)‖²`
+    /// `+ Σ_c w_c ‖v_c - q_c‖² + ANCHOR_WEIGHT Σ_v ‖v - T(a_v)‖²`;
+    /// step 2 minimises `Σ_t Σ_(i,j) ‖(v_j - v_i) - R_t (r_j - r_i)‖²` plus the same
+    /// constraint and anchor terms, with `R_t` the rotation of the similarity that best
+    /// maps the rest triangle onto its step-1 image.
+    ///
+    /// # Units
+    /// Positions in metres; weights dimensionless.
+    ///
+    /// # Complexity
+    /// O(T + profile) per call: two right-hand sides, one 2n and two n triangular
+    /// solve pairs. No allocation.
+    ///
+    /// # Errors
+    /// [`ArapError::LengthMismatch`], [`ArapError::NonFinite`] for bad inputs (nothing
+    /// is written), [`ArapError::Degenerate`] if the current set did not factorise.
     pub fn solve(
         &mut self,
         targets: &[Vec2],
         anchor: &[Vec2],
         out: &mut [Vec2],
     ) -> Result<(), ArapError> {
-        unimplemented!()
+        let check_len = |buffer, expected, got| {
+            if expected == got {
+                Ok(())
+            } else {
+                Err(ArapError::LengthMismatch {
+                    buffer,
+                    expected,
+                    got,
+                })
+            }
+        };
+        check_len(ArapBuffer::Targets, self.constraints.len(), targets.len())?;
+        check_len(ArapBuffer::Anchor, self.n, anchor.len())?;
+        check_len(ArapBuffer::Out, self.n, out.len())?;
+        let finite = |p: &Vec2| p.x.is_finite() && p.y.is_finite();
+        if let Some(index) = targets.iter().position(|p| !finite(p)) {
+            return Err(ArapError::NonFinite {
+                buffer: ArapBuffer::Targets,
+                index,
+            });
+        }
+        if let Some(index) = anchor.iter().position(|p| !finite(p)) {
+            return Err(ArapError::NonFinite {
+                buffer: ArapBuffer::Anchor,
+                index,
+            });
+        }
+        if !self.factored {
+            return Err(ArapError::Degenerate);
+        }
+        let motion = self.anchor_motion(targets, anchor);
+        self.step1(targets, anchor, &motion);
+        self.step2(targets, anchor, &motion);
+        for (o, &p) in out.iter_mut().zip(&self.inv) {
+            let [x, y] = self.rhs2[p as usize];
+            *o = Vec2::new(x, y);
+        }
+        Ok(())
+    }
+
+    /// The rigid motion that best carries the constrained vertices' anchor positions to
+    /// their targets (weighted least squares; [`RigidMotion::IDENTITY`] without
+    /// constraints, a translation with one constrained position).
+    fn anchor_motion(&self, targets: &[Vec2], anchor: &[Vec2]) -> RigidMotion {
+        let mut wsum = 0.0;
+        let (mut abar, mut qbar) = (Vec2::zeros(), Vec2::zeros());
+        for (c, q) in self.constraints.iter().zip(targets) {
+            wsum += c.weight;
+            abar += anchor[c.vertex as usize] * c.weight;
+            qbar += q * c.weight;
+        }
+        if wsum.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            return RigidMotion::IDENTITY;
+        }
+        abar /= wsum;
+        qbar /= wsum;
+        let (mut dot, mut crs, mut aa, mut qq) = (0.0, 0.0, 0.0, 0.0);
+        for (c, q) in self.constraints.iter().zip(targets) {
+            let a = anchor[c.vertex as usize] - abar;
+            let q = q - qbar;
+            dot += c.weight * a.dot(&q);
+            crs += c.weight * (a.x * q.y - a.y * q.x);
+            aa += c.weight * a.norm_squared();
+            qq += c.weight * q.norm_squared();
+        }
+        let norm = dot.hypot(crs);
+        let (cos, sin) = if norm > ROTATION_FIT_EPS * (aa * qq).sqrt() && norm.is_finite() {
+            (dot / norm, crs / norm)
+        } else {
+            (1.0, 0.0)
+        };
+        RigidMotion {
+            cos,
+            sin,
+            from: abar,
+            to: qbar,
+        }
+    }
+
+    /// Step 1 (similarity-invariant energy); the solution is left in `rhs1`.
+    fn step1(&mut self, targets: &[Vec2], anchor: &[Vec2], motion: &RigidMotion) {
+        for (a, &p) in anchor.iter().zip(&self.inv) {
+            let p = 2 * p as usize;
+            let a = motion.apply(*a);
+            self.rhs1[p] = ANCHOR_WEIGHT * a.x;
+            self.rhs1[p + 1] = ANCHOR_WEIGHT * a.y;
+        }
+        for (c, q) in self.constraints.iter().zip(targets) {
+            let p = 2 * self.inv[c.vertex as usize] as usize;
+            self.rhs1[p] += c.weight * q.x;
+            self.rhs1[p + 1] += c.weight * q.y;
+        }
+        self.fac1.solve(&mut self.rhs1);
+    }
+
+    /// Step 2 (rotation fit + scale adjustment) from the step-1 solution in `rhs1`;
+    /// the solution is left in `rhs2`.
+    fn step2(&mut self, targets: &[Vec2], anchor: &[Vec2], motion: &RigidMotion) {
+        for (a, &p) in anchor.iter().zip(&self.inv) {
+            let a = motion.apply(*a);
+            self.rhs2[p as usize] = [ANCHOR_WEIGHT * a.x, ANCHOR_WEIGHT * a.y];
+        }
+        for (c, q) in self.constraints.iter().zip(targets) {
+            let b = &mut self.rhs2[self.inv[c.vertex as usize] as usize];
+            b[0] += c.weight * q.x;
+            b[1] += c.weight * q.y;
+        }
+        // Σ over the triangle's edges of ±R (r_j - r_i) lands on corner c as
+        // R (e_{c-1} - e_c) = R (2 r_c - r_{c-1} - r_{c+1}) = 3 R (r_c - r̄).
+        let u = &self.rhs1;
+        for (t, pc) in self.tris.iter().zip(&self.rest_centered) {
+            let q = t.map(|p| Vec2::new(u[2 * p as usize], u[2 * p as usize + 1]));
+            let (cos, sin) = fit_rotation(pc, &q);
+            for (&v, g) in t.iter().zip(pc) {
+                let b = &mut self.rhs2[v as usize];
+                b[0] += 3.0 * (cos * g.x - sin * g.y);
+                b[1] += 3.0 * (sin * g.x + cos * g.y);
+            }
+        }
+        self.fac2.solve2(&mut self.rhs2);
+    }
+}
+
+/// A rigid motion `x ↦ R (x - from) + to` with `R` the rotation by `(cos, sin)`.
+#[derive(Copy, Clone, Debug, PartialEq)]
+struct RigidMotion {
+    cos: f64,
+    sin: f64,
+    from: Vec2,
+    to: Vec2,
+}
+
+impl RigidMotion {
+    const IDENTITY: RigidMotion = RigidMotion {
+        cos: 1.0,
+        sin: 0.0,
+        from: Vec2::new(0.0, 0.0),
+        to: Vec2::new(0.0, 0.0),
+    };
+
+    fn apply(&self, x: Vec2) -> Vec2 {
+        let d = x - self.from;
+        Vec2::new(
+            self.cos * d.x - self.sin * d.y,
+            self.sin * d.x + self.cos * d.y,
+        ) + self.to
+    }
+}
+
+/// Rotation `(cos θ, sin θ)` of the similarity `T = [[a, -b], [b, a]]` minimising
+/// `Σ ‖(q_c - q̄) - T p_c‖²` for rest corners `p_c` (already centred), normalised to unit
+/// scale; the identity if the fit is degenerate.
+///
+/// # Formula
+/// `a = Σ p_c · q̃_c`, `b = Σ p_c × q̃_c` (the common factor `1 / Σ‖p_c‖²` cancels in the
+/// normalisation); Igarashi et al. 2005, section 4.2 (fitting step).
+fn fit_rotation(p: &[Vec2; 3], q: &[Vec2; 3]) -> (f64, f64) {
+    // The p_c are centred, so Σ p_c · (q_c - q̄) = Σ p_c · q_c (same for the cross).
+    let (mut a, mut b, mut pp, mut qq) = (0.0, 0.0, 0.0, 0.0);
+    let qbar = (q[0] + q[1] + q[2]) / 3.0;
+    for (pc, qc) in p.iter().zip(q) {
+        let qc = qc - qbar;
+        a += pc.x * qc.x + pc.y * qc.y;
+        b += pc.x * qc.y - pc.y * qc.x;
+        pp += pc.x * pc.x + pc.y * pc.y;
+        qq += qc.x * qc.x + qc.y * qc.y;
+    }
+    let norm2 = a * a + b * b;
+    if norm2 > ROTATION_FIT_EPS * ROTATION_FIT_EPS * pp * qq && norm2.is_finite() {
+        let inv = 1.0 / norm2.sqrt();
+        (a * inv, b * inv)
+    } else {
+        (1.0, 0.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::Rect;
+    use nalgebra::{DMatrix, DVector, Matrix2, Rotation2};
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config as ProptestConfig, RngSeed};
+
+    const W_HARD: f64 = 1000.0;
+
+    fn grid(cols: usize, rows: usize) -> TriMesh {
+        TriMesh::grid(
+            Rect {
+                min: [1.0, -2.0],
+                max: [
+                    1.0 + 0.5 * (cols - 1) as f64,
+                    -2.0 + 0.5 * (rows - 1) as f64,
+                ],
+            },
+            cols,
+            rows,
+        )
+    }
+
+    fn mesh_size(m: &TriMesh) -> f64 {
+        let r = m.rest();
+        let (mut lo, mut hi) = (r[0], r[0]);
+        for p in r {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        (hi - lo).norm()
+    }
+
+    fn hard(vs: &[u32]) -> Vec<Constraint> {
+        vs.iter()
+            .map(|&vertex| Constraint {
+                vertex,
+                weight: W_HARD,
+            })
+            .collect()
+    }
+
+    fn solve(arap: &mut Arap, targets: &[Vec2], anchor: &[Vec2]) -> Vec<Vec2> {
+        let mut out = vec![Vec2::zeros(); arap.vertex_count()];
+        arap.solve(targets, anchor, &mut out).expect("solve");
+        out
+    }
+
+    fn max_err(a: &[Vec2], b: &[Vec2]) -> f64 {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| (p - q).norm())
+            .fold(0.0, f64::max)
+    }
+
+    /// Tiny deterministic generator for test inputs (SplitMix64).
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    #[test]
+    fn envelope_cholesky_matches_dense() {
+        let n = 9;
+        let first: Vec<usize> = (0..n).map(|i: usize| i.saturating_sub(1 + i % 3)).collect();
+        let mut env = Envelope::new(first.clone());
+        let mut dense = DMatrix::<f64>::zeros(n, n);
+        let mut rng = Rng(7);
+        for i in 0..n {
+            for j in first[i]..i {
+                let v = rng.next() - 0.5;
+                assert!(env.add(i, j, v));
+                dense[(i, j)] += v;
+                dense[(j, i)] += v;
+            }
+            env.add(i, i, 4.0);
+            dense[(i, i)] += 4.0;
+        }
+        assert!(!env.add(n - 1, 0, 1.0), "outside the envelope");
+        assert_eq!(env.get(3, 1), dense[(3, 1)]);
+        let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+        let expect = dense
+            .clone()
+            .cholesky()
+            .expect("spd")
+            .solve(&DVector::from_vec(b.clone()));
+        env.factor().expect("spd");
+        let mut x = b.clone();
+        env.solve(&mut x);
+        let mut x2: Vec<[f64; 2]> = b.iter().map(|&v| [v, -2.0 * v]).collect();
+        env.solve2(&mut x2);
+        for i in 0..n {
+            assert!((x[i] - expect[i]).abs() < 1e-12);
+            assert!((x2[i][0] - expect[i]).abs() < 1e-12);
+            assert!((x2[i][1] + 2.0 * expect[i]).abs() < 1e-12);
+        }
+        let mut bad = Envelope::new(vec![0, 0]);
+        bad.add(0, 0, 1.0);
+        bad.add(1, 0, 2.0);
+        bad.add(1, 1, 1.0);
+        assert_eq!(bad.factor(), Err(1));
+    }
+
+    #[test]
+    fn rcm_is_a_permutation_with_a_small_profile() {
+        for (c, r) in [(20, 20), (10, 8), (30, 3)] {
+            let m = grid(c, r);
+            let arap = Arap::new(&m);
+            let mut seen = vec![false; m.vertex_count()];
+            for &p in &arap.inv {
+                assert!(!seen[p as usize]);
+                seen[p as usize] = true;
+            }
+            let (s1, s2) = arap.factor_sizes();
+            let n = m.vertex_count();
+            let band = c.min(r) + 2;
+            assert!(
+                s2 <= n * band,
+                "{c}x{r}: step-2 profile {s2} > {n} * {band}"
+            );
+            assert!(s1 <= 2 * n * 2 * band, "{c}x{r}: step-1 profile {s1}");
+        }
+    }
+
+    #[test]
+    fn fit_rotation_recovers_a_similarity() {
+        let p = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(2.0, 0.0),
+            Vec2::new(0.5, 1.0),
+        ];
+        let c = (p[0] + p[1] + p[2]) / 3.0;
+        let pc = p.map(|v| v - c);
+        for theta in [-3.0, -1.0, 0.0, 0.3, 2.5] {
+            let rot = Rotation2::new(theta);
+            let q = p.map(|v| rot * v * 1.7 + Vec2::new(5.0, -1.0));
+            let (cos, sin) = fit_rotation(&pc, &q);
+            assert!((cos - theta.cos()).abs() < 1e-12 && (sin - theta.sin()).abs() < 1e-12);
+        }
+        assert_eq!(fit_rotation(&pc, &[Vec2::new(1.0, 1.0); 3]), (1.0, 0.0));
+    }
+
+    #[test]
+    fn rest_pose_is_unchanged() {
+        let m = grid(10, 8);
+        let mut arap = Arap::new(&m);
+        let rest = m.rest();
+        let tol = 1e-9 * mesh_size(&m);
+        // No constraints: the anchor alone.
+        assert!(max_err(&solve(&mut arap, &[], rest), rest) <= tol);
+        let cs = [
+            Constraint {
+                vertex: 0,
+                weight: W_HARD,
+            },
+            Constraint {
+                vertex: 79,
+                weight: W_HARD,
+            },
+            Constraint {
+                vertex: 33,
+                weight: 100.0,
+            },
+            Constraint {
+                vertex: 34,
+                weight: 100.0,
+            },
+        ];
+        arap.set_constraints(&cs).expect("valid");
+        let targets: Vec<Vec2> = cs.iter().map(|c| rest[c.vertex as usize]).collect();
+        assert!(max_err(&solve(&mut arap, &targets, rest), rest) <= tol);
+    }
+
+    #[test]
+    fn without_constraints_a_rigidly_moved_anchor_is_reproduced() {
+        let m = grid(6, 5);
+        let mut arap = Arap::new(&m);
+        let rot = Rotation2::new(0.8);
+        let anchor: Vec<Vec2> = m
+            .rest()
+            .iter()
+            .map(|p| rot * p + Vec2::new(-3.0, 4.0))
+            .collect();
+        let out = solve(&mut arap, &[], &anchor);
+        assert!(max_err(&out, &anchor) <= 1e-9 * mesh_size(&m));
+    }
+
+    fn rigid_case(cols: usize, rows: usize, handles: &[u32], theta: f64, t: Vec2) -> f64 {
+        let m = grid(cols, rows);
+        let mut arap = Arap::new(&m);
+        arap.set_constraints(&hard(handles)).expect("valid");
+        let rot = Rotation2::new(theta);
+        let moved: Vec<Vec2> = m.rest().iter().map(|p| rot * p + t).collect();
+        let targets: Vec<Vec2> = handles.iter().map(|&v| moved[v as usize]).collect();
+        let out = solve(&mut arap, &targets, m.rest());
+        max_err(&out, &moved) / mesh_size(&m)
+    }
+
+    #[test]
+    fn rigid_motion_of_the_constraints_moves_the_mesh_rigidly() {
+        let e = rigid_case(10, 8, &[0, 9, 70, 79], 0.7, Vec2::new(3.0, -2.0));
+        assert!(e <= 1e-3, "relative error {e}");
+        let e = rigid_case(10, 8, &[0, 79], 2.5, Vec2::new(-1.0, 0.5));
+        assert!(e <= 1e-3, "relative error {e}");
+    }
+
+    #[test]
+    fn one_moved_constraint_translates_the_mesh() {
+        let m = grid(10, 8);
+        let mut arap = Arap::new(&m);
+        arap.set_constraints(&hard(&[34])).expect("valid");
+        let d = Vec2::new(0.7, -1.3);
+        let out = solve(&mut arap, &[m.rest()[34] + d], m.rest());
+        for (p, r) in out.iter().zip(m.rest()) {
+            assert!((p - r - d).norm() <= 1e-3 * d.norm(), "{p} vs {}", r + d);
+        }
+    }
+
+    #[test]
+    fn stretching_is_more_rigid_than_scaling() {
+        let m = grid(10, 8);
+        let n = m.vertex_count() as u32;
+        let mut arap = Arap::new(&m);
+        let (a, b) = (0, n - 1);
+        arap.set_constraints(&hard(&[a, b])).expect("valid");
+        let (ra, rb) = (m.rest()[a as usize], m.rest()[b as usize]);
+        let c = (ra + rb) / 2.0;
+        let scale = 1.5;
+        let targets = [c + (ra - c) * scale, c + (rb - c) * scale];
+        let out = solve(&mut arap, &targets, m.rest());
+        // The handles reach their targets.
+        assert!((out[a as usize] - targets[0]).norm() < 0.05);
+        assert!((out[b as usize] - targets[1]).norm() < 0.05);
+        let mut sum = 0.0;
+        let mut count = 0.0;
+        for t in m.triangles() {
+            for k in 0..3 {
+                let (i, j) = (t[k] as usize, t[(k + 1) % 3] as usize);
+                let l0 = (m.rest()[j] - m.rest()[i]).norm();
+                let l = (out[j] - out[i]).norm();
+                sum += (l / l0 - 1.0).abs();
+                count += 1.0;
+            }
+        }
+        let mean = sum / count;
+        // Pure scaling changes every edge by 50 %.
+        assert!(
+            mean < 0.5 * (scale - 1.0),
+            "mean relative edge change {mean}"
+        );
+    }
+
+    /// Dense reference of both steps, assembled from residual functions in the
+    /// original vertex order.
+    fn dense_reference(
+        m: &TriMesh,
+        cs: &[Constraint],
+        targets: &[Vec2],
+        anchor: &[Vec2],
+    ) -> (Vec<Vec2>, Vec<Vec2>) {
+        let n = m.vertex_count();
+        let rest = m.rest();
+        // The anchor carried by the weighted rigid fit of constrained anchors to targets.
+        let wsum: f64 = cs.iter().map(|c| c.weight).sum();
+        let abar = cs
+            .iter()
+            .map(|c| anchor[c.vertex as usize] * c.weight)
+            .sum::<Vec2>()
+            / wsum;
+        let qbar = cs
+            .iter()
+            .zip(targets)
+            .map(|(c, q)| q * c.weight)
+            .sum::<Vec2>()
+            / wsum;
+        let (mut dot, mut crs) = (0.0, 0.0);
+        for (c, q) in cs.iter().zip(targets) {
+            let (a, q) = (anchor[c.vertex as usize] - abar, q - qbar);
+            dot += c.weight * a.dot(&q);
+            crs += c.weight * a.perp(&q);
+        }
+        let fit = Rotation2::new(crs.atan2(dot));
+        let anchor: Vec<Vec2> = anchor.iter().map(|a| fit * (a - abar) + qbar).collect();
+        let at = |u: &DVector<f64>, v: usize| Vec2::new(u[2 * v], u[2 * v + 1]);
+        let rot90 = Matrix2::new(0.0, -1.0, 1.0, 0.0);
+        let mut a1 = DMatrix::<f64>::zeros(2 * n, 2 * n);
+        let mut b1 = DVector::<f64>::zeros(2 * n);
+        for t in m.triangles() {
+            for c in 0..3 {
+                let (i, j, k) = (
+                    t[c] as usize,
+                    t[(c + 1) % 3] as usize,
+                    t[(c + 2) % 3] as usize,
+                );
+                let e = rest[j] - rest[i];
+                // Solve [e, R90 e] (x, y)ᵀ = v_k - v_i for the local coordinates.
+                let basis = Matrix2::from_columns(&[e, rot90 * e]);
+                let xy = basis.lu().solve(&(rest[k] - rest[i])).expect("invertible");
+                let residual = |u: &DVector<f64>| {
+                    let (vi, vj, vk) = (at(u, i), at(u, j), at(u, k));
+                    vk - vi - (vj - vi) * xy.x - rot90 * (vj - vi) * xy.y
+                };
+                let mut jac = DMatrix::<f64>::zeros(2, 2 * n);
+                for col in 0..2 * n {
+                    let mut unit = DVector::zeros(2 * n);
+                    unit[col] = 1.0;
+                    let r = residual(&unit);
+                    jac[(0, col)] = r.x;
+                    jac[(1, col)] = r.y;
+                }
+                a1 += jac.transpose() * &jac;
+            }
+        }
+        let mut lap = DMatrix::<f64>::zeros(n, n);
+        for v in 0..n {
+            for d in 0..2 {
+                a1[(2 * v + d, 2 * v + d)] += ANCHOR_WEIGHT;
+                b1[2 * v + d] += ANCHOR_WEIGHT * anchor[v][d];
+            }
+            lap[(v, v)] += ANCHOR_WEIGHT;
+        }
+        for (c, q) in cs.iter().zip(targets) {
+            let v = c.vertex as usize;
+            for d in 0..2 {
+                a1[(2 * v + d, 2 * v + d)] += c.weight;
+                b1[2 * v + d] += c.weight * q[d];
+            }
+            lap[(v, v)] += c.weight;
+        }
+        let u1 = a1.cholesky().expect("spd").solve(&b1);
+        let step1: Vec<Vec2> = (0..n).map(|v| at(&u1, v)).collect();
+
+        let mut bx = DVector::<f64>::zeros(n);
+        let mut by = DVector::<f64>::zeros(n);
+        for v in 0..n {
+            bx[v] += ANCHOR_WEIGHT * anchor[v].x;
+            by[v] += ANCHOR_WEIGHT * anchor[v].y;
+        }
+        for (c, q) in cs.iter().zip(targets) {
+            bx[c.vertex as usize] += c.weight * q.x;
+            by[c.vertex as usize] += c.weight * q.y;
+        }
+        for t in m.triangles() {
+            let p = t.map(|v| rest[v as usize]);
+            let q = t.map(|v| step1[v as usize]);
+            let (pc, qc) = ((p[0] + p[1] + p[2]) / 3.0, (q[0] + q[1] + q[2]) / 3.0);
+            let (mut dot, mut crs) = (0.0, 0.0);
+            for c in 0..3 {
+                let (a, b) = (p[c] - pc, q[c] - qc);
+                dot += a.dot(&b);
+                crs += a.x * b.y - a.y * b.x;
+            }
+            let rot = Rotation2::new(crs.atan2(dot));
+            for c in 0..3 {
+                let (i, j) = (t[c] as usize, t[(c + 1) % 3] as usize);
+                let f = rot * (rest[j] - rest[i]);
+                lap[(i, i)] += 1.0;
+                lap[(j, j)] += 1.0;
+                lap[(i, j)] -= 1.0;
+                lap[(j, i)] -= 1.0;
+                bx[j] += f.x;
+                by[j] += f.y;
+                bx[i] -= f.x;
+                by[i] -= f.y;
+            }
+        }
+        let chol = lap.cholesky().expect("spd");
+        let (x, y) = (chol.solve(&bx), chol.solve(&by));
+        (step1, (0..n).map(|v| Vec2::new(x[v], y[v])).collect())
+    }
+
+    #[test]
+    fn sparse_solves_equal_dense_solves() {
+        let m = grid(6, 5);
+        let n = m.vertex_count();
+        let mut rng = Rng(42);
+        let cs = [
+            Constraint {
+                vertex: 0,
+                weight: W_HARD,
+            },
+            Constraint {
+                vertex: 29,
+                weight: W_HARD,
+            },
+            Constraint {
+                vertex: 14,
+                weight: 100.0,
+            },
+            Constraint {
+                vertex: 8,
+                weight: 3.0,
+            },
+        ];
+        let targets: Vec<Vec2> = cs
+            .iter()
+            .map(|c| m.rest()[c.vertex as usize] + Vec2::new(rng.next() - 0.5, rng.next() - 0.5))
+            .collect();
+        let anchor: Vec<Vec2> = m
+            .rest()
+            .iter()
+            .map(|p| p + 0.1 * Vec2::new(rng.next() - 0.5, rng.next() - 0.5))
+            .collect();
+        let mut arap = Arap::new(&m);
+        arap.set_constraints(&cs).expect("valid");
+        let out = solve(&mut arap, &targets, &anchor);
+        let step1: Vec<Vec2> = (0..n)
+            .map(|v| {
+                let p = 2 * arap.inv[v] as usize;
+                Vec2::new(arap.rhs1[p], arap.rhs1[p + 1])
+            })
+            .collect();
+        let (d1, d2) = dense_reference(&m, &cs, &targets, &anchor);
+        let tol = 1e-9 * mesh_size(&m);
+        assert!(
+            max_err(&step1, &d1) <= tol,
+            "step 1: {}",
+            max_err(&step1, &d1)
+        );
+        assert!(max_err(&out, &d2) <= tol, "step 2: {}", max_err(&out, &d2));
+        // The envelope factor reproduces the assembled matrix entries.
+        let mut dense_check = Arap::new(&m);
+        dense_check.fac1.vals.copy_from_slice(&dense_check.base1);
+        let (p0, p1) = (dense_check.inv[0] as usize, dense_check.inv[1] as usize);
+        assert!(
+            dense_check.fac1.get(2 * p1, 2 * p0) != 0.0,
+            "edge 0-1 couples x0 and x1"
+        );
+    }
+
+    #[test]
+    fn identical_set_does_not_refactor() {
+        let m = grid(5, 4);
+        let mut arap = Arap::new(&m);
+        assert_eq!(arap.factorizations(), 1);
+        let cs = hard(&[0, 19, 7]);
+        arap.set_constraints(&cs).expect("valid");
+        assert_eq!(arap.factorizations(), 2);
+        arap.set_constraints(&cs).expect("valid");
+        assert_eq!(arap.factorizations(), 2, "identical set");
+        let reordered = hard(&[19, 7, 0]);
+        arap.set_constraints(&reordered).expect("valid");
+        assert_eq!(arap.factorizations(), 2, "same matrix");
+        assert_eq!(
+            arap.constraints(),
+            reordered.as_slice(),
+            "list still updated"
+        );
+        let mut changed = reordered.clone();
+        changed[1].weight = 10.0;
+        arap.set_constraints(&changed).expect("valid");
+        assert_eq!(arap.factorizations(), 3);
+        arap.set_constraints(&[]).expect("valid");
+        assert_eq!(arap.factorizations(), 4);
+    }
+
+    #[test]
+    fn bad_inputs_are_errors_and_leave_the_state() {
+        let m = grid(5, 4);
+        let mut arap = Arap::new(&m);
+        let cs = hard(&[0, 19]);
+        arap.set_constraints(&cs).expect("valid");
+        assert_eq!(
+            arap.set_constraints(&[Constraint {
+                vertex: 20,
+                weight: 1.0
+            }]),
+            Err(ArapError::VertexOutOfRange {
+                vertex: 20,
+                vertex_count: 20
+            })
+        );
+        for weight in [0.0, -1.0, f64::INFINITY, 2.0 * MAX_CONSTRAINT_WEIGHT] {
+            assert_eq!(
+                arap.set_constraints(&[Constraint { vertex: 3, weight }]),
+                Err(ArapError::BadWeight { vertex: 3, weight })
+            );
+        }
+        assert!(matches!(
+            arap.set_constraints(&[Constraint {
+                vertex: 3,
+                weight: f64::NAN
+            }]),
+            Err(ArapError::BadWeight { vertex: 3, .. })
+        ));
+        assert_eq!(arap.constraints(), cs.as_slice());
+        assert_eq!(arap.factorizations(), 2);
+
+        let rest = m.rest();
+        let t = [rest[0], rest[19]];
+        let mut out = vec![Vec2::zeros(); 20];
+        assert_eq!(
+            arap.solve(&t[..1], rest, &mut out),
+            Err(ArapError::LengthMismatch {
+                buffer: ArapBuffer::Targets,
+                expected: 2,
+                got: 1
+            })
+        );
+        assert_eq!(
+            arap.solve(&t, &rest[..3], &mut out),
+            Err(ArapError::LengthMismatch {
+                buffer: ArapBuffer::Anchor,
+                expected: 20,
+                got: 3
+            })
+        );
+        assert_eq!(
+            arap.solve(&t, rest, &mut out[..19]),
+            Err(ArapError::LengthMismatch {
+                buffer: ArapBuffer::Out,
+                expected: 20,
+                got: 19
+            })
+        );
+        let nan = [rest[0], Vec2::new(f64::NAN, 0.0)];
+        assert_eq!(
+            arap.solve(&nan, rest, &mut out),
+            Err(ArapError::NonFinite {
+                buffer: ArapBuffer::Targets,
+                index: 1
+            })
+        );
+        let mut bad_anchor = rest.to_vec();
+        bad_anchor[5].y = f64::INFINITY;
+        assert_eq!(
+            arap.solve(&t, &bad_anchor, &mut out),
+            Err(ArapError::NonFinite {
+                buffer: ArapBuffer::Anchor,
+                index: 5
+            })
+        );
+        assert!(
+            out.iter().all(|p| *p == Vec2::zeros()),
+            "nothing written on error"
+        );
+        arap.solve(&t, rest, &mut out).expect("still usable");
+    }
+
+    #[test]
+    fn solve_reuses_its_workspaces() {
+        let m = grid(10, 8);
+        let mut arap = Arap::new(&m);
+        arap.set_constraints(&hard(&[0, 79])).expect("valid");
+        let ptrs = (
+            arap.rhs1.as_ptr(),
+            arap.rhs2.as_ptr(),
+            arap.fac1.vals.as_ptr(),
+        );
+        let t = [m.rest()[0], m.rest()[79] + Vec2::new(1.0, 0.0)];
+        let mut out = vec![Vec2::zeros(); 80];
+        for _ in 0..3 {
+            arap.solve(&t, m.rest(), &mut out).expect("solve");
+        }
+        assert_eq!(
+            ptrs,
+            (
+                arap.rhs1.as_ptr(),
+                arap.rhs2.as_ptr(),
+                arap.fac1.vals.as_ptr()
+            )
+        );
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig {
+            cases: 32,
+            rng_seed: RngSeed::Fixed(0x6172_6170),
+            failure_persistence: None,
+            ..ProptestConfig::default()
+        })]
+
+        #[test]
+        fn prop_rest_pose_is_fixed(cols in 2usize..9, rows in 2usize..9,
+                                   picks in proptest::collection::vec((0usize..1000, 0.5f64..2000.0), 0..6)) {
+            let m = grid(cols, rows);
+            let n = m.vertex_count();
+            let cs: Vec<Constraint> = picks.iter().map(|&(v, w)| Constraint { vertex: (v % n) as u32, weight: w }).collect();
+            let mut arap = Arap::new(&m);
+            arap.set_constraints(&cs).expect("valid");
+            let targets: Vec<Vec2> = cs.iter().map(|c| m.rest()[c.vertex as usize]).collect();
+            let out = solve(&mut arap, &targets, m.rest());
+            prop_assert!(max_err(&out, m.rest()) <= 1e-9 * mesh_size(&m));
+        }
+
+        #[test]
+        fn prop_rigid_motion(theta in -3.1f64..3.1, tx in -5.0f64..5.0, ty in -5.0f64..5.0,
+                             a in 0u32..80, b in 0u32..80) {
+            prop_assume!(a != b);
+            let e = rigid_case(10, 8, &[a, b], theta, Vec2::new(tx, ty));
+            prop_assert!(e <= 1e-3, "relative error {}", e);
+        }
     }
 }
