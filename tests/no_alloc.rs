@@ -62,8 +62,16 @@ const ABS_MT_TRACKING_ID: u16 = 0x39;
 #[test]
 fn input_decode_and_queue_do_not_allocate() {
     let axes = MtAxes {
-        x: AxisRange { min: 0.0, max: 4095.0, resolution: 10.0 },
-        y: AxisRange { min: 0.0, max: 4095.0, resolution: 10.0 },
+        x: AxisRange {
+            min: 0.0,
+            max: 4095.0,
+            resolution: 10.0,
+        },
+        y: AxisRange {
+            min: 0.0,
+            max: 4095.0,
+            resolution: 10.0,
+        },
         slots: 10,
         pressure: None,
         touch_major: None,
@@ -75,19 +83,26 @@ fn input_decode_and_queue_do_not_allocate() {
     let mut frame = TouchFrame::default();
     // Warm-up: fingers down.
     let mut t = 0u64;
-    let mut feed = |dec: &mut MtDecoder, q: &mut FrameQueue, frame: &mut TouchFrame, t: u64, k: i32| {
-        for slot in 0..5 {
-            dec.event(Micros(t), EV_ABS, ABS_MT_SLOT, slot, frame);
-            if k == 0 {
-                dec.event(Micros(t), EV_ABS, ABS_MT_TRACKING_ID, 100 + slot, frame);
+    let mut feed =
+        |dec: &mut MtDecoder, q: &mut FrameQueue, frame: &mut TouchFrame, t: u64, k: i32| {
+            for slot in 0..5 {
+                dec.event(Micros(t), EV_ABS, ABS_MT_SLOT, slot, frame);
+                if k == 0 {
+                    dec.event(Micros(t), EV_ABS, ABS_MT_TRACKING_ID, 100 + slot, frame);
+                }
+                dec.event(
+                    Micros(t),
+                    EV_ABS,
+                    ABS_MT_POSITION_X,
+                    100 + slot * 500 + k % 1000,
+                    frame,
+                );
+                dec.event(Micros(t), EV_ABS, ABS_MT_POSITION_Y, 2000 - k % 1000, frame);
             }
-            dec.event(Micros(t), EV_ABS, ABS_MT_POSITION_X, 100 + slot * 500 + k % 1000, frame);
-            dec.event(Micros(t), EV_ABS, ABS_MT_POSITION_Y, 2000 - k % 1000, frame);
-        }
-        if dec.event(Micros(t), EV_SYN, 0, 0, frame) {
-            crowdtouch::input::FrameSink::push(q, frame);
-        }
-    };
+            if dec.event(Micros(t), EV_SYN, 0, 0, frame) {
+                crowdtouch::input::FrameSink::push(q, frame);
+            }
+        };
     feed(&mut dec, &mut q, &mut frame, t, 0);
     while rx.try_recv().is_ok() {}
     let n = allocations(|| {
@@ -113,14 +128,27 @@ fn a_steady_control_tick_does_not_allocate() {
     let frame_at = |k: u64, flags: ContactFlags| {
         let mut f = TouchFrame::new(Micros(k * 8_333));
         for (i, &(x, y)) in fingers.iter().enumerate() {
-            let c = Contact { id: ContactId(i as u32 + 1), x: x + k as f32 * 1e-4, y, flags, ..Contact::default() };
+            let c = Contact {
+                id: ContactId(i as u32 + 1),
+                x: x + k as f32 * 1e-4,
+                y,
+                flags,
+                ..Contact::default()
+            };
             f.push(c).unwrap();
         }
         f
     };
     // Warm-up: the control begins, the window closes, buffers reach their size.
     for k in 0..120u64 {
-        engine.push_frame(&frame_at(k, if k == 0 { ContactFlags::DOWN } else { ContactFlags::NONE }));
+        engine.push_frame(&frame_at(
+            k,
+            if k == 0 {
+                ContactFlags::DOWN
+            } else {
+                ContactFlags::NONE
+            },
+        ));
         drop(engine.tick(Micros(k * 8_333)));
         engine.clear_events();
     }

@@ -6,7 +6,8 @@ use std::path::Path;
 use std::process::Command;
 
 fn read(p: &str) -> String {
-    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(p)).unwrap_or_else(|e| panic!("{p}: {e}"))
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(p))
+        .unwrap_or_else(|e| panic!("{p}: {e}"))
 }
 
 fn unit_values<'a>(unit: &'a str, key: &str) -> Vec<&'a str> {
@@ -19,18 +20,24 @@ fn unit_values<'a>(unit: &'a str, key: &str) -> Vec<&'a str> {
 #[test]
 fn every_shipped_config_file_loads() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("config");
-    let cfg = crowdtouch::config::Config::load(&dir.join("crowdtouch.ron")).expect("config/crowdtouch.ron");
+    let cfg = crowdtouch::config::Config::load(&dir.join("crowdtouch.ron"))
+        .expect("config/crowdtouch.ron");
     let sources = crowdtouch::pipeline::sources_from_config(&cfg).expect("its recordings load");
     assert_eq!(sources.len(), 1);
     let mut n = 0;
     for e in std::fs::read_dir(dir.join("recordings")).unwrap() {
         let p = e.unwrap().path();
-        let rec = crowdtouch::input::recording::read_recording(&p, Default::default()).expect("recording loads");
+        let rec = crowdtouch::input::recording::read_recording(&p, Default::default())
+            .expect("recording loads");
         assert!(!rec.frames.is_empty(), "{}", p.display());
         n += 1;
     }
     assert!(n >= 6, "at least six shipped recordings, found {n}");
-    assert_eq!(crowdtouch::embedded::RECORDINGS.len(), n, "every shipped recording is embedded");
+    assert_eq!(
+        crowdtouch::embedded::RECORDINGS.len(),
+        n,
+        "every shipped recording is embedded"
+    );
 }
 
 #[test]
@@ -45,19 +52,35 @@ fn unit_sysusers_and_udev_agree() {
     assert!(allow.contains(&"char-input r") && allow.iter().any(|a| a.starts_with("char-hidraw")));
     let group = unit_values(&unit, "Group")[0];
     assert_eq!(unit_values(&unit, "User"), vec![group]);
-    assert!(sysusers.lines().any(|l| l.split_whitespace().take(2).eq(["g", group])), "sysusers creates group {group}");
-    assert!(sysusers.lines().any(|l| l.split_whitespace().take(2).eq(["u", group])), "sysusers creates user {group}");
+    assert!(
+        sysusers
+            .lines()
+            .any(|l| l.split_whitespace().take(2).eq(["g", group])),
+        "sysusers creates group {group}"
+    );
+    assert!(
+        sysusers
+            .lines()
+            .any(|l| l.split_whitespace().take(2).eq(["u", group])),
+        "sysusers creates user {group}"
+    );
     let rule_groups: Vec<&str> = rules
         .lines()
         .filter(|l| !l.trim_start().starts_with('#'))
         .filter_map(|l| l.split("GROUP=\"").nth(1))
         .map(|r| r.split('"').next().unwrap())
         .collect();
-    assert!(rule_groups.len() >= 2 && rule_groups.iter().all(|g| *g == group), "{rule_groups:?}");
+    assert!(
+        rule_groups.len() >= 2 && rule_groups.iter().all(|g| *g == group),
+        "{rule_groups:?}"
+    );
     // The unit's runtime directory is where the daemon puts its socket.
     let rundir = unit_values(&unit, "RuntimeDirectory")[0];
     let exec = unit_values(&unit, "ExecStart")[0];
-    assert!(exec.contains(" run ") && exec.contains("--config /etc/crowdtouch/crowdtouch.ron"), "{exec}");
+    assert!(
+        exec.contains(" run ") && exec.contains("--config /etc/crowdtouch/crowdtouch.ron"),
+        "{exec}"
+    );
     let out = Command::new(env!("CARGO_BIN_EXE_crowdtouch"))
         .args(["check-config", "config/crowdtouch.ron"])
         .current_dir(env!("CARGO_MANIFEST_DIR"))
@@ -65,7 +88,10 @@ fn unit_sysusers_and_udev_agree() {
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains(&format!("/run/{rundir}/crowdtouch.sock")), "{text}");
+    assert!(
+        text.contains(&format!("/run/{rundir}/crowdtouch.sock")),
+        "{text}"
+    );
 }
 
 /// udev rule lines are `KEY{attr}OP"value"` pairs separated by commas.
@@ -80,7 +106,10 @@ fn udev_rule_syntax() {
         for pair in l.split(", ") {
             let ok = ["==", "!=", "+=", "-=", ":=", "="].iter().any(|op| {
                 pair.split_once(op).is_some_and(|(k, v)| {
-                    !k.is_empty() && k.chars().all(|c| c.is_ascii_uppercase() || "{}_".contains(c) || c.is_ascii_alphanumeric())
+                    !k.is_empty()
+                        && k.chars().all(|c| {
+                            c.is_ascii_uppercase() || "{}_".contains(c) || c.is_ascii_alphanumeric()
+                        })
                         && v.starts_with('"')
                         && v.ends_with('"')
                 })
@@ -98,10 +127,17 @@ fn systemd_analyze_verifies_the_unit_where_available() {
     };
     assert!(v.status.success());
     let dir = tempfile::tempdir().unwrap();
-    let unit = read("systemd/crowdtouch.service").replace("/usr/local/bin/crowdtouch", env!("CARGO_BIN_EXE_crowdtouch"));
+    let unit = read("systemd/crowdtouch.service").replace(
+        "/usr/local/bin/crowdtouch",
+        env!("CARGO_BIN_EXE_crowdtouch"),
+    );
     let path = dir.path().join("crowdtouch.service");
     std::fs::write(&path, unit).unwrap();
-    let out = Command::new("systemd-analyze").arg("verify").arg(&path).output().unwrap();
+    let out = Command::new("systemd-analyze")
+        .arg("verify")
+        .arg(&path)
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success() && !err.contains("Unknown"), "{err}");
 }

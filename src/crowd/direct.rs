@@ -439,11 +439,19 @@ impl DirectController {
             let Some(c) = controls.iter().find(|c| c.id == rig.id) else {
                 continue;
             };
+            // The fingers' similarity since they landed turns each handle's offset
+            // with the hand, so a twisted or pinched hand twists or pinches its
+            // vertices exactly (a single finger only translates).
+            let z = hand_similarity(c);
             for h in &mut rig.handles {
                 let Some(f) = c.fingers.iter().find(|f| f.id == h.finger) else {
                     continue;
                 };
-                h.record(f.world + h.offset, p.checkpoint_spacing_m);
+                let offset = Vec2::new(
+                    z.x * h.offset.x - z.y * h.offset.y,
+                    z.y * h.offset.x + z.x * h.offset.y,
+                );
+                h.record(f.world + offset, p.checkpoint_spacing_m);
                 // Constraint velocity: catch up this tick, within the speed limit.
                 let remaining = h.remaining();
                 let v_c = if dt_s > 0.0 {
@@ -541,6 +549,30 @@ impl DirectController {
             .map(|r| r.handles.iter().map(|h| h.vertex).collect())
             .unwrap_or_default()
     }
+}
+
+/// The least-squares similarity (rotation × scale, as a complex number `x + iy`)
+/// carrying the fingers' landing positions to their current ones; `(1, 0)` for one
+/// finger or when the fingers landed on one point.
+fn hand_similarity(c: &Control) -> Vec2 {
+    let n = c.fingers.len();
+    if n < 2 {
+        return Vec2::new(1.0, 0.0);
+    }
+    let a0 = c.fingers.iter().map(|f| f.world_down).sum::<Vec2>() / n as f64;
+    let b0 = c.fingers.iter().map(|f| f.world).sum::<Vec2>() / n as f64;
+    let (mut re, mut im, mut norm) = (0.0, 0.0, 0.0);
+    for f in &c.fingers {
+        let (a, b) = (f.world_down - a0, f.world - b0);
+        // conj(a) * b
+        re += a.x * b.x + a.y * b.y;
+        im += a.x * b.y - a.y * b.x;
+        norm += a.norm_squared();
+    }
+    if norm < 1e-12 {
+        return Vec2::new(1.0, 0.0);
+    }
+    Vec2::new(re / norm, im / norm)
 }
 
 /// `v` rotated by +90°.
