@@ -483,3 +483,155 @@ proptest! {
         check_any(&mutate(base, &ops));
     }
 }
+
+// ---------------------------------------------------------------------------
+// Shipped synthetic recordings
+
+fn shipped_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("config/recordings")
+}
+
+fn jsonl_bytes(surface: &crowdtouch::input::SurfaceInfo, frames: &[TouchFrame]) -> Vec<u8> {
+    let mut out = Vec::new();
+    write_jsonl(surface, frames, &mut out).unwrap();
+    out
+}
+
+/// Regenerate with `CROWDTOUCH_BLESS=1 cargo test --test recordings shipped`.
+#[test]
+fn shipped_recordings_match_config_files() {
+    if std::env::var_os("CROWDTOUCH_BLESS").is_some() {
+        synth::write_shipped(&shipped_dir()).unwrap();
+    }
+    let shipped = synth::shipped();
+    let mut on_disk: Vec<String> = std::fs::read_dir(shipped_dir())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".jsonl"))
+        .collect();
+    on_disk.sort();
+    let names: Vec<String> = shipped.iter().map(|(n, ..)| n.clone()).collect();
+    assert_eq!(on_disk, names);
+    for (name, surface, frames) in &shipped {
+        let file = std::fs::read(shipped_dir().join(name)).unwrap();
+        assert!(
+            file == jsonl_bytes(surface, frames),
+            "config/recordings/{name} differs from synth::shipped(); regenerate it"
+        );
+        let rec = read_recording(&shipped_dir().join(name), OnBadFrame::Stop).unwrap();
+        assert_eq!(&rec.surface, surface);
+        assert!(rec.warnings.is_empty());
+        assert_same_frames(frames, &rec.frames);
+    }
+}
+
+#[test]
+fn shipped_generation_is_deterministic() {
+    let a: Vec<Vec<u8>> = synth::shipped().iter().map(|(_, s, f)| jsonl_bytes(s, f)).collect();
+    let b: Vec<Vec<u8>> = synth::shipped().iter().map(|(_, s, f)| jsonl_bytes(s, f)).collect();
+    assert_eq!(a, b);
+    let dir = tempfile::tempdir().unwrap();
+    let paths = synth::write_shipped(dir.path()).unwrap();
+    assert_eq!(paths.len(), 7);
+    for (p, bytes) in paths.iter().zip(&a) {
+        assert_eq!(&std::fs::read(p).unwrap(), bytes);
+    }
+}
+
+/// World metres of a surface point (default 16 m × 9 m world).
+fn world(x: f32, y: f32) -> (f64, f64) {
+    (f64::from(x) * 16.0, f64::from(y) * 9.0)
+}
+
+/// Positions of contact `id` over the recording, world metres.
+fn track(frames: &[TouchFrame], id: u32) -> Vec<(f64, f64)> {
+    frames
+        .iter()
+        .flat_map(|f| f.contacts().iter().filter(|c| c.id.0 == id).map(|c| world(c.x, c.y)))
+        .collect()
+}
+
+fn near(a: (f64, f64), b: (f64, f64), tol_m: f64) -> bool {
+    (a.0 - b.0).hypot(a.1 - b.1) <= tol_m
+}
+
+#[test]
+fn shipped_recordings_are_what_they_say() {
+    let surface = synth::surface();
+    let (w_mm, h_mm) = surface.size_mm().unwrap();
+    assert!((w_mm - 1210.0).abs() < 1e-9 && (h_mm - 680.0).abs() < 1e-9);
+    let expect_fingers = [1, 2, 2, 3, 4, 5, 2];
+    let shipped = synth::shipped();
+    for ((name, _, frames), &fingers) in shipped.iter().zip(&expect_fingers) {
+        let rec = Recording { surface: surface.clone(), frames: frames.clone(), warnings: Vec::new() };
+        assert_eq!(check_life_cycle(&rec), fingers, "{name}");
+        assert_eq!(max_down(&rec), fingers, "{name}");
+        let d = rec.duration().as_secs_f64();
+        assert!((1.5..=4.0).contains(&d), "{name}: {d} s");
+        // ~120 Hz with ±0.4 ms jitter.
+        let period = 1e6 / 120.0;
+        for w in frames.windows(2) {
+            let dt = (w[1].t.0 - w[0].t.0) as f64;
+            assert!((dt - period).abs() <= 800.0 + 1.0, "{name}: {dt} us");
+        }
+        let mean = (frames.last().unwrap().t.0 as f64) / (frames.len() - 1) as f64;
+        assert!((mean - period).abs() < 50.0, "{name}: mean {mean}");
+        // Fingers of a hand land 10–60 ms apart (seen through 120 Hz frames).
+        let downs: Vec<u64> = frames
+            .iter()
+            .flat_map(|f| f.contacts().iter().filter(|c| c.flags.contains(ContactFlags::DOWN)).map(move |_| f.t.0))
+            .collect();
+        for w in downs.windows(2) {
+            assert!(w[1] - w[0] <= 60_000 + 9_000, "{name}: landing gap {}", w[1] - w[0]);
+        }
+    }
+    let f = |i: usize| &shipped[i].2;
+    // 01: lands at (9.9, 4.5), ends 2.5 m to the right.
+    let t = track(f(0), 1);
+    assert!(near(t[0], (9.9, 4.5), 0.02) && near(*t.last().unwrap(), (12.4, 4.5), 0.02), "{t:?}");
+    // 02: 1.8 m apart ≈ 136 mm on the glass, both end 2 m further left.
+    let (a, b) = (track(f(1), 1), track(f(1), 2));
+    assert!(((a[0].1 - b[0].1).abs() * 680.0 / 9.0 - 136.0).abs() < 1.0);
+    assert!(near(*a.last().unwrap(), (4.1, a[0].1), 0.02) && (a[0].0 - 6.1).abs() < 0.02);
+    // 03: pinch from 2 m to 0.8 m apart on y ≈ 3.1.
+    let (a, b) = (track(f(2), 1), track(f(2), 2));
+    let gap = |p: (f64, f64), q: (f64, f64)| (p.0 - q.0).hypot(p.1 - q.1);
+    assert!((gap(a[0], b[0]) - 2.0).abs() < 0.03 && (gap(*a.last().unwrap(), *b.last().unwrap()) - 0.8).abs() < 0.03);
+    assert!((a[0].1 - 3.1).abs() < 0.02);
+    // 04: the triangle moves by (1, 1.5).
+    for id in 1..=3 {
+        let t = track(f(3), id);
+        let (d0, d1) = (t.last().unwrap().0 - t[0].0, t.last().unwrap().1 - t[0].1);
+        assert!((d0 - 1.0).abs() < 0.02 && (d1 - 1.5).abs() < 0.02, "{d0} {d1}");
+    }
+    // 05: each finger turns 60° about (8, 4.5) at radius 0.9 m.
+    for id in 1..=4 {
+        let t = track(f(4), id);
+        let ang = |p: (f64, f64)| (p.1 - 4.5).atan2(p.0 - 8.0);
+        let mut turn = (ang(*t.last().unwrap()) - ang(t[0])).to_degrees();
+        if turn < -180.0 {
+            turn += 360.0;
+        }
+        assert!((turn - 60.0).abs() < 1.0, "turn {turn}");
+        assert!(((t[0].0 - 8.0).hypot(t[0].1 - 4.5) - 0.9).abs() < 0.02);
+    }
+    // 06: hand B lands ≥ 80 ms after hand A; hands > 250 mm apart in every frame.
+    let frames = f(5);
+    let first_b = frames.iter().find(|fr| fr.contacts().iter().any(|c| c.id.0 >= 3)).unwrap();
+    assert!(first_b.t.0 >= 80_000 && first_b.t.0 <= 80_000 + 9_000, "{}", first_b.t);
+    for fr in frames {
+        let cs = fr.contacts();
+        for a in cs.iter().filter(|c| c.id.0 <= 2) {
+            for b in cs.iter().filter(|c| c.id.0 >= 3) {
+                let d = (f64::from(a.x - b.x) * 1210.0).hypot(f64::from(a.y - b.y) * 680.0);
+                assert!(d > synth::TWO_HANDS_MIN_GAP_MM, "hands {d} mm apart at {}", fr.t);
+            }
+        }
+    }
+    // 07: far from the crowd (x 6..10, y 3..6) all along; swipes 3 m right.
+    for id in 1..=2 {
+        let t = track(f(6), id);
+        assert!(t.iter().all(|p| p.1 > 6.5 && p.0 < 6.0), "{t:?}");
+        assert!((t.last().unwrap().0 - t[0].0 - 3.0).abs() < 0.02);
+    }
+}
