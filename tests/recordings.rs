@@ -5,7 +5,7 @@
 
 use crowdtouch::input::recording::{
     parse_recording, read_evemu_with_desc, read_recording, write_jsonl, OnBadFrame, Recording,
-    RecordingError, Unsupported,
+    RecordingError, UnsupportedReason,
 };
 use crowdtouch::input::{synth, ContactFlags, TouchFrame};
 use crowdtouch::time::Micros;
@@ -14,7 +14,9 @@ use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
 fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name)
 }
 
 fn text(name: &str) -> String {
@@ -22,8 +24,13 @@ fn text(name: &str) -> String {
 }
 
 fn with_desc(desc: &str, events: &str) -> Recording {
-    read_evemu_with_desc(&text(desc), &text(events), Path::new(events), OnBadFrame::Stop)
-        .unwrap_or_else(|e| panic!("{e}"))
+    read_evemu_with_desc(
+        &text(desc),
+        &text(events),
+        Path::new(events),
+        OnBadFrame::Stop,
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Contacts still down after each frame → number of frames.
@@ -48,7 +55,10 @@ fn check_life_cycle(rec: &Recording) -> usize {
         let mut seen = BTreeSet::new();
         for c in f.contacts() {
             assert!(seen.insert(c.id), "frame {i}: id {} twice", c.id.0);
-            assert!((0.0..=1.0).contains(&c.x) && (0.0..=1.0).contains(&c.y), "frame {i}: {c:?}");
+            assert!(
+                (0.0..=1.0).contains(&c.x) && (0.0..=1.0).contains(&c.y),
+                "frame {i}: {c:?}"
+            );
             let down = c.flags.contains(ContactFlags::DOWN);
             match state.get(&c.id.0) {
                 None => assert!(down, "frame {i}: id {} appears without DOWN", c.id.0),
@@ -84,7 +94,10 @@ fn max_down(rec: &Recording) -> usize {
 
 #[test]
 fn atmel_one_finger_implicit_slot_zero() {
-    let rec = with_desc("atmel-maxtouch.desc", "atmel-maxtouch.1-finger-drag-up-down.events");
+    let rec = with_desc(
+        "atmel-maxtouch.desc",
+        "atmel-maxtouch.1-finger-drag-up-down.events",
+    );
     assert_eq!(rec.frames.len(), 150);
     assert_eq!(max_down(&rec), 1);
     assert_eq!(check_life_cycle(&rec), 1);
@@ -105,7 +118,10 @@ fn atmel_one_finger_implicit_slot_zero() {
 
 #[test]
 fn atmel_two_fingers() {
-    let rec = with_desc("atmel-maxtouch.desc", "atmel-maxtouch.2-fingers-touch-release.events");
+    let rec = with_desc(
+        "atmel-maxtouch.desc",
+        "atmel-maxtouch.2-fingers-touch-release.events",
+    );
     assert_eq!(rec.frames.len(), 16);
     assert_eq!(max_down(&rec), 2);
     assert_eq!(check_life_cycle(&rec), 2);
@@ -118,9 +134,15 @@ fn atmel_two_fingers() {
 
 #[test]
 fn atmel_four_fingers_histogram() {
-    let rec = with_desc("atmel-maxtouch.desc", "atmel-maxtouch.4-finger-drag-down.events");
+    let rec = with_desc(
+        "atmel-maxtouch.desc",
+        "atmel-maxtouch.4-finger-drag-down.events",
+    );
     assert_eq!(rec.frames.len(), 31);
-    assert_eq!(histogram(&rec), BTreeMap::from([(0, 1), (1, 1), (3, 4), (4, 25)]));
+    assert_eq!(
+        histogram(&rec),
+        BTreeMap::from([(0, 1), (1, 1), (3, 4), (4, 25)])
+    );
     assert_eq!(check_life_cycle(&rec), 4);
 }
 
@@ -178,7 +200,16 @@ fn ntrig_protocol_a_is_unsupported() {
         OnBadFrame::Stop,
     )
     .unwrap_err();
-    assert!(matches!(err, RecordingError::Unsupported { reason: Unsupported::ProtocolA, .. }), "{err}");
+    assert!(
+        matches!(
+            err,
+            RecordingError::Unsupported {
+                reason: UnsupportedReason::ProtocolA,
+                ..
+            }
+        ),
+        "{err}"
+    );
     assert!(err.to_string().contains("protocol A"), "{err}");
 }
 
@@ -186,7 +217,16 @@ fn ntrig_protocol_a_is_unsupported() {
 fn single_touch_device_is_unsupported() {
     let t = "N: single\nA: 00 42 1981 0 0\nA: 01 42 1981 0 0\nE: 0.000001 0001 014a 1\n";
     let err = parse_recording(t, Path::new("st"), OnBadFrame::Stop).unwrap_err();
-    assert!(matches!(err, RecordingError::Unsupported { reason: Unsupported::NoMultiTouch, .. }), "{err}");
+    assert!(
+        matches!(
+            err,
+            RecordingError::Unsupported {
+                reason: UnsupportedReason::NoMultiTouch,
+                ..
+            }
+        ),
+        "{err}"
+    );
 }
 
 #[test]
@@ -213,7 +253,10 @@ fn assert_same_frames(a: &[TouchFrame], b: &[TouchFrame]) {
         for (ca, cb) in fa.contacts().iter().zip(fb.contacts()) {
             assert_eq!((ca.id, ca.flags), (cb.id, cb.flags), "frame {i}");
             for (u, v) in [(ca.x, cb.x), (ca.y, cb.y)] {
-                assert!((u - v).abs() <= 1e-6 * u.abs().max(1e-3), "frame {i}: {u} vs {v}");
+                assert!(
+                    (u - v).abs() <= 1e-6 * u.abs().max(1e-3),
+                    "frame {i}: {u} vs {v}"
+                );
             }
             assert_eq!(ca.pressure, cb.pressure, "frame {i}");
             for (u, v) in [(ca.major_mm, cb.major_mm), (ca.minor_mm, cb.minor_mm)] {
@@ -230,7 +273,10 @@ fn assert_same_frames(a: &[TouchFrame], b: &[TouchFrame]) {
 fn jsonl_round_trip_of_real_recordings() {
     for rec in [
         read_recording(&fixture("dell-canvas-27-touch.evemu"), OnBadFrame::Stop).unwrap(),
-        with_desc("atmel-maxtouch.desc", "atmel-maxtouch.4-finger-drag-down.events"),
+        with_desc(
+            "atmel-maxtouch.desc",
+            "atmel-maxtouch.4-finger-drag-down.events",
+        ),
         read_recording(
             &fixture("ite-8595-touchpad-06cb-2968.two-finger-scroll.yml"),
             OnBadFrame::Stop,
@@ -239,8 +285,12 @@ fn jsonl_round_trip_of_real_recordings() {
     ] {
         let mut out = Vec::new();
         write_jsonl(&rec.surface, &rec.frames, &mut out).unwrap();
-        let back = parse_recording(std::str::from_utf8(&out).unwrap(), Path::new("rt.jsonl"), OnBadFrame::Stop)
-            .unwrap();
+        let back = parse_recording(
+            std::str::from_utf8(&out).unwrap(),
+            Path::new("rt.jsonl"),
+            OnBadFrame::Stop,
+        )
+        .unwrap();
         assert_eq!(back.surface, rec.surface);
         assert_same_frames(&rec.frames, &back.frames);
         // Writing again gives the same bytes.
@@ -259,7 +309,10 @@ fn jsonl_round_trip_keeps_cancel_palm_pressure_and_size() {
     let rec = parse_recording(t, Path::new("a.jsonl"), OnBadFrame::Stop).unwrap();
     let c = rec.frames[0].contacts()[0];
     assert_eq!(c.flags, ContactFlags::DOWN | ContactFlags::PALM);
-    assert_eq!((c.major_mm, c.minor_mm, c.pressure), (Some(10.0), Some(5.0), Some(0.25)));
+    assert_eq!(
+        (c.major_mm, c.minor_mm, c.pressure),
+        (Some(10.0), Some(5.0), Some(0.25))
+    );
     assert!((c.x - 0.1).abs() < 1e-6);
     assert_eq!(
         rec.frames[1].contacts()[0].flags,
@@ -267,7 +320,12 @@ fn jsonl_round_trip_keeps_cancel_palm_pressure_and_size() {
     );
     let mut out = Vec::new();
     write_jsonl(&rec.surface, &rec.frames, &mut out).unwrap();
-    let back = parse_recording(std::str::from_utf8(&out).unwrap(), Path::new("b.jsonl"), OnBadFrame::Stop).unwrap();
+    let back = parse_recording(
+        std::str::from_utf8(&out).unwrap(),
+        Path::new("b.jsonl"),
+        OnBadFrame::Stop,
+    )
+    .unwrap();
     assert_same_frames(&rec.frames, &back.frames);
 }
 
@@ -302,11 +360,16 @@ fn jsonl_errors_name_line_and_field() {
     ];
     for (t, line, what) in cases {
         let (l, m) = parse_err(t);
-        assert_eq!((l, m.contains(what)), (*line, true), "{what}: line {l}: {m}");
+        assert_eq!(
+            (l, m.contains(what)),
+            (*line, true),
+            "{what}: line {l}: {m}"
+        );
     }
 }
 
-const EH: &str = "N: dev\nA: 2f 0 1 0 0 0\nA: 35 0 100 0 0 0\nA: 36 0 100 0 0 0\nA: 39 0 65535 0 0 0\n";
+const EH: &str =
+    "N: dev\nA: 2f 0 1 0 0 0\nA: 35 0 100 0 0 0\nA: 36 0 100 0 0 0\nA: 39 0 65535 0 0 0\n";
 
 #[test]
 fn evemu_errors_name_the_line() {
@@ -315,18 +378,34 @@ fn evemu_errors_name_the_line() {
         (format!("{EH}{ok1}E: 0.1 0003 0035"), 8, "4 fields"),
         (format!("{EH}{ok1}E: 0.1 0003 0035 abc"), 8, "value"),
         (format!("{EH}{ok1}E: x.1 0003 0035 5"), 8, "timestamp"),
-        (format!("{EH}E: 1.0 0003 0039 1\nE: 0.5 0000 0000 0\n"), 7, "goes back"),
-        (format!("{EH}{ok1}E: 0.2 0003 0030 5"), 8, "does not declare"),
+        (
+            format!("{EH}E: 1.0 0003 0039 1\nE: 0.5 0000 0000 0\n"),
+            7,
+            "goes back",
+        ),
+        (
+            format!("{EH}{ok1}E: 0.2 0003 0030 5"),
+            8,
+            "does not declare",
+        ),
         (format!("{EH}{ok1}E: 0.2 0003 0045 5"), 8, "unknown axis"),
         (format!("{EH}A: 47 0 1 0 0 0\n{ok1}"), 6, "unknown axis"),
         (format!("{EH}A: 30 0 1 0\n{ok1}"), 6, "A: code"),
         (format!("{EH}{ok1}Z: what"), 8, "unrecognised"),
         (format!("{EH}{ok1}N: again"), 8, "header line after"),
-        ("A: 35 0 0 0 0 0\nA: 36 0 1 0 0\nA: 2f 0 1 0 0\nE: 0.1 0000 0000 0\n".to_string(), 1, "empty range"),
+        (
+            "A: 35 0 0 0 0 0\nA: 36 0 1 0 0\nA: 2f 0 1 0 0\nE: 0.1 0000 0000 0\n".to_string(),
+            1,
+            "empty range",
+        ),
     ];
     for (t, line, what) in cases {
         let (l, m) = parse_err(t);
-        assert_eq!((l, m.contains(what)), (*line, true), "{what}: line {l}: {m}");
+        assert_eq!(
+            (l, m.contains(what)),
+            (*line, true),
+            "{what}: line {l}: {m}"
+        );
     }
 }
 
@@ -336,22 +415,60 @@ const YH: &str = "version: 1\ndevices:\n- evdev:\n    name: d\n    absinfo:\n   
 fn yaml_errors_name_the_line() {
     let ok = "  - evdev:\n    - [0, 0, 3, 57, 1]\n    - [0, 0, 0, 0, 0]\n";
     let cases: &[(String, usize, &str)] = &[
-        (format!("{YH}{ok}  - evdev:\n    - [0, 1, 3, 53]\n"), 15, "5 to 5"),
-        (format!("{YH}{ok}  - evdev:\n    - [0, 1, 3, 53, x]\n"), 15, "not an integer"),
-        (format!("{YH}{ok}  - evdev:\n    - [0, 1, 3, 48, 4]\n"), 15, "does not declare"),
-        (format!("{YH}  - evdev:\n    - [1, 0, 0, 0, 0]\n    - [0, 5, 0, 0, 0]\n"), 13, "goes back"),
-        (format!("{YH}{ok}  - evdev:\n    - [0, 1, 3, 53, 1\n"), 16, "invalid YAML"),
-        (YH.replace("      54: [0, 100, 0, 0, 0]\n", "      54: [0, 100]\n"), 8, "absinfo.54"),
-        (YH.replace("      57: [0, 65535, 0, 0, 0]\n", "      99: [0, 1, 0, 0, 0]\n"), 9, "unknown axis"),
+        (
+            format!("{YH}{ok}  - evdev:\n    - [0, 1, 3, 53]\n"),
+            15,
+            "5 to 5",
+        ),
+        (
+            format!("{YH}{ok}  - evdev:\n    - [0, 1, 3, 53, x]\n"),
+            15,
+            "not an integer",
+        ),
+        (
+            format!("{YH}{ok}  - evdev:\n    - [0, 1, 3, 48, 4]\n"),
+            15,
+            "does not declare",
+        ),
+        (
+            format!("{YH}  - evdev:\n    - [1, 0, 0, 0, 0]\n    - [0, 5, 0, 0, 0]\n"),
+            13,
+            "goes back",
+        ),
+        (
+            format!("{YH}{ok}  - evdev:\n    - [0, 1, 3, 53, 1\n"),
+            16,
+            "invalid YAML",
+        ),
+        (
+            YH.replace("      54: [0, 100, 0, 0, 0]\n", "      54: [0, 100]\n"),
+            8,
+            "absinfo.54",
+        ),
+        (
+            YH.replace(
+                "      57: [0, 65535, 0, 0, 0]\n",
+                "      99: [0, 1, 0, 0, 0]\n",
+            ),
+            9,
+            "unknown axis",
+        ),
     ];
     for (t, line, what) in cases {
         let (l, m) = parse_err(t);
-        assert_eq!((l, m.contains(what)), (*line, true), "{what}: line {l}: {m}");
+        assert_eq!(
+            (l, m.contains(what)),
+            (*line, true),
+            "{what}: line {l}: {m}"
+        );
     }
     let v2 = YH.replace("version: 1", "version: 2");
     assert!(matches!(
         parse_recording(&v2, Path::new("y"), OnBadFrame::Stop),
-        Err(RecordingError::Unsupported { reason: Unsupported::Version { version: 2, .. }, .. })
+        Err(RecordingError::Unsupported {
+            reason: UnsupportedReason::Version { version: 2, .. },
+            ..
+        })
     ));
 }
 
@@ -372,7 +489,11 @@ fn skip_mode_records_warnings_and_keeps_good_frames() {
     let rec = parse_recording(&t, Path::new("s"), OnBadFrame::Skip).unwrap();
     assert_eq!(rec.frames.len(), 2);
     assert_eq!(rec.frames[1].contacts()[0].flags, ContactFlags::UP);
-    assert_eq!(rec.frames[1].contacts()[0].y, 0.0, "the skipped frame's Y was discarded");
+    assert_eq!(
+        rec.frames[1].contacts()[0].y,
+        0.0,
+        "the skipped frame's Y was discarded"
+    );
     assert_eq!((rec.warnings[0].line, rec.warnings.len()), (8, 1));
 }
 
@@ -404,7 +525,8 @@ fn other_errors() {
         Err(RecordingError::Parse { line: 1, .. })
     ));
     let big = std::fs::File::create(dir.path().join("big")).unwrap();
-    big.set_len(crowdtouch::input::recording::MAX_RECORDING_BYTES + 1).unwrap();
+    big.set_len(crowdtouch::input::recording::MAX_RECORDING_BYTES + 1)
+        .unwrap();
     assert!(matches!(
         read_recording(&dir.path().join("big"), OnBadFrame::Stop),
         Err(RecordingError::TooLarge { .. })
@@ -454,7 +576,10 @@ fn mutate(base: &str, ops: &[(u8, usize, usize, String)]) -> String {
 fn small_fixtures() -> Vec<String> {
     let yaml = text("ite-8595-touchpad-06cb-2968.two-finger-scroll.yml");
     let evemu = text("atmel-maxtouch.2-fingers-touch-release.events");
-    let rec = with_desc("atmel-maxtouch.desc", "atmel-maxtouch.2-fingers-touch-release.events");
+    let rec = with_desc(
+        "atmel-maxtouch.desc",
+        "atmel-maxtouch.2-fingers-touch-release.events",
+    );
     let mut jsonl = Vec::new();
     write_jsonl(&rec.surface, &rec.frames, &mut jsonl).unwrap();
     vec![yaml, evemu, String::from_utf8(jsonl).unwrap()]
@@ -527,8 +652,14 @@ fn shipped_recordings_match_config_files() {
 
 #[test]
 fn shipped_generation_is_deterministic() {
-    let a: Vec<Vec<u8>> = synth::shipped().iter().map(|(_, s, f)| jsonl_bytes(s, f)).collect();
-    let b: Vec<Vec<u8>> = synth::shipped().iter().map(|(_, s, f)| jsonl_bytes(s, f)).collect();
+    let a: Vec<Vec<u8>> = synth::shipped()
+        .iter()
+        .map(|(_, s, f)| jsonl_bytes(s, f))
+        .collect();
+    let b: Vec<Vec<u8>> = synth::shipped()
+        .iter()
+        .map(|(_, s, f)| jsonl_bytes(s, f))
+        .collect();
     assert_eq!(a, b);
     let dir = tempfile::tempdir().unwrap();
     let paths = synth::write_shipped(dir.path()).unwrap();
@@ -547,7 +678,12 @@ fn world(x: f32, y: f32) -> (f64, f64) {
 fn track(frames: &[TouchFrame], id: u32) -> Vec<(f64, f64)> {
     frames
         .iter()
-        .flat_map(|f| f.contacts().iter().filter(|c| c.id.0 == id).map(|c| world(c.x, c.y)))
+        .flat_map(|f| {
+            f.contacts()
+                .iter()
+                .filter(|c| c.id.0 == id)
+                .map(|c| world(c.x, c.y))
+        })
         .collect()
 }
 
@@ -563,7 +699,11 @@ fn shipped_recordings_are_what_they_say() {
     let expect_fingers = [1, 2, 2, 3, 4, 5, 2];
     let shipped = synth::shipped();
     for ((name, _, frames), &fingers) in shipped.iter().zip(&expect_fingers) {
-        let rec = Recording { surface: surface.clone(), frames: frames.clone(), warnings: Vec::new() };
+        let rec = Recording {
+            surface: surface.clone(),
+            frames: frames.clone(),
+            warnings: Vec::new(),
+        };
         assert_eq!(check_life_cycle(&rec), fingers, "{name}");
         assert_eq!(max_down(&rec), fingers, "{name}");
         let d = rec.duration().as_secs_f64();
@@ -579,16 +719,28 @@ fn shipped_recordings_are_what_they_say() {
         // Fingers of a hand land 10–60 ms apart (seen through 120 Hz frames).
         let downs: Vec<u64> = frames
             .iter()
-            .flat_map(|f| f.contacts().iter().filter(|c| c.flags.contains(ContactFlags::DOWN)).map(move |_| f.t.0))
+            .flat_map(|f| {
+                f.contacts()
+                    .iter()
+                    .filter(|c| c.flags.contains(ContactFlags::DOWN))
+                    .map(move |_| f.t.0)
+            })
             .collect();
         for w in downs.windows(2) {
-            assert!(w[1] - w[0] <= 60_000 + 9_000, "{name}: landing gap {}", w[1] - w[0]);
+            assert!(
+                w[1] - w[0] <= 60_000 + 9_000,
+                "{name}: landing gap {}",
+                w[1] - w[0]
+            );
         }
     }
     let f = |i: usize| &shipped[i].2;
     // 01: lands at (9.9, 4.5), ends 2.5 m to the right.
     let t = track(f(0), 1);
-    assert!(near(t[0], (9.9, 4.5), 0.02) && near(*t.last().unwrap(), (12.4, 4.5), 0.02), "{t:?}");
+    assert!(
+        near(t[0], (9.9, 4.5), 0.02) && near(*t.last().unwrap(), (12.4, 4.5), 0.02),
+        "{t:?}"
+    );
     // 02: 1.8 m apart ≈ 136 mm on the glass, both end 2 m further left.
     let (a, b) = (track(f(1), 1), track(f(1), 2));
     assert!(((a[0].1 - b[0].1).abs() * 680.0 / 9.0 - 136.0).abs() < 1.0);
@@ -596,13 +748,19 @@ fn shipped_recordings_are_what_they_say() {
     // 03: pinch from 2 m to 0.8 m apart on y ≈ 3.1.
     let (a, b) = (track(f(2), 1), track(f(2), 2));
     let gap = |p: (f64, f64), q: (f64, f64)| (p.0 - q.0).hypot(p.1 - q.1);
-    assert!((gap(a[0], b[0]) - 2.0).abs() < 0.03 && (gap(*a.last().unwrap(), *b.last().unwrap()) - 0.8).abs() < 0.03);
+    assert!(
+        (gap(a[0], b[0]) - 2.0).abs() < 0.03
+            && (gap(*a.last().unwrap(), *b.last().unwrap()) - 0.8).abs() < 0.03
+    );
     assert!((a[0].1 - 3.1).abs() < 0.02);
     // 04: the triangle moves by (1, 1.5).
     for id in 1..=3 {
         let t = track(f(3), id);
         let (d0, d1) = (t.last().unwrap().0 - t[0].0, t.last().unwrap().1 - t[0].1);
-        assert!((d0 - 1.0).abs() < 0.02 && (d1 - 1.5).abs() < 0.02, "{d0} {d1}");
+        assert!(
+            (d0 - 1.0).abs() < 0.02 && (d1 - 1.5).abs() < 0.02,
+            "{d0} {d1}"
+        );
     }
     // 05: each finger turns 60° about (8, 4.5) at radius 0.9 m.
     for id in 1..=4 {
@@ -617,14 +775,25 @@ fn shipped_recordings_are_what_they_say() {
     }
     // 06: hand B lands ≥ 80 ms after hand A; hands > 250 mm apart in every frame.
     let frames = f(5);
-    let first_b = frames.iter().find(|fr| fr.contacts().iter().any(|c| c.id.0 >= 3)).unwrap();
-    assert!(first_b.t.0 >= 80_000 && first_b.t.0 <= 80_000 + 9_000, "{}", first_b.t);
+    let first_b = frames
+        .iter()
+        .find(|fr| fr.contacts().iter().any(|c| c.id.0 >= 3))
+        .unwrap();
+    assert!(
+        first_b.t.0 >= 80_000 && first_b.t.0 <= 80_000 + 9_000,
+        "{}",
+        first_b.t
+    );
     for fr in frames {
         let cs = fr.contacts();
         for a in cs.iter().filter(|c| c.id.0 <= 2) {
             for b in cs.iter().filter(|c| c.id.0 >= 3) {
                 let d = (f64::from(a.x - b.x) * 1210.0).hypot(f64::from(a.y - b.y) * 680.0);
-                assert!(d > synth::TWO_HANDS_MIN_GAP_MM, "hands {d} mm apart at {}", fr.t);
+                assert!(
+                    d > synth::TWO_HANDS_MIN_GAP_MM,
+                    "hands {d} mm apart at {}",
+                    fr.t
+                );
             }
         }
     }

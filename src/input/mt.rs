@@ -239,8 +239,22 @@ impl Slot {
     const FREE: Slot = Slot {
         tracking_id: -1,
         id: ContactId(0),
-        vals: SlotValues { x: 0, y: 0, pressure: 0, major: 0, minor: 0, tool: 0 },
-        staged: SlotValues { x: 0, y: 0, pressure: 0, major: 0, minor: 0, tool: 0 },
+        vals: SlotValues {
+            x: 0,
+            y: 0,
+            pressure: 0,
+            major: 0,
+            minor: 0,
+            tool: 0,
+        },
+        staged: SlotValues {
+            x: 0,
+            y: 0,
+            pressure: 0,
+            major: 0,
+            minor: 0,
+            tool: 0,
+        },
         staged_tid: -1,
         dirty: 0,
     };
@@ -321,7 +335,10 @@ impl MtDecoder {
 
     /// Number of contacts currently down (committed state).
     pub fn active_contacts(&self) -> usize {
-        self.slots[..self.nslots].iter().filter(|s| s.tracking_id >= 0).count()
+        self.slots[..self.nslots]
+            .iter()
+            .filter(|s| s.tracking_id >= 0)
+            .count()
     }
 
     /// Feeds one event.
@@ -368,13 +385,11 @@ impl MtDecoder {
                 }
                 false
             }
-            (EV_ABS, ABS_MT_TRACKING_ID
-            | ABS_MT_POSITION_X
-            | ABS_MT_POSITION_Y
-            | ABS_MT_PRESSURE
-            | ABS_MT_TOUCH_MAJOR
-            | ABS_MT_TOUCH_MINOR
-            | ABS_MT_TOOL_TYPE) => {
+            (
+                EV_ABS,
+                ABS_MT_TRACKING_ID | ABS_MT_POSITION_X | ABS_MT_POSITION_Y | ABS_MT_PRESSURE
+                | ABS_MT_TOUCH_MAJOR | ABS_MT_TOUCH_MINOR | ABS_MT_TOOL_TYPE,
+            ) => {
                 let Some(i) = self.current else {
                     self.counters.ignored_slot_events += 1;
                     return false;
@@ -476,7 +491,11 @@ impl MtDecoder {
     fn contact(&self, id: ContactId, v: &SlotValues, flags: ContactFlags) -> Contact {
         let size_mm = |axis: &Option<AxisRange>, raw: i32| {
             let a = axis.as_ref()?;
-            let res = if a.resolution > 0.0 { a.resolution } else { self.axes.x.resolution };
+            let res = if a.resolution > 0.0 {
+                a.resolution
+            } else {
+                self.axes.x.resolution
+            };
             (res > 0.0).then(|| (f64::from(raw) / res) as f32)
         };
         let mut flags = flags;
@@ -487,7 +506,11 @@ impl MtDecoder {
             id,
             x: self.axes.x.normalise(f64::from(v.x)),
             y: self.axes.y.normalise(f64::from(v.y)),
-            pressure: self.axes.pressure.as_ref().map(|p| p.normalise(f64::from(v.pressure))),
+            pressure: self
+                .axes
+                .pressure
+                .as_ref()
+                .map(|p| p.normalise(f64::from(v.pressure))),
             major_mm: size_mm(&self.axes.touch_major, v.major),
             minor_mm: size_mm(&self.axes.touch_minor, v.minor),
             flags,
@@ -560,7 +583,11 @@ impl MtDecoder {
                 if s.tracking_id < 0 || ((began >> i) & 1 == 1) != pass_began {
                     continue;
                 }
-                let flags = if pass_began { ContactFlags::DOWN } else { ContactFlags::NONE };
+                let flags = if pass_began {
+                    ContactFlags::DOWN
+                } else {
+                    ContactFlags::NONE
+                };
                 let c = self.contact(s.id, &s.vals, flags);
                 self.emit(out, c);
             }
@@ -575,8 +602,19 @@ mod tests {
     const EPS: f32 = 1e-6;
 
     fn axes(slots: usize) -> MtAxes {
-        let r = AxisRange { min: 0.0, max: 1000.0, resolution: 10.0 };
-        MtAxes { x: r, y: r, slots, pressure: None, touch_major: None, touch_minor: None }
+        let r = AxisRange {
+            min: 0.0,
+            max: 1000.0,
+            resolution: 10.0,
+        };
+        MtAxes {
+            x: r,
+            y: r,
+            slots,
+            pressure: None,
+            touch_major: None,
+            touch_minor: None,
+        }
     }
 
     /// Feeds `(type, code, value)` events at time `t`; returns the frame if one closed.
@@ -603,7 +641,11 @@ mod tests {
         let f = feed(
             &mut d,
             1,
-            &[(EV_ABS, ABS_MT_TRACKING_ID, 3), (EV_ABS, ABS_MT_POSITION_X, 100), SYN],
+            &[
+                (EV_ABS, ABS_MT_TRACKING_ID, 3),
+                (EV_ABS, ABS_MT_POSITION_X, 100),
+                SYN,
+            ],
         )
         .unwrap();
         assert_eq!(ids_flags(&f), vec![(5, ContactFlags::DOWN)]);
@@ -616,7 +658,11 @@ mod tests {
         let f = feed(
             &mut d,
             3,
-            &[(EV_ABS, ABS_MT_TRACKING_ID, -1), (EV_ABS, ABS_MT_POSITION_Y, 900), SYN],
+            &[
+                (EV_ABS, ABS_MT_TRACKING_ID, -1),
+                (EV_ABS, ABS_MT_POSITION_Y, 900),
+                SYN,
+            ],
         )
         .unwrap();
         assert_eq!(ids_flags(&f), vec![(5, ContactFlags::UP)]);
@@ -632,14 +678,29 @@ mod tests {
     #[test]
     fn id_change_in_one_slot_ends_and_begins() {
         let mut d = MtDecoder::new(axes(2), 1);
-        feed(&mut d, 1, &[(EV_ABS, ABS_MT_TRACKING_ID, 10), (EV_ABS, ABS_MT_POSITION_X, 100), SYN]);
+        feed(
+            &mut d,
+            1,
+            &[
+                (EV_ABS, ABS_MT_TRACKING_ID, 10),
+                (EV_ABS, ABS_MT_POSITION_X, 100),
+                SYN,
+            ],
+        );
         let f = feed(
             &mut d,
             2,
-            &[(EV_ABS, ABS_MT_TRACKING_ID, 11), (EV_ABS, ABS_MT_POSITION_X, 700), SYN],
+            &[
+                (EV_ABS, ABS_MT_TRACKING_ID, 11),
+                (EV_ABS, ABS_MT_POSITION_X, 700),
+                SYN,
+            ],
         )
         .unwrap();
-        assert_eq!(ids_flags(&f), vec![(1, ContactFlags::UP), (2, ContactFlags::DOWN)]);
+        assert_eq!(
+            ids_flags(&f),
+            vec![(1, ContactFlags::UP), (2, ContactFlags::DOWN)]
+        );
         assert!((f.contacts()[0].x - 0.1).abs() < EPS);
         assert!((f.contacts()[1].x - 0.7).abs() < EPS);
     }
@@ -647,7 +708,15 @@ mod tests {
     #[test]
     fn new_contact_keeps_slot_values_not_resent() {
         let mut d = MtDecoder::new(axes(2), 1);
-        feed(&mut d, 1, &[(EV_ABS, ABS_MT_TRACKING_ID, 1), (EV_ABS, ABS_MT_POSITION_X, 300), SYN]);
+        feed(
+            &mut d,
+            1,
+            &[
+                (EV_ABS, ABS_MT_TRACKING_ID, 1),
+                (EV_ABS, ABS_MT_POSITION_X, 300),
+                SYN,
+            ],
+        );
         feed(&mut d, 2, &[(EV_ABS, ABS_MT_TRACKING_ID, -1), SYN]);
         let f = feed(&mut d, 3, &[(EV_ABS, ABS_MT_TRACKING_ID, 2), SYN]).unwrap();
         assert_eq!(ids_flags(&f), vec![(2, ContactFlags::DOWN)]);
@@ -669,7 +738,10 @@ mod tests {
             ],
         )
         .unwrap();
-        assert_eq!(ids_flags(&f), vec![(2, ContactFlags::DOWN), (1, ContactFlags::NONE)]);
+        assert_eq!(
+            ids_flags(&f),
+            vec![(2, ContactFlags::DOWN), (1, ContactFlags::NONE)]
+        );
         // The slot selection persists across frames.
         let f = feed(&mut d, 3, &[(EV_ABS, ABS_MT_POSITION_X, 600), SYN]).unwrap();
         assert!((f.contacts()[1].x - 0.6).abs() < EPS);
@@ -699,7 +771,15 @@ mod tests {
     #[test]
     fn syn_dropped_discards_until_report() {
         let mut d = MtDecoder::new(axes(2), 1);
-        feed(&mut d, 1, &[(EV_ABS, ABS_MT_TRACKING_ID, 1), (EV_ABS, ABS_MT_POSITION_X, 100), SYN]);
+        feed(
+            &mut d,
+            1,
+            &[
+                (EV_ABS, ABS_MT_TRACKING_ID, 1),
+                (EV_ABS, ABS_MT_POSITION_X, 100),
+                SYN,
+            ],
+        );
         let mut f = TouchFrame::default();
         assert!(!d.event(Micros(2), EV_ABS, ABS_MT_POSITION_X, 200, &mut f));
         assert!(!d.event(Micros(2), EV_SYN, SYN_DROPPED, 0, &mut f));
@@ -740,9 +820,21 @@ mod tests {
     #[test]
     fn pressure_size_and_palm() {
         let mut a = axes(1);
-        a.pressure = Some(AxisRange { min: 0.0, max: 255.0, resolution: 0.0 });
-        a.touch_major = Some(AxisRange { min: 0.0, max: 255.0, resolution: 0.0 });
-        a.touch_minor = Some(AxisRange { min: 0.0, max: 255.0, resolution: 5.0 });
+        a.pressure = Some(AxisRange {
+            min: 0.0,
+            max: 255.0,
+            resolution: 0.0,
+        });
+        a.touch_major = Some(AxisRange {
+            min: 0.0,
+            max: 255.0,
+            resolution: 0.0,
+        });
+        a.touch_minor = Some(AxisRange {
+            min: 0.0,
+            max: 255.0,
+            resolution: 5.0,
+        });
         let mut d = MtDecoder::new(a, 1);
         let f = feed(
             &mut d,
@@ -771,7 +863,11 @@ mod tests {
         let f = feed(
             &mut d,
             1,
-            &[(EV_ABS, ABS_MT_TRACKING_ID, 1), (EV_ABS, ABS_MT_TRACKING_ID, -1), SYN],
+            &[
+                (EV_ABS, ABS_MT_TRACKING_ID, 1),
+                (EV_ABS, ABS_MT_TRACKING_ID, -1),
+                SYN,
+            ],
         )
         .unwrap();
         assert!(f.is_empty());

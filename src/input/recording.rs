@@ -139,7 +139,7 @@ pub enum OnBadFrame {
 
 /// Why a well-formed recording cannot be used.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Unsupported {
+pub enum UnsupportedReason {
     /// The device speaks multi-touch protocol A (no `ABS_MT_SLOT`).
     ProtocolA,
     /// The device has no `ABS_MT_POSITION_X/Y` axes.
@@ -153,20 +153,20 @@ pub enum Unsupported {
     },
 }
 
-impl fmt::Display for Unsupported {
+impl fmt::Display for UnsupportedReason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Unsupported::ProtocolA => write!(
+            UnsupportedReason::ProtocolA => write!(
                 f,
                 "multi-touch protocol A (anonymous contacts closed by SYN_MT_REPORT, no \
                  ABS_MT_SLOT) is not supported yet; only type-B (slotted) devices are"
             ),
-            Unsupported::NoMultiTouch => write!(
+            UnsupportedReason::NoMultiTouch => write!(
                 f,
                 "the device has no multi-touch axes (ABS_MT_POSITION_X/Y); single-touch \
                  devices are not supported"
             ),
-            Unsupported::Version { format, version } => {
+            UnsupportedReason::Version { format, version } => {
                 write!(f, "{format} version {version} is not supported")
             }
         }
@@ -222,7 +222,7 @@ pub enum RecordingError {
         /// File.
         path: PathBuf,
         /// Why.
-        reason: Unsupported,
+        reason: UnsupportedReason,
     },
     /// No frame at all.
     #[error("{}: the recording holds no frame", path.display())]
@@ -244,7 +244,10 @@ pub fn read_recording(path: &Path, on_bad: OnBadFrame) -> Result<Recording, Reco
 
 /// Reads a text file of at most [`MAX_RECORDING_BYTES`].
 fn read_capped(path: &Path) -> Result<String, RecordingError> {
-    let io = |source| RecordingError::Io { path: path.to_path_buf(), source };
+    let io = |source| RecordingError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
     let file = std::fs::File::open(path).map_err(io)?;
     let too_large = |size| RecordingError::TooLarge {
         path: path.to_path_buf(),
@@ -257,7 +260,9 @@ fn read_capped(path: &Path) -> Result<String, RecordingError> {
         }
     }
     let mut bytes = Vec::new();
-    file.take(MAX_RECORDING_BYTES + 1).read_to_end(&mut bytes).map_err(io)?;
+    file.take(MAX_RECORDING_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
     if bytes.len() as u64 > MAX_RECORDING_BYTES {
         return Err(too_large(bytes.len() as u64));
     }
@@ -287,7 +292,9 @@ enum Format {
 
 /// Whether `line` (trimmed) is an evemu header or event line.
 fn is_evemu_line(line: &str) -> bool {
-    ["N:", "I:", "P:", "B:", "A:", "E:"].iter().any(|p| line.starts_with(p))
+    ["N:", "I:", "P:", "B:", "A:", "E:"]
+        .iter()
+        .any(|p| line.starts_with(p))
 }
 
 /// Detects the format from the first meaningful line (or the YAML top keys).
@@ -327,8 +334,13 @@ pub fn parse_recording(
         Ok(Some(Format::Jsonl)) => parse_jsonl(text, name, on_bad),
         Ok(Some(Format::Evemu)) => parse_evemu(None, text, name, on_bad),
         Ok(Some(Format::LibinputYaml)) => parse_libinput_yaml(text, name, on_bad),
-        Ok(None) => Err(RecordingError::Empty { path: name.to_path_buf() }),
-        Err(found) => Err(RecordingError::UnknownFormat { path: name.to_path_buf(), found }),
+        Ok(None) => Err(RecordingError::Empty {
+            path: name.to_path_buf(),
+        }),
+        Err(found) => Err(RecordingError::UnknownFormat {
+            path: name.to_path_buf(),
+            found,
+        }),
     }
 }
 
@@ -372,7 +384,10 @@ struct DeviceHeader {
 
 impl Default for DeviceHeader {
     fn default() -> Self {
-        DeviceHeader { name: None, abs: [None; ABS_MAX as usize + 1] }
+        DeviceHeader {
+            name: None,
+            abs: [None; ABS_MAX as usize + 1],
+        }
     }
 }
 
@@ -425,10 +440,10 @@ impl DeviceHeader {
             ));
         }
         if !has(mt::ABS_MT_POSITION_X) || !has(mt::ABS_MT_POSITION_Y) {
-            return Err(unsupported(Unsupported::NoMultiTouch));
+            return Err(unsupported(UnsupportedReason::NoMultiTouch));
         }
         let Some(slot) = self.abs[mt::ABS_MT_SLOT as usize] else {
-            return Err(unsupported(Unsupported::ProtocolA));
+            return Err(unsupported(UnsupportedReason::ProtocolA));
         };
         for code in [mt::ABS_MT_POSITION_X, mt::ABS_MT_POSITION_Y] {
             if let Some(a) = self.abs[code as usize] {
@@ -464,10 +479,11 @@ impl DeviceHeader {
                 ),
             );
         }
-        let (Some(x), Some(y)) =
-            (self.axis_range(mt::ABS_MT_POSITION_X), self.axis_range(mt::ABS_MT_POSITION_Y))
-        else {
-            return Err(unsupported(Unsupported::NoMultiTouch));
+        let (Some(x), Some(y)) = (
+            self.axis_range(mt::ABS_MT_POSITION_X),
+            self.axis_range(mt::ABS_MT_POSITION_Y),
+        ) else {
+            return Err(unsupported(UnsupportedReason::NoMultiTouch));
         };
         let axes = MtAxes {
             x,
@@ -478,7 +494,10 @@ impl DeviceHeader {
             touch_minor: self.axis_range(mt::ABS_MT_TOUCH_MINOR),
         };
         let surface = SurfaceInfo {
-            name: self.name.clone().unwrap_or_else(|| default_name.to_string()),
+            name: self
+                .name
+                .clone()
+                .unwrap_or_else(|| default_name.to_string()),
             x,
             y,
             max_contacts: axes.slots as u32,
@@ -579,7 +598,8 @@ impl<'a> EventStream<'a> {
                 message,
             }),
             OnBadFrame::Skip => {
-                self.warnings.push(line, format!("{message}; frame skipped"));
+                self.warnings
+                    .push(line, format!("{message}; frame skipped"));
                 self.decoder.discard_frame();
                 self.pending_events = 0;
                 Ok(())
@@ -616,7 +636,9 @@ impl<'a> EventStream<'a> {
             if !self.declared[code as usize] {
                 return self.bad(
                     line,
-                    format!("event for axis 0x{code:02x}, which the device header does not declare"),
+                    format!(
+                        "event for axis 0x{code:02x}, which the device header does not declare"
+                    ),
                 );
             }
         }
@@ -642,17 +664,29 @@ impl<'a> EventStream<'a> {
             );
         }
         if let Some(last) = self.frames.last().map(|f| f.t) {
-            if self.decoder.cancel_all(last + Micros(END_CANCEL_US), &mut self.frame) {
+            if self
+                .decoder
+                .cancel_all(last + Micros(END_CANCEL_US), &mut self.frame)
+            {
                 self.frames.push(self.frame);
             }
         }
         let c = self.decoder.counters();
         let notes = [
-            (c.slot_out_of_range, "ABS_MT_SLOT values out of range (their events ignored)"),
+            (
+                c.slot_out_of_range,
+                "ABS_MT_SLOT values out of range (their events ignored)",
+            ),
             (c.frame_overflow, "contacts did not fit a frame"),
-            (c.dropped_sync, "SYN_DROPPED events (frames discarded, no resync)"),
+            (
+                c.dropped_sync,
+                "SYN_DROPPED events (frames discarded, no resync)",
+            ),
             (c.mt_report, "SYN_MT_REPORT events (protocol A) ignored"),
-            (c.transient_contacts, "contacts began and ended inside one frame (not reported)"),
+            (
+                c.transient_contacts,
+                "contacts began and ended inside one frame (not reported)",
+            ),
         ];
         for (n, what) in notes {
             if n > 0 {
@@ -660,7 +694,9 @@ impl<'a> EventStream<'a> {
             }
         }
         if self.frames.is_empty() {
-            return Err(RecordingError::Empty { path: self.path.to_path_buf() });
+            return Err(RecordingError::Empty {
+                path: self.path.to_path_buf(),
+            });
         }
         Ok(Recording {
             surface: self.surface,
@@ -767,7 +803,12 @@ fn evemu_header_line(hdr: &mut DeviceHeader, line: usize, l: &str) -> Result<(),
             if hdr.abs[code as usize].is_some() {
                 return Err(format!("axis 0x{code:02x} is declared twice"));
             }
-            hdr.abs[code as usize] = Some(AbsInfo { min: v[0], max: v[1], resolution: v[4], line });
+            hdr.abs[code as usize] = Some(AbsInfo {
+                min: v[0],
+                max: v[1],
+                resolution: v[4],
+                line,
+            });
             Ok(())
         }
         // Bus/vendor/product, properties and capability bits are not needed.
@@ -785,7 +826,10 @@ fn parse_evemu(
     let mut hdr = DeviceHeader::default();
     let mut warnings = Warnings::default();
     if let Some(desc) = desc {
-        let ctx = HeaderCtx { path, prefix: "in the device description: " };
+        let ctx = HeaderCtx {
+            path,
+            prefix: "in the device description: ",
+        };
         let desc = desc.strip_prefix('\u{feff}').unwrap_or(desc);
         for (i, raw) in desc.lines().enumerate() {
             let l = raw.trim();
@@ -793,7 +837,10 @@ fn parse_evemu(
                 continue;
             }
             if l.starts_with("E:") {
-                warnings.push(0, "the device description holds events; they are ignored".into());
+                warnings.push(
+                    0,
+                    "the device description holds events; they are ignored".into(),
+                );
                 break;
             }
             if !is_evemu_line(l) {
@@ -828,7 +875,9 @@ fn parse_evemu(
                 // The description is authoritative; a header repeated in the
                 // events file is ignored.
                 (_, true) => {}
-                (None, false) => evemu_header_line(&mut hdr, line, l).map_err(|m| ctx.err(line, m))?,
+                (None, false) => {
+                    evemu_header_line(&mut hdr, line, l).map_err(|m| ctx.err(line, m))?
+                }
                 (Some(s), false) => s.bad(line, "header line after the first event".into())?,
             }
         } else {
@@ -845,7 +894,9 @@ fn parse_evemu(
             // A header with no events: say what is wrong with the device first.
             let mut w = warnings.take().unwrap_or_default();
             hdr.mt_axes(&ctx, 1, &dflt, &mut w)?;
-            Err(RecordingError::Empty { path: path.to_path_buf() })
+            Err(RecordingError::Empty {
+                path: path.to_path_buf(),
+            })
         }
     }
 }
@@ -943,9 +994,15 @@ impl yaml_rust2::parser::MarkedEventReceiver for TreeBuilder {
 fn check_yaml_depth(text: &str) -> Result<(), (usize, String)> {
     let mut depth = 0usize;
     for (i, l) in text.lines().enumerate() {
-        let indent = l.bytes().take_while(|b| matches!(b, b' ' | b'\t' | b'-' | b'?' | b':')).count();
+        let indent = l
+            .bytes()
+            .take_while(|b| matches!(b, b' ' | b'\t' | b'-' | b'?' | b':'))
+            .count();
         if indent > MAX_YAML_INDENT && !l[indent..].starts_with('#') && indent < l.len() {
-            return Err((i + 1, format!("indentation deeper than {MAX_YAML_INDENT} columns")));
+            return Err((
+                i + 1,
+                format!("indentation deeper than {MAX_YAML_INDENT} columns"),
+            ));
         }
         let code = l.split(" #").next().unwrap_or(l);
         for b in code.bytes() {
@@ -955,7 +1012,10 @@ fn check_yaml_depth(text: &str) -> Result<(), (usize, String)> {
                 _ => {}
             }
             if depth > MAX_YAML_FLOW_DEPTH {
-                return Err((i + 1, format!("brackets nested deeper than {MAX_YAML_FLOW_DEPTH}")));
+                return Err((
+                    i + 1,
+                    format!("brackets nested deeper than {MAX_YAML_FLOW_DEPTH}"),
+                ));
             }
         }
     }
@@ -982,13 +1042,25 @@ fn parse_libinput_yaml(
     }));
     match parsed {
         Ok(Ok(())) => {}
-        Ok(Err(e)) => return Err(perr(e.marker().line(), format!("invalid YAML: {}", e.info()))),
+        Ok(Err(e)) => {
+            return Err(perr(
+                e.marker().line(),
+                format!("invalid YAML: {}", e.info()),
+            ))
+        }
         Err(_) => return Err(perr(1, "invalid YAML (the parser failed)".to_string())),
     }
     let Some(root) = tree.root else {
-        return Err(RecordingError::Empty { path: path.to_path_buf() });
+        return Err(RecordingError::Empty {
+            path: path.to_path_buf(),
+        });
     };
-    fn field<'n>(parent: &'n Node, key: &str, what: &str, path: &Path) -> Result<&'n Node, RecordingError> {
+    fn field<'n>(
+        parent: &'n Node,
+        key: &str,
+        what: &str,
+        path: &Path,
+    ) -> Result<&'n Node, RecordingError> {
         parent.get(key).ok_or_else(|| RecordingError::Parse {
             path: path.to_path_buf(),
             line: parent.line(),
@@ -1001,13 +1073,19 @@ fn parse_libinput_yaml(
         Some(v) => {
             return Err(RecordingError::Unsupported {
                 path: path.to_path_buf(),
-                reason: Unsupported::Version { format: "libinput record", version: v },
+                reason: UnsupportedReason::Version {
+                    format: "libinput record",
+                    version: v,
+                },
             })
         }
         None => {
             return Err(perr(
                 version.line(),
-                format!("field `version`: expected an integer, found {}", version.kind()),
+                format!(
+                    "field `version`: expected an integer, found {}",
+                    version.kind()
+                ),
             ))
         }
     }
@@ -1017,7 +1095,10 @@ fn parse_libinput_yaml(
         other => {
             return Err(perr(
                 other.line(),
-                format!("field `devices`: expected a non-empty list, found {}", other.kind()),
+                format!(
+                    "field `devices`: expected a non-empty list, found {}",
+                    other.kind()
+                ),
             ))
         }
     };
@@ -1028,26 +1109,36 @@ fn parse_libinput_yaml(
         }
     }
     if !matches!(dev, Node::Map(..)) {
-        return Err(perr(dev.line(), format!("field `devices[0]`: expected a mapping, found {}", dev.kind())));
+        return Err(perr(
+            dev.line(),
+            format!(
+                "field `devices[0]`: expected a mapping, found {}",
+                dev.kind()
+            ),
+        ));
     }
     let evdev = field(dev, "evdev", "devices[0].evdev", path)?;
     let mut hdr = DeviceHeader::default();
-    if let Some(n) = evdev.get("name") {
-        if let Node::Scalar(s, _) = n {
-            hdr.name = Some(s.clone());
-        }
+    if let Some(Node::Scalar(s, _)) = evdev.get("name") {
+        hdr.name = Some(s.clone());
     }
     let absinfo = field(evdev, "absinfo", "devices[0].evdev.absinfo", path)?;
     let Node::Map(kv, _) = absinfo else {
         return Err(perr(
             absinfo.line(),
-            format!("field `devices[0].evdev.absinfo`: expected a mapping, found {}", absinfo.kind()),
+            format!(
+                "field `devices[0].evdev.absinfo`: expected a mapping, found {}",
+                absinfo.kind()
+            ),
         ));
     };
     for pair in kv.chunks_exact(2) {
         let (k, v) = (&pair[0], &pair[1]);
         let code = k.as_i64().ok_or_else(|| {
-            perr(k.line(), "field `absinfo`: axis codes must be integers".to_string())
+            perr(
+                k.line(),
+                "field `absinfo`: axis codes must be integers".to_string(),
+            )
         })?;
         if !(0..=i64::from(ABS_MAX)).contains(&code) {
             return Err(perr(
@@ -1058,9 +1149,15 @@ fn parse_libinput_yaml(
         let f = format!("absinfo.{code}");
         let vals = int_list(v, &f, 4..=5).map_err(|m| perr(v.line(), m))?;
         let get = |i: usize| vals.get(i).copied().unwrap_or(0);
-        let to_i32 = |x: i64| i32::try_from(x).map_err(|_| perr(v.line(), format!("field `{f}`: {x} is out of range")));
+        let to_i32 = |x: i64| {
+            i32::try_from(x)
+                .map_err(|_| perr(v.line(), format!("field `{f}`: {x} is out of range")))
+        };
         if hdr.abs[code as usize].is_some() {
-            return Err(perr(k.line(), format!("field `absinfo`: axis {code} is declared twice")));
+            return Err(perr(
+                k.line(),
+                format!("field `absinfo`: axis {code} is declared twice"),
+            ));
         }
         hdr.abs[code as usize] = Some(AbsInfo {
             min: to_i32(get(0))?,
@@ -1073,13 +1170,24 @@ fn parse_libinput_yaml(
     let (axes, surface) = hdr.mt_axes(&ctx, absinfo.line(), &default_name(path), &mut warnings)?;
     let mut stream = EventStream::new(path, on_bad, axes, surface, &hdr, warnings);
     let events = match dev.get("events") {
-        None => return Err(RecordingError::Empty { path: path.to_path_buf() }),
-        Some(n) if n.is_null() => return Err(RecordingError::Empty { path: path.to_path_buf() }),
+        None => {
+            return Err(RecordingError::Empty {
+                path: path.to_path_buf(),
+            })
+        }
+        Some(n) if n.is_null() => {
+            return Err(RecordingError::Empty {
+                path: path.to_path_buf(),
+            })
+        }
         Some(Node::Seq(items, _)) => items,
         Some(other) => {
             return Err(perr(
                 other.line(),
-                format!("field `devices[0].events`: expected a list, found {}", other.kind()),
+                format!(
+                    "field `devices[0].events`: expected a list, found {}",
+                    other.kind()
+                ),
             ))
         }
     };
@@ -1088,7 +1196,10 @@ fn parse_libinput_yaml(
             if !matches!(frame, Node::Map(..)) {
                 stream.bad(
                     frame.line(),
-                    format!("field `events[{fi}]`: expected a mapping, found {}", frame.kind()),
+                    format!(
+                        "field `events[{fi}]`: expected a mapping, found {}",
+                        frame.kind()
+                    ),
                 )?;
             }
             continue; // libinput events and other keys are not needed.
@@ -1096,7 +1207,10 @@ fn parse_libinput_yaml(
         let Node::Seq(evs, _) = list else {
             stream.bad(
                 list.line(),
-                format!("field `events[{fi}].evdev`: expected a list, found {}", list.kind()),
+                format!(
+                    "field `events[{fi}].evdev`: expected a list, found {}",
+                    list.kind()
+                ),
             )?;
             continue;
         };
@@ -1112,9 +1226,16 @@ fn parse_libinput_yaml(
 }
 
 /// A list of integers of a length in `len`.
-fn int_list(n: &Node, field: &str, len: std::ops::RangeInclusive<usize>) -> Result<Vec<i64>, String> {
+fn int_list(
+    n: &Node,
+    field: &str,
+    len: std::ops::RangeInclusive<usize>,
+) -> Result<Vec<i64>, String> {
     let Node::Seq(items, _) = n else {
-        return Err(format!("field `{field}`: expected a list of integers, found {}", n.kind()));
+        return Err(format!(
+            "field `{field}`: expected a list of integers, found {}",
+            n.kind()
+        ));
     };
     if !len.contains(&items.len()) {
         return Err(format!(
@@ -1130,7 +1251,10 @@ fn int_list(n: &Node, field: &str, len: std::ops::RangeInclusive<usize>) -> Resu
         .map(|(i, it)| {
             it.as_i64().ok_or_else(|| match it {
                 Node::Scalar(s, _) => format!("field `{field}[{i}]`: `{s}` is not an integer"),
-                other => format!("field `{field}[{i}]`: expected an integer, found {}", other.kind()),
+                other => format!(
+                    "field `{field}[{i}]`: expected an integer, found {}",
+                    other.kind()
+                ),
             })
         })
         .collect()
@@ -1143,7 +1267,10 @@ fn yaml_event(n: &Node, field: &str) -> Result<(u64, u16, u16, i32), String> {
         if ok {
             Ok(())
         } else {
-            Err(format!("field `{field}[{i}]` ({what}): {} is out of range", v[i]))
+            Err(format!(
+                "field `{field}[{i}]` ({what}): {} is out of range",
+                v[i]
+            ))
         }
     };
     range(0, "seconds", v[0] >= 0)?;
@@ -1175,7 +1302,10 @@ fn json_kind(v: &Value) -> &'static str {
 fn want_obj<'v>(v: Option<&'v Value>, field: &str) -> Result<&'v Map<String, Value>, String> {
     match v {
         Some(Value::Object(m)) => Ok(m),
-        Some(o) => Err(format!("field `{field}`: expected an object, found {}", json_kind(o))),
+        Some(o) => Err(format!(
+            "field `{field}`: expected an object, found {}",
+            json_kind(o)
+        )),
         None => Err(format!("missing field `{field}`")),
     }
 }
@@ -1186,7 +1316,10 @@ fn want_f64(v: Option<&Value>, field: &str) -> Result<f64, String> {
             .as_f64()
             .filter(|x| x.is_finite())
             .ok_or_else(|| format!("field `{field}`: {n} is not a finite number")),
-        Some(o) => Err(format!("field `{field}`: expected a number, found {}", json_kind(o))),
+        Some(o) => Err(format!(
+            "field `{field}`: expected a number, found {}",
+            json_kind(o)
+        )),
         None => Err(format!("missing field `{field}`")),
     }
 }
@@ -1232,7 +1365,11 @@ fn json_axis(dev: &Map<String, Value>, key: &str) -> Result<AxisRange, String> {
     if resolution < 0.0 {
         return Err(format!("field `{f}.resolution`: {resolution} is negative"));
     }
-    Ok(AxisRange { min, max, resolution })
+    Ok(AxisRange {
+        min,
+        max,
+        resolution,
+    })
 }
 
 fn json_header(l: &str) -> Result<SurfaceInfo, String> {
@@ -1243,12 +1380,19 @@ fn json_header(l: &str) -> Result<SurfaceInfo, String> {
         ));
     };
     if format.as_str() != Some(JSONL_FORMAT) {
-        return Err(format!("field `format`: expected \"{JSONL_FORMAT}\", found {format}"));
+        return Err(format!(
+            "field `format`: expected \"{JSONL_FORMAT}\", found {format}"
+        ));
     }
     let dev = want_obj(m.get("device"), "device")?;
     let name = match dev.get("name") {
         Some(Value::String(s)) => s.clone(),
-        Some(o) => return Err(format!("field `device.name`: expected a string, found {}", json_kind(o))),
+        Some(o) => {
+            return Err(format!(
+                "field `device.name`: expected a string, found {}",
+                json_kind(o)
+            ))
+        }
         None => return Err("missing field `device.name`".to_string()),
     };
     let x = json_axis(dev, "x")?;
@@ -1257,7 +1401,12 @@ fn json_header(l: &str) -> Result<SurfaceInfo, String> {
     if max_contacts == 0 {
         return Err("field `device.max_contacts`: must be at least 1".to_string());
     }
-    Ok(SurfaceInfo { name, x, y, max_contacts })
+    Ok(SurfaceInfo {
+        name,
+        x,
+        y,
+        max_contacts,
+    })
 }
 
 /// One contact of a JSON Lines frame, still in file terms.
@@ -1284,7 +1433,12 @@ fn json_frame(
     let t_us = want_u64(m.get("t_us"), "t_us")?;
     let list = match m.get("contacts") {
         Some(Value::Array(a)) => a,
-        Some(o) => return Err(format!("field `contacts`: expected an array, found {}", json_kind(o))),
+        Some(o) => {
+            return Err(format!(
+                "field `contacts`: expected an array, found {}",
+                json_kind(o)
+            ))
+        }
         None => return Err("missing field `contacts`".to_string()),
     };
     if list.len() > MAX_CONTACTS {
@@ -1298,7 +1452,10 @@ fn json_frame(
         let o = want_obj(Some(c), &format!("contacts[{i}]"))?;
         let file_id = want_u32(o.get("id"), &f("id"))?;
         if contacts.iter().any(|c| c.file_id == file_id) {
-            return Err(format!("field `{}`: id {file_id} appears twice in the frame", f("id")));
+            return Err(format!(
+                "field `{}`: id {file_id} appears twice in the frame",
+                f("id")
+            ));
         }
         let x = want_f64(o.get("x"), &f("x"))?;
         let y = want_f64(o.get("y"), &f("y"))?;
@@ -1334,9 +1491,19 @@ fn json_frame(
         let palm = match o.get("palm") {
             None | Some(Value::Null) => false,
             Some(Value::Bool(b)) => *b,
-            Some(v) => return Err(format!("field `{}`: expected a boolean, found {}", f("palm"), json_kind(v))),
+            Some(v) => {
+                return Err(format!(
+                    "field `{}`: expected a boolean, found {}",
+                    f("palm"),
+                    json_kind(v)
+                ))
+            }
         };
-        let flags = if palm { ContactFlags::PALM } else { ContactFlags::NONE };
+        let flags = if palm {
+            ContactFlags::PALM
+        } else {
+            ContactFlags::NONE
+        };
         contacts.push(FileContact {
             file_id,
             contact: Contact {
@@ -1357,7 +1524,12 @@ fn json_frame(
                 cancelled.push(want_u32(Some(v), &format!("cancelled[{i}]"))?);
             }
         }
-        Some(o) => return Err(format!("field `cancelled`: expected an array, found {}", json_kind(o))),
+        Some(o) => {
+            return Err(format!(
+                "field `cancelled`: expected an array, found {}",
+                json_kind(o)
+            ))
+        }
     }
     Ok(t_us)
 }
@@ -1374,7 +1546,9 @@ fn parse_jsonl(text: &str, path: &Path, on_bad: OnBadFrame) -> Result<Recording,
         .map(|(i, l)| (i + 1, l.trim()))
         .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
     let Some((hline, header)) = lines.next() else {
-        return Err(RecordingError::Empty { path: path.to_path_buf() });
+        return Err(RecordingError::Empty {
+            path: path.to_path_buf(),
+        });
     };
     let surface = json_header(header).map_err(|m| perr(hline, m))?;
     let mut warnings = Warnings::default();
@@ -1387,12 +1561,14 @@ fn parse_jsonl(text: &str, path: &Path, on_bad: OnBadFrame) -> Result<Recording,
     let mut last_t: Option<u64> = None;
     let mut size_dropped = false;
     for (line, l) in lines {
-        let parsed = json_frame(l, &surface, &mut cur, &mut cancelled, &mut size_dropped)
-            .and_then(|t| match last_t {
-                Some(prev) if t < prev => Err(format!(
-                    "field `t_us`: {t} is earlier than the previous frame's {prev}"
-                )),
-                _ => Ok(t),
+        let parsed =
+            json_frame(l, &surface, &mut cur, &mut cancelled, &mut size_dropped).and_then(|t| {
+                match last_t {
+                    Some(prev) if t < prev => Err(format!(
+                        "field `t_us`: {t} is earlier than the previous frame's {prev}"
+                    )),
+                    _ => Ok(t),
+                }
             });
         let t = match parsed {
             Ok(t) => t,
@@ -1442,7 +1618,9 @@ fn parse_jsonl(text: &str, path: &Path, on_bad: OnBadFrame) -> Result<Recording,
         );
     }
     let Some(last) = frames.last().map(|f| f.t) else {
-        return Err(RecordingError::Empty { path: path.to_path_buf() });
+        return Err(RecordingError::Empty {
+            path: path.to_path_buf(),
+        });
     };
     if !down.is_empty() {
         let mut frame = TouchFrame::new(last + Micros(END_CANCEL_US));
@@ -1453,7 +1631,11 @@ fn parse_jsonl(text: &str, path: &Path, on_bad: OnBadFrame) -> Result<Recording,
         }
         frames.push(frame);
     }
-    Ok(Recording { surface, frames, warnings: warnings.finish() })
+    Ok(Recording {
+        surface,
+        frames,
+        warnings: warnings.finish(),
+    })
 }
 
 #[derive(Serialize)]
@@ -1507,7 +1689,11 @@ struct FrameOut<'a> {
 }
 
 fn axis_out(a: &AxisRange) -> AxisOut {
-    AxisOut { min: a.min, max: a.max, resolution: a.resolution }
+    AxisOut {
+        min: a.min,
+        max: a.max,
+        resolution: a.resolution,
+    }
 }
 
 /// Device units for a normalised coordinate, rounded to 1e-3 units.
@@ -1561,7 +1747,9 @@ pub fn write_jsonl(
         cancelled.clear();
         for c in f.contacts() {
             if c.flags.ended() {
-                if c.flags.contains(ContactFlags::CANCELLED) && !c.flags.contains(ContactFlags::DOWN) {
+                if c.flags.contains(ContactFlags::CANCELLED)
+                    && !c.flags.contains(ContactFlags::DOWN)
+                {
                     cancelled.push(c.id.0);
                 }
                 continue;
@@ -1576,7 +1764,11 @@ pub fn write_jsonl(
                 palm: c.flags.contains(ContactFlags::PALM),
             });
         }
-        let line = FrameOut { t_us: f.t.saturating_since(t0).0, contacts: &contacts, cancelled: &cancelled };
+        let line = FrameOut {
+            t_us: f.t.saturating_since(t0).0,
+            contacts: &contacts,
+            cancelled: &cancelled,
+        };
         serde_json::to_writer(&mut *w, &line)?;
         w.write_all(b"\n")?;
     }
@@ -1626,7 +1818,10 @@ mod tests {
     #[test]
     fn evemu_time_forms() {
         assert_eq!(parse_evemu_time("0.000001"), Ok(1));
-        assert_eq!(parse_evemu_time("1357751031.716015"), Ok(1_357_751_031_716_015));
+        assert_eq!(
+            parse_evemu_time("1357751031.716015"),
+            Ok(1_357_751_031_716_015)
+        );
         assert_eq!(parse_evemu_time("2.5"), Ok(2_500_000));
         assert_eq!(parse_evemu_time("3"), Ok(3_000_000));
         assert!(parse_evemu_time("-1.0").is_err());
@@ -1640,8 +1835,12 @@ mod tests {
             parse_evemu_event(" 0.000001 0003 0039 -001\t# EV_ABS / ABS_MT_TRACKING_ID"),
             Ok((1, 3, 0x39, -1))
         );
-        assert!(parse_evemu_event(" 0.1 0003 0035").unwrap_err().contains("4 fields"));
-        assert!(parse_evemu_event(" 0.1 0003 zz 1").unwrap_err().contains("code"));
+        assert!(parse_evemu_event(" 0.1 0003 0035")
+            .unwrap_err()
+            .contains("4 fields"));
+        assert!(parse_evemu_event(" 0.1 0003 zz 1")
+            .unwrap_err()
+            .contains("code"));
     }
 
     #[test]

@@ -57,7 +57,10 @@ pub struct ReplayItem {
 impl ReplayItem {
     /// An item from a name and its frames.
     pub fn new(name: impl Into<String>, frames: Vec<TouchFrame>) -> ReplayItem {
-        ReplayItem { name: name.into(), frames }
+        ReplayItem {
+            name: name.into(),
+            frames,
+        }
     }
 }
 
@@ -85,7 +88,14 @@ struct PlayState {
 
 impl PlayState {
     /// Emits `f` with ids moved into the block starting at `base`.
-    fn emit(&mut self, f: &TouchFrame, base: u32, span: IdSpan, t: Micros, sink: &mut dyn FrameSink) {
+    fn emit(
+        &mut self,
+        f: &TouchFrame,
+        base: u32,
+        span: IdSpan,
+        t: Micros,
+        sink: &mut dyn FrameSink,
+    ) {
         self.out.clear();
         self.out.t = t;
         self.out.t_queued = Micros::ZERO;
@@ -95,7 +105,9 @@ impl PlayState {
             m.id = ContactId(base.wrapping_add(c.id.0.wrapping_sub(span.min)));
             // Cannot overflow: `f` held no more than MAX_CONTACTS.
             let _ = self.out.push(m);
-            let pos = self.active[..self.active_len].iter().position(|a| a.id == m.id);
+            let pos = self.active[..self.active_len]
+                .iter()
+                .position(|a| a.id == m.id);
             match (pos, m.flags.ended()) {
                 (Some(i), true) => {
                     self.active[i] = self.active[self.active_len - 1];
@@ -154,12 +166,19 @@ impl ReplaySource {
         let spans = items
             .iter()
             .map(|it| {
-                let ids = it.frames.iter().flat_map(|f| f.contacts().iter().map(|c| c.id.0));
-                let (min, max) = ids.fold((u32::MAX, 0u32), |(lo, hi), id| (lo.min(id), hi.max(id)));
+                let ids = it
+                    .frames
+                    .iter()
+                    .flat_map(|f| f.contacts().iter().map(|c| c.id.0));
+                let (min, max) =
+                    ids.fold((u32::MAX, 0u32), |(lo, hi), id| (lo.min(id), hi.max(id)));
                 if min > max {
                     IdSpan { min: 0, len: 0 }
                 } else {
-                    IdSpan { min, len: (max - min).saturating_add(1) }
+                    IdSpan {
+                        min,
+                        len: (max - min).saturating_add(1),
+                    }
                 }
             })
             .collect();
@@ -207,7 +226,12 @@ impl ReplaySource {
     /// when the playlist holds no frame at all. With [`Pacing::RealTime`] the
     /// stop flag is checked at least every [`STOP_POLL_US`]; with
     /// [`Pacing::Virtual`] before every frame.
-    pub fn run(&mut self, sink: &mut dyn FrameSink, stop: &AtomicBool, on_item: &mut dyn FnMut(usize)) {
+    pub fn run(
+        &mut self,
+        sink: &mut dyn FrameSink,
+        stop: &AtomicBool,
+        on_item: &mut dyn FnMut(usize),
+    ) {
         if self.items.iter().all(|it| it.frames.is_empty()) {
             return;
         }
@@ -299,8 +323,14 @@ mod tests {
     fn frame(t: u64, contacts: &[(u32, ContactFlags)]) -> TouchFrame {
         let mut f = TouchFrame::new(Micros(t));
         for &(id, flags) in contacts {
-            f.push(Contact { id: ContactId(id), x: 0.5, y: 0.5, flags, ..Contact::default() })
-                .unwrap();
+            f.push(Contact {
+                id: ContactId(id),
+                x: 0.5,
+                y: 0.5,
+                flags,
+                ..Contact::default()
+            })
+            .unwrap();
         }
         f
     }
@@ -318,7 +348,10 @@ mod tests {
     }
 
     fn ids(frames: &[TouchFrame]) -> Vec<Vec<u32>> {
-        frames.iter().map(|f| f.contacts().iter().map(|c| c.id.0).collect()).collect()
+        frames
+            .iter()
+            .map(|f| f.contacts().iter().map(|c| c.id.0).collect())
+            .collect()
     }
 
     #[test]
@@ -335,7 +368,17 @@ mod tests {
         assert_eq!(started, vec![0, 1]);
         let ts: Vec<u64> = out.iter().map(|f| f.t.0).collect();
         assert_eq!(ts, vec![0, 10_000, 20_000, 120_000, 130_000, 140_000]);
-        assert_eq!(ids(&out), vec![vec![1], vec![1, 2], vec![1, 2], vec![3], vec![3, 4], vec![3, 4]]);
+        assert_eq!(
+            ids(&out),
+            vec![
+                vec![1],
+                vec![1, 2],
+                vec![1, 2],
+                vec![3],
+                vec![3, 4],
+                vec![3, 4]
+            ]
+        );
         assert_eq!(src.frames_emitted(), 6);
         assert_eq!(src.next_id(), 5);
     }
@@ -359,9 +402,13 @@ mod tests {
     #[test]
     fn looped_ids_never_repeat_and_stop_cancels() {
         let stop = AtomicBool::new(false);
-        let mut sink = StopAfter { frames: Vec::new(), n: 3 * 7 + 2, stop: &stop };
-        let mut src =
-            ReplaySource::new(vec![tap_item("a")], true, Micros(5_000), Pacing::Virtual).with_first_id(100);
+        let mut sink = StopAfter {
+            frames: Vec::new(),
+            n: 3 * 7 + 2,
+            stop: &stop,
+        };
+        let mut src = ReplaySource::new(vec![tap_item("a")], true, Micros(5_000), Pacing::Virtual)
+            .with_first_id(100);
         let mut items = 0;
         src.run(&mut sink, &stop, &mut |_| items += 1);
         assert_eq!(items, 8);
@@ -370,7 +417,10 @@ mod tests {
         assert_eq!(frames.len(), 3 * 7 + 3);
         let last = frames.last().unwrap();
         assert_eq!(last.t, frames[frames.len() - 2].t);
-        assert!(last.contacts().iter().all(|c| c.flags == ContactFlags::CANCELLED));
+        assert!(last
+            .contacts()
+            .iter()
+            .all(|c| c.flags == ContactFlags::CANCELLED));
         assert_eq!(last.len(), 2);
         // Every DOWN id is new.
         let mut seen = HashSet::new();
@@ -390,8 +440,15 @@ mod tests {
 
     #[test]
     fn file_cut_mid_touch_is_cancelled_at_its_end() {
-        let cut = ReplayItem::new("cut", vec![frame(0, &[(7, ContactFlags::DOWN)]), frame(8_000, &[(7, ContactFlags::NONE)])]);
-        let mut src = ReplaySource::new(vec![cut, tap_item("b")], false, Micros(0), Pacing::Virtual);
+        let cut = ReplayItem::new(
+            "cut",
+            vec![
+                frame(0, &[(7, ContactFlags::DOWN)]),
+                frame(8_000, &[(7, ContactFlags::NONE)]),
+            ],
+        );
+        let mut src =
+            ReplaySource::new(vec![cut, tap_item("b")], false, Micros(0), Pacing::Virtual);
         let mut out: Vec<TouchFrame> = Vec::new();
         src.run(&mut out, &AtomicBool::new(false), &mut |_| {});
         assert_eq!(out[2].t, Micros(8_000));
@@ -403,7 +460,12 @@ mod tests {
 
     #[test]
     fn empty_playlist_returns() {
-        let mut src = ReplaySource::new(vec![ReplayItem::new("e", Vec::new())], true, Micros(0), Pacing::Virtual);
+        let mut src = ReplaySource::new(
+            vec![ReplayItem::new("e", Vec::new())],
+            true,
+            Micros(0),
+            Pacing::Virtual,
+        );
         let mut out: Vec<TouchFrame> = Vec::new();
         src.run(&mut out, &AtomicBool::new(false), &mut |_| {});
         assert!(out.is_empty());
@@ -424,7 +486,10 @@ mod tests {
         // A frame 10 s away; stop after 100 ms must end the run well before.
         let long = ReplayItem::new(
             "long",
-            vec![frame(0, &[(1, ContactFlags::DOWN)]), frame(10_000_000, &[(1, ContactFlags::UP)])],
+            vec![
+                frame(0, &[(1, ContactFlags::DOWN)]),
+                frame(10_000_000, &[(1, ContactFlags::UP)]),
+            ],
         );
         let mut src = ReplaySource::new(vec![long], false, Micros(0), Pacing::RealTime);
         let stop = std::sync::Arc::new(AtomicBool::new(false));

@@ -86,8 +86,16 @@ pub const TWO_HANDS_MIN_GAP_MM: f64 = 250.0;
 pub fn surface() -> SurfaceInfo {
     SurfaceInfo {
         name: DEVICE_NAME.to_string(),
-        x: AxisRange { min: 0.0, max: AXIS_MAX, resolution: AXIS_MAX / SURFACE_W_MM },
-        y: AxisRange { min: 0.0, max: AXIS_MAX, resolution: AXIS_MAX / SURFACE_H_MM },
+        x: AxisRange {
+            min: 0.0,
+            max: AXIS_MAX,
+            resolution: AXIS_MAX / SURFACE_W_MM,
+        },
+        y: AxisRange {
+            min: 0.0,
+            max: AXIS_MAX,
+            resolution: AXIS_MAX / SURFACE_H_MM,
+        },
         max_contacts: MAX_CONTACTS,
     }
 }
@@ -179,7 +187,9 @@ impl Hand {
         let e = ease((t_s - self.move_start_s()) / self.move_s);
         let (s, c) = (self.rotate_rad * e).sin_cos();
         let r = self.fingers[i] - self.centre;
-        self.centre + Vec2::new(c * r.x - s * r.y, s * r.x + c * r.y) + (self.translate + self.spread[i]) * e
+        self.centre
+            + Vec2::new(c * r.x - s * r.y, s * r.x + c * r.y)
+            + (self.translate + self.spread[i]) * e
     }
 }
 
@@ -204,7 +214,12 @@ fn generate(hands: &[Hand], seed: u64) -> Vec<TouchFrame> {
                 land += rng.uniform(STAGGER_MIN_MS, STAGGER_MAX_MS) * 1e-3;
                 lift += rng.uniform(STAGGER_MIN_MS, STAGGER_MAX_MS) * 1e-3;
             }
-            fingers.push(Finger { hand: h, index: i, land_s: land, lift_s: lift });
+            fingers.push(Finger {
+                hand: h,
+                index: i,
+                land_s: land,
+                lift_s: lift,
+            });
         }
     }
     // Ids in landing order, as a reader numbers them.
@@ -217,7 +232,11 @@ fn generate(hands: &[Hand], seed: u64) -> Vec<TouchFrame> {
     let mut done = vec![false; fingers.len()];
     let mut frames = Vec::new();
     for k in 0u64.. {
-        let jitter = if k == 0 { 0.0 } else { rng.uniform(-TIMING_JITTER_US, TIMING_JITTER_US) };
+        let jitter = if k == 0 {
+            0.0
+        } else {
+            rng.uniform(-TIMING_JITTER_US, TIMING_JITTER_US)
+        };
         let t_us = (k as f64 * period_us + jitter).round().max(0.0) as u64;
         let t_s = t_us as f64 * 1e-6;
         let mut frame = TouchFrame::new(Micros(t_us));
@@ -240,7 +259,11 @@ fn generate(hands: &[Hand], seed: u64) -> Vec<TouchFrame> {
             let p = world_to_surface(hands[f.hand].position(f.index, t_s));
             let x = (p.x + rng.uniform(-noise_x, noise_x)).clamp(0.0, 1.0);
             let y = (p.y + rng.uniform(-noise_y, noise_y)).clamp(0.0, 1.0);
-            let flags = if last[j].is_none() { ContactFlags::DOWN } else { ContactFlags::NONE };
+            let flags = if last[j].is_none() {
+                ContactFlags::DOWN
+            } else {
+                ContactFlags::NONE
+            };
             let c = Contact {
                 id: ContactId(j as u32 + 1),
                 x: x as f32,
@@ -384,7 +407,10 @@ mod tests {
     fn world_mapping_is_isotropic_on_the_glass() {
         let mm_per_m_x = SURFACE_W_MM / WORLD_W_M;
         let mm_per_m_y = SURFACE_H_MM / WORLD_H_M;
-        assert!((mm_per_m_x - mm_per_m_y).abs() < 0.1, "{mm_per_m_x} vs {mm_per_m_y}");
+        assert!(
+            (mm_per_m_x - mm_per_m_y).abs() < 0.1,
+            "{mm_per_m_x} vs {mm_per_m_y}"
+        );
         let p = world_to_surface(v(6.0, 3.0));
         assert!((p.x - 0.375).abs() < 1e-12 && (p.y - 1.0 / 3.0).abs() < 1e-12);
     }
