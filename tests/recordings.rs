@@ -495,6 +495,16 @@ fn skip_mode_records_warnings_and_keeps_good_frames() {
         "the skipped frame's Y was discarded"
     );
     assert_eq!((rec.warnings[0].line, rec.warnings.len()), (8, 1));
+
+    // A SYN_REPORT going back in time drops its own frame only.
+    let t = format!(
+        "{EH}E: 0.1 0003 0039 1\nE: 0.1 0000 0000 0\nE: 0.2 0003 0035 50\nE: 0.05 0000 0000 0\nE: 0.3 0003 0036 50\nE: 0.3 0000 0000 0\nE: 0.4 0003 0039 -1\nE: 0.4 0000 0000 0\n"
+    );
+    let rec = parse_recording(&t, Path::new("s"), OnBadFrame::Skip).unwrap();
+    assert_eq!(rec.frames.len(), 3);
+    let c = rec.frames[1].contacts()[0];
+    assert_eq!((c.x, c.y, rec.frames[1].t), (0.0, 0.5, Micros(200_000)));
+    assert_eq!((rec.warnings[0].line, rec.warnings.len()), (9, 1));
 }
 
 #[test]
@@ -803,4 +813,78 @@ fn shipped_recordings_are_what_they_say() {
         assert!(t.iter().all(|p| p.1 > 6.5 && p.0 < 6.0), "{t:?}");
         assert!((t.last().unwrap().0 - t[0].0 - 3.0).abs() < 0.02);
     }
+}
+
+// ---------------------------------------------------------------------------
+// MtDecoder on arbitrary event streams
+
+fn mt_event() -> impl Strategy<Value = (u16, u16, i32)> {
+    use crowdtouch::input::mt::*;
+    prop_oneof![
+        3 => Just((EV_SYN, SYN_REPORT, 0)),
+        1 => (0u16..4).prop_map(|c| (EV_SYN, c, 0)),
+        2 => (-2i32..6).prop_map(|v| (EV_ABS, ABS_MT_SLOT, v)),
+        3 => (-1i32..8).prop_map(|v| (EV_ABS, ABS_MT_TRACKING_ID, v)),
+        4 => (-100i32..1200).prop_map(|v| (EV_ABS, ABS_MT_POSITION_X, v)),
+        4 => (-100i32..1200).prop_map(|v| (EV_ABS, ABS_MT_POSITION_Y, v)),
+        1 => (0u16..0x40, any::<i32>()).prop_map(|(c, v)| (EV_ABS, c, v)),
+        1 => (any::<u16>(), any::<u16>(), any::<i32>()),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 128, rng_seed: proptest::test_runner::RngSeed::Fixed(0x3170), failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// Whatever the events, frames keep the contact life cycle and the unit square,
+    /// and `cancel_all` ends everything.
+    #[test]
+    fn mt_decoder_keeps_life_cycle(events in proptest::collection::vec(mt_event(), 0..300), slots in 1usize..5) {
+        use crowdtouch::input::mt::{MtAxes, MtDecoder};
+        use crowdtouch::input::AxisRange;
+        let r = AxisRange { min: 0.0, max: 1000.0, resolution: 0.0 };
+        let mut dec = MtDecoder::new(MtAxes { x: r, y: r, slots, pressure: None, touch_major: None, touch_minor: None }, 1);
+        let mut f = TouchFrame::default();
+        let mut frames = Vec::new();
+        for (i, (ty, code, value)) in events.into_iter().enumerate() {
+            if dec.event(Micros(i as u64), ty, code, value, &mut f) {
+                prop_assert!(f.contacts().iter().filter(|c| !c.flags.ended()).count() <= slots);
+                frames.push(f);
+            }
+        }
+        if dec.cancel_all(Micros(1_000), &mut f) {
+            frames.push(f);
+        }
+        let rec = Recording { surface: synth::surface(), frames, warnings: Vec::new() };
+        let n = check_life_cycle(&rec);
+        prop_assert_eq!(n as u32, dec.next_id() - 1);
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Recordings through the replay source
+
+#[test]
+fn replay_of_shipped_and_real_recordings_keeps_life_cycle() {
+    use crowdtouch::input::replay::{Pacing, ReplayItem, ReplaySource};
+    use std::sync::atomic::AtomicBool;
+    let mut items: Vec<ReplayItem> = synth::shipped()
+        .into_iter()
+        .map(|(n, _, f)| ReplayItem::new(n, f))
+        .collect();
+    let dell = read_recording(&fixture("dell-canvas-27-touch.evemu"), OnBadFrame::Stop).unwrap();
+    items.push(ReplayItem::new("dell", dell.frames.clone()));
+    let total: usize = items.iter().map(|i| i.frames.len()).sum();
+    let mut src = ReplaySource::new(items, false, Micros(500_000), Pacing::Virtual);
+    let mut out: Vec<TouchFrame> = Vec::new();
+    let mut started = Vec::new();
+    src.run(&mut out, &AtomicBool::new(false), &mut |i| started.push(i));
+    assert_eq!(started, (0..8).collect::<Vec<_>>());
+    assert_eq!(out.len(), total);
+    let rec = Recording {
+        surface: synth::surface(),
+        frames: out,
+        warnings: Vec::new(),
+    };
+    // 1+2+2+3+4+5+2 synthetic fingers + 12 Dell contacts, all distinct ids.
+    assert_eq!(check_life_cycle(&rec), 19 + 12);
 }

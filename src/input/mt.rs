@@ -449,6 +449,15 @@ impl MtDecoder {
     ///
     /// This is what `SYN_DROPPED` does; readers call it to skip a bad frame.
     pub fn discard_frame(&mut self) {
+        self.discard_staged();
+        self.dropping = true;
+    }
+
+    /// Throws away the changes staged since the last `SYN_REPORT`; later events
+    /// are decoded normally.
+    ///
+    /// For a reader that drops a frame whose closing `SYN_REPORT` it rejected.
+    pub fn discard_staged(&mut self) {
         let mut bits = self.dirty_slots;
         while bits != 0 {
             let i = bits.trailing_zeros() as usize;
@@ -457,7 +466,6 @@ impl MtDecoder {
             s.dirty = 0;
         }
         self.dirty_slots = 0;
-        self.dropping = true;
     }
 
     /// Ends every contact still down, as a frame of `CANCELLED` contacts at

@@ -589,8 +589,20 @@ impl<'a> EventStream<'a> {
         }
     }
 
-    /// Reports a bad event: fails, or skips its frame.
+    /// Reports a bad event: fails, or skips its frame (up to and including the
+    /// next `SYN_REPORT`).
     fn bad(&mut self, line: usize, message: String) -> Result<(), RecordingError> {
+        self.bad_at(line, message, false)
+    }
+
+    /// As [`EventStream::bad`]; `closes_frame` when the bad event is itself the
+    /// frame's `SYN_REPORT`, so the next frame is kept.
+    fn bad_at(
+        &mut self,
+        line: usize,
+        message: String,
+        closes_frame: bool,
+    ) -> Result<(), RecordingError> {
         match self.on_bad {
             OnBadFrame::Stop => Err(RecordingError::Parse {
                 path: self.path.to_path_buf(),
@@ -600,7 +612,11 @@ impl<'a> EventStream<'a> {
             OnBadFrame::Skip => {
                 self.warnings
                     .push(line, format!("{message}; frame skipped"));
-                self.decoder.discard_frame();
+                if closes_frame {
+                    self.decoder.discard_staged();
+                } else {
+                    self.decoder.discard_frame();
+                }
                 self.pending_events = 0;
                 Ok(())
             }
@@ -617,13 +633,14 @@ impl<'a> EventStream<'a> {
         value: i32,
     ) -> Result<(), RecordingError> {
         if time_us < self.last_us {
-            return self.bad(
+            return self.bad_at(
                 line,
                 format!(
                     "timestamp {} goes back before the previous event's {}",
                     fmt_time(time_us),
                     fmt_time(self.last_us)
                 ),
+                ev_type == mt::EV_SYN && code == mt::SYN_REPORT,
             );
         }
         if ev_type == mt::EV_ABS {
@@ -1848,6 +1865,25 @@ mod tests {
         let deep = "[".repeat(200);
         assert!(check_yaml_depth(&deep).is_err());
         assert!(check_yaml_depth("a:\n  - [1, 2]\n").is_ok());
+    }
+
+    #[test]
+    fn deep_yaml_is_refused_or_survived() {
+        let header = "version: 1\ndevices:\n";
+        let dashes = format!("{header}{}x\n", "- ".repeat(100_000));
+        assert!(matches!(
+            parse_recording(&dashes, p(), OnBadFrame::Stop),
+            Err(RecordingError::Parse { line: 3, .. })
+        ));
+        let flow = format!("{header}{}\n", "[".repeat(100_000));
+        assert!(parse_recording(&flow, p(), OnBadFrame::Stop).is_err());
+        // The deepest ladder the guard lets through parses on a test thread's stack.
+        let mut ladder = String::from(header);
+        for i in 0..MAX_YAML_INDENT {
+            ladder.push_str(&" ".repeat(i));
+            ladder.push_str("k:\n");
+        }
+        assert!(parse_recording(&ladder, p(), OnBadFrame::Stop).is_err());
     }
 
     #[test]
