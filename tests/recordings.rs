@@ -508,6 +508,39 @@ fn skip_mode_records_warnings_and_keeps_good_frames() {
 }
 
 #[test]
+fn description_errors_point_into_the_description() {
+    let desc = "N: d\nA: 2f 0 1 0 0 0\nA: 35 0 0 0 0 0\nA: 36 0 100 0 0 0\n";
+    let err = read_evemu_with_desc(
+        desc,
+        "E: 0.1 0000 0000 0\n",
+        Path::new("d"),
+        OnBadFrame::Stop,
+    )
+    .unwrap_err();
+    match err {
+        RecordingError::Parse { line, message, .. } => {
+            assert_eq!(line, 3);
+            assert!(
+                message.starts_with("in the device description: "),
+                "{message}"
+            );
+        }
+        e => panic!("{e}"),
+    }
+    let err = read_evemu_with_desc(
+        "N: d\nA: 2f 0 x 0 0\n",
+        "",
+        Path::new("d"),
+        OnBadFrame::Stop,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(err, RecordingError::Parse { line: 2, .. }),
+        "{err}"
+    );
+}
+
+#[test]
 fn other_errors() {
     assert!(matches!(
         parse_recording("", Path::new("e"), OnBadFrame::Stop),

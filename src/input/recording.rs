@@ -867,6 +867,15 @@ fn parse_evemu(
         }
     }
     let ctx = HeaderCtx { path, prefix: "" };
+    // Header problems point into the description when there is one.
+    let hctx = HeaderCtx {
+        path,
+        prefix: if desc.is_some() {
+            "in the device description: "
+        } else {
+            ""
+        },
+    };
     let dflt = default_name(path);
     let mut stream: Option<EventStream<'_>> = None;
     let mut warnings = Some(warnings);
@@ -879,7 +888,8 @@ fn parse_evemu(
         if let Some(rest) = l.strip_prefix("E:") {
             if stream.is_none() {
                 let mut w = warnings.take().unwrap_or_default();
-                let (axes, surface) = hdr.mt_axes(&ctx, line, &dflt, &mut w)?;
+                let at = if desc.is_some() { 1 } else { line };
+                let (axes, surface) = hdr.mt_axes(&hctx, at, &dflt, &mut w)?;
                 stream = Some(EventStream::new(path, on_bad, axes, surface, &hdr, w));
             }
             let Some(s) = stream.as_mut() else { continue };
@@ -910,7 +920,7 @@ fn parse_evemu(
         None => {
             // A header with no events: say what is wrong with the device first.
             let mut w = warnings.take().unwrap_or_default();
-            hdr.mt_axes(&ctx, 1, &dflt, &mut w)?;
+            hdr.mt_axes(&hctx, 1, &dflt, &mut w)?;
             Err(RecordingError::Empty {
                 path: path.to_path_buf(),
             })
