@@ -8,9 +8,22 @@ use libfuzzer_sys::fuzz_target;
 use std::collections::HashMap;
 
 fuzz_target!(|data: &[u8]| {
-    let Some((&slots, rest)) = data.split_first() else { return };
-    let r = AxisRange { min: -50.0, max: 1000.0, resolution: 10.0 };
-    let axes = MtAxes { x: r, y: r, slots: slots as usize % 80, pressure: Some(r), touch_major: Some(r), touch_minor: None };
+    let Some((&slots, rest)) = data.split_first() else {
+        return;
+    };
+    let r = AxisRange {
+        min: -50.0,
+        max: 1000.0,
+        resolution: 10.0,
+    };
+    let axes = MtAxes {
+        x: r,
+        y: r,
+        slots: slots as usize % 80,
+        pressure: Some(r),
+        touch_major: Some(r),
+        touch_minor: None,
+    };
     let mut dec = MtDecoder::new(axes, 1);
     let mut f = TouchFrame::default();
     let mut down: HashMap<u32, ()> = HashMap::new();

@@ -13,8 +13,18 @@ fuzz_target!(|data: &[u8]| {
     for mode in common::MODES {
         common::check(parse_recording(&text, Path::new("fuzz.evemu"), mode));
         match text.split_once('\0') {
-            Some((desc, events)) => common::check(read_evemu_with_desc(desc, events, Path::new("fuzz.events"), mode)),
-            None => common::check(read_evemu_with_desc(DESC, &text, Path::new("fuzz.events"), mode)),
+            Some((desc, events)) => common::check(read_evemu_with_desc(
+                desc,
+                events,
+                Path::new("fuzz.events"),
+                mode,
+            )),
+            None => common::check(read_evemu_with_desc(
+                DESC,
+                &text,
+                Path::new("fuzz.events"),
+                mode,
+            )),
         }
     }
 });

@@ -10,7 +10,11 @@ const HEADER: &str = r#"{"format":"crowdtouch-touch","version":1,"device":{"name
 
 fuzz_target!(|data: &[u8]| {
     let text = String::from_utf8_lossy(data);
-    let text = if text.contains("crowdtouch-touch") { text.into_owned() } else { format!("{HEADER}\n{text}") };
+    let text = if text.contains("crowdtouch-touch") {
+        text.into_owned()
+    } else {
+        format!("{HEADER}\n{text}")
+    };
     for mode in common::MODES {
         common::check(parse_recording(&text, Path::new("fuzz.jsonl"), mode));
     }

@@ -8,7 +8,11 @@ mod common;
 
 fuzz_target!(|data: &[u8]| {
     let text = String::from_utf8_lossy(data);
-    let text = if text.contains("devices:") { text.into_owned() } else { format!("version: 1\ndevices:\n{text}") };
+    let text = if text.contains("devices:") {
+        text.into_owned()
+    } else {
+        format!("version: 1\ndevices:\n{text}")
+    };
     for mode in common::MODES {
         common::check(parse_recording(&text, Path::new("fuzz.yml"), mode));
     }
