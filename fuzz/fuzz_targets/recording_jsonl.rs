@@ -1,0 +1,21 @@
+#![no_main]
+use crowdtouch::input::recording::parse_recording;
+use libfuzzer_sys::fuzz_target;
+use std::path::Path;
+
+#[path = "common.rs"]
+mod common;
+
+const HEADER: &str = r#"{"format":"crowdtouch-touch","version":1,"device":{"name":"f","x":{"min":0,"max":1000,"resolution":4},"y":{"min":0,"max":1000},"max_contacts":10}}"#;
+
+fuzz_target!(|data: &[u8]| {
+    let text = String::from_utf8_lossy(data);
+    let text = if text.contains("crowdtouch-touch") {
+        text.into_owned()
+    } else {
+        format!("{HEADER}\n{text}")
+    };
+    for mode in common::MODES {
+        common::check(parse_recording(&text, Path::new("fuzz.jsonl"), mode));
+    }
+});
