@@ -83,26 +83,25 @@ fn input_decode_and_queue_do_not_allocate() {
     let mut frame = TouchFrame::default();
     // Warm-up: fingers down.
     let mut t = 0u64;
-    let mut feed =
-        |dec: &mut MtDecoder, q: &mut FrameQueue, frame: &mut TouchFrame, t: u64, k: i32| {
-            for slot in 0..5 {
-                dec.event(Micros(t), EV_ABS, ABS_MT_SLOT, slot, frame);
-                if k == 0 {
-                    dec.event(Micros(t), EV_ABS, ABS_MT_TRACKING_ID, 100 + slot, frame);
-                }
-                dec.event(
-                    Micros(t),
-                    EV_ABS,
-                    ABS_MT_POSITION_X,
-                    100 + slot * 500 + k % 1000,
-                    frame,
-                );
-                dec.event(Micros(t), EV_ABS, ABS_MT_POSITION_Y, 2000 - k % 1000, frame);
+    let feed = |dec: &mut MtDecoder, q: &mut FrameQueue, frame: &mut TouchFrame, t: u64, k: i32| {
+        for slot in 0..5 {
+            dec.event(Micros(t), EV_ABS, ABS_MT_SLOT, slot, frame);
+            if k == 0 {
+                dec.event(Micros(t), EV_ABS, ABS_MT_TRACKING_ID, 100 + slot, frame);
             }
-            if dec.event(Micros(t), EV_SYN, 0, 0, frame) {
-                crowdtouch::input::FrameSink::push(q, frame);
-            }
-        };
+            dec.event(
+                Micros(t),
+                EV_ABS,
+                ABS_MT_POSITION_X,
+                100 + slot * 500 + k % 1000,
+                frame,
+            );
+            dec.event(Micros(t), EV_ABS, ABS_MT_POSITION_Y, 2000 - k % 1000, frame);
+        }
+        if dec.event(Micros(t), EV_SYN, 0, 0, frame) {
+            crowdtouch::input::FrameSink::push(q, frame);
+        }
+    };
     feed(&mut dec, &mut q, &mut frame, t, 0);
     while rx.try_recv().is_ok() {}
     let n = allocations(|| {
