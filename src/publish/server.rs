@@ -439,6 +439,9 @@ impl Publisher<'_> {
             }
         };
         let shared = Arc::new(ClientShared::new(id));
+        // Counted before its hello can reach it, so a client that has read its hello
+        // is always in the count; uncounted again if it cannot be started.
+        stats.clients.fetch_add(1, Ordering::Relaxed);
         {
             let mut q = shared.lock();
             let hello = self.hub.hello(id, &q.settings);
@@ -458,6 +461,7 @@ impl Publisher<'_> {
             Ok(h) => h,
             Err(e) => {
                 log::warn!("client {id}: cannot start its writer thread: {e}");
+                stats.clients.fetch_sub(1, Ordering::Relaxed);
                 return;
             }
         };
@@ -474,10 +478,10 @@ impl Publisher<'_> {
                 shared.kill();
                 let _ = stream.shutdown(Shutdown::Both);
                 let _ = writer.join();
+                stats.clients.fetch_sub(1, Ordering::Relaxed);
                 return;
             }
         };
-        stats.clients.fetch_add(1, Ordering::Relaxed);
         stats.clients_accepted.fetch_add(1, Ordering::Relaxed);
         log::debug!("client {id}: connected");
         self.clients.push(ClientHandle {
