@@ -669,26 +669,75 @@ fn parse_command(mut map: Map<String, Value>) -> Result<ClientMessage, ProtocolE
 // ---------------------------------------------------------------------------------
 // Number writing (hot path).
 
-/// Appends `v` as a fixed 3-decimal number (`-12.345`), from the integer
-/// `round(v * 1000)`; NaN is written as `0.000` and |v| is clamped to
+/// "00" to "99": two decimal digits per table lookup.
+const DIGIT_PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
+
+/// Bytes enough for one fixed-3 number: sign, 10 integer digits (|v| ≤ 1e9), point, 3 decimals.
+const FIXED3_MAX_BYTES: usize = 16;
+
+/// Writes `v` as a fixed 3-decimal number (`-12.345`) right-aligned into `buf`,
+/// returning where it starts. It is the integer `round(v * 1000)` with a point
+/// before its last three digits; NaN is written as `0.000` and |v| is clamped to
 /// [`MAX_COORD_ABS`].
 #[inline]
-fn push_fixed3(out: &mut Vec<u8>, v: f64, buf: &mut itoa::Buffer) {
+fn fmt_fixed3(v: f64, buf: &mut [u8; FIXED3_MAX_BYTES]) -> usize {
     let v = sanitize(v);
     // Round half away from zero; `as` truncates toward zero.
     let scaled = (v * 1000.0 + 0.5f64.copysign(v)) as i64;
     let mag = scaled.unsigned_abs();
-    if scaled < 0 {
-        out.push(b'-');
+    let frac = (mag % 1000) as usize;
+    let mut int = mag / 1000;
+    let mut i = FIXED3_MAX_BYTES - 4;
+    buf[i] = b'.';
+    buf[i + 1] = b'0' + (frac / 100) as u8;
+    buf[i + 2..i + 4].copy_from_slice(&DIGIT_PAIRS[2 * (frac % 100)..2 * (frac % 100) + 2]);
+    while int >= 100 {
+        let pair = (int % 100) as usize;
+        int /= 100;
+        i -= 2;
+        buf[i..i + 2].copy_from_slice(&DIGIT_PAIRS[2 * pair..2 * pair + 2]);
     }
-    out.extend_from_slice(buf.format(mag / 1000).as_bytes());
-    let frac = mag % 1000;
-    out.extend_from_slice(&[
-        b'.',
-        b'0' + (frac / 100) as u8,
-        b'0' + (frac / 10 % 10) as u8,
-        b'0' + (frac % 10) as u8,
-    ]);
+    if int >= 10 {
+        i -= 2;
+        let pair = int as usize;
+        buf[i..i + 2].copy_from_slice(&DIGIT_PAIRS[2 * pair..2 * pair + 2]);
+    } else {
+        i -= 1;
+        buf[i] = b'0' + int as u8;
+    }
+    if scaled < 0 {
+        i -= 1;
+        buf[i] = b'-';
+    }
+    i
+}
+
+/// Appends `v` as a fixed 3-decimal number (see [`fmt_fixed3`]).
+#[inline]
+fn push_fixed3(out: &mut Vec<u8>, v: f64) {
+    let mut buf = [0u8; FIXED3_MAX_BYTES];
+    let at = fmt_fixed3(v, &mut buf);
+    out.extend_from_slice(&buf[at..]);
+}
+
+/// Appends `x,y` as two fixed 3-decimal numbers with one copy.
+#[inline]
+fn push_fixed3_pair(out: &mut Vec<u8>, p: Vec2) {
+    let mut bx = [0u8; FIXED3_MAX_BYTES];
+    let mut by = [0u8; FIXED3_MAX_BYTES];
+    let ax = fmt_fixed3(p.x, &mut bx);
+    let ay = fmt_fixed3(p.y, &mut by);
+    let mut pair = [0u8; 2 * FIXED3_MAX_BYTES + 1];
+    let nx = FIXED3_MAX_BYTES - ax;
+    let ny = FIXED3_MAX_BYTES - ay;
+    pair[..nx].copy_from_slice(&bx[ax..]);
+    pair[nx] = b',';
+    pair[nx + 1..nx + 1 + ny].copy_from_slice(&by[ay..]);
+    out.extend_from_slice(&pair[..nx + 1 + ny]);
 }
 
 #[inline]
@@ -706,7 +755,7 @@ fn push_uint(out: &mut Vec<u8>, v: impl itoa::Integer, buf: &mut itoa::Buffer) {
 }
 
 /// Appends `[x0,y0,x1,y1,…]`.
-fn push_flat_vec2(out: &mut Vec<u8>, it: impl Iterator<Item = Vec2>, buf: &mut itoa::Buffer) {
+fn push_flat_vec2(out: &mut Vec<u8>, it: impl Iterator<Item = Vec2>) {
     out.push(b'[');
     let mut first = true;
     for p in it {
@@ -714,9 +763,7 @@ fn push_flat_vec2(out: &mut Vec<u8>, it: impl Iterator<Item = Vec2>, buf: &mut i
             out.push(b',');
         }
         first = false;
-        push_fixed3(out, p.x, buf);
-        out.push(b',');
-        push_fixed3(out, p.y, buf);
+        push_fixed3_pair(out, p);
     }
     out.push(b']');
 }
@@ -773,15 +820,15 @@ fn snapshot_json_tail(s: &Snapshot, fields: &FieldSet, out: &mut Vec<u8>, b: &mu
     });
     if fields.positions {
         out.extend_from_slice(b",\"positions\":");
-        push_flat_vec2(out, s.agents.iter().map(|a| a.pos), b);
+        push_flat_vec2(out, s.agents.iter().map(|a| a.pos));
     }
     if fields.velocities {
         out.extend_from_slice(b",\"velocities\":");
-        push_flat_vec2(out, s.agents.iter().map(|a| a.vel), b);
+        push_flat_vec2(out, s.agents.iter().map(|a| a.vel));
     }
     if fields.goals {
         out.extend_from_slice(b",\"goals\":");
-        push_flat_vec2(out, s.goals.iter().copied(), b);
+        push_flat_vec2(out, s.goals.iter().copied());
     }
     if fields.assignment {
         out.extend_from_slice(b",\"assignment_seq\":");
@@ -798,9 +845,9 @@ fn snapshot_json_tail(s: &Snapshot, fields: &FieldSet, out: &mut Vec<u8>, b: &mu
             out.extend_from_slice(b"{\"id\":");
             push_uint(out, t.id, b);
             out.extend_from_slice(b",\"x\":");
-            push_fixed3(out, t.pos.x, b);
+            push_fixed3(out, t.pos.x);
             out.extend_from_slice(b",\"y\":");
-            push_fixed3(out, t.pos.y, b);
+            push_fixed3(out, t.pos.y);
             out.extend_from_slice(b",\"control\":");
             match t.control {
                 Some(c) => push_uint(out, c, b),
@@ -1169,7 +1216,7 @@ pub fn encode_mesh_json(m: &MeshView, with_triangles: bool, out: &mut Vec<u8>) {
     out.extend_from_slice(b",\"topology\":");
     push_uint(out, m.topology, &mut b);
     out.extend_from_slice(b",\"vertices\":");
-    push_flat_vec2(out, m.vertices.iter().copied(), &mut b);
+    push_flat_vec2(out, m.vertices.iter().copied());
     if with_triangles {
         out.extend_from_slice(b",\"triangles\":");
         push_u32_list(out, m.triangles.iter().flatten().copied(), &mut b);
@@ -1370,7 +1417,6 @@ mod tests {
 
     #[test]
     fn fixed3_formats_exactly() {
-        let mut b = itoa::Buffer::new();
         let cases = [
             (0.0, "0.000"),
             (-0.0004, "0.000"),
@@ -1381,10 +1427,15 @@ mod tests {
             (f64::NEG_INFINITY, "-1000000000.000"),
             (f64::NAN, "0.000"),
             (0.999_9, "1.000"),
+            (5.05, "5.050"),
+            (99.999_6, "100.000"),
+            (123_456.789_1, "123456.789"),
+            (-7.0, "-7.000"),
+            (10.0, "10.000"),
         ];
         for (v, want) in cases {
             let mut out = Vec::new();
-            push_fixed3(&mut out, v, &mut b);
+            push_fixed3(&mut out, v);
             assert_eq!(String::from_utf8(out).unwrap(), want, "{v}");
         }
     }
