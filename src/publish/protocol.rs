@@ -1226,10 +1226,76 @@ pub fn encode_mesh_json(m: &MeshView, with_triangles: bool, out: &mut Vec<u8>) {
     out.extend_from_slice(b"}\n");
 }
 
+/// Every JSON message but `snapshot`, `mesh`, `stats` and `dropped` (written by
+/// hand), in wire form: serde writes the `type` tag first, then fields in order.
+#[derive(serde::Serialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+enum Wire<'a> {
+    Control {
+        phase: &'static str,
+        id: u32,
+        kind: crate::snapshot::ControlKind,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        fingers: Option<&'a [u32]>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        vertices: Option<&'a [u32]>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        cancelled: Option<bool>,
+        t_us: u64,
+    },
+    Gesture {
+        phase: &'static str,
+        id: u32,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        fingers: Option<u32>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        contacts: Option<u32>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        duration_us: Option<u64>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        cancelled: Option<bool>,
+        t_us: u64,
+    },
+    Reset {
+        agents: u32,
+        hard: bool,
+        t_us: u64,
+    },
+    Paused {
+        paused: bool,
+        t_us: u64,
+    },
+    Ack {
+        id: &'a Value,
+    },
+    Error {
+        id: Option<&'a Value>,
+        message: &'a str,
+        fatal: bool,
+    },
+    Bye {
+        reason: &'a str,
+    },
+    Hello {
+        protocol: u32,
+        server: &'static str,
+        client: ClientId,
+        formats: [&'static str; 2],
+        format: &'static str,
+        subscriptions: Vec<&'static str>,
+        fields: Vec<&'static str>,
+        max_rate_hz: Option<f64>,
+        world: &'a crate::geom::Rect,
+        agents: u32,
+        agent_radius_m: f64,
+        client_queue: u32,
+        max_line_bytes: usize,
+    },
+}
+
 /// Appends one event JSON line (`control`, `gesture`, `reset` or `paused`).
 pub fn encode_event(e: &Event, out: &mut Vec<u8>) {
-    use serde_json::json;
-    let v = match e {
+    let w = match e {
         Event::ControlBegin {
             id,
             kind,
@@ -1243,25 +1309,42 @@ pub fn encode_event(e: &Event, out: &mut Vec<u8>) {
             fingers,
             vertices,
             t,
-        } => {
-            let phase = if matches!(e, Event::ControlBegin { .. }) {
+        } => Wire::Control {
+            phase: if matches!(e, Event::ControlBegin { .. }) {
                 "begin"
             } else {
                 "update"
-            };
-            json!({"type": "control", "phase": phase, "id": id, "kind": kind,
-                   "fingers": fingers, "vertices": vertices, "t_us": t.0})
-        }
+            },
+            id: *id,
+            kind: *kind,
+            fingers: Some(fingers),
+            vertices: Some(vertices),
+            cancelled: None,
+            t_us: t.0,
+        },
         Event::ControlEnd {
             id,
             kind,
             cancelled,
             t,
-        } => json!({"type": "control", "phase": "end", "id": id, "kind": kind,
-                    "cancelled": cancelled, "t_us": t.0}),
-        Event::GestureBegin { id, t } => {
-            json!({"type": "gesture", "phase": "begin", "id": id, "t_us": t.0})
-        }
+        } => Wire::Control {
+            phase: "end",
+            id: *id,
+            kind: *kind,
+            fingers: None,
+            vertices: None,
+            cancelled: Some(*cancelled),
+            t_us: t.0,
+        },
+        Event::GestureBegin { id, t } => Wire::Gesture {
+            phase: "begin",
+            id: *id,
+            fingers: None,
+            contacts: None,
+            duration_us: None,
+            cancelled: None,
+            t_us: t.0,
+        },
         Event::GestureEnd {
             id,
             fingers,
@@ -1269,15 +1352,26 @@ pub fn encode_event(e: &Event, out: &mut Vec<u8>) {
             duration_us,
             cancelled,
             t,
-        } => json!({"type": "gesture", "phase": "end", "id": id, "fingers": fingers,
-                    "contacts": contacts, "duration_us": duration_us,
-                    "cancelled": cancelled, "t_us": t.0}),
-        Event::Reset { agents, hard, t } => {
-            json!({"type": "reset", "agents": agents, "hard": hard, "t_us": t.0})
-        }
-        Event::Paused { paused, t } => json!({"type": "paused", "paused": paused, "t_us": t.0}),
+        } => Wire::Gesture {
+            phase: "end",
+            id: *id,
+            fingers: Some(*fingers),
+            contacts: Some(*contacts),
+            duration_us: Some(*duration_us),
+            cancelled: Some(*cancelled),
+            t_us: t.0,
+        },
+        Event::Reset { agents, hard, t } => Wire::Reset {
+            agents: *agents,
+            hard: *hard,
+            t_us: t.0,
+        },
+        Event::Paused { paused, t } => Wire::Paused {
+            paused: *paused,
+            t_us: t.0,
+        },
     };
-    push_json_line(out, &v);
+    push_json_line(out, &w);
 }
 
 /// Appends one `stats` JSON line: every field of [`StatsReport`], with its time `t`
@@ -1301,15 +1395,12 @@ pub fn encode_stats(r: &StatsReport, out: &mut Vec<u8>) {
 
 /// Appends `{"type":"ack","id":…}`.
 pub fn encode_ack(id: &Value, out: &mut Vec<u8>) {
-    push_json_line(out, &serde_json::json!({"type": "ack", "id": id}));
+    push_json_line(out, &Wire::Ack { id });
 }
 
 /// Appends `{"type":"error","id":…|null,"message":…,"fatal":…}`.
 pub fn encode_error(id: Option<&Value>, message: &str, fatal: bool, out: &mut Vec<u8>) {
-    push_json_line(
-        out,
-        &serde_json::json!({"type": "error", "id": id, "message": message, "fatal": fatal}),
-    );
+    push_json_line(out, &Wire::Error { id, message, fatal });
 }
 
 /// Appends `{"type":"dropped","count":…,"total":…}`: `count` snapshots were dropped
@@ -1325,7 +1416,7 @@ pub fn encode_dropped(count: u64, total: u64, out: &mut Vec<u8>) {
 
 /// Appends `{"type":"bye","reason":…}`.
 pub fn encode_bye(reason: &str, out: &mut Vec<u8>) {
-    push_json_line(out, &serde_json::json!({"type": "bye", "reason": reason}));
+    push_json_line(out, &Wire::Bye { reason });
 }
 
 /// The server `hello`: static facts plus the settings in force for this client.
@@ -1346,22 +1437,21 @@ pub struct ServerHello<'a> {
 /// Appends one server `hello` line.
 pub fn encode_server_hello(h: &ServerHello<'_>, out: &mut Vec<u8>) {
     let s = h.settings;
-    let v = serde_json::json!({
-        "type": "hello",
-        "protocol": PROTOCOL_VERSION,
-        "server": concat!("crowdtouch ", env!("CARGO_PKG_VERSION")),
-        "client": h.client,
-        "formats": ["json", "binary"],
-        "format": s.format.as_str(),
-        "subscriptions": s.subscriptions.names(),
-        "fields": s.fields.names(),
-        "max_rate_hz": s.max_rate_hz,
-        "world": {"min": h.info.world.min, "max": h.info.world.max},
-        "agents": h.agents,
-        "agent_radius_m": h.info.agent_radius_m,
-        "client_queue": h.client_queue,
-        "max_line_bytes": MAX_LINE_BYTES,
-    });
+    let v = Wire::Hello {
+        protocol: PROTOCOL_VERSION,
+        server: concat!("crowdtouch ", env!("CARGO_PKG_VERSION")),
+        client: h.client,
+        formats: [Format::Json.as_str(), Format::Binary.as_str()],
+        format: s.format.as_str(),
+        subscriptions: s.subscriptions.names(),
+        fields: s.fields.names(),
+        max_rate_hz: s.max_rate_hz,
+        world: &h.info.world,
+        agents: h.agents,
+        agent_radius_m: h.info.agent_radius_m,
+        client_queue: h.client_queue,
+        max_line_bytes: MAX_LINE_BYTES,
+    };
     push_json_line(out, &v);
 }
 
@@ -1626,6 +1716,10 @@ mod tests {
         for e in &evs {
             encode_event(e, &mut out);
         }
+        assert!(out
+            .split(|&c| c == b'\n')
+            .filter(|l| !l.is_empty())
+            .all(|l| l.starts_with(b"{\"type\":")));
         let lines: Vec<Value> = out
             .split(|&c| c == b'\n')
             .filter(|l| !l.is_empty())
@@ -1647,6 +1741,7 @@ mod tests {
         encode_dropped(3, 10, &mut r);
         encode_bye("shutdown", &mut r);
         let text = String::from_utf8(r).unwrap();
+        assert!(text.lines().all(|l| l.starts_with("{\"type\":")), "{text}");
         let v: Vec<Value> = text
             .lines()
             .map(|l| serde_json::from_str(l).unwrap())
@@ -1710,6 +1805,7 @@ mod tests {
             },
             &mut out,
         );
+        assert!(out.starts_with(b"{\"type\":\"hello\",\"protocol\":1,"));
         let v: Value = serde_json::from_slice(&out).unwrap();
         assert_eq!(v["protocol"], 1);
         assert_eq!(v["format"], "binary");
