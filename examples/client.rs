@@ -26,7 +26,9 @@ fn default_socket() -> PathBuf {
         return run;
     }
     use std::os::unix::fs::MetadataExt;
-    let uid = std::fs::metadata("/proc/self").map(|m| m.uid()).unwrap_or(0);
+    let uid = std::fs::metadata("/proc/self")
+        .map(|m| m.uid())
+        .unwrap_or(0);
     PathBuf::from(format!("/tmp/crowdtouch-{uid}.sock"))
 }
 
@@ -152,7 +154,9 @@ fn summarise_json(v: &Value) -> String {
         let k = (p.len() / 2).max(1) as f64;
         centroid = (centroid.0 / k, centroid.1 / k);
     }
-    let latency = v["latency_us"].as_u64().map_or("-".into(), |l| format!("{l} us"));
+    let latency = v["latency_us"]
+        .as_u64()
+        .map_or("-".into(), |l| format!("{l} us"));
     format!(
         "snapshot seq={} agents={n} latency={latency} dropped={} centroid=({:.3}, {:.3})",
         v["seq"], v["dropped"], centroid.0, centroid.1
@@ -170,7 +174,10 @@ fn main() {
     let stream = match UnixStream::connect(&o.socket) {
         Ok(s) => s,
         Err(e) => {
-            eprintln!("{}: cannot connect: {e} (is crowdtouch running?)", o.socket.display());
+            eprintln!(
+                "{}: cannot connect: {e} (is crowdtouch running?)",
+                o.socket.display()
+            );
             std::process::exit(1);
         }
     };
@@ -199,7 +206,12 @@ fn main() {
         writeln!(writer, "{hello}").expect("send hello");
     }
     if let Some(name) = &o.command {
-        writeln!(writer, "{}", json!({"type": "command", "id": 1, "name": name})).expect("send command");
+        writeln!(
+            writer,
+            "{}",
+            json!({"type": "command", "id": 1, "name": name})
+        )
+        .expect("send command");
     }
 
     loop {

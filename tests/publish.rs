@@ -601,7 +601,8 @@ fn many_clients_all_get_every_snapshot_in_order() {
 
 #[test]
 fn a_client_that_never_reads_loses_its_oldest_snapshots_and_is_told() {
-    const QUEUE: u32 = 16;
+    // The good client has QUEUE ticks of slack before it would lose anything.
+    const QUEUE: u32 = 32;
     const N: u64 = 300;
     let d = Daemon::start(socket_config(QUEUE));
     let mut slow = Client::ready(&d.path);
@@ -620,7 +621,7 @@ fn a_client_that_never_reads_loses_its_oldest_snapshots_and_is_told() {
     // ~15 kB per snapshot: the slow client's socket buffer fills after a few dozen.
     for seq in 1..=N {
         d.snapshot(seq, 300);
-        std::thread::sleep(Duration::from_micros(700));
+        std::thread::sleep(Duration::from_millis(1));
     }
     assert_eq!(good_reader.join().unwrap(), (1..=N).collect::<Vec<_>>());
 
@@ -661,6 +662,61 @@ fn a_client_that_never_reads_loses_its_oldest_snapshots_and_is_told() {
     let tail: Vec<u64> = (N - u64::from(QUEUE) + 1..=N).collect();
     assert_eq!(seqs[seqs.len() - tail.len()..], tail[..]);
     assert_eq!(d.stats.snapshots_dropped(), last_dropped);
+}
+
+#[test]
+fn a_client_whose_event_backlog_passes_the_cap_is_disconnected() {
+    let d = Daemon::start(socket_config(8));
+    let mut stuck = Client::ready(&d.path);
+    stuck.hello(json!({"type":"hello","protocol":1,"subscribe":["events"]}));
+    let mut good = Client::ready(&d.path);
+    good.hello(json!({"type":"hello","protocol":1,"subscribe":["events"]}));
+    // More than the socket buffer plus MAX_BACKLOG_MESSAGES.
+    let n = 3 * crowdtouch::publish::MAX_BACKLOG_MESSAGES as u32;
+    let progress = Arc::new(std::sync::atomic::AtomicU32::new(0));
+    let good_reader = {
+        let progress = Arc::clone(&progress);
+        std::thread::spawn(move || {
+            for id in 0..n {
+                let v = good.json();
+                assert_eq!(v["id"], id, "{v}");
+                progress.store(id + 1, Ordering::Relaxed);
+            }
+        })
+    };
+    for id in 0..n {
+        // Keep the reading client well inside its cap.
+        while id - progress.load(Ordering::Relaxed) > 1024 {
+            std::thread::sleep(Duration::from_micros(200));
+        }
+        d.send(Outgoing::Event(Arc::new(Event::GestureBegin {
+            id,
+            t: Micros(1),
+        })));
+    }
+    good_reader.join().unwrap();
+    // Events are never dropped: the stuck client gets an in-order prefix, then the error.
+    let mut next = 0;
+    let e = loop {
+        let v = stuck.json();
+        if v["type"] != "gesture" {
+            break v;
+        }
+        assert_eq!(v["id"], next);
+        next += 1;
+    };
+    assert!(next < n);
+    assert_eq!(
+        (e["type"].as_str(), e["fatal"].as_bool()),
+        (Some("error"), Some(true)),
+        "{e}"
+    );
+    assert!(
+        e["message"].as_str().unwrap().contains("not reading"),
+        "{e}"
+    );
+    stuck.expect_eof();
+    wait_until("the stuck client to be reaped", || d.stats.clients() == 1);
 }
 
 #[test]
