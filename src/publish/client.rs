@@ -12,7 +12,7 @@ use crate::snapshot::{ClientId, CommandRequest, MeshView};
 use crate::time::{monotonic_now, Micros};
 use crossbeam_channel::{Sender, TrySendError};
 use std::collections::VecDeque;
-use std::io::{BufRead, BufReader, ErrorKind, Read, Write};
+use std::io::{BufRead, BufReader, ErrorKind, Read};
 use std::net::Shutdown;
 use std::os::unix::net::UnixStream;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -337,7 +337,7 @@ fn put_json(json: &[u8], framing: Format, buf: &mut Vec<u8>) {
 /// Writer thread body: pops items, writes them, until the client is dead or closed.
 pub(crate) fn writer_loop(
     shared: Arc<ClientShared>,
-    mut stream: UnixStream,
+    stream: UnixStream,
     stats: Arc<PublisherStats>,
 ) {
     let mut buf: Vec<u8> = Vec::with_capacity(64 * 1024);
@@ -359,7 +359,6 @@ pub(crate) fn writer_loop(
                 if q.closing_since.is_some() {
                     q.dead = true;
                     drop(q);
-                    let _ = stream.flush();
                     let _ = stream.shutdown(Shutdown::Both);
                     return;
                 }
@@ -396,7 +395,7 @@ pub(crate) fn writer_loop(
                 put_json(json, *framing, &mut buf)
             }
         }
-        if let Err(e) = stream.write_all(&buf) {
+        if let Err(e) = send_all(&stream, &buf) {
             match e.kind() {
                 ErrorKind::WouldBlock | ErrorKind::TimedOut => log::info!(
                     "client {}: took no data for {:?}; disconnecting",
@@ -411,6 +410,23 @@ pub(crate) fn writer_loop(
         }
         stats.record_write(buf.len(), &item, input_t);
     }
+}
+
+/// Writes all of `buf` with `send(MSG_NOSIGNAL)`: a vanished peer is an `EPIPE`
+/// error here, never a `SIGPIPE` for the process, whatever its signal setup.
+/// `SO_SNDTIMEO` (the [`super::WRITE_STALL_TIMEOUT`]) applies; it surfaces as `WouldBlock`.
+pub(crate) fn send_all(stream: &UnixStream, mut buf: &[u8]) -> std::io::Result<()> {
+    use nix::sys::socket::{send, MsgFlags};
+    use std::os::fd::AsRawFd;
+    while !buf.is_empty() {
+        match send(stream.as_raw_fd(), buf, MsgFlags::MSG_NOSIGNAL) {
+            Ok(0) => return Err(ErrorKind::WriteZero.into()),
+            Ok(n) => buf = &buf[n..],
+            Err(nix::errno::Errno::EINTR) => {}
+            Err(e) => return Err(std::io::Error::from(e)),
+        }
+    }
+    Ok(())
 }
 
 /// What reading one line gave.

@@ -8,7 +8,7 @@ use crate::snapshot::{ClientId, CommandRequest, Event, MeshView, Outgoing, Snaps
 use crate::time::{monotonic_now, Micros};
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender};
 use hdrhistogram::Histogram;
-use std::io::{ErrorKind, Write};
+use std::io::ErrorKind;
 use std::net::Shutdown;
 use std::os::unix::fs::{FileTypeExt, MetadataExt, PermissionsExt};
 use std::os::unix::net::{UnixListener, UnixStream};
@@ -405,7 +405,7 @@ impl Publisher<'_> {
         }
     }
 
-    fn admit(&mut self, mut stream: UnixStream) {
+    fn admit(&mut self, stream: UnixStream) {
         let stats = &self.hub.stats;
         if self.clients.len() >= self.server.max_clients as usize {
             stats.clients_refused.fetch_add(1, Ordering::Relaxed);
@@ -421,7 +421,7 @@ impl Publisher<'_> {
             protocol::encode_error(None, &msg, true, &mut json);
             // A fresh socket's buffer is empty; never block on it anyway.
             let _ = stream.set_nonblocking(true);
-            let _ = stream.write_all(&json);
+            let _ = client::send_all(&stream, &json);
             let _ = stream.shutdown(Shutdown::Both);
             return;
         }
