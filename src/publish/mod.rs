@@ -9,9 +9,10 @@
 //! # Threads
 //! * **Publisher thread** ([`Server::run`]): receives from the control thread with a
 //!   short timeout, accepts clients (non-blocking listener), encodes, and pushes onto
-//!   each client's queue. A push takes the client's queue mutex for a few hundred
-//!   nanoseconds; nobody holds that mutex across I/O, so a stalled client can never
-//!   stall the publisher.
+//!   each client's queue. A push holds the client's queue mutex for well under a
+//!   microsecond; the first client of each encoding also holds it while the snapshot
+//!   is encoded (tens of µs; that only delays that client's own writer). Nobody holds
+//!   the mutex across I/O, so a stalled client can never stall the publisher.
 //! * **Per client, a writer thread and a reader thread.** Kiosks have a handful of
 //!   clients (`socket.max_clients`, default 32), so plain blocking I/O on two threads
 //!   per client is the simplest thing that keeps one client's socket from touching
@@ -39,7 +40,7 @@
 //!
 //! # Latency accounting
 //! `latency_us` in a snapshot is encode time − `input_t`. Each writer records
-//! (CLOCK_MONOTONIC after `write_all` of a snapshot) − `input_t` into
+//! (CLOCK_MONOTONIC after the last byte of a snapshot is sent) − `input_t` into
 //! [`PublisherStats::take_end_to_end`]'s histogram.
 
 mod client;
