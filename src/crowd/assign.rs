@@ -57,6 +57,9 @@
 //! assert!(solver.verify_optimal(&c, 1e-9));
 //! ```
 
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
 use crate::geom::Vec2;
 
 /// Relative tolerance of the tightness and dual-feasibility tests.
@@ -70,8 +73,19 @@ pub const EPS_REL: f64 = 1e-12;
 /// Default number of cheapest candidate columns kept per row by [`Strategy::Sparse`].
 pub const DEFAULT_CANDIDATES: usize = 10;
 
-/// Slots per row for extra candidate edges (column coverage, rectangular repairs).
-const EXTRA_SLOTS: usize = 6;
+/// Candidate slots over which the local cost spread is measured for the auction.
+const AUCTION_SPREAD_SLOTS: usize = 8;
+/// First auction ε as a fraction of the mean local cost spread.
+const AUCTION_START: f64 = 0.25;
+/// Factor by which ε shrinks between auction phases.
+const AUCTION_FACTOR: f64 = 0.2;
+/// Last auction ε relative to the first.
+const AUCTION_END: f64 = 1e-6;
+/// Auction bid budget per row and phase (beyond it the exact finish takes over).
+const AUCTION_BIDS_PER_ROW: usize = 5000;
+
+/// Candidate list slots relaxed at once when a scanned row's list is advanced.
+const RELAX_BATCH: usize = 2;
 
 /// Pricing rounds of the sparse strategy before it finishes densely.
 const MAX_ROUNDS: u32 = 16;
@@ -84,8 +98,6 @@ const LANES: usize = 8;
 
 /// "No row / no column" in the matching arrays.
 const NONE: usize = usize::MAX;
-/// "No row" in compact `u32` arrays.
-const NO_ROW: u32 = u32::MAX;
 /// "Not in the heap".
 const ABSENT: u32 = u32::MAX;
 
@@ -313,6 +325,12 @@ pub struct SolveStats {
     pub augmentations: u64,
     /// Rows scanned inside the searches.
     pub rows_scanned: u64,
+    /// Auction phases run before the exact finish (cold sparse solves).
+    pub auction_phases: u32,
+    /// Auction bids.
+    pub bids: u64,
+    /// Streaming passes fetching columns beyond a row's candidate list in searches.
+    pub expansions: u64,
     /// Whether the dense finish was needed.
     pub dense_finish: bool,
 }
@@ -415,6 +433,42 @@ impl ColHeap {
     }
 }
 
+/// Pending work of a scanned row in a sparse search: the columns of the row not
+/// relaxed yet cannot get a distance below `bound`. `slot < len` means the row's
+/// candidate list from `slot` on; [`BEYOND`] means the columns off the list, whose
+/// [`key`]s are all at least `lo`. Ordered so that `BinaryHeap` pops the least bound.
+#[derive(Copy, Clone, Debug)]
+struct Pending {
+    bound: f64,
+    off: f64,
+    lo: u64,
+    row: u32,
+    slot: u32,
+}
+
+/// [`Pending::slot`] of the columns off the candidate list.
+const BEYOND: u32 = u32::MAX;
+
+impl PartialEq for Pending {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+
+impl Eq for Pending {}
+
+impl PartialOrd for Pending {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Pending {
+    fn cmp(&self, other: &Self) -> Ordering {
+        other.bound.total_cmp(&self.bound)
+    }
+}
+
 // ---------------------------------------------------------------------------------
 // Row kernels
 // ---------------------------------------------------------------------------------
@@ -450,35 +504,94 @@ fn validate_row(row: &[f64]) -> (Option<usize>, f64, bool) {
     (first_bad, mx.iter().fold(0.0, |a: f64, &b| a.max(b)), finite)
 }
 
-/// Inserts `(w, c)` into the ascending list `ws[..len]` of capacity `k`, dropping the
-/// largest entry when full.
+/// Order-preserving map of a finite or infinite `f64` (not NaN) to `u64`; `-0.0`
+/// is folded into `0.0` so that the order agrees with `==`.
 #[inline]
-fn topk_insert(ws: &mut [f64], cs: &mut [u32], len: &mut usize, k: usize, w: f64, c: u32) {
-    let mut p = if *len < k {
-        *len += 1;
-        *len - 1
+fn ord_bits(w: f64) -> u64 {
+    let b = (w + 0.0).to_bits();
+    if b >> 63 == 0 {
+        b | 1 << 63
     } else {
-        k - 1
-    };
-    while p > 0 && ws[p - 1] > w {
-        ws[p] = ws[p - 1];
-        cs[p] = cs[p - 1];
-        p -= 1;
+        !b
     }
-    ws[p] = w;
-    cs[p] = c;
 }
 
-/// The `ws.len()` smallest finite reduced costs `row[j] - v[j]` (ascending, ties to
-/// the lower column) with their columns. Returns how many were found.
+/// Inverse of [`ord_bits`].
+#[inline]
+fn from_ord_bits(o: u64) -> f64 {
+    f64::from_bits(if o >> 63 == 1 { o & !(1 << 63) } else { !o })
+}
+
+/// Sort key of the pair `(w, col)`: the order bits of `w` with the low mantissa bits
+/// (`mask`) replaced by the column. Keys are totally ordered, and a key bounds its
+/// `w` from below: `w >= key_floor(key)`. Low-bit truncation costs about `mask / 2^52`
+/// relative precision in the bounds only, never in the costs.
+#[inline]
+fn key(w: f64, col: u32, mask: u64) -> u64 {
+    (ord_bits(w) & !mask) | u64::from(col)
+}
+
+/// The largest `f64` not above any `w` whose [`key`] is at least `k`.
+#[inline]
+fn key_floor(k: u64, mask: u64) -> f64 {
+    if k & !mask == 0 {
+        f64::NEG_INFINITY
+    } else {
+        from_ord_bits(k & !mask)
+    }
+}
+
+/// The column of a [`key`].
+#[inline]
+fn key_col(k: u64, mask: u64) -> u32 {
+    (k & mask) as u32
+}
+
+/// Streaming selection of the `k` smallest [`key`]s `key(w, col)`, `w = row[col] -
+/// v[col]` finite, that are at least `lo`. `thr0` is an inclusive upper bound on the
+/// `k`-th smallest `w` when one is known (`+inf` otherwise). The keys are left sorted
+/// in `buf[..returned]`; `buf.len() >= 2k` is the scratch.
 ///
 /// # Complexity
-/// One streaming pass; blocks of [`LANES`] entries are tested against the current
-/// threshold at once, so the selection work is only done for the few improving entries.
-fn topk_row(row: &[f64], v: &[f64], ws: &mut [f64], cs: &mut [u32]) -> usize {
-    let k = ws.len();
-    let mut len = 0usize;
-    let mut thr = f64::INFINITY;
+/// One pass over the row; blocks of [`LANES`] entries are tested against the current
+/// threshold at once, admitted entries are appended to `buf`, and `buf` is cut back to
+/// the best `k` (linear-time selection) when full, so the work beyond the streaming
+/// compare is `O(admitted + k log k)`.
+fn select_k(
+    row: &[f64],
+    v: &[f64],
+    k: usize,
+    mask: u64,
+    lo: u64,
+    thr0: f64,
+    buf: &mut [u64],
+) -> usize {
+    let cap = buf.len();
+    debug_assert!(k >= 1 && cap >= 2 * k);
+    let lo_w = key_floor(lo, mask);
+    let mut n = 0usize;
+    // Keys above `thr_key` are rejected; `thr` is a float upper bound of the `w` of
+    // any key up to `thr_key` (for the block prefilter).
+    let (mut thr_key, mut thr) = if thr0 < f64::INFINITY {
+        (ord_bits(thr0) | mask, thr0)
+    } else {
+        (u64::MAX, f64::INFINITY)
+    };
+    let mut admit = |w: f64, col: u32, n: &mut usize, thr_key: &mut u64, thr: &mut f64| {
+        if w < f64::INFINITY {
+            let kk = key(w, col, mask);
+            if kk >= lo && kk <= *thr_key {
+                buf[*n] = kk;
+                *n += 1;
+                if *n == cap {
+                    let (_, kth, _) = buf.select_nth_unstable(k - 1);
+                    *thr_key = *kth;
+                    *thr = from_ord_bits(*kth | mask);
+                    *n = k;
+                }
+            }
+        }
+    };
     let rch = row.chunks_exact(LANES);
     let vch = v.chunks_exact(LANES);
     let (rt, vt) = (rch.remainder(), vch.remainder());
@@ -486,31 +599,25 @@ fn topk_row(row: &[f64], v: &[f64], ws: &mut [f64], cs: &mut [u32]) -> usize {
     for (r, vv) in rch.zip(vch) {
         let mut hit = false;
         for (a, b) in r.iter().zip(vv) {
-            hit |= a - b < thr;
+            let w = a - b;
+            hit |= (w >= lo_w) & (w <= thr);
         }
         if hit {
             for (l, (a, b)) in r.iter().zip(vv).enumerate() {
-                let w = a - b;
-                if w < thr {
-                    topk_insert(ws, cs, &mut len, k, w, base + l as u32);
-                    if len == k {
-                        thr = ws[k - 1];
-                    }
-                }
+                admit(a - b, base + l as u32, &mut n, &mut thr_key, &mut thr);
             }
         }
         base += LANES as u32;
     }
     for (l, (a, b)) in rt.iter().zip(vt).enumerate() {
-        let w = a - b;
-        if w < thr {
-            topk_insert(ws, cs, &mut len, k, w, base + l as u32);
-            if len == k {
-                thr = ws[k - 1];
-            }
-        }
+        admit(a - b, base + l as u32, &mut n, &mut thr_key, &mut thr);
     }
-    len
+    if n > k {
+        buf[..n].select_nth_unstable(k - 1);
+        n = k;
+    }
+    buf[..n].sort_unstable();
+    n
 }
 
 // ---------------------------------------------------------------------------------
@@ -526,28 +633,34 @@ pub struct Solver {
     strategy: Strategy,
     /// Candidates per row (sparse strategy).
     k: usize,
-    /// Candidate slots per row: `k` best + [`EXTRA_SLOTS`].
-    cap: usize,
     rows: usize,
     cols: usize,
     /// Whether `x`, `u`, `v` hold a complete optimal solution of the last problem.
     solved: bool,
     /// Tolerance of the current solve (absolute).
     eps: f64,
+    /// Largest finite cost magnitude of the current problem.
+    scale: f64,
     u: Vec<f64>,
     v: Vec<f64>,
     /// Row -> column.
     x: Vec<usize>,
     /// Column -> row.
     y: Vec<usize>,
-    // Candidate graph, `cap` slots per row: `[0, len)` the k best, `[k, k + elen)` extras.
+    // Candidate lists, `k` slots per row, sorted by `wb` (= c - v when built).
     cand_col: Vec<u32>,
     cand_cost: Vec<f64>,
+    cand_wb: Vec<f64>,
     cand_len: Vec<u32>,
-    extra_len: Vec<u32>,
-    topw: Vec<f64>,
-    col_best: Vec<f64>,
-    col_best_row: Vec<u32>,
+    /// Per row: every column off the list has `key(c - v, col) >= theta_key` and so
+    /// `c - v >= theta` (`theta = +inf` when the list holds every finite entry).
+    /// Stays valid while prices only decrease.
+    theta: Vec<f64>,
+    theta_key: Vec<u64>,
+    /// Low key bits holding the column ([`key`]).
+    mask: u64,
+    /// Selection scratch, `4k` entries.
+    buf: Vec<u64>,
     // Search workspaces (per column).
     dist: Vec<f64>,
     pred: Vec<u32>,
@@ -555,6 +668,7 @@ pub struct Solver {
     done: Vec<u32>,
     epoch: u32,
     heap: ColHeap,
+    pending: BinaryHeap<Pending>,
     scanned: Vec<u32>,
     dd: Vec<f64>,
     vm: Vec<f64>,
@@ -578,14 +692,12 @@ impl Solver {
     }
 
     /// A solver using `strategy` that keeps `candidates` (at least 1) cheapest columns
-    /// per row in the sparse strategy. Fewer candidates mean cheaper searches but more
-    /// pricing rounds; the result is optimal either way.
+    /// per row in the sparse strategy. The result is optimal for any value; it only
+    /// trades list-building work against full-row scans.
     pub fn with_options(strategy: Strategy, candidates: usize) -> Solver {
-        let k = candidates.max(1);
         Solver {
             strategy,
-            k,
-            cap: k + EXTRA_SLOTS,
+            k: candidates.max(1),
             ..Solver::default()
         }
     }
@@ -600,22 +712,24 @@ impl Solver {
         self.stats
     }
 
-    /// Cold solve: ignores any previous state. Returns row -> column.
+    /// Cold solve: ignores any previous duals and assignment. Returns row -> column.
     ///
     /// # Formula
     /// Minimises `sum_i c[i][sigma(i)]` over injections (mesh-formation-control section
     /// 6.1, eq. 2 with unit weights). On success the duals `u`, `v` satisfy
     /// `c[i][j] - u[i] - v[j] >= -eps` everywhere, `== 0` on assigned pairs, and
-    /// unassigned columns carry the maximal `v` ([`Solver::verify_optimal`]).
+    /// unassigned columns carry the maximal `v` ([`Solver::verify_optimal`]), with
+    /// `eps = EPS_REL * scale` ([`EPS_REL`]).
     ///
     /// # Units
     /// Costs in any unit; indices only in the result.
     ///
     /// # Complexity
-    /// Dense strategy `O(rows² · cols)` worst case. Sparse strategy: a few streaming
-    /// passes over the matrix plus heap searches on `k`-sparse rows; on geometric
-    /// instances roughly `O(rows · cols)` passes dominate. No allocation when the
-    /// dimensions equal those of the previous call.
+    /// Dense strategy `O(rows² · cols)` worst case. Sparse strategy: one streaming
+    /// pass over the matrix, heap searches over short sorted candidate lists, and a
+    /// streaming full-row pass only for rows whose dual outgrows their list; the same
+    /// worst case, far less on geometric instances. No allocation when the dimensions
+    /// equal those of the previous call.
     ///
     /// # Errors
     /// [`AssignError::Empty`], [`AssignError::MoreRowsThanCols`],
@@ -648,9 +762,9 @@ impl Solver {
         if !self.solved || costs.rows() != self.rows || costs.cols() != self.cols {
             return self.solve(costs);
         }
-        // Keep the prices bounded over long runs: shift so that max v = 0 (all
-        // reduced costs are unchanged; free columns of a rectangular problem are
-        // already at the maximum, 0).
+        // Keep the prices bounded over long runs: shift so that max v = 0 (reduced
+        // costs are unchanged; free columns of a rectangular problem are already at
+        // the maximum, 0).
         let vmax = self.v.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
         if vmax.is_finite() && vmax != 0.0 {
             for e in &mut self.v {
@@ -691,7 +805,7 @@ impl Solver {
     /// the assignment is an injection; reduced costs `c[i][j] - u[i] - v[j] >= -tol`
     /// for all pairs and `|c[i][j] - u[i] - v[j]| <= tol` on assigned pairs; and every
     /// unassigned column has `v[j] >= max_k v[k] - tol`. Together these prove that no
-    /// injection is cheaper by more than `rows * 2 * tol`.
+    /// injection is cheaper by more than `2 * rows * tol`.
     ///
     /// # Complexity
     /// `O(rows · cols)`, no allocation.
@@ -711,9 +825,10 @@ impl Solver {
         }
         for i in 0..rows {
             let ui = self.u[i];
-            for (c, vj) in costs.row(i).iter().zip(&self.v) {
+            for (jj, (c, vj)) in costs.row(i).iter().zip(&self.v).enumerate() {
                 // NaN fails this comparison too.
                 if !(c - ui - vj >= -tol) {
+                    if std::env::var_os("ASSIGN_TRACE").is_some() { eprintln!("row {i} col {jj} reduced {} (x {} ) v {vj}", c - ui - vj, self.x[i]); }
                     return false;
                 }
             }
@@ -724,7 +839,7 @@ impl Solver {
             }
         }
         let vmax = self.v.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-        (0..cols).all(|j| self.y[j] != NONE || self.v[j] >= vmax - tol)
+        (0..cols).all(|j| { let ok = self.y[j] != NONE || self.v[j] >= vmax - tol; if !ok && std::env::var_os("ASSIGN_TRACE").is_some() { eprintln!("free col {j} v {} vmax {vmax}", self.v[j]); } ok })
     }
 
     // -- internals -------------------------------------------------------------------
@@ -754,6 +869,7 @@ impl Solver {
         if rows == self.rows && cols == self.cols && self.x.len() == rows {
             return;
         }
+        let k = self.k;
         self.solved = false;
         self.rows = rows;
         self.cols = cols;
@@ -761,13 +877,16 @@ impl Solver {
         self.v.resize(cols, 0.0);
         self.x.resize(rows, NONE);
         self.y.resize(cols, NONE);
-        self.cand_col.resize(rows * self.cap, 0);
-        self.cand_cost.resize(rows * self.cap, 0.0);
+        self.cand_col.resize(rows * k, 0);
+        self.cand_cost.resize(rows * k, 0.0);
+        self.cand_wb.resize(rows * k, 0.0);
+        self.cand_len.clear();
         self.cand_len.resize(rows, 0);
-        self.extra_len.resize(rows, 0);
-        self.topw.resize(self.k, 0.0);
-        self.col_best.resize(cols, f64::INFINITY);
-        self.col_best_row.resize(cols, NO_ROW);
+        self.theta.resize(rows, f64::INFINITY);
+        self.theta_key.resize(rows, 0);
+        let bits = (usize::BITS - (cols.max(4 * k).max(2) - 1).leading_zeros()).min(32);
+        self.mask = (1u64 << bits) - 1;
+        self.buf.resize(4 * k, 0);
         self.dist.resize(cols, 0.0);
         self.pred.resize(cols, 0);
         self.seen.clear();
@@ -776,6 +895,7 @@ impl Solver {
         self.done.resize(cols, 0);
         self.epoch = 0;
         self.heap.size_for(cols);
+        self.pending = BinaryHeap::with_capacity(2 * rows + 2);
         self.scanned = Vec::with_capacity(cols);
         self.dd.resize(cols, 0.0);
         self.vm.resize(cols, 0.0);
@@ -813,6 +933,12 @@ impl Solver {
                 // Leave a consistent (cold) state behind.
                 self.x.fill(NONE);
                 self.y.fill(NONE);
+                for &i in &self.dirty_rows {
+                    self.dirty[i as usize] = false;
+                }
+                self.dirty_rows.clear();
+                self.free_rows.clear();
+                self.raise.clear();
                 Err(e)
             }
         }
@@ -821,9 +947,20 @@ impl Solver {
     fn run(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
         self.validate(costs)?;
         let sparse = self.use_sparse();
-        let warm = self.stats.warm;
         self.price_all(costs, sparse);
-        if warm {
+        if sparse && !self.stats.warm {
+            self.auction(costs);
+            self.tighten(costs);
+            if self.rows < self.cols {
+                for j in 0..self.cols {
+                    if self.y[j] == NONE && self.v[j] < 0.0 {
+                        self.raise.push(j as u32);
+                    }
+                }
+            }
+            self.price_all_lists(costs);
+        }
+        if self.stats.warm {
             self.stats.kept_rows = self.x.iter().filter(|&&j| j != NONE).count();
         }
         if sparse {
@@ -835,21 +972,15 @@ impl Solver {
                     break;
                 }
                 self.stats.rounds += 1;
-                let mut ok = true;
-                for idx in 0..self.free_rows.len() {
-                    let i = self.free_rows[idx] as usize;
-                    if !self.sparse_augment(costs, i) {
-                        ok = false;
-                        break;
+                while let Some(i) = self.free_rows.pop() {
+                    if !self.sparse_augment(costs, i as usize) {
+                        return Err(AssignError::Infeasible { row: i as usize });
                     }
-                }
-                if !ok {
-                    break;
                 }
                 self.price_dirty(costs);
             }
-            // Dense finish: make the duals feasible on the whole matrix again, then
-            // augment the remaining free rows over full rows.
+            // Safety net (not reached in practice): make the duals feasible on the
+            // whole matrix again, then augment the remaining free rows densely.
             self.stats.dense_finish = true;
             for &i in &self.dirty_rows {
                 self.dirty[i as usize] = false;
@@ -861,6 +992,7 @@ impl Solver {
     }
 
     /// Validation pass: NaN / -inf, all-+inf rows, tolerance scale.
+    #[inline(never)]
     fn validate(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
         let mut scale = 0.0f64;
         let mut first_unservable = None;
@@ -878,84 +1010,53 @@ impl Solver {
             return Err(AssignError::Infeasible { row });
         }
         let vmax = self.v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        self.scale = scale;
         self.eps = EPS_REL * scale.max(vmax);
         Ok(())
     }
 
     /// Pricing pass over every row: frees rows that are not tight, greedily assigns
     /// free rows whose cheapest column is free, collects the free rows, and (when
-    /// `build`) rebuilds every candidate list plus the column-coverage extras.
+    /// `build`) rebuilds every candidate list.
+    #[inline(never)]
     fn price_all(&mut self, costs: &CostMatrix, build: bool) {
         self.free_rows.clear();
-        if build {
-            self.col_best.fill(f64::INFINITY);
-            self.col_best_row.fill(NO_ROW);
-        }
         for i in 0..self.rows {
             self.price_row(costs, i, build);
-            if build {
-                let row = costs.row(i);
-                for ((b, br), &c) in self.col_best.iter_mut().zip(&mut self.col_best_row).zip(row) {
-                    let better = c < *b;
-                    *b = if better { c } else { *b };
-                    *br = if better { i as u32 } else { *br };
-                }
-            }
-        }
-        self.stats.rows_priced += self.rows as u64;
-        if build {
-            self.extra_len.fill(0);
-            for j in 0..self.cols {
-                let r = self.col_best_row[j];
-                if r == NO_ROW {
-                    continue;
-                }
-                let r = r as usize;
-                let e = self.extra_len[r] as usize;
-                if e < EXTRA_SLOTS {
-                    let s = r * self.cap + self.k + e;
-                    self.cand_col[s] = j as u32;
-                    self.cand_cost[s] = self.col_best[j];
-                    self.extra_len[r] += 1;
-                }
-            }
         }
         self.raise_free_columns(costs);
     }
 
-    /// Pricing pass over the rows whose duals changed since they were last priced.
+    /// End of a sparse round: reprices the rows whose dual rose above their
+    /// candidate threshold (the only rows that can have become violated).
     fn price_dirty(&mut self, costs: &CostMatrix) {
         self.free_rows.clear();
         for idx in 0..self.dirty_rows.len() {
             let i = self.dirty_rows[idx] as usize;
             self.dirty[i] = false;
+            let xi = self.x[i];
+            if xi == NONE {
+                continue;
+            }
+            let ui = costs.get(i, xi) - self.v[xi];
+            if ui <= self.theta[i] + self.eps {
+                continue;
+            }
             self.price_row(costs, i, true);
         }
-        self.stats.rows_priced += self.dirty_rows.len() as u64;
         self.dirty_rows.clear();
         self.raise_free_columns(costs);
     }
 
     /// Prices row `i` against the full row: keeps it if its pair is tight, else frees
     /// it; a free row takes its cheapest column if that column is free. With `build`,
-    /// the row's candidate list becomes its `k` cheapest reduced costs.
+    /// the row's candidate list is rebuilt.
     fn price_row(&mut self, costs: &CostMatrix, i: usize, build: bool) {
-        let row = costs.row(i);
+        self.stats.rows_priced += 1;
         let (min_w, arg) = if build {
-            let base = i * self.cap;
-            let k = self.k;
-            let cs = &mut self.cand_col[base..base + k];
-            let len = topk_row(row, &self.v, &mut self.topw, cs);
-            for (cc, &c) in self.cand_cost[base..base + len].iter_mut().zip(cs.iter()) {
-                *cc = row[c as usize];
-            }
-            self.cand_len[i] = len as u32;
-            if len == 0 {
-                (f64::INFINITY, NONE)
-            } else {
-                (self.topw[0], cs[0] as usize)
-            }
+            self.build_row(costs, i)
         } else {
+            let row = costs.row(i);
             let mut best = f64::INFINITY;
             let mut arg = NONE;
             for (j, (c, vj)) in row.iter().zip(&self.v).enumerate() {
@@ -967,6 +1068,13 @@ impl Solver {
             }
             (best, arg)
         };
+        self.settle_row(costs, i, min_w, arg);
+    }
+
+    /// Keeps row `i` if its pair is tight against the row minimum `min_w` (at column
+    /// `arg`), else frees it; a free row takes `arg` if that column is free.
+    fn settle_row(&mut self, costs: &CostMatrix, i: usize, min_w: f64, arg: usize) {
+        let row = costs.row(i);
         let xi = self.x[i];
         if xi != NONE {
             let wx = row[xi] - self.v[xi];
@@ -987,9 +1095,216 @@ impl Solver {
         }
     }
 
+    /// Rebuilds the candidate list of row `i` (its `k` smallest `(c - v, col)`) and
+    /// its threshold. Returns the row's minimum `c - v` and its column.
+    fn build_row(&mut self, costs: &CostMatrix, i: usize) -> (f64, usize) {
+        let row = costs.row(i);
+        let k = self.k;
+        let base = i * k;
+        // Any k distinct columns bound the k-th smallest reduced cost from above.
+        let thr0 = if self.cand_len[i] as usize == k {
+            self.cand_col[base..base + k]
+                .iter()
+                .map(|&c| row[c as usize] - self.v[c as usize])
+                .fold(f64::NEG_INFINITY, f64::max)
+        } else {
+            f64::INFINITY
+        };
+        let mask = self.mask;
+        let n = select_k(row, &self.v, k, mask, 0, thr0, &mut self.buf);
+        for (t, &kk) in self.buf[..n].iter().enumerate() {
+            let c = key_col(kk, mask);
+            self.cand_col[base + t] = c;
+            self.cand_cost[base + t] = row[c as usize];
+            self.cand_wb[base + t] = key_floor(kk, mask);
+        }
+        self.cand_len[i] = n as u32;
+        if n == k {
+            let kk = self.buf[k - 1] + 1;
+            self.theta[i] = key_floor(kk, mask);
+            self.theta_key[i] = kk;
+        } else {
+            self.theta[i] = f64::INFINITY;
+            self.theta_key[i] = u64::MAX;
+        }
+        match self.buf[..n].first() {
+            Some(&kk) => {
+                let c = key_col(kk, mask) as usize;
+                (row[c] - self.v[c], c)
+            }
+            None => (f64::INFINITY, NONE),
+        }
+    }
+
+    /// Best and second-best reduced cost `c - v` of row `i` (`w1`, its column, `w2`),
+    /// from the candidate list and the threshold; the list is rebuilt when stale.
+    fn best2(&mut self, costs: &CostMatrix, i: usize) -> (f64, usize, f64) {
+        let mut rebuilt = false;
+        loop {
+            let base = i * self.k;
+            let len = self.cand_len[i] as usize;
+            let (mut w1, mut j1, mut w2) = (f64::INFINITY, NONE, f64::INFINITY);
+            for ((&c, &cost), &wb) in self.cand_col[base..base + len]
+                .iter()
+                .zip(&self.cand_cost[base..base + len])
+                .zip(&self.cand_wb[base..base + len])
+            {
+                // The list is sorted by `wb` and current values are >= `wb`: nothing
+                // further down can beat the second best.
+                if wb >= w2 {
+                    break;
+                }
+                let w = cost - self.v[c as usize];
+                if w < w1 {
+                    w2 = w1;
+                    w1 = w;
+                    j1 = c as usize;
+                } else if w < w2 {
+                    w2 = w;
+                }
+            }
+            let th = self.theta[i];
+            if w1 <= th || rebuilt {
+                return (w1, j1, w2.min(th));
+            }
+            self.stats.rows_priced += 1;
+            let _ = self.build_row(costs, i);
+            rebuilt = true;
+        }
+    }
+
+    /// Forward auction with ε-scaling over the candidate lists (Bertsekas; prices
+    /// only fall, so every list threshold stays valid). It only brings the prices
+    /// close to optimal; exactness comes from the finish that follows.
+    #[inline(never)]
+    fn auction(&mut self, costs: &CostMatrix) {
+        let k = self.k;
+        let (mut spread, mut count) = (0.0, 0usize);
+        for i in 0..self.rows {
+            let len = (self.cand_len[i] as usize).min(AUCTION_SPREAD_SLOTS);
+            if len >= 2 {
+                spread += self.cand_wb[i * k + len - 1] - self.cand_wb[i * k];
+                count += 1;
+            }
+        }
+        if count == 0 {
+            return;
+        }
+        let start: f64 = std::env::var("ASSIGN_START").ok().and_then(|s| s.parse().ok()).unwrap_or(AUCTION_START);
+        let factor: f64 = std::env::var("ASSIGN_FACTOR").ok().and_then(|s| s.parse().ok()).unwrap_or(AUCTION_FACTOR);
+        let endr: f64 = std::env::var("ASSIGN_END").ok().and_then(|s| s.parse().ok()).unwrap_or(AUCTION_END);
+        let eps0 = start * spread / count as f64;
+        if !(eps0 > 0.0 && eps0 < f64::INFINITY) {
+            return;
+        }
+        let eps_end = eps0 * endr;
+        let cap = self.scale.max(eps0);
+        let budget = AUCTION_BIDS_PER_ROW * self.rows + 64;
+        let mut eps = eps0;
+        loop {
+            self.stats.auction_phases += 1;
+            self.free_rows.clear();
+            for i in 0..self.rows {
+                let xi = self.x[i];
+                if xi != NONE {
+                    let (w1, _, _) = self.best2(costs, i);
+                    if costs.get(i, xi) - self.v[xi] <= w1 + eps {
+                        continue;
+                    }
+                    self.x[i] = NONE;
+                    self.y[xi] = NONE;
+                }
+                self.free_rows.push(i as u32);
+            }
+            let mut bids = 0;
+            while let Some(i) = self.free_rows.pop() {
+                let i = i as usize;
+                bids += 1;
+                let (w1, j1, w2) = self.best2(costs, i);
+                if bids > budget || j1 == NONE {
+                    self.free_rows.push(i as u32);
+                    self.stats.bids += bids as u64;
+                    return;
+                }
+                let w2 = w2.min(w1 + cap);
+                self.v[j1] -= (w2 - w1) + eps;
+                let prev = self.y[j1];
+                self.y[j1] = i;
+                self.x[i] = j1;
+                if prev != NONE {
+                    self.x[prev] = NONE;
+                    self.free_rows.push(prev as u32);
+                }
+            }
+            self.stats.bids += bids as u64;
+            if std::env::var_os("ASSIGN_TRACE").is_some() {
+                eprintln!("phase eps {eps:.3e} bids {bids} priced {}", self.stats.rows_priced);
+            }
+            if eps <= eps_end {
+                break;
+            }
+            eps = (eps * factor).max(eps_end);
+        }
+    }
+
+    /// After the auction: raises each assigned column's price by its row's slack so
+    /// that the pair becomes tight (the pricing pass that follows frees the few rows
+    /// this makes violated, and rebuilds every list).
+    #[inline(never)]
+    fn tighten(&mut self, costs: &CostMatrix) {
+        let rect = self.rows < self.cols;
+        let mut max_raise = 0.0f64;
+        for i in 0..self.rows {
+            let xi = self.x[i];
+            if xi == NONE {
+                continue;
+            }
+            let (w1, _, _) = self.best2(costs, i);
+            let slack = costs.get(i, xi) - self.v[xi] - w1;
+            if slack > 0.0 {
+                let old = self.v[xi];
+                self.v[xi] += slack;
+                if rect && self.v[xi] > 0.0 {
+                    self.v[xi] = 0.0;
+                }
+                max_raise = max_raise.max(self.v[xi] - old);
+            }
+        }
+        // Every price rose by at most `max_raise`: lowering the list bounds and the
+        // thresholds by as much keeps them valid, so the lists stay usable.
+        if max_raise > 0.0 {
+            let mask = self.mask;
+            for wb in &mut self.cand_wb {
+                *wb -= max_raise;
+            }
+            for (t, tk) in self.theta.iter_mut().zip(&mut self.theta_key) {
+                if *t < f64::INFINITY {
+                    let kk = key(*t - max_raise, 0, mask);
+                    *t = key_floor(kk, mask);
+                    *tk = kk;
+                }
+            }
+        }
+    }
+
+    /// Pricing pass over every row using the candidate lists (a row is scanned in
+    /// full only when its list is stale): as [`Solver::price_all`] otherwise.
+    #[inline(never)]
+    fn price_all_lists(&mut self, costs: &CostMatrix) {
+        self.free_rows.clear();
+        for i in 0..self.rows {
+            self.stats.rows_priced += 1;
+            let (min_w, arg, _) = self.best2(costs, i);
+            self.settle_row(costs, i, min_w, arg);
+        }
+        self.raise_free_columns(costs);
+    }
+
     /// Rectangular problems only: raises the price of every freed column back to the
-    /// maximum (0) and frees the assigned rows this makes non-tight, transitively.
+    /// maximum (0), frees the assigned rows this makes non-tight (transitively), and
+    /// keeps every row's candidate threshold a valid lower bound.
     fn raise_free_columns(&mut self, costs: &CostMatrix) {
+        let sparse = self.use_sparse();
         while let Some(j) = self.raise.pop() {
             let j = j as usize;
             if self.y[j] != NONE || self.v[j] >= 0.0 {
@@ -997,24 +1312,31 @@ impl Solver {
             }
             self.v[j] = 0.0;
             for r in 0..self.rows {
-                let xr = self.x[r];
-                if xr == NONE {
+                let c = costs.get(r, j);
+                if !(c < f64::INFINITY) {
                     continue;
                 }
-                let c = costs.get(r, j);
-                if c < costs.get(r, xr) - self.v[xr] - self.eps {
+                if sparse && c < self.theta[r] {
+                    // Column j got cheaper for row r: weaken the threshold, and clamp
+                    // the list bounds (j may be on the list; clamping keeps it sorted).
+                    let kk = key(c, 0, self.mask);
+                    let th = key_floor(kk, self.mask);
+                    self.theta[r] = th;
+                    self.theta_key[r] = kk;
+                    let base = r * self.k;
+                    let len = self.cand_len[r] as usize;
+                    for wb in &mut self.cand_wb[base..base + len] {
+                        if *wb > th {
+                            *wb = th;
+                        }
+                    }
+                }
+                let xr = self.x[r];
+                if xr != NONE && c < costs.get(r, xr) - self.v[xr] - self.eps {
                     self.x[r] = NONE;
                     self.y[xr] = NONE;
                     self.raise.push(xr as u32);
                     self.free_rows.push(r as u32);
-                    // Let the row see the column that undercut it.
-                    let e = self.extra_len[r] as usize;
-                    if e < EXTRA_SLOTS {
-                        let s = r * self.cap + self.k + e;
-                        self.cand_col[s] = j as u32;
-                        self.cand_cost[s] = c;
-                        self.extra_len[r] += 1;
-                    }
                 }
             }
         }
@@ -1038,15 +1360,40 @@ impl Solver {
         }
     }
 
-    /// Dijkstra on the candidate graph from free row `i0`; on success updates the
-    /// prices of the settled columns, flips the path, and returns true.
+    /// Dijkstra from free row `i0` over the sorted candidate lists, exact on the full
+    /// matrix:
+    ///
+    /// * a scanned row relaxes its list lazily, a few slots at a time, in order of
+    ///   the bound `off + wb[slot]` (prices only fall, so `wb` bounds the current
+    ///   reduced cost from below); past the list, the bound `off + theta` guards the
+    ///   rest of the row, which is fetched `k` columns at a time by a streaming pass;
+    /// * a row whose dual rose above its threshold since its list was built is
+    ///   repriced first; if its pair is no longer tight the row is released and its
+    ///   column ends the augmenting path (the row goes back on the free list).
+    ///
+    /// On success updates the prices of the settled columns and flips the path.
+    /// Returns false only if no augmenting path exists in the whole matrix.
+    #[inline(never)]
     fn sparse_augment(&mut self, costs: &CostMatrix, i0: usize) -> bool {
         let ep = self.next_epoch();
         self.stats.augmentations += 1;
         self.heap.clear();
+        self.pending.clear();
         self.scanned.clear();
-        self.relax(i0, 0.0, ep);
+        self.advance_list(i0, 0.0, 0, ep);
         let (dstar, sink) = loop {
+            let hmin = self.heap.key.first().copied().unwrap_or(f64::INFINITY);
+            if let Some(&p) = self.pending.peek() {
+                if p.bound < hmin {
+                    let _ = self.pending.pop();
+                    if p.slot == BEYOND {
+                        self.expand_row(costs, p, ep);
+                    } else {
+                        self.advance_list(p.row as usize, p.off, p.slot as usize, ep);
+                    }
+                    continue;
+                }
+            }
             let Some((dk, j)) = self.heap.pop() else {
                 return false;
             };
@@ -1059,8 +1406,18 @@ impl Solver {
             }
             self.stats.rows_scanned += 1;
             self.mark_dirty(i);
-            let off = dk - (costs.get(i, j) - self.v[j]);
-            self.relax(i, off, ep);
+            let ui = costs.get(i, j) - self.v[j];
+            if !(ui <= self.theta[i] + self.eps) {
+                self.stats.rows_priced += 1;
+                let (min_w, _) = self.build_row(costs, i);
+                if !(ui <= min_w + self.eps) {
+                    self.x[i] = NONE;
+                    self.y[j] = NONE;
+                    self.free_rows.push(i as u32);
+                    break (dk, j);
+                }
+            }
+            self.advance_list(i, dk - ui, 0, ep);
         };
         for &k in &self.scanned {
             let k = k as usize;
@@ -1071,26 +1428,68 @@ impl Solver {
         true
     }
 
-    /// Relaxes the candidate edges of row `i` with distance offset `off`.
+    /// Relaxes column `k` from row `i` with tentative distance `nd`.
     #[inline]
-    fn relax(&mut self, i: usize, off: f64, ep: u32) {
-        let base = i * self.cap;
+    fn relax_to(&mut self, i: u32, k: usize, nd: f64, ep: u32) {
+        if self.done[k] != ep && (self.seen[k] != ep || nd < self.dist[k]) {
+            self.seen[k] = ep;
+            self.dist[k] = nd;
+            self.pred[k] = i;
+            self.heap.push_or_decrease(k as u32, nd);
+        }
+    }
+
+    /// Relaxes list slots `t0..t0 + RELAX_BATCH` of row `i` (distance offset `off`)
+    /// and queues what is left of the row.
+    fn advance_list(&mut self, i: usize, off: f64, t0: usize, ep: u32) {
+        let base = i * self.k;
         let len = self.cand_len[i] as usize;
-        let elen = self.extra_len[i] as usize;
-        let ranges = [(base, base + len), (base + self.k, base + self.k + elen)];
-        for (lo, hi) in ranges {
-            for (&k, &c) in self.cand_col[lo..hi].iter().zip(&self.cand_cost[lo..hi]) {
-                let ku = k as usize;
-                if self.done[ku] == ep {
-                    continue;
-                }
-                let nd = off + (c - self.v[ku]);
-                if self.seen[ku] != ep || nd < self.dist[ku] {
-                    self.seen[ku] = ep;
-                    self.dist[ku] = nd;
-                    self.pred[ku] = i as u32;
-                    self.heap.push_or_decrease(k, nd);
-                }
+        let t1 = len.min(t0 + RELAX_BATCH);
+        for s in base + t0..base + t1 {
+            let k = self.cand_col[s] as usize;
+            let nd = off + (self.cand_cost[s] - self.v[k]);
+            self.relax_to(i as u32, k, nd, ep);
+        }
+        let p = if t1 < len {
+            Pending {
+                bound: off + self.cand_wb[base + t1],
+                off,
+                lo: 0,
+                row: i as u32,
+                slot: t1 as u32,
+            }
+        } else {
+            Pending {
+                bound: off + self.theta[i],
+                off,
+                lo: self.theta_key[i],
+                row: i as u32,
+                slot: BEYOND,
+            }
+        };
+        if p.bound < f64::INFINITY {
+            self.pending.push(p);
+        }
+    }
+
+    /// Relaxes the next `k` cheapest columns of a row beyond its list (one streaming
+    /// pass) and queues the row again with the raised bound.
+    fn expand_row(&mut self, costs: &CostMatrix, p: Pending, ep: u32) {
+        self.stats.expansions += 1;
+        let k = self.k;
+        let row = costs.row(p.row as usize);
+        let mask = self.mask;
+        let n = select_k(row, &self.v, k, mask, p.lo, f64::INFINITY, &mut self.buf);
+        for t in 0..n {
+            let c = key_col(self.buf[t], mask) as usize;
+            let nd = p.off + (row[c] - self.v[c]);
+            self.relax_to(p.row, c, nd, ep);
+        }
+        if n == k {
+            let lo = self.buf[k - 1] + 1;
+            let bound = p.off + key_floor(lo, mask);
+            if bound < f64::INFINITY {
+                self.pending.push(Pending { bound, lo, ..p });
             }
         }
     }
@@ -1200,11 +1599,11 @@ impl Solver {
             f(&self.y),
             f(&self.cand_col),
             f(&self.cand_cost),
+            f(&self.cand_wb),
             f(&self.cand_len),
-            f(&self.extra_len),
-            f(&self.topw),
-            f(&self.col_best),
-            f(&self.col_best_row),
+            f(&self.theta),
+            f(&self.theta_key),
+            f(&self.buf),
             f(&self.dist),
             f(&self.pred),
             f(&self.seen),
@@ -1212,6 +1611,7 @@ impl Solver {
             f(&self.heap.key),
             f(&self.heap.col),
             f(&self.heap.pos),
+            (self.pending.capacity(), 0),
             f(&self.scanned),
             f(&self.dd),
             f(&self.vm),
@@ -1449,7 +1849,7 @@ mod tests {
             for mut s in solvers() {
                 s.solve(&c).unwrap();
                 assert_eq!(s.total_cost(&c), -best as f64, "{:?}", s.strategy());
-                assert!(s.verify_optimal(&c, 0.0));
+                assert!(s.verify_optimal(&c, 1e-9));
             }
         }
     }
