@@ -1,75 +1,1959 @@
-//! STUB (uncommitted)
-#![allow(missing_docs, unused)]
+//! Exact one-to-one assignment of agents (rows) to goal points (columns).
+//!
+//! The control thread assigns every agent to one goal point of the formation each
+//! frame, minimising the total cost. This is the transportation problem of
+//! mesh-formation-control section 6.1 (eq. 2) with unit supply and demand weights,
+//! i.e. the linear assignment problem
+//!
+//! ```text
+//!   minimise   sum_i c[i][sigma(i)]     over injections sigma: rows -> cols (rows <= cols)
+//! ```
+//!
+//! # Algorithm
+//!
+//! A shortest-augmenting-path (SAP) solver with dual prices, in the Jonker–Volgenant
+//! family, with two ways of searching for augmenting paths:
+//!
+//! * **Dense** ([`Strategy::Dense`]): each free row runs a Dijkstra search over the full
+//!   reduced-cost matrix (`c[i][j] - u[i] - v[j] >= 0`), scanning whole contiguous rows.
+//!   `O(rows * cols)` per scanned row; used for small problems and as the exact fallback.
+//! * **Sparse with pricing** ([`Strategy::Sparse`], the default for large problems): one
+//!   streaming pass over the matrix keeps, per row, the `k` columns of smallest reduced
+//!   cost `c[i][j] - v[j]` (plus each column's cheapest row, so no column is orphaned).
+//!   Augmenting paths are searched on that candidate graph with a binary heap. A pricing
+//!   pass then re-checks, against the *full* rows, every row whose dual changed; rows
+//!   that are no longer tight are freed, their candidate lists rebuilt, and re-augmented.
+//!   Because Dijkstra only ever lowers column prices, a row whose matched column was
+//!   not touched cannot become violated, so later pricing passes only touch the rows
+//!   the searches went through. When no row is violated the full dual certificate
+//!   holds and the assignment is optimal. A bounded number of rounds, after which
+//!   (or after a search that finds no path in the candidate graph) the solver re-prices
+//!   everything and finishes densely, keeps it exact in every case.
+//!
+//! Warm start ([`Solver::solve_warm`]) keeps the column prices `v` and the assignment of
+//! the previous frame, re-prices every row against the new costs, keeps the pairs that
+//! are still tight and re-augments only the freed rows.
+//!
+//! Rectangular problems (rows < cols) are exact: every column price starts at 0 and is
+//! only lowered, except that a column freed by a warm start or a pricing pass is raised
+//! back to 0 (re-checking the rows it could now undercut), so at every augmentation all
+//! free columns have the maximal price — the dual condition of unassigned columns.
+//!
+//! `+inf` entries mean "unreachable" and are never part of an assignment; no arithmetic
+//! on them produces NaN (column prices stay finite).
+//!
+//! # Example
+//!
+//! ```
+//! use crowdtouch::crowd::assign::{CostMatrix, Solver};
+//! let mut c = CostMatrix::new(3, 3);
+//! let data = [[4.0, 1.0, 3.0], [2.0, 0.0, 5.0], [3.0, 2.0, 2.0]];
+//! for (r, row) in data.iter().enumerate() {
+//!     c.row_mut(r).copy_from_slice(row);
+//! }
+//! let mut solver = Solver::new();
+//! assert_eq!(solver.solve(&c).unwrap(), &[1, 0, 2]);
+//! assert!((solver.total_cost(&c) - 5.0).abs() < 1e-12);
+//! assert!(solver.verify_optimal(&c, 1e-9));
+//! ```
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
 use crate::geom::Vec2;
+
+/// Relative tolerance of the tightness and dual-feasibility tests.
+///
+/// A matched pair counts as tight, and an edge as dual-feasible, when its reduced cost
+/// is at least `-EPS_REL * scale`, where `scale` is the largest magnitude among the
+/// finite costs and the column prices. The returned assignment is therefore optimal to
+/// within about `rows * EPS_REL * scale` of total cost (rounding level).
+pub const EPS_REL: f64 = 1e-12;
+
+/// Default number of cheapest candidate columns kept per row by [`Strategy::Sparse`].
+pub const DEFAULT_CANDIDATES: usize = 10;
+
+/// Candidate slots over which the local cost spread is measured for the auction.
+const AUCTION_SPREAD_SLOTS: usize = 8;
+/// First auction ε as a fraction of the mean local cost spread.
+const AUCTION_START: f64 = 0.25;
+/// Factor by which ε shrinks between auction phases.
+const AUCTION_FACTOR: f64 = 0.2;
+/// Last auction ε relative to the first.
+const AUCTION_END: f64 = 1e-6;
+/// Auction bid budget per row and phase (beyond it the exact finish takes over).
+const AUCTION_BIDS_PER_ROW: usize = 5000;
+
+/// Candidate list slots relaxed at once when a scanned row's list is advanced.
+const RELAX_BATCH: usize = 2;
+
+/// Pricing rounds of the sparse strategy before it finishes densely.
+const MAX_ROUNDS: u32 = 16;
+
+/// [`Strategy::Auto`] solves densely up to this many columns.
+const AUTO_DENSE_MAX_COLS: usize = 128;
+
+/// Width of the blocks the streaming row scans test at once.
+const LANES: usize = 8;
+
+/// "No row / no column" in the matching arrays.
+const NONE: usize = usize::MAX;
+/// "Not in the heap".
+const ABSENT: u32 = u32::MAX;
+
+// ---------------------------------------------------------------------------------
+// Cost matrix and providers
+// ---------------------------------------------------------------------------------
+
+/// Dense row-major cost matrix: rows are agents, columns are goals, `rows <= cols`.
+///
+/// Entries are costs in the caller's unit (m² for [`SquaredDistance`], m for
+/// [`Distance`]). `+inf` marks an unreachable goal; NaN and `-inf` are rejected by the
+/// solver.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct CostMatrix {
     rows: usize,
     cols: usize,
     data: Vec<f64>,
 }
+
 impl CostMatrix {
+    /// A zero-filled `rows × cols` matrix.
+    ///
+    /// # Panics
+    /// If `rows * cols` overflows `usize` or cannot be allocated.
     pub fn new(rows: usize, cols: usize) -> CostMatrix {
-        unimplemented!()
+        CostMatrix {
+            rows,
+            cols,
+            data: vec![0.0; rows.checked_mul(cols).expect("cost matrix size overflow")],
+        }
     }
-    pub fn resize(&mut self, rows: usize, cols: usize) {}
+
+    /// A `rows × cols` matrix with entry `(r, c)` set to `f(r, c)`.
+    ///
+    /// # Panics
+    /// As [`CostMatrix::new`].
+    pub fn from_fn(rows: usize, cols: usize, mut f: impl FnMut(usize, usize) -> f64) -> CostMatrix {
+        let mut m = CostMatrix::new(rows, cols);
+        for r in 0..rows {
+            for (c, e) in m.row_mut(r).iter_mut().enumerate() {
+                *e = f(r, c);
+            }
+        }
+        m
+    }
+
+    /// Changes the dimensions, keeping the allocation when it is large enough.
+    /// The contents afterwards are unspecified (callers refill every entry).
+    ///
+    /// # Panics
+    /// As [`CostMatrix::new`].
+    pub fn resize(&mut self, rows: usize, cols: usize) {
+        let n = rows.checked_mul(cols).expect("cost matrix size overflow");
+        self.data.resize(n, 0.0);
+        self.rows = rows;
+        self.cols = cols;
+    }
+
+    /// Number of rows (agents).
     pub fn rows(&self) -> usize {
         self.rows
     }
+
+    /// Number of columns (goals).
     pub fn cols(&self) -> usize {
         self.cols
     }
+
+    /// Entry `(r, c)`.
+    ///
+    /// # Panics
+    /// If `r >= rows()` or `c >= cols()`.
     pub fn get(&self, r: usize, c: usize) -> f64 {
-        0.0
+        assert!(c < self.cols, "column {c} out of range");
+        self.data[r * self.cols + c]
     }
-    pub fn set(&mut self, r: usize, c: usize, v: f64) {}
+
+    /// Sets entry `(r, c)`.
+    ///
+    /// # Panics
+    /// If `r >= rows()` or `c >= cols()`.
+    pub fn set(&mut self, r: usize, c: usize, v: f64) {
+        assert!(c < self.cols, "column {c} out of range");
+        self.data[r * self.cols + c] = v;
+    }
+
+    /// Row `r` as a slice of `cols()` entries.
+    ///
+    /// # Panics
+    /// If `r >= rows()`.
     pub fn row(&self, r: usize) -> &[f64] {
+        &self.data[r * self.cols..(r + 1) * self.cols]
+    }
+
+    /// Row `r` as a mutable slice of `cols()` entries.
+    ///
+    /// # Panics
+    /// If `r >= rows()`.
+    pub fn row_mut(&mut self, r: usize) -> &mut [f64] {
+        &mut self.data[r * self.cols..(r + 1) * self.cols]
+    }
+
+    /// All entries, row-major.
+    pub fn as_slice(&self) -> &[f64] {
         &self.data
     }
-    pub fn row_mut(&mut self, r: usize) -> &mut [f64] {
-        &mut self.data
-    }
 }
+
+/// Fills a cost matrix from agent and goal positions.
+///
+/// Implementations resize `out` to `agents.len() × goals.len()` and write every entry;
+/// they must not produce NaN or `-inf` (use `+inf` for unreachable goals).
 pub trait CostProvider {
+    /// Writes `out[i][j]` = cost of sending agent `i` to goal `j`.
     fn fill(&self, agents: &[Vec2], goals: &[Vec2], out: &mut CostMatrix);
 }
+
+/// Squared Euclidean distance cost, `|a - g|²` in m².
+///
+/// # Formula
+/// `c_ij = (a_i - g_j)·(a_i - g_j)` (mesh-formation-control section 6.1 with the
+/// Euclidean metric of its reference [7]; squaring favours even travel lengths).
+///
+/// # Complexity
+/// `O(agents * goals)`, no allocation when `out` is already large enough.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
 pub struct SquaredDistance;
+
+/// Euclidean distance cost, `|a - g|` in metres.
+///
+/// # Formula
+/// `c_ij = |a_i - g_j|` (mesh-formation-control section 6.1, Euclidean metric).
+///
+/// # Complexity
+/// `O(agents * goals)`, no allocation when `out` is already large enough.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
 pub struct Distance;
+
 impl CostProvider for SquaredDistance {
-    fn fill(&self, agents: &[Vec2], goals: &[Vec2], out: &mut CostMatrix) {}
+    fn fill(&self, agents: &[Vec2], goals: &[Vec2], out: &mut CostMatrix) {
+        out.resize(agents.len(), goals.len());
+        for (r, a) in agents.iter().enumerate() {
+            for (e, g) in out.row_mut(r).iter_mut().zip(goals) {
+                let (dx, dy) = (a.x - g.x, a.y - g.y);
+                *e = dx * dx + dy * dy;
+            }
+        }
+    }
 }
+
 impl CostProvider for Distance {
-    fn fill(&self, agents: &[Vec2], goals: &[Vec2], out: &mut CostMatrix) {}
+    fn fill(&self, agents: &[Vec2], goals: &[Vec2], out: &mut CostMatrix) {
+        out.resize(agents.len(), goals.len());
+        for (r, a) in agents.iter().enumerate() {
+            for (e, g) in out.row_mut(r).iter_mut().zip(goals) {
+                let (dx, dy) = (a.x - g.x, a.y - g.y);
+                *e = (dx * dx + dy * dy).sqrt();
+            }
+        }
+    }
 }
+
+// ---------------------------------------------------------------------------------
+// Errors, options, statistics
+// ---------------------------------------------------------------------------------
+
+/// Why an assignment could not be computed.
 #[derive(Copy, Clone, Debug, PartialEq, thiserror::Error)]
 pub enum AssignError {
-    #[error("e")]
+    /// The matrix has no rows.
+    #[error("assignment problem has no rows")]
     Empty,
-    #[error("m")]
-    MoreRowsThanCols { rows: usize, cols: usize },
-    #[error("n")]
-    NotFinite { row: usize, col: usize },
-    #[error("i")]
-    Infeasible { row: usize },
+    /// More agents than goals: a one-to-one assignment of every row is impossible.
+    #[error("assignment problem has more rows ({rows}) than columns ({cols})")]
+    MoreRowsThanCols {
+        /// Number of rows (agents).
+        rows: usize,
+        /// Number of columns (goals).
+        cols: usize,
+    },
+    /// An entry is NaN or `-inf` (the first one in row-major order).
+    #[error("cost ({row}, {col}) is NaN or -inf")]
+    NotFinite {
+        /// Row of the entry.
+        row: usize,
+        /// Column of the entry.
+        col: usize,
+    },
+    /// No complete assignment with finite cost exists. `row` is the first row found
+    /// that cannot be served: the lowest-index all-`+inf` row if there is one,
+    /// otherwise the row whose augmenting path search failed.
+    #[error("no assignment with finite cost exists: row {row} cannot be served")]
+    Infeasible {
+        /// The row that cannot be served.
+        row: usize,
+    },
 }
+
+/// How [`Solver`] searches for augmenting paths. All strategies return an optimal
+/// assignment; they differ only in speed.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub enum Strategy {
+    /// Dense for small problems (at most 128 columns), sparse with pricing otherwise.
+    #[default]
+    Auto,
+    /// Dijkstra over full rows (classic dense shortest augmenting path).
+    Dense,
+    /// Dijkstra over per-row candidate lists, with full-row pricing passes and a dense
+    /// finish if the candidate graph is insufficient.
+    Sparse,
+}
+
+/// Work counters of the last solve (for benchmarks and tuning; not part of the result).
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub struct SolveStats {
+    /// Whether the previous duals and assignment were reused.
+    pub warm: bool,
+    /// Rows still assigned after the first pricing pass of a warm start.
+    pub kept_rows: usize,
+    /// Full-row pricing checks (one per row per pass).
+    pub rows_priced: u64,
+    /// Sparse pricing rounds.
+    pub rounds: u32,
+    /// Augmenting path searches.
+    pub augmentations: u64,
+    /// Rows scanned inside the searches.
+    pub rows_scanned: u64,
+    /// Auction phases run before the exact finish (cold sparse solves).
+    pub auction_phases: u32,
+    /// Auction bids.
+    pub bids: u64,
+    /// Streaming passes fetching columns beyond a row's candidate list in searches.
+    pub expansions: u64,
+    /// Whether the dense finish was needed.
+    pub dense_finish: bool,
+}
+
+// ---------------------------------------------------------------------------------
+// Indexed binary min-heap over columns
+// ---------------------------------------------------------------------------------
+
+/// Binary min-heap of columns keyed by tentative distance, with decrease-key.
+/// Capacity is reserved for every column, so it never allocates after sizing.
+#[derive(Clone, Debug, Default)]
+struct ColHeap {
+    key: Vec<f64>,
+    col: Vec<u32>,
+    pos: Vec<u32>,
+}
+
+impl ColHeap {
+    fn size_for(&mut self, cols: usize) {
+        self.key = Vec::with_capacity(cols);
+        self.col = Vec::with_capacity(cols);
+        self.pos.clear();
+        self.pos.resize(cols, ABSENT);
+    }
+
+    fn clear(&mut self) {
+        for &c in &self.col {
+            self.pos[c as usize] = ABSENT;
+        }
+        self.key.clear();
+        self.col.clear();
+    }
+
+    #[inline]
+    fn push_or_decrease(&mut self, c: u32, k: f64) {
+        let p = self.pos[c as usize];
+        let at = if p == ABSENT {
+            self.key.push(k);
+            self.col.push(c);
+            self.key.len() - 1
+        } else {
+            p as usize
+        };
+        self.sift_up(at, c, k);
+    }
+
+    #[inline]
+    fn sift_up(&mut self, mut at: usize, c: u32, k: f64) {
+        while at > 0 {
+            let parent = (at - 1) / 2;
+            let pk = self.key[parent];
+            if pk <= k {
+                break;
+            }
+            let pc = self.col[parent];
+            self.key[at] = pk;
+            self.col[at] = pc;
+            self.pos[pc as usize] = at as u32;
+            at = parent;
+        }
+        self.key[at] = k;
+        self.col[at] = c;
+        self.pos[c as usize] = at as u32;
+    }
+
+    #[inline]
+    fn pop(&mut self) -> Option<(f64, u32)> {
+        let top_k = *self.key.first()?;
+        let top_c = self.col[0];
+        self.pos[top_c as usize] = ABSENT;
+        let (lk, lc) = match (self.key.pop(), self.col.pop()) {
+            (Some(k), Some(c)) => (k, c),
+            _ => return Some((top_k, top_c)),
+        };
+        if !self.key.is_empty() {
+            let n = self.key.len();
+            let mut at = 0;
+            loop {
+                let l = 2 * at + 1;
+                if l >= n {
+                    break;
+                }
+                let r = l + 1;
+                let m = if r < n && self.key[r] < self.key[l] { r } else { l };
+                let mk = self.key[m];
+                if mk >= lk {
+                    break;
+                }
+                let mc = self.col[m];
+                self.key[at] = mk;
+                self.col[at] = mc;
+                self.pos[mc as usize] = at as u32;
+                at = m;
+            }
+            self.key[at] = lk;
+            self.col[at] = lc;
+            self.pos[lc as usize] = at as u32;
+        }
+        Some((top_k, top_c))
+    }
+}
+
+/// Pending work of a scanned row in a sparse search: the columns of the row not
+/// relaxed yet cannot get a distance below `bound`. `slot < len` means the row's
+/// candidate list from `slot` on; [`BEYOND`] means the columns off the list, whose
+/// [`key`]s are all at least `lo`. Ordered so that `BinaryHeap` pops the least bound.
+#[derive(Copy, Clone, Debug)]
+struct Pending {
+    bound: f64,
+    off: f64,
+    lo: u64,
+    row: u32,
+    slot: u32,
+}
+
+/// [`Pending::slot`] of the columns off the candidate list.
+const BEYOND: u32 = u32::MAX;
+
+impl PartialEq for Pending {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+
+impl Eq for Pending {}
+
+impl PartialOrd for Pending {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Pending {
+    fn cmp(&self, other: &Self) -> Ordering {
+        other.bound.total_cmp(&self.bound)
+    }
+}
+
+// ---------------------------------------------------------------------------------
+// Row kernels
+// ---------------------------------------------------------------------------------
+
+/// Validates a row: index of the first NaN / `-inf`, the largest finite magnitude,
+/// and whether any entry is finite.
+fn validate_row(row: &[f64]) -> (Option<usize>, f64, bool) {
+    let mut bad = false;
+    let mut finite = false;
+    let mut mx = [0.0f64; LANES];
+    let chunks = row.chunks_exact(LANES);
+    let tail = chunks.remainder();
+    for ch in chunks {
+        for (m, &c) in mx.iter_mut().zip(ch) {
+            bad |= !(c > f64::NEG_INFINITY);
+            finite |= c < f64::INFINITY;
+            let a = if c < f64::INFINITY { c.abs() } else { 0.0 };
+            *m = if a > *m { a } else { *m };
+        }
+    }
+    for &c in tail {
+        bad |= !(c > f64::NEG_INFINITY);
+        finite |= c < f64::INFINITY;
+        if c < f64::INFINITY && c.abs() > mx[0] {
+            mx[0] = c.abs();
+        }
+    }
+    let first_bad = if bad {
+        row.iter().position(|&c| !(c > f64::NEG_INFINITY))
+    } else {
+        None
+    };
+    (first_bad, mx.iter().fold(0.0, |a: f64, &b| a.max(b)), finite)
+}
+
+/// Order-preserving map of a finite or infinite `f64` (not NaN) to `u64`; `-0.0`
+/// is folded into `0.0` so that the order agrees with `==`.
+#[inline]
+fn ord_bits(w: f64) -> u64 {
+    let b = (w + 0.0).to_bits();
+    if b >> 63 == 0 {
+        b | 1 << 63
+    } else {
+        !b
+    }
+}
+
+/// Inverse of [`ord_bits`].
+#[inline]
+fn from_ord_bits(o: u64) -> f64 {
+    f64::from_bits(if o >> 63 == 1 { o & !(1 << 63) } else { !o })
+}
+
+/// Sort key of the pair `(w, col)`: the order bits of `w` with the low mantissa bits
+/// (`mask`) replaced by the column. Keys are totally ordered, and a key bounds its
+/// `w` from below: `w >= key_floor(key)`. Low-bit truncation costs about `mask / 2^52`
+/// relative precision in the bounds only, never in the costs.
+#[inline]
+fn key(w: f64, col: u32, mask: u64) -> u64 {
+    (ord_bits(w) & !mask) | u64::from(col)
+}
+
+/// The largest `f64` not above any `w` whose [`key`] is at least `k`.
+#[inline]
+fn key_floor(k: u64, mask: u64) -> f64 {
+    if k & !mask == 0 {
+        f64::NEG_INFINITY
+    } else {
+        from_ord_bits(k & !mask)
+    }
+}
+
+/// The column of a [`key`].
+#[inline]
+fn key_col(k: u64, mask: u64) -> u32 {
+    (k & mask) as u32
+}
+
+/// Streaming selection of the `k` smallest [`key`]s `key(w, col)`, `w = row[col] -
+/// v[col]` finite, that are at least `lo`. `thr0` is an inclusive upper bound on the
+/// `k`-th smallest `w` when one is known (`+inf` otherwise). The keys are left sorted
+/// in `buf[..returned]`; `buf.len() >= 2k` is the scratch.
+///
+/// # Complexity
+/// One pass over the row; blocks of [`LANES`] entries are tested against the current
+/// threshold at once, admitted entries are appended to `buf`, and `buf` is cut back to
+/// the best `k` (linear-time selection) when full, so the work beyond the streaming
+/// compare is `O(admitted + k log k)`.
+fn select_k(
+    row: &[f64],
+    v: &[f64],
+    k: usize,
+    mask: u64,
+    lo: u64,
+    thr0: f64,
+    buf: &mut [u64],
+) -> usize {
+    let cap = buf.len();
+    debug_assert!(k >= 1 && cap >= 2 * k);
+    let lo_w = key_floor(lo, mask);
+    let mut n = 0usize;
+    // Keys above `thr_key` are rejected; `thr` is a float upper bound of the `w` of
+    // any key up to `thr_key` (for the block prefilter).
+    let (mut thr_key, mut thr) = if thr0 < f64::INFINITY {
+        (ord_bits(thr0) | mask, thr0)
+    } else {
+        (u64::MAX, f64::INFINITY)
+    };
+    let mut admit = |w: f64, col: u32, n: &mut usize, thr_key: &mut u64, thr: &mut f64| {
+        if w < f64::INFINITY {
+            let kk = key(w, col, mask);
+            if kk >= lo && kk <= *thr_key {
+                buf[*n] = kk;
+                *n += 1;
+                if *n == cap {
+                    let (_, kth, _) = buf.select_nth_unstable(k - 1);
+                    *thr_key = *kth;
+                    *thr = from_ord_bits(*kth | mask);
+                    *n = k;
+                }
+            }
+        }
+    };
+    let rch = row.chunks_exact(LANES);
+    let vch = v.chunks_exact(LANES);
+    let (rt, vt) = (rch.remainder(), vch.remainder());
+    let mut base = 0u32;
+    for (r, vv) in rch.zip(vch) {
+        let mut hit = false;
+        for (a, b) in r.iter().zip(vv) {
+            let w = a - b;
+            hit |= (w >= lo_w) & (w <= thr);
+        }
+        if hit {
+            for (l, (a, b)) in r.iter().zip(vv).enumerate() {
+                admit(a - b, base + l as u32, &mut n, &mut thr_key, &mut thr);
+            }
+        }
+        base += LANES as u32;
+    }
+    for (l, (a, b)) in rt.iter().zip(vt).enumerate() {
+        admit(a - b, base + l as u32, &mut n, &mut thr_key, &mut thr);
+    }
+    if n > k {
+        buf[..n].select_nth_unstable(k - 1);
+        n = k;
+    }
+    buf[..n].sort_unstable();
+    n
+}
+
+// ---------------------------------------------------------------------------------
+// Solver
+// ---------------------------------------------------------------------------------
+
+/// Exact assignment solver with reusable workspaces, dual prices and warm start.
+///
+/// Workspaces are sized on the first solve and whenever the dimensions change; solving
+/// again with the same dimensions does not allocate.
+#[derive(Clone, Debug, Default)]
 pub struct Solver {
-    a: Vec<usize>,
+    strategy: Strategy,
+    /// Candidates per row (sparse strategy).
+    k: usize,
+    rows: usize,
+    cols: usize,
+    /// Whether `x`, `u`, `v` hold a complete optimal solution of the last problem.
+    solved: bool,
+    /// Tolerance of the current solve (absolute).
+    eps: f64,
+    /// Largest finite cost magnitude of the current problem.
+    scale: f64,
+    u: Vec<f64>,
+    v: Vec<f64>,
+    /// Row -> column.
+    x: Vec<usize>,
+    /// Column -> row.
+    y: Vec<usize>,
+    // Candidate lists, `k` slots per row, sorted by `wb` (= c - v when built).
+    cand_col: Vec<u32>,
+    cand_cost: Vec<f64>,
+    cand_wb: Vec<f64>,
+    cand_len: Vec<u32>,
+    /// Per row: every column off the list has `key(c - v, col) >= theta_key` and so
+    /// `c - v >= theta` (`theta = +inf` when the list holds every finite entry).
+    /// Stays valid while prices only decrease.
+    theta: Vec<f64>,
+    theta_key: Vec<u64>,
+    /// Low key bits holding the column ([`key`]).
+    mask: u64,
+    /// Selection scratch, `4k` entries.
+    buf: Vec<u64>,
+    // Search workspaces (per column).
+    dist: Vec<f64>,
+    pred: Vec<u32>,
+    seen: Vec<u32>,
+    done: Vec<u32>,
+    epoch: u32,
+    heap: ColHeap,
+    pending: BinaryHeap<Pending>,
+    scanned: Vec<u32>,
+    dd: Vec<f64>,
+    vm: Vec<f64>,
+    // Row sets.
+    free_rows: Vec<u32>,
+    dirty: Vec<bool>,
+    dirty_rows: Vec<u32>,
+    raise: Vec<u32>,
+    stats: SolveStats,
 }
+
 impl Solver {
+    /// A solver with [`Strategy::Auto`] and [`DEFAULT_CANDIDATES`] candidates per row.
     pub fn new() -> Solver {
-        unimplemented!()
+        Solver::with_strategy(Strategy::Auto)
     }
+
+    /// A solver using `strategy`.
+    pub fn with_strategy(strategy: Strategy) -> Solver {
+        Solver::with_options(strategy, DEFAULT_CANDIDATES)
+    }
+
+    /// A solver using `strategy` that keeps `candidates` (at least 1) cheapest columns
+    /// per row in the sparse strategy. The result is optimal for any value; it only
+    /// trades list-building work against full-row scans.
+    pub fn with_options(strategy: Strategy, candidates: usize) -> Solver {
+        Solver {
+            strategy,
+            k: candidates.max(1),
+            ..Solver::default()
+        }
+    }
+
+    /// The strategy in use.
+    pub fn strategy(&self) -> Strategy {
+        self.strategy
+    }
+
+    /// Work counters of the last solve.
+    pub fn stats(&self) -> SolveStats {
+        self.stats
+    }
+
+    /// Cold solve: ignores any previous duals and assignment. Returns row -> column.
+    ///
+    /// # Formula
+    /// Minimises `sum_i c[i][sigma(i)]` over injections (mesh-formation-control section
+    /// 6.1, eq. 2 with unit weights). On success the duals `u`, `v` satisfy
+    /// `c[i][j] - u[i] - v[j] >= -eps` everywhere, `== 0` on assigned pairs, and
+    /// unassigned columns carry the maximal `v` ([`Solver::verify_optimal`]), with
+    /// `eps = EPS_REL * scale` ([`EPS_REL`]).
+    ///
+    /// # Units
+    /// Costs in any unit; indices only in the result.
+    ///
+    /// # Complexity
+    /// Dense strategy `O(rows² · cols)` worst case. Sparse strategy: one streaming
+    /// pass over the matrix, heap searches over short sorted candidate lists, and a
+    /// streaming full-row pass only for rows whose dual outgrows their list; the same
+    /// worst case, far less on geometric instances. No allocation when the dimensions
+    /// equal those of the previous call.
+    ///
+    /// # Errors
+    /// [`AssignError::Empty`], [`AssignError::MoreRowsThanCols`],
+    /// [`AssignError::NotFinite`] (first NaN/`-inf` in row-major order),
+    /// [`AssignError::Infeasible`]. After an error [`Solver::assignment`] is empty and
+    /// the next warm solve is cold.
     pub fn solve(&mut self, costs: &CostMatrix) -> Result<&[usize], AssignError> {
-        unimplemented!()
+        self.check_dims(costs)?;
+        self.size_for(costs.rows(), costs.cols());
+        self.v.fill(0.0);
+        self.x.fill(NONE);
+        self.y.fill(NONE);
+        self.stats = SolveStats::default();
+        self.finish(costs)
     }
+
+    /// Warm solve: when the dimensions equal those of the last successful solve, starts
+    /// from its column prices and assignment (pairs that are still tight are kept, the
+    /// rest re-augmented); otherwise a cold [`Solver::solve`]. The result is optimal
+    /// either way.
+    ///
+    /// # Formula, Units, Errors
+    /// As [`Solver::solve`].
+    ///
+    /// # Complexity
+    /// One streaming pricing pass over the matrix plus the re-augmentation of the freed
+    /// rows; no allocation.
     pub fn solve_warm(&mut self, costs: &CostMatrix) -> Result<&[usize], AssignError> {
-        unimplemented!()
+        self.check_dims(costs)?;
+        if !self.solved || costs.rows() != self.rows || costs.cols() != self.cols {
+            return self.solve(costs);
+        }
+        // Keep the prices bounded over long runs: shift so that max v = 0 (reduced
+        // costs are unchanged; free columns of a rectangular problem are already at
+        // the maximum, 0).
+        let vmax = self.v.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+        if vmax.is_finite() && vmax != 0.0 {
+            for e in &mut self.v {
+                *e -= vmax;
+            }
+        }
+        self.stats = SolveStats {
+            warm: true,
+            ..SolveStats::default()
+        };
+        self.finish(costs)
     }
+
+    /// The assignment of the last successful solve (row -> column); empty after an
+    /// error or before the first solve.
     pub fn assignment(&self) -> &[usize] {
-        &self.a
+        if self.solved {
+            &self.x
+        } else {
+            &[]
+        }
     }
+
+    /// Total cost of the current assignment under `costs`; NaN if there is no
+    /// assignment or the dimensions differ.
     pub fn total_cost(&self, costs: &CostMatrix) -> f64 {
-        0.0
+        if !self.solved || costs.rows() != self.rows || costs.cols() != self.cols {
+            return f64::NAN;
+        }
+        self.x
+            .iter()
+            .enumerate()
+            .map(|(i, &j)| costs.get(i, j))
+            .sum()
     }
+
+    /// Checks the optimality certificate of the current assignment against `costs`:
+    /// the assignment is an injection; reduced costs `c[i][j] - u[i] - v[j] >= -tol`
+    /// for all pairs and `|c[i][j] - u[i] - v[j]| <= tol` on assigned pairs; and every
+    /// unassigned column has `v[j] >= max_k v[k] - tol`. Together these prove that no
+    /// injection is cheaper by more than `2 * rows * tol`.
+    ///
+    /// # Complexity
+    /// `O(rows · cols)`, no allocation.
     pub fn verify_optimal(&self, costs: &CostMatrix, tol: f64) -> bool {
+        if !self.solved || costs.rows() != self.rows || costs.cols() != self.cols {
+            return false;
+        }
+        let (rows, cols) = (self.rows, self.cols);
+        for (i, &j) in self.x.iter().enumerate() {
+            if j >= cols || self.y[j] != i {
+                return false;
+            }
+        }
+        let assigned = self.y.iter().filter(|&&i| i != NONE).count();
+        if assigned != rows {
+            return false;
+        }
+        for i in 0..rows {
+            let ui = self.u[i];
+            for (jj, (c, vj)) in costs.row(i).iter().zip(&self.v).enumerate() {
+                // NaN fails this comparison too.
+                if !(c - ui - vj >= -tol) {
+                    if std::env::var_os("ASSIGN_TRACE").is_some() { eprintln!("row {i} col {jj} reduced {} (x {} ) v {vj}", c - ui - vj, self.x[i]); }
+                    return false;
+                }
+            }
+            let j = self.x[i];
+            let r = costs.get(i, j) - ui - self.v[j];
+            if !(r.abs() <= tol) {
+                return false;
+            }
+        }
+        let vmax = self.v.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+        (0..cols).all(|j| { let ok = self.y[j] != NONE || self.v[j] >= vmax - tol; if !ok && std::env::var_os("ASSIGN_TRACE").is_some() { eprintln!("free col {j} v {} vmax {vmax}", self.v[j]); } ok })
+    }
+
+    // -- internals -------------------------------------------------------------------
+
+    /// Tolerance of the debug certificate check: far above rounding, far below any
+    /// real sub-optimality.
+    fn debug_tolerance(&self) -> f64 {
+        let vmax = self.v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        1e3 * EPS_REL * (self.eps / EPS_REL).max(vmax) + f64::MIN_POSITIVE
+    }
+
+    fn check_dims(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
+        let (rows, cols) = (costs.rows(), costs.cols());
+        if rows == 0 {
+            self.solved = false;
+            return Err(AssignError::Empty);
+        }
+        if rows > cols {
+            self.solved = false;
+            return Err(AssignError::MoreRowsThanCols { rows, cols });
+        }
+        Ok(())
+    }
+
+    /// Sizes every workspace for `rows × cols`; does nothing when unchanged.
+    fn size_for(&mut self, rows: usize, cols: usize) {
+        if rows == self.rows && cols == self.cols && self.x.len() == rows {
+            return;
+        }
+        let k = self.k;
+        self.solved = false;
+        self.rows = rows;
+        self.cols = cols;
+        self.u.resize(rows, 0.0);
+        self.v.resize(cols, 0.0);
+        self.x.resize(rows, NONE);
+        self.y.resize(cols, NONE);
+        self.cand_col.resize(rows * k, 0);
+        self.cand_cost.resize(rows * k, 0.0);
+        self.cand_wb.resize(rows * k, 0.0);
+        self.cand_len.clear();
+        self.cand_len.resize(rows, 0);
+        self.theta.resize(rows, f64::INFINITY);
+        self.theta_key.resize(rows, 0);
+        let bits = (usize::BITS - (cols.max(4 * k).max(2) - 1).leading_zeros()).min(32);
+        self.mask = (1u64 << bits) - 1;
+        self.buf.resize(4 * k, 0);
+        self.dist.resize(cols, 0.0);
+        self.pred.resize(cols, 0);
+        self.seen.clear();
+        self.seen.resize(cols, 0);
+        self.done.clear();
+        self.done.resize(cols, 0);
+        self.epoch = 0;
+        self.heap.size_for(cols);
+        self.pending = BinaryHeap::with_capacity(2 * rows + 2);
+        self.scanned = Vec::with_capacity(cols);
+        self.dd.resize(cols, 0.0);
+        self.vm.resize(cols, 0.0);
+        self.free_rows = Vec::with_capacity(rows);
+        self.dirty.clear();
+        self.dirty.resize(rows, false);
+        self.dirty_rows = Vec::with_capacity(rows);
+        self.raise = Vec::with_capacity(rows + cols);
+    }
+
+    fn use_sparse(&self) -> bool {
+        match self.strategy {
+            Strategy::Dense => false,
+            Strategy::Sparse => true,
+            Strategy::Auto => self.cols > AUTO_DENSE_MAX_COLS,
+        }
+    }
+
+    /// Common driver of cold and warm solves (state: prices `v`, partial matching).
+    fn finish(&mut self, costs: &CostMatrix) -> Result<&[usize], AssignError> {
+        self.solved = false;
+        match self.run(costs) {
+            Ok(()) => {
+                for (i, &j) in self.x.iter().enumerate() {
+                    self.u[i] = costs.get(i, j) - self.v[j];
+                }
+                self.solved = true;
+                debug_assert!(
+                    self.verify_optimal(costs, self.debug_tolerance()),
+                    "assignment certificate failed"
+                );
+                Ok(&self.x)
+            }
+            Err(e) => {
+                // Leave a consistent (cold) state behind.
+                self.x.fill(NONE);
+                self.y.fill(NONE);
+                for &i in &self.dirty_rows {
+                    self.dirty[i as usize] = false;
+                }
+                self.dirty_rows.clear();
+                self.free_rows.clear();
+                self.raise.clear();
+                Err(e)
+            }
+        }
+    }
+
+    fn run(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
+        self.validate(costs)?;
+        let sparse = self.use_sparse();
+        self.price_all(costs, sparse);
+        if sparse && !self.stats.warm {
+            self.auction(costs);
+            self.tighten(costs);
+            if self.rows < self.cols {
+                for j in 0..self.cols {
+                    if self.y[j] == NONE && self.v[j] < 0.0 {
+                        self.raise.push(j as u32);
+                    }
+                }
+            }
+            self.price_all_lists(costs);
+        }
+        if self.stats.warm {
+            self.stats.kept_rows = self.x.iter().filter(|&&j| j != NONE).count();
+        }
+        if sparse {
+            loop {
+                if self.free_rows.is_empty() {
+                    return Ok(());
+                }
+                if self.stats.rounds == MAX_ROUNDS {
+                    break;
+                }
+                self.stats.rounds += 1;
+                while let Some(i) = self.free_rows.pop() {
+                    if !self.sparse_augment(costs, i as usize) {
+                        return Err(AssignError::Infeasible { row: i as usize });
+                    }
+                }
+                self.price_dirty(costs);
+            }
+            // Safety net (not reached in practice): make the duals feasible on the
+            // whole matrix again, then augment the remaining free rows densely.
+            self.stats.dense_finish = true;
+            for &i in &self.dirty_rows {
+                self.dirty[i as usize] = false;
+            }
+            self.dirty_rows.clear();
+            self.price_all(costs, false);
+        }
+        self.dense_all(costs)
+    }
+
+    /// Validation pass: NaN / -inf, all-+inf rows, tolerance scale.
+    #[inline(never)]
+    fn validate(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
+        let mut scale = 0.0f64;
+        let mut first_unservable = None;
+        for i in 0..costs.rows() {
+            let (bad, mx, finite) = validate_row(costs.row(i));
+            if let Some(col) = bad {
+                return Err(AssignError::NotFinite { row: i, col });
+            }
+            if !finite && first_unservable.is_none() {
+                first_unservable = Some(i);
+            }
+            scale = scale.max(mx);
+        }
+        if let Some(row) = first_unservable {
+            return Err(AssignError::Infeasible { row });
+        }
+        let vmax = self.v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        self.scale = scale;
+        self.eps = EPS_REL * scale.max(vmax);
+        Ok(())
+    }
+
+    /// Pricing pass over every row: frees rows that are not tight, greedily assigns
+    /// free rows whose cheapest column is free, collects the free rows, and (when
+    /// `build`) rebuilds every candidate list.
+    #[inline(never)]
+    fn price_all(&mut self, costs: &CostMatrix, build: bool) {
+        self.free_rows.clear();
+        for i in 0..self.rows {
+            self.price_row(costs, i, build);
+        }
+        self.raise_free_columns(costs);
+    }
+
+    /// End of a sparse round: reprices the rows whose dual rose above their
+    /// candidate threshold (the only rows that can have become violated).
+    fn price_dirty(&mut self, costs: &CostMatrix) {
+        self.free_rows.clear();
+        for idx in 0..self.dirty_rows.len() {
+            let i = self.dirty_rows[idx] as usize;
+            self.dirty[i] = false;
+            let xi = self.x[i];
+            if xi == NONE {
+                continue;
+            }
+            let ui = costs.get(i, xi) - self.v[xi];
+            if ui <= self.theta[i] + self.eps {
+                continue;
+            }
+            self.price_row(costs, i, true);
+        }
+        self.dirty_rows.clear();
+        self.raise_free_columns(costs);
+    }
+
+    /// Prices row `i` against the full row: keeps it if its pair is tight, else frees
+    /// it; a free row takes its cheapest column if that column is free. With `build`,
+    /// the row's candidate list is rebuilt.
+    fn price_row(&mut self, costs: &CostMatrix, i: usize, build: bool) {
+        self.stats.rows_priced += 1;
+        let (min_w, arg) = if build {
+            self.build_row(costs, i)
+        } else {
+            let row = costs.row(i);
+            let mut best = f64::INFINITY;
+            let mut arg = NONE;
+            for (j, (c, vj)) in row.iter().zip(&self.v).enumerate() {
+                let w = c - vj;
+                if w < best {
+                    best = w;
+                    arg = j;
+                }
+            }
+            (best, arg)
+        };
+        self.settle_row(costs, i, min_w, arg);
+    }
+
+    /// Keeps row `i` if its pair is tight against the row minimum `min_w` (at column
+    /// `arg`), else frees it; a free row takes `arg` if that column is free.
+    fn settle_row(&mut self, costs: &CostMatrix, i: usize, min_w: f64, arg: usize) {
+        let row = costs.row(i);
+        let xi = self.x[i];
+        if xi != NONE {
+            let wx = row[xi] - self.v[xi];
+            if wx <= min_w + self.eps {
+                return;
+            }
+            self.x[i] = NONE;
+            self.y[xi] = NONE;
+            if self.rows < self.cols {
+                self.raise.push(xi as u32);
+            }
+        }
+        if arg != NONE && self.y[arg] == NONE {
+            self.x[i] = arg;
+            self.y[arg] = i;
+        } else {
+            self.free_rows.push(i as u32);
+        }
+    }
+
+    /// Rebuilds the candidate list of row `i` (its `k` smallest `(c - v, col)`) and
+    /// its threshold. Returns the row's minimum `c - v` and its column.
+    fn build_row(&mut self, costs: &CostMatrix, i: usize) -> (f64, usize) {
+        let row = costs.row(i);
+        let k = self.k;
+        let base = i * k;
+        // Any k distinct columns bound the k-th smallest reduced cost from above.
+        let thr0 = if self.cand_len[i] as usize == k {
+            self.cand_col[base..base + k]
+                .iter()
+                .map(|&c| row[c as usize] - self.v[c as usize])
+                .fold(f64::NEG_INFINITY, f64::max)
+        } else {
+            f64::INFINITY
+        };
+        let mask = self.mask;
+        let n = select_k(row, &self.v, k, mask, 0, thr0, &mut self.buf);
+        for (t, &kk) in self.buf[..n].iter().enumerate() {
+            let c = key_col(kk, mask);
+            self.cand_col[base + t] = c;
+            self.cand_cost[base + t] = row[c as usize];
+            self.cand_wb[base + t] = key_floor(kk, mask);
+        }
+        self.cand_len[i] = n as u32;
+        if n == k {
+            let kk = self.buf[k - 1] + 1;
+            self.theta[i] = key_floor(kk, mask);
+            self.theta_key[i] = kk;
+        } else {
+            self.theta[i] = f64::INFINITY;
+            self.theta_key[i] = u64::MAX;
+        }
+        match self.buf[..n].first() {
+            Some(&kk) => {
+                let c = key_col(kk, mask) as usize;
+                (row[c] - self.v[c], c)
+            }
+            None => (f64::INFINITY, NONE),
+        }
+    }
+
+    /// Best and second-best reduced cost `c - v` of row `i` (`w1`, its column, `w2`),
+    /// from the candidate list and the threshold; the list is rebuilt when stale.
+    fn best2(&mut self, costs: &CostMatrix, i: usize) -> (f64, usize, f64) {
+        let mut rebuilt = false;
+        loop {
+            let base = i * self.k;
+            let len = self.cand_len[i] as usize;
+            let (mut w1, mut j1, mut w2) = (f64::INFINITY, NONE, f64::INFINITY);
+            for ((&c, &cost), &wb) in self.cand_col[base..base + len]
+                .iter()
+                .zip(&self.cand_cost[base..base + len])
+                .zip(&self.cand_wb[base..base + len])
+            {
+                // The list is sorted by `wb` and current values are >= `wb`: nothing
+                // further down can beat the second best.
+                if wb >= w2 {
+                    break;
+                }
+                let w = cost - self.v[c as usize];
+                if w < w1 {
+                    w2 = w1;
+                    w1 = w;
+                    j1 = c as usize;
+                } else if w < w2 {
+                    w2 = w;
+                }
+            }
+            let th = self.theta[i];
+            if w1 <= th || rebuilt {
+                return (w1, j1, w2.min(th));
+            }
+            self.stats.rows_priced += 1;
+            let _ = self.build_row(costs, i);
+            rebuilt = true;
+        }
+    }
+
+    /// Forward auction with ε-scaling over the candidate lists (Bertsekas; prices
+    /// only fall, so every list threshold stays valid). It only brings the prices
+    /// close to optimal; exactness comes from the finish that follows.
+    #[inline(never)]
+    fn auction(&mut self, costs: &CostMatrix) {
+        let k = self.k;
+        let (mut spread, mut count) = (0.0, 0usize);
+        for i in 0..self.rows {
+            let len = (self.cand_len[i] as usize).min(AUCTION_SPREAD_SLOTS);
+            if len >= 2 {
+                spread += self.cand_wb[i * k + len - 1] - self.cand_wb[i * k];
+                count += 1;
+            }
+        }
+        if count == 0 {
+            return;
+        }
+        let start: f64 = std::env::var("ASSIGN_START").ok().and_then(|s| s.parse().ok()).unwrap_or(AUCTION_START);
+        let factor: f64 = std::env::var("ASSIGN_FACTOR").ok().and_then(|s| s.parse().ok()).unwrap_or(AUCTION_FACTOR);
+        let endr: f64 = std::env::var("ASSIGN_END").ok().and_then(|s| s.parse().ok()).unwrap_or(AUCTION_END);
+        let eps0 = start * spread / count as f64;
+        if !(eps0 > 0.0 && eps0 < f64::INFINITY) {
+            return;
+        }
+        let eps_end = eps0 * endr;
+        let cap = self.scale.max(eps0);
+        let budget = AUCTION_BIDS_PER_ROW * self.rows + 64;
+        let mut eps = eps0;
+        loop {
+            self.stats.auction_phases += 1;
+            self.free_rows.clear();
+            for i in 0..self.rows {
+                let xi = self.x[i];
+                if xi != NONE {
+                    let (w1, _, _) = self.best2(costs, i);
+                    if costs.get(i, xi) - self.v[xi] <= w1 + eps {
+                        continue;
+                    }
+                    self.x[i] = NONE;
+                    self.y[xi] = NONE;
+                }
+                self.free_rows.push(i as u32);
+            }
+            let mut bids = 0;
+            while let Some(i) = self.free_rows.pop() {
+                let i = i as usize;
+                bids += 1;
+                let (w1, j1, w2) = self.best2(costs, i);
+                if bids > budget || j1 == NONE {
+                    self.free_rows.push(i as u32);
+                    self.stats.bids += bids as u64;
+                    return;
+                }
+                let w2 = w2.min(w1 + cap);
+                self.v[j1] -= (w2 - w1) + eps;
+                let prev = self.y[j1];
+                self.y[j1] = i;
+                self.x[i] = j1;
+                if prev != NONE {
+                    self.x[prev] = NONE;
+                    self.free_rows.push(prev as u32);
+                }
+            }
+            self.stats.bids += bids as u64;
+            if std::env::var_os("ASSIGN_TRACE").is_some() {
+                eprintln!("phase eps {eps:.3e} bids {bids} priced {}", self.stats.rows_priced);
+            }
+            if eps <= eps_end {
+                break;
+            }
+            eps = (eps * factor).max(eps_end);
+        }
+    }
+
+    /// After the auction: raises each assigned column's price by its row's slack so
+    /// that the pair becomes tight (the pricing pass that follows frees the few rows
+    /// this makes violated, and rebuilds every list).
+    #[inline(never)]
+    fn tighten(&mut self, costs: &CostMatrix) {
+        let rect = self.rows < self.cols;
+        let mut max_raise = 0.0f64;
+        for i in 0..self.rows {
+            let xi = self.x[i];
+            if xi == NONE {
+                continue;
+            }
+            let (w1, _, _) = self.best2(costs, i);
+            let slack = costs.get(i, xi) - self.v[xi] - w1;
+            if slack > 0.0 {
+                let old = self.v[xi];
+                self.v[xi] += slack;
+                if rect && self.v[xi] > 0.0 {
+                    self.v[xi] = 0.0;
+                }
+                max_raise = max_raise.max(self.v[xi] - old);
+            }
+        }
+        // Every price rose by at most `max_raise`: lowering the list bounds and the
+        // thresholds by as much keeps them valid, so the lists stay usable.
+        if max_raise > 0.0 {
+            let mask = self.mask;
+            for wb in &mut self.cand_wb {
+                *wb -= max_raise;
+            }
+            for (t, tk) in self.theta.iter_mut().zip(&mut self.theta_key) {
+                if *t < f64::INFINITY {
+                    let kk = key(*t - max_raise, 0, mask);
+                    *t = key_floor(kk, mask);
+                    *tk = kk;
+                }
+            }
+        }
+    }
+
+    /// Pricing pass over every row using the candidate lists (a row is scanned in
+    /// full only when its list is stale): as [`Solver::price_all`] otherwise.
+    #[inline(never)]
+    fn price_all_lists(&mut self, costs: &CostMatrix) {
+        self.free_rows.clear();
+        for i in 0..self.rows {
+            self.stats.rows_priced += 1;
+            let (min_w, arg, _) = self.best2(costs, i);
+            self.settle_row(costs, i, min_w, arg);
+        }
+        self.raise_free_columns(costs);
+    }
+
+    /// Rectangular problems only: raises the price of every freed column back to the
+    /// maximum (0), frees the assigned rows this makes non-tight (transitively), and
+    /// keeps every row's candidate threshold a valid lower bound.
+    fn raise_free_columns(&mut self, costs: &CostMatrix) {
+        let sparse = self.use_sparse();
+        while let Some(j) = self.raise.pop() {
+            let j = j as usize;
+            if self.y[j] != NONE || self.v[j] >= 0.0 {
+                continue;
+            }
+            self.v[j] = 0.0;
+            for r in 0..self.rows {
+                let c = costs.get(r, j);
+                if !(c < f64::INFINITY) {
+                    continue;
+                }
+                if sparse && c < self.theta[r] {
+                    // Column j got cheaper for row r: weaken the threshold, and clamp
+                    // the list bounds (j may be on the list; clamping keeps it sorted).
+                    let kk = key(c, 0, self.mask);
+                    let th = key_floor(kk, self.mask);
+                    self.theta[r] = th;
+                    self.theta_key[r] = kk;
+                    let base = r * self.k;
+                    let len = self.cand_len[r] as usize;
+                    for wb in &mut self.cand_wb[base..base + len] {
+                        if *wb > th {
+                            *wb = th;
+                        }
+                    }
+                }
+                let xr = self.x[r];
+                if xr != NONE && c < costs.get(r, xr) - self.v[xr] - self.eps {
+                    self.x[r] = NONE;
+                    self.y[xr] = NONE;
+                    self.raise.push(xr as u32);
+                    self.free_rows.push(r as u32);
+                }
+            }
+        }
+    }
+
+    fn next_epoch(&mut self) -> u32 {
+        if self.epoch == u32::MAX {
+            self.seen.fill(0);
+            self.done.fill(0);
+            self.epoch = 0;
+        }
+        self.epoch += 1;
+        self.epoch
+    }
+
+    #[inline]
+    fn mark_dirty(&mut self, i: usize) {
+        if !self.dirty[i] {
+            self.dirty[i] = true;
+            self.dirty_rows.push(i as u32);
+        }
+    }
+
+    /// Dijkstra from free row `i0` over the sorted candidate lists, exact on the full
+    /// matrix:
+    ///
+    /// * a scanned row relaxes its list lazily, a few slots at a time, in order of
+    ///   the bound `off + wb[slot]` (prices only fall, so `wb` bounds the current
+    ///   reduced cost from below); past the list, the bound `off + theta` guards the
+    ///   rest of the row, which is fetched `k` columns at a time by a streaming pass;
+    /// * a row whose dual rose above its threshold since its list was built is
+    ///   repriced first; if its pair is no longer tight the row is released and its
+    ///   column ends the augmenting path (the row goes back on the free list).
+    ///
+    /// On success updates the prices of the settled columns and flips the path.
+    /// Returns false only if no augmenting path exists in the whole matrix.
+    #[inline(never)]
+    fn sparse_augment(&mut self, costs: &CostMatrix, i0: usize) -> bool {
+        let ep = self.next_epoch();
+        self.stats.augmentations += 1;
+        self.heap.clear();
+        self.pending.clear();
+        self.scanned.clear();
+        self.advance_list(i0, 0.0, 0, ep);
+        let (dstar, sink) = loop {
+            let hmin = self.heap.key.first().copied().unwrap_or(f64::INFINITY);
+            if let Some(&p) = self.pending.peek() {
+                if p.bound < hmin {
+                    let _ = self.pending.pop();
+                    if p.slot == BEYOND {
+                        self.expand_row(costs, p, ep);
+                    } else {
+                        self.advance_list(p.row as usize, p.off, p.slot as usize, ep);
+                    }
+                    continue;
+                }
+            }
+            let Some((dk, j)) = self.heap.pop() else {
+                return false;
+            };
+            let j = j as usize;
+            self.done[j] = ep;
+            self.scanned.push(j as u32);
+            let i = self.y[j];
+            if i == NONE {
+                break (dk, j);
+            }
+            self.stats.rows_scanned += 1;
+            self.mark_dirty(i);
+            let ui = costs.get(i, j) - self.v[j];
+            if !(ui <= self.theta[i] + self.eps) {
+                self.stats.rows_priced += 1;
+                let (min_w, _) = self.build_row(costs, i);
+                if !(ui <= min_w + self.eps) {
+                    self.x[i] = NONE;
+                    self.y[j] = NONE;
+                    self.free_rows.push(i as u32);
+                    break (dk, j);
+                }
+            }
+            self.advance_list(i, dk - ui, 0, ep);
+        };
+        for &k in &self.scanned {
+            let k = k as usize;
+            self.v[k] += self.dist[k] - dstar;
+        }
+        self.flip_path(sink, i0);
+        self.mark_dirty(i0);
         true
+    }
+
+    /// Relaxes column `k` from row `i` with tentative distance `nd`.
+    #[inline]
+    fn relax_to(&mut self, i: u32, k: usize, nd: f64, ep: u32) {
+        if self.done[k] != ep && (self.seen[k] != ep || nd < self.dist[k]) {
+            self.seen[k] = ep;
+            self.dist[k] = nd;
+            self.pred[k] = i;
+            self.heap.push_or_decrease(k as u32, nd);
+        }
+    }
+
+    /// Relaxes list slots `t0..t0 + RELAX_BATCH` of row `i` (distance offset `off`)
+    /// and queues what is left of the row.
+    fn advance_list(&mut self, i: usize, off: f64, t0: usize, ep: u32) {
+        let base = i * self.k;
+        let len = self.cand_len[i] as usize;
+        let t1 = len.min(t0 + RELAX_BATCH);
+        for s in base + t0..base + t1 {
+            let k = self.cand_col[s] as usize;
+            let nd = off + (self.cand_cost[s] - self.v[k]);
+            self.relax_to(i as u32, k, nd, ep);
+        }
+        let p = if t1 < len {
+            Pending {
+                bound: off + self.cand_wb[base + t1],
+                off,
+                lo: 0,
+                row: i as u32,
+                slot: t1 as u32,
+            }
+        } else {
+            Pending {
+                bound: off + self.theta[i],
+                off,
+                lo: self.theta_key[i],
+                row: i as u32,
+                slot: BEYOND,
+            }
+        };
+        if p.bound < f64::INFINITY {
+            self.pending.push(p);
+        }
+    }
+
+    /// Relaxes the next `k` cheapest columns of a row beyond its list (one streaming
+    /// pass) and queues the row again with the raised bound.
+    fn expand_row(&mut self, costs: &CostMatrix, p: Pending, ep: u32) {
+        self.stats.expansions += 1;
+        let k = self.k;
+        let row = costs.row(p.row as usize);
+        let mask = self.mask;
+        let n = select_k(row, &self.v, k, mask, p.lo, f64::INFINITY, &mut self.buf);
+        for t in 0..n {
+            let c = key_col(self.buf[t], mask) as usize;
+            let nd = p.off + (row[c] - self.v[c]);
+            self.relax_to(p.row, c, nd, ep);
+        }
+        if n == k {
+            let lo = self.buf[k - 1] + 1;
+            let bound = p.off + key_floor(lo, mask);
+            if bound < f64::INFINITY {
+                self.pending.push(Pending { bound, lo, ..p });
+            }
+        }
+    }
+
+    /// Flips the alternating path ending at free column `sink` back to row `i0`.
+    fn flip_path(&mut self, sink: usize, i0: usize) {
+        let mut j = sink;
+        loop {
+            let i = self.pred[j] as usize;
+            let prev = self.x[i];
+            self.y[j] = i;
+            self.x[i] = j;
+            if i == i0 {
+                break;
+            }
+            j = prev;
+        }
+    }
+
+    /// Dense augmentation of every free row, in index order.
+    fn dense_all(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
+        self.free_rows.sort_unstable();
+        for idx in 0..self.free_rows.len() {
+            let i = self.free_rows[idx] as usize;
+            if !self.dense_augment(costs, i) {
+                return Err(AssignError::Infeasible { row: i });
+            }
+        }
+        self.free_rows.clear();
+        Ok(())
+    }
+
+    /// Dijkstra over full rows from free row `i0` (requires dual feasibility on the
+    /// whole matrix). Settled columns get `d = +inf` and a masked price of `-inf`, so
+    /// the relaxation loop runs branch-free over all columns and never touches them.
+    fn dense_augment(&mut self, costs: &CostMatrix, i0: usize) -> bool {
+        self.stats.augmentations += 1;
+        self.scanned.clear();
+        let row0 = costs.row(i0);
+        for (((d, vm), p), (&c, &vj)) in self
+            .dd
+            .iter_mut()
+            .zip(&mut self.vm)
+            .zip(&mut self.pred)
+            .zip(row0.iter().zip(&self.v))
+        {
+            *vm = vj;
+            *d = c - vj;
+            *p = i0 as u32;
+        }
+        let (dstar, sink) = loop {
+            let mut best = f64::INFINITY;
+            let mut bj = NONE;
+            for (j, &d) in self.dd.iter().enumerate() {
+                if d < best {
+                    best = d;
+                    bj = j;
+                }
+            }
+            if bj == NONE {
+                return false;
+            }
+            self.dist[bj] = best;
+            self.dd[bj] = f64::INFINITY;
+            self.vm[bj] = f64::NEG_INFINITY;
+            self.scanned.push(bj as u32);
+            let i = self.y[bj];
+            if i == NONE {
+                break (best, bj);
+            }
+            self.stats.rows_scanned += 1;
+            let row = costs.row(i);
+            let off = best - (row[bj] - self.v[bj]);
+            let iu = i as u32;
+            for ((d, p), (&c, &vm)) in self
+                .dd
+                .iter_mut()
+                .zip(&mut self.pred)
+                .zip(row.iter().zip(&self.vm))
+            {
+                let h = c - vm + off;
+                if h < *d {
+                    *d = h;
+                    *p = iu;
+                }
+            }
+        };
+        for &k in &self.scanned {
+            let k = k as usize;
+            self.v[k] += self.dist[k] - dstar;
+        }
+        self.flip_path(sink, i0);
+        true
+    }
+
+    /// Identity of every internal buffer (pointer, capacity), to check that repeated
+    /// same-size solves do not reallocate.
+    #[cfg(test)]
+    fn buffer_fingerprint(&self) -> Vec<(usize, usize)> {
+        fn f<T>(v: &Vec<T>) -> (usize, usize) {
+            (v.as_ptr() as usize, v.capacity())
+        }
+        vec![
+            f(&self.u),
+            f(&self.v),
+            f(&self.x),
+            f(&self.y),
+            f(&self.cand_col),
+            f(&self.cand_cost),
+            f(&self.cand_wb),
+            f(&self.cand_len),
+            f(&self.theta),
+            f(&self.theta_key),
+            f(&self.buf),
+            f(&self.dist),
+            f(&self.pred),
+            f(&self.seen),
+            f(&self.done),
+            f(&self.heap.key),
+            f(&self.heap.col),
+            f(&self.heap.pos),
+            (self.pending.capacity(), 0),
+            f(&self.scanned),
+            f(&self.dd),
+            f(&self.vm),
+            f(&self.free_rows),
+            f(&self.dirty),
+            f(&self.dirty_rows),
+            f(&self.raise),
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Strategy as Algo;
+    use super::*;
+    use proptest::prelude::{prop_assert, prop_oneof, proptest, Just, TestCaseError};
+    use proptest::strategy::Strategy as _;
+    use proptest::test_runner::{Config as ProptestConfig, RngSeed};
+
+    /// Small deterministic PRNG (splitmix64) for the larger instances.
+    struct SplitMix(u64);
+    impl SplitMix {
+        fn next_u64(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^ (z >> 31)
+        }
+        fn unit(&mut self) -> f64 {
+            (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+        }
+    }
+
+    fn points(rng: &mut SplitMix, n: usize) -> Vec<Vec2> {
+        (0..n).map(|_| Vec2::new(rng.unit(), rng.unit())).collect()
+    }
+
+    /// Minimum total cost over all injections rows -> cols (None if none is finite).
+    fn brute_force(c: &CostMatrix) -> Option<f64> {
+        fn rec(c: &CostMatrix, i: usize, used: &mut [bool], acc: f64, best: &mut f64) {
+            if i == c.rows() {
+                if acc < *best {
+                    *best = acc;
+                }
+                return;
+            }
+            for j in 0..c.cols() {
+                let e = c.get(i, j);
+                if !used[j] && e < f64::INFINITY {
+                    used[j] = true;
+                    rec(c, i + 1, used, acc + e, best);
+                    used[j] = false;
+                }
+            }
+        }
+        let mut best = f64::INFINITY;
+        rec(c, 0, &mut vec![false; c.cols()], 0.0, &mut best);
+        best.is_finite().then_some(best)
+    }
+
+    /// Every configuration worth exercising: dense, sparse with very few candidates
+    /// (forces many pricing rounds and repairs), sparse default, auto.
+    fn solvers() -> Vec<Solver> {
+        vec![
+            Solver::with_strategy(Algo::Dense),
+            Solver::with_options(Algo::Sparse, 1),
+            Solver::with_options(Algo::Sparse, 2),
+            Solver::with_strategy(Algo::Sparse),
+            Solver::new(),
+        ]
+    }
+
+    fn check_against_brute(s: &mut Solver, c: &CostMatrix, warm: bool) -> Result<(), TestCaseError> {
+        let want = brute_force(c).expect("instances are feasible by construction");
+        let res = if warm { s.solve_warm(c).map(|_| ()) } else { s.solve(c).map(|_| ()) };
+        prop_assert!(res.is_ok(), "{:?} failed: {:?}", s.strategy(), res);
+        let got = s.total_cost(c);
+        prop_assert!(
+            (got - want).abs() <= 1e-9 * (1.0 + want.abs()),
+            "{:?} (k={}) warm={}: got {} want {}",
+            s.strategy(),
+            s.k,
+            warm,
+            got,
+            want
+        );
+        prop_assert!(s.verify_optimal(c, 1e-9));
+        Ok(())
+    }
+
+    /// A feasible matrix: rows <= cols <= 8, integer (tie-heavy) or real entries, some
+    /// `+inf`, and a hidden injection kept finite so a finite assignment exists.
+    fn matrix() -> impl proptest::strategy::Strategy<Value = CostMatrix> {
+        (1usize..=8)
+            .prop_flat_map(|r| (Just(r), r..=8usize))
+            .prop_flat_map(|(r, c)| {
+                let entry = prop_oneof![
+                    4 => (0i32..4).prop_map(f64::from),
+                    4 => -10.0..10.0f64,
+                    1 => Just(f64::INFINITY),
+                ];
+                (
+                    Just(r),
+                    Just(c),
+                    proptest::collection::vec(entry, r * c),
+                    Just((0..c).collect::<Vec<usize>>()).prop_shuffle(),
+                )
+            })
+            .prop_map(|(r, c, data, perm)| {
+                let mut m = CostMatrix::from_fn(r, c, |i, j| data[i * c + j]);
+                for (i, &j) in perm.iter().take(r).enumerate() {
+                    if m.get(i, j) == f64::INFINITY {
+                        m.set(i, j, 3.0);
+                    }
+                }
+                m
+            })
+    }
+
+    fn config(cases: u32, seed: u64) -> ProptestConfig {
+        ProptestConfig {
+            cases,
+            rng_seed: RngSeed::Fixed(seed),
+            failure_persistence: None,
+            ..ProptestConfig::default()
+        }
+    }
+
+    proptest! {
+        #![proptest_config(config(160, 0x00A5_5167))]
+
+        #[test]
+        fn cold_equals_brute_force(c in matrix()) {
+            for mut s in solvers() {
+                check_against_brute(&mut s, &c, false)?;
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(config(96, 0x0005_1A7E))]
+
+        #[test]
+        fn warm_after_perturbation_equals_brute_force(
+            c in matrix(),
+            noise in proptest::collection::vec((0usize..64, -2i32..=2, -0.5..0.5f64), 0..12),
+            frames in 1usize..4,
+        ) {
+            for mut s in solvers() {
+                check_against_brute(&mut s, &c, false)?;
+                let mut cur = c.clone();
+                for f in 0..frames {
+                    // Perturb some finite entries (integer steps keep ties; real steps
+                    // break them), never creating an infeasible instance.
+                    for (t, &(idx, step, real)) in noise.iter().enumerate() {
+                        let e = (idx + 7 * t + 13 * f) % (cur.rows() * cur.cols());
+                        let (i, j) = (e / cur.cols(), e % cur.cols());
+                        let old = cur.get(i, j);
+                        if old.is_finite() {
+                            let new = if t % 2 == 0 { old + f64::from(step) } else { old + real };
+                            cur.set(i, j, new);
+                        }
+                    }
+                    check_against_brute(&mut s, &cur, true)?;
+                }
+            }
+        }
+    }
+
+    fn run_chain(rows: usize, cols: usize, seed: u64, strategy: Algo) {
+        let mut rng = SplitMix(seed);
+        let mut agents = points(&mut rng, rows);
+        let mut goals = points(&mut rng, cols);
+        let mut c = CostMatrix::new(0, 0);
+        let mut s = Solver::with_strategy(strategy);
+        SquaredDistance.fill(&agents, &goals, &mut c);
+        s.solve(&c).unwrap();
+        assert!(s.verify_optimal(&c, 1e-9), "cold {rows}x{cols} {strategy:?}");
+        let mut cold = Solver::with_strategy(Algo::Dense);
+        for frame in 0..20 {
+            for p in goals.iter_mut().chain(agents.iter_mut().take(rows / 10)) {
+                p.x += 0.04 * (rng.unit() - 0.5);
+                p.y += 0.04 * (rng.unit() - 0.5);
+            }
+            SquaredDistance.fill(&agents, &goals, &mut c);
+            s.solve_warm(&c).unwrap();
+            assert!(s.stats().warm);
+            assert!(s.verify_optimal(&c, 1e-9), "warm frame {frame} {rows}x{cols} {strategy:?}");
+            if frame % 5 == 0 {
+                cold.solve(&c).unwrap();
+                assert!(cold.verify_optimal(&c, 1e-9));
+                let (a, b) = (s.total_cost(&c), cold.total_cost(&c));
+                assert!((a - b).abs() < 1e-9, "frame {frame}: warm {a} cold {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn certificate_square_200_cold_and_warm_chain() {
+        run_chain(200, 200, 1, Algo::Sparse);
+        run_chain(200, 200, 2, Algo::Dense);
+    }
+
+    #[test]
+    fn certificate_rectangular_300x400_cold_and_warm_chain() {
+        run_chain(300, 400, 3, Algo::Sparse);
+        run_chain(300, 400, 4, Algo::Dense);
+    }
+
+    #[test]
+    fn sparse_with_one_candidate_matches_dense_on_200() {
+        let mut rng = SplitMix(5);
+        let (a, g) = (points(&mut rng, 200), points(&mut rng, 230));
+        let mut c = CostMatrix::new(0, 0);
+        Distance.fill(&a, &g, &mut c);
+        let mut sparse = Solver::with_options(Algo::Sparse, 1);
+        let mut dense = Solver::with_strategy(Algo::Dense);
+        sparse.solve(&c).unwrap();
+        dense.solve(&c).unwrap();
+        assert!(sparse.verify_optimal(&c, 1e-9));
+        assert!((sparse.total_cost(&c) - dense.total_cost(&c)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn matches_pathfinding_kuhn_munkres_on_integer_costs() {
+        use pathfinding::kuhn_munkres::kuhn_munkres;
+        use pathfinding::matrix::Matrix;
+        for (seed, (rows, cols)) in [(10u64, (50, 50)), (11, (50, 50)), (12, (40, 50))] {
+            let mut rng = SplitMix(seed);
+            let ints: Vec<i64> = (0..rows * cols).map(|_| (rng.next_u64() % 100) as i64).collect();
+            let c = CostMatrix::from_fn(rows, cols, |i, j| ints[i * cols + j] as f64);
+            let neg = Matrix::from_vec(rows, cols, ints.iter().map(|&x| -x).collect()).unwrap();
+            let (best, _) = kuhn_munkres(&neg);
+            for mut s in solvers() {
+                s.solve(&c).unwrap();
+                assert_eq!(s.total_cost(&c), -best as f64, "{:?}", s.strategy());
+                assert!(s.verify_optimal(&c, 1e-9));
+            }
+        }
+    }
+
+    #[test]
+    fn errors_are_reported_not_panicked() {
+        for mut s in solvers() {
+            assert_eq!(s.solve(&CostMatrix::new(0, 0)), Err(AssignError::Empty));
+            assert_eq!(s.solve(&CostMatrix::new(0, 3)), Err(AssignError::Empty));
+            assert_eq!(
+                s.solve(&CostMatrix::new(3, 2)),
+                Err(AssignError::MoreRowsThanCols { rows: 3, cols: 2 })
+            );
+            let mut c = CostMatrix::new(3, 3);
+            c.set(1, 2, f64::NAN);
+            assert_eq!(s.solve(&c), Err(AssignError::NotFinite { row: 1, col: 2 }));
+            c.set(1, 2, 0.0);
+            c.set(2, 0, f64::NEG_INFINITY);
+            assert_eq!(s.solve_warm(&c), Err(AssignError::NotFinite { row: 2, col: 0 }));
+            assert!(s.assignment().is_empty());
+            c.set(2, 0, 1.0);
+            c.row_mut(1).fill(f64::INFINITY);
+            assert_eq!(s.solve(&c), Err(AssignError::Infeasible { row: 1 }));
+            // Square with an all-+inf column: some row is left without a finite goal.
+            let mut c = CostMatrix::from_fn(3, 3, |i, j| (i + j) as f64);
+            for i in 0..3 {
+                c.set(i, 1, f64::INFINITY);
+            }
+            assert!(matches!(s.solve(&c), Err(AssignError::Infeasible { .. })));
+            // Hall violation: rows 0 and 1 can only use column 0.
+            let c = CostMatrix::from_fn(2, 3, |_, j| if j == 0 { 1.0 } else { f64::INFINITY });
+            assert_eq!(s.solve(&c), Err(AssignError::Infeasible { row: 1 }));
+            assert!(s.assignment().is_empty());
+            assert!(s.total_cost(&c).is_nan());
+            assert!(!s.verify_optimal(&c, 1.0));
+            // Recovers after errors, warm falls back to cold.
+            let c = CostMatrix::from_fn(2, 3, |i, j| ((i + 2 * j) % 3) as f64);
+            assert!(s.solve_warm(&c).is_ok());
+            assert!(s.verify_optimal(&c, 0.0));
+        }
+    }
+
+    #[test]
+    fn infinite_entries_are_avoided() {
+        // The only finite assignment is the anti-diagonal.
+        let c = CostMatrix::from_fn(4, 4, |i, j| if i + j == 3 { 100.0 } else { f64::INFINITY });
+        for mut s in solvers() {
+            assert_eq!(s.solve(&c).unwrap(), &[3, 2, 1, 0]);
+            assert_eq!(s.total_cost(&c), 400.0);
+        }
+    }
+
+    #[test]
+    fn repeated_same_size_solves_keep_buffers() {
+        let mut rng = SplitMix(9);
+        let (mut a, g) = (points(&mut rng, 300), points(&mut rng, 300));
+        let mut c = CostMatrix::new(0, 0);
+        for strategy in [Algo::Dense, Algo::Sparse] {
+            let mut s = Solver::with_strategy(strategy);
+            SquaredDistance.fill(&a, &g, &mut c);
+            s.solve(&c).unwrap();
+            let fp = s.buffer_fingerprint();
+            for frame in 0..6 {
+                for p in &mut a {
+                    p.x += 0.01 * (rng.unit() - 0.5);
+                }
+                SquaredDistance.fill(&a, &g, &mut c);
+                if frame % 2 == 0 {
+                    s.solve_warm(&c).unwrap();
+                } else {
+                    s.solve(&c).unwrap();
+                }
+                assert_eq!(fp, s.buffer_fingerprint(), "{strategy:?} frame {frame}");
+            }
+        }
+    }
+
+    #[test]
+    fn providers_fill_expected_costs() {
+        let agents = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 1.0)];
+        let goals = [Vec2::new(3.0, 4.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)];
+        let mut c = CostMatrix::new(5, 5);
+        SquaredDistance.fill(&agents, &goals, &mut c);
+        assert_eq!((c.rows(), c.cols()), (2, 3));
+        assert_eq!(c.row(0), &[25.0, 2.0, 1.0]);
+        Distance.fill(&agents, &goals, &mut c);
+        assert!((c.get(0, 0) - 5.0).abs() < 1e-12);
+        assert!((c.get(0, 1) - 2f64.sqrt()).abs() < 1e-12);
+        assert_eq!(c.get(1, 1), 0.0);
+        let mut s = Solver::new();
+        assert_eq!(s.solve(&c).unwrap(), &[2, 1]);
+    }
+
+    #[test]
+    fn warm_with_changed_dimensions_is_cold() {
+        let mut s = Solver::new();
+        let c = CostMatrix::from_fn(3, 3, |i, j| ((i * 7 + j * 3) % 5) as f64);
+        s.solve(&c).unwrap();
+        let c2 = CostMatrix::from_fn(3, 4, |i, j| ((i * 5 + j * 3) % 7) as f64);
+        s.solve_warm(&c2).unwrap();
+        assert!(!s.stats().warm);
+        assert_eq!(brute_force(&c2), Some(s.total_cost(&c2)));
+        s.solve_warm(&c2).unwrap();
+        assert!(s.stats().warm);
+        assert_eq!(s.stats().kept_rows, 3);
     }
 }

@@ -1,0 +1,107 @@
+//! Exact assignment benchmarks: uniform random points in the unit square,
+//! squared-Euclidean cost, square N×N, one core.
+//!
+//! `cargo bench --bench assign -- --warm-up-time 1 --measurement-time 3`
+
+use criterion::{black_box, criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion};
+use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Solver, SquaredDistance};
+use crowdtouch::geom::Vec2;
+use pathfinding::kuhn_munkres::kuhn_munkres;
+use pathfinding::matrix::Matrix;
+
+/// splitmix64: small seeded PRNG so every run sees the same instances.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+}
+
+fn points(rng: &mut SplitMix, n: usize) -> Vec<Vec2> {
+    (0..n).map(|_| Vec2::new(rng.unit(), rng.unit())).collect()
+}
+
+/// Agents, goals and their cost matrix for size `n`.
+fn instance(n: usize) -> (Vec<Vec2>, Vec<Vec2>, CostMatrix) {
+    let mut rng = SplitMix(0xC0FFEE ^ n as u64);
+    let agents = points(&mut rng, n);
+    let goals = points(&mut rng, n);
+    let mut c = CostMatrix::new(n, n);
+    SquaredDistance.fill(&agents, &goals, &mut c);
+    (agents, goals, c)
+}
+
+fn assign_cold(cr: &mut Criterion) {
+    let mut g = cr.benchmark_group("assign_cold");
+    g.sample_size(10);
+    for n in [1000usize, 2000, 5000] {
+        let (_, _, c) = instance(n);
+        let mut solver = Solver::new();
+        solver.solve(&c).expect("feasible");
+        g.bench_with_input(BenchmarkId::from_parameter(n), &c, |b, c| {
+            b.iter(|| {
+                let a = solver.solve(black_box(c)).expect("feasible");
+                black_box(a.len())
+            })
+        });
+    }
+    g.finish();
+}
+
+fn assign_warm(cr: &mut Criterion) {
+    let mut g = cr.benchmark_group("assign_warm");
+    g.sample_size(20);
+    let n = 1000;
+    let (agents, mut goals, c0) = instance(n);
+    // Every goal moves by up to 2 % of the extent (unit square) in x and y.
+    let mut rng = SplitMix(0xBEEF);
+    for p in &mut goals {
+        p.x += 0.04 * (rng.unit() - 0.5);
+        p.y += 0.04 * (rng.unit() - 0.5);
+    }
+    let mut c1 = CostMatrix::new(n, n);
+    SquaredDistance.fill(&agents, &goals, &mut c1);
+    let mut base = Solver::new();
+    base.solve(&c0).expect("feasible");
+    g.bench_with_input(BenchmarkId::from_parameter(n), &c1, |b, c1| {
+        b.iter_batched_ref(
+            || base.clone(),
+            |s| {
+                let a = s.solve_warm(black_box(c1)).expect("feasible");
+                black_box(a.len())
+            },
+            BatchSize::LargeInput,
+        )
+    });
+    g.finish();
+}
+
+fn pathfinding_kuhn_munkres(cr: &mut Criterion) {
+    let mut g = cr.benchmark_group("pathfinding_kuhn_munkres");
+    g.sample_size(10);
+    for n in [1000usize, 2000] {
+        let (_, _, c) = instance(n);
+        // kuhn_munkres maximises integer weights: negate the cost scaled to 1e-6.
+        let w = Matrix::from_vec(
+            n,
+            n,
+            c.as_slice().iter().map(|&x| -(x * 1e6).round() as i64).collect(),
+        )
+        .expect("n×n");
+        g.bench_with_input(BenchmarkId::from_parameter(n), &w, |b, w| {
+            b.iter(|| black_box(kuhn_munkres(black_box(w)).0))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, assign_cold, assign_warm, pathfinding_kuhn_munkres);
+criterion_main!(benches);
