@@ -413,6 +413,47 @@ fn envelope_first(pairs: &[(u32, u32)], inv: &[u32]) -> Vec<usize> {
 /// Step-1 coefficient matrix of one (edge, opposite vertex) relation, as the 2×2
 /// similarity blocks `M = α I + β R90` for corners `(i, j, k)`:
 /// residual `= M_i v_i + M_j v_j + M_k v_k` (Igarashi et al. 2005, section 4.1).
+/// Adds the step-1 (similarity) energy of every triangle, measured on `rest`, to
+/// `fac1`, and records each triangle's rest corners about their centroid.
+fn assemble_step1(
+    fac1: &mut Envelope,
+    tris_orig: &[[u32; 3]],
+    tris: &[[u32; 3]],
+    rest: &[Vec2],
+    rest_centered: &mut Vec<[Vec2; 3]>,
+) {
+    rest_centered.clear();
+    for (t, tp) in tris_orig.iter().zip(tris) {
+        let p = t.map(|v| rest[v as usize]);
+        let centroid = (p[0] + p[1] + p[2]) / 3.0;
+        rest_centered.push(p.map(|q| q - centroid));
+        // Step 1: three (edge, opposite vertex) relations per triangle.
+        for c in 0..3 {
+            let corners = [c, (c + 1) % 3, (c + 2) % 3];
+            let Some(blocks) = step1_blocks(p[corners[0]], p[corners[1]], p[corners[2]]) else {
+                continue;
+            };
+            for (ma, &ca) in blocks.iter().zip(&corners) {
+                for (mb, &cb) in blocks.iter().zip(&corners) {
+                    let (va, vb) = (tp[ca] as usize, tp[cb] as usize);
+                    // (M_aᵀ M_b)[r][s] = Σ_m M_a[m][r] M_b[m][s]
+                    for r in 0..2 {
+                        for s in 0..2 {
+                            let (row, col) = (2 * va + r, 2 * vb + s);
+                            if row < col {
+                                continue;
+                            }
+                            let v = sim_entry(*ma, 0, r) * sim_entry(*mb, 0, s)
+                                + sim_entry(*ma, 1, r) * sim_entry(*mb, 1, s);
+                            fac1.add(row, col, v);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 fn step1_blocks(vi: Vec2, vj: Vec2, vk: Vec2) -> Option<[(f64, f64); 3]> {
     let e = vj - vi;
     let l2 = e.norm_squared();
@@ -468,6 +509,8 @@ pub struct Arap {
     inv: Vec<u32>,
     /// Triangles with permuted vertex indices.
     tris: Vec<[u32; 3]>,
+    /// Triangles with the caller's vertex indices.
+    tris_orig: Vec<[u32; 3]>,
     /// Rest corners minus the rest centroid, per triangle (for the rotation fit).
     rest_centered: Vec<[Vec2; 3]>,
     /// Step-1 matrix without constraint weights (envelope layout of `fac1`).
@@ -560,34 +603,8 @@ impl Arap {
             .map(|t| t.map(|v| inv[v as usize]))
             .collect();
         let mut rest_centered = Vec::with_capacity(tris_orig.len());
-        for (t, tp) in tris_orig.iter().zip(&tris) {
-            let p = t.map(|v| rest[v as usize]);
-            let centroid = (p[0] + p[1] + p[2]) / 3.0;
-            rest_centered.push(p.map(|q| q - centroid));
-            // Step 1: three (edge, opposite vertex) relations per triangle.
-            for c in 0..3 {
-                let corners = [c, (c + 1) % 3, (c + 2) % 3];
-                let Some(blocks) = step1_blocks(p[corners[0]], p[corners[1]], p[corners[2]]) else {
-                    continue;
-                };
-                for (ma, &ca) in blocks.iter().zip(&corners) {
-                    for (mb, &cb) in blocks.iter().zip(&corners) {
-                        let (va, vb) = (tp[ca] as usize, tp[cb] as usize);
-                        // (M_aᵀ M_b)[r][s] = Σ_m M_a[m][r] M_b[m][s]
-                        for r in 0..2 {
-                            for s in 0..2 {
-                                let (row, col) = (2 * va + r, 2 * vb + s);
-                                if row < col {
-                                    continue;
-                                }
-                                let v = sim_entry(*ma, 0, r) * sim_entry(*mb, 0, s)
-                                    + sim_entry(*ma, 1, r) * sim_entry(*mb, 1, s);
-                                fac1.add(row, col, v);
-                            }
-                        }
-                    }
-                }
-            }
+        assemble_step1(&mut fac1, &tris_orig, &tris, rest, &mut rest_centered);
+        for tp in &tris {
             // Step 2: edge differences, unit weight per triangle edge.
             for c in 0..3 {
                 let (a, b) = (tp[c] as usize, tp[(c + 1) % 3] as usize);
@@ -605,6 +622,7 @@ impl Arap {
             n,
             inv,
             tris,
+            tris_orig,
             rest_centered,
             base1: fac1.vals.clone(),
             fac1,
@@ -637,6 +655,57 @@ impl Arap {
     /// constraint-set change). For tests and stats.
     pub fn factorizations(&self) -> u64 {
         self.factorizations
+    }
+
+    /// Makes `rest` (one position per vertex) the shape the mesh is as rigid as
+    /// possible to, keeping the topology, ordering and constraint set. The
+    /// factorisation is redone by the next [`Arap::set_constraints`] (so setting a
+    /// new rest shape and a new constraint set costs one factorisation) or, failing
+    /// that, by the next [`Arap::solve`].
+    ///
+    /// The direct-manipulation controller calls this whenever its constraint set
+    /// changes, so a deformation made by one control persists when that control ends
+    /// while others go on.
+    ///
+    /// # Complexity
+    /// O(T) assembly; no allocation.
+    ///
+    /// # Errors
+    /// [`ArapError::LengthMismatch`] or [`ArapError::NonFinite`] for a bad `rest`
+    /// (the solver keeps its previous rest shape); [`ArapError::Degenerate`] when the
+    /// new systems cannot be factorised.
+    pub fn set_rest(&mut self, rest: &[Vec2]) -> Result<(), ArapError> {
+        if rest.len() != self.n {
+            return Err(ArapError::LengthMismatch {
+                buffer: ArapBuffer::Anchor,
+                expected: self.n,
+                got: rest.len(),
+            });
+        }
+        if let Some(i) = rest
+            .iter()
+            .position(|p| !(p.x.is_finite() && p.y.is_finite()))
+        {
+            return Err(ArapError::NonFinite {
+                buffer: ArapBuffer::Anchor,
+                index: i,
+            });
+        }
+        self.fac1.vals.fill(0.0);
+        assemble_step1(
+            &mut self.fac1,
+            &self.tris_orig,
+            &self.tris,
+            rest,
+            &mut self.rest_centered,
+        );
+        for p in 0..self.n {
+            self.fac1.add(2 * p, 2 * p, ANCHOR_WEIGHT);
+            self.fac1.add(2 * p + 1, 2 * p + 1, ANCHOR_WEIGHT);
+        }
+        self.base1.copy_from_slice(&self.fac1.vals);
+        self.factored = false;
+        Ok(())
     }
 
     /// Stored entries of the step-1 and step-2 factors (profile sizes, for diagnostics).
@@ -780,7 +849,7 @@ impl Arap {
             });
         }
         if !self.factored {
-            return Err(ArapError::Degenerate);
+            self.refactor()?;
         }
         let motion = self.anchor_motion(targets, anchor);
         self.step1(targets, anchor, &motion);
@@ -1075,6 +1144,54 @@ mod tests {
             assert!((cos - theta.cos()).abs() < 1e-12 && (sin - theta.sin()).abs() < 1e-12);
         }
         assert_eq!(fit_rotation(&pc, &[Vec2::new(1.0, 1.0); 3]), (1.0, 0.0));
+    }
+
+    /// After `set_rest`, the new shape is the one kept: constraints at their new
+    /// rest positions reproduce it, and a rigid motion of them moves it rigidly.
+    #[test]
+    fn set_rest_makes_a_deformed_pose_the_rest_shape() {
+        let m = grid(8, 6);
+        let mut arap = Arap::new(&m);
+        // A sheared, stretched pose.
+        let bent: Vec<Vec2> = m
+            .rest()
+            .iter()
+            .map(|p| Vec2::new(p.x * 1.3 + 0.4 * p.y, p.y * 0.8))
+            .collect();
+        arap.set_rest(&bent).unwrap();
+        let cons = hard(&[0, 7, 40, 47]);
+        let before = arap.factorizations();
+        arap.set_constraints(&cons).unwrap();
+        assert_eq!(
+            arap.factorizations(),
+            before + 1,
+            "one factorisation for rest + constraints"
+        );
+        let targets: Vec<Vec2> = cons.iter().map(|c| bent[c.vertex as usize]).collect();
+        let out = solve(&mut arap, &targets, &bent);
+        assert!(
+            max_err(&out, &bent) < 1e-9 * mesh_size(&m),
+            "{}",
+            max_err(&out, &bent)
+        );
+        let rot = Rotation2::new(0.7);
+        let moved: Vec<Vec2> = bent
+            .iter()
+            .map(|p| rot * p + Vec2::new(2.0, -1.0))
+            .collect();
+        let targets: Vec<Vec2> = cons.iter().map(|c| moved[c.vertex as usize]).collect();
+        let out = solve(&mut arap, &targets, &bent);
+        assert!(max_err(&out, &moved) < 1e-3 * mesh_size(&m));
+        assert!(matches!(
+            arap.set_rest(&bent[1..]),
+            Err(ArapError::LengthMismatch { .. })
+        ));
+        let mut nan = bent.clone();
+        nan[3].x = f64::NAN;
+        assert!(matches!(
+            arap.set_rest(&nan),
+            Err(ArapError::NonFinite { index: 3, .. })
+        ));
     }
 
     #[test]

@@ -414,7 +414,11 @@ impl ColHeap {
                     break;
                 }
                 let r = l + 1;
-                let m = if r < n && self.key[r] < self.key[l] { r } else { l };
+                let m = if r < n && self.key[r] < self.key[l] {
+                    r
+                } else {
+                    l
+                };
                 let mk = self.key[m];
                 if mk >= lk {
                     break;
@@ -501,7 +505,11 @@ fn validate_row(row: &[f64]) -> (Option<usize>, f64, bool) {
     } else {
         None
     };
-    (first_bad, mx.iter().fold(0.0, |a: f64, &b| a.max(b)), finite)
+    (
+        first_bad,
+        mx.iter().fold(0.0, |a: f64, &b| a.max(b)),
+        finite,
+    )
 }
 
 /// Order-preserving map of a finite or infinite `f64` (not NaN) to `u64`; `-0.0`
@@ -828,7 +836,13 @@ impl Solver {
             for (jj, (c, vj)) in costs.row(i).iter().zip(&self.v).enumerate() {
                 // NaN fails this comparison too.
                 if !(c - ui - vj >= -tol) {
-                    if std::env::var_os("ASSIGN_TRACE").is_some() { eprintln!("row {i} col {jj} reduced {} (x {} ) v {vj}", c - ui - vj, self.x[i]); }
+                    if std::env::var_os("ASSIGN_TRACE").is_some() {
+                        eprintln!(
+                            "row {i} col {jj} reduced {} (x {} ) v {vj}",
+                            c - ui - vj,
+                            self.x[i]
+                        );
+                    }
                     return false;
                 }
             }
@@ -839,7 +853,13 @@ impl Solver {
             }
         }
         let vmax = self.v.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-        (0..cols).all(|j| { let ok = self.y[j] != NONE || self.v[j] >= vmax - tol; if !ok && std::env::var_os("ASSIGN_TRACE").is_some() { eprintln!("free col {j} v {} vmax {vmax}", self.v[j]); } ok })
+        (0..cols).all(|j| {
+            let ok = self.y[j] != NONE || self.v[j] >= vmax - tol;
+            if !ok && std::env::var_os("ASSIGN_TRACE").is_some() {
+                eprintln!("free col {j} v {} vmax {vmax}", self.v[j]);
+            }
+            ok
+        })
     }
 
     // -- internals -------------------------------------------------------------------
@@ -1190,9 +1210,18 @@ impl Solver {
         if count == 0 {
             return;
         }
-        let start: f64 = std::env::var("ASSIGN_START").ok().and_then(|s| s.parse().ok()).unwrap_or(AUCTION_START);
-        let factor: f64 = std::env::var("ASSIGN_FACTOR").ok().and_then(|s| s.parse().ok()).unwrap_or(AUCTION_FACTOR);
-        let endr: f64 = std::env::var("ASSIGN_END").ok().and_then(|s| s.parse().ok()).unwrap_or(AUCTION_END);
+        let start: f64 = std::env::var("ASSIGN_START")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(AUCTION_START);
+        let factor: f64 = std::env::var("ASSIGN_FACTOR")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(AUCTION_FACTOR);
+        let endr: f64 = std::env::var("ASSIGN_END")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(AUCTION_END);
         let eps0 = start * spread / count as f64;
         if !(eps0 > 0.0 && eps0 < f64::INFINITY) {
             return;
@@ -1238,7 +1267,10 @@ impl Solver {
             }
             self.stats.bids += bids as u64;
             if std::env::var_os("ASSIGN_TRACE").is_some() {
-                eprintln!("phase eps {eps:.3e} bids {bids} priced {}", self.stats.rows_priced);
+                eprintln!(
+                    "phase eps {eps:.3e} bids {bids} priced {}",
+                    self.stats.rows_priced
+                );
             }
             if eps <= eps_end {
                 break;
@@ -1685,9 +1717,17 @@ mod tests {
         ]
     }
 
-    fn check_against_brute(s: &mut Solver, c: &CostMatrix, warm: bool) -> Result<(), TestCaseError> {
+    fn check_against_brute(
+        s: &mut Solver,
+        c: &CostMatrix,
+        warm: bool,
+    ) -> Result<(), TestCaseError> {
         let want = brute_force(c).expect("instances are feasible by construction");
-        let res = if warm { s.solve_warm(c).map(|_| ()) } else { s.solve(c).map(|_| ()) };
+        let res = if warm {
+            s.solve_warm(c).map(|_| ())
+        } else {
+            s.solve(c).map(|_| ())
+        };
         prop_assert!(res.is_ok(), "{:?} failed: {:?}", s.strategy(), res);
         let got = s.total_cost(c);
         prop_assert!(
@@ -1790,7 +1830,10 @@ mod tests {
         let mut s = Solver::with_strategy(strategy);
         SquaredDistance.fill(&agents, &goals, &mut c);
         s.solve(&c).unwrap();
-        assert!(s.verify_optimal(&c, 1e-9), "cold {rows}x{cols} {strategy:?}");
+        assert!(
+            s.verify_optimal(&c, 1e-9),
+            "cold {rows}x{cols} {strategy:?}"
+        );
         let mut cold = Solver::with_strategy(Algo::Dense);
         for frame in 0..20 {
             for p in goals.iter_mut().chain(agents.iter_mut().take(rows / 10)) {
@@ -1800,7 +1843,10 @@ mod tests {
             SquaredDistance.fill(&agents, &goals, &mut c);
             s.solve_warm(&c).unwrap();
             assert!(s.stats().warm);
-            assert!(s.verify_optimal(&c, 1e-9), "warm frame {frame} {rows}x{cols} {strategy:?}");
+            assert!(
+                s.verify_optimal(&c, 1e-9),
+                "warm frame {frame} {rows}x{cols} {strategy:?}"
+            );
             if frame % 5 == 0 {
                 cold.solve(&c).unwrap();
                 assert!(cold.verify_optimal(&c, 1e-9));
@@ -1842,7 +1888,9 @@ mod tests {
         use pathfinding::matrix::Matrix;
         for (seed, (rows, cols)) in [(10u64, (50, 50)), (11, (50, 50)), (12, (40, 50))] {
             let mut rng = SplitMix(seed);
-            let ints: Vec<i64> = (0..rows * cols).map(|_| (rng.next_u64() % 100) as i64).collect();
+            let ints: Vec<i64> = (0..rows * cols)
+                .map(|_| (rng.next_u64() % 100) as i64)
+                .collect();
             let c = CostMatrix::from_fn(rows, cols, |i, j| ints[i * cols + j] as f64);
             let neg = Matrix::from_vec(rows, cols, ints.iter().map(|&x| -x).collect()).unwrap();
             let (best, _) = kuhn_munkres(&neg);
@@ -1868,7 +1916,10 @@ mod tests {
             assert_eq!(s.solve(&c), Err(AssignError::NotFinite { row: 1, col: 2 }));
             c.set(1, 2, 0.0);
             c.set(2, 0, f64::NEG_INFINITY);
-            assert_eq!(s.solve_warm(&c), Err(AssignError::NotFinite { row: 2, col: 0 }));
+            assert_eq!(
+                s.solve_warm(&c),
+                Err(AssignError::NotFinite { row: 2, col: 0 })
+            );
             assert!(s.assignment().is_empty());
             c.set(2, 0, 1.0);
             c.row_mut(1).fill(f64::INFINITY);
@@ -1930,7 +1981,11 @@ mod tests {
     #[test]
     fn providers_fill_expected_costs() {
         let agents = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 1.0)];
-        let goals = [Vec2::new(3.0, 4.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)];
+        let goals = [
+            Vec2::new(3.0, 4.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+        ];
         let mut c = CostMatrix::new(5, 5);
         SquaredDistance.fill(&agents, &goals, &mut c);
         assert_eq!((c.rows(), c.cols()), (2, 3));

@@ -9,6 +9,10 @@
 //! value coordinates in that hull. All rigs' constraints go to one ARAP solve, so
 //! several controls (two hands, two people) act on the mesh together.
 //!
+//! The mesh is as rigid as possible relative to its pose when the constraint set
+//! last changed (a finger landed or lifted): a deformation persists until another
+//! control changes it, and `reset` returns to the formation.
+//!
 //! Handles follow their finger through check points spaced along its trajectory
 //! (section 4.1: "We represent each trajectory as a set of two-dimensional check
 //! points by dividing the trajectory into segments of a pre-defined length"), at the
@@ -263,6 +267,9 @@ impl DirectController {
         self.verts.clear();
         self.verts.extend_from_slice(self.mesh.rest());
         self.anchor.clone_from(&self.verts);
+        // The rest shape is re-based at the next constraint change; forget the
+        // current constraint set so that happens on the first touch.
+        let _ = self.arap.set_constraints(&[]);
         goal_positions(&self.mesh, &self.samples, &self.verts, &mut self.goals);
         self.changed = true;
     }
@@ -294,7 +301,10 @@ impl DirectController {
         self.build_constraints();
         let same_set = self.constraints.as_slice() == self.arap.constraints();
         if !same_set {
+            // The pose at this moment becomes the shape to stay rigid to: what one
+            // control shaped stays shaped when it ends while others go on.
             self.anchor.clone_from(&self.verts);
+            self.arap.set_rest(&self.verts)?;
             self.arap.set_constraints(&self.constraints)?;
         }
         self.arap
