@@ -331,8 +331,19 @@ fn demo(a: DemoArgs) -> Result<()> {
 
 /// One status line: agents, controls, last gesture, latency, drops.
 pub fn status_line(r: &StatsReport) -> String {
-    let e2e = r.stages.iter().find(|s| s.stage == "end_to_end");
-    let (p50, p99) = e2e.map(|s| (s.p50_us, s.p99_us)).unwrap_or((0, 0));
+    let e2e = r
+        .stages
+        .iter()
+        .find(|s| s.stage == "end_to_end")
+        .filter(|s| s.count > 0);
+    let latency = match e2e {
+        Some(s) => format!(
+            "p50 {:>5.2} ms p99 {:>5.2} ms",
+            s.p50_us as f64 / 1000.0,
+            s.p99_us as f64 / 1000.0
+        ),
+        None => "  - (no client yet)       ".to_string(),
+    };
     let assign_per_s = r
         .stages
         .iter()
@@ -341,12 +352,10 @@ pub fn status_line(r: &StatsReport) -> String {
         .unwrap_or(0) as f64
         / (r.interval_us as f64 * 1e-6);
     format!(
-        "agents {:>5} | controls {} | last: {:<28} | latency p50 {:>5.2} ms p99 {:>5.2} ms | assign {:>4.0}/s | clients {} | dropped snapshots {} touches {}",
+        "agents {:>5} | controls {} | last: {:<28} | latency {latency} | assign {:>4.0}/s | clients {} | dropped snapshots {} touches {}",
         r.agents,
         r.controls,
         r.last_gesture.as_deref().unwrap_or("-"),
-        p50 as f64 / 1000.0,
-        p99 as f64 / 1000.0,
         assign_per_s,
         r.clients,
         r.snapshots_dropped,

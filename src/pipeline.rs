@@ -161,7 +161,7 @@ impl FrameSink for FrameQueue {
         self.counters.frames.fetch_add(1, Ordering::Relaxed);
         if self.flush() {
             match self.tx.try_send(f) {
-                Ok(()) | Err(TrySendError::Disconnected(_)) => return,
+                Ok(()) | Err(TrySendError::Disconnected(_)) => (),
                 Err(TrySendError::Full(back)) => {
                     self.counters.queue_full.fetch_add(1, Ordering::Relaxed);
                     self.hold(&back);
@@ -228,6 +228,16 @@ pub enum SourceSpec {
         /// Reset the crowd before each file.
         reset_between: bool,
         /// Surface size (mm) from the first recording, if known.
+        glass_mm: Option<(f64, f64)>,
+    },
+    /// Frames handed in by the embedding program through a channel: a virtual
+    /// device for tests, benchmarks and tools. Frames keep the time stamp they were
+    /// given (stamp them with [`monotonic_now`] when sent to measure latency). The
+    /// source ends when the sender is dropped.
+    Channel {
+        /// Where the frames come from.
+        rx: Receiver<TouchFrame>,
+        /// Surface size (mm), if known.
         glass_mm: Option<(f64, f64)>,
     },
 }
@@ -330,7 +340,7 @@ impl Daemon {
             return Err(Error::NoInputs);
         }
         let glass = sources.iter().find_map(|s| match s {
-            SourceSpec::Replay { glass_mm, .. } => *glass_mm,
+            SourceSpec::Replay { glass_mm, .. } | SourceSpec::Channel { glass_mm, .. } => *glass_mm,
         });
         let engine = Engine::new(&cfg, glass, !cfg.assignment.worker);
         let hello = HelloInfo {
@@ -421,10 +431,19 @@ impl Daemon {
                             }
                         };
                         src.run(&mut queue, &stop, &mut on_item);
-                        // Hand on whatever is still held back before the sink goes away.
-                        while !queue.flush() && !stop.load(Ordering::Relaxed) {
-                            std::thread::sleep(Duration::from_millis(1));
+                        drain_backlog(&mut queue, &stop);
+                    })?);
+                }
+                SourceSpec::Channel { rx, .. } => {
+                    threads.push(spawn("input", move || {
+                        while !stop.load(Ordering::Relaxed) {
+                            match rx.recv_timeout(Duration::from_millis(50)) {
+                                Ok(f) => queue.push(&f),
+                                Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
+                                Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break,
+                            }
                         }
+                        drain_backlog(&mut queue, &stop);
                     })?);
                 }
             }
@@ -563,6 +582,13 @@ impl Daemon {
     /// Stats interval (µs).
     pub fn interval_us(&self) -> u64 {
         self.interval_us
+    }
+}
+
+/// Hands on whatever an input thread still holds back before its sink goes away.
+fn drain_backlog(queue: &mut FrameQueue, stop: &AtomicBool) {
+    while !queue.flush() && !stop.load(Ordering::Relaxed) {
+        std::thread::sleep(Duration::from_millis(1));
     }
 }
 

@@ -92,7 +92,7 @@ impl StageTimer {
     /// The interval's summary so far.
     pub fn peek(&self) -> StageStats {
         let h = &self.hist;
-        let empty = h.len() == 0;
+        let empty = h.is_empty();
         StageStats {
             stage: self.name.to_string(),
             count: h.len(),

@@ -106,7 +106,7 @@ impl Agents {
     /// O(n) expected with the uniform neighbour grid; no allocation once the grid
     /// has grown to the crowd's size.
     pub fn step(&mut self, goals: &[Vec2], goal_of: &[u32], dt_s: f64, p: &AgentParams) {
-        if !(dt_s > 0.0) || self.pos.is_empty() {
+        if dt_s.is_nan() || dt_s <= 0.0 || self.pos.is_empty() {
             return;
         }
         let substeps = (dt_s / MAX_SUBSTEP_S).ceil().clamp(1.0, 64.0) as usize;
