@@ -18,6 +18,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 mod bench;
+mod svg;
 mod watch;
 
 /// crowdtouch — a multi-touch table daemon that drives a crowd.
@@ -115,6 +116,9 @@ struct ReplayArgs {
     /// Output file (default: stdout).
     #[arg(long, short)]
     out: Option<PathBuf>,
+    /// Also draw the replay (mesh before and after, agent and finger paths) as SVG.
+    #[arg(long)]
+    svg: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -407,6 +411,7 @@ fn replay(a: ReplayArgs) -> Result<()> {
             }
         }
     };
+    let mut trace = a.svg.as_ref().map(|_| svg::Trace::default());
     replay_virtual(
         &mut engine,
         &rec.frames,
@@ -414,6 +419,9 @@ fn replay(a: ReplayArgs) -> Result<()> {
         settle,
         pace,
         |o| -> Result<()> {
+            if let Some(t) = &mut trace {
+                t.tick(&o.snapshot, o.mesh.as_deref());
+            }
             buf.clear();
             for e in o.events {
                 encode_event(e, &mut buf);
@@ -428,6 +436,15 @@ fn replay(a: ReplayArgs) -> Result<()> {
         },
     )?;
     out.flush().context("writing snapshots")?;
+    if let (Some(path), Some(t)) = (&a.svg, &mut trace) {
+        let title = a
+            .file
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        std::fs::write(path, t.render(cfg.surface.world, &title))
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
     Ok(())
 }
 
