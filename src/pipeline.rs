@@ -585,6 +585,33 @@ impl Daemon {
     }
 }
 
+/// Nice value of the assignment worker: it yields the CPU to the input, control
+/// and publisher threads, which wake for short bursts on the latency path, while still
+/// getting a fair share against other busy programs.
+pub const WORKER_NICE: i8 = 10;
+
+/// Lowers the calling thread's CPU priority to `nice` (SCHED_OTHER). Lowering needs
+/// no privilege; a refusal is logged once and otherwise ignored.
+fn lower_priority(nice: i8) {
+    use thread_priority::unix::{
+        set_thread_priority_and_policy, thread_native_id, NormalThreadSchedulePolicy, ThreadSchedulePolicy,
+    };
+    use thread_priority::{ThreadPriority, ThreadPriorityValue};
+    let policy = ThreadSchedulePolicy::Normal(NormalThreadSchedulePolicy::Other);
+    // The crate maps a 0..=99 scale onto niceness; pick the step that gives `nice`.
+    let priority = (0u8..=99).find_map(|v| {
+        let p = ThreadPriority::Crossplatform(ThreadPriorityValue::try_from(v).ok()?);
+        (p.to_posix(policy).ok()? == i32::from(nice)).then_some(p)
+    });
+    let result = match priority {
+        Some(p) => set_thread_priority_and_policy(thread_native_id(), p, policy).map_err(|e| format!("{e:?}")),
+        None => Err(format!("no priority step maps to nice {nice}")),
+    };
+    if let Err(e) = result {
+        log::warn!("could not lower the assignment worker's priority to nice {nice}: {e}");
+    }
+}
+
 /// Hands on whatever an input thread still holds back before its sink goes away.
 fn drain_backlog(queue: &mut FrameQueue, stop: &AtomicBool) {
     while !queue.flush() && !stop.load(Ordering::Relaxed) {
@@ -862,11 +889,8 @@ fn describe_event(e: &Event) -> Option<String> {
     }
 }
 
-fn assignment_worker(
-    cost: crate::config::AssignmentCost,
-    jobs: Receiver<Box<AssignJob>>,
-    results: Sender<Box<AssignJob>>,
-) {
+fn assignment_worker(cost: crate::config::AssignmentCost, jobs: Receiver<Box<AssignJob>>, results: Sender<Box<AssignJob>>) {
+    lower_priority(WORKER_NICE);
     let mut assigner = Assigner::new(cost);
     let mut generation = u64::MAX;
     let mut failures = 0u64;
