@@ -64,11 +64,18 @@ use crate::geom::Vec2;
 
 /// Relative tolerance of the tightness and dual-feasibility tests.
 ///
-/// A matched pair counts as tight, and an edge as dual-feasible, when its reduced cost
-/// is at least `-EPS_REL * scale`, where `scale` is the largest magnitude among the
-/// finite costs and the column prices. The returned assignment is therefore optimal to
-/// within about `rows * EPS_REL * scale` of total cost (rounding level).
+/// Two reduced costs `c - v` count as equal when they differ by at most `EPS_REL`
+/// times the sum of the magnitudes of the costs and prices involved (rounding level),
+/// so the returned assignment is optimal to within about `rows * EPS_REL * scale` of
+/// total cost, `scale` the magnitude of the costs and prices.
 pub const EPS_REL: f64 = 1e-12;
+
+/// Rounding tolerance of a comparison between reduced costs `c - v` built from the
+/// given magnitudes ([`EPS_REL`]).
+#[inline]
+fn tol(a: f64, b: f64, c: f64, d: f64) -> f64 {
+    EPS_REL * (a.abs() + b.abs() + c.abs() + d.abs())
+}
 
 /// Default number of cheapest candidate columns kept per row by [`Strategy::Sparse`].
 pub const DEFAULT_CANDIDATES: usize = 10;
@@ -81,8 +88,16 @@ const AUCTION_START: f64 = 0.25;
 const AUCTION_FACTOR: f64 = 0.2;
 /// Last auction ε relative to the first.
 const AUCTION_END: f64 = 1e-6;
+/// Largest auction bid, in units of the first ε (rows with one finite entry).
+const AUCTION_CAP: f64 = 1e6;
 /// Auction bid budget per row and phase (beyond it the exact finish takes over).
 const AUCTION_BIDS_PER_ROW: usize = 5000;
+
+/// A list scan longer than this re-sorts the list by current reduced costs.
+const REFRESH_SCAN: usize = usize::MAX;
+
+/// Whether auction bids use the exact second-best value (else a lower bound).
+const AUCTION_EXACT_SECOND: bool = true;
 
 /// Candidate list slots relaxed at once when a scanned row's list is advanced.
 const RELAX_BATCH: usize = 2;
@@ -329,6 +344,8 @@ pub struct SolveStats {
     pub auction_phases: u32,
     /// Auction bids.
     pub bids: u64,
+    /// Candidate lists re-sorted by current reduced costs.
+    pub refreshes: u64,
     /// Streaming passes fetching columns beyond a row's candidate list in searches.
     pub expansions: u64,
     /// Whether the dense finish was needed.
@@ -473,37 +490,6 @@ impl Ord for Pending {
 // Row kernels
 // ---------------------------------------------------------------------------------
 
-/// Validates a row: index of the first NaN / `-inf`, the largest finite magnitude,
-/// and whether any entry is finite.
-fn validate_row(row: &[f64]) -> (Option<usize>, f64, bool) {
-    let mut bad = false;
-    let mut finite = false;
-    let mut mx = [0.0f64; LANES];
-    let chunks = row.chunks_exact(LANES);
-    let tail = chunks.remainder();
-    for ch in chunks {
-        for (m, &c) in mx.iter_mut().zip(ch) {
-            bad |= !(c > f64::NEG_INFINITY);
-            finite |= c < f64::INFINITY;
-            let a = if c < f64::INFINITY { c.abs() } else { 0.0 };
-            *m = if a > *m { a } else { *m };
-        }
-    }
-    for &c in tail {
-        bad |= !(c > f64::NEG_INFINITY);
-        finite |= c < f64::INFINITY;
-        if c < f64::INFINITY && c.abs() > mx[0] {
-            mx[0] = c.abs();
-        }
-    }
-    let first_bad = if bad {
-        row.iter().position(|&c| !(c > f64::NEG_INFINITY))
-    } else {
-        None
-    };
-    (first_bad, mx.iter().fold(0.0, |a: f64, &b| a.max(b)), finite)
-}
-
 /// Order-preserving map of a finite or infinite `f64` (not NaN) to `u64`; `-0.0`
 /// is folded into `0.0` so that the order agrees with `==`.
 #[inline]
@@ -550,13 +536,15 @@ fn key_col(k: u64, mask: u64) -> u32 {
 /// Streaming selection of the `k` smallest [`key`]s `key(w, col)`, `w = row[col] -
 /// v[col]` finite, that are at least `lo`. `thr0` is an inclusive upper bound on the
 /// `k`-th smallest `w` when one is known (`+inf` otherwise). The keys are left sorted
-/// in `buf[..returned]`; `buf.len() >= 2k` is the scratch.
+/// in `buf[..n]`; `buf.len() >= 2k` is the scratch. With `check` and `lo == 0`, also
+/// returns the first column whose `w` is NaN or `-inf`.
 ///
 /// # Complexity
 /// One pass over the row; blocks of [`LANES`] entries are tested against the current
 /// threshold at once, admitted entries are appended to `buf`, and `buf` is cut back to
 /// the best `k` (linear-time selection) when full, so the work beyond the streaming
 /// compare is `O(admitted + k log k)`.
+#[allow(clippy::too_many_arguments)]
 fn select_k(
     row: &[f64],
     v: &[f64],
@@ -564,8 +552,9 @@ fn select_k(
     mask: u64,
     lo: u64,
     thr0: f64,
+    check: bool,
     buf: &mut [u64],
-) -> usize {
+) -> (usize, Option<usize>) {
     let cap = buf.len();
     debug_assert!(k >= 1 && cap >= 2 * k);
     let lo_w = key_floor(lo, mask);
@@ -577,8 +566,14 @@ fn select_k(
     } else {
         (u64::MAX, f64::INFINITY)
     };
+    let mut bad = None;
     let mut admit = |w: f64, col: u32, n: &mut usize, thr_key: &mut u64, thr: &mut f64| {
-        if w < f64::INFINITY {
+        if !(w > f64::NEG_INFINITY) {
+            // NaN or -inf (only reachable here when `lo` admits everything).
+            if check && bad.is_none() {
+                bad = Some(col as usize);
+            }
+        } else if w < f64::INFINITY {
             let kk = key(w, col, mask);
             if kk >= lo && kk <= *thr_key {
                 buf[*n] = kk;
@@ -597,15 +592,25 @@ fn select_k(
     let (rt, vt) = (rch.remainder(), vch.remainder());
     let mut base = 0u32;
     for (r, vv) in rch.zip(vch) {
+        // Candidates, and also NaN (every comparison false).
         let mut hit = false;
         for (a, b) in r.iter().zip(vv) {
             let w = a - b;
-            hit |= (w >= lo_w) & (w <= thr);
+            hit |= !((w > thr) | (w < lo_w));
         }
-        if hit {
-            for (l, (a, b)) in r.iter().zip(vv).enumerate() {
-                admit(a - b, base + l as u32, &mut n, &mut thr_key, &mut thr);
-            }
+        if !hit {
+            base += LANES as u32;
+            continue;
+        }
+        let mut hits = 0u32;
+        for (l, (a, b)) in r.iter().zip(vv).enumerate() {
+            let w = a - b;
+            hits |= u32::from(!((w > thr) | (w < lo_w))) << l;
+        }
+        while hits != 0 {
+            let l = hits.trailing_zeros() as usize;
+            hits &= hits - 1;
+            admit(r[l] - vv[l], base + l as u32, &mut n, &mut thr_key, &mut thr);
         }
         base += LANES as u32;
     }
@@ -617,7 +622,7 @@ fn select_k(
         n = k;
     }
     buf[..n].sort_unstable();
-    n
+    (n, bad)
 }
 
 // ---------------------------------------------------------------------------------
@@ -637,10 +642,6 @@ pub struct Solver {
     cols: usize,
     /// Whether `x`, `u`, `v` hold a complete optimal solution of the last problem.
     solved: bool,
-    /// Tolerance of the current solve (absolute).
-    eps: f64,
-    /// Largest finite cost magnitude of the current problem.
-    scale: f64,
     u: Vec<f64>,
     v: Vec<f64>,
     /// Row -> column.
@@ -846,9 +847,15 @@ impl Solver {
 
     /// Tolerance of the debug certificate check: far above rounding, far below any
     /// real sub-optimality.
-    fn debug_tolerance(&self) -> f64 {
-        let vmax = self.v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-        1e3 * EPS_REL * (self.eps / EPS_REL).max(vmax) + f64::MIN_POSITIVE
+    fn debug_tolerance(&self, costs: &CostMatrix) -> f64 {
+        let mut scale = 0.0f64;
+        for (i, &j) in self.x.iter().enumerate() {
+            scale = scale.max(costs.get(i, j).abs()).max(self.u[i].abs());
+        }
+        for &vj in &self.v {
+            scale = scale.max(vj.abs());
+        }
+        1e3 * EPS_REL * scale + f64::MIN_POSITIVE
     }
 
     fn check_dims(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
@@ -924,7 +931,7 @@ impl Solver {
                 }
                 self.solved = true;
                 debug_assert!(
-                    self.verify_optimal(costs, self.debug_tolerance()),
+                    self.verify_optimal(costs, self.debug_tolerance(costs)),
                     "assignment certificate failed"
                 );
                 Ok(&self.x)
@@ -945,9 +952,8 @@ impl Solver {
     }
 
     fn run(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
-        self.validate(costs)?;
         let sparse = self.use_sparse();
-        self.price_all(costs, sparse);
+        self.price_all(costs, sparse, true)?;
         if sparse && !self.stats.warm {
             self.auction(costs);
             self.tighten(costs);
@@ -986,45 +992,35 @@ impl Solver {
                 self.dirty[i as usize] = false;
             }
             self.dirty_rows.clear();
-            self.price_all(costs, false);
+            self.price_all(costs, false, false)?;
         }
         self.dense_all(costs)
     }
 
-    /// Validation pass: NaN / -inf, all-+inf rows, tolerance scale.
-    #[inline(never)]
-    fn validate(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
-        let mut scale = 0.0f64;
-        let mut first_unservable = None;
-        for i in 0..costs.rows() {
-            let (bad, mx, finite) = validate_row(costs.row(i));
-            if let Some(col) = bad {
-                return Err(AssignError::NotFinite { row: i, col });
-            }
-            if !finite && first_unservable.is_none() {
-                first_unservable = Some(i);
-            }
-            scale = scale.max(mx);
-        }
-        if let Some(row) = first_unservable {
-            return Err(AssignError::Infeasible { row });
-        }
-        let vmax = self.v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-        self.scale = scale;
-        self.eps = EPS_REL * scale.max(vmax);
-        Ok(())
-    }
-
     /// Pricing pass over every row: frees rows that are not tight, greedily assigns
     /// free rows whose cheapest column is free, collects the free rows, and (when
-    /// `build`) rebuilds every candidate list.
+    /// `build`) rebuilds every candidate list. With `check` (the first pass of a
+    /// solve) it also validates the entries.
+    ///
+    /// # Errors
+    /// With `check`: [`AssignError::NotFinite`] for the first NaN / `-inf` in
+    /// row-major order, else [`AssignError::Infeasible`] for the first row without a
+    /// finite entry.
     #[inline(never)]
-    fn price_all(&mut self, costs: &CostMatrix, build: bool) {
+    fn price_all(&mut self, costs: &CostMatrix, build: bool, check: bool) -> Result<(), AssignError> {
         self.free_rows.clear();
+        let mut unservable = None;
         for i in 0..self.rows {
-            self.price_row(costs, i, build);
+            let finite = self.price_row(costs, i, build, check)?;
+            if !finite && unservable.is_none() {
+                unservable = Some(i);
+            }
+        }
+        if let (true, Some(row)) = (check, unservable) {
+            return Err(AssignError::Infeasible { row });
         }
         self.raise_free_columns(costs);
+        Ok(())
     }
 
     /// End of a sparse round: reprices the rows whose dual rose above their
@@ -1038,11 +1034,11 @@ impl Solver {
             if xi == NONE {
                 continue;
             }
-            let ui = costs.get(i, xi) - self.v[xi];
-            if ui <= self.theta[i] + self.eps {
+            let (c, vx) = (costs.get(i, xi), self.v[xi]);
+            if c - vx <= self.theta[i] + tol(c, vx, 0.0, 0.0) {
                 continue;
             }
-            self.price_row(costs, i, true);
+            let _ = self.price_row(costs, i, true, false);
         }
         self.dirty_rows.clear();
         self.raise_free_columns(costs);
@@ -1050,25 +1046,43 @@ impl Solver {
 
     /// Prices row `i` against the full row: keeps it if its pair is tight, else frees
     /// it; a free row takes its cheapest column if that column is free. With `build`,
-    /// the row's candidate list is rebuilt.
-    fn price_row(&mut self, costs: &CostMatrix, i: usize, build: bool) {
+    /// the row's candidate list is rebuilt; with `check`, NaN and `-inf` are reported.
+    /// Returns whether the row has a finite entry.
+    fn price_row(
+        &mut self,
+        costs: &CostMatrix,
+        i: usize,
+        build: bool,
+        check: bool,
+    ) -> Result<bool, AssignError> {
         self.stats.rows_priced += 1;
-        let (min_w, arg) = if build {
-            self.build_row(costs, i)
+        let (min_w, arg, bad) = if build {
+            self.build_row(costs, i, check)
         } else {
             let row = costs.row(i);
             let mut best = f64::INFINITY;
             let mut arg = NONE;
+            let mut ok = true;
             for (j, (c, vj)) in row.iter().zip(&self.v).enumerate() {
                 let w = c - vj;
+                ok &= w > f64::NEG_INFINITY;
                 if w < best {
                     best = w;
                     arg = j;
                 }
             }
-            (best, arg)
+            let bad = if ok {
+                None
+            } else {
+                row.iter().position(|&c| !(c > f64::NEG_INFINITY))
+            };
+            (best, arg, bad)
         };
+        if let (true, Some(col)) = (check, bad) {
+            return Err(AssignError::NotFinite { row: i, col });
+        }
         self.settle_row(costs, i, min_w, arg);
+        Ok(arg != NONE)
     }
 
     /// Keeps row `i` if its pair is tight against the row minimum `min_w` (at column
@@ -1077,8 +1091,13 @@ impl Solver {
         let row = costs.row(i);
         let xi = self.x[i];
         if xi != NONE {
-            let wx = row[xi] - self.v[xi];
-            if wx <= min_w + self.eps {
+            let (c, vx) = (row[xi], self.v[xi]);
+            let t = if arg == NONE {
+                0.0
+            } else {
+                tol(c, vx, row[arg], self.v[arg])
+            };
+            if c - vx <= min_w + t {
                 return;
             }
             self.x[i] = NONE;
@@ -1096,8 +1115,9 @@ impl Solver {
     }
 
     /// Rebuilds the candidate list of row `i` (its `k` smallest `(c - v, col)`) and
-    /// its threshold. Returns the row's minimum `c - v` and its column.
-    fn build_row(&mut self, costs: &CostMatrix, i: usize) -> (f64, usize) {
+    /// its threshold. Returns the row's minimum `c - v`, its column, and (with
+    /// `check`) the first column holding NaN or `-inf`.
+    fn build_row(&mut self, costs: &CostMatrix, i: usize, check: bool) -> (f64, usize, Option<usize>) {
         let row = costs.row(i);
         let k = self.k;
         let base = i * k;
@@ -1111,7 +1131,7 @@ impl Solver {
             f64::INFINITY
         };
         let mask = self.mask;
-        let n = select_k(row, &self.v, k, mask, 0, thr0, &mut self.buf);
+        let (n, bad) = select_k(row, &self.v, k, mask, 0, thr0, check, &mut self.buf);
         for (t, &kk) in self.buf[..n].iter().enumerate() {
             let c = key_col(kk, mask);
             self.cand_col[base + t] = c;
@@ -1130,30 +1150,36 @@ impl Solver {
         match self.buf[..n].first() {
             Some(&kk) => {
                 let c = key_col(kk, mask) as usize;
-                (row[c] - self.v[c], c)
+                (row[c] - self.v[c], c, bad)
             }
-            None => (f64::INFINITY, NONE),
+            None => (f64::INFINITY, NONE, bad),
         }
     }
 
-    /// Best and second-best reduced cost `c - v` of row `i` (`w1`, its column, `w2`),
-    /// from the candidate list and the threshold; the list is rebuilt when stale.
-    fn best2(&mut self, costs: &CostMatrix, i: usize) -> (f64, usize, f64) {
+    /// Minimum reduced cost `c - v` of row `i`, its column, and a lower bound of the
+    /// second smallest, from the candidate list and the threshold (the list is
+    /// rebuilt when stale). The scan stops as soon as the sorted list bounds prove
+    /// the minimum; with `exact_second` it goes on until the second is exact too.
+    fn best2(&mut self, costs: &CostMatrix, i: usize, exact_second: bool) -> (f64, usize, f64) {
         let mut rebuilt = false;
         loop {
             let base = i * self.k;
             let len = self.cand_len[i] as usize;
             let (mut w1, mut j1, mut w2) = (f64::INFINITY, NONE, f64::INFINITY);
+            let mut rest = f64::INFINITY;
+            let mut scanned = 0usize;
             for ((&c, &cost), &wb) in self.cand_col[base..base + len]
                 .iter()
                 .zip(&self.cand_cost[base..base + len])
                 .zip(&self.cand_wb[base..base + len])
             {
                 // The list is sorted by `wb` and current values are >= `wb`: nothing
-                // further down can beat the second best.
-                if wb >= w2 {
+                // further down goes below `wb`.
+                if wb >= if exact_second { w2 } else { w1 } {
+                    rest = wb;
                     break;
                 }
+                scanned += 1;
                 let w = cost - self.v[c as usize];
                 if w < w1 {
                     w2 = w1;
@@ -1165,11 +1191,39 @@ impl Solver {
             }
             let th = self.theta[i];
             if w1 <= th || rebuilt {
-                return (w1, j1, w2.min(th));
+                if scanned > REFRESH_SCAN {
+                    self.refresh_row(i);
+                }
+                return (w1, j1, w2.min(rest).min(th));
             }
             self.stats.rows_priced += 1;
-            let _ = self.build_row(costs, i);
+            let _ = self.build_row(costs, i, false);
             rebuilt = true;
+        }
+    }
+
+    /// Re-sorts row `i`'s candidate list by the current reduced costs (which only
+    /// grew since it was built), so that scans of it stop early again.
+    fn refresh_row(&mut self, i: usize) {
+        self.stats.refreshes += 1;
+        let base = i * self.k;
+        let len = self.cand_len[i] as usize;
+        let mask = self.mask;
+        let (keys, rest) = self.buf.split_at_mut(len);
+        let (cols, costs) = rest.split_at_mut(len);
+        for t in 0..len {
+            let c = self.cand_col[base + t];
+            let cost = self.cand_cost[base + t];
+            keys[t] = key(cost - self.v[c as usize], t as u32, mask);
+            cols[t] = u64::from(c);
+            costs[t] = cost.to_bits();
+        }
+        keys.sort_unstable();
+        for (t, &kk) in keys.iter().enumerate() {
+            let src = key_col(kk, mask) as usize;
+            self.cand_col[base + t] = cols[src] as u32;
+            self.cand_cost[base + t] = f64::from_bits(costs[src]);
+            self.cand_wb[base + t] = key_floor(kk, mask);
         }
     }
 
@@ -1198,7 +1252,8 @@ impl Solver {
             return;
         }
         let eps_end = eps0 * endr;
-        let cap = self.scale.max(eps0);
+        // Bid cap for rows with a single finite candidate.
+        let cap = AUCTION_CAP * eps0;
         let budget = AUCTION_BIDS_PER_ROW * self.rows + 64;
         let mut eps = eps0;
         loop {
@@ -1207,7 +1262,7 @@ impl Solver {
             for i in 0..self.rows {
                 let xi = self.x[i];
                 if xi != NONE {
-                    let (w1, _, _) = self.best2(costs, i);
+                    let (w1, _, _) = self.best2(costs, i, false);
                     if costs.get(i, xi) - self.v[xi] <= w1 + eps {
                         continue;
                     }
@@ -1220,7 +1275,7 @@ impl Solver {
             while let Some(i) = self.free_rows.pop() {
                 let i = i as usize;
                 bids += 1;
-                let (w1, j1, w2) = self.best2(costs, i);
+                let (w1, j1, w2) = self.best2(costs, i, AUCTION_EXACT_SECOND);
                 if bids > budget || j1 == NONE {
                     self.free_rows.push(i as u32);
                     self.stats.bids += bids as u64;
@@ -1259,7 +1314,7 @@ impl Solver {
             if xi == NONE {
                 continue;
             }
-            let (w1, _, _) = self.best2(costs, i);
+            let (w1, _, _) = self.best2(costs, i, false);
             let slack = costs.get(i, xi) - self.v[xi] - w1;
             if slack > 0.0 {
                 let old = self.v[xi];
@@ -1294,7 +1349,7 @@ impl Solver {
         self.free_rows.clear();
         for i in 0..self.rows {
             self.stats.rows_priced += 1;
-            let (min_w, arg, _) = self.best2(costs, i);
+            let (min_w, arg, _) = self.best2(costs, i, false);
             self.settle_row(costs, i, min_w, arg);
         }
         self.raise_free_columns(costs);
@@ -1332,7 +1387,10 @@ impl Solver {
                     }
                 }
                 let xr = self.x[r];
-                if xr != NONE && c < costs.get(r, xr) - self.v[xr] - self.eps {
+                if xr != NONE && {
+                    let (cx, vx) = (costs.get(r, xr), self.v[xr]);
+                    c < cx - vx - tol(c, cx, vx, 0.0)
+                } {
                     self.x[r] = NONE;
                     self.y[xr] = NONE;
                     self.raise.push(xr as u32);
@@ -1406,11 +1464,17 @@ impl Solver {
             }
             self.stats.rows_scanned += 1;
             self.mark_dirty(i);
-            let ui = costs.get(i, j) - self.v[j];
-            if !(ui <= self.theta[i] + self.eps) {
+            let (cij, vj) = (costs.get(i, j), self.v[j]);
+            let ui = cij - vj;
+            if !(ui <= self.theta[i] + tol(cij, vj, 0.0, 0.0)) {
                 self.stats.rows_priced += 1;
-                let (min_w, _) = self.build_row(costs, i);
-                if !(ui <= min_w + self.eps) {
+                let (min_w, arg, _) = self.build_row(costs, i, false);
+                let t = if arg == NONE {
+                    0.0
+                } else {
+                    tol(cij, vj, costs.get(i, arg), self.v[arg])
+                };
+                if !(ui <= min_w + t) {
                     self.x[i] = NONE;
                     self.y[j] = NONE;
                     self.free_rows.push(i as u32);
@@ -1479,7 +1543,7 @@ impl Solver {
         let k = self.k;
         let row = costs.row(p.row as usize);
         let mask = self.mask;
-        let n = select_k(row, &self.v, k, mask, p.lo, f64::INFINITY, &mut self.buf);
+        let (n, _) = select_k(row, &self.v, k, mask, p.lo, f64::INFINITY, false, &mut self.buf);
         for t in 0..n {
             let c = key_col(self.buf[t], mask) as usize;
             let nd = p.off + (row[c] - self.v[c]);
