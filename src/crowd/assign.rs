@@ -57,9 +57,6 @@
 //! assert!(solver.verify_optimal(&c, 1e-9));
 //! ```
 
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
-
 use crate::geom::Vec2;
 
 /// Relative tolerance of the tightness and dual-feasibility tests.
@@ -77,19 +74,30 @@ fn tol(a: f64, b: f64, c: f64, d: f64) -> f64 {
     EPS_REL * (a.abs() + b.abs() + c.abs() + d.abs())
 }
 
-/// Default number of cheapest candidate columns kept per row by [`Strategy::Sparse`].
-pub const DEFAULT_CANDIDATES: usize = 10;
+/// Candidate columns kept per row by [`Strategy::Sparse`] when chosen automatically:
+/// `cols / AUTO_CANDIDATES_DIV`, clamped to `[AUTO_CANDIDATES_MIN, AUTO_CANDIDATES_MAX]`.
+const AUTO_CANDIDATES_DIV: usize = 40;
+/// Lower clamp of the automatic candidate count.
+const AUTO_CANDIDATES_MIN: usize = 24;
+/// Upper clamp of the automatic candidate count.
+const AUTO_CANDIDATES_MAX: usize = 64;
 
 /// Candidate slots over which the local cost spread is measured for the auction.
 const AUCTION_SPREAD_SLOTS: usize = 8;
 /// First auction ε as a fraction of the mean local cost spread.
-const AUCTION_START: f64 = 0.25;
+const AUCTION_START: f64 = 0.5;
+/// First auction ε of a warm start (prices already near optimal), as
+/// [`AUCTION_START`].
+const AUCTION_START_WARM: f64 = 0.1;
 /// Factor by which ε shrinks between auction phases.
-const AUCTION_FACTOR: f64 = 0.2;
+const AUCTION_FACTOR: f64 = 0.1;
 /// Last auction ε relative to the first.
-const AUCTION_END: f64 = 1e-6;
+const AUCTION_END: f64 = 1e-4;
 /// Largest auction bid, in units of the first ε (rows with one finite entry).
 const AUCTION_CAP: f64 = 1e6;
+/// A warm start runs the auction first when more than `1 / WARM_AUCTION_FREE_DIV` of
+/// the rows lost their pair.
+const WARM_AUCTION_FREE_DIV: usize = 4;
 /// Auction bid budget per row and phase (beyond it the exact finish takes over).
 const AUCTION_BIDS_PER_ROW: usize = 5000;
 
@@ -100,7 +108,7 @@ const REFRESH_SCAN: usize = usize::MAX;
 const AUCTION_EXACT_SECOND: bool = true;
 
 /// Candidate list slots relaxed at once when a scanned row's list is advanced.
-const RELAX_BATCH: usize = 2;
+const RELAX_BATCH: usize = 8;
 
 /// Pricing rounds of the sparse strategy before it finishes densely.
 const MAX_ROUNDS: u32 = 16;
@@ -453,7 +461,7 @@ impl ColHeap {
 /// Pending work of a scanned row in a sparse search: the columns of the row not
 /// relaxed yet cannot get a distance below `bound`. `slot < len` means the row's
 /// candidate list from `slot` on; [`BEYOND`] means the columns off the list, whose
-/// [`key`]s are all at least `lo`. Ordered so that `BinaryHeap` pops the least bound.
+/// [`key`]s are all at least `lo`.
 #[derive(Copy, Clone, Debug)]
 struct Pending {
     bound: f64,
@@ -463,26 +471,82 @@ struct Pending {
     slot: u32,
 }
 
+/// Search state of a column in a sparse search: tentative distance, and the epochs
+/// in which it was reached (`seen`) and settled (`done`).
+#[derive(Copy, Clone, Debug, Default)]
+struct Mark {
+    dist: f64,
+    seen: u32,
+    done: u32,
+}
+
 /// [`Pending::slot`] of the columns off the candidate list.
 const BEYOND: u32 = u32::MAX;
 
-impl PartialEq for Pending {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
-    }
+/// Binary min-heap of [`Pending`] by `bound` (never NaN). Capacity is reserved for
+/// two entries per row, more than a search can hold (one per scanned row plus the
+/// free row), so it never allocates after sizing.
+#[derive(Clone, Debug, Default)]
+struct PendHeap {
+    items: Vec<Pending>,
 }
 
-impl Eq for Pending {}
-
-impl PartialOrd for Pending {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
+impl PendHeap {
+    fn size_for(&mut self, rows: usize) {
+        self.items = Vec::with_capacity(2 * rows + 2);
     }
-}
 
-impl Ord for Pending {
-    fn cmp(&self, other: &Self) -> Ordering {
-        other.bound.total_cmp(&self.bound)
+    fn clear(&mut self) {
+        self.items.clear();
+    }
+
+    #[inline]
+    fn min_bound(&self) -> f64 {
+        self.items.first().map_or(f64::INFINITY, |p| p.bound)
+    }
+
+    #[inline]
+    fn push(&mut self, p: Pending) {
+        self.items.push(p);
+        let mut at = self.items.len() - 1;
+        while at > 0 {
+            let parent = (at - 1) / 2;
+            if self.items[parent].bound <= p.bound {
+                break;
+            }
+            self.items[at] = self.items[parent];
+            at = parent;
+        }
+        self.items[at] = p;
+    }
+
+    #[inline]
+    fn pop(&mut self) -> Option<Pending> {
+        let top = *self.items.first()?;
+        let last = self.items.pop()?;
+        let n = self.items.len();
+        if n > 0 {
+            let mut at = 0;
+            loop {
+                let l = 2 * at + 1;
+                if l >= n {
+                    break;
+                }
+                let r = l + 1;
+                let m = if r < n && self.items[r].bound < self.items[l].bound {
+                    r
+                } else {
+                    l
+                };
+                if self.items[m].bound >= last.bound {
+                    break;
+                }
+                self.items[at] = self.items[m];
+                at = m;
+            }
+            self.items[at] = last;
+        }
+        Some(top)
     }
 }
 
@@ -537,7 +601,8 @@ fn key_col(k: u64, mask: u64) -> u32 {
 /// v[col]` finite, that are at least `lo`. `thr0` is an inclusive upper bound on the
 /// `k`-th smallest `w` when one is known (`+inf` otherwise). The keys are left sorted
 /// in `buf[..n]`; `buf.len() >= 2k` is the scratch. With `check` and `lo == 0`, also
-/// returns the first column whose `w` is NaN or `-inf`.
+/// returns the first column whose `w` is NaN or `-inf`. `BELOW` says whether `lo`
+/// bounds anything (`false` requires `lo == 0`).
 ///
 /// # Complexity
 /// One pass over the row; blocks of [`LANES`] entries are tested against the current
@@ -545,7 +610,7 @@ fn key_col(k: u64, mask: u64) -> u32 {
 /// the best `k` (linear-time selection) when full, so the work beyond the streaming
 /// compare is `O(admitted + k log k)`.
 #[allow(clippy::too_many_arguments)]
-fn select_k(
+fn select_k<const BELOW: bool>(
     row: &[f64],
     v: &[f64],
     k: usize,
@@ -596,7 +661,11 @@ fn select_k(
         let mut hit = false;
         for (a, b) in r.iter().zip(vv) {
             let w = a - b;
-            hit |= !((w > thr) | (w < lo_w));
+            hit |= if BELOW {
+                !((w > thr) | (w < lo_w))
+            } else {
+                !(w > thr)
+            };
         }
         if !hit {
             base += LANES as u32;
@@ -605,7 +674,12 @@ fn select_k(
         let mut hits = 0u32;
         for (l, (a, b)) in r.iter().zip(vv).enumerate() {
             let w = a - b;
-            hits |= u32::from(!((w > thr) | (w < lo_w))) << l;
+            let h = if BELOW {
+                !((w > thr) | (w < lo_w))
+            } else {
+                !(w > thr)
+            };
+            hits |= u32::from(h) << l;
         }
         while hits != 0 {
             let l = hits.trailing_zeros() as usize;
@@ -636,7 +710,9 @@ fn select_k(
 #[derive(Clone, Debug, Default)]
 pub struct Solver {
     strategy: Strategy,
-    /// Candidates per row (sparse strategy).
+    /// Requested candidates per row (0 = automatic).
+    k_opt: usize,
+    /// Candidates per row (sparse strategy) for the current dimensions.
     k: usize,
     rows: usize,
     cols: usize,
@@ -665,11 +741,11 @@ pub struct Solver {
     // Search workspaces (per column).
     dist: Vec<f64>,
     pred: Vec<u32>,
-    seen: Vec<u32>,
-    done: Vec<u32>,
+    /// Per column: search state of the current sparse search ([`Mark`]).
+    mark: Vec<Mark>,
     epoch: u32,
     heap: ColHeap,
-    pending: BinaryHeap<Pending>,
+    pending: PendHeap,
     scanned: Vec<u32>,
     dd: Vec<f64>,
     vm: Vec<f64>,
@@ -682,23 +758,24 @@ pub struct Solver {
 }
 
 impl Solver {
-    /// A solver with [`Strategy::Auto`] and [`DEFAULT_CANDIDATES`] candidates per row.
+    /// A solver with [`Strategy::Auto`] and an automatic number of candidates per row.
     pub fn new() -> Solver {
         Solver::with_strategy(Strategy::Auto)
     }
 
     /// A solver using `strategy`.
     pub fn with_strategy(strategy: Strategy) -> Solver {
-        Solver::with_options(strategy, DEFAULT_CANDIDATES)
+        Solver::with_options(strategy, 0)
     }
 
-    /// A solver using `strategy` that keeps `candidates` (at least 1) cheapest columns
-    /// per row in the sparse strategy. The result is optimal for any value; it only
-    /// trades list-building work against full-row scans.
+    /// A solver using `strategy` that keeps `candidates` cheapest columns per row in
+    /// the sparse strategy (`0` = automatic, growing with the number of columns from
+    /// 24 to 64). The result is optimal for any value; it only trades list-building
+    /// work against list refills.
     pub fn with_options(strategy: Strategy, candidates: usize) -> Solver {
         Solver {
             strategy,
-            k: candidates.max(1),
+            k_opt: candidates,
             ..Solver::default()
         }
     }
@@ -826,10 +903,9 @@ impl Solver {
         }
         for i in 0..rows {
             let ui = self.u[i];
-            for (jj, (c, vj)) in costs.row(i).iter().zip(&self.v).enumerate() {
+            for (c, vj) in costs.row(i).iter().zip(&self.v) {
                 // NaN fails this comparison too.
                 if !(c - ui - vj >= -tol) {
-                    if std::env::var_os("ASSIGN_TRACE").is_some() { eprintln!("row {i} col {jj} reduced {} (x {} ) v {vj}", c - ui - vj, self.x[i]); }
                     return false;
                 }
             }
@@ -840,7 +916,7 @@ impl Solver {
             }
         }
         let vmax = self.v.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-        (0..cols).all(|j| { let ok = self.y[j] != NONE || self.v[j] >= vmax - tol; if !ok && std::env::var_os("ASSIGN_TRACE").is_some() { eprintln!("free col {j} v {} vmax {vmax}", self.v[j]); } ok })
+        (0..cols).all(|j| self.y[j] != NONE || self.v[j] >= vmax - tol)
     }
 
     // -- internals -------------------------------------------------------------------
@@ -876,7 +952,12 @@ impl Solver {
         if rows == self.rows && cols == self.cols && self.x.len() == rows {
             return;
         }
-        let k = self.k;
+        let k = if self.k_opt == 0 {
+            (cols / AUTO_CANDIDATES_DIV).clamp(AUTO_CANDIDATES_MIN, AUTO_CANDIDATES_MAX)
+        } else {
+            self.k_opt
+        };
+        self.k = k;
         self.solved = false;
         self.rows = rows;
         self.cols = cols;
@@ -896,13 +977,11 @@ impl Solver {
         self.buf.resize(4 * k, 0);
         self.dist.resize(cols, 0.0);
         self.pred.resize(cols, 0);
-        self.seen.clear();
-        self.seen.resize(cols, 0);
-        self.done.clear();
-        self.done.resize(cols, 0);
+        self.mark.clear();
+        self.mark.resize(cols, Mark::default());
         self.epoch = 0;
         self.heap.size_for(cols);
-        self.pending = BinaryHeap::with_capacity(2 * rows + 2);
+        self.pending.size_for(rows);
         self.scanned = Vec::with_capacity(cols);
         self.dd.resize(cols, 0.0);
         self.vm.resize(cols, 0.0);
@@ -954,7 +1033,8 @@ impl Solver {
     fn run(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
         let sparse = self.use_sparse();
         self.price_all(costs, sparse, true)?;
-        if sparse && !self.stats.warm {
+        let many_free = self.free_rows.len() * WARM_AUCTION_FREE_DIV > self.rows;
+        if sparse && (!self.stats.warm || many_free) {
             self.auction(costs);
             self.tighten(costs);
             if self.rows < self.cols {
@@ -1006,7 +1086,6 @@ impl Solver {
     /// With `check`: [`AssignError::NotFinite`] for the first NaN / `-inf` in
     /// row-major order, else [`AssignError::Infeasible`] for the first row without a
     /// finite entry.
-    #[inline(never)]
     fn price_all(&mut self, costs: &CostMatrix, build: bool, check: bool) -> Result<(), AssignError> {
         self.free_rows.clear();
         let mut unservable = None;
@@ -1131,7 +1210,7 @@ impl Solver {
             f64::INFINITY
         };
         let mask = self.mask;
-        let (n, bad) = select_k(row, &self.v, k, mask, 0, thr0, check, &mut self.buf);
+        let (n, bad) = select_k::<false>(row, &self.v, k, mask, 0, thr0, check, &mut self.buf);
         for (t, &kk) in self.buf[..n].iter().enumerate() {
             let c = key_col(kk, mask);
             self.cand_col[base + t] = c;
@@ -1230,7 +1309,6 @@ impl Solver {
     /// Forward auction with ε-scaling over the candidate lists (Bertsekas; prices
     /// only fall, so every list threshold stays valid). It only brings the prices
     /// close to optimal; exactness comes from the finish that follows.
-    #[inline(never)]
     fn auction(&mut self, costs: &CostMatrix) {
         let k = self.k;
         let (mut spread, mut count) = (0.0, 0usize);
@@ -1244,14 +1322,16 @@ impl Solver {
         if count == 0 {
             return;
         }
-        let start: f64 = std::env::var("ASSIGN_START").ok().and_then(|s| s.parse().ok()).unwrap_or(AUCTION_START);
-        let factor: f64 = std::env::var("ASSIGN_FACTOR").ok().and_then(|s| s.parse().ok()).unwrap_or(AUCTION_FACTOR);
-        let endr: f64 = std::env::var("ASSIGN_END").ok().and_then(|s| s.parse().ok()).unwrap_or(AUCTION_END);
+        let start = if self.stats.warm {
+            AUCTION_START_WARM
+        } else {
+            AUCTION_START
+        };
         let eps0 = start * spread / count as f64;
         if !(eps0 > 0.0 && eps0 < f64::INFINITY) {
             return;
         }
-        let eps_end = eps0 * endr;
+        let eps_end = eps0 * AUCTION_END;
         // Bid cap for rows with a single finite candidate.
         let cap = AUCTION_CAP * eps0;
         let budget = AUCTION_BIDS_PER_ROW * self.rows + 64;
@@ -1292,20 +1372,16 @@ impl Solver {
                 }
             }
             self.stats.bids += bids as u64;
-            if std::env::var_os("ASSIGN_TRACE").is_some() {
-                eprintln!("phase eps {eps:.3e} bids {bids} priced {}", self.stats.rows_priced);
-            }
             if eps <= eps_end {
                 break;
             }
-            eps = (eps * factor).max(eps_end);
+            eps = (eps * AUCTION_FACTOR).max(eps_end);
         }
     }
 
     /// After the auction: raises each assigned column's price by its row's slack so
     /// that the pair becomes tight (the pricing pass that follows frees the few rows
     /// this makes violated, and rebuilds every list).
-    #[inline(never)]
     fn tighten(&mut self, costs: &CostMatrix) {
         let rect = self.rows < self.cols;
         let mut max_raise = 0.0f64;
@@ -1344,7 +1420,6 @@ impl Solver {
 
     /// Pricing pass over every row using the candidate lists (a row is scanned in
     /// full only when its list is stale): as [`Solver::price_all`] otherwise.
-    #[inline(never)]
     fn price_all_lists(&mut self, costs: &CostMatrix) {
         self.free_rows.clear();
         for i in 0..self.rows {
@@ -1402,8 +1477,7 @@ impl Solver {
 
     fn next_epoch(&mut self) -> u32 {
         if self.epoch == u32::MAX {
-            self.seen.fill(0);
-            self.done.fill(0);
+            self.mark.fill(Mark::default());
             self.epoch = 0;
         }
         self.epoch += 1;
@@ -1431,7 +1505,6 @@ impl Solver {
     ///
     /// On success updates the prices of the settled columns and flips the path.
     /// Returns false only if no augmenting path exists in the whole matrix.
-    #[inline(never)]
     fn sparse_augment(&mut self, costs: &CostMatrix, i0: usize) -> bool {
         let ep = self.next_epoch();
         self.stats.augmentations += 1;
@@ -1441,9 +1514,8 @@ impl Solver {
         self.advance_list(i0, 0.0, 0, ep);
         let (dstar, sink) = loop {
             let hmin = self.heap.key.first().copied().unwrap_or(f64::INFINITY);
-            if let Some(&p) = self.pending.peek() {
-                if p.bound < hmin {
-                    let _ = self.pending.pop();
+            if self.pending.min_bound() < hmin {
+                if let Some(p) = self.pending.pop() {
                     if p.slot == BEYOND {
                         self.expand_row(costs, p, ep);
                     } else {
@@ -1456,7 +1528,7 @@ impl Solver {
                 return false;
             };
             let j = j as usize;
-            self.done[j] = ep;
+            self.mark[j].done = ep;
             self.scanned.push(j as u32);
             let i = self.y[j];
             if i == NONE {
@@ -1485,7 +1557,7 @@ impl Solver {
         };
         for &k in &self.scanned {
             let k = k as usize;
-            self.v[k] += self.dist[k] - dstar;
+            self.v[k] += self.mark[k].dist - dstar;
         }
         self.flip_path(sink, i0);
         self.mark_dirty(i0);
@@ -1495,9 +1567,10 @@ impl Solver {
     /// Relaxes column `k` from row `i` with tentative distance `nd`.
     #[inline]
     fn relax_to(&mut self, i: u32, k: usize, nd: f64, ep: u32) {
-        if self.done[k] != ep && (self.seen[k] != ep || nd < self.dist[k]) {
-            self.seen[k] = ep;
-            self.dist[k] = nd;
+        let m = &mut self.mark[k];
+        if m.done != ep && (m.seen != ep || nd < m.dist) {
+            m.seen = ep;
+            m.dist = nd;
             self.pred[k] = i;
             self.heap.push_or_decrease(k as u32, nd);
         }
@@ -1543,7 +1616,8 @@ impl Solver {
         let k = self.k;
         let row = costs.row(p.row as usize);
         let mask = self.mask;
-        let (n, _) = select_k(row, &self.v, k, mask, p.lo, f64::INFINITY, false, &mut self.buf);
+        let (n, _) =
+            select_k::<true>(row, &self.v, k, mask, p.lo, f64::INFINITY, false, &mut self.buf);
         for t in 0..n {
             let c = key_col(self.buf[t], mask) as usize;
             let nd = p.off + (row[c] - self.v[c]);
@@ -1670,12 +1744,11 @@ impl Solver {
             f(&self.buf),
             f(&self.dist),
             f(&self.pred),
-            f(&self.seen),
-            f(&self.done),
+            f(&self.mark),
             f(&self.heap.key),
             f(&self.heap.col),
             f(&self.heap.pos),
-            (self.pending.capacity(), 0),
+            f(&self.pending.items),
             f(&self.scanned),
             f(&self.dd),
             f(&self.vm),
