@@ -57,6 +57,9 @@
 //! assert!(solver.verify_optimal(&c, 1e-9));
 //! ```
 
+// NaN-aware comparisons (`!(a > b)` is true for NaN) are deliberate throughout.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::geom::Vec2;
 
 /// Relative tolerance of the tightness and dual-feasibility tests.
@@ -100,9 +103,6 @@ const AUCTION_CAP: f64 = 1e6;
 const WARM_AUCTION_FREE_DIV: usize = 4;
 /// Auction bid budget per row and phase (beyond it the exact finish takes over).
 const AUCTION_BIDS_PER_ROW: usize = 5000;
-
-/// A list scan longer than this re-sorts the list by current reduced costs.
-const REFRESH_SCAN: usize = usize::MAX;
 
 /// Whether auction bids use the exact second-best value (else a lower bound).
 const AUCTION_EXACT_SECOND: bool = true;
@@ -242,7 +242,7 @@ pub trait CostProvider {
 ///
 /// # Formula
 /// `c_ij = (a_i - g_j)·(a_i - g_j)` (mesh-formation-control section 6.1 with the
-/// Euclidean metric of its reference [7]; squaring favours even travel lengths).
+/// Euclidean metric of its reference \[7\]; squaring favours even travel lengths).
 ///
 /// # Complexity
 /// `O(agents * goals)`, no allocation when `out` is already large enough.
@@ -352,8 +352,6 @@ pub struct SolveStats {
     pub auction_phases: u32,
     /// Auction bids.
     pub bids: u64,
-    /// Candidate lists re-sorted by current reduced costs.
-    pub refreshes: u64,
     /// Streaming passes fetching columns beyond a row's candidate list in searches.
     pub expansions: u64,
     /// Whether the dense finish was needed.
@@ -439,7 +437,11 @@ impl ColHeap {
                     break;
                 }
                 let r = l + 1;
-                let m = if r < n && self.key[r] < self.key[l] { r } else { l };
+                let m = if r < n && self.key[r] < self.key[l] {
+                    r
+                } else {
+                    l
+                };
                 let mk = self.key[m];
                 if mk >= lk {
                     break;
@@ -684,7 +686,13 @@ fn select_k<const BELOW: bool>(
         while hits != 0 {
             let l = hits.trailing_zeros() as usize;
             hits &= hits - 1;
-            admit(r[l] - vv[l], base + l as u32, &mut n, &mut thr_key, &mut thr);
+            admit(
+                r[l] - vv[l],
+                base + l as u32,
+                &mut n,
+                &mut thr_key,
+                &mut thr,
+            );
         }
         base += LANES as u32;
     }
@@ -712,6 +720,8 @@ pub struct Solver {
     strategy: Strategy,
     /// Requested candidates per row (0 = automatic).
     k_opt: usize,
+    /// Sparse rounds before the dense finish ([`MAX_ROUNDS`]; tests lower it).
+    max_rounds: u32,
     /// Candidates per row (sparse strategy) for the current dimensions.
     k: usize,
     rows: usize,
@@ -776,6 +786,7 @@ impl Solver {
         Solver {
             strategy,
             k_opt: candidates,
+            max_rounds: MAX_ROUNDS,
             ..Solver::default()
         }
     }
@@ -1054,7 +1065,7 @@ impl Solver {
                 if self.free_rows.is_empty() {
                     return Ok(());
                 }
-                if self.stats.rounds == MAX_ROUNDS {
+                if self.stats.rounds >= self.max_rounds {
                     break;
                 }
                 self.stats.rounds += 1;
@@ -1086,7 +1097,12 @@ impl Solver {
     /// With `check`: [`AssignError::NotFinite`] for the first NaN / `-inf` in
     /// row-major order, else [`AssignError::Infeasible`] for the first row without a
     /// finite entry.
-    fn price_all(&mut self, costs: &CostMatrix, build: bool, check: bool) -> Result<(), AssignError> {
+    fn price_all(
+        &mut self,
+        costs: &CostMatrix,
+        build: bool,
+        check: bool,
+    ) -> Result<(), AssignError> {
         self.free_rows.clear();
         let mut unservable = None;
         for i in 0..self.rows {
@@ -1196,7 +1212,12 @@ impl Solver {
     /// Rebuilds the candidate list of row `i` (its `k` smallest `(c - v, col)`) and
     /// its threshold. Returns the row's minimum `c - v`, its column, and (with
     /// `check`) the first column holding NaN or `-inf`.
-    fn build_row(&mut self, costs: &CostMatrix, i: usize, check: bool) -> (f64, usize, Option<usize>) {
+    fn build_row(
+        &mut self,
+        costs: &CostMatrix,
+        i: usize,
+        check: bool,
+    ) -> (f64, usize, Option<usize>) {
         let row = costs.row(i);
         let k = self.k;
         let base = i * k;
@@ -1246,7 +1267,6 @@ impl Solver {
             let len = self.cand_len[i] as usize;
             let (mut w1, mut j1, mut w2) = (f64::INFINITY, NONE, f64::INFINITY);
             let mut rest = f64::INFINITY;
-            let mut scanned = 0usize;
             for ((&c, &cost), &wb) in self.cand_col[base..base + len]
                 .iter()
                 .zip(&self.cand_cost[base..base + len])
@@ -1258,7 +1278,6 @@ impl Solver {
                     rest = wb;
                     break;
                 }
-                scanned += 1;
                 let w = cost - self.v[c as usize];
                 if w < w1 {
                     w2 = w1;
@@ -1270,39 +1289,11 @@ impl Solver {
             }
             let th = self.theta[i];
             if w1 <= th || rebuilt {
-                if scanned > REFRESH_SCAN {
-                    self.refresh_row(i);
-                }
                 return (w1, j1, w2.min(rest).min(th));
             }
             self.stats.rows_priced += 1;
             let _ = self.build_row(costs, i, false);
             rebuilt = true;
-        }
-    }
-
-    /// Re-sorts row `i`'s candidate list by the current reduced costs (which only
-    /// grew since it was built), so that scans of it stop early again.
-    fn refresh_row(&mut self, i: usize) {
-        self.stats.refreshes += 1;
-        let base = i * self.k;
-        let len = self.cand_len[i] as usize;
-        let mask = self.mask;
-        let (keys, rest) = self.buf.split_at_mut(len);
-        let (cols, costs) = rest.split_at_mut(len);
-        for t in 0..len {
-            let c = self.cand_col[base + t];
-            let cost = self.cand_cost[base + t];
-            keys[t] = key(cost - self.v[c as usize], t as u32, mask);
-            cols[t] = u64::from(c);
-            costs[t] = cost.to_bits();
-        }
-        keys.sort_unstable();
-        for (t, &kk) in keys.iter().enumerate() {
-            let src = key_col(kk, mask) as usize;
-            self.cand_col[base + t] = cols[src] as u32;
-            self.cand_cost[base + t] = f64::from_bits(costs[src]);
-            self.cand_wb[base + t] = key_floor(kk, mask);
         }
     }
 
@@ -1616,8 +1607,16 @@ impl Solver {
         let k = self.k;
         let row = costs.row(p.row as usize);
         let mask = self.mask;
-        let (n, _) =
-            select_k::<true>(row, &self.v, k, mask, p.lo, f64::INFINITY, false, &mut self.buf);
+        let (n, _) = select_k::<true>(
+            row,
+            &self.v,
+            k,
+            mask,
+            p.lo,
+            f64::INFINITY,
+            false,
+            &mut self.buf,
+        );
         for t in 0..n {
             let c = key_col(self.buf[t], mask) as usize;
             let nd = p.off + (row[c] - self.v[c]);
@@ -1822,9 +1821,17 @@ mod tests {
         ]
     }
 
-    fn check_against_brute(s: &mut Solver, c: &CostMatrix, warm: bool) -> Result<(), TestCaseError> {
+    fn check_against_brute(
+        s: &mut Solver,
+        c: &CostMatrix,
+        warm: bool,
+    ) -> Result<(), TestCaseError> {
         let want = brute_force(c).expect("instances are feasible by construction");
-        let res = if warm { s.solve_warm(c).map(|_| ()) } else { s.solve(c).map(|_| ()) };
+        let res = if warm {
+            s.solve_warm(c).map(|_| ())
+        } else {
+            s.solve(c).map(|_| ())
+        };
         prop_assert!(res.is_ok(), "{:?} failed: {:?}", s.strategy(), res);
         let got = s.total_cost(c);
         prop_assert!(
@@ -1927,7 +1934,10 @@ mod tests {
         let mut s = Solver::with_strategy(strategy);
         SquaredDistance.fill(&agents, &goals, &mut c);
         s.solve(&c).unwrap();
-        assert!(s.verify_optimal(&c, 1e-9), "cold {rows}x{cols} {strategy:?}");
+        assert!(
+            s.verify_optimal(&c, 1e-9),
+            "cold {rows}x{cols} {strategy:?}"
+        );
         let mut cold = Solver::with_strategy(Algo::Dense);
         for frame in 0..20 {
             for p in goals.iter_mut().chain(agents.iter_mut().take(rows / 10)) {
@@ -1937,12 +1947,81 @@ mod tests {
             SquaredDistance.fill(&agents, &goals, &mut c);
             s.solve_warm(&c).unwrap();
             assert!(s.stats().warm);
-            assert!(s.verify_optimal(&c, 1e-9), "warm frame {frame} {rows}x{cols} {strategy:?}");
+            assert!(
+                s.verify_optimal(&c, 1e-9),
+                "warm frame {frame} {rows}x{cols} {strategy:?}"
+            );
             if frame % 5 == 0 {
                 cold.solve(&c).unwrap();
                 assert!(cold.verify_optimal(&c, 1e-9));
                 let (a, b) = (s.total_cost(&c), cold.total_cost(&c));
                 assert!((a - b).abs() < 1e-9, "frame {frame}: warm {a} cold {b}");
+            }
+        }
+    }
+
+    /// A medium instance: random real or small-integer costs (ties), some `+inf`
+    /// entries off a hidden feasible injection.
+    fn medium(rows: usize, cols: usize, seed: u64, ints: bool, inf_per_mille: u64) -> CostMatrix {
+        let mut rng = SplitMix(seed);
+        let mut perm: Vec<usize> = (0..cols).collect();
+        for i in (1..cols).rev() {
+            perm.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
+        }
+        let mut c = CostMatrix::from_fn(rows, cols, |_, _| {
+            if rng.next_u64() % 1000 < inf_per_mille {
+                f64::INFINITY
+            } else if ints {
+                (rng.next_u64() % 6) as f64
+            } else {
+                10.0 * rng.unit() - 3.0
+            }
+        });
+        for (i, &j) in perm.iter().take(rows).enumerate() {
+            if c.get(i, j) == f64::INFINITY {
+                c.set(i, j, 2.0);
+            }
+        }
+        c
+    }
+
+    proptest! {
+        #![proptest_config(config(48, 0x0000_3D1A))]
+
+        /// The sparse machinery (auction, tightening, lazy lists, list refills,
+        /// rectangular price raises, dense finish) against the dense solver on
+        /// instances too large for brute force, cold and over warm frames.
+        #[test]
+        fn sparse_matches_dense_on_medium_instances(
+            rows in 5usize..40,
+            extra in 0usize..12,
+            seed in 0u64..u64::MAX,
+            ints: bool,
+            inf_per_mille in prop_oneof![Just(0u64), Just(100), Just(400)],
+            k in 1usize..6,
+            max_rounds in prop_oneof![Just(0u32), Just(1), Just(MAX_ROUNDS)],
+        ) {
+            let cols = rows + extra;
+            let mut dense = Solver::with_strategy(Algo::Dense);
+            let mut sparse = Solver::with_options(Algo::Sparse, k);
+            sparse.max_rounds = max_rounds;
+            let mut c = medium(rows, cols, seed, ints, inf_per_mille);
+            for frame in 0..4u64 {
+                dense.solve(&c).unwrap();
+                let res = if frame == 0 { sparse.solve(&c) } else { sparse.solve_warm(&c) };
+                prop_assert!(res.is_ok(), "{:?}", res);
+                prop_assert!(sparse.verify_optimal(&c, 1e-9), "frame {}", frame);
+                let (a, b) = (sparse.total_cost(&c), dense.total_cost(&c));
+                prop_assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "frame {}: {} vs {}", frame, a, b);
+                // Next frame: perturb the finite entries.
+                let mut rng = SplitMix(seed ^ (frame + 1));
+                for i in 0..rows {
+                    for e in c.row_mut(i) {
+                        if e.is_finite() && rng.next_u64() % 3 == 0 {
+                            *e += if ints { (rng.next_u64() % 3) as f64 - 1.0 } else { rng.unit() - 0.5 };
+                        }
+                    }
+                }
             }
         }
     }
@@ -1979,7 +2058,9 @@ mod tests {
         use pathfinding::matrix::Matrix;
         for (seed, (rows, cols)) in [(10u64, (50, 50)), (11, (50, 50)), (12, (40, 50))] {
             let mut rng = SplitMix(seed);
-            let ints: Vec<i64> = (0..rows * cols).map(|_| (rng.next_u64() % 100) as i64).collect();
+            let ints: Vec<i64> = (0..rows * cols)
+                .map(|_| (rng.next_u64() % 100) as i64)
+                .collect();
             let c = CostMatrix::from_fn(rows, cols, |i, j| ints[i * cols + j] as f64);
             let neg = Matrix::from_vec(rows, cols, ints.iter().map(|&x| -x).collect()).unwrap();
             let (best, _) = kuhn_munkres(&neg);
@@ -2005,7 +2086,10 @@ mod tests {
             assert_eq!(s.solve(&c), Err(AssignError::NotFinite { row: 1, col: 2 }));
             c.set(1, 2, 0.0);
             c.set(2, 0, f64::NEG_INFINITY);
-            assert_eq!(s.solve_warm(&c), Err(AssignError::NotFinite { row: 2, col: 0 }));
+            assert_eq!(
+                s.solve_warm(&c),
+                Err(AssignError::NotFinite { row: 2, col: 0 })
+            );
             assert!(s.assignment().is_empty());
             c.set(2, 0, 1.0);
             c.row_mut(1).fill(f64::INFINITY);
@@ -2067,7 +2151,11 @@ mod tests {
     #[test]
     fn providers_fill_expected_costs() {
         let agents = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 1.0)];
-        let goals = [Vec2::new(3.0, 4.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)];
+        let goals = [
+            Vec2::new(3.0, 4.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+        ];
         let mut c = CostMatrix::new(5, 5);
         SquaredDistance.fill(&agents, &goals, &mut c);
         assert_eq!((c.rows(), c.cols()), (2, 3));
