@@ -11,33 +11,46 @@
 //!
 //! # Algorithm
 //!
-//! A shortest-augmenting-path (SAP) solver with dual prices, in the Jonker–Volgenant
-//! family, with two ways of searching for augmenting paths:
+//! A shortest-augmenting-path (SAP) solver with dual prices in the Jonker–Volgenant
+//! family (convention: reduced costs `c[i][j] - u[i] - v[j] >= 0`, zero on assigned
+//! pairs; `v` are the column prices). Two ways of running it:
 //!
 //! * **Dense** ([`Strategy::Dense`]): each free row runs a Dijkstra search over the full
-//!   reduced-cost matrix (`c[i][j] - u[i] - v[j] >= 0`), scanning whole contiguous rows.
-//!   `O(rows * cols)` per scanned row; used for small problems and as the exact fallback.
-//! * **Sparse with pricing** ([`Strategy::Sparse`], the default for large problems): one
-//!   streaming pass over the matrix keeps, per row, the `k` columns of smallest reduced
-//!   cost `c[i][j] - v[j]` (plus each column's cheapest row, so no column is orphaned).
-//!   Augmenting paths are searched on that candidate graph with a binary heap. A pricing
-//!   pass then re-checks, against the *full* rows, every row whose dual changed; rows
-//!   that are no longer tight are freed, their candidate lists rebuilt, and re-augmented.
-//!   Because Dijkstra only ever lowers column prices, a row whose matched column was
-//!   not touched cannot become violated, so later pricing passes only touch the rows
-//!   the searches went through. When no row is violated the full dual certificate
-//!   holds and the assignment is optimal. A bounded number of rounds, after which
-//!   (or after a search that finds no path in the candidate graph) the solver re-prices
-//!   everything and finishes densely, keeps it exact in every case.
+//!   reduced-cost matrix, scanning whole contiguous rows (settled columns are masked
+//!   with `d = +inf`, price `-inf`, so the relaxation loop is branch-free).
+//!   `O(cols)` per scanned row; used for small problems and as the safety net.
+//! * **Sparse** ([`Strategy::Sparse`], the default above 128 columns), in four steps:
+//!   1. One streaming pass over the matrix (which also validates it) keeps, per row,
+//!      the `k` columns of smallest reduced cost `w = c - v`, sorted, and a threshold
+//!      `theta` below which no other column of the row lies. Prices only ever fall
+//!      during the solve (except where noted below), so these stay lower bounds.
+//!   2. A forward auction with ε-scaling (Bertsekas) on the lists brings the prices
+//!      close to optimal cheaply; a row whose list went stale (its best entry rose
+//!      above `theta`) rebuilds it with one streaming pass. The auction is only a
+//!      price initialiser; exactness comes from the next steps.
+//!   3. Each assigned column's price is raised by its row's slack (at most the last
+//!      ε) so the pairs become tight, the list bounds are lowered by as much, and every
+//!      row is priced against its list: rows whose pair is not tight are freed.
+//!   4. Exact Dijkstra from each free row over the sorted lists, with lazy relaxation
+//!      (a scanned row relaxes its list a few slots at a time, in order of the bound
+//!      `offset + w_listed`; past the list, `offset + theta` guards the rest of the
+//!      row, fetched `k` columns at a time by a streaming pass only if the search gets
+//!      that far). A row whose dual outgrew its `theta` is repriced on the spot (and
+//!      released if no longer tight). The searches are therefore exact on the full
+//!      matrix, not just on the lists. A final check reprices the rows whose dual
+//!      outgrew their threshold; rounds repeat until no row is violated (a bounded
+//!      number, then a full dense finish) — at that point the full certificate holds.
 //!
 //! Warm start ([`Solver::solve_warm`]) keeps the column prices `v` and the assignment of
-//! the previous frame, re-prices every row against the new costs, keeps the pairs that
-//! are still tight and re-augments only the freed rows.
+//! the previous frame, prices every row against the new costs (step 1), keeps the pairs
+//! that are still tight, runs a short auction first if more than a quarter of the rows
+//! lost their pair, and re-augments the freed rows (steps 3–4).
 //!
 //! Rectangular problems (rows < cols) are exact: every column price starts at 0 and is
-//! only lowered, except that a column freed by a warm start or a pricing pass is raised
-//! back to 0 (re-checking the rows it could now undercut), so at every augmentation all
-//! free columns have the maximal price — the dual condition of unassigned columns.
+//! only lowered, except that a column left free with a lowered price is raised back to
+//! 0 (freeing the rows it now undercuts and weakening the list bounds it affects), so at
+//! every augmentation all free columns have the maximal price — the dual condition of
+//! unassigned columns.
 //!
 //! `+inf` entries mean "unreachable" and are never part of an assignment; no arithmetic
 //! on them produces NaN (column prices stay finite).
@@ -102,7 +115,9 @@ const AUCTION_CAP: f64 = 1e6;
 /// the rows lost their pair.
 const WARM_AUCTION_FREE_DIV: usize = 4;
 /// Auction bid budget per row and phase (beyond it the exact finish takes over).
-const AUCTION_BIDS_PER_ROW: usize = 5000;
+const AUCTION_BIDS_PER_ROW: usize = 200;
+/// Auction budget of list rebuilds (full-row passes) per row over all phases.
+const AUCTION_REBUILDS_PER_ROW: u64 = 16;
 
 /// Whether auction bids use the exact second-best value (else a lower bound).
 const AUCTION_EXACT_SECOND: bool = true;
@@ -328,8 +343,8 @@ pub enum Strategy {
     Auto,
     /// Dijkstra over full rows (classic dense shortest augmenting path).
     Dense,
-    /// Dijkstra over per-row candidate lists, with full-row pricing passes and a dense
-    /// finish if the candidate graph is insufficient.
+    /// Auction-initialised prices, then Dijkstra over sorted per-row candidate lists
+    /// with lazy full-row refills (see the module documentation).
     Sparse,
 }
 
@@ -601,7 +616,8 @@ fn key_col(k: u64, mask: u64) -> u32 {
 
 /// Streaming selection of the `k` smallest [`key`]s `key(w, col)`, `w = row[col] -
 /// v[col]` finite, that are at least `lo`. `thr0` is an inclusive upper bound on the
-/// `k`-th smallest `w` when one is known (`+inf` otherwise). The keys are left sorted
+/// `k`-th smallest `w` when one is known (`+inf` otherwise). Columns enter the keys
+/// XOR-ed with `salt` (ties between equal `w` break in a per-row order). The keys are left sorted
 /// in `buf[..n]`; `buf.len() >= 2k` is the scratch. With `check` and `lo == 0`, also
 /// returns the first column whose `w` is NaN or `-inf`. `BELOW` says whether `lo`
 /// bounds anything (`false` requires `lo == 0`).
@@ -620,6 +636,7 @@ fn select_k<const BELOW: bool>(
     lo: u64,
     thr0: f64,
     check: bool,
+    salt: u32,
     buf: &mut [u64],
 ) -> (usize, Option<usize>) {
     let cap = buf.len();
@@ -641,7 +658,7 @@ fn select_k<const BELOW: bool>(
                 bad = Some(col as usize);
             }
         } else if w < f64::INFINITY {
-            let kk = key(w, col, mask);
+            let kk = key(w, col ^ salt, mask);
             if kk >= lo && kk <= *thr_key {
                 buf[*n] = kk;
                 *n += 1;
@@ -748,6 +765,10 @@ pub struct Solver {
     mask: u64,
     /// Selection scratch, `4k` entries.
     buf: Vec<u64>,
+    /// Lower bound of every tentative distance of the current sparse search.
+    cur_min: f64,
+    /// A free column reached at distance `cur_min` in the current search, or NONE.
+    early: usize,
     // Search workspaces (per column).
     dist: Vec<f64>,
     pred: Vec<u32>,
@@ -828,7 +849,12 @@ impl Solver {
     pub fn solve(&mut self, costs: &CostMatrix) -> Result<&[usize], AssignError> {
         self.check_dims(costs)?;
         self.size_for(costs.rows(), costs.cols());
-        self.v.fill(0.0);
+        if costs.rows() == costs.cols() {
+            self.column_reduction(costs);
+        } else {
+            // Rectangular: free columns must keep the maximal price, so all start equal.
+            self.v.fill(0.0);
+        }
         self.x.fill(NONE);
         self.y.fill(NONE);
         self.stats = SolveStats::default();
@@ -943,6 +969,28 @@ impl Solver {
             scale = scale.max(vj.abs());
         }
         1e3 * EPS_REL * scale + f64::MIN_POSITIVE
+    }
+
+    /// Square problems: initial prices `v[j] = min_i c[i][j]` (Jonker–Volgenant column
+    /// reduction), which removes any large per-goal cost component (e.g. a crowd far
+    /// from its formation) before candidate lists are chosen. Columns without a finite
+    /// entry get 0; NaN and `-inf` are skipped here (reported by the first pass).
+    fn column_reduction(&mut self, costs: &CostMatrix) {
+        self.v.fill(f64::INFINITY);
+        for i in 0..costs.rows() {
+            for (vj, &c) in self.v.iter_mut().zip(costs.row(i)) {
+                *vj = if c < *vj && c > f64::NEG_INFINITY {
+                    c
+                } else {
+                    *vj
+                };
+            }
+        }
+        for vj in &mut self.v {
+            if *vj == f64::INFINITY {
+                *vj = 0.0;
+            }
+        }
     }
 
     fn check_dims(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
@@ -1176,8 +1224,37 @@ impl Solver {
         if let (true, Some(col)) = (check, bad) {
             return Err(AssignError::NotFinite { row: i, col });
         }
+        let arg = if build {
+            self.free_tie(costs, i, min_w, arg)
+        } else {
+            arg
+        };
         self.settle_row(costs, i, min_w, arg);
         Ok(arg != NONE)
+    }
+
+    /// Among the listed columns of row `i` tied with its minimum `min_w` (at `arg`),
+    /// one that is free if `arg` is taken (so that greedy assignment survives ties).
+    fn free_tie(&self, costs: &CostMatrix, i: usize, min_w: f64, arg: usize) -> usize {
+        if arg == NONE || self.y[arg] == NONE {
+            return arg;
+        }
+        let base = i * self.k;
+        let len = self.cand_len[i] as usize;
+        let row = costs.row(i);
+        for (&c, &wb) in self.cand_col[base..base + len]
+            .iter()
+            .zip(&self.cand_wb[base..base + len])
+        {
+            let c = c as usize;
+            if wb > min_w {
+                break;
+            }
+            if self.y[c] == NONE && row[c] - self.v[c] <= min_w {
+                return c;
+            }
+        }
+        arg
     }
 
     /// Keeps row `i` if its pair is tight against the row minimum `min_w` (at column
@@ -1231,9 +1308,11 @@ impl Solver {
             f64::INFINITY
         };
         let mask = self.mask;
-        let (n, bad) = select_k::<false>(row, &self.v, k, mask, 0, thr0, check, &mut self.buf);
+        let salt = self.salt(i);
+        let (n, bad) =
+            select_k::<false>(row, &self.v, k, mask, 0, thr0, check, salt, &mut self.buf);
         for (t, &kk) in self.buf[..n].iter().enumerate() {
-            let c = key_col(kk, mask);
+            let c = key_col(kk, mask) ^ salt;
             self.cand_col[base + t] = c;
             self.cand_cost[base + t] = row[c as usize];
             self.cand_wb[base + t] = key_floor(kk, mask);
@@ -1249,7 +1328,7 @@ impl Solver {
         }
         match self.buf[..n].first() {
             Some(&kk) => {
-                let c = key_col(kk, mask) as usize;
+                let c = (key_col(kk, mask) ^ salt) as usize;
                 (row[c] - self.v[c], c, bad)
             }
             None => (f64::INFINITY, NONE, bad),
@@ -1326,6 +1405,8 @@ impl Solver {
         // Bid cap for rows with a single finite candidate.
         let cap = AUCTION_CAP * eps0;
         let budget = AUCTION_BIDS_PER_ROW * self.rows + 64;
+        let rebuild_budget =
+            self.stats.rows_priced + AUCTION_REBUILDS_PER_ROW * self.rows as u64 + 64;
         let mut eps = eps0;
         loop {
             self.stats.auction_phases += 1;
@@ -1347,7 +1428,7 @@ impl Solver {
                 let i = i as usize;
                 bids += 1;
                 let (w1, j1, w2) = self.best2(costs, i, AUCTION_EXACT_SECOND);
-                if bids > budget || j1 == NONE {
+                if bids > budget || j1 == NONE || self.stats.rows_priced > rebuild_budget {
                     self.free_rows.push(i as u32);
                     self.stats.bids += bids as u64;
                     return;
@@ -1466,6 +1547,12 @@ impl Solver {
         }
     }
 
+    /// Per-row tie-breaking salt of the candidate keys.
+    #[inline]
+    fn salt(&self, i: usize) -> u32 {
+        ((i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as u32 & self.mask as u32
+    }
+
     fn next_epoch(&mut self) -> u32 {
         if self.epoch == u32::MAX {
             self.mark.fill(Mark::default());
@@ -1502,8 +1589,21 @@ impl Solver {
         self.heap.clear();
         self.pending.clear();
         self.scanned.clear();
+        self.early = NONE;
+        // Every reduced cost of the row is at least its first list bound.
+        self.cur_min = if self.cand_len[i0] > 0 {
+            self.cand_wb[i0 * self.k]
+        } else {
+            self.theta[i0]
+        };
         self.advance_list(i0, 0.0, 0, ep);
         let (dstar, sink) = loop {
+            if self.early != NONE {
+                let j = self.early;
+                self.mark[j].done = ep;
+                self.scanned.push(j as u32);
+                break (self.mark[j].dist, j);
+            }
             let hmin = self.heap.key.first().copied().unwrap_or(f64::INFINITY);
             if self.pending.min_bound() < hmin {
                 if let Some(p) = self.pending.pop() {
@@ -1521,6 +1621,7 @@ impl Solver {
             let j = j as usize;
             self.mark[j].done = ep;
             self.scanned.push(j as u32);
+            self.cur_min = dk;
             let i = self.y[j];
             if i == NONE {
                 break (dk, j);
@@ -1564,6 +1665,11 @@ impl Solver {
             m.dist = nd;
             self.pred[k] = i;
             self.heap.push_or_decrease(k as u32, nd);
+            // A free column at the least possible distance ends the search at once
+            // (what LAPJV does with zero reduced costs; decisive with many ties).
+            if nd <= self.cur_min && self.y[k] == NONE && self.early == NONE {
+                self.early = k;
+            }
         }
     }
 
@@ -1607,6 +1713,7 @@ impl Solver {
         let k = self.k;
         let row = costs.row(p.row as usize);
         let mask = self.mask;
+        let salt = self.salt(p.row as usize);
         let (n, _) = select_k::<true>(
             row,
             &self.v,
@@ -1615,10 +1722,11 @@ impl Solver {
             p.lo,
             f64::INFINITY,
             false,
+            salt,
             &mut self.buf,
         );
         for t in 0..n {
-            let c = key_col(self.buf[t], mask) as usize;
+            let c = (key_col(self.buf[t], mask) ^ salt) as usize;
             let nd = p.off + (row[c] - self.v[c]);
             self.relax_to(p.row, c, nd, ep);
         }
