@@ -93,7 +93,10 @@ fn pathfinding_kuhn_munkres(cr: &mut Criterion) {
         let w = Matrix::from_vec(
             n,
             n,
-            c.as_slice().iter().map(|&x| -(x * 1e6).round() as i64).collect(),
+            c.as_slice()
+                .iter()
+                .map(|&x| -(x * 1e6).round() as i64)
+                .collect(),
         )
         .expect("n×n");
         g.bench_with_input(BenchmarkId::from_parameter(n), &w, |b, w| {

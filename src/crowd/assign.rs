@@ -737,8 +737,8 @@ pub struct Solver {
     strategy: Strategy,
     /// Requested candidates per row (0 = automatic).
     k_opt: usize,
-    /// Sparse rounds before the dense finish ([`MAX_ROUNDS`]; tests lower it).
-    max_rounds: u32,
+    /// Sparse rounds before the dense finish if not [`MAX_ROUNDS`] (tests lower it).
+    max_rounds: Option<u32>,
     /// Candidates per row (sparse strategy) for the current dimensions.
     k: usize,
     rows: usize,
@@ -807,7 +807,6 @@ impl Solver {
         Solver {
             strategy,
             k_opt: candidates,
-            max_rounds: MAX_ROUNDS,
             ..Solver::default()
         }
     }
@@ -974,16 +973,14 @@ impl Solver {
     /// Square problems: initial prices `v[j] = min_i c[i][j]` (Jonker–Volgenant column
     /// reduction), which removes any large per-goal cost component (e.g. a crowd far
     /// from its formation) before candidate lists are chosen. Columns without a finite
-    /// entry get 0; NaN and `-inf` are skipped here (reported by the first pass).
+    /// entry get 0.
     fn column_reduction(&mut self, costs: &CostMatrix) {
         self.v.fill(f64::INFINITY);
         for i in 0..costs.rows() {
             for (vj, &c) in self.v.iter_mut().zip(costs.row(i)) {
-                *vj = if c < *vj && c > f64::NEG_INFINITY {
-                    c
-                } else {
-                    *vj
-                };
+                // `min` skips NaN; a `-inf` entry makes the price `-inf`, which the
+                // first pass then reports as NaN in that column (the solve stops).
+                *vj = vj.min(c);
             }
         }
         for vj in &mut self.v {
@@ -1113,7 +1110,7 @@ impl Solver {
                 if self.free_rows.is_empty() {
                     return Ok(());
                 }
-                if self.stats.rounds >= self.max_rounds {
+                if self.stats.rounds >= self.max_rounds.unwrap_or(MAX_ROUNDS) {
                     break;
                 }
                 self.stats.rounds += 1;
@@ -2112,7 +2109,7 @@ mod tests {
             let cols = rows + extra;
             let mut dense = Solver::with_strategy(Algo::Dense);
             let mut sparse = Solver::with_options(Algo::Sparse, k);
-            sparse.max_rounds = max_rounds;
+            sparse.max_rounds = Some(max_rounds);
             let mut c = medium(rows, cols, seed, ints, inf_per_mille);
             for frame in 0..4u64 {
                 dense.solve(&c).unwrap();
@@ -2234,9 +2231,9 @@ mod tests {
     #[test]
     fn repeated_same_size_solves_keep_buffers() {
         let mut rng = SplitMix(9);
-        let (mut a, g) = (points(&mut rng, 300), points(&mut rng, 300));
         let mut c = CostMatrix::new(0, 0);
-        for strategy in [Algo::Dense, Algo::Sparse] {
+        for (strategy, cols) in [(Algo::Dense, 300), (Algo::Sparse, 300), (Algo::Sparse, 350)] {
+            let (mut a, g) = (points(&mut rng, 300), points(&mut rng, cols));
             let mut s = Solver::with_strategy(strategy);
             SquaredDistance.fill(&a, &g, &mut c);
             s.solve(&c).unwrap();
@@ -2274,6 +2271,16 @@ mod tests {
         assert_eq!(c.get(1, 1), 0.0);
         let mut s = Solver::new();
         assert_eq!(s.solve(&c).unwrap(), &[2, 1]);
+    }
+
+    #[test]
+    fn default_solver_is_new() {
+        let c = CostMatrix::from_fn(200, 200, |i, j| ((i * 31 + j * 17) % 97) as f64);
+        let mut a = Solver::default();
+        a.solve(&c).unwrap();
+        assert_eq!(a.strategy(), Algo::Auto);
+        assert!(!a.stats().dense_finish);
+        assert!(a.verify_optimal(&c, 1e-9));
     }
 
     #[test]
