@@ -41,10 +41,12 @@
 //!      outgrew their threshold; rounds repeat until no row is violated (a bounded
 //!      number, then a full dense finish) — at that point the full certificate holds.
 //!
-//! Warm start ([`Solver::solve_warm`]) keeps the column prices `v` and the assignment of
-//! the previous frame, prices every row against the new costs (step 1), keeps the pairs
-//! that are still tight, runs a short auction first if more than a quarter of the rows
-//! lost their pair, and re-augments the freed rows (steps 3–4).
+//! Warm start ([`Solver::solve_warm`]) keeps the assignment, the row duals and the
+//! column prices of the previous frame, carries each price over by the change of its
+//! assigned cost (so kept pairs start tight), prices every row against the new costs
+//! (step 1), keeps the pairs that are still tight, runs a short auction (its first ε
+//! sized by how far the broken pairs are off) if more than a quarter of the rows lost
+//! their pair, and re-augments the freed rows (steps 3–4).
 //!
 //! Rectangular problems (rows < cols) are exact: every column price starts at 0 and is
 //! only lowered, except that a column left free with a lowered price is raised back to
@@ -102,9 +104,12 @@ const AUTO_CANDIDATES_MAX: usize = 64;
 const AUCTION_SPREAD_SLOTS: usize = 8;
 /// First auction ε as a fraction of the mean local cost spread.
 const AUCTION_START: f64 = 0.5;
-/// First auction ε of a warm start (prices already near optimal), as
+/// Smallest first auction ε of a warm start (prices already near optimal), as
 /// [`AUCTION_START`].
 const AUCTION_START_WARM: f64 = 0.1;
+/// First auction ε of a warm start as a fraction of the mean slack of the pairs the
+/// new costs broke (clamped between the warm and the cold start).
+const AUCTION_WARM_SLACK: f64 = 0.25;
 /// Factor by which ε shrinks between auction phases.
 const AUCTION_FACTOR: f64 = 0.1;
 /// Last auction ε relative to the first.
@@ -765,6 +770,8 @@ pub struct Solver {
     mask: u64,
     /// Selection scratch, `4k` entries.
     buf: Vec<u64>,
+    /// Sum of the slacks of the pairs freed by pricing passes (sizes the warm auction).
+    freed_slack: f64,
     /// Lower bound of every tentative distance of the current sparse search.
     cur_min: f64,
     /// A free column reached at distance `cur_min` in the current search, or NONE.
@@ -876,6 +883,7 @@ impl Solver {
         if !self.solved || costs.rows() != self.rows || costs.cols() != self.cols {
             return self.solve(costs);
         }
+        self.shift_prices(costs);
         // Keep the prices bounded over long runs: shift so that max v = 0 (reduced
         // costs are unchanged; free columns of a rectangular problem are already at
         // the maximum, 0).
@@ -889,7 +897,25 @@ impl Solver {
             warm: true,
             ..SolveStats::default()
         };
+        self.freed_slack = 0.0;
         self.finish(costs)
+    }
+
+    /// Warm start: carries each column's price over by the change of its assigned
+    /// cost, `v[j] = c_new[i][j] - u[i]` for its row `i`, so every kept pair starts
+    /// tight with the old row dual. A change that splits into a row part and a column
+    /// part (the whole formation moving, turning or scaling a little) then leaves the
+    /// reduced costs almost as they were. Rectangular problems keep the assigned
+    /// prices at or below the free columns' 0.
+    fn shift_prices(&mut self, costs: &CostMatrix) {
+        let rect = self.rows < self.cols;
+        for (i, &j) in self.x.iter().enumerate() {
+            let c = costs.get(i, j);
+            if c.is_finite() {
+                let vj = c - self.u[i];
+                self.v[j] = if rect && vj > 0.0 { 0.0 } else { vj };
+            }
+        }
     }
 
     /// The assignment of the last successful solve (row -> column); empty after an
@@ -1089,6 +1115,9 @@ impl Solver {
     fn run(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
         let sparse = self.use_sparse();
         self.price_all(costs, sparse, true)?;
+        if self.stats.warm {
+            self.stats.kept_rows = self.x.iter().filter(|&&j| j != NONE).count();
+        }
         let many_free = self.free_rows.len() * WARM_AUCTION_FREE_DIV > self.rows;
         if sparse && (!self.stats.warm || many_free) {
             self.auction(costs);
@@ -1101,9 +1130,6 @@ impl Solver {
                 }
             }
             self.price_all_lists(costs);
-        }
-        if self.stats.warm {
-            self.stats.kept_rows = self.x.iter().filter(|&&j| j != NONE).count();
         }
         if sparse {
             loop {
@@ -1269,6 +1295,7 @@ impl Solver {
             if c - vx <= min_w + t {
                 return;
             }
+            self.freed_slack += c - vx - min_w;
             self.x[i] = NONE;
             self.y[xi] = NONE;
             if self.rows < self.cols {
@@ -1389,12 +1416,15 @@ impl Solver {
         if count == 0 {
             return;
         }
-        let start = if self.stats.warm {
-            AUCTION_START_WARM
+        let spread = spread / count as f64;
+        let eps0 = if self.stats.warm {
+            // Sized by how far the prices are off: the mean slack of the broken pairs.
+            let freed = self.free_rows.len().max(1) as f64;
+            (AUCTION_WARM_SLACK * self.freed_slack / freed)
+                .clamp(AUCTION_START_WARM * spread, AUCTION_START * spread)
         } else {
-            AUCTION_START
+            AUCTION_START * spread
         };
-        let eps0 = start * spread / count as f64;
         if !(eps0 > 0.0 && eps0 < f64::INFINITY) {
             return;
         }
