@@ -122,7 +122,7 @@ const WARM_AUCTION_FREE_DIV: usize = 4;
 /// Auction bid budget per row and phase (beyond it the exact finish takes over).
 const AUCTION_BIDS_PER_ROW: usize = 200;
 /// Auction budget of list rebuilds (full-row passes) per row over all phases.
-const AUCTION_REBUILDS_PER_ROW: u64 = 16;
+const AUCTION_REBUILDS_PER_ROW: u64 = 64;
 
 /// Whether auction bids use the exact second-best value (else a lower bound).
 const AUCTION_EXACT_SECOND: bool = true;
