@@ -343,7 +343,7 @@ pub enum AssignError {
 /// assignment; they differ only in speed.
 #[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
 pub enum Strategy {
-    /// Dense for small problems (at most 128 columns), sparse with pricing otherwise.
+    /// Dense for small problems (at most 128 columns), sparse otherwise.
     #[default]
     Auto,
     /// Dijkstra over full rows (classic dense shortest augmenting path).
@@ -360,7 +360,8 @@ pub struct SolveStats {
     pub warm: bool,
     /// Rows still assigned after the first pricing pass of a warm start.
     pub kept_rows: usize,
-    /// Full-row pricing checks (one per row per pass).
+    /// Row pricings: full-row streaming passes (list builds, dense pricing) and
+    /// list-based checks.
     pub rows_priced: u64,
     /// Sparse pricing rounds.
     pub rounds: u32,
@@ -368,7 +369,8 @@ pub struct SolveStats {
     pub augmentations: u64,
     /// Rows scanned inside the searches.
     pub rows_scanned: u64,
-    /// Auction phases run before the exact finish (cold sparse solves).
+    /// Auction phases run before the exact finish (sparse cold solves, and warm
+    /// solves that broke many pairs).
     pub auction_phases: u32,
     /// Auction bids.
     pub bids: u64,
@@ -736,7 +738,8 @@ fn select_k<const BELOW: bool>(
 /// Exact assignment solver with reusable workspaces, dual prices and warm start.
 ///
 /// Workspaces are sized on the first solve and whenever the dimensions change; solving
-/// again with the same dimensions does not allocate.
+/// again with the same dimensions does not allocate. Memory is `O(rows · k + cols)`
+/// (`k <= 64` candidates per row, 20 bytes each) besides the caller's matrix.
 #[derive(Clone, Debug, Default)]
 pub struct Solver {
     strategy: Strategy,
