@@ -11,33 +11,48 @@
 //!
 //! # Algorithm
 //!
-//! A shortest-augmenting-path (SAP) solver with dual prices, in the Jonker–Volgenant
-//! family, with two ways of searching for augmenting paths:
+//! A shortest-augmenting-path (SAP) solver with dual prices in the Jonker–Volgenant
+//! family (convention: reduced costs `c[i][j] - u[i] - v[j] >= 0`, zero on assigned
+//! pairs; `v` are the column prices). Two ways of running it:
 //!
 //! * **Dense** ([`Strategy::Dense`]): each free row runs a Dijkstra search over the full
-//!   reduced-cost matrix (`c[i][j] - u[i] - v[j] >= 0`), scanning whole contiguous rows.
-//!   `O(rows * cols)` per scanned row; used for small problems and as the exact fallback.
-//! * **Sparse with pricing** ([`Strategy::Sparse`], the default for large problems): one
-//!   streaming pass over the matrix keeps, per row, the `k` columns of smallest reduced
-//!   cost `c[i][j] - v[j]` (plus each column's cheapest row, so no column is orphaned).
-//!   Augmenting paths are searched on that candidate graph with a binary heap. A pricing
-//!   pass then re-checks, against the *full* rows, every row whose dual changed; rows
-//!   that are no longer tight are freed, their candidate lists rebuilt, and re-augmented.
-//!   Because Dijkstra only ever lowers column prices, a row whose matched column was
-//!   not touched cannot become violated, so later pricing passes only touch the rows
-//!   the searches went through. When no row is violated the full dual certificate
-//!   holds and the assignment is optimal. A bounded number of rounds, after which
-//!   (or after a search that finds no path in the candidate graph) the solver re-prices
-//!   everything and finishes densely, keeps it exact in every case.
+//!   reduced-cost matrix, scanning whole contiguous rows (settled columns are masked
+//!   with `d = +inf`, price `-inf`, so the relaxation loop is branch-free).
+//!   `O(cols)` per scanned row; used for small problems and as the safety net.
+//! * **Sparse** ([`Strategy::Sparse`], the default above 128 columns), in four steps:
+//!   1. One streaming pass over the matrix (which also validates it) keeps, per row,
+//!      the `k` columns of smallest reduced cost `w = c - v`, sorted, and a threshold
+//!      `theta` below which no other column of the row lies. Prices only ever fall
+//!      during the solve (except where noted below), so these stay lower bounds.
+//!   2. A forward auction with ε-scaling (Bertsekas) on the lists brings the prices
+//!      close to optimal cheaply; a row whose list went stale (its best entry rose
+//!      above `theta`) rebuilds it with one streaming pass. The auction is only a
+//!      price initialiser; exactness comes from the next steps.
+//!   3. Each assigned column's price is raised by its row's slack (at most the last
+//!      ε) so the pairs become tight, the list bounds are lowered by as much, and every
+//!      row is priced against its list: rows whose pair is not tight are freed.
+//!   4. Exact Dijkstra from each free row over the sorted lists, with lazy relaxation
+//!      (a scanned row relaxes its list a few slots at a time, in order of the bound
+//!      `offset + w_listed`; past the list, `offset + theta` guards the rest of the
+//!      row, fetched `k` columns at a time by a streaming pass only if the search gets
+//!      that far). A row whose dual outgrew its `theta` is repriced on the spot (and
+//!      released if no longer tight). The searches are therefore exact on the full
+//!      matrix, not just on the lists. A final check reprices the rows whose dual
+//!      outgrew their threshold; rounds repeat until no row is violated (a bounded
+//!      number, then a full dense finish) — at that point the full certificate holds.
 //!
-//! Warm start ([`Solver::solve_warm`]) keeps the column prices `v` and the assignment of
-//! the previous frame, re-prices every row against the new costs, keeps the pairs that
-//! are still tight and re-augments only the freed rows.
+//! Warm start ([`Solver::solve_warm`]) keeps the assignment, the row duals and the
+//! column prices of the previous frame, carries each price over by the change of its
+//! assigned cost (so kept pairs start tight), prices every row against the new costs
+//! (step 1), keeps the pairs that are still tight, runs a short auction (its first ε
+//! sized by how far the broken pairs are off) if more than a quarter of the rows lost
+//! their pair, and re-augments the freed rows (steps 3–4).
 //!
 //! Rectangular problems (rows < cols) are exact: every column price starts at 0 and is
-//! only lowered, except that a column freed by a warm start or a pricing pass is raised
-//! back to 0 (re-checking the rows it could now undercut), so at every augmentation all
-//! free columns have the maximal price — the dual condition of unassigned columns.
+//! only lowered, except that a column left free with a lowered price is raised back to
+//! 0 (freeing the rows it now undercuts and weakening the list bounds it affects), so at
+//! every augmentation all free columns have the maximal price — the dual condition of
+//! unassigned columns.
 //!
 //! `+inf` entries mean "unreachable" and are never part of an assignment; no arithmetic
 //! on them produces NaN (column prices stay finite).
@@ -57,35 +72,63 @@
 //! assert!(solver.verify_optimal(&c, 1e-9));
 //! ```
 
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
+// NaN-aware comparisons (`!(a > b)` is true for NaN) are deliberate throughout.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::geom::Vec2;
 
 /// Relative tolerance of the tightness and dual-feasibility tests.
 ///
-/// A matched pair counts as tight, and an edge as dual-feasible, when its reduced cost
-/// is at least `-EPS_REL * scale`, where `scale` is the largest magnitude among the
-/// finite costs and the column prices. The returned assignment is therefore optimal to
-/// within about `rows * EPS_REL * scale` of total cost (rounding level).
+/// Two reduced costs `c - v` count as equal when they differ by at most `EPS_REL`
+/// times the sum of the magnitudes of the costs and prices involved (rounding level),
+/// so the returned assignment is optimal to within about `rows * EPS_REL * scale` of
+/// total cost, `scale` the magnitude of the costs and prices.
 pub const EPS_REL: f64 = 1e-12;
 
-/// Default number of cheapest candidate columns kept per row by [`Strategy::Sparse`].
-pub const DEFAULT_CANDIDATES: usize = 10;
+/// Rounding tolerance of a comparison between reduced costs `c - v` built from the
+/// given magnitudes ([`EPS_REL`]).
+#[inline]
+fn tol(a: f64, b: f64, c: f64, d: f64) -> f64 {
+    EPS_REL * (a.abs() + b.abs() + c.abs() + d.abs())
+}
+
+/// Candidate columns kept per row by [`Strategy::Sparse`] when chosen automatically:
+/// `cols / AUTO_CANDIDATES_DIV`, clamped to `[AUTO_CANDIDATES_MIN, AUTO_CANDIDATES_MAX]`.
+const AUTO_CANDIDATES_DIV: usize = 40;
+/// Lower clamp of the automatic candidate count.
+const AUTO_CANDIDATES_MIN: usize = 24;
+/// Upper clamp of the automatic candidate count.
+const AUTO_CANDIDATES_MAX: usize = 64;
 
 /// Candidate slots over which the local cost spread is measured for the auction.
 const AUCTION_SPREAD_SLOTS: usize = 8;
 /// First auction ε as a fraction of the mean local cost spread.
-const AUCTION_START: f64 = 0.25;
+const AUCTION_START: f64 = 0.5;
+/// Smallest first auction ε of a warm start (prices already near optimal), as
+/// [`AUCTION_START`].
+const AUCTION_START_WARM: f64 = 0.1;
+/// First auction ε of a warm start as a fraction of the mean slack of the pairs the
+/// new costs broke (clamped between the warm and the cold start).
+const AUCTION_WARM_SLACK: f64 = 0.25;
 /// Factor by which ε shrinks between auction phases.
-const AUCTION_FACTOR: f64 = 0.2;
+const AUCTION_FACTOR: f64 = 0.1;
 /// Last auction ε relative to the first.
-const AUCTION_END: f64 = 1e-6;
+const AUCTION_END: f64 = 1e-4;
+/// Largest auction bid, in units of the first ε (rows with one finite entry).
+const AUCTION_CAP: f64 = 1e6;
+/// A warm start runs the auction first when more than `1 / WARM_AUCTION_FREE_DIV` of
+/// the rows lost their pair.
+const WARM_AUCTION_FREE_DIV: usize = 4;
 /// Auction bid budget per row and phase (beyond it the exact finish takes over).
-const AUCTION_BIDS_PER_ROW: usize = 5000;
+const AUCTION_BIDS_PER_ROW: usize = 200;
+/// Auction budget of list rebuilds (full-row passes) per row over all phases.
+const AUCTION_REBUILDS_PER_ROW: u64 = 64;
+
+/// Whether auction bids use the exact second-best value (else a lower bound).
+const AUCTION_EXACT_SECOND: bool = true;
 
 /// Candidate list slots relaxed at once when a scanned row's list is advanced.
-const RELAX_BATCH: usize = 2;
+const RELAX_BATCH: usize = 8;
 
 /// Pricing rounds of the sparse strategy before it finishes densely.
 const MAX_ROUNDS: u32 = 16;
@@ -219,7 +262,7 @@ pub trait CostProvider {
 ///
 /// # Formula
 /// `c_ij = (a_i - g_j)·(a_i - g_j)` (mesh-formation-control section 6.1 with the
-/// Euclidean metric of its reference [7]; squaring favours even travel lengths).
+/// Euclidean metric of its reference \[7\]; squaring favours even travel lengths).
 ///
 /// # Complexity
 /// `O(agents * goals)`, no allocation when `out` is already large enough.
@@ -300,13 +343,13 @@ pub enum AssignError {
 /// assignment; they differ only in speed.
 #[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
 pub enum Strategy {
-    /// Dense for small problems (at most 128 columns), sparse with pricing otherwise.
+    /// Dense for small problems (at most 128 columns), sparse otherwise.
     #[default]
     Auto,
     /// Dijkstra over full rows (classic dense shortest augmenting path).
     Dense,
-    /// Dijkstra over per-row candidate lists, with full-row pricing passes and a dense
-    /// finish if the candidate graph is insufficient.
+    /// Auction-initialised prices, then Dijkstra over sorted per-row candidate lists
+    /// with lazy full-row refills (see the module documentation).
     Sparse,
 }
 
@@ -317,7 +360,8 @@ pub struct SolveStats {
     pub warm: bool,
     /// Rows still assigned after the first pricing pass of a warm start.
     pub kept_rows: usize,
-    /// Full-row pricing checks (one per row per pass).
+    /// Row pricings: full-row streaming passes (list builds, dense pricing) and
+    /// list-based checks.
     pub rows_priced: u64,
     /// Sparse pricing rounds.
     pub rounds: u32,
@@ -325,7 +369,8 @@ pub struct SolveStats {
     pub augmentations: u64,
     /// Rows scanned inside the searches.
     pub rows_scanned: u64,
-    /// Auction phases run before the exact finish (cold sparse solves).
+    /// Auction phases run before the exact finish (sparse cold solves, and warm
+    /// solves that broke many pairs).
     pub auction_phases: u32,
     /// Auction bids.
     pub bids: u64,
@@ -440,7 +485,7 @@ impl ColHeap {
 /// Pending work of a scanned row in a sparse search: the columns of the row not
 /// relaxed yet cannot get a distance below `bound`. `slot < len` means the row's
 /// candidate list from `slot` on; [`BEYOND`] means the columns off the list, whose
-/// [`key`]s are all at least `lo`. Ordered so that `BinaryHeap` pops the least bound.
+/// [`key`]s are all at least `lo`.
 #[derive(Copy, Clone, Debug)]
 struct Pending {
     bound: f64,
@@ -450,67 +495,88 @@ struct Pending {
     slot: u32,
 }
 
+/// Search state of a column in a sparse search: tentative distance, and the epochs
+/// in which it was reached (`seen`) and settled (`done`).
+#[derive(Copy, Clone, Debug, Default)]
+struct Mark {
+    dist: f64,
+    seen: u32,
+    done: u32,
+}
+
 /// [`Pending::slot`] of the columns off the candidate list.
 const BEYOND: u32 = u32::MAX;
 
-impl PartialEq for Pending {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
-    }
+/// Binary min-heap of [`Pending`] by `bound` (never NaN). Capacity is reserved for
+/// two entries per row, more than a search can hold (one per scanned row plus the
+/// free row), so it never allocates after sizing.
+#[derive(Clone, Debug, Default)]
+struct PendHeap {
+    items: Vec<Pending>,
 }
 
-impl Eq for Pending {}
-
-impl PartialOrd for Pending {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
+impl PendHeap {
+    fn size_for(&mut self, rows: usize) {
+        self.items = Vec::with_capacity(2 * rows + 2);
     }
-}
 
-impl Ord for Pending {
-    fn cmp(&self, other: &Self) -> Ordering {
-        other.bound.total_cmp(&self.bound)
+    fn clear(&mut self) {
+        self.items.clear();
+    }
+
+    #[inline]
+    fn min_bound(&self) -> f64 {
+        self.items.first().map_or(f64::INFINITY, |p| p.bound)
+    }
+
+    #[inline]
+    fn push(&mut self, p: Pending) {
+        self.items.push(p);
+        let mut at = self.items.len() - 1;
+        while at > 0 {
+            let parent = (at - 1) / 2;
+            if self.items[parent].bound <= p.bound {
+                break;
+            }
+            self.items[at] = self.items[parent];
+            at = parent;
+        }
+        self.items[at] = p;
+    }
+
+    #[inline]
+    fn pop(&mut self) -> Option<Pending> {
+        let top = *self.items.first()?;
+        let last = self.items.pop()?;
+        let n = self.items.len();
+        if n > 0 {
+            let mut at = 0;
+            loop {
+                let l = 2 * at + 1;
+                if l >= n {
+                    break;
+                }
+                let r = l + 1;
+                let m = if r < n && self.items[r].bound < self.items[l].bound {
+                    r
+                } else {
+                    l
+                };
+                if self.items[m].bound >= last.bound {
+                    break;
+                }
+                self.items[at] = self.items[m];
+                at = m;
+            }
+            self.items[at] = last;
+        }
+        Some(top)
     }
 }
 
 // ---------------------------------------------------------------------------------
 // Row kernels
 // ---------------------------------------------------------------------------------
-
-/// Validates a row: index of the first NaN / `-inf`, the largest finite magnitude,
-/// and whether any entry is finite.
-fn validate_row(row: &[f64]) -> (Option<usize>, f64, bool) {
-    let mut bad = false;
-    let mut finite = false;
-    let mut mx = [0.0f64; LANES];
-    let chunks = row.chunks_exact(LANES);
-    let tail = chunks.remainder();
-    for ch in chunks {
-        for (m, &c) in mx.iter_mut().zip(ch) {
-            bad |= !(c > f64::NEG_INFINITY);
-            finite |= c < f64::INFINITY;
-            let a = if c < f64::INFINITY { c.abs() } else { 0.0 };
-            *m = if a > *m { a } else { *m };
-        }
-    }
-    for &c in tail {
-        bad |= !(c > f64::NEG_INFINITY);
-        finite |= c < f64::INFINITY;
-        if c < f64::INFINITY && c.abs() > mx[0] {
-            mx[0] = c.abs();
-        }
-    }
-    let first_bad = if bad {
-        row.iter().position(|&c| !(c > f64::NEG_INFINITY))
-    } else {
-        None
-    };
-    (
-        first_bad,
-        mx.iter().fold(0.0, |a: f64, &b| a.max(b)),
-        finite,
-    )
-}
 
 /// Order-preserving map of a finite or infinite `f64` (not NaN) to `u64`; `-0.0`
 /// is folded into `0.0` so that the order agrees with `==`.
@@ -557,23 +623,29 @@ fn key_col(k: u64, mask: u64) -> u32 {
 
 /// Streaming selection of the `k` smallest [`key`]s `key(w, col)`, `w = row[col] -
 /// v[col]` finite, that are at least `lo`. `thr0` is an inclusive upper bound on the
-/// `k`-th smallest `w` when one is known (`+inf` otherwise). The keys are left sorted
-/// in `buf[..returned]`; `buf.len() >= 2k` is the scratch.
+/// `k`-th smallest `w` when one is known (`+inf` otherwise). Columns enter the keys
+/// XOR-ed with `salt` (ties between equal `w` break in a per-row order). The keys are left sorted
+/// in `buf[..n]`; `buf.len() >= 2k` is the scratch. With `check` and `lo == 0`, also
+/// returns the first column whose `w` is NaN or `-inf`. `BELOW` says whether `lo`
+/// bounds anything (`false` requires `lo == 0`).
 ///
 /// # Complexity
 /// One pass over the row; blocks of [`LANES`] entries are tested against the current
 /// threshold at once, admitted entries are appended to `buf`, and `buf` is cut back to
 /// the best `k` (linear-time selection) when full, so the work beyond the streaming
 /// compare is `O(admitted + k log k)`.
-fn select_k(
+#[allow(clippy::too_many_arguments)]
+fn select_k<const BELOW: bool>(
     row: &[f64],
     v: &[f64],
     k: usize,
     mask: u64,
     lo: u64,
     thr0: f64,
+    check: bool,
+    salt: u32,
     buf: &mut [u64],
-) -> usize {
+) -> (usize, Option<usize>) {
     let cap = buf.len();
     debug_assert!(k >= 1 && cap >= 2 * k);
     let lo_w = key_floor(lo, mask);
@@ -585,9 +657,15 @@ fn select_k(
     } else {
         (u64::MAX, f64::INFINITY)
     };
+    let mut bad = None;
     let mut admit = |w: f64, col: u32, n: &mut usize, thr_key: &mut u64, thr: &mut f64| {
-        if w < f64::INFINITY {
-            let kk = key(w, col, mask);
+        if !(w > f64::NEG_INFINITY) {
+            // NaN or -inf (only reachable here when `lo` admits everything).
+            if check && bad.is_none() {
+                bad = Some(col as usize);
+            }
+        } else if w < f64::INFINITY {
+            let kk = key(w, col ^ salt, mask);
             if kk >= lo && kk <= *thr_key {
                 buf[*n] = kk;
                 *n += 1;
@@ -605,15 +683,40 @@ fn select_k(
     let (rt, vt) = (rch.remainder(), vch.remainder());
     let mut base = 0u32;
     for (r, vv) in rch.zip(vch) {
+        // Candidates, and also NaN (every comparison false).
         let mut hit = false;
         for (a, b) in r.iter().zip(vv) {
             let w = a - b;
-            hit |= (w >= lo_w) & (w <= thr);
+            hit |= if BELOW {
+                !((w > thr) | (w < lo_w))
+            } else {
+                !(w > thr)
+            };
         }
-        if hit {
-            for (l, (a, b)) in r.iter().zip(vv).enumerate() {
-                admit(a - b, base + l as u32, &mut n, &mut thr_key, &mut thr);
-            }
+        if !hit {
+            base += LANES as u32;
+            continue;
+        }
+        let mut hits = 0u32;
+        for (l, (a, b)) in r.iter().zip(vv).enumerate() {
+            let w = a - b;
+            let h = if BELOW {
+                !((w > thr) | (w < lo_w))
+            } else {
+                !(w > thr)
+            };
+            hits |= u32::from(h) << l;
+        }
+        while hits != 0 {
+            let l = hits.trailing_zeros() as usize;
+            hits &= hits - 1;
+            admit(
+                r[l] - vv[l],
+                base + l as u32,
+                &mut n,
+                &mut thr_key,
+                &mut thr,
+            );
         }
         base += LANES as u32;
     }
@@ -625,7 +728,7 @@ fn select_k(
         n = k;
     }
     buf[..n].sort_unstable();
-    n
+    (n, bad)
 }
 
 // ---------------------------------------------------------------------------------
@@ -635,20 +738,21 @@ fn select_k(
 /// Exact assignment solver with reusable workspaces, dual prices and warm start.
 ///
 /// Workspaces are sized on the first solve and whenever the dimensions change; solving
-/// again with the same dimensions does not allocate.
+/// again with the same dimensions does not allocate. Memory is `O(rows · k + cols)`
+/// (`k <= 64` candidates per row, 20 bytes each) besides the caller's matrix.
 #[derive(Clone, Debug, Default)]
 pub struct Solver {
     strategy: Strategy,
-    /// Candidates per row (sparse strategy).
+    /// Requested candidates per row (0 = automatic).
+    k_opt: usize,
+    /// Sparse rounds before the dense finish if not [`MAX_ROUNDS`] (tests lower it).
+    max_rounds: Option<u32>,
+    /// Candidates per row (sparse strategy) for the current dimensions.
     k: usize,
     rows: usize,
     cols: usize,
     /// Whether `x`, `u`, `v` hold a complete optimal solution of the last problem.
     solved: bool,
-    /// Tolerance of the current solve (absolute).
-    eps: f64,
-    /// Largest finite cost magnitude of the current problem.
-    scale: f64,
     u: Vec<f64>,
     v: Vec<f64>,
     /// Row -> column.
@@ -669,14 +773,20 @@ pub struct Solver {
     mask: u64,
     /// Selection scratch, `4k` entries.
     buf: Vec<u64>,
+    /// Sum of the slacks of the pairs freed by pricing passes (sizes the warm auction).
+    freed_slack: f64,
+    /// Lower bound of every tentative distance of the current sparse search.
+    cur_min: f64,
+    /// A free column reached at distance `cur_min` in the current search, or NONE.
+    early: usize,
     // Search workspaces (per column).
     dist: Vec<f64>,
     pred: Vec<u32>,
-    seen: Vec<u32>,
-    done: Vec<u32>,
+    /// Per column: search state of the current sparse search ([`Mark`]).
+    mark: Vec<Mark>,
     epoch: u32,
     heap: ColHeap,
-    pending: BinaryHeap<Pending>,
+    pending: PendHeap,
     scanned: Vec<u32>,
     dd: Vec<f64>,
     vm: Vec<f64>,
@@ -689,23 +799,24 @@ pub struct Solver {
 }
 
 impl Solver {
-    /// A solver with [`Strategy::Auto`] and [`DEFAULT_CANDIDATES`] candidates per row.
+    /// A solver with [`Strategy::Auto`] and an automatic number of candidates per row.
     pub fn new() -> Solver {
         Solver::with_strategy(Strategy::Auto)
     }
 
     /// A solver using `strategy`.
     pub fn with_strategy(strategy: Strategy) -> Solver {
-        Solver::with_options(strategy, DEFAULT_CANDIDATES)
+        Solver::with_options(strategy, 0)
     }
 
-    /// A solver using `strategy` that keeps `candidates` (at least 1) cheapest columns
-    /// per row in the sparse strategy. The result is optimal for any value; it only
-    /// trades list-building work against full-row scans.
+    /// A solver using `strategy` that keeps `candidates` cheapest columns per row in
+    /// the sparse strategy (`0` = automatic, growing with the number of columns from
+    /// 24 to 64). The result is optimal for any value; it only trades list-building
+    /// work against list refills.
     pub fn with_options(strategy: Strategy, candidates: usize) -> Solver {
         Solver {
             strategy,
-            k: candidates.max(1),
+            k_opt: candidates,
             ..Solver::default()
         }
     }
@@ -747,7 +858,12 @@ impl Solver {
     pub fn solve(&mut self, costs: &CostMatrix) -> Result<&[usize], AssignError> {
         self.check_dims(costs)?;
         self.size_for(costs.rows(), costs.cols());
-        self.v.fill(0.0);
+        if costs.rows() == costs.cols() {
+            self.column_reduction(costs);
+        } else {
+            // Rectangular: free columns must keep the maximal price, so all start equal.
+            self.v.fill(0.0);
+        }
         self.x.fill(NONE);
         self.y.fill(NONE);
         self.stats = SolveStats::default();
@@ -770,6 +886,7 @@ impl Solver {
         if !self.solved || costs.rows() != self.rows || costs.cols() != self.cols {
             return self.solve(costs);
         }
+        self.shift_prices(costs);
         // Keep the prices bounded over long runs: shift so that max v = 0 (reduced
         // costs are unchanged; free columns of a rectangular problem are already at
         // the maximum, 0).
@@ -783,7 +900,25 @@ impl Solver {
             warm: true,
             ..SolveStats::default()
         };
+        self.freed_slack = 0.0;
         self.finish(costs)
+    }
+
+    /// Warm start: carries each column's price over by the change of its assigned
+    /// cost, `v[j] = c_new[i][j] - u[i]` for its row `i`, so every kept pair starts
+    /// tight with the old row dual. A change that splits into a row part and a column
+    /// part (the whole formation moving, turning or scaling a little) then leaves the
+    /// reduced costs almost as they were. Rectangular problems keep the assigned
+    /// prices at or below the free columns' 0.
+    fn shift_prices(&mut self, costs: &CostMatrix) {
+        let rect = self.rows < self.cols;
+        for (i, &j) in self.x.iter().enumerate() {
+            let c = costs.get(i, j);
+            if c.is_finite() {
+                let vj = c - self.u[i];
+                self.v[j] = if rect && vj > 0.0 { 0.0 } else { vj };
+            }
+        }
     }
 
     /// The assignment of the last successful solve (row -> column); empty after an
@@ -833,16 +968,9 @@ impl Solver {
         }
         for i in 0..rows {
             let ui = self.u[i];
-            for (jj, (c, vj)) in costs.row(i).iter().zip(&self.v).enumerate() {
+            for (c, vj) in costs.row(i).iter().zip(&self.v) {
                 // NaN fails this comparison too.
                 if !(c - ui - vj >= -tol) {
-                    if std::env::var_os("ASSIGN_TRACE").is_some() {
-                        eprintln!(
-                            "row {i} col {jj} reduced {} (x {} ) v {vj}",
-                            c - ui - vj,
-                            self.x[i]
-                        );
-                    }
                     return false;
                 }
             }
@@ -853,22 +981,42 @@ impl Solver {
             }
         }
         let vmax = self.v.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-        (0..cols).all(|j| {
-            let ok = self.y[j] != NONE || self.v[j] >= vmax - tol;
-            if !ok && std::env::var_os("ASSIGN_TRACE").is_some() {
-                eprintln!("free col {j} v {} vmax {vmax}", self.v[j]);
-            }
-            ok
-        })
+        (0..cols).all(|j| self.y[j] != NONE || self.v[j] >= vmax - tol)
     }
 
     // -- internals -------------------------------------------------------------------
 
     /// Tolerance of the debug certificate check: far above rounding, far below any
     /// real sub-optimality.
-    fn debug_tolerance(&self) -> f64 {
-        let vmax = self.v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-        1e3 * EPS_REL * (self.eps / EPS_REL).max(vmax) + f64::MIN_POSITIVE
+    fn debug_tolerance(&self, costs: &CostMatrix) -> f64 {
+        let mut scale = 0.0f64;
+        for (i, &j) in self.x.iter().enumerate() {
+            scale = scale.max(costs.get(i, j).abs()).max(self.u[i].abs());
+        }
+        for &vj in &self.v {
+            scale = scale.max(vj.abs());
+        }
+        1e3 * EPS_REL * scale + f64::MIN_POSITIVE
+    }
+
+    /// Square problems: initial prices `v[j] = min_i c[i][j]` (Jonker–Volgenant column
+    /// reduction), which removes any large per-goal cost component (e.g. a crowd far
+    /// from its formation) before candidate lists are chosen. Columns without a finite
+    /// entry get 0.
+    fn column_reduction(&mut self, costs: &CostMatrix) {
+        self.v.fill(f64::INFINITY);
+        for i in 0..costs.rows() {
+            for (vj, &c) in self.v.iter_mut().zip(costs.row(i)) {
+                // `min` skips NaN; a `-inf` entry makes the price `-inf`, which the
+                // first pass then reports as NaN in that column (the solve stops).
+                *vj = vj.min(c);
+            }
+        }
+        for vj in &mut self.v {
+            if *vj == f64::INFINITY {
+                *vj = 0.0;
+            }
+        }
     }
 
     fn check_dims(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
@@ -889,7 +1037,12 @@ impl Solver {
         if rows == self.rows && cols == self.cols && self.x.len() == rows {
             return;
         }
-        let k = self.k;
+        let k = if self.k_opt == 0 {
+            (cols / AUTO_CANDIDATES_DIV).clamp(AUTO_CANDIDATES_MIN, AUTO_CANDIDATES_MAX)
+        } else {
+            self.k_opt
+        };
+        self.k = k;
         self.solved = false;
         self.rows = rows;
         self.cols = cols;
@@ -909,13 +1062,11 @@ impl Solver {
         self.buf.resize(4 * k, 0);
         self.dist.resize(cols, 0.0);
         self.pred.resize(cols, 0);
-        self.seen.clear();
-        self.seen.resize(cols, 0);
-        self.done.clear();
-        self.done.resize(cols, 0);
+        self.mark.clear();
+        self.mark.resize(cols, Mark::default());
         self.epoch = 0;
         self.heap.size_for(cols);
-        self.pending = BinaryHeap::with_capacity(2 * rows + 2);
+        self.pending.size_for(rows);
         self.scanned = Vec::with_capacity(cols);
         self.dd.resize(cols, 0.0);
         self.vm.resize(cols, 0.0);
@@ -944,7 +1095,7 @@ impl Solver {
                 }
                 self.solved = true;
                 debug_assert!(
-                    self.verify_optimal(costs, self.debug_tolerance()),
+                    self.verify_optimal(costs, self.debug_tolerance(costs)),
                     "assignment certificate failed"
                 );
                 Ok(&self.x)
@@ -965,10 +1116,13 @@ impl Solver {
     }
 
     fn run(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
-        self.validate(costs)?;
         let sparse = self.use_sparse();
-        self.price_all(costs, sparse);
-        if sparse && !self.stats.warm {
+        self.price_all(costs, sparse, true)?;
+        if self.stats.warm {
+            self.stats.kept_rows = self.x.iter().filter(|&&j| j != NONE).count();
+        }
+        let many_free = self.free_rows.len() * WARM_AUCTION_FREE_DIV > self.rows;
+        if sparse && (!self.stats.warm || many_free) {
             self.auction(costs);
             self.tighten(costs);
             if self.rows < self.cols {
@@ -980,15 +1134,12 @@ impl Solver {
             }
             self.price_all_lists(costs);
         }
-        if self.stats.warm {
-            self.stats.kept_rows = self.x.iter().filter(|&&j| j != NONE).count();
-        }
         if sparse {
             loop {
                 if self.free_rows.is_empty() {
                     return Ok(());
                 }
-                if self.stats.rounds == MAX_ROUNDS {
+                if self.stats.rounds >= self.max_rounds.unwrap_or(MAX_ROUNDS) {
                     break;
                 }
                 self.stats.rounds += 1;
@@ -1006,45 +1157,39 @@ impl Solver {
                 self.dirty[i as usize] = false;
             }
             self.dirty_rows.clear();
-            self.price_all(costs, false);
+            self.price_all(costs, false, false)?;
         }
         self.dense_all(costs)
     }
 
-    /// Validation pass: NaN / -inf, all-+inf rows, tolerance scale.
-    #[inline(never)]
-    fn validate(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
-        let mut scale = 0.0f64;
-        let mut first_unservable = None;
-        for i in 0..costs.rows() {
-            let (bad, mx, finite) = validate_row(costs.row(i));
-            if let Some(col) = bad {
-                return Err(AssignError::NotFinite { row: i, col });
-            }
-            if !finite && first_unservable.is_none() {
-                first_unservable = Some(i);
-            }
-            scale = scale.max(mx);
-        }
-        if let Some(row) = first_unservable {
-            return Err(AssignError::Infeasible { row });
-        }
-        let vmax = self.v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-        self.scale = scale;
-        self.eps = EPS_REL * scale.max(vmax);
-        Ok(())
-    }
-
     /// Pricing pass over every row: frees rows that are not tight, greedily assigns
     /// free rows whose cheapest column is free, collects the free rows, and (when
-    /// `build`) rebuilds every candidate list.
-    #[inline(never)]
-    fn price_all(&mut self, costs: &CostMatrix, build: bool) {
+    /// `build`) rebuilds every candidate list. With `check` (the first pass of a
+    /// solve) it also validates the entries.
+    ///
+    /// # Errors
+    /// With `check`: [`AssignError::NotFinite`] for the first NaN / `-inf` in
+    /// row-major order, else [`AssignError::Infeasible`] for the first row without a
+    /// finite entry.
+    fn price_all(
+        &mut self,
+        costs: &CostMatrix,
+        build: bool,
+        check: bool,
+    ) -> Result<(), AssignError> {
         self.free_rows.clear();
+        let mut unservable = None;
         for i in 0..self.rows {
-            self.price_row(costs, i, build);
+            let finite = self.price_row(costs, i, build, check)?;
+            if !finite && unservable.is_none() {
+                unservable = Some(i);
+            }
+        }
+        if let (true, Some(row)) = (check, unservable) {
+            return Err(AssignError::Infeasible { row });
         }
         self.raise_free_columns(costs);
+        Ok(())
     }
 
     /// End of a sparse round: reprices the rows whose dual rose above their
@@ -1058,11 +1203,11 @@ impl Solver {
             if xi == NONE {
                 continue;
             }
-            let ui = costs.get(i, xi) - self.v[xi];
-            if ui <= self.theta[i] + self.eps {
+            let (c, vx) = (costs.get(i, xi), self.v[xi]);
+            if c - vx <= self.theta[i] + tol(c, vx, 0.0, 0.0) {
                 continue;
             }
-            self.price_row(costs, i, true);
+            let _ = self.price_row(costs, i, true, false);
         }
         self.dirty_rows.clear();
         self.raise_free_columns(costs);
@@ -1070,25 +1215,72 @@ impl Solver {
 
     /// Prices row `i` against the full row: keeps it if its pair is tight, else frees
     /// it; a free row takes its cheapest column if that column is free. With `build`,
-    /// the row's candidate list is rebuilt.
-    fn price_row(&mut self, costs: &CostMatrix, i: usize, build: bool) {
+    /// the row's candidate list is rebuilt; with `check`, NaN and `-inf` are reported.
+    /// Returns whether the row has a finite entry.
+    fn price_row(
+        &mut self,
+        costs: &CostMatrix,
+        i: usize,
+        build: bool,
+        check: bool,
+    ) -> Result<bool, AssignError> {
         self.stats.rows_priced += 1;
-        let (min_w, arg) = if build {
-            self.build_row(costs, i)
+        let (min_w, arg, bad) = if build {
+            self.build_row(costs, i, check)
         } else {
             let row = costs.row(i);
             let mut best = f64::INFINITY;
             let mut arg = NONE;
+            let mut ok = true;
             for (j, (c, vj)) in row.iter().zip(&self.v).enumerate() {
                 let w = c - vj;
+                ok &= w > f64::NEG_INFINITY;
                 if w < best {
                     best = w;
                     arg = j;
                 }
             }
-            (best, arg)
+            let bad = if ok {
+                None
+            } else {
+                row.iter().position(|&c| !(c > f64::NEG_INFINITY))
+            };
+            (best, arg, bad)
+        };
+        if let (true, Some(col)) = (check, bad) {
+            return Err(AssignError::NotFinite { row: i, col });
+        }
+        let arg = if build {
+            self.free_tie(costs, i, min_w, arg)
+        } else {
+            arg
         };
         self.settle_row(costs, i, min_w, arg);
+        Ok(arg != NONE)
+    }
+
+    /// Among the listed columns of row `i` tied with its minimum `min_w` (at `arg`),
+    /// one that is free if `arg` is taken (so that greedy assignment survives ties).
+    fn free_tie(&self, costs: &CostMatrix, i: usize, min_w: f64, arg: usize) -> usize {
+        if arg == NONE || self.y[arg] == NONE {
+            return arg;
+        }
+        let base = i * self.k;
+        let len = self.cand_len[i] as usize;
+        let row = costs.row(i);
+        for (&c, &wb) in self.cand_col[base..base + len]
+            .iter()
+            .zip(&self.cand_wb[base..base + len])
+        {
+            let c = c as usize;
+            if wb > min_w {
+                break;
+            }
+            if self.y[c] == NONE && row[c] - self.v[c] <= min_w {
+                return c;
+            }
+        }
+        arg
     }
 
     /// Keeps row `i` if its pair is tight against the row minimum `min_w` (at column
@@ -1097,10 +1289,16 @@ impl Solver {
         let row = costs.row(i);
         let xi = self.x[i];
         if xi != NONE {
-            let wx = row[xi] - self.v[xi];
-            if wx <= min_w + self.eps {
+            let (c, vx) = (row[xi], self.v[xi]);
+            let t = if arg == NONE {
+                0.0
+            } else {
+                tol(c, vx, row[arg], self.v[arg])
+            };
+            if c - vx <= min_w + t {
                 return;
             }
+            self.freed_slack += c - vx - min_w;
             self.x[i] = NONE;
             self.y[xi] = NONE;
             if self.rows < self.cols {
@@ -1116,8 +1314,14 @@ impl Solver {
     }
 
     /// Rebuilds the candidate list of row `i` (its `k` smallest `(c - v, col)`) and
-    /// its threshold. Returns the row's minimum `c - v` and its column.
-    fn build_row(&mut self, costs: &CostMatrix, i: usize) -> (f64, usize) {
+    /// its threshold. Returns the row's minimum `c - v`, its column, and (with
+    /// `check`) the first column holding NaN or `-inf`.
+    fn build_row(
+        &mut self,
+        costs: &CostMatrix,
+        i: usize,
+        check: bool,
+    ) -> (f64, usize, Option<usize>) {
         let row = costs.row(i);
         let k = self.k;
         let base = i * k;
@@ -1131,9 +1335,11 @@ impl Solver {
             f64::INFINITY
         };
         let mask = self.mask;
-        let n = select_k(row, &self.v, k, mask, 0, thr0, &mut self.buf);
+        let salt = self.salt(i);
+        let (n, bad) =
+            select_k::<false>(row, &self.v, k, mask, 0, thr0, check, salt, &mut self.buf);
         for (t, &kk) in self.buf[..n].iter().enumerate() {
-            let c = key_col(kk, mask);
+            let c = key_col(kk, mask) ^ salt;
             self.cand_col[base + t] = c;
             self.cand_cost[base + t] = row[c as usize];
             self.cand_wb[base + t] = key_floor(kk, mask);
@@ -1149,29 +1355,33 @@ impl Solver {
         }
         match self.buf[..n].first() {
             Some(&kk) => {
-                let c = key_col(kk, mask) as usize;
-                (row[c] - self.v[c], c)
+                let c = (key_col(kk, mask) ^ salt) as usize;
+                (row[c] - self.v[c], c, bad)
             }
-            None => (f64::INFINITY, NONE),
+            None => (f64::INFINITY, NONE, bad),
         }
     }
 
-    /// Best and second-best reduced cost `c - v` of row `i` (`w1`, its column, `w2`),
-    /// from the candidate list and the threshold; the list is rebuilt when stale.
-    fn best2(&mut self, costs: &CostMatrix, i: usize) -> (f64, usize, f64) {
+    /// Minimum reduced cost `c - v` of row `i`, its column, and a lower bound of the
+    /// second smallest, from the candidate list and the threshold (the list is
+    /// rebuilt when stale). The scan stops as soon as the sorted list bounds prove
+    /// the minimum; with `exact_second` it goes on until the second is exact too.
+    fn best2(&mut self, costs: &CostMatrix, i: usize, exact_second: bool) -> (f64, usize, f64) {
         let mut rebuilt = false;
         loop {
             let base = i * self.k;
             let len = self.cand_len[i] as usize;
             let (mut w1, mut j1, mut w2) = (f64::INFINITY, NONE, f64::INFINITY);
+            let mut rest = f64::INFINITY;
             for ((&c, &cost), &wb) in self.cand_col[base..base + len]
                 .iter()
                 .zip(&self.cand_cost[base..base + len])
                 .zip(&self.cand_wb[base..base + len])
             {
                 // The list is sorted by `wb` and current values are >= `wb`: nothing
-                // further down can beat the second best.
-                if wb >= w2 {
+                // further down goes below `wb`.
+                if wb >= if exact_second { w2 } else { w1 } {
+                    rest = wb;
                     break;
                 }
                 let w = cost - self.v[c as usize];
@@ -1185,10 +1395,10 @@ impl Solver {
             }
             let th = self.theta[i];
             if w1 <= th || rebuilt {
-                return (w1, j1, w2.min(th));
+                return (w1, j1, w2.min(rest).min(th));
             }
             self.stats.rows_priced += 1;
-            let _ = self.build_row(costs, i);
+            let _ = self.build_row(costs, i, false);
             rebuilt = true;
         }
     }
@@ -1196,7 +1406,6 @@ impl Solver {
     /// Forward auction with ε-scaling over the candidate lists (Bertsekas; prices
     /// only fall, so every list threshold stays valid). It only brings the prices
     /// close to optimal; exactness comes from the finish that follows.
-    #[inline(never)]
     fn auction(&mut self, costs: &CostMatrix) {
         let k = self.k;
         let (mut spread, mut count) = (0.0, 0usize);
@@ -1210,25 +1419,24 @@ impl Solver {
         if count == 0 {
             return;
         }
-        let start: f64 = std::env::var("ASSIGN_START")
-            .ok()
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(AUCTION_START);
-        let factor: f64 = std::env::var("ASSIGN_FACTOR")
-            .ok()
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(AUCTION_FACTOR);
-        let endr: f64 = std::env::var("ASSIGN_END")
-            .ok()
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(AUCTION_END);
-        let eps0 = start * spread / count as f64;
+        let spread = spread / count as f64;
+        let eps0 = if self.stats.warm {
+            // Sized by how far the prices are off: the mean slack of the broken pairs.
+            let freed = self.free_rows.len().max(1) as f64;
+            (AUCTION_WARM_SLACK * self.freed_slack / freed)
+                .clamp(AUCTION_START_WARM * spread, AUCTION_START * spread)
+        } else {
+            AUCTION_START * spread
+        };
         if !(eps0 > 0.0 && eps0 < f64::INFINITY) {
             return;
         }
-        let eps_end = eps0 * endr;
-        let cap = self.scale.max(eps0);
+        let eps_end = eps0 * AUCTION_END;
+        // Bid cap for rows with a single finite candidate.
+        let cap = AUCTION_CAP * eps0;
         let budget = AUCTION_BIDS_PER_ROW * self.rows + 64;
+        let rebuild_budget =
+            self.stats.rows_priced + AUCTION_REBUILDS_PER_ROW * self.rows as u64 + 64;
         let mut eps = eps0;
         loop {
             self.stats.auction_phases += 1;
@@ -1236,7 +1444,7 @@ impl Solver {
             for i in 0..self.rows {
                 let xi = self.x[i];
                 if xi != NONE {
-                    let (w1, _, _) = self.best2(costs, i);
+                    let (w1, _, _) = self.best2(costs, i, false);
                     if costs.get(i, xi) - self.v[xi] <= w1 + eps {
                         continue;
                     }
@@ -1249,8 +1457,8 @@ impl Solver {
             while let Some(i) = self.free_rows.pop() {
                 let i = i as usize;
                 bids += 1;
-                let (w1, j1, w2) = self.best2(costs, i);
-                if bids > budget || j1 == NONE {
+                let (w1, j1, w2) = self.best2(costs, i, AUCTION_EXACT_SECOND);
+                if bids > budget || j1 == NONE || self.stats.rows_priced > rebuild_budget {
                     self.free_rows.push(i as u32);
                     self.stats.bids += bids as u64;
                     return;
@@ -1266,23 +1474,16 @@ impl Solver {
                 }
             }
             self.stats.bids += bids as u64;
-            if std::env::var_os("ASSIGN_TRACE").is_some() {
-                eprintln!(
-                    "phase eps {eps:.3e} bids {bids} priced {}",
-                    self.stats.rows_priced
-                );
-            }
             if eps <= eps_end {
                 break;
             }
-            eps = (eps * factor).max(eps_end);
+            eps = (eps * AUCTION_FACTOR).max(eps_end);
         }
     }
 
     /// After the auction: raises each assigned column's price by its row's slack so
     /// that the pair becomes tight (the pricing pass that follows frees the few rows
     /// this makes violated, and rebuilds every list).
-    #[inline(never)]
     fn tighten(&mut self, costs: &CostMatrix) {
         let rect = self.rows < self.cols;
         let mut max_raise = 0.0f64;
@@ -1291,7 +1492,7 @@ impl Solver {
             if xi == NONE {
                 continue;
             }
-            let (w1, _, _) = self.best2(costs, i);
+            let (w1, _, _) = self.best2(costs, i, false);
             let slack = costs.get(i, xi) - self.v[xi] - w1;
             if slack > 0.0 {
                 let old = self.v[xi];
@@ -1321,12 +1522,11 @@ impl Solver {
 
     /// Pricing pass over every row using the candidate lists (a row is scanned in
     /// full only when its list is stale): as [`Solver::price_all`] otherwise.
-    #[inline(never)]
     fn price_all_lists(&mut self, costs: &CostMatrix) {
         self.free_rows.clear();
         for i in 0..self.rows {
             self.stats.rows_priced += 1;
-            let (min_w, arg, _) = self.best2(costs, i);
+            let (min_w, arg, _) = self.best2(costs, i, false);
             self.settle_row(costs, i, min_w, arg);
         }
         self.raise_free_columns(costs);
@@ -1364,7 +1564,10 @@ impl Solver {
                     }
                 }
                 let xr = self.x[r];
-                if xr != NONE && c < costs.get(r, xr) - self.v[xr] - self.eps {
+                if xr != NONE && {
+                    let (cx, vx) = (costs.get(r, xr), self.v[xr]);
+                    c < cx - vx - tol(c, cx, vx, 0.0)
+                } {
                     self.x[r] = NONE;
                     self.y[xr] = NONE;
                     self.raise.push(xr as u32);
@@ -1374,10 +1577,15 @@ impl Solver {
         }
     }
 
+    /// Per-row tie-breaking salt of the candidate keys.
+    #[inline]
+    fn salt(&self, i: usize) -> u32 {
+        ((i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as u32 & self.mask as u32
+    }
+
     fn next_epoch(&mut self) -> u32 {
         if self.epoch == u32::MAX {
-            self.seen.fill(0);
-            self.done.fill(0);
+            self.mark.fill(Mark::default());
             self.epoch = 0;
         }
         self.epoch += 1;
@@ -1405,19 +1613,30 @@ impl Solver {
     ///
     /// On success updates the prices of the settled columns and flips the path.
     /// Returns false only if no augmenting path exists in the whole matrix.
-    #[inline(never)]
     fn sparse_augment(&mut self, costs: &CostMatrix, i0: usize) -> bool {
         let ep = self.next_epoch();
         self.stats.augmentations += 1;
         self.heap.clear();
         self.pending.clear();
         self.scanned.clear();
+        self.early = NONE;
+        // Every reduced cost of the row is at least its first list bound.
+        self.cur_min = if self.cand_len[i0] > 0 {
+            self.cand_wb[i0 * self.k]
+        } else {
+            self.theta[i0]
+        };
         self.advance_list(i0, 0.0, 0, ep);
         let (dstar, sink) = loop {
+            if self.early != NONE {
+                let j = self.early;
+                self.mark[j].done = ep;
+                self.scanned.push(j as u32);
+                break (self.mark[j].dist, j);
+            }
             let hmin = self.heap.key.first().copied().unwrap_or(f64::INFINITY);
-            if let Some(&p) = self.pending.peek() {
-                if p.bound < hmin {
-                    let _ = self.pending.pop();
+            if self.pending.min_bound() < hmin {
+                if let Some(p) = self.pending.pop() {
                     if p.slot == BEYOND {
                         self.expand_row(costs, p, ep);
                     } else {
@@ -1430,19 +1649,26 @@ impl Solver {
                 return false;
             };
             let j = j as usize;
-            self.done[j] = ep;
+            self.mark[j].done = ep;
             self.scanned.push(j as u32);
+            self.cur_min = dk;
             let i = self.y[j];
             if i == NONE {
                 break (dk, j);
             }
             self.stats.rows_scanned += 1;
             self.mark_dirty(i);
-            let ui = costs.get(i, j) - self.v[j];
-            if !(ui <= self.theta[i] + self.eps) {
+            let (cij, vj) = (costs.get(i, j), self.v[j]);
+            let ui = cij - vj;
+            if !(ui <= self.theta[i] + tol(cij, vj, 0.0, 0.0)) {
                 self.stats.rows_priced += 1;
-                let (min_w, _) = self.build_row(costs, i);
-                if !(ui <= min_w + self.eps) {
+                let (min_w, arg, _) = self.build_row(costs, i, false);
+                let t = if arg == NONE {
+                    0.0
+                } else {
+                    tol(cij, vj, costs.get(i, arg), self.v[arg])
+                };
+                if !(ui <= min_w + t) {
                     self.x[i] = NONE;
                     self.y[j] = NONE;
                     self.free_rows.push(i as u32);
@@ -1453,7 +1679,7 @@ impl Solver {
         };
         for &k in &self.scanned {
             let k = k as usize;
-            self.v[k] += self.dist[k] - dstar;
+            self.v[k] += self.mark[k].dist - dstar;
         }
         self.flip_path(sink, i0);
         self.mark_dirty(i0);
@@ -1463,11 +1689,17 @@ impl Solver {
     /// Relaxes column `k` from row `i` with tentative distance `nd`.
     #[inline]
     fn relax_to(&mut self, i: u32, k: usize, nd: f64, ep: u32) {
-        if self.done[k] != ep && (self.seen[k] != ep || nd < self.dist[k]) {
-            self.seen[k] = ep;
-            self.dist[k] = nd;
+        let m = &mut self.mark[k];
+        if m.done != ep && (m.seen != ep || nd < m.dist) {
+            m.seen = ep;
+            m.dist = nd;
             self.pred[k] = i;
             self.heap.push_or_decrease(k as u32, nd);
+            // A free column at the least possible distance ends the search at once
+            // (what LAPJV does with zero reduced costs; decisive with many ties).
+            if nd <= self.cur_min && self.y[k] == NONE && self.early == NONE {
+                self.early = k;
+            }
         }
     }
 
@@ -1511,9 +1743,20 @@ impl Solver {
         let k = self.k;
         let row = costs.row(p.row as usize);
         let mask = self.mask;
-        let n = select_k(row, &self.v, k, mask, p.lo, f64::INFINITY, &mut self.buf);
+        let salt = self.salt(p.row as usize);
+        let (n, _) = select_k::<true>(
+            row,
+            &self.v,
+            k,
+            mask,
+            p.lo,
+            f64::INFINITY,
+            false,
+            salt,
+            &mut self.buf,
+        );
         for t in 0..n {
-            let c = key_col(self.buf[t], mask) as usize;
+            let c = (key_col(self.buf[t], mask) ^ salt) as usize;
             let nd = p.off + (row[c] - self.v[c]);
             self.relax_to(p.row, c, nd, ep);
         }
@@ -1638,12 +1881,11 @@ impl Solver {
             f(&self.buf),
             f(&self.dist),
             f(&self.pred),
-            f(&self.seen),
-            f(&self.done),
+            f(&self.mark),
             f(&self.heap.key),
             f(&self.heap.col),
             f(&self.heap.pos),
-            (self.pending.capacity(), 0),
+            f(&self.pending.items),
             f(&self.scanned),
             f(&self.dd),
             f(&self.vm),
@@ -1856,6 +2098,72 @@ mod tests {
         }
     }
 
+    /// A medium instance: random real or small-integer costs (ties), some `+inf`
+    /// entries off a hidden feasible injection.
+    fn medium(rows: usize, cols: usize, seed: u64, ints: bool, inf_per_mille: u64) -> CostMatrix {
+        let mut rng = SplitMix(seed);
+        let mut perm: Vec<usize> = (0..cols).collect();
+        for i in (1..cols).rev() {
+            perm.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
+        }
+        let mut c = CostMatrix::from_fn(rows, cols, |_, _| {
+            if rng.next_u64() % 1000 < inf_per_mille {
+                f64::INFINITY
+            } else if ints {
+                (rng.next_u64() % 6) as f64
+            } else {
+                10.0 * rng.unit() - 3.0
+            }
+        });
+        for (i, &j) in perm.iter().take(rows).enumerate() {
+            if c.get(i, j) == f64::INFINITY {
+                c.set(i, j, 2.0);
+            }
+        }
+        c
+    }
+
+    proptest! {
+        #![proptest_config(config(48, 0x0000_3D1A))]
+
+        /// The sparse machinery (auction, tightening, lazy lists, list refills,
+        /// rectangular price raises, dense finish) against the dense solver on
+        /// instances too large for brute force, cold and over warm frames.
+        #[test]
+        fn sparse_matches_dense_on_medium_instances(
+            rows in 5usize..40,
+            extra in 0usize..12,
+            seed in 0u64..u64::MAX,
+            ints: bool,
+            inf_per_mille in prop_oneof![Just(0u64), Just(100), Just(400)],
+            k in 1usize..6,
+            max_rounds in prop_oneof![Just(0u32), Just(1), Just(MAX_ROUNDS)],
+        ) {
+            let cols = rows + extra;
+            let mut dense = Solver::with_strategy(Algo::Dense);
+            let mut sparse = Solver::with_options(Algo::Sparse, k);
+            sparse.max_rounds = Some(max_rounds);
+            let mut c = medium(rows, cols, seed, ints, inf_per_mille);
+            for frame in 0..4u64 {
+                dense.solve(&c).unwrap();
+                let res = if frame == 0 { sparse.solve(&c) } else { sparse.solve_warm(&c) };
+                prop_assert!(res.is_ok(), "{:?}", res);
+                prop_assert!(sparse.verify_optimal(&c, 1e-9), "frame {}", frame);
+                let (a, b) = (sparse.total_cost(&c), dense.total_cost(&c));
+                prop_assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "frame {}: {} vs {}", frame, a, b);
+                // Next frame: perturb the finite entries.
+                let mut rng = SplitMix(seed ^ (frame + 1));
+                for i in 0..rows {
+                    for e in c.row_mut(i) {
+                        if e.is_finite() && rng.next_u64() % 3 == 0 {
+                            *e += if ints { (rng.next_u64() % 3) as f64 - 1.0 } else { rng.unit() - 0.5 };
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn certificate_square_200_cold_and_warm_chain() {
         run_chain(200, 200, 1, Algo::Sparse);
@@ -1956,9 +2264,9 @@ mod tests {
     #[test]
     fn repeated_same_size_solves_keep_buffers() {
         let mut rng = SplitMix(9);
-        let (mut a, g) = (points(&mut rng, 300), points(&mut rng, 300));
         let mut c = CostMatrix::new(0, 0);
-        for strategy in [Algo::Dense, Algo::Sparse] {
+        for (strategy, cols) in [(Algo::Dense, 300), (Algo::Sparse, 300), (Algo::Sparse, 350)] {
+            let (mut a, g) = (points(&mut rng, 300), points(&mut rng, cols));
             let mut s = Solver::with_strategy(strategy);
             SquaredDistance.fill(&a, &g, &mut c);
             s.solve(&c).unwrap();
@@ -1996,6 +2304,16 @@ mod tests {
         assert_eq!(c.get(1, 1), 0.0);
         let mut s = Solver::new();
         assert_eq!(s.solve(&c).unwrap(), &[2, 1]);
+    }
+
+    #[test]
+    fn default_solver_is_new() {
+        let c = CostMatrix::from_fn(200, 200, |i, j| ((i * 31 + j * 17) % 97) as f64);
+        let mut a = Solver::default();
+        a.solve(&c).unwrap();
+        assert_eq!(a.strategy(), Algo::Auto);
+        assert!(!a.stats().dense_finish);
+        assert!(a.verify_optimal(&c, 1e-9));
     }
 
     #[test]
