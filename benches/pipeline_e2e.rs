@@ -85,7 +85,6 @@ fn e2e(c: &mut Criterion) {
             })
         });
         send(ContactFlags::UP);
-        drop(send);
         daemon.shutdown();
         let _ = std::fs::remove_dir_all(&dir);
     }

@@ -594,7 +594,8 @@ pub const WORKER_NICE: i8 = 10;
 /// no privilege; a refusal is logged once and otherwise ignored.
 fn lower_priority(nice: i8) {
     use thread_priority::unix::{
-        set_thread_priority_and_policy, thread_native_id, NormalThreadSchedulePolicy, ThreadSchedulePolicy,
+        set_thread_priority_and_policy, thread_native_id, NormalThreadSchedulePolicy,
+        ThreadSchedulePolicy,
     };
     use thread_priority::{ThreadPriority, ThreadPriorityValue};
     let policy = ThreadSchedulePolicy::Normal(NormalThreadSchedulePolicy::Other);
@@ -604,7 +605,8 @@ fn lower_priority(nice: i8) {
         (p.to_posix(policy).ok()? == i32::from(nice)).then_some(p)
     });
     let result = match priority {
-        Some(p) => set_thread_priority_and_policy(thread_native_id(), p, policy).map_err(|e| format!("{e:?}")),
+        Some(p) => set_thread_priority_and_policy(thread_native_id(), p, policy)
+            .map_err(|e| format!("{e:?}")),
         None => Err(format!("no priority step maps to nice {nice}")),
     };
     if let Err(e) = result {
@@ -889,7 +891,11 @@ fn describe_event(e: &Event) -> Option<String> {
     }
 }
 
-fn assignment_worker(cost: crate::config::AssignmentCost, jobs: Receiver<Box<AssignJob>>, results: Sender<Box<AssignJob>>) {
+fn assignment_worker(
+    cost: crate::config::AssignmentCost,
+    jobs: Receiver<Box<AssignJob>>,
+    results: Sender<Box<AssignJob>>,
+) {
     lower_priority(WORKER_NICE);
     let mut assigner = Assigner::new(cost);
     let mut generation = u64::MAX;

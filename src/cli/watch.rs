@@ -244,7 +244,7 @@ pub fn watch(socket: Option<PathBuf>, fps: f64, seconds: Option<f64>) -> Result<
     let stdout = std::io::stdout();
     print!("\x1b[2J\x1b[?25l");
     let mut ended = false;
-    while !stop.load(Ordering::Relaxed) && !until.is_some_and(|u| monotonic_now() >= u) {
+    while !stop.load(Ordering::Relaxed) && until.is_none_or(|u| monotonic_now() < u) {
         let deadline = monotonic_now() + frame;
         loop {
             let left = deadline.saturating_since(monotonic_now());

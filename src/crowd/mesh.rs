@@ -826,7 +826,7 @@ impl BucketGrid {
                     for &i in self.cell(cx, cy) {
                         let i = i as usize;
                         let d2 = dist2(points[i], q);
-                        if best.map_or(true, |(bd, bi)| d2 < bd || (d2 == bd && i < bi)) {
+                        if best.is_none_or(|(bd, bi)| d2 < bd || (d2 == bd && i < bi)) {
                             best = Some((d2, i));
                         }
                     }
@@ -979,7 +979,7 @@ fn lloyd_relax(
     for (ci, c) in cands.iter().enumerate() {
         let s = owner[ci] as usize;
         let d2 = dist2(c.p, sites[s]);
-        if best[s].map_or(true, |(bd, _)| d2 < bd) {
+        if best[s].is_none_or(|(bd, _)| d2 < bd) {
             best[s] = Some((d2, ci));
         }
     }

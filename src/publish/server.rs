@@ -332,9 +332,7 @@ impl Server {
             if stop.load(Ordering::Relaxed) {
                 break;
             }
-            if p.last_accept
-                .map_or(true, |t| t.elapsed() >= ACCEPT_INTERVAL)
-            {
+            if p.last_accept.is_none_or(|t| t.elapsed() >= ACCEPT_INTERVAL) {
                 p.accept_pending();
                 p.reap();
                 p.last_accept = Some(Instant::now());
@@ -394,7 +392,7 @@ impl Publisher<'_> {
                     // EMFILE and friends: try again next round, say so now and then.
                     if self
                         .last_accept_log
-                        .map_or(true, |t| t.elapsed() >= ACCEPT_LOG_INTERVAL)
+                        .is_none_or(|t| t.elapsed() >= ACCEPT_LOG_INTERVAL)
                     {
                         log::warn!("{}: accept failed: {e}", self.server.path.display());
                         self.last_accept_log = Some(Instant::now());
