@@ -220,12 +220,12 @@ fn signals() -> Result<Signals> {
 
 /// The supervisor loop shared by `run` and `demo`.
 fn supervise(
+    sig: Signals,
     mut daemon: Daemon,
     config_path: Option<PathBuf>,
     until: Option<Micros>,
     mut on_report: impl FnMut(&StatsReport),
 ) -> Result<()> {
-    let sig = signals()?;
     let mut watchdog_us = 0u64;
     let watchdog = sd_notify::watchdog_enabled(false, &mut watchdog_us);
     let _ = sd_notify::notify(false, &[sd_notify::NotifyState::Ready]);
@@ -273,6 +273,8 @@ fn supervise(
 }
 
 fn run(a: RunArgs) -> Result<()> {
+    // Handlers first: a SIGHUP or SIGTERM during start-up must not kill the process.
+    let sig = signals()?;
     let (cfg, path) = find_config(a.config.as_deref())?;
     init_logging(cfg.log_level);
     match &path {
@@ -296,12 +298,13 @@ fn run(a: RunArgs) -> Result<()> {
         },
     )?;
     log::info!("listening on {}", daemon.socket_path().display());
-    supervise(daemon, path, None, |r| {
+    supervise(sig, daemon, path, None, |r| {
         log::debug!("{}", status_line(r));
     })
 }
 
 fn demo(a: DemoArgs) -> Result<()> {
+    let sig = signals()?;
     let mut cfg = Config::embedded_default();
     init_logging(cfg.log_level);
     if let Some(n) = a.agents {
@@ -327,7 +330,7 @@ fn demo(a: DemoArgs) -> Result<()> {
     let until = a
         .seconds
         .map(|s| monotonic_now() + Micros::from_secs_f64(s));
-    supervise(daemon, None, until, |r| {
+    supervise(sig, daemon, None, until, |r| {
         println!("{}", status_line(r));
         let _ = std::io::stdout().flush();
     })
