@@ -255,6 +255,20 @@ pub struct BudgetsConfig {
     pub assignment_us: u64,
 }
 
+/// Real-time scheduling of the latency path (input, control, publisher threads).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RealtimeConfig {
+    /// SCHED_FIFO priority 1..=99 for the latency-path threads; `None` keeps normal
+    /// scheduling. Needs RLIMIT_RTPRIO (the systemd unit grants it); when refused the
+    /// daemon logs it once and runs at normal priority.
+    #[serde(default)]
+    pub priority: Option<u8>,
+    /// Lock all memory into RAM (mlockall), so the latency path never page-faults.
+    #[serde(default)]
+    pub lock_memory: bool,
+}
+
 /// Threads and queues.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -267,6 +281,9 @@ pub struct PipelineConfig {
     pub budgets: BudgetsConfig,
     /// How often `stats` is published (ms).
     pub stats_interval_ms: u64,
+    /// Real-time scheduling and memory locking.
+    #[serde(default)]
+    pub realtime: RealtimeConfig,
 }
 
 /// The Unix socket.
@@ -620,6 +637,13 @@ impl Config {
                 pl.stats_interval_ms
             ),
         );
+        if let Some(prio) = pl.realtime.priority {
+            check(
+                (1..=99).contains(&prio),
+                "pipeline.realtime.priority",
+                format!("real-time priority must be 1..=99 (or None), got {prio}"),
+            );
+        }
         let b = &pl.budgets;
         for (name, v) in [
             ("input_us", b.input_us),
@@ -998,6 +1022,21 @@ mod tests {
         let expect_line = text.lines().position(|l| l.contains("agnets")).unwrap() + 1;
         assert_eq!(is[0].line, expect_line);
         assert!(is[0].message.contains("agnets"), "{}", is[0].message);
+    }
+
+    #[test]
+    fn realtime_priority_is_range_checked_and_optional() {
+        let text = DEFAULT_CONFIG_RON.replacen("priority: Some(20)", "priority: Some(0)", 1);
+        let is = issues(&text);
+        assert_eq!(is[0].field, "pipeline.realtime.priority");
+        let none = DEFAULT_CONFIG_RON.replacen("priority: Some(20)", "priority: None", 1);
+        assert!(Config::from_str(&none, Path::new("t.ron")).is_ok());
+        // The whole section may be left out: normal scheduling.
+        let a = DEFAULT_CONFIG_RON.find("        realtime: (").unwrap();
+        let b = a + DEFAULT_CONFIG_RON[a..].find("        ),\n").unwrap() + "        ),\n".len();
+        let without = format!("{}{}", &DEFAULT_CONFIG_RON[..a], &DEFAULT_CONFIG_RON[b..]);
+        let c = Config::from_str(&without, Path::new("t.ron")).unwrap();
+        assert_eq!(c.pipeline.realtime, RealtimeConfig::default());
     }
 
     #[test]

@@ -17,6 +17,7 @@ pub mod gesture;
 pub mod input;
 pub mod pipeline;
 pub mod publish;
+pub mod rt;
 pub mod snapshot;
 pub mod stats;
 pub mod time;

@@ -374,11 +374,23 @@ impl Daemon {
         // Supervisor → control: bounded(1) config reloads, try_send.
         let (reload_tx, reload_rx) = bounded::<Arc<Config>>(1);
 
+        let rt = cfg.pipeline.realtime.clone();
+        if rt.lock_memory && crate::rt::lock_memory() {
+            log::info!("memory locked");
+        }
+        let prio = rt.priority;
+        let realtime = move |thread: &str| {
+            if let Some(p) = prio {
+                crate::rt::make_realtime(p, thread);
+            }
+        };
         let mut threads = Vec::new();
         {
             let stop = Arc::clone(&stop);
             let cmd_tx = cmd_tx.clone();
+            let server = server.with_realtime(prio);
             threads.push(spawn("publisher", move || {
+                realtime("publisher");
                 server.run(out_rx, cmd_tx, stop)
             })?);
         }
@@ -404,7 +416,10 @@ impl Daemon {
                 Arc::clone(&stop),
                 Arc::clone(&heartbeat_us),
             );
-            threads.push(spawn("control", move || ctl.run())?);
+            threads.push(spawn("control", move || {
+                realtime("control");
+                ctl.run()
+            })?);
         }
         for (i, source) in sources.into_iter().enumerate() {
             let mut queue =
@@ -421,6 +436,7 @@ impl Daemon {
                 } => {
                     let mut src = ReplaySource::new(items, looped, gap, Pacing::RealTime);
                     threads.push(spawn("input", move || {
+                        realtime("input");
                         let mut on_item = |i: usize| {
                             if reset_between && i > 0 {
                                 let _ = cmd_tx.try_send(CommandRequest {
@@ -436,6 +452,7 @@ impl Daemon {
                 }
                 SourceSpec::Channel { rx, .. } => {
                     threads.push(spawn("input", move || {
+                        realtime("input");
                         while !stop.load(Ordering::Relaxed) {
                             match rx.recv_timeout(Duration::from_millis(50)) {
                                 Ok(f) => queue.push(&f),
@@ -582,35 +599,6 @@ impl Daemon {
     /// Stats interval (µs).
     pub fn interval_us(&self) -> u64 {
         self.interval_us
-    }
-}
-
-/// Nice value of the assignment worker: it yields the CPU to the input, control
-/// and publisher threads, which wake for short bursts on the latency path, while still
-/// getting a fair share against other busy programs.
-pub const WORKER_NICE: i8 = 10;
-
-/// Lowers the calling thread's CPU priority to `nice` (SCHED_OTHER). Lowering needs
-/// no privilege; a refusal is logged once and otherwise ignored.
-fn lower_priority(nice: i8) {
-    use thread_priority::unix::{
-        set_thread_priority_and_policy, thread_native_id, NormalThreadSchedulePolicy,
-        ThreadSchedulePolicy,
-    };
-    use thread_priority::{ThreadPriority, ThreadPriorityValue};
-    let policy = ThreadSchedulePolicy::Normal(NormalThreadSchedulePolicy::Other);
-    // The crate maps a 0..=99 scale onto niceness; pick the step that gives `nice`.
-    let priority = (0u8..=99).find_map(|v| {
-        let p = ThreadPriority::Crossplatform(ThreadPriorityValue::try_from(v).ok()?);
-        (p.to_posix(policy).ok()? == i32::from(nice)).then_some(p)
-    });
-    let result = match priority {
-        Some(p) => set_thread_priority_and_policy(thread_native_id(), p, policy)
-            .map_err(|e| format!("{e:?}")),
-        None => Err(format!("no priority step maps to nice {nice}")),
-    };
-    if let Err(e) = result {
-        log::warn!("could not lower the assignment worker's priority to nice {nice}: {e}");
     }
 }
 
@@ -896,7 +884,7 @@ fn assignment_worker(
     jobs: Receiver<Box<AssignJob>>,
     results: Sender<Box<AssignJob>>,
 ) {
-    lower_priority(WORKER_NICE);
+    crate::rt::make_idle("assignment worker");
     let mut assigner = Assigner::new(cost);
     let mut generation = u64::MAX;
     let mut failures = 0u64;

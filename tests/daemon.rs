@@ -46,7 +46,9 @@ fn source(names: &[&str], looped: bool) -> SourceSpec {
     }
 }
 
-fn start(cfg: Config, names: &[&str], path: &Path) -> Daemon {
+fn start(mut cfg: Config, names: &[&str], path: &Path) -> Daemon {
+    // Real-time scheduling and mlockall would apply to the whole test process.
+    cfg.pipeline.realtime = Default::default();
     Daemon::start(
         cfg,
         vec![source(names, false)],
@@ -263,8 +265,10 @@ fn a_live_socket_is_refused_and_a_stale_one_replaced() {
         &["07-open-space-swipe.jsonl"],
         &path,
     );
+    let mut cfg = Config::embedded_default();
+    cfg.pipeline.realtime = Default::default();
     let second = Daemon::start(
-        Config::embedded_default(),
+        cfg,
         vec![source(&["07-open-space-swipe.jsonl"], false)],
         DaemonOptions {
             socket_path: path.clone(),

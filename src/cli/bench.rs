@@ -43,6 +43,10 @@ pub struct BenchArgs {
     /// Machine-readable output.
     #[arg(long)]
     json: bool,
+    /// Run the end-to-end workload without real-time scheduling or locked memory
+    /// (as on a machine that refuses them).
+    #[arg(long)]
+    no_realtime: bool,
 }
 
 #[derive(Serialize, Debug)]
@@ -99,7 +103,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         rows.push(control_tick(a.agents));
     }
     if matches!(a.workload, Workload::All | Workload::E2e) {
-        rows.extend(end_to_end(a.agents, a.seconds)?);
+        rows.extend(end_to_end(a.agents, a.seconds, !a.no_realtime)?);
     }
     if a.json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
@@ -211,9 +215,12 @@ fn control_tick(agents: u32) -> Row {
 }
 
 /// The full daemon replaying the shipped recordings at 120 Hz to one socket client.
-fn end_to_end(agents: u32, seconds: f64) -> Result<Vec<Row>> {
+fn end_to_end(agents: u32, seconds: f64, realtime: bool) -> Result<Vec<Row>> {
     let mut cfg = Config::embedded_default();
     cfg.crowd.agents = agents;
+    if !realtime {
+        cfg.pipeline.realtime = Default::default();
+    }
     cfg.log_level = crowdtouch::config::LogLevel::Error;
     let sock = std::env::temp_dir().join(format!("crowdtouch-bench-{}.sock", std::process::id()));
     let sources = sources_from_config(&cfg)?;
@@ -262,7 +269,8 @@ fn end_to_end(agents: u32, seconds: f64) -> Result<Vec<Row>> {
             &format!("end_to_end {agents} agents"),
             find("end_to_end"),
             format!(
-                "input timestamp -> bytes written; {snapshots} snapshots read, {dropped} dropped, touch transitions lost {lost}, motion frames coalesced {coalesced}, RSS {:.1} MB",
+                "input timestamp -> bytes written; SCHED_FIFO {}; {snapshots} snapshots read, {dropped} dropped, touch transitions lost {lost}, motion frames coalesced {coalesced}, RSS {:.1} MB",
+                if crowdtouch::rt::realtime_granted() { "on" } else { "off" },
                 rss as f64 / 1e6
             ),
         ),

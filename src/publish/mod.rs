@@ -52,6 +52,10 @@ pub use server::{PublisherStats, Server};
 use std::path::PathBuf;
 use std::time::Duration;
 
+/// Send buffer requested for each client socket (bytes): room for several
+/// 1,000-agent snapshots, so a reader that is briefly late never blocks the write.
+pub const CLIENT_SNDBUF_BYTES: usize = 1 << 20;
+
 /// Most non-snapshot messages queued for one client before it is disconnected.
 pub const MAX_BACKLOG_MESSAGES: usize = 4096;
 /// Most bytes of non-snapshot messages queued for one client before it is disconnected.

@@ -2,7 +2,7 @@
 
 use super::client::{self, ClientShared, EncodedSnapshot, Hub, Item};
 use super::protocol::{self, FieldSet, Format};
-use super::{Error, HelloInfo, CLOSE_GRACE, WRITE_STALL_TIMEOUT};
+use super::{Error, HelloInfo, CLIENT_SNDBUF_BYTES, CLOSE_GRACE, WRITE_STALL_TIMEOUT};
 use crate::config::SocketConfig;
 use crate::snapshot::{ClientId, CommandRequest, Event, MeshView, Outgoing, Snapshot};
 use crate::time::{monotonic_now, Micros};
@@ -171,6 +171,8 @@ pub struct Server {
     max_clients: u32,
     hello: HelloInfo,
     stats: Arc<PublisherStats>,
+    /// SCHED_FIFO priority for client writer threads (`None`: normal scheduling).
+    realtime: Option<u8>,
 }
 
 impl Server {
@@ -283,6 +285,7 @@ impl Server {
             ident,
             client_queue: cfg.client_queue,
             max_clients: cfg.max_clients,
+            realtime: None,
             hello,
             stats: Arc::new(PublisherStats::default()),
         })
@@ -296,6 +299,12 @@ impl Server {
     /// The counters, shared with the rest of the daemon.
     pub fn stats(&self) -> Arc<PublisherStats> {
         Arc::clone(&self.stats)
+    }
+    /// Runs each client's writer thread under SCHED_FIFO at `priority` (the writer
+    /// is on the latency path: its `send` is what the end-to-end figure ends with).
+    pub fn with_realtime(mut self, priority: Option<u8>) -> Server {
+        self.realtime = priority;
+        self
     }
 
     /// Publisher thread body: accepts clients, fans out messages, until `stop` is set
@@ -425,6 +434,13 @@ impl Publisher<'_> {
         }
         let id = self.next_id;
         self.next_id += 1;
+        // A kernel buffer that holds several large snapshots, so a client that reads a
+        // little late does not block its writer (the kernel caps this at wmem_max).
+        let _ = nix::sys::socket::setsockopt(
+            &stream,
+            nix::sys::socket::sockopt::SndBuf,
+            &CLIENT_SNDBUF_BYTES,
+        );
         let prepared = stream
             .set_nonblocking(false)
             .and_then(|()| stream.set_write_timeout(Some(WRITE_STALL_TIMEOUT)))
@@ -451,9 +467,15 @@ impl Publisher<'_> {
         }
         let w = {
             let (shared, stats) = (Arc::clone(&shared), Arc::clone(stats));
+            let realtime = self.server.realtime;
             std::thread::Builder::new()
                 .name(format!("ct-client{id}-w"))
-                .spawn(move || client::writer_loop(shared, wstream, stats))
+                .spawn(move || {
+                    if let Some(p) = realtime {
+                        crate::rt::make_realtime(p, "client writer");
+                    }
+                    client::writer_loop(shared, wstream, stats)
+                })
         };
         let writer = match w {
             Ok(h) => h,

@@ -1,0 +1,86 @@
+//! Real-time scheduling for the latency path.
+//!
+//! The input, control and publisher threads (and each client's writer) run under
+//! SCHED_FIFO when the config asks for it, so a busy machine — a renderer on the
+//! same box, the assignment worker, the client itself — cannot hold a touch back by
+//! a scheduler time slice. Memory can be locked (`mlockall`) so the path never takes
+//! a page fault. Both need privileges (RLIMIT_RTPRIO / RLIMIT_MEMLOCK, granted by the
+//! shipped systemd unit, or CAP_SYS_NICE / CAP_IPC_LOCK); when the system refuses,
+//! the daemon says so once and carries on at normal priority.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+static REFUSAL_LOGGED: AtomicBool = AtomicBool::new(false);
+static GRANTED: AtomicBool = AtomicBool::new(false);
+
+/// Whether any thread of this process has been made real-time.
+pub fn realtime_granted() -> bool {
+    GRANTED.load(Ordering::Relaxed)
+}
+
+/// Runs the calling thread under SCHED_FIFO at `priority` (1..=99). Returns whether
+/// it took effect; a refusal is logged once per process.
+pub fn make_realtime(priority: u8, thread: &str) -> bool {
+    use thread_priority::unix::{
+        set_thread_priority_and_policy, thread_native_id, RealtimeThreadSchedulePolicy,
+        ThreadSchedulePolicy,
+    };
+    use thread_priority::{ThreadPriority, ThreadPriorityValue};
+    let policy = ThreadSchedulePolicy::Realtime(RealtimeThreadSchedulePolicy::Fifo);
+    let result = ThreadPriorityValue::try_from(priority.min(99))
+        .map_err(|e| format!("priority {priority}: {e}"))
+        .and_then(|v| {
+            set_thread_priority_and_policy(
+                thread_native_id(),
+                ThreadPriority::Crossplatform(v),
+                policy,
+            )
+            .map_err(|e| format!("{e:?}"))
+        });
+    match result {
+        Ok(()) => {
+            GRANTED.store(true, Ordering::Relaxed);
+            true
+        }
+        Err(e) => {
+            if !REFUSAL_LOGGED.swap(true, Ordering::Relaxed) {
+                log::warn!(
+                    "real-time scheduling refused for the {thread} thread ({e}); running at normal priority. \
+                     Grant RLIMIT_RTPRIO (the systemd unit's LimitRTPRIO=) or set pipeline.realtime.priority: None"
+                );
+            }
+            false
+        }
+    }
+}
+
+/// Runs the calling thread under SCHED_IDLE: it gets the CPU only when nothing else
+/// wants it. For the assignment worker, so a long solve never delays a frame.
+pub fn make_idle(thread: &str) {
+    use thread_priority::unix::{
+        set_thread_priority_and_policy, thread_native_id, NormalThreadSchedulePolicy,
+        ThreadSchedulePolicy,
+    };
+    use thread_priority::ThreadPriority;
+    let policy = ThreadSchedulePolicy::Normal(NormalThreadSchedulePolicy::Idle);
+    if let Err(e) = set_thread_priority_and_policy(thread_native_id(), ThreadPriority::Min, policy)
+    {
+        log::warn!("could not run the {thread} thread under SCHED_IDLE ({e:?}); it competes with the latency path");
+    }
+}
+
+/// Locks the process's current and future memory into RAM. Returns whether it took
+/// effect; a refusal is logged.
+pub fn lock_memory() -> bool {
+    use nix::sys::mman::{mlockall, MlockAllFlags};
+    match mlockall(MlockAllFlags::MCL_CURRENT | MlockAllFlags::MCL_FUTURE) {
+        Ok(()) => true,
+        Err(e) => {
+            log::warn!(
+                "could not lock memory ({e}); page faults may delay frames. Grant RLIMIT_MEMLOCK \
+                 (the systemd unit's LimitMEMLOCK=) or set pipeline.realtime.lock_memory: false"
+            );
+            false
+        }
+    }
+}
