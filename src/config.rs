@@ -1068,6 +1068,38 @@ mod tests {
         assert_eq!(locate_field(t, "a.zz"), Some((2, 2)));
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig { cases: 256, ..Default::default() })]
+        /// Arbitrary text never panics the parser, and every error points inside it.
+        #[test]
+        fn arbitrary_text_never_panics(text in "\\PC{0,200}") {
+            if let Err(Error::Invalid { issues, .. }) = Config::from_str(&text, Path::new("p.ron")) {
+                let lines = text.lines().count().max(1);
+                for i in issues {
+                    proptest::prop_assert!(i.line <= lines + 1, "line {} of {}", i.line, lines);
+                }
+            }
+        }
+
+        /// The default config with a slice cut out or repeated: an error with a place,
+        /// or (rarely) still a valid config; never a panic.
+        #[test]
+        fn mutated_default_never_panics(a in 0usize..4000, len in 0usize..80, dup in proptest::bool::ANY) {
+            let t = DEFAULT_CONFIG_RON;
+            let a = a.min(t.len());
+            let b = (a + len).min(t.len());
+            if !t.is_char_boundary(a) || !t.is_char_boundary(b) {
+                return Ok(());
+            }
+            let mutated = if dup { format!("{}{}", &t[..b], &t[a..]) } else { format!("{}{}", &t[..a], &t[b..]) };
+            match Config::from_str(&mutated, Path::new("m.ron")) {
+                Ok(_) => {}
+                Err(Error::Invalid { issues, .. }) => proptest::prop_assert!(!issues.is_empty()),
+                Err(e) => proptest::prop_assert!(false, "unexpected error kind {e}"),
+            }
+        }
+    }
+
     #[test]
     fn garbage_never_panics() {
         for t in [

@@ -225,10 +225,19 @@ fn sighup_with_a_bad_config_keeps_the_old_one_running() {
     let mut line = String::new();
     r.read_line(&mut line).unwrap();
     assert!(line.contains("\"hello\""));
+    // A valid new config is applied.
+    std::fs::write(
+        &cfg_path,
+        text.replacen("max_speed_m_s: 1.5", "max_speed_m_s: 2.0", 1),
+    )
+    .unwrap();
+    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGHUP).unwrap();
+    std::thread::sleep(Duration::from_millis(500));
     nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGTERM).unwrap();
     let out = child.wait_with_output().unwrap();
     assert!(out.status.success());
     let log = String::from_utf8_lossy(&out.stderr);
+    assert!(log.contains("config reloaded"), "{log}");
     assert!(
         log.contains("rejected") && log.contains("crowdtouch.ron:1"),
         "{log}"
