@@ -272,6 +272,24 @@ fn supervise(
     Ok(())
 }
 
+/// Applies `--agents`, checked like the config field.
+fn set_agents(cfg: &mut Config, agents: Option<u32>) -> Result<()> {
+    if let Some(n) = agents {
+        cfg.crowd.agents = n;
+        if let Some((field, msg)) = cfg.validate().into_iter().next() {
+            bail!("--agents: {field}: {msg}");
+        }
+    }
+    Ok(())
+}
+
+/// Reads the config's inputs and starts the daemon on `socket` (or the config's).
+fn start_daemon(cfg: Config, socket: Option<PathBuf>) -> Result<Daemon> {
+    let socket_path = socket.unwrap_or_else(|| cfg.socket.resolved_path());
+    let sources = sources_from_config(&cfg)?;
+    Ok(Daemon::start(cfg, sources, DaemonOptions { socket_path })?)
+}
+
 fn run(a: RunArgs) -> Result<()> {
     // Handlers first: a SIGHUP or SIGTERM during start-up must not kill the process.
     let sig = signals()?;
@@ -288,15 +306,7 @@ fn run(a: RunArgs) -> Result<()> {
                 .join(", ")
         ),
     }
-    let socket = a.socket.unwrap_or_else(|| cfg.socket.resolved_path());
-    let sources = sources_from_config(&cfg)?;
-    let daemon = Daemon::start(
-        cfg,
-        sources,
-        DaemonOptions {
-            socket_path: socket,
-        },
-    )?;
+    let daemon = start_daemon(cfg, a.socket)?;
     log::info!("listening on {}", daemon.socket_path().display());
     supervise(sig, daemon, path, None, |r| {
         log::debug!("{}", status_line(r));
@@ -307,21 +317,8 @@ fn demo(a: DemoArgs) -> Result<()> {
     let sig = signals()?;
     let mut cfg = Config::embedded_default();
     init_logging(cfg.log_level);
-    if let Some(n) = a.agents {
-        cfg.crowd.agents = n;
-        if let Some((field, msg)) = cfg.validate().into_iter().next() {
-            bail!("--agents: {field}: {msg}");
-        }
-    }
-    let socket = a.socket.unwrap_or_else(|| cfg.socket.resolved_path());
-    let sources = sources_from_config(&cfg)?;
-    let daemon = Daemon::start(
-        cfg,
-        sources,
-        DaemonOptions {
-            socket_path: socket,
-        },
-    )?;
+    set_agents(&mut cfg, a.agents)?;
+    let daemon = start_daemon(cfg, a.socket)?;
     let path = daemon.socket_path().display().to_string();
     println!("crowdtouch demo: serving the crowd on {path}");
     println!("  watch it:   crowdtouch watch --socket {path}   (or: cargo run --release -- watch --socket {path})");
@@ -376,12 +373,7 @@ fn replay(a: ReplayArgs) -> Result<()> {
         None => (Config::embedded_default(), None),
     };
     init_logging(cfg.log_level);
-    if let Some(n) = a.agents {
-        cfg.crowd.agents = n;
-        if let Some((field, msg)) = cfg.validate().into_iter().next() {
-            bail!("--agents: {field}: {msg}");
-        }
-    }
+    set_agents(&mut cfg, a.agents)?;
     let on_bad = if a.skip_bad_frames {
         OnBadFrame::Skip
     } else {
