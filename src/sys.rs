@@ -1,0 +1,3 @@
+//! System calls the safe crates do not wrap (in progress).
+#![allow(unsafe_code)]
+#![deny(clippy::undocumented_unsafe_blocks)]
