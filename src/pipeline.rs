@@ -27,7 +27,7 @@ use crate::stats::StageTimer;
 use crate::time::{monotonic_now, Micros};
 use crossbeam_channel::{bounded, never, select, Receiver, Sender, TryRecvError, TrySendError};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Duration;
@@ -77,6 +77,11 @@ pub struct InputCounters {
     pub transitions_lost: AtomicU64,
     /// Times the queue was found full.
     pub queue_full: AtomicU64,
+    /// Contacts that appeared without a touch-down (a source bug); given fresh ids.
+    pub contacts_without_down: AtomicU64,
+    /// The last contact id handed out; ids are unique across every source and never
+    /// reused while the daemon runs.
+    pub last_contact_id: AtomicU32,
 }
 
 /// The input side of the input → control queue: a [`FrameSink`] for one source.
@@ -87,6 +92,11 @@ pub struct InputCounters {
 /// frame, and when the backlog is full every new frame is merged into its newest
 /// entry. Merging keeps every touch-down and lift (see [`TouchFrame::merge_later`]),
 /// so transitions are never lost; only intermediate positions are.
+///
+/// The queue also gives contacts their daemon-wide ids: a source numbers its contacts
+/// as it likes (unique while they are down); each touch-down gets the next id from
+/// [`InputCounters::last_contact_id`], so ids are unique across devices, re-plugs and
+/// replay loops, and never reused while the daemon runs.
 pub struct FrameQueue {
     tx: Sender<TouchFrame>,
     ring: Vec<TouchFrame>,
@@ -94,7 +104,14 @@ pub struct FrameQueue {
     len: usize,
     device: u16,
     counters: Arc<InputCounters>,
+    /// Source id → daemon id of the contacts down, in a fixed table.
+    ids: [(u32, u32); ID_MAP_CAPACITY],
+    ids_len: usize,
 }
+
+/// Contacts one source may have down at once (twice a frame's capacity: ends and
+/// begins of one frame).
+const ID_MAP_CAPACITY: usize = 2 * crate::input::MAX_CONTACTS;
 
 impl FrameQueue {
     /// A sink for device index `device` feeding `tx`.
@@ -106,6 +123,61 @@ impl FrameQueue {
             len: 0,
             device,
             counters,
+            ids: [(0, 0); ID_MAP_CAPACITY],
+            ids_len: 0,
+        }
+    }
+
+    fn fresh_id(&self) -> u32 {
+        self.counters
+            .last_contact_id
+            .fetch_add(1, Ordering::Relaxed)
+            .wrapping_add(1)
+    }
+
+    /// Rewrites the frame's contact ids into daemon-wide ids.
+    fn map_ids(&mut self, f: &mut TouchFrame) {
+        for c in f.contacts_mut() {
+            let local = c.id.0;
+            let found = self.ids[..self.ids_len]
+                .iter()
+                .position(|&(l, _)| l == local);
+            let begins = c.flags.contains(crate::input::ContactFlags::DOWN);
+            let slot = match (found, begins) {
+                (Some(i), false) => i,
+                (found, _) => {
+                    if !begins {
+                        self.counters
+                            .contacts_without_down
+                            .fetch_add(1, Ordering::Relaxed);
+                    }
+                    let id = self.fresh_id();
+                    match found {
+                        // A source reusing an id for a new touch: the old one has ended.
+                        Some(i) => {
+                            self.ids[i].1 = id;
+                            i
+                        }
+                        None if self.ids_len < ID_MAP_CAPACITY => {
+                            self.ids[self.ids_len] = (local, id);
+                            self.ids_len += 1;
+                            self.ids_len - 1
+                        }
+                        None => {
+                            // Table full (a source that never ends its contacts): drop
+                            // the oldest mapping to stay allocation-free.
+                            self.ids.copy_within(1..ID_MAP_CAPACITY, 0);
+                            self.ids[ID_MAP_CAPACITY - 1] = (local, id);
+                            ID_MAP_CAPACITY - 1
+                        }
+                    }
+                }
+            };
+            c.id = crate::input::ContactId(self.ids[slot].1);
+            if c.flags.ended() {
+                self.ids.copy_within(slot + 1..self.ids_len, slot);
+                self.ids_len -= 1;
+            }
         }
     }
 
@@ -156,6 +228,7 @@ impl FrameQueue {
 impl FrameSink for FrameQueue {
     fn push(&mut self, frame: &TouchFrame) {
         let mut f = *frame;
+        self.map_ids(&mut f);
         f.device = self.device;
         f.t_queued = monotonic_now();
         self.counters.frames.fetch_add(1, Ordering::Relaxed);
@@ -994,6 +1067,43 @@ mod tests {
         assert_eq!(counters.transitions_lost.load(Ordering::Relaxed), 0);
         // Time order is kept.
         assert!(got.windows(2).all(|w| w[0].t <= w[1].t));
+    }
+
+    #[test]
+    fn contact_ids_are_unique_across_sources_and_reuse() {
+        let (tx, rx) = bounded(64);
+        let counters = Arc::new(InputCounters::default());
+        let mut a = FrameQueue::new(tx.clone(), 0, Arc::clone(&counters));
+        let mut b = FrameQueue::new(tx, 1, Arc::clone(&counters));
+        // Both sources call their first contact 1, and reuse 1 after a lift.
+        for q in [&mut a, &mut b] {
+            q.push(&frame(0, &[(1, 0.1, ContactFlags::DOWN)]));
+            q.push(&frame(1, &[(1, 0.2, ContactFlags::NONE)]));
+            q.push(&frame(2, &[(1, 0.2, ContactFlags::UP)]));
+            q.push(&frame(3, &[(1, 0.3, ContactFlags::DOWN)]));
+            q.push(&frame(4, &[(1, 0.3, ContactFlags::CANCELLED)]));
+        }
+        let got: Vec<TouchFrame> = rx.try_iter().collect();
+        let ids: Vec<(u16, u32)> = got
+            .iter()
+            .map(|f| (f.device, f.contacts()[0].id.0))
+            .collect();
+        assert_eq!(
+            ids,
+            vec![
+                (0, 1),
+                (0, 1),
+                (0, 1),
+                (0, 2),
+                (0, 2),
+                (1, 3),
+                (1, 3),
+                (1, 3),
+                (1, 4),
+                (1, 4)
+            ]
+        );
+        assert_eq!(counters.contacts_without_down.load(Ordering::Relaxed), 0);
     }
 
     #[test]

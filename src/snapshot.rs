@@ -172,6 +172,23 @@ pub enum Event {
         /// When.
         t: Micros,
     },
+    /// A touch device was attached, went away, or failed.
+    Device {
+        /// Index of the input in the config.
+        input: u16,
+        /// What happened.
+        state: DeviceState,
+        /// Device name.
+        name: String,
+        /// Node it was read through (`/dev/input/event5`).
+        node: String,
+        /// Stable identity (udev ID_PATH, else vendor:product:serial).
+        stable_id: String,
+        /// Why, for `failed` (and a hint for `unplugged`).
+        message: Option<String>,
+        /// When.
+        t: Micros,
+    },
     /// The simulation was paused or resumed.
     Paused {
         /// Paused after this event.
@@ -179,6 +196,30 @@ pub enum Event {
         /// When.
         t: Micros,
     },
+}
+
+/// Life of a touch device.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DeviceState {
+    /// Opened and being read (first time, or back after an unplug).
+    Attached,
+    /// Gone (unplugged, driver unbound); its touches were cancelled; waiting for it.
+    Unplugged,
+    /// Could not be opened or read (permissions, busy, not a touch device); retried
+    /// when the node changes.
+    Failed,
+}
+
+impl DeviceState {
+    /// Lower-case name, as on the wire.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            DeviceState::Attached => "attached",
+            DeviceState::Unplugged => "unplugged",
+            DeviceState::Failed => "failed",
+        }
+    }
 }
 
 /// Timing of one pipeline stage over the last stats interval.

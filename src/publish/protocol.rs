@@ -1266,6 +1266,16 @@ enum Wire<'a> {
         paused: bool,
         t_us: u64,
     },
+    Device {
+        input: u16,
+        state: crate::snapshot::DeviceState,
+        name: &'a str,
+        node: &'a str,
+        stable_id: &'a str,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        message: Option<&'a str>,
+        t_us: u64,
+    },
     Ack {
         id: &'a Value,
     },
@@ -1294,7 +1304,7 @@ enum Wire<'a> {
     },
 }
 
-/// Appends one event JSON line (`control`, `gesture`, `reset` or `paused`).
+/// Appends one event JSON line (`control`, `gesture`, `reset`, `paused` or `device`).
 pub fn encode_event(e: &Event, out: &mut Vec<u8>) {
     let w = match e {
         Event::ControlBegin {
@@ -1369,6 +1379,23 @@ pub fn encode_event(e: &Event, out: &mut Vec<u8>) {
         },
         Event::Paused { paused, t } => Wire::Paused {
             paused: *paused,
+            t_us: t.0,
+        },
+        Event::Device {
+            input,
+            state,
+            name,
+            node,
+            stable_id,
+            message,
+            t,
+        } => Wire::Device {
+            input: *input,
+            state: *state,
+            name,
+            node,
+            stable_id,
+            message: message.as_deref(),
             t_us: t.0,
         },
     };

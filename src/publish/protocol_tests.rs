@@ -616,3 +616,26 @@ proptest! {
         prop_assert_eq!(d.touches.unwrap().len(), s.touches.len());
     }
 }
+
+#[test]
+fn device_event_encodes_as_documented() {
+    let mut out = Vec::new();
+    encode_event(
+        &Event::Device {
+            input: 0,
+            state: crate::snapshot::DeviceState::Unplugged,
+            name: "Dell Canvas".into(),
+            node: "/dev/input/event5".into(),
+            stable_id: "pci-0000:00:14.0-usb-0:2:1.0".into(),
+            message: Some("device unplugged".into()),
+            t: Micros(7),
+        },
+        &mut out,
+    );
+    let v: Value = serde_json::from_slice(&out).unwrap();
+    assert_eq!(v["type"], "device");
+    assert_eq!(v["state"], "unplugged");
+    assert_eq!(v["node"], "/dev/input/event5");
+    assert_eq!(v["message"], "device unplugged");
+    assert_eq!(v["t_us"], 7);
+}
