@@ -142,10 +142,96 @@ pub enum InputConfig {
         #[serde(default)]
         reset_between: bool,
     },
+    /// A touch device (evdev or hidraw), found by discovery, read on a real-time
+    /// thread, re-attached when it comes back after an unplug.
+    Device {
+        /// Which device.
+        #[serde(default)]
+        select: DeviceSelect,
+        /// Through which interface.
+        #[serde(default)]
+        interface: DeviceInterface,
+        /// Take the device exclusively (EVIOCGRAB) so the desktop does not also react.
+        /// Applied once every finger has lifted.
+        #[serde(default)]
+        grab: bool,
+        /// The part of the table this device covers, in table units (the unit square);
+        /// `None` is the whole table. Several devices make one table this way.
+        #[serde(default)]
+        region: Option<Rect>,
+        /// Rotation, flips and calibration matrix.
+        #[serde(default)]
+        calibration: CalibrationConfig,
+        /// Contacts larger than this (mm, from the reported contact size) are palms:
+        /// ignored for control and reported as such. `None` keeps every contact
+        /// (firmware palm flags still apply).
+        #[serde(default = "default_palm_max_mm")]
+        palm_max_mm: Option<f64>,
+        /// Physical size of the surface (mm) when the device reports no resolution.
+        #[serde(default)]
+        size_mm: Option<(f64, f64)>,
+    },
 }
 
 fn default_gap_ms() -> u64 {
     1000
+}
+
+/// Which touch device a `Device` input reads.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum DeviceSelect {
+    /// The best touch device found: a touchscreen over a touchpad, then the one with
+    /// the most contacts, then the largest (`crowdtouch devices` shows the pick).
+    #[default]
+    Auto,
+    /// Name contains this text (case-insensitive), or matches it as a `*` glob.
+    Name(String),
+    /// USB/HID ids, `"2575:0204"` (hex).
+    VendorProduct(String),
+    /// A device node, `"/dev/input/event5"` (changes between boots; prefer `Id`).
+    Path(PathBuf),
+    /// A stable id as `crowdtouch devices` prints it (udev ID_PATH, or vendor:product:serial).
+    Id(String),
+}
+
+/// Which kernel interface to read a device through.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum DeviceInterface {
+    /// evdev when the kernel handles the device, else hidraw.
+    #[default]
+    Any,
+    /// `/dev/input/eventN` only.
+    Evdev,
+    /// `/dev/hidrawN` only (raw HID digitizer reports).
+    Hidraw,
+}
+
+/// How a device's coordinates are corrected before they reach the table.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrationConfig {
+    /// Clockwise rotation in degrees: 0, 90, 180 or 270.
+    #[serde(default)]
+    pub rotation: u16,
+    /// Mirror left-right (after rotation).
+    #[serde(default)]
+    pub flip_x: bool,
+    /// Mirror top-bottom (after rotation).
+    #[serde(default)]
+    pub flip_y: bool,
+    /// 2×3 matrix `(a, b, c, d, e, f)` in libinput's LIBINPUT_CALIBRATION_MATRIX
+    /// convention (`x' = a·x + b·y + c`, `y' = d·x + e·y + f` on unit coordinates),
+    /// applied first. `None` uses the udev property when the device has one.
+    /// `crowdtouch calibrate --write` fills this in.
+    #[serde(default)]
+    pub matrix: Option<[f64; 6]>,
+}
+
+/// Default largest contact that still counts as a finger (mm).
+pub const DEFAULT_PALM_MAX_MM: f64 = 30.0;
+
+fn default_palm_max_mm() -> Option<f64> {
+    Some(DEFAULT_PALM_MAX_MM)
 }
 
 /// How the touch surface maps onto the world.
@@ -267,6 +353,9 @@ pub struct RealtimeConfig {
     /// Lock all memory into RAM (mlockall), so the latency path never page-faults.
     #[serde(default)]
     pub lock_memory: bool,
+    /// CPUs the input threads may run on (`None`: any).
+    #[serde(default)]
+    pub input_cpus: Option<Vec<usize>>,
 }
 
 /// Threads and queues.
@@ -453,6 +542,7 @@ impl Config {
                         }
                     }
                 }
+                InputConfig::Device { .. } => {}
             }
         }
     }
@@ -694,8 +784,84 @@ impl Config {
                     &format!("inputs[{i}].files"),
                     "a replay input needs at least one file".to_string(),
                 ),
+                InputConfig::Device {
+                    select,
+                    region,
+                    calibration,
+                    palm_max_mm,
+                    size_mm,
+                    ..
+                } => {
+                    match select {
+                        DeviceSelect::Name(n) | DeviceSelect::Id(n) => check(
+                            !n.trim().is_empty(),
+                            &format!("inputs[{i}].select"),
+                            "the name or id to select is empty".to_string(),
+                        ),
+                        DeviceSelect::VendorProduct(vp) => check(
+                            parse_vendor_product(vp).is_some(),
+                            &format!("inputs[{i}].select"),
+                            format!("vendor:product must be two hex numbers like \"2575:0204\", got {vp:?}"),
+                        ),
+                        DeviceSelect::Path(p) => check(
+                            p.is_absolute(),
+                            &format!("inputs[{i}].select"),
+                            format!("device path must be absolute, got {}", p.display()),
+                        ),
+                        DeviceSelect::Auto => {}
+                    }
+                    if let Some(r) = region {
+                        check(
+                            finite_rect(r) && r.min[0] >= 0.0 && r.min[1] >= 0.0 && r.max[0] <= 1.0 && r.max[1] <= 1.0
+                                && r.width() > 0.0 && r.height() > 0.0,
+                            &format!("inputs[{i}].region"),
+                            format!("region must be a rectangle inside the unit square (table units), got {:?} .. {:?}", r.min, r.max),
+                        );
+                    }
+                    check(
+                        matches!(calibration.rotation, 0 | 90 | 180 | 270),
+                        &format!("inputs[{i}].calibration.rotation"),
+                        format!(
+                            "rotation must be 0, 90, 180 or 270 degrees, got {}",
+                            calibration.rotation
+                        ),
+                    );
+                    if let Some(m) = calibration.matrix {
+                        check(
+                            m.iter().all(|v| v.is_finite()),
+                            &format!("inputs[{i}].calibration.matrix"),
+                            "calibration matrix values must be finite".to_string(),
+                        );
+                    }
+                    if let Some(p) = palm_max_mm {
+                        check(
+                            p.is_finite() && *p > 0.0,
+                            &format!("inputs[{i}].palm_max_mm"),
+                            format!("palm size must be positive millimetres, got {p}"),
+                        );
+                    }
+                    if let Some((w, h)) = size_mm {
+                        check(
+                            w.is_finite() && h.is_finite() && *w > 0.0 && *h > 0.0,
+                            &format!("inputs[{i}].size_mm"),
+                            format!("size must be positive millimetres, got ({w}, {h})"),
+                        );
+                    }
+                }
             }
         }
+        if let Some(cpus) = &pl.realtime.input_cpus {
+            let n = std::thread::available_parallelism()
+                .map(|n| n.get())
+                .unwrap_or(1024)
+                .max(1024);
+            check(
+                !cpus.is_empty() && cpus.iter().all(|&c| c < n),
+                "pipeline.realtime.input_cpus",
+                format!("CPU list must be non-empty CPU numbers, got {cpus:?}"),
+            );
+        }
+
         p
     }
 
@@ -710,6 +876,15 @@ impl Config {
             self.surface.world.height() / h_mm,
         )
     }
+}
+
+/// Parses `"vvvv:pppp"` (hex) into vendor and product ids.
+pub fn parse_vendor_product(s: &str) -> Option<(u16, u16)> {
+    let (v, p) = s.trim().split_once(':')?;
+    Some((
+        u16::from_str_radix(v, 16).ok()?,
+        u16::from_str_radix(p, 16).ok()?,
+    ))
 }
 
 fn finite_rect(r: &Rect) -> bool {

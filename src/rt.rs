@@ -84,3 +84,25 @@ pub fn lock_memory() -> bool {
         }
     }
 }
+
+/// Pins the calling thread to `cpus`. Returns whether it took effect; a refusal is
+/// logged.
+pub fn pin_to_cpus(cpus: &[usize], thread: &str) -> bool {
+    use nix::sched::{sched_setaffinity, CpuSet};
+    let mut set = CpuSet::new();
+    for &c in cpus {
+        if let Err(e) = set.set(c) {
+            log::warn!("CPU {c} for the {thread} thread is out of range ({e}); ignoring the affinity setting");
+            return false;
+        }
+    }
+    match sched_setaffinity(nix::unistd::Pid::from_raw(0), &set) {
+        Ok(()) => true,
+        Err(e) => {
+            log::warn!(
+                "could not pin the {thread} thread to CPUs {cpus:?} ({e}); it runs anywhere"
+            );
+            false
+        }
+    }
+}

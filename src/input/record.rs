@@ -1,1 +1,1 @@
-//! (in progress)
+//! STUB until the record module lands.

@@ -25,6 +25,8 @@ use crate::publish::{HelloInfo, PublisherStats, Server};
 use crate::snapshot::{Command, CommandRequest, Event, Outgoing, StageStats, StatsReport};
 use crate::stats::StageTimer;
 use crate::time::{monotonic_now, Micros};
+pub mod device;
+
 use crossbeam_channel::{bounded, never, select, Receiver, Sender, TryRecvError, TrySendError};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
@@ -303,6 +305,19 @@ pub enum SourceSpec {
         /// Surface size (mm) from the first recording, if known.
         glass_mm: Option<(f64, f64)>,
     },
+    /// A touch device found by discovery and re-attached after unplugging.
+    Device {
+        /// Index of the input in the config.
+        input: u16,
+        /// Which device, and through which interface.
+        select: crate::config::DeviceSelect,
+        /// evdev, hidraw or either.
+        interface: crate::config::DeviceInterface,
+        /// Exclusive grab.
+        grab: bool,
+        /// Calibration, region and palm settings applied to its frames.
+        transform: device::TransformSettings,
+    },
     /// Frames handed in by the embedding program through a channel: a virtual
     /// device for tests, benchmarks and tools. Frames keep the time stamp they were
     /// given (stamp them with [`monotonic_now`] when sent to measure latency). The
@@ -324,7 +339,7 @@ pub fn sources_from_config(cfg: &Config) -> Result<Vec<SourceSpec>, Error> {
         return Err(Error::NoInputs);
     }
     let mut out = Vec::new();
-    for input in &cfg.inputs {
+    for (i, input) in cfg.inputs.iter().enumerate() {
         match input {
             InputConfig::Replay {
                 files,
@@ -350,6 +365,28 @@ pub fn sources_from_config(cfg: &Config) -> Result<Vec<SourceSpec>, Error> {
                     gap: Micros(gap_ms * 1000),
                     reset_between: *reset_between,
                     glass_mm: glass,
+                });
+            }
+            InputConfig::Device {
+                select,
+                interface,
+                grab,
+                region,
+                calibration,
+                palm_max_mm,
+                size_mm,
+            } => {
+                out.push(SourceSpec::Device {
+                    input: i as u16,
+                    select: select.clone(),
+                    interface: *interface,
+                    grab: *grab,
+                    transform: device::TransformSettings {
+                        calibration: calibration.clone(),
+                        region: *region,
+                        palm_max_mm: *palm_max_mm,
+                        size_mm: size_mm.or(cfg.surface.size_mm),
+                    },
                 });
             }
         }
@@ -414,6 +451,7 @@ impl Daemon {
         }
         let glass = sources.iter().find_map(|s| match s {
             SourceSpec::Replay { glass_mm, .. } | SourceSpec::Channel { glass_mm, .. } => *glass_mm,
+            SourceSpec::Device { transform, .. } => transform.size_mm,
         });
         let engine = Engine::new(&cfg, glass, !cfg.assignment.worker);
         let hello = HelloInfo {
@@ -521,6 +559,48 @@ impl Daemon {
                         };
                         src.run(&mut queue, &stop, &mut on_item);
                         drain_backlog(&mut queue, &stop);
+                    })?);
+                }
+                SourceSpec::Device {
+                    input,
+                    select,
+                    interface,
+                    grab,
+                    transform,
+                } => {
+                    let out = out_tx.clone();
+                    let cpus = rt.input_cpus.clone();
+                    threads.push(spawn("input", move || {
+                        realtime("input");
+                        if let Some(cpus) = &cpus {
+                            crate::rt::pin_to_cpus(cpus, "input");
+                        }
+                        let mut env = device::SystemEnv::new(std::path::Path::new("/"), grab);
+                        let mut sink = device::TransformSink::new(queue, transform);
+                        let mut notify = |n: device::DeviceNotice| {
+                            let info = n.info.as_ref();
+                            let ev = Event::Device {
+                                input,
+                                state: n.state,
+                                name: info.map(|i| i.name.clone()).unwrap_or_default(),
+                                node: info
+                                    .map(|i| i.node.display().to_string())
+                                    .unwrap_or_default(),
+                                stable_id: info.map(|i| i.stable_id.clone()).unwrap_or_default(),
+                                message: n.message,
+                                t: n.t,
+                            };
+                            let _ = out.try_send(Outgoing::Event(Arc::new(ev)));
+                        };
+                        device::supervise(
+                            &mut env,
+                            &select,
+                            interface,
+                            &mut sink,
+                            &stop,
+                            &mut notify,
+                        );
+                        drain_backlog(sink.queue(), &stop);
                     })?);
                 }
                 SourceSpec::Channel { rx, .. } => {
