@@ -119,6 +119,10 @@ struct ReplayArgs {
     /// Also draw the replay (mesh before and after, agent and finger paths) as SVG.
     #[arg(long)]
     svg: Option<PathBuf>,
+    /// Print the decoded touch frames (JSON Lines) instead of running the crowd: the
+    /// daemon's own view of a recording, for bug reports.
+    #[arg(long)]
+    frames: bool,
 }
 
 #[derive(Args, Debug)]
@@ -148,6 +152,15 @@ pub fn main() -> i32 {
     };
     match result {
         Ok(()) => 0,
+        // `crowdtouch replay --frames x | head`: the reader went away; not an error.
+        Err(e)
+            if e.chain().any(|c| {
+                c.downcast_ref::<std::io::Error>()
+                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            }) =>
+        {
+            0
+        }
         Err(e) => {
             eprintln!("crowdtouch: error: {e:#}");
             1
@@ -383,6 +396,19 @@ fn replay(a: ReplayArgs) -> Result<()> {
     for w in &rec.warnings {
         eprintln!("{}:{}: skipped: {}", a.file.display(), w.line, w.message);
     }
+    if a.frames {
+        let mut out: Box<dyn Write> = match &a.out {
+            Some(p) => Box::new(std::io::BufWriter::new(
+                std::fs::File::create(p).with_context(|| format!("creating {}", p.display()))?,
+            )),
+            None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
+        };
+        for f in &rec.frames {
+            writeln!(out, "{}", frame_json(f)).context("writing frames")?;
+        }
+        out.flush().context("writing frames")?;
+        return Ok(());
+    }
     let mut out: Box<dyn Write> = match &a.out {
         Some(p) => Box::new(std::io::BufWriter::new(
             std::fs::File::create(p).with_context(|| format!("creating {}", p.display()))?,
@@ -441,6 +467,49 @@ fn replay(a: ReplayArgs) -> Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
+}
+
+/// One decoded frame as a JSON object: `t_us` and the contacts (unit-square
+/// coordinates, life-cycle state, optional pressure and size).
+pub fn frame_json(f: &crowdtouch::input::TouchFrame) -> serde_json::Value {
+    use crowdtouch::input::ContactFlags;
+    let contacts: Vec<serde_json::Value> = f
+        .contacts()
+        .iter()
+        .map(|c| {
+            let state = if c.flags.contains(ContactFlags::CANCELLED) {
+                "cancelled"
+            } else if c.flags.contains(ContactFlags::DOWN) && c.flags.contains(ContactFlags::UP) {
+                "tap"
+            } else if c.flags.contains(ContactFlags::DOWN) {
+                "down"
+            } else if c.flags.contains(ContactFlags::UP) {
+                "up"
+            } else {
+                "move"
+            };
+            let mut o = serde_json::json!({
+                "id": c.id.0,
+                "x": (c.x as f64 * 1e5).round() / 1e5,
+                "y": (c.y as f64 * 1e5).round() / 1e5,
+                "state": state,
+            });
+            if let Some(p) = c.pressure {
+                o["pressure"] = serde_json::json!((p as f64 * 1e3).round() / 1e3);
+            }
+            if let Some(m) = c.major_mm {
+                o["major_mm"] = serde_json::json!((m as f64 * 10.0).round() / 10.0);
+            }
+            if let Some(m) = c.minor_mm {
+                o["minor_mm"] = serde_json::json!((m as f64 * 10.0).round() / 10.0);
+            }
+            if c.flags.contains(ContactFlags::PALM) {
+                o["palm"] = serde_json::json!(true);
+            }
+            o
+        })
+        .collect();
+    serde_json::json!({ "t_us": f.t.0, "contacts": contacts })
 }
 
 fn synth(out: &Path) -> Result<()> {

@@ -244,3 +244,43 @@ fn sighup_with_a_bad_config_keeps_the_old_one_running() {
     );
     let _ = std::io::stderr().flush();
 }
+
+/// `replay --frames` prints the daemon's decoding of a real device recording.
+#[test]
+fn replay_frames_prints_decoded_touches() {
+    let rec = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/dell-canvas-27-touch.evemu");
+    let out = bin()
+        .arg("replay")
+        .arg("--frames")
+        .arg(&rec)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let (mut downs, mut ends, mut frames) = (0, 0, 0);
+    for line in text.lines() {
+        let v: serde_json::Value = serde_json::from_str(line).unwrap();
+        frames += 1;
+        for c in v["contacts"].as_array().unwrap() {
+            let x = c["x"].as_f64().unwrap();
+            assert!((0.0..=1.0).contains(&x));
+            match c["state"].as_str().unwrap() {
+                "down" => downs += 1,
+                "up" | "cancelled" => ends += 1,
+                "tap" => {
+                    downs += 1;
+                    ends += 1
+                }
+                _ => {}
+            }
+        }
+    }
+    // The Dell Canvas 27 recording: 450 frames, 12 touches.
+    assert_eq!(frames, 450);
+    assert_eq!((downs, ends), (12, 12));
+}
