@@ -141,3 +141,14 @@ fn systemd_analyze_verifies_the_unit_where_available() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success() && !err.contains("Unknown"), "{err}");
 }
+
+/// The installation config reads a device and otherwise matches the documented default.
+#[test]
+fn kiosk_config_differs_from_the_default_only_in_its_inputs() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("config");
+    let mut kiosk = crowdtouch::config::Config::load(&dir.join("kiosk.ron")).expect("config/kiosk.ron");
+    let default = crowdtouch::config::Config::load(&dir.join("crowdtouch.ron")).unwrap();
+    assert!(matches!(kiosk.inputs.as_slice(), [crowdtouch::config::InputConfig::Device { .. }]));
+    kiosk.inputs = default.inputs.clone();
+    assert_eq!(kiosk, default, "config/kiosk.ron drifted from config/crowdtouch.ron");
+}
