@@ -146,9 +146,16 @@ fn systemd_analyze_verifies_the_unit_where_available() {
 #[test]
 fn kiosk_config_differs_from_the_default_only_in_its_inputs() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("config");
-    let mut kiosk = crowdtouch::config::Config::load(&dir.join("kiosk.ron")).expect("config/kiosk.ron");
+    let mut kiosk =
+        crowdtouch::config::Config::load(&dir.join("kiosk.ron")).expect("config/kiosk.ron");
     let default = crowdtouch::config::Config::load(&dir.join("crowdtouch.ron")).unwrap();
-    assert!(matches!(kiosk.inputs.as_slice(), [crowdtouch::config::InputConfig::Device { .. }]));
+    assert!(matches!(
+        kiosk.inputs.as_slice(),
+        [crowdtouch::config::InputConfig::Device { .. }]
+    ));
     kiosk.inputs = default.inputs.clone();
-    assert_eq!(kiosk, default, "config/kiosk.ron drifted from config/crowdtouch.ron");
+    assert_eq!(
+        kiosk, default,
+        "config/kiosk.ron drifted from config/crowdtouch.ron"
+    );
 }
