@@ -18,6 +18,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 mod bench;
+mod devices;
 mod svg;
 mod watch;
 
@@ -63,6 +64,16 @@ enum Cmd {
     },
     /// Measure the standard workloads on this machine (p50/p99/max).
     Bench(bench::BenchArgs),
+    /// List the touch devices on this machine (evdev and hidraw) with their ranges,
+    /// contact counts and stable ids, and which one `run` would pick.
+    Devices {
+        /// Config whose Device inputs to resolve (default: the search path).
+        #[arg(long, short)]
+        config: Option<PathBuf>,
+        /// Machine-readable output.
+        #[arg(long)]
+        json: bool,
+    },
     /// Regenerate the shipped recordings (deterministic).
     SynthRecordings {
         /// Output directory.
@@ -149,6 +160,8 @@ pub fn main() -> i32 {
         Cmd::CheckConfig { file } => return check_config(&file),
         Cmd::Bench(a) => bench::bench(a),
         Cmd::SynthRecordings { out } => synth(&out),
+        Cmd::Devices { config, json } => find_config(config.as_deref())
+            .and_then(|(cfg, _)| devices::devices(&cfg, json, Path::new("/"))),
     };
     match result {
         Ok(()) => 0,
