@@ -58,8 +58,11 @@ fn parse_evemu(text: &str) -> Desc {
         } else if let Some(p) = line.strip_prefix("P: ") {
             for b in p.split_whitespace() {
                 let byte = u8::from_str_radix(b, 16).unwrap();
-                d.props
-                    .extend((0..8).filter(|j| byte >> j & 1 == 1).map(|j| prop_index * 8 + j));
+                d.props.extend(
+                    (0..8)
+                        .filter(|j| byte >> j & 1 == 1)
+                        .map(|j| prop_index * 8 + j),
+                );
                 prop_index += 1;
             }
         } else if let Some(b) = line.strip_prefix("B: ") {
@@ -155,9 +158,9 @@ fn keyboard_desc() -> Desc {
 
 /// A boot keyboard HID descriptor (Generic Desktop / Keyboard), written for this test.
 const KEYBOARD_RDESC: &[u8] = &[
-    0x05, 0x01, 0x09, 0x06, 0xa1, 0x01, 0x05, 0x07, 0x19, 0xe0, 0x29, 0xe7, 0x15, 0x00, 0x25,
-    0x01, 0x75, 0x01, 0x95, 0x08, 0x81, 0x02, 0x95, 0x01, 0x75, 0x08, 0x81, 0x03, 0x95, 0x06,
-    0x75, 0x08, 0x15, 0x00, 0x25, 0x65, 0x05, 0x07, 0x19, 0x00, 0x29, 0x65, 0x81, 0x00, 0xc0,
+    0x05, 0x01, 0x09, 0x06, 0xa1, 0x01, 0x05, 0x07, 0x19, 0xe0, 0x29, 0xe7, 0x15, 0x00, 0x25, 0x01,
+    0x75, 0x01, 0x95, 0x08, 0x81, 0x02, 0x95, 0x01, 0x75, 0x08, 0x81, 0x03, 0x95, 0x06, 0x75, 0x08,
+    0x15, 0x00, 0x25, 0x65, 0x05, 0x07, 0x19, 0x00, 0x29, 0x65, 0x81, 0x00, 0xc0,
 ];
 
 /// What the evdev module's probe would report for a device with this description.
@@ -228,7 +231,7 @@ fn dell_hidraw_info(node: &Path) -> DeviceInfo {
 
 #[derive(Clone)]
 enum Outcome {
-    Ok(DeviceInfo),
+    Ok(Box<DeviceInfo>),
     Denied,
 }
 
@@ -241,7 +244,8 @@ struct FakeProber {
 
 impl FakeProber {
     fn ok(&mut self, info: DeviceInfo) {
-        self.answers.insert(info.node.clone(), Outcome::Ok(info));
+        self.answers
+            .insert(info.node.clone(), Outcome::Ok(Box::new(info)));
     }
     fn denied(&mut self, node: &Path) {
         self.answers.insert(node.to_path_buf(), Outcome::Denied);
@@ -252,7 +256,7 @@ impl Prober for FakeProber {
     fn probe(&self, _kind: DeviceKind, node: &Path) -> Result<DeviceInfo, Error> {
         self.asked.borrow_mut().push(node.to_path_buf());
         match self.answers.get(node) {
-            Some(Outcome::Ok(info)) => Ok(info.clone()),
+            Some(Outcome::Ok(info)) => Ok((**info).clone()),
             Some(Outcome::Denied) => Err(Error::PermissionDenied {
                 node: node.to_path_buf(),
                 source: std::io::Error::from_raw_os_error(nix::libc::EACCES),
@@ -333,7 +337,10 @@ impl Tree {
         );
         self.link(parent, &input.join("device"));
         let event = input.join(format!("event{event_n}"));
-        self.write(&event.join("dev"), format!("{EVDEV_MAJOR}:{}\n", 64 + event_n));
+        self.write(
+            &event.join("dev"),
+            format!("{EVDEV_MAJOR}:{}\n", 64 + event_n),
+        );
         self.link(&input, &event.join("device"));
         self.link(
             &event,
@@ -349,7 +356,10 @@ impl Tree {
         let dir = parent.join(format!("hidraw/hidraw{n}"));
         self.write(&dir.join("dev"), format!("{HIDRAW_MAJOR}:{n}\n"));
         self.link(parent, &dir.join("device"));
-        self.link(&dir, &self.root().join(format!("sys/class/hidraw/hidraw{n}")));
+        self.link(
+            &dir,
+            &self.root().join(format!("sys/class/hidraw/hidraw{n}")),
+        );
         let node = self.root().join(format!("dev/hidraw{n}"));
         self.write(&node, "");
         node
@@ -433,7 +443,11 @@ fn standard_tree(with_udev: bool) -> (Tree, FakeProber, Nodes) {
         t.udev_record(
             EVDEV_MAJOR,
             69,
-            &[("ID_INPUT_TOUCHSCREEN", "1"), ("ID_PATH", DELL_ID_PATH), calib],
+            &[
+                ("ID_INPUT_TOUCHSCREEN", "1"),
+                ("ID_PATH", DELL_ID_PATH),
+                calib,
+            ],
         );
         t.udev_record(EVDEV_MAJOR, 71, &[("ID_INPUT_TOUCHSCREEN", "1")]);
         t.udev_record(
@@ -442,7 +456,11 @@ fn standard_tree(with_udev: bool) -> (Tree, FakeProber, Nodes) {
             &[("ID_INPUT_TOUCHPAD", "1"), ("ID_PATH", ITE_ID_PATH)],
         );
         t.udev_record(HIDRAW_MAJOR, 0, &[("ID_PATH", DELL_ID_PATH)]);
-        t.udev_record(HIDRAW_MAJOR, 2, &[("ID_PATH", "pci-0000:00:14.0-usb-0:4:1.0")]);
+        t.udev_record(
+            HIDRAW_MAJOR,
+            2,
+            &[("ID_PATH", "pci-0000:00:14.0-usb-0:4:1.0")],
+        );
         // hidraw1 (ITE): no record yet.
     }
     let nodes = Nodes {
@@ -563,6 +581,8 @@ fn discovery_lists_touch_devices_with_udev_facts() {
     let dell_raw = &found[2];
     assert_eq!(dell_raw.info.stable_id, DELL_ID_PATH);
     assert_eq!(dell_raw.parent, dell.parent);
+    // udev puts the matrix on the input device; the hidraw sibling inherits it.
+    assert_eq!(dell_raw.info.calibration, dell.info.calibration);
 
     // Probing hidraw1 was refused: listed with the error and what sysfs knows.
     let ite_raw = &found[3];
@@ -570,8 +590,14 @@ fn discovery_lists_touch_devices_with_udev_facts() {
     assert!(!ite_raw.processed, "no udev record for c244:1");
     let err = ite_raw.probe_error.as_deref().unwrap();
     assert!(err.contains("permission denied"), "{err}");
-    assert_eq!(ite_raw.info.name, "ITE Tech. Inc. ITE Device(8595) Touchpad");
-    assert_eq!((ite_raw.info.vendor, ite_raw.info.product), (0x06cb, 0x2968));
+    assert_eq!(
+        ite_raw.info.name,
+        "ITE Tech. Inc. ITE Device(8595) Touchpad"
+    );
+    assert_eq!(
+        (ite_raw.info.vendor, ite_raw.info.product),
+        (0x06cb, 0x2968)
+    );
     assert_eq!(ite_raw.info.stable_id, "06cb:2968");
 }
 
@@ -581,9 +607,18 @@ fn auto_picks_the_dell_canvas_through_evdev() {
     let found = discover(t.root(), &p);
     let pick = |sel: &Selector, pref| select(&found, sel, pref).map(|f| f.info.node.clone());
     // The hidraw interface declares more contacts (10 vs 5) but is the same device.
-    assert_eq!(pick(&Selector::Auto, InterfacePreference::Any), Ok(n.dell_evdev.clone()));
-    assert_eq!(pick(&Selector::Auto, InterfacePreference::Evdev), Ok(n.dell_evdev.clone()));
-    assert_eq!(pick(&Selector::Auto, InterfacePreference::Hidraw), Ok(n.dell_hidraw.clone()));
+    assert_eq!(
+        pick(&Selector::Auto, InterfacePreference::Any),
+        Ok(n.dell_evdev.clone())
+    );
+    assert_eq!(
+        pick(&Selector::Auto, InterfacePreference::Evdev),
+        Ok(n.dell_evdev.clone())
+    );
+    assert_eq!(
+        pick(&Selector::Auto, InterfacePreference::Hidraw),
+        Ok(n.dell_hidraw.clone())
+    );
 }
 
 #[test]
@@ -593,8 +628,14 @@ fn selection_by_name_ids_path_and_stable_id() {
     let any = InterfacePreference::Any;
     let pick = |sel: Selector, pref| select(&found, &sel, pref).map(|f| f.info.node.clone());
 
-    assert_eq!(pick(Selector::Name("cooltouch".into()), any), Ok(n.dell_evdev.clone()));
-    assert_eq!(pick(Selector::Name("*TOUCHPAD".into()), any), Ok(n.ite_evdev.clone()));
+    assert_eq!(
+        pick(Selector::Name("cooltouch".into()), any),
+        Ok(n.dell_evdev.clone())
+    );
+    assert_eq!(
+        pick(Selector::Name("*TOUCHPAD".into()), any),
+        Ok(n.ite_evdev.clone())
+    );
     assert_eq!(
         pick(Selector::VendorProduct("2575:0204".into()), any),
         Ok(n.dell_evdev.clone())
@@ -606,7 +647,10 @@ fn selection_by_name_ids_path_and_stable_id() {
         ),
         Ok(n.dell_hidraw.clone())
     );
-    assert_eq!(pick(Selector::Path(n.dell_hidraw.clone()), any), Ok(n.dell_hidraw.clone()));
+    assert_eq!(
+        pick(Selector::Path(n.dell_hidraw.clone()), any),
+        Ok(n.dell_hidraw.clone())
+    );
     // A by-path link names the node it points to; Path ignores the preference.
     let link = t
         .root()
@@ -616,8 +660,14 @@ fn selection_by_name_ids_path_and_stable_id() {
         pick(Selector::Path(link), InterfacePreference::Hidraw),
         Ok(n.ite_evdev.clone())
     );
-    assert_eq!(pick(Selector::Id(ITE_ID_PATH.into()), any), Ok(n.ite_evdev.clone()));
-    assert_eq!(pick(Selector::Id(DELL_ID_PATH.into()), any), Ok(n.dell_evdev.clone()));
+    assert_eq!(
+        pick(Selector::Id(ITE_ID_PATH.into()), any),
+        Ok(n.ite_evdev.clone())
+    );
+    assert_eq!(
+        pick(Selector::Id(DELL_ID_PATH.into()), any),
+        Ok(n.dell_evdev.clone())
+    );
 }
 
 #[test]
@@ -625,14 +675,22 @@ fn selection_errors_list_the_candidates() {
     let (t, p, n) = standard_tree(true);
     let found = discover(t.root(), &p);
 
-    let e = select(&found, &Selector::Name("egalax".into()), InterfacePreference::Any).unwrap_err();
+    let e = select(
+        &found,
+        &Selector::Name("egalax".into()),
+        InterfacePreference::Any,
+    )
+    .unwrap_err();
     assert!(matches!(e, SelectError::NoMatch { .. }));
     let msg = e.to_string();
     assert!(msg.contains("name \"egalax\""), "{msg}");
     for node in [&n.dell_evdev, &n.ite_evdev, &n.dell_hidraw, &n.ite_hidraw] {
         assert!(msg.contains(&node.display().to_string()), "{msg}");
     }
-    assert!(msg.contains("2575:0204") && msg.contains("CoolTouch"), "{msg}");
+    assert!(
+        msg.contains("2575:0204") && msg.contains("CoolTouch"),
+        "{msg}"
+    );
     assert!(msg.contains("permission denied"), "{msg}");
 
     // The ITE hidraw matches but cannot be opened.
@@ -646,8 +704,12 @@ fn selection_errors_list_the_candidates() {
     let msg = e.to_string();
     assert!(msg.contains(&n.ite_hidraw.display().to_string()) && msg.contains("permission denied"));
 
-    let e = select(&found, &Selector::VendorProduct("canvas".into()), InterfacePreference::Any)
-        .unwrap_err();
+    let e = select(
+        &found,
+        &Selector::VendorProduct("canvas".into()),
+        InterfacePreference::Any,
+    )
+    .unwrap_err();
     assert!(matches!(e, SelectError::BadSelector { .. }));
     assert!(e.to_string().contains("2575:0204"), "{e}");
 
@@ -681,7 +743,10 @@ fn device_is_recognised_after_coming_back_as_another_node() {
     t.udev_record(
         EVDEV_MAJOR,
         73,
-        &[("ID_PATH", DELL_ID_PATH), ("LIBINPUT_CALIBRATION_MATRIX", "0 -1 1 1 0 0")],
+        &[
+            ("ID_PATH", DELL_ID_PATH),
+            ("LIBINPUT_CALIBRATION_MATRIX", "0 -1 1 1 0 0"),
+        ],
     );
     let after = discover(t.root(), &p);
     let back = after
@@ -691,13 +756,24 @@ fn device_is_recognised_after_coming_back_as_another_node() {
     assert_eq!(back.info.node, t.root().join("dev/input/event9"));
     assert!(recognise(&chosen, &back.info));
     assert!(matches(&back.info, &sticky_selector(&chosen)));
+    // The hotplug path examines just the new node, with the same result.
+    let one = discover::discover_node(t.root(), &back.info.node, &p).unwrap();
+    assert_eq!(&one, back);
+    assert!(discover::discover_node(t.root(), &n.keyboard, &p).is_none());
+    assert!(discover::discover_node(t.root(), &t.root().join("dev/input/mouse0"), &p).is_none());
     assert!(matches(&back.info, &Selector::Auto));
     assert!(matches(&back.info, &Selector::Name("CoolTouch".into())));
-    assert!(matches(&back.info, &Selector::VendorProduct("2575:0204".into())));
+    assert!(matches(
+        &back.info,
+        &Selector::VendorProduct("2575:0204".into())
+    ));
     // Never by node number.
     assert!(!matches(&back.info, &Selector::Path(chosen.node.clone())));
     // The same physical device through hidraw is not "the same interface".
-    let raw = after.iter().find(|f| f.info.kind == DeviceKind::Hidraw).unwrap();
+    let raw = after
+        .iter()
+        .find(|f| f.info.kind == DeviceKind::Hidraw)
+        .unwrap();
     assert!(!recognise(&chosen, &raw.info));
     assert!(discover::same_physical_device(back, raw));
     // And the other devices are not mistaken for it.
@@ -711,7 +787,9 @@ fn without_udev_everything_is_processed_and_ids_come_from_usb_ids() {
     let found = discover(t.root(), &p);
     assert_eq!(found.len(), 4);
     assert!(found.iter().all(|f| f.processed));
-    assert!(found.iter().all(|f| f.info.id_path.is_none() && f.info.calibration.is_none()));
+    assert!(found
+        .iter()
+        .all(|f| f.info.id_path.is_none() && f.info.calibration.is_none()));
     assert_eq!(found[0].info.stable_id, "2575:0204");
     assert_eq!(found[2].info.stable_id, "2575:0204");
     // Still one physical device, still evdev.
@@ -727,7 +805,10 @@ fn bad_udev_calibration_is_reported_and_ignored() {
     t.udev_record(
         EVDEV_MAJOR,
         69,
-        &[("ID_PATH", DELL_ID_PATH), ("LIBINPUT_CALIBRATION_MATRIX", "1 0 0 0 1")],
+        &[
+            ("ID_PATH", DELL_ID_PATH),
+            ("LIBINPUT_CALIBRATION_MATRIX", "1 0 0 0 1"),
+        ],
     );
     let found = discover(t.root(), &p);
     assert_eq!(found[0].info.calibration, None);
@@ -738,7 +819,9 @@ fn bad_udev_calibration_is_reported_and_ignored() {
 #[test]
 fn sysfs_errors_name_the_file_and_never_panic() {
     let (t, p, n) = standard_tree(true);
-    let abs = t.root().join("sys/class/input/event14/device/capabilities/abs");
+    let abs = t
+        .root()
+        .join("sys/class/input/event14/device/capabilities/abs");
     std::fs::write(&abs, "zz not hex\n").unwrap();
     let desc = t.root().join("sys/class/hidraw/hidraw0/device/uevent");
     std::fs::write(&desc, "HID_NAME=x\n").unwrap();
@@ -755,7 +838,10 @@ fn sysfs_errors_name_the_file_and_never_panic() {
             .to_string()
     };
     let e = err(&n.ite_evdev);
-    assert!(e.contains("capabilities/abs") && e.contains("zz not hex"), "{e}");
+    assert!(
+        e.contains("capabilities/abs") && e.contains("zz not hex"),
+        "{e}"
+    );
     let e = err(&n.dell_hidraw);
     assert!(e.contains("uevent") && e.contains("HID_ID"), "{e}");
     let e = err(&n.keyboard);
@@ -767,7 +853,9 @@ fn sysfs_errors_name_the_file_and_never_panic() {
     assert!(nodes.contains(&n.ite_evdev) && nodes.contains(&n.dell_hidraw));
     assert!(!nodes.contains(&n.keyboard));
     // A truncated report descriptor is an error naming the file, not a panic.
-    let rd = t.root().join("sys/class/hidraw/hidraw1/device/report_descriptor");
+    let rd = t
+        .root()
+        .join("sys/class/hidraw/hidraw1/device/report_descriptor");
     let bytes = std::fs::read(&rd).unwrap();
     std::fs::write(&rd, &bytes[..7]).unwrap();
     let scanned = scan(t.root());

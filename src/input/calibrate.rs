@@ -403,9 +403,7 @@ impl DeviceTransform {
     /// O(1), no allocation.
     pub fn map_point(&self, x: f64, y: f64) -> (f64, f64) {
         let (cx, cy) = apply_matrix(&self.cal, x, y);
-        // NaN (only from a NaN input) clamps to 0 via `max`'s NaN rule.
-        let cx = cx.max(0.0).min(1.0);
-        let cy = cy.max(0.0).min(1.0);
+        let (cx, cy) = (clamp_unit(cx), clamp_unit(cy));
         let r = &self.region;
         (
             (r.x + cx * r.width).clamp(0.0, 1.0),
@@ -428,6 +426,15 @@ impl DeviceTransform {
                 }
             }
         }
+    }
+}
+
+/// Clamps to `[0, 1]`; NaN (only from a NaN input) becomes 0.
+fn clamp_unit(v: f64) -> f64 {
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(0.0, 1.0)
     }
 }
 
@@ -691,6 +698,9 @@ mod tests {
         // (0.9, 0.1) -> (1.1, -0.1) clamps to (1, 0) -> the region's top-right corner.
         assert!(close(d.map_point(0.9, 0.1), (1.0, 0.25), EPS));
         assert_eq!(d.size_mm(), Some((596.7, 335.7)));
+        // A NaN from a broken decoder still lands inside the region.
+        let (x, y) = d.map_point(f64::NAN, 0.5);
+        assert!((0.5..=1.0).contains(&x) && (0.25..=0.75).contains(&y));
     }
 
     #[test]

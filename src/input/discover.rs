@@ -21,7 +21,7 @@
 //! error, so `crowdtouch devices` can say why it cannot be used.
 //!
 //! [`select`] then picks one device for a [`Selector`]; see [`select`] for the
-//! `Auto` rule. [`matches`] and [`recognise`] tell whether a device that appears
+//! `Auto` rule. [`matches()`] and [`recognise`] tell whether a device that appears
 //! later is the one that was selected (by stable id, never by node number).
 
 use crate::input::calibrate::CalibrationError;
@@ -650,12 +650,49 @@ pub fn examine(
 ///
 /// Non-touch nodes are left out; touch nodes that fail to probe are listed with
 /// [`Found::probe_error`]. Evdev nodes come first, each kind in node order.
+///
+/// udev sets `LIBINPUT_CALIBRATION_MATRIX` on input devices only; a hidraw node with
+/// none of its own takes the matrix of its evdev sibling (the same physical device,
+/// see [`same_physical_device`]), since both report the same normalised surface.
 pub fn discover(root: &Path, prober: &dyn Prober) -> Vec<Found> {
     let udev = UdevDb::new(root);
-    scan(root)
+    let mut found: Vec<Found> = scan(root)
         .iter()
         .filter_map(|s| examine(root, &udev, s, prober))
-        .collect()
+        .collect();
+    for i in 0..found.len() {
+        if found[i].info.kind != DeviceKind::Hidraw || found[i].info.calibration.is_some() {
+            continue;
+        }
+        let inherited = found
+            .iter()
+            .find(|e| e.info.kind == DeviceKind::Evdev && same_physical_device(e, &found[i]))
+            .and_then(|e| e.info.calibration);
+        found[i].info.calibration = inherited;
+    }
+    found
+}
+
+/// Examines one node (after a hotplug `Added` and [`crate::input::hotplug::Watcher::wait_ready`]):
+/// `None` when it is not a touch device or not an `event*`/`hidraw*` node.
+pub fn discover_node(root: &Path, node: &Path, prober: &dyn Prober) -> Option<Found> {
+    let name = node.file_name()?.to_str()?;
+    let scanned = if name.starts_with("event") {
+        Scanned {
+            kind: DeviceKind::Evdev,
+            node: node.to_path_buf(),
+            facts: evdev_facts(root, node),
+        }
+    } else if name.starts_with("hidraw") {
+        Scanned {
+            kind: DeviceKind::Hidraw,
+            node: node.to_path_buf(),
+            facts: hidraw_facts(root, node),
+        }
+    } else {
+        return None;
+    };
+    examine(root, &UdevDb::new(root), &scanned, prober)
 }
 
 /// Which device to use.
@@ -934,13 +971,15 @@ fn rank(a: &Found, b: &Found) -> Ordering {
 /// 1. Only devices that probed fine, and only the interfaces `pref` admits
 ///    (`Any`: both; `Evdev` / `Hidraw`: only that kind).
 /// 2. When one physical device shows as both evdev and hidraw (same vendor:product
-///    and same stable id or sysfs parent), its hidraw node is dropped: the kernel
-///    already decodes the digitizer protocol. (`pref: Hidraw` admits only hidraw.)
+///    and same stable id or sysfs parent) and its evdev node probed fine, the hidraw
+///    node is dropped: the kernel already decodes the digitizer protocol.
+///    (`pref: Hidraw` admits only hidraw; an unusable evdev node leaves the hidraw
+///    one in the running.)
 /// 3. Touchscreens (direct) before touchpads; then more contacts; then the larger
 ///    physical surface (unknown size counts as zero); then node order (`event2`
 ///    before `event10`).
 ///
-/// The other selectors keep the devices that [`matches`] accepts and `pref` admits
+/// The other selectors keep the devices that [`matches()`] accepts and `pref` admits
 /// (`Path` ignores `pref`: it names a node), and pick among them by the same rule.
 ///
 /// # Errors
