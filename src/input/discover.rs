@@ -93,13 +93,48 @@ pub enum SysfsError {
         found: String,
     },
     /// The HID report descriptor does not parse.
-    #[error("{file}: report descriptor does not parse: {reason}")]
+    #[error("{file}: report descriptor does not parse: {source}")]
     Descriptor {
         /// The file.
         file: PathBuf,
-        /// The parser's message.
-        reason: String,
+        /// What the parser said.
+        #[source]
+        source: DescriptorError,
     },
+}
+
+/// Why a HID report descriptor does not parse.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum DescriptorError {
+    /// An item is malformed.
+    #[error("invalid item at byte {offset}: {message}")]
+    InvalidData {
+        /// Byte offset of the item.
+        offset: usize,
+        /// The parser's description.
+        message: String,
+    },
+    /// An item runs past the end.
+    #[error("an item runs past the end of the descriptor")]
+    OutOfBounds,
+    /// Report ids are inconsistent.
+    #[error("mismatching report id")]
+    MismatchingReportId,
+    /// The parser itself failed on this input.
+    #[error("the descriptor parser failed on this input")]
+    ParserFailed,
+}
+
+impl From<hidreport::ParserError> for DescriptorError {
+    fn from(e: hidreport::ParserError) -> DescriptorError {
+        match e {
+            hidreport::ParserError::InvalidData { offset, message } => {
+                DescriptorError::InvalidData { offset, message }
+            }
+            hidreport::ParserError::OutOfBounds => DescriptorError::OutOfBounds,
+            hidreport::ParserError::MismatchingReportId => DescriptorError::MismatchingReportId,
+        }
+    }
 }
 
 /// What the pre-filter concluded from sysfs.
@@ -253,16 +288,16 @@ impl fmt::Display for Bitmap {
 /// multi-touch.
 ///
 /// # Errors
-/// The parser's message when the descriptor does not parse.
-pub fn classify_report_descriptor(bytes: &[u8]) -> Result<TouchClass, String> {
+/// [`DescriptorError`] when the descriptor does not parse.
+pub fn classify_report_descriptor(bytes: &[u8]) -> Result<TouchClass, DescriptorError> {
     use hidreport::{CollectionType, Field, Report, ReportDescriptor};
     // The parser must never take the daemon down: a descriptor that trips it is
     // reported like one that fails to parse.
     let parsed = std::panic::catch_unwind(|| ReportDescriptor::try_from(bytes));
     let rd = match parsed {
         Ok(Ok(rd)) => rd,
-        Ok(Err(e)) => return Err(e.to_string()),
-        Err(_) => return Err("the descriptor parser failed".to_string()),
+        Ok(Err(e)) => return Err(e.into()),
+        Err(_) => return Err(DescriptorError::ParserFailed),
     };
     let (mut screen, mut pad, mut vendor, mut no_id) = (false, false, false, false);
     for report in rd.input_reports() {
@@ -461,9 +496,9 @@ pub fn hidraw_facts(root: &Path, node: &Path) -> Result<SysfsFacts, SysfsError> 
     })?;
     let rdesc_file = dev.join("report_descriptor");
     let rdesc = read_bytes(&rdesc_file)?;
-    let touch = classify_report_descriptor(&rdesc).map_err(|reason| SysfsError::Descriptor {
+    let touch = classify_report_descriptor(&rdesc).map_err(|source| SysfsError::Descriptor {
         file: rdesc_file,
-        reason,
+        source,
     })?;
     Ok(SysfsFacts {
         kind: DeviceKind::Hidraw,
