@@ -104,10 +104,33 @@ fn input_decode_and_queue_do_not_allocate() {
     };
     feed(&mut dec, &mut q, &mut frame, t, 0);
     while rx.try_recv().is_ok() {}
+    // A device's calibration (rotation + matrix), region and palm threshold.
+    let cal = crowdtouch::input::calibrate::Calibration {
+        rotation: 90,
+        flip_x: true,
+        flip_y: false,
+        matrix: Some([1.02, 0.01, -0.01, 0.0, 0.98, 0.01]),
+    };
+    let region = crowdtouch::input::calibrate::Region {
+        x: 0.5,
+        y: 0.0,
+        width: 0.5,
+        height: 1.0,
+    };
+    let transform = crowdtouch::input::calibrate::DeviceTransform::new(
+        &cal,
+        None,
+        region,
+        Some((600.0, 340.0)),
+        Some(30.0),
+    )
+    .unwrap();
     let n = allocations(|| {
         for k in 1..20_000 {
             t += 8_333;
             feed(&mut dec, &mut q, &mut frame, t, k);
+            let mut calibrated = frame;
+            transform.apply(&mut calibrated);
             // A consumer that keeps up most of the time, and sometimes falls behind
             // so the backlog and coalescing paths run too.
             if k % 100 < 90 {

@@ -149,8 +149,32 @@ pub fn build_transform(
     s: &TransformSettings,
     info: &DeviceInfo,
 ) -> crate::input::calibrate::DeviceTransform {
-    let _ = (s, info);
-    crate::input::calibrate::DeviceTransform
+    use crate::input::calibrate::{Calibration, DeviceTransform, Region};
+    let c = &s.calibration;
+    let cal = Calibration {
+        rotation: c.rotation,
+        flip_x: c.flip_x,
+        flip_y: c.flip_y,
+        matrix: c.matrix,
+    };
+    let region = s
+        .region
+        .map(|r| Region {
+            x: r.min[0],
+            y: r.min[1],
+            width: r.width(),
+            height: r.height(),
+        })
+        .unwrap_or_default();
+    let size = info.surface.size_mm().or(s.size_mm);
+    match DeviceTransform::new(&cal, info.calibration, region, size, s.palm_max_mm) {
+        Ok(t) => t,
+        Err(e) => {
+            // The config was validated; a bad udev matrix is the likely cause.
+            log::error!("{}: calibration not applied: {e}", info.node.display());
+            DeviceTransform::identity()
+        }
+    }
 }
 
 /// A device event for the publisher.
@@ -299,9 +323,7 @@ impl SystemEnv {
         };
         SystemEnv {
             root: root.to_path_buf(),
-            udev: crate::input::udev::UdevDb {
-                root: root.to_path_buf(),
-            },
+            udev: crate::input::udev::UdevDb::new(root),
             watcher,
             grab,
         }
