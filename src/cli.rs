@@ -18,6 +18,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 mod bench;
+mod calibrate;
 mod devices;
 mod svg;
 mod watch;
@@ -73,6 +74,19 @@ enum Cmd {
         /// Machine-readable output.
         #[arg(long)]
         json: bool,
+    },
+    /// Calibrate a touch device: touch four targets, get the matrix (and write it into
+    /// the config with --write).
+    Calibrate {
+        /// Config with the Device input to calibrate (default: the search path).
+        #[arg(long, short)]
+        config: Option<PathBuf>,
+        /// Index of the input in the config (default: the first Device input).
+        #[arg(long)]
+        input: Option<usize>,
+        /// Write the matrix into the config file (a .bak copy is kept).
+        #[arg(long)]
+        write: bool,
     },
     /// Regenerate the shipped recordings (deterministic).
     SynthRecordings {
@@ -160,6 +174,12 @@ pub fn main() -> i32 {
         Cmd::CheckConfig { file } => return check_config(&file),
         Cmd::Bench(a) => bench::bench(a),
         Cmd::SynthRecordings { out } => synth(&out),
+        Cmd::Calibrate {
+            config,
+            input,
+            write,
+        } => find_config(config.as_deref())
+            .and_then(|(cfg, path)| calibrate::calibrate(&cfg, path.as_deref(), input, write)),
         Cmd::Devices { config, json } => find_config(config.as_deref())
             .and_then(|(cfg, _)| devices::devices(&cfg, json, Path::new("/"))),
     };
