@@ -86,12 +86,10 @@ impl Session {
                     });
                     progress = Progress::Holding;
                 }
-                Some(cap) if cap.id == c.id => {
-                    if f.t.0.saturating_sub(cap.t_down) >= SETTLE_US {
-                        cap.sum.0 += p.0;
-                        cap.sum.1 += p.1;
-                        cap.n += 1;
-                    }
+                Some(cap) if cap.id == c.id && f.t.0.saturating_sub(cap.t_down) >= SETTLE_US => {
+                    cap.sum.0 += p.0;
+                    cap.sum.1 += p.1;
+                    cap.n += 1;
                 }
                 _ => {}
             }
