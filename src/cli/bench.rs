@@ -281,5 +281,11 @@ fn end_to_end(agents: u32, seconds: f64, realtime: bool) -> Result<Vec<Row>> {
             format!("worker solve; refreshed {refresh:.1} times/s"),
         ),
         row_from_stage("publish (encode)", find("publish"), "snapshot serialisation".into()),
+        row_from_stage(
+            "input thread",
+            find("input"),
+            "input timestamp -> frame on the queue (replay source: the added latency of the input thread)".into(),
+        ),
+        row_from_stage("queue", find("queue"), "frame on the queue -> control thread takes it".into()),
     ])
 }
