@@ -177,6 +177,8 @@ mod tests {
     }
 
     #[test]
+    // The request type is `u64` on glibc and `c_int` on musl: the casts are for the latter.
+    #[allow(clippy::unnecessary_cast)]
     fn request_codes_match_the_kernel() {
         // EVIOCGMTSLOTS(len) = _IOC(_IOC_READ, 'E', 0x0a, len): dir 2 in bits
         // 30-31, size in bits 16-29, 'E' = 0x45, nr 0x0a (asm-generic layout).
@@ -192,7 +194,10 @@ mod tests {
         );
         // EVIOCGABS(ABS_MT_SLOT) = _IOR('E', 0x6f, struct input_absinfo) (24 bytes).
         assert_eq!(std::mem::size_of::<libc::input_absinfo>(), 24);
-        assert_eq!(nix::request_code_read!(b'E', 0x40 + 0x2f, 24) as u64, 0x8018_456f);
+        assert_eq!(
+            nix::request_code_read!(b'E', 0x40 + 0x2f, 24) as u64,
+            0x8018_456f
+        );
     }
 
     #[test]
@@ -202,7 +207,9 @@ mod tests {
         let mut out = [0i32; 4];
         let tty = Some(libc::ENOTTY);
         assert_eq!(
-            mt_slots(fd, ABS_MT_TRACKING_ID, &mut out).unwrap_err().raw_os_error(),
+            mt_slots(fd, ABS_MT_TRACKING_ID, &mut out)
+                .unwrap_err()
+                .raw_os_error(),
             tty
         );
         assert_eq!(set_clock_monotonic(fd).unwrap_err().raw_os_error(), tty);
@@ -211,7 +218,9 @@ mod tests {
         assert_eq!(key_state(fd, &mut keys).unwrap_err().raw_os_error(), tty);
         let mut big = [0i32; MAX_SLOTS + 1];
         assert_eq!(
-            mt_slots(fd, ABS_MT_TRACKING_ID, &mut big).unwrap_err().raw_os_error(),
+            mt_slots(fd, ABS_MT_TRACKING_ID, &mut big)
+                .unwrap_err()
+                .raw_os_error(),
             Some(libc::EINVAL)
         );
         assert_eq!(

@@ -240,7 +240,7 @@ fn four_finger_type_a() -> String {
             _ => [2, 0, 3, 1],
         };
         for k in order {
-            let x = xs[k] + (frame * 7) as i32 * (k as i32 - 1);
+            let x = xs[k] + frame * 7 * (k as i32 - 1);
             let y = 1000 + frame * 120;
             s.push_str(&format!(
                 "E: {}.{:06} 0003 0035 {x}\nE: {}.{:06} 0003 0036 {y}\nE: {}.{:06} 0000 0002 0\n",
@@ -294,7 +294,10 @@ fn four_contacts_type_a() {
 
 #[test]
 fn empty_frame_lifts_type_a() {
-    let (caps, _) = raw(Some("ntrig-multitouch.desc"), "ntrig-multitouch.2-fingers-touch-release.events");
+    let (caps, _) = raw(
+        Some("ntrig-multitouch.desc"),
+        "ntrig-multitouch.2-fingers-touch-release.events",
+    );
     let mut d = decoder(&caps);
     assert_eq!(d.protocol(), MtProtocol::A);
     let t = Micros(1);
@@ -557,7 +560,10 @@ fn dell_drop_across_all_lifts_and_new_touches() {
 fn dell_drop_across_new_touches() {
     // Frames 100..=103: fingers 4 and 5 land while 2 and 3 move.
     let r = drop_and_resync(100, 103);
-    let down = r.contacts().iter().filter(|c| c.flags == ContactFlags::DOWN);
+    let down = r
+        .contacts()
+        .iter()
+        .filter(|c| c.flags == ContactFlags::DOWN);
     assert_eq!(down.count(), 2);
     assert_eq!(r.len(), 4);
 }
@@ -583,12 +589,9 @@ fn dell_drop_inside_one_frame() {
 
 fn round_trip(desc: Option<&str>, events: &str, time: EvemuTime) {
     let direct = match desc {
-        Some(d) => read_evemu_with_desc(
-            &text(d),
-            &text(events),
-            Path::new(events),
-            OnBadFrame::Stop,
-        ),
+        Some(d) => {
+            read_evemu_with_desc(&text(d), &text(events), Path::new(events), OnBadFrame::Stop)
+        }
         None => read_recording(&fixture(events), OnBadFrame::Stop),
     }
     .unwrap();
@@ -614,7 +617,10 @@ fn round_trip(desc: Option<&str>, events: &str, time: EvemuTime) {
         EvemuTime::Relative => evs[0].t.0 - 1,
     };
     for (a, b) in evs2.iter().zip(&evs) {
-        assert_eq!((a.t.0, a.ev_type, a.code, a.value), (b.t.0 - shift, b.ev_type, b.code, b.value));
+        assert_eq!(
+            (a.t.0, a.ev_type, a.code, a.value),
+            (b.t.0 - shift, b.ev_type, b.code, b.value)
+        );
     }
 }
 
@@ -625,7 +631,11 @@ fn evemu_round_trip_dell_canvas() {
 
 #[test]
 fn evemu_round_trip_atmel_four_fingers() {
-    round_trip(None, "atmel-maxtouch.4-finger-drag-down.events", EvemuTime::Relative);
+    round_trip(
+        None,
+        "atmel-maxtouch.4-finger-drag-down.events",
+        EvemuTime::Relative,
+    );
 }
 
 #[test]
@@ -700,11 +710,17 @@ fn device_info_from_capabilities() {
         &[ABS_MT_TRACKING_ID, ABS_MT_POSITION_X, ABS_MT_POSITION_Y]
     );
 
-    let (ntrig, _) = raw(Some("ntrig-multitouch.desc"), "ntrig-multitouch.1-finger-drag-NW-SE.events");
+    let (ntrig, _) = raw(
+        Some("ntrig-multitouch.desc"),
+        "ntrig-multitouch.1-finger-drag-NW-SE.events",
+    );
     let setup = ntrig.decoder_setup().unwrap();
     assert_eq!(setup.protocol, MtProtocol::A);
     let info = device_info(node, &ntrig, &setup, None);
-    assert!(!info.direct, "old N-Trig descriptions carry no properties (P: 00)");
+    assert!(
+        !info.direct,
+        "old N-Trig descriptions carry no properties (P: 00)"
+    );
     assert_eq!((info.vendor, info.product), (0x1b96, 0x0001));
 
     let (atmel, _) = raw(None, "atmel-maxtouch.desc");
@@ -728,13 +744,19 @@ fn evemu_raw_errors_name_the_line() {
         ("N: x\nB: 20 00\n", 2, "below 0x20"),
         ("N: x\nA: 35 0 1\n", 2, "axis line"),
         ("N: x\nI: 3 1\n", 2, "id line"),
-        ("N: x\nE: 0.1 0003 0035 1\nA: 35 0 1 0 0\n", 3, "after the first event"),
+        (
+            "N: x\nE: 0.1 0003 0035 1\nA: 35 0 1 0 0\n",
+            3,
+            "after the first event",
+        ),
         ("N: x\nP: zz\n", 2, "hex byte"),
         ("Z: x\n", 1, "unrecognised"),
     ];
     for (t, line, what) in bad {
         match read_evemu_raw(t, Path::new("bad")) {
-            Err(crowdtouch::input::recording::RecordingError::Parse { line: l, message, .. }) => {
+            Err(crowdtouch::input::recording::RecordingError::Parse {
+                line: l, message, ..
+            }) => {
                 assert_eq!(l, line, "{t}: {message}");
                 assert!(message.contains(what), "{t}: {message}");
             }
@@ -948,5 +970,68 @@ proptest! {
         }
         let want = best(0, &cur, &prev, &mut vec![false; prev.len()], lim2, &d2);
         prop_assert!((got - want).abs() < 1e-9, "got {} want {}", got, want);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 64,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0xe7de_0002),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    /// Any capability snapshot and event list survives `EvemuWriter` →
+    /// `read_evemu_raw` unchanged (relative times shifted to start at 1 µs).
+    #[test]
+    fn evemu_writer_round_trips(
+        name in "[A-Za-z0-9®][A-Za-z0-9 ._®-]{0,30}[A-Za-z0-9]",
+        id in any::<[u16; 4]>(),
+        props in any::<u8>(),
+        bits in proptest::collection::vec((0u16..0x20, 0u16..0x300), 0..40),
+        axes in proptest::collection::vec((0u16..0x40, any::<[i32; 5]>()), 0..10),
+        events in proptest::collection::vec((0u64..5_000_000, any::<u16>(), any::<u16>(), any::<i32>()), 1..50),
+        relative in any::<bool>(),
+    ) {
+        use crowdtouch::input::record::AbsAxisInfo;
+        let mut caps = EvdevCapabilities::new(name);
+        [caps.bus, caps.vendor, caps.product, caps.version] = id;
+        for b in 0..8 {
+            if props >> b & 1 == 1 {
+                caps.set_property(b);
+            }
+        }
+        for (ty, code) in bits {
+            caps.set_code(ty, code);
+        }
+        for (code, v) in axes {
+            caps.set_abs(code, AbsAxisInfo { value: 0, minimum: v[0], maximum: v[1], fuzz: v[2], flat: v[3], resolution: v[4] });
+        }
+        let mut t = 1_000_000_000u64;
+        let evs: Vec<RawEvent> = events
+            .into_iter()
+            .map(|(dt, ty, code, value)| {
+                t += dt;
+                RawEvent { t: Micros(t), ev_type: ty, code, value }
+            })
+            .collect();
+        let time = if relative { EvemuTime::Relative } else { EvemuTime::Absolute };
+        let mut w = EvemuWriter::with_time(&caps, Vec::new(), time).unwrap();
+        for e in &evs {
+            w.event(e).unwrap();
+        }
+        let written = String::from_utf8(w.into_inner()).unwrap();
+        let (caps2, evs2) = read_evemu_raw(&written, Path::new("w")).unwrap();
+        // Axes declared by a bit only come back with a zero absinfo.
+        let mut want = caps.clone();
+        for code in 0..0x40 {
+            if want.has_code(EV_ABS, code) && want.abs(code).is_none() {
+                want.set_abs(code, AbsAxisInfo::default());
+            }
+        }
+        prop_assert_eq!(caps2, want);
+        let shift = if relative { evs[0].t.0 - 1 } else { 0 };
+        let back: Vec<RawEvent> = evs.iter().map(|e| RawEvent { t: Micros(e.t.0 - shift), ..*e }).collect();
+        prop_assert_eq!(evs2, back);
     }
 }

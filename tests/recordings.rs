@@ -202,7 +202,10 @@ fn ntrig_protocol_a_decodes() {
     assert_eq!(max_down(&rec), 1);
     assert_eq!(check_life_cycle(&rec), 1);
     assert!(rec.warnings.is_empty(), "{:?}", rec.warnings);
-    assert_eq!(rec.surface.max_contacts as usize, crowdtouch::input::MAX_CONTACTS);
+    assert_eq!(
+        rec.surface.max_contacts as usize,
+        crowdtouch::input::MAX_CONTACTS
+    );
 }
 
 #[test]

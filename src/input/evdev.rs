@@ -65,10 +65,12 @@ pub fn timeval_micros(sec: i64, usec: i64) -> Micros {
 pub fn parse_input_event(b: &[u8]) -> Option<RawEvent> {
     const W: usize = std::mem::size_of::<libc::c_long>();
     let b = b.get(..INPUT_EVENT_BYTES)?;
+    // `c_long` is `i64` on 64-bit targets and `i32` on 32-bit ones.
+    #[allow(clippy::useless_conversion)]
     let long = |at: usize| -> i64 {
         let mut v = [0u8; W];
         v.copy_from_slice(&b[at..at + W]);
-        libc::c_long::from_ne_bytes(v) as i64
+        i64::from(libc::c_long::from_ne_bytes(v))
     };
     let u16_at = |at: usize| u16::from_ne_bytes([b[at], b[at + 1]]);
     Some(RawEvent {
@@ -201,12 +203,7 @@ pub fn device_info(
         product: caps.product,
         serial: serial.clone(),
         id_path: None,
-        stable_id: DeviceInfo::make_stable_id(
-            None,
-            caps.vendor,
-            caps.product,
-            serial.as_deref(),
-        ),
+        stable_id: DeviceInfo::make_stable_id(None, caps.vendor, caps.product, serial.as_deref()),
         surface: caps.surface(setup),
         direct: caps.is_direct(),
         calibration: None,
@@ -352,7 +349,8 @@ impl EvdevReader {
         sys::set_clock_monotonic(dev.as_fd())
             .map_err(|e| Error::from_io(node, "EVIOCSCLOCKID", e))?;
         if opts.grab {
-            dev.grab().map_err(|e| Error::from_io(node, "EVIOCGRAB", e))?;
+            dev.grab()
+                .map_err(|e| Error::from_io(node, "EVIOCGRAB", e))?;
         }
         let (codes, ncodes) = slot_codes(&caps, &setup);
         let slots = setup.axes.slots;
@@ -457,9 +455,11 @@ impl DeviceReader for EvdevReader {
                     break;
                 };
                 at += INPUT_EVENT_BYTES;
-                if self.decoder.feed(&ev, &mut self.frame) {
-                    sink.push(&self.frame);
-                } else if self.decoder.wants_resync() && self.query_and_resync(ev.t)? {
+                // A frame closed, or a dropped block ended and the resync
+                // produced one.
+                let ready = self.decoder.feed(&ev, &mut self.frame)
+                    || (self.decoder.wants_resync() && self.query_and_resync(ev.t)?);
+                if ready {
                     sink.push(&self.frame);
                 }
             }

@@ -992,11 +992,7 @@ impl MtDecoder {
     /// A type-A event other than `EV_SYN`.
     fn event_a(&mut self, ev_type: u16, code: u16, value: i32) {
         match (ev_type, code) {
-            (EV_KEY, BTN_TOUCH) => {
-                if value == 0 {
-                    self.packets.lift_all = true;
-                }
-            }
+            (EV_KEY, BTN_TOUCH) if value == 0 => self.packets.lift_all = true,
             (EV_ABS, ABS_MT_SLOT) => self.counters.undeclared_axis += 1,
             (
                 EV_ABS,
@@ -1441,10 +1437,7 @@ impl MtDecoder {
                 }
             }
         }
-        for j in 0..m {
-            if taken[j] {
-                continue;
-            }
+        for j in (0..m).filter(|&j| !taken[j]) {
             let prev = self.packets.prev[j];
             if end == ContactFlags::CANCELLED {
                 self.counters.contacts_cancelled += 1;

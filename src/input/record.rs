@@ -574,8 +574,14 @@ pub fn write_evemu_header(caps: &EvdevCapabilities, w: &mut impl Write) -> io::R
         Ok(())
     };
     for (ty, max) in EVEMU_TYPES {
+        // The words the kernel maximum needs, and any set bit beyond it.
+        let m = caps.mask(ty);
         let words = usize::from(max) / 64 + 1;
-        write_mask(w, ty, &caps.mask(ty)[..words * 8])?;
+        let used = m
+            .iter()
+            .rposition(|&b| b != 0)
+            .map_or(0, |last| last / 8 + 1);
+        write_mask(w, ty, &m[..words.max(used) * 8])?;
     }
     for ty in 0..EV_CNT as u16 {
         if EVEMU_TYPES.iter().any(|&(t, _)| t == ty) {
@@ -586,7 +592,8 @@ pub fn write_evemu_header(caps: &EvdevCapabilities, w: &mut impl Write) -> io::R
             write_mask(w, ty, &m[..(last / 8 + 1) * 8])?;
         }
     }
-    for code in caps.codes(EV_ABS) {
+    // Bits above ABS_MAX (possible in a bitmask read from a file) have no absinfo.
+    for code in caps.codes(EV_ABS).filter(|&c| c <= ABS_MAX) {
         let a = caps.abs(code).unwrap_or_default();
         writeln!(
             w,
@@ -721,11 +728,7 @@ pub fn code_name(ev_type: u16, code: u16) -> &'static str {
 /// # Errors
 /// [`super::Error`] from opening the node, `Unplugged` when it goes away, and
 /// [`super::Error::Io`] (op `"write recording"`) when `w` fails.
-pub fn record_evdev(
-    node: &Path,
-    w: impl Write,
-    stop: &AtomicBool,
-) -> Result<u64, super::Error> {
+pub fn record_evdev(node: &Path, w: impl Write, stop: &AtomicBool) -> Result<u64, super::Error> {
     let dev = super::evdev::open_node(node)?;
     let caps = super::evdev::capabilities(&dev)
         .map_err(|e| super::Error::from_io(node, "query capabilities", e))?;
@@ -845,7 +848,10 @@ mod tests {
     fn setup_per_protocol() {
         let c = caps();
         let s = c.decoder_setup().unwrap();
-        assert_eq!((s.protocol, s.axes.slots, s.max_contacts), (MtProtocol::B, 5, 5));
+        assert_eq!(
+            (s.protocol, s.axes.slots, s.max_contacts),
+            (MtProtocol::B, 5, 5)
+        );
         assert_eq!(c.surface(&s).x.resolution, 55.0);
         let mut a = c.clone();
         a.abs[usize::from(ABS_MT_SLOT)] = None;

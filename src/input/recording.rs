@@ -322,7 +322,7 @@ fn detect(text: &str) -> Result<Option<Format>, String> {
 ///
 /// # Errors
 /// [`RecordingError::Parse`] (with [`OnBadFrame::Stop`]), `UnknownFormat`,
-/// `Unsupported` (protocol A, no multi-touch axes, unknown version) and `Empty`.
+/// `Unsupported` (no multi-touch axes, unknown version) and `Empty`.
 pub fn parse_recording(
     text: &str,
     name: &Path,
