@@ -192,25 +192,20 @@ fn libinput_record_yaml_two_contacts() {
 }
 
 #[test]
-fn ntrig_protocol_a_is_unsupported() {
-    let err = read_evemu_with_desc(
-        &text("ntrig-multitouch.desc"),
-        &text("ntrig-multitouch.1-finger-drag-NW-SE.events"),
-        Path::new("ntrig"),
-        OnBadFrame::Stop,
-    )
-    .unwrap_err();
-    assert!(
-        matches!(
-            err,
-            RecordingError::Unsupported {
-                reason: UnsupportedReason::ProtocolA,
-                ..
-            }
-        ),
-        "{err}"
+fn ntrig_protocol_a_decodes() {
+    let rec = with_desc(
+        "ntrig-multitouch.desc",
+        "ntrig-multitouch.1-finger-drag-NW-SE.events",
     );
-    assert!(err.to_string().contains("protocol A"), "{err}");
+    // Protocol A: one contact dragged across the whole panel, then lifted.
+    assert_eq!(rec.frames.len(), 107);
+    assert_eq!(max_down(&rec), 1);
+    assert_eq!(check_life_cycle(&rec), 1);
+    assert!(rec.warnings.is_empty(), "{:?}", rec.warnings);
+    assert_eq!(
+        rec.surface.max_contacts as usize,
+        crowdtouch::input::MAX_CONTACTS
+    );
 }
 
 #[test]

@@ -40,8 +40,13 @@
 //!   keys are ignored; only the first device is read.
 //!
 //! evemu and libinput record go through [`MtDecoder`], so they must describe a
-//! type-B (slotted) multi-touch device. Protocol A devices (no `ABS_MT_SLOT`)
-//! and single-touch devices are refused with [`RecordingError::Unsupported`].
+//! multi-touch device (`ABS_MT_POSITION_X/Y`): type B when the header declares
+//! `ABS_MT_SLOT`, type A (anonymous contacts closed by `SYN_MT_REPORT`, tracked
+//! by the decoder) when it does not. Single-touch devices are refused with
+//! [`RecordingError::Unsupported`].
+//!
+//! [`read_evemu_raw`] reads an evemu file without decoding it: the device's
+//! [`EvdevCapabilities`] and its [`RawEvent`]s, as they would be played back.
 //!
 //! # Bad input
 //!
@@ -60,7 +65,8 @@
 //! after it, that ends them as `CANCELLED`, so nothing sticks when the recording
 //! is replayed.
 
-use super::mt::{self, MtAxes, MtDecoder, ABS_MAX};
+use super::mt::{self, MtAxes, MtDecoder, RawEvent, ABS_MAX};
+use super::record::{AbsAxisInfo, EvdevCapabilities, EV_CNT, MASK_BYTES, PROP_BYTES};
 use super::{AxisRange, Contact, ContactFlags, ContactId, SurfaceInfo, TouchFrame, MAX_CONTACTS};
 use crate::time::Micros;
 use serde::Serialize;
@@ -140,8 +146,6 @@ pub enum OnBadFrame {
 /// Why a well-formed recording cannot be used.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum UnsupportedReason {
-    /// The device speaks multi-touch protocol A (no `ABS_MT_SLOT`).
-    ProtocolA,
     /// The device has no `ABS_MT_POSITION_X/Y` axes.
     NoMultiTouch,
     /// A format version this reader does not know.
@@ -156,11 +160,6 @@ pub enum UnsupportedReason {
 impl fmt::Display for UnsupportedReason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            UnsupportedReason::ProtocolA => write!(
-                f,
-                "multi-touch protocol A (anonymous contacts closed by SYN_MT_REPORT, no \
-                 ABS_MT_SLOT) is not supported yet; only type-B (slotted) devices are"
-            ),
             UnsupportedReason::NoMultiTouch => write!(
                 f,
                 "the device has no multi-touch axes (ABS_MT_POSITION_X/Y); single-touch \
@@ -292,7 +291,7 @@ enum Format {
 
 /// Whether `line` (trimmed) is an evemu header or event line.
 fn is_evemu_line(line: &str) -> bool {
-    ["N:", "I:", "P:", "B:", "A:", "E:"]
+    ["N:", "I:", "P:", "B:", "A:", "L:", "S:", "E:"]
         .iter()
         .any(|p| line.starts_with(p))
 }
@@ -323,7 +322,7 @@ fn detect(text: &str) -> Result<Option<Format>, String> {
 ///
 /// # Errors
 /// [`RecordingError::Parse`] (with [`OnBadFrame::Stop`]), `UnknownFormat`,
-/// `Unsupported` (protocol A, no multi-touch axes, unknown version) and `Empty`.
+/// `Unsupported` (no multi-touch axes, unknown version) and `Empty`.
 pub fn parse_recording(
     text: &str,
     name: &Path,
@@ -442,9 +441,6 @@ impl DeviceHeader {
         if !has(mt::ABS_MT_POSITION_X) || !has(mt::ABS_MT_POSITION_Y) {
             return Err(unsupported(UnsupportedReason::NoMultiTouch));
         }
-        let Some(slot) = self.abs[mt::ABS_MT_SLOT as usize] else {
-            return Err(unsupported(UnsupportedReason::ProtocolA));
-        };
         for code in [mt::ABS_MT_POSITION_X, mt::ABS_MT_POSITION_Y] {
             if let Some(a) = self.abs[code as usize] {
                 if a.max <= a.min {
@@ -460,24 +456,31 @@ impl DeviceHeader {
                 }
             }
         }
-        if slot.max < 0 || slot.min != 0 {
-            return Err(ctx.err(
-                slot.line,
-                format_args!(
-                    "ABS_MT_SLOT must range from 0 (found min {}, max {})",
-                    slot.min, slot.max
-                ),
-            ));
-        }
-        let declared = slot.max as usize + 1;
-        if declared > mt::MAX_SLOTS {
-            warnings.push(
-                slot.line,
-                format!(
-                    "the device declares {declared} slots; only the first {} are decoded",
-                    mt::MAX_SLOTS
-                ),
-            );
+        // No ABS_MT_SLOT: protocol A (0 slots), up to a frame's worth of contacts.
+        let mut slots = 0;
+        let mut max_contacts = MAX_CONTACTS as u32;
+        if let Some(slot) = self.abs[mt::ABS_MT_SLOT as usize] {
+            if slot.max < 0 || slot.min != 0 {
+                return Err(ctx.err(
+                    slot.line,
+                    format_args!(
+                        "ABS_MT_SLOT must range from 0 (found min {}, max {})",
+                        slot.min, slot.max
+                    ),
+                ));
+            }
+            let declared = slot.max as usize + 1;
+            if declared > mt::MAX_SLOTS {
+                warnings.push(
+                    slot.line,
+                    format!(
+                        "the device declares {declared} slots; only the first {} are decoded",
+                        mt::MAX_SLOTS
+                    ),
+                );
+            }
+            slots = declared.min(mt::MAX_SLOTS);
+            max_contacts = slots as u32;
         }
         let (Some(x), Some(y)) = (
             self.axis_range(mt::ABS_MT_POSITION_X),
@@ -488,7 +491,7 @@ impl DeviceHeader {
         let axes = MtAxes {
             x,
             y,
-            slots: declared.min(mt::MAX_SLOTS),
+            slots,
             pressure: self.axis_range(mt::ABS_MT_PRESSURE),
             touch_major: self.axis_range(mt::ABS_MT_TOUCH_MAJOR),
             touch_minor: self.axis_range(mt::ABS_MT_TOUCH_MINOR),
@@ -500,7 +503,7 @@ impl DeviceHeader {
                 .unwrap_or_else(|| default_name.to_string()),
             x,
             y,
-            max_contacts: axes.slots as u32,
+            max_contacts,
         };
         Ok((axes, surface))
     }
@@ -689,6 +692,7 @@ impl<'a> EventStream<'a> {
             }
         }
         let c = self.decoder.counters();
+        let type_b = self.decoder.protocol() == mt::MtProtocol::B;
         let notes = [
             (
                 c.slot_out_of_range,
@@ -699,10 +703,29 @@ impl<'a> EventStream<'a> {
                 c.dropped_sync,
                 "SYN_DROPPED events (frames discarded, no resync)",
             ),
-            (c.mt_report, "SYN_MT_REPORT events (protocol A) ignored"),
+            (
+                if type_b { c.mt_report } else { 0 },
+                "SYN_MT_REPORT events ignored (the device declares slots: protocol B)",
+            ),
             (
                 c.transient_contacts,
                 "contacts began and ended inside one frame (not reported)",
+            ),
+            (
+                c.tracking_id_reused,
+                "tracking ids sent again on an active slot (contact continued)",
+            ),
+            (
+                c.contacts_over_capacity,
+                "protocol A packets beyond the capacity of a frame (dropped)",
+            ),
+            (
+                c.unterminated_packets,
+                "protocol A packets not closed by SYN_MT_REPORT (kept)",
+            ),
+            (
+                c.packets_after_lift,
+                "protocol A packets in a frame with BTN_TOUCH 0 (ignored)",
             ),
         ];
         for (n, what) in notes {
@@ -926,6 +949,168 @@ fn parse_evemu(
             })
         }
     }
+}
+
+/// Reads an evemu file without decoding it: the device's capabilities (`N:`,
+/// `I:`, `P:`, `B:`, `A:` lines; `L:`/`S:` state lines are skipped) and every
+/// `E:` event, with its time as written (µs).
+///
+/// `text` may be a whole `.evemu` file, a `.desc`/`.prop` (no events), or a
+/// description followed by its `.events`. `name` is used in errors, and as the
+/// device name when there is no `N:` line. Bitmask lines add 8 bytes each to
+/// their type's bitmask, as evemu reads them; bits beyond what
+/// [`EvdevCapabilities`] keeps must be zero.
+///
+/// # Errors
+/// [`RecordingError::Parse`] at the first malformed line (also a header line
+/// after the first event).
+pub fn read_evemu_raw(
+    text: &str,
+    name: &Path,
+) -> Result<(EvdevCapabilities, Vec<RawEvent>), RecordingError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut caps = EvdevCapabilities::new(default_name(name));
+    let mut prop_bytes = 0usize;
+    let mut mask_bytes = [0usize; EV_CNT];
+    let mut events = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let l = raw.trim();
+        if l.is_empty() || l.starts_with('#') {
+            continue;
+        }
+        let perr = |message: String| RecordingError::Parse {
+            path: name.to_path_buf(),
+            line,
+            message,
+        };
+        if let Some(rest) = l.strip_prefix("E:") {
+            let (time, ev_type, code, value) = parse_evemu_event(rest).map_err(perr)?;
+            events.push(RawEvent {
+                t: Micros(time),
+                ev_type,
+                code,
+                value,
+            });
+            continue;
+        }
+        if !is_evemu_line(l) {
+            return Err(perr(
+                "unrecognised line (expected N:, I:, P:, B:, A:, L:, S: or E:)".into(),
+            ));
+        }
+        if !events.is_empty() {
+            return Err(perr("header line after the first event".into()));
+        }
+        caps_header_line(&mut caps, &mut prop_bytes, &mut mask_bytes, l).map_err(perr)?;
+    }
+    Ok((caps, events))
+}
+
+/// Parses a hex byte of a bitmask line.
+fn hex_byte(tok: &str) -> Result<u8, String> {
+    u8::from_str_radix(tok, 16).map_err(|_| format!("`{tok}` is not a hex byte"))
+}
+
+/// Applies one evemu header line to a capability snapshot.
+fn caps_header_line(
+    caps: &mut EvdevCapabilities,
+    prop_bytes: &mut usize,
+    mask_bytes: &mut [usize; EV_CNT],
+    l: &str,
+) -> Result<(), String> {
+    let rest = l[2..].trim();
+    let toks: Vec<&str> = evemu_fields(rest).collect();
+    match &l[..2] {
+        "N:" => caps.name = rest.to_string(),
+        "I:" => {
+            if toks.len() != 4 {
+                return Err(format!(
+                    "an id line needs `I: bus vendor product version`, found {} fields",
+                    toks.len()
+                ));
+            }
+            let mut v = [0u16; 4];
+            for (k, tok) in toks.iter().enumerate() {
+                v[k] = u16::from_str_radix(tok, 16)
+                    .map_err(|_| format!("id field `{tok}` is not a 16-bit hex number"))?;
+            }
+            [caps.bus, caps.vendor, caps.product, caps.version] = v;
+        }
+        "P:" => {
+            for tok in &toks {
+                let b = hex_byte(tok)?;
+                if *prop_bytes < PROP_BYTES {
+                    for bit in 0..8 {
+                        if (b >> bit) & 1 == 1 {
+                            caps.set_property((*prop_bytes * 8 + bit) as u16);
+                        }
+                    }
+                } else if b != 0 {
+                    return Err(format!(
+                        "property bits beyond the first {} bytes are not supported",
+                        PROP_BYTES
+                    ));
+                }
+                *prop_bytes += 1;
+            }
+        }
+        "B:" => {
+            let Some((ty, bytes)) = toks.split_first() else {
+                return Err("a bitmask line needs `B: type bytes...`".into());
+            };
+            let ty = u16::from_str_radix(ty, 16)
+                .ok()
+                .filter(|&t| usize::from(t) < EV_CNT)
+                .ok_or_else(|| format!("event type `{ty}` is not a hex number below 0x20"))?;
+            let at = &mut mask_bytes[usize::from(ty)];
+            for tok in bytes {
+                let b = hex_byte(tok)?;
+                if *at < MASK_BYTES {
+                    let old = caps.mask(ty)[*at];
+                    caps.set_mask_byte(ty, *at, old | b);
+                } else if b != 0 {
+                    return Err(format!(
+                        "type 0x{ty:02x} bits beyond the first {MASK_BYTES} bytes are not supported"
+                    ));
+                }
+                *at += 1;
+            }
+        }
+        "A:" => {
+            if !(5..=6).contains(&toks.len()) {
+                return Err(format!(
+                    "an axis line needs `A: code min max fuzz flat [resolution]`, found {} fields",
+                    toks.len()
+                ));
+            }
+            let code = u16::from_str_radix(toks[0], 16)
+                .ok()
+                .filter(|&c| c <= ABS_MAX)
+                .ok_or_else(|| format!("axis code `{}` is not a hex number up to 0x3f", toks[0]))?;
+            let mut v = [0i32; 5];
+            for (k, tok) in toks[1..].iter().enumerate() {
+                let what = ["min", "max", "fuzz", "flat", "resolution"][k];
+                v[k] = tok
+                    .parse()
+                    .map_err(|_| format!("axis 0x{code:02x} {what} `{tok}` is not an integer"))?;
+            }
+            caps.set_abs(
+                code,
+                AbsAxisInfo {
+                    value: 0,
+                    minimum: v[0],
+                    maximum: v[1],
+                    fuzz: v[2],
+                    flat: v[3],
+                    resolution: v[4],
+                },
+            );
+        }
+        // LED and switch states: not capabilities.
+        _ => {}
+    }
+    Ok(())
 }
 
 // ---------------------------------------------------------------------------

@@ -399,7 +399,8 @@ impl DeviceEnv for SystemEnv {
             crate::input::DeviceKind::Evdev => crate::input::evdev::EvdevReader::open(
                 &info.node,
                 &crate::input::evdev::EvdevOptions { grab: self.grab },
-            ),
+            )
+            .map(|r| Box::new(r) as Box<dyn DeviceReader>),
             crate::input::DeviceKind::Hidraw => {
                 crate::input::hid::HidReader::open(&info.node, &crate::input::hid::HidOptions {})
             }
