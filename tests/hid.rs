@@ -310,6 +310,26 @@ fn negative_descriptors_say_why() {
     let d = rdesc("actionstar_2101_1011");
     let e = touch_collections(&d[..59]).unwrap_err();
     assert!(e.reason.contains("byte 58"), "{e}");
+    // SYNTHETIC: a finger with a Contact Identifier but no X/Y, and one with no
+    // Tip Switch or In Range.
+    let no_xy = [
+        0x05, 0x0d, 0x09, 0x04, 0xa1, 0x01, 0x85, 0x01, 0x09, 0x22, 0xa1, 0x02, 0x09, 0x42, 0x15,
+        0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x01, 0x81, 0x02, 0x95, 0x07, 0x81, 0x03, 0x09, 0x51,
+        0x75, 0x08, 0x95, 0x01, 0x81, 0x02, 0xc0, 0xc0,
+    ];
+    let e = touch_collections(&no_xy).unwrap_err();
+    assert!(e.reason.contains("has no X/Y"), "{e}");
+    let no_tip = [
+        0x05, 0x0d, 0x09, 0x04, 0xa1, 0x01, 0x85, 0x01, 0x09, 0x22, 0xa1, 0x02, 0x09, 0x51, 0x15,
+        0x00, 0x25, 0x0f, 0x75, 0x08, 0x95, 0x01, 0x81, 0x02, 0x05, 0x01, 0x09, 0x30, 0x09, 0x31,
+        0x26, 0xff, 0x0f, 0x75, 0x10, 0x95, 0x02, 0x81, 0x02, 0xc0, 0xc0,
+    ];
+    let e = touch_collections(&no_tip).unwrap_err();
+    assert!(
+        e.reason
+            .contains("finger 1 of input report 1 has no Tip Switch or In Range"),
+        "{e}"
+    );
     let e = touch_collections(&vec![0u8; 5000]).unwrap_err();
     assert!(e.reason.contains("5000 bytes"), "{e}");
     // eGalax: the second touch screen collection (a stylus layout) is ignored.
@@ -383,6 +403,33 @@ fn descriptor_files_in_every_form() {
     assert!(read_descriptor_file(&dir.path().join("missing")).is_err());
 }
 
+#[test]
+fn device_info_from_sysfs_facts() {
+    use crowdtouch::input::hid::device::{device_info, parse_hid_uevent};
+    use crowdtouch::input::{DeviceKind, Error};
+    let u = parse_hid_uevent("HID_ID=0003:00002101:00001011\nHID_NAME=ActionStar\nHID_UNIQ=\n")
+        .unwrap();
+    let node = Path::new("/dev/hidraw4");
+    let (info, tc) = device_info(node, &u, &rdesc("actionstar_2101_1011")).unwrap();
+    assert_eq!(info.kind, DeviceKind::Hidraw);
+    assert_eq!((info.bus, info.vendor, info.product), (3, 0x2101, 0x1011));
+    assert_eq!(info.stable_id, "2101:1011");
+    assert!(info.direct);
+    assert_eq!(info.surface.name, "ActionStar");
+    assert_eq!(info.surface.x.max, 19967.0);
+    assert_eq!(info.surface.max_contacts, 2);
+    assert_eq!(tc.report_ids(), vec![1]);
+    let (pad, _) = device_info(node, &u, &rdesc("ite_06cb_2968")).unwrap();
+    assert!(!pad.direct);
+    match device_info(node, &u, &NO_CONTACT_ID) {
+        Err(Error::NotTouch { node: n, reason }) => {
+            assert_eq!(n, node);
+            assert!(reason.contains("Contact Identifier"));
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
 // ---------------------------------------------------------------------------
 // Reports
 
@@ -405,10 +452,12 @@ fn actionstar_decodes_to_the_oracle() {
     let r: Vec<Vec<u8>> = ACTIONSTAR.iter().map(|s| hex(s)).collect();
     assert_eq!(raw(&f0, &r[0]), (1, 1, 1, 1, 6999, 2441));
     assert_eq!(raw(&f1, &r[0]), (1, 1, 1, 2, 15227, 2026));
-    assert_eq!(raw(&f0, &r[1]).4..=raw(&f0, &r[1]).5, 6996..=2450);
+    let r1 = raw(&f0, &r[1]);
+    assert_eq!((r1.4, r1.5), (6996, 2450));
     assert_eq!(raw(&f1, &r[1]).5, 2028);
     assert_eq!(raw(&f0, &r[2]), (1, 1, 1, 2, 15233, 2040));
-    assert_eq!(raw(&f1, &r[2]).0..=raw(&f1, &r[2]).3, 0..=1);
+    let r2 = raw(&f1, &r[2]);
+    assert_eq!((r2.0, r2.3), (0, 1));
     assert_eq!(raw(&f1, &r[3]).1, 0);
     assert_eq!(c.reports[0].contact_count.unwrap().extract(&r[3]), Some(2));
 
