@@ -38,6 +38,10 @@
 //!   axis code to `[min, max, fuzz, flat, resolution]`, and
 //!   `devices[0].events[*].evdev` lists `[sec, usec, type, code, value]`. Unknown
 //!   keys are ignored; only the first device is read.
+//! * **hid-recorder** (raw HID): `R:` report descriptor, `N:`, `I:`, then
+//!   `E: sec.usec len bytes` input reports; decoded by
+//!   [`hid::recorder`](super::hid::recorder) with the first touch collection of
+//!   the descriptor.
 //!
 //! evemu and libinput record go through [`MtDecoder`], so they must describe a
 //! multi-touch device (`ABS_MT_POSITION_X/Y`): type B when the header declares
@@ -207,7 +211,7 @@ pub enum RecordingError {
     /// Not a format this module reads.
     #[error(
         "{}: unknown recording format (starts with `{found}`); expected crowdtouch JSON \
-         Lines, evemu or libinput record YAML", path.display()
+         Lines, evemu, libinput record YAML or hid-recorder", path.display()
     )]
     UnknownFormat {
         /// File.
@@ -287,6 +291,7 @@ enum Format {
     Jsonl,
     Evemu,
     LibinputYaml,
+    HidRecorder,
 }
 
 /// Whether `line` (trimmed) is an evemu header or event line.
@@ -307,6 +312,10 @@ fn detect(text: &str) -> Result<Option<Format>, String> {
     };
     if first.starts_with('{') {
         return Ok(Some(Format::Jsonl));
+    }
+    // hid-recorder writes the descriptor (`R:`) first, after an optional `D:`.
+    if first.starts_with("R:") || first.starts_with("D:") {
+        return Ok(Some(Format::HidRecorder));
     }
     if is_evemu_line(first) {
         return Ok(Some(Format::Evemu));
@@ -333,6 +342,9 @@ pub fn parse_recording(
         Ok(Some(Format::Jsonl)) => parse_jsonl(text, name, on_bad),
         Ok(Some(Format::Evemu)) => parse_evemu(None, text, name, on_bad),
         Ok(Some(Format::LibinputYaml)) => parse_libinput_yaml(text, name, on_bad),
+        Ok(Some(Format::HidRecorder)) => {
+            super::hid::recorder::read_hid_recorder(text, name, on_bad)
+        }
         Ok(None) => Err(RecordingError::Empty {
             path: name.to_path_buf(),
         }),

@@ -403,6 +403,7 @@ impl DeviceEnv for SystemEnv {
             .map(|r| Box::new(r) as Box<dyn DeviceReader>),
             crate::input::DeviceKind::Hidraw => {
                 crate::input::hid::HidReader::open(&info.node, &crate::input::hid::HidOptions {})
+                    .map(|r| Box::new(r) as Box<dyn DeviceReader>)
             }
         }
     }

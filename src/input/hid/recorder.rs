@@ -1,0 +1,507 @@
+//! `hid-recorder` logs: the report descriptor and the raw input reports of a hidraw
+//! device, as text.
+//!
+//! # Format
+//!
+//! ```text
+//! # comment (hid-decode's annotations)
+//! D: 0                               device index (multi-device logs); optional
+//! R: 177 05 0d 09 04 a1 01 …         descriptor: byte count, then hex bytes
+//! N: ActionStar touchscreen          name
+//! P: usb-0000:00:14.0-2/input0       physical path (ignored)
+//! I: 3 2101 1011                     bus, vendor, product (hex)
+//! E: 000000.012345 14 01 ff 01 …     one input report: sec.usec, byte count, hex bytes
+//! ```
+//!
+//! Only the first device (the one whose `R:` comes first) is read; `E:` lines of
+//! other devices are skipped with a warning. Timestamps are made relative to the
+//! first report; they may all be equal (the ActionStar fixture's placeholders are
+//! all zero), but must not go back.
+//!
+//! [`read_hid_recorder`] decodes the reports of the first touch collection with
+//! [`HidDecoder`] into a [`Recording`], as the other recording formats are.
+
+use super::descriptor::touch_collections;
+use super::report::{HidCounters, HidDecoder};
+use crate::input::recording::{
+    OnBadFrame, Recording, RecordingError, RecordingIssue, END_CANCEL_US, MAX_WARNINGS,
+};
+use crate::input::TouchFrame;
+use crate::time::Micros;
+use std::path::Path;
+
+/// One `E:` line.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct HidEvent {
+    /// 1-based line in the file.
+    pub line: usize,
+    /// Timestamp as written, in µs.
+    pub time_us: u64,
+    start: usize,
+    len: usize,
+}
+
+/// A hid-recorder log, parsed but not decoded.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct HidRecorderLog {
+    /// `N:` name.
+    pub name: Option<String>,
+    /// `I:` bus (3 USB, 0x18 I2C, …).
+    pub bus: Option<u16>,
+    /// `I:` vendor id.
+    pub vendor: Option<u16>,
+    /// `I:` product id.
+    pub product: Option<u16>,
+    /// The report descriptor (`R:`).
+    pub descriptor: Vec<u8>,
+    /// Line of the `R:`.
+    pub descriptor_line: usize,
+    /// Problems that did not stop the reading.
+    pub warnings: Vec<RecordingIssue>,
+    events: Vec<HidEvent>,
+    data: Vec<u8>,
+}
+
+impl HidRecorderLog {
+    /// The input reports in file order, with their bytes.
+    pub fn events(&self) -> impl Iterator<Item = (&HidEvent, &[u8])> + '_ {
+        self.events
+            .iter()
+            .map(|e| (e, self.data.get(e.start..e.start + e.len).unwrap_or(&[])))
+    }
+
+    /// Number of input reports.
+    pub fn len(&self) -> usize {
+        self.events.len()
+    }
+
+    /// Whether the log holds no input report.
+    pub fn is_empty(&self) -> bool {
+        self.events.is_empty()
+    }
+}
+
+/// Issues capped at [`MAX_WARNINGS`].
+#[derive(Default)]
+struct Issues {
+    list: Vec<RecordingIssue>,
+    dropped: usize,
+}
+
+impl Issues {
+    fn push(&mut self, line: usize, message: String) {
+        if self.list.len() < MAX_WARNINGS {
+            self.list.push(RecordingIssue { line, message });
+        } else {
+            self.dropped += 1;
+        }
+    }
+
+    fn finish(mut self) -> Vec<RecordingIssue> {
+        if self.dropped > 0 {
+            self.list.push(RecordingIssue {
+                line: 0,
+                message: format!("{} more issues not listed", self.dropped),
+            });
+        }
+        self.list
+    }
+}
+
+/// Parses hex byte tokens; `what` names them in errors.
+fn parse_hex_bytes<'a>(
+    tokens: impl Iterator<Item = &'a str>,
+    out: &mut Vec<u8>,
+) -> Result<usize, String> {
+    let mut n = 0;
+    for tok in tokens {
+        if tok.is_empty() || tok.len() > 2 {
+            return Err(format!("`{tok}` is not a hex byte"));
+        }
+        let b = u8::from_str_radix(tok, 16).map_err(|_| format!("`{tok}` is not a hex byte"))?;
+        out.push(b);
+        n += 1;
+    }
+    Ok(n)
+}
+
+/// Parses what follows `R:`: a byte count, then that many hex bytes.
+pub(crate) fn parse_r_line(rest: &str) -> Result<Vec<u8>, String> {
+    let mut it = rest.split_whitespace();
+    let len: usize = it
+        .next()
+        .ok_or("empty R: line")?
+        .parse()
+        .map_err(|_| "R: must start with the descriptor's byte count".to_string())?;
+    let mut out = Vec::with_capacity(len.min(4096));
+    let n = parse_hex_bytes(it, &mut out)?;
+    if n != len {
+        return Err(format!(
+            "R: announces {len} bytes but holds {n} (truncated or wrapped line?)"
+        ));
+    }
+    Ok(out)
+}
+
+/// `sec.usec` → µs.
+fn parse_time(s: &str) -> Result<u64, String> {
+    let bad = || format!("`{s}` is not a timestamp (sec.usec)");
+    let (sec, frac) = s.split_once('.').unwrap_or((s, ""));
+    if sec.is_empty() || !sec.bytes().all(|b| b.is_ascii_digit()) {
+        return Err(bad());
+    }
+    if frac.len() > 6 || !frac.bytes().all(|b| b.is_ascii_digit()) {
+        return Err(bad());
+    }
+    let sec: u64 = sec.parse().map_err(|_| bad())?;
+    let mut usec: u64 = if frac.is_empty() {
+        0
+    } else {
+        frac.parse().map_err(|_| bad())?
+    };
+    for _ in frac.len()..6 {
+        usec *= 10;
+    }
+    sec.checked_mul(1_000_000)
+        .and_then(|v| v.checked_add(usec))
+        .ok_or_else(bad)
+}
+
+/// Parses an `I:` line: bus, vendor, product in hex.
+fn parse_id(rest: &str) -> Result<(u16, u16, u16), String> {
+    let v: Vec<&str> = rest.split_whitespace().collect();
+    let hex = |s: &str| u16::from_str_radix(s, 16).map_err(|_| format!("`{s}` is not hex"));
+    match v.as_slice() {
+        [bus, vid, pid, ..] => Ok((hex(bus)?, hex(vid)?, hex(pid)?)),
+        _ => Err("I: needs bus, vendor and product".into()),
+    }
+}
+
+/// Parses a hid-recorder log.
+///
+/// # Errors
+/// [`RecordingError::Parse`] with the line: a malformed `R:`/`I:`/`D:`/`E:` line
+/// (an `E:` whose byte count does not match, bad hex, a bad timestamp), an `E:`
+/// before the `R:`, a second `R:` for the same device, no `R:` at all, an unknown
+/// line. With [`OnBadFrame::Skip`] a bad `E:` line is skipped with a warning
+/// instead; header problems are always fatal.
+pub fn parse_hid_recorder(
+    text: &str,
+    path: &Path,
+    on_bad: OnBadFrame,
+) -> Result<HidRecorderLog, RecordingError> {
+    let perr = |line: usize, message: String| RecordingError::Parse {
+        path: path.to_path_buf(),
+        line,
+        message,
+    };
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut issues = Issues::default();
+    let mut log = HidRecorderLog {
+        name: None,
+        bus: None,
+        vendor: None,
+        product: None,
+        descriptor: Vec::new(),
+        descriptor_line: 0,
+        warnings: Vec::new(),
+        events: Vec::new(),
+        data: Vec::new(),
+    };
+    let mut device: u32 = 0;
+    let mut ours: Option<u32> = None;
+    let mut other_events = 0usize;
+    let mut last_line = 0;
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        last_line = line;
+        let l = raw.trim();
+        if l.is_empty() || l.starts_with('#') {
+            continue;
+        }
+        let Some((tag, rest)) = l.split_once(':') else {
+            return Err(perr(line, format!("unknown line `{}`", prefix(l))));
+        };
+        let mine = ours.is_none_or(|d| d == device);
+        match tag {
+            "D" => {
+                device = rest
+                    .trim()
+                    .parse()
+                    .map_err(|_| perr(line, "D: needs a device number".into()))?;
+            }
+            "R" if ours.is_none() => {
+                log.descriptor = parse_r_line(rest).map_err(|m| perr(line, m))?;
+                log.descriptor_line = line;
+                ours = Some(device);
+            }
+            "R" if mine => {
+                return Err(perr(
+                    line,
+                    "a second R: line for the same device".to_string(),
+                ))
+            }
+            "N" if mine => log.name = Some(rest.trim().to_string()),
+            "I" if mine => {
+                let (b, v, p) = parse_id(rest).map_err(|m| perr(line, m))?;
+                (log.bus, log.vendor, log.product) = (Some(b), Some(v), Some(p));
+            }
+            "R" | "N" | "I" | "P" => {}
+            "E" if ours.is_none() => {
+                return Err(perr(
+                    line,
+                    "input report (E:) before the report descriptor (R:)".to_string(),
+                ))
+            }
+            "E" if !mine => other_events += 1,
+            "E" => {
+                let start = log.data.len();
+                match parse_event(rest, &mut log.data) {
+                    Ok((time_us, len)) => log.events.push(HidEvent {
+                        line,
+                        time_us,
+                        start,
+                        len,
+                    }),
+                    Err(m) => {
+                        log.data.truncate(start);
+                        match on_bad {
+                            OnBadFrame::Stop => return Err(perr(line, m)),
+                            OnBadFrame::Skip => issues.push(line, format!("{m}; report skipped")),
+                        }
+                    }
+                }
+            }
+            _ => return Err(perr(line, format!("unknown line `{}`", prefix(l)))),
+        }
+    }
+    if ours.is_none() {
+        return Err(perr(
+            last_line.max(1),
+            "no report descriptor (R: line) in the hid-recorder log".into(),
+        ));
+    }
+    if other_events > 0 {
+        issues.push(
+            0,
+            format!("{other_events} input reports of other devices in the log were skipped"),
+        );
+    }
+    log.warnings = issues.finish();
+    Ok(log)
+}
+
+/// The first characters of a line, for messages.
+fn prefix(l: &str) -> String {
+    l.chars().take(24).collect()
+}
+
+/// Parses what follows `E:`: `sec.usec len bytes…`, appending the bytes.
+fn parse_event(rest: &str, data: &mut Vec<u8>) -> Result<(u64, usize), String> {
+    let mut it = rest.split_whitespace();
+    let time = parse_time(it.next().ok_or("empty E: line")?)?;
+    let len: usize = it
+        .next()
+        .ok_or("E: has no byte count")?
+        .parse()
+        .map_err(|_| "E: byte count is not a number".to_string())?;
+    let n = parse_hex_bytes(it, data)?;
+    if n != len {
+        return Err(format!("E: announces {len} bytes but holds {n}"));
+    }
+    Ok((time, n))
+}
+
+/// Decodes a parsed log's first touch collection into a [`Recording`].
+///
+/// Frames are timed relative to the first report. Contacts still down after the
+/// last report get a `CANCELLED` frame [`END_CANCEL_US`] later. Reports the
+/// decoder refuses (undeclared report ID, too short, Contact Count above the
+/// maximum) fail the reading with [`OnBadFrame::Stop`] and are skipped with a
+/// warning with [`OnBadFrame::Skip`]; reports of other collections are ignored and
+/// counted in a warning.
+///
+/// # Errors
+/// [`RecordingError::Parse`] at the `R:` line when the descriptor has no usable
+/// touch collection (the reason is in the message), at an `E:` line for a bad
+/// report or a timestamp going back; [`RecordingError::Empty`] when no frame
+/// results (a log with pen reports only).
+pub fn decode_hid_recording(
+    log: &HidRecorderLog,
+    path: &Path,
+    on_bad: OnBadFrame,
+) -> Result<Recording, RecordingError> {
+    let perr = |line: usize, message: String| RecordingError::Parse {
+        path: path.to_path_buf(),
+        line,
+        message,
+    };
+    let collections = touch_collections(&log.descriptor).map_err(|e| {
+        perr(
+            log.descriptor_line,
+            format!("the report descriptor has no multi-touch collection crowdtouch can read: {e}"),
+        )
+    })?;
+    let Some(tc) = collections.first() else {
+        return Err(RecordingError::Empty {
+            path: path.to_path_buf(),
+        });
+    };
+    let default_name = path.file_stem().map_or_else(
+        || "hid-recorder".to_string(),
+        |s| s.to_string_lossy().into_owned(),
+    );
+    let surface = tc.surface(log.name.as_deref().unwrap_or(&default_name));
+    let mut issues = Issues::default();
+    for w in &log.warnings {
+        issues.push(w.line, w.message.clone());
+    }
+    let mut dec = HidDecoder::new(tc);
+    let mut frame = TouchFrame::default();
+    let mut frames = Vec::new();
+    let mut first: Option<u64> = None;
+    let mut last_us = 0u64;
+    for (e, bytes) in log.events() {
+        if e.time_us < last_us {
+            let m = format!(
+                "timestamp {}.{:06} goes back before the previous report's {}.{:06}",
+                e.time_us / 1_000_000,
+                e.time_us % 1_000_000,
+                last_us / 1_000_000,
+                last_us % 1_000_000
+            );
+            match on_bad {
+                OnBadFrame::Stop => return Err(perr(e.line, m)),
+                OnBadFrame::Skip => {
+                    issues.push(e.line, format!("{m}; report skipped"));
+                    continue;
+                }
+            }
+        }
+        let t0 = *first.get_or_insert(e.time_us);
+        last_us = e.time_us;
+        match dec.decode(Micros(e.time_us - t0), bytes, &mut frame) {
+            Ok(true) => frames.push(frame),
+            Ok(false) => {}
+            Err(err) => match on_bad {
+                OnBadFrame::Stop => return Err(perr(e.line, err.to_string())),
+                OnBadFrame::Skip => issues.push(e.line, format!("{err}; report skipped")),
+            },
+        }
+    }
+    if dec.frame_pending() {
+        issues.push(
+            0,
+            "the last frame was incomplete (its Contact Count announced more contacts \
+             than followed); its changes are not delivered"
+                .into(),
+        );
+    }
+    if let Some(last) = frames.last().map(|f| f.t) {
+        if dec.cancel_all(last + Micros(END_CANCEL_US), &mut frame) {
+            frames.push(frame);
+        }
+    }
+    for (count, what) in counter_notes(&dec.counters()) {
+        if count > 0 {
+            issues.push(0, format!("{count} {what}"));
+        }
+    }
+    if frames.is_empty() {
+        return Err(RecordingError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(Recording {
+        surface,
+        frames,
+        warnings: issues.finish(),
+    })
+}
+
+/// Counters worth a warning.
+fn counter_notes(c: &HidCounters) -> [(u64, &'static str); 5] {
+    [
+        (
+            c.other_reports,
+            "reports of other collections (pen, vendor) were ignored",
+        ),
+        (
+            c.incomplete_frames,
+            "frames started before the previous one completed (a report is missing)",
+        ),
+        (
+            c.duplicate_contacts,
+            "repeated Contact Identifiers within a frame were ignored",
+        ),
+        (
+            c.contacts_over_capacity,
+            "contacts above the device's maximum were ignored",
+        ),
+        (c.frame_overflow, "contacts did not fit a frame"),
+    ]
+}
+
+/// Parses and decodes a hid-recorder log (what `read_recording` does with one).
+///
+/// # Errors
+/// As [`parse_hid_recorder`] and [`decode_hid_recording`].
+pub fn read_hid_recorder(
+    text: &str,
+    path: &Path,
+    on_bad: OnBadFrame,
+) -> Result<Recording, RecordingError> {
+    let log = parse_hid_recorder(text, path, on_bad)?;
+    decode_hid_recording(&log, path, on_bad)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn times() {
+        assert_eq!(parse_time("000000.000000"), Ok(0));
+        assert_eq!(parse_time("000001.5"), Ok(1_500_000));
+        assert_eq!(parse_time("12"), Ok(12_000_000));
+        assert!(parse_time("-1.0").is_err());
+        assert!(parse_time("1.1234567").is_err());
+        assert!(parse_time("99999999999999999999.0").is_err());
+    }
+
+    #[test]
+    fn r_line() {
+        assert_eq!(parse_r_line(" 3 05 0d 09"), Ok(vec![5, 0x0d, 9]));
+        assert!(parse_r_line(" 4 05 0d 09")
+            .unwrap_err()
+            .contains("announces 4"));
+        assert!(parse_r_line(" 1 zz").is_err());
+    }
+
+    #[test]
+    fn header_errors_name_the_line() {
+        let p = Path::new("x.hid");
+        let e = parse_hid_recorder("# c\nE: 0.0 1 01\n", p, OnBadFrame::Skip).unwrap_err();
+        assert!(matches!(e, RecordingError::Parse { line: 2, .. }), "{e}");
+        let e = parse_hid_recorder("R: 1 05\nX: what\n", p, OnBadFrame::Skip).unwrap_err();
+        assert!(matches!(e, RecordingError::Parse { line: 2, .. }), "{e}");
+        let log =
+            parse_hid_recorder("R: 1 05\nE: 0.1 2 01\nE: 0.2 1 01\n", p, OnBadFrame::Skip).unwrap();
+        assert_eq!(log.len(), 1);
+        assert_eq!(log.warnings[0].line, 2);
+        let e = parse_hid_recorder("R: 1 05\nE: 0.1 2 01\n", p, OnBadFrame::Stop).unwrap_err();
+        assert!(matches!(e, RecordingError::Parse { line: 2, .. }), "{e}");
+    }
+
+    #[test]
+    fn other_devices_are_skipped() {
+        let p = Path::new("x.hid");
+        let text = "D: 0\nR: 1 05\nI: 3 1 2\nD: 1\nR: 1 06\nI: 3 3 4\nD: 0\nE: 0.0 1 01\nD: 1\nE: 0.0 1 02\n";
+        let log = parse_hid_recorder(text, p, OnBadFrame::Stop).unwrap();
+        assert_eq!(log.descriptor, vec![5]);
+        assert_eq!((log.vendor, log.product), (Some(1), Some(2)));
+        let got: Vec<&[u8]> = log.events().map(|(_, b)| b).collect();
+        assert_eq!(got, vec![&[1u8][..]]);
+        assert!(log.warnings[0].message.contains("other devices"));
+    }
+}
