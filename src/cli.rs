@@ -20,6 +20,8 @@ use std::time::Duration;
 mod bench;
 mod calibrate;
 mod devices;
+mod hid;
+mod record;
 mod svg;
 mod watch;
 
@@ -52,7 +54,8 @@ enum Cmd {
     Demo(DemoArgs),
     /// Play a recording through the engine and write snapshots as JSON Lines.
     ///
-    /// Reads our JSON Lines recordings, `evemu-record` text and `libinput record` YAML.
+    /// Reads our JSON Lines recordings, `evemu-record` text, `libinput record` YAML
+    /// and hid-recorder logs.
     /// By default runs on a virtual clock as fast as possible: the same recording and
     /// config give byte-identical output.
     Replay(ReplayArgs),
@@ -88,6 +91,13 @@ enum Cmd {
         #[arg(long)]
         write: bool,
     },
+    /// Record a touch device's raw stream: evdev nodes as evemu, hidraw nodes as
+    /// hid-recorder logs. Replays on any machine (`evemu-play`, `hid-replay`,
+    /// `crowdtouch replay`); attach it to bug reports.
+    Record(record::RecordArgs),
+    /// Raw HID digitizer tools.
+    #[command(subcommand)]
+    Hid(hid::HidCmd),
     /// Regenerate the shipped recordings (deterministic).
     SynthRecordings {
         /// Output directory.
@@ -121,7 +131,7 @@ struct DemoArgs {
 
 #[derive(Args, Debug)]
 struct ReplayArgs {
-    /// Recording (.jsonl, evemu, libinput record YAML).
+    /// Recording (.jsonl, evemu, libinput record YAML, hid-recorder).
     file: PathBuf,
     /// Config (default: the embedded default).
     #[arg(long, short)]
@@ -180,6 +190,8 @@ pub fn main() -> i32 {
             write,
         } => find_config(config.as_deref())
             .and_then(|(cfg, path)| calibrate::calibrate(&cfg, path.as_deref(), input, write)),
+        Cmd::Record(a) => record::record(a),
+        Cmd::Hid(c) => hid::hid(c),
         Cmd::Devices { config, json } => find_config(config.as_deref())
             .and_then(|(cfg, _)| devices::devices(&cfg, json, Path::new("/"))),
     };

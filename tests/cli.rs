@@ -22,6 +22,10 @@ fn help_lists_every_subcommand() {
         "check-config",
         "bench",
         "synth-recordings",
+        "devices",
+        "calibrate",
+        "record",
+        "hid",
     ] {
         assert!(text.contains(sub), "--help misses {sub}:\n{text}");
     }
@@ -283,4 +287,114 @@ fn replay_frames_prints_decoded_touches() {
     // The Dell Canvas 27 recording: 450 frames, 12 touches.
     assert_eq!(frames, 450);
     assert_eq!((downs, ends), (12, 12));
+}
+
+fn fixture(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name)
+}
+
+/// `hid describe` on a real touchscreen descriptor, a hid-recorder log and a
+/// keyboard descriptor.
+#[test]
+fn hid_describe_prints_the_layout_or_why_not() {
+    let describe = |path: &std::path::Path| {
+        let out = bin().args(["hid", "describe"]).arg(path).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
+    };
+    // The ActionStar in the R:/N:/I: form: 2 fingers per report, report id 1.
+    let v = describe(&fixture("hid/actionstar-2101-1011.inrange-sequence.hid"));
+    assert_eq!(v["touch"], true, "{v}");
+    let c = &v["collections"][0];
+    assert_eq!(c["application"], "touchscreen");
+    assert!(c["contacts_per_report"].as_u64().unwrap() >= 1);
+    assert!(c["max_contacts"].as_u64().unwrap() >= c["contacts_per_report"].as_u64().unwrap());
+    assert!(!c["report_ids"].as_array().unwrap().is_empty());
+    let fields = c["finger_fields"].as_object().unwrap();
+    for f in ["tip_switch", "contact_id", "x", "y"] {
+        assert!(fields.contains_key(f), "{f} missing: {c}");
+    }
+    assert_eq!(fields["x"]["logical"], serde_json::json!([0, 19967]));
+    // A USB boot keyboard descriptor (HID spec appendix E.6) is not a digitizer.
+    let dir = tempfile::tempdir().unwrap();
+    let kb = dir.path().join("keyboard.rdesc");
+    std::fs::write(
+        &kb,
+        [
+            0x05u8, 0x01, 0x09, 0x06, 0xa1, 0x01, 0x05, 0x07, 0x19, 0xe0, 0x29, 0xe7, 0x15, 0x00,
+            0x25, 0x01, 0x75, 0x01, 0x95, 0x08, 0x81, 0x02, 0x95, 0x01, 0x75, 0x08, 0x81, 0x01,
+            0x95, 0x06, 0x75, 0x08, 0x15, 0x00, 0x25, 0x65, 0x05, 0x07, 0x19, 0x00, 0x29, 0x65,
+            0x81, 0x00, 0xc0,
+        ],
+    )
+    .unwrap();
+    let v = describe(&kb);
+    assert_eq!(v["touch"], false, "{v}");
+    assert!(!v["reason"].as_str().unwrap().is_empty());
+    // A file that is not there is an error naming it.
+    let out = bin()
+        .args(["hid", "describe", "/nonexistent/x.rdesc"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/x.rdesc"));
+}
+
+/// `replay --frames` decodes a hid-recorder log (the Wacom touch node: 72 frames,
+/// two fingers).
+#[test]
+fn replay_frames_reads_hid_recorder_logs() {
+    let out = bin()
+        .args(["replay", "--frames"])
+        .arg(fixture(
+            "hid/wacom-intuos-pro-m-pth660.touch.two-finger-vert-in-center.hid",
+        ))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut ids = std::collections::BTreeSet::new();
+    let mut frames = 0;
+    for line in text.lines() {
+        let v: serde_json::Value = serde_json::from_str(line).unwrap();
+        frames += 1;
+        for c in v["contacts"].as_array().unwrap() {
+            ids.insert(c["id"].as_u64().unwrap());
+        }
+    }
+    assert_eq!(frames, 72);
+    assert_eq!(ids.len(), 2);
+}
+
+/// `record` on a device that is not there says what it looked for.
+#[test]
+fn record_without_the_device_explains() {
+    let out = bin()
+        .args([
+            "record",
+            "--device",
+            "/nonexistent/event9",
+            "--seconds",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("/nonexistent/event9"), "{err}");
+    let out = bin()
+        .args(["record", "--device", "auto", "--seconds", "-1"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
 }

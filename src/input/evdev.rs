@@ -328,18 +328,26 @@ pub struct EvdevReader {
     /// The frame of the resync at open, not yet handed to a sink.
     initial: bool,
     resync_failures: u64,
+    /// `EVIOCGRAB` asked for and not yet done (a finger was down).
+    grab_pending: bool,
 }
 
 impl EvdevReader {
     /// Opens `node`: checks it is a touch device, switches its clock to
-    /// CLOCK_MONOTONIC, grabs it when asked, and reads which contacts are
-    /// already down (delivered as the first frame of [`DeviceReader::run`]).
+    /// CLOCK_MONOTONIC, and reads which contacts are already down (delivered as
+    /// the first frame of [`DeviceReader::run`]).
+    ///
+    /// With [`EvdevOptions::grab`] the device is taken exclusively (`EVIOCGRAB`)
+    /// as soon as no finger is down: at once when the glass is clear, otherwise
+    /// after the last lift, so that a desktop that already saw a touch also sees
+    /// it end instead of keeping a stuck finger.
     ///
     /// # Errors
-    /// `PermissionDenied` (EACCES), `Busy` (EBUSY on grab), `Unplugged`
-    /// (ENODEV), `NotFound`, `NotTouch`, or `Io`.
+    /// `PermissionDenied` (EACCES), `Busy` (EBUSY on grab: another program holds
+    /// the device; also from [`DeviceReader::run`] for a deferred grab),
+    /// `Unplugged` (ENODEV), `NotFound`, `NotTouch`, or `Io`.
     pub fn open(node: &Path, opts: &EvdevOptions) -> Result<EvdevReader, Error> {
-        let mut dev = open_node(node)?;
+        let dev = open_node(node)?;
         let caps = capabilities(&dev).map_err(|e| Error::from_io(node, "query absinfo", e))?;
         let setup = caps.decoder_setup().map_err(|r| Error::NotTouch {
             node: node.to_path_buf(),
@@ -348,10 +356,6 @@ impl EvdevReader {
         let info = device_info(node, &caps, &setup, dev.unique_name());
         sys::set_clock_monotonic(dev.as_fd())
             .map_err(|e| Error::from_io(node, "EVIOCSCLOCKID", e))?;
-        if opts.grab {
-            dev.grab()
-                .map_err(|e| Error::from_io(node, "EVIOCGRAB", e))?;
-        }
         let (codes, ncodes) = slot_codes(&caps, &setup);
         let slots = setup.axes.slots;
         let decoder = MtDecoder::with_protocol(setup.axes, setup.protocol, 1);
@@ -367,9 +371,29 @@ impl EvdevReader {
             frame: TouchFrame::default(),
             initial: false,
             resync_failures: 0,
+            grab_pending: opts.grab,
         };
         r.initial = r.query_and_resync(monotonic_now())?;
+        r.grab_when_clear()?;
         Ok(r)
+    }
+
+    /// Takes the pending exclusive grab once no contact is down.
+    fn grab_when_clear(&mut self) -> Result<(), Error> {
+        if self.grab_pending && self.decoder.active_contacts() == 0 {
+            self.dev
+                .grab()
+                .map_err(|e| Error::from_io(&self.info.node, "EVIOCGRAB", e))?;
+            self.grab_pending = false;
+            log::debug!("{}: grabbed (exclusive)", self.info.node.display());
+        }
+        Ok(())
+    }
+
+    /// Whether the exclusive grab asked for is still waiting for the glass to
+    /// clear.
+    pub fn grab_pending(&self) -> bool {
+        self.grab_pending
     }
 
     /// What the decoder has seen.
@@ -461,6 +485,9 @@ impl DeviceReader for EvdevReader {
                     || (self.decoder.wants_resync() && self.query_and_resync(ev.t)?);
                 if ready {
                     sink.push(&self.frame);
+                    if self.grab_pending {
+                        self.grab_when_clear()?;
+                    }
                 }
             }
         }

@@ -1889,7 +1889,7 @@ struct HeaderOut<'a> {
     device: DeviceOut<'a>,
 }
 
-#[derive(Serialize)]
+#[derive(Debug, Serialize)]
 struct ContactOut {
     id: u32,
     x: f64,
@@ -1946,39 +1946,78 @@ pub fn write_jsonl(
     frames: &[TouchFrame],
     w: &mut impl std::io::Write,
 ) -> std::io::Result<()> {
-    let header = HeaderOut {
-        format: JSONL_FORMAT,
-        version: JSONL_VERSION,
-        device: DeviceOut {
-            name: &rec_surface.name,
-            x: axis_out(&rec_surface.x),
-            y: axis_out(&rec_surface.y),
-            max_contacts: rec_surface.max_contacts,
-        },
-    };
-    serde_json::to_writer(&mut *w, &header)?;
-    w.write_all(b"\n")?;
-    let t0 = frames.first().map_or(Micros::ZERO, |f| f.t);
-    let res = rec_surface.x.resolution;
-    let size = |mm: Option<f32>| {
-        mm.filter(|_| res > 0.0)
-            .map(|v| (f64::from(v) * res * WRITE_SCALE).round() / WRITE_SCALE)
-    };
-    let mut contacts: Vec<ContactOut> = Vec::with_capacity(MAX_CONTACTS);
-    let mut cancelled: Vec<u32> = Vec::with_capacity(MAX_CONTACTS);
+    let mut out = JsonlWriter::new(rec_surface, w)?;
     for f in frames {
-        contacts.clear();
-        cancelled.clear();
+        out.frame(f)?;
+    }
+    Ok(())
+}
+
+/// Writes our JSON Lines recording one frame at a time, as [`write_jsonl`] does
+/// for a whole recording (same bytes): the header at creation, then one line per
+/// [`JsonlWriter::frame`]. For recording a live device.
+#[derive(Debug)]
+pub struct JsonlWriter<'s, W: std::io::Write> {
+    surface: &'s SurfaceInfo,
+    out: W,
+    t0: Option<Micros>,
+    contacts: Vec<ContactOut>,
+    cancelled: Vec<u32>,
+    frames: u64,
+}
+
+impl<'s, W: std::io::Write> JsonlWriter<'s, W> {
+    /// Writes the header line for a device of surface `rec_surface`.
+    ///
+    /// # Errors
+    /// Whatever `out` returns.
+    pub fn new(rec_surface: &'s SurfaceInfo, mut out: W) -> std::io::Result<Self> {
+        let header = HeaderOut {
+            format: JSONL_FORMAT,
+            version: JSONL_VERSION,
+            device: DeviceOut {
+                name: &rec_surface.name,
+                x: axis_out(&rec_surface.x),
+                y: axis_out(&rec_surface.y),
+                max_contacts: rec_surface.max_contacts,
+            },
+        };
+        serde_json::to_writer(&mut out, &header)?;
+        out.write_all(b"\n")?;
+        Ok(JsonlWriter {
+            surface: rec_surface,
+            out,
+            t0: None,
+            contacts: Vec::with_capacity(MAX_CONTACTS),
+            cancelled: Vec::with_capacity(MAX_CONTACTS),
+            frames: 0,
+        })
+    }
+
+    /// Writes one frame; times are relative to the first frame written.
+    ///
+    /// # Errors
+    /// Whatever the writer returns.
+    pub fn frame(&mut self, f: &TouchFrame) -> std::io::Result<()> {
+        let t0 = *self.t0.get_or_insert(f.t);
+        let rec_surface = self.surface;
+        let res = rec_surface.x.resolution;
+        let size = |mm: Option<f32>| {
+            mm.filter(|_| res > 0.0)
+                .map(|v| (f64::from(v) * res * WRITE_SCALE).round() / WRITE_SCALE)
+        };
+        self.contacts.clear();
+        self.cancelled.clear();
         for c in f.contacts() {
             if c.flags.ended() {
                 if c.flags.contains(ContactFlags::CANCELLED)
                     && !c.flags.contains(ContactFlags::DOWN)
                 {
-                    cancelled.push(c.id.0);
+                    self.cancelled.push(c.id.0);
                 }
                 continue;
             }
-            contacts.push(ContactOut {
+            self.contacts.push(ContactOut {
                 id: c.id.0,
                 x: to_device(&rec_surface.x, c.x),
                 y: to_device(&rec_surface.y, c.y),
@@ -1990,13 +2029,27 @@ pub fn write_jsonl(
         }
         let line = FrameOut {
             t_us: f.t.saturating_since(t0).0,
-            contacts: &contacts,
-            cancelled: &cancelled,
+            contacts: &self.contacts,
+            cancelled: &self.cancelled,
         };
-        serde_json::to_writer(&mut *w, &line)?;
-        w.write_all(b"\n")?;
+        serde_json::to_writer(&mut self.out, &line)?;
+        self.out.write_all(b"\n")?;
+        self.frames += 1;
+        Ok(())
     }
-    Ok(())
+
+    /// Frames written.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+
+    /// Flushes the writer.
+    ///
+    /// # Errors
+    /// The writer's.
+    pub fn flush(&mut self) -> std::io::Result<()> {
+        self.out.flush()
+    }
 }
 
 #[cfg(test)]

@@ -412,6 +412,98 @@ impl DeviceReader for HidReader {
     }
 }
 
+/// Records the raw input reports of the hidraw node `node` into `w` as a
+/// hid-recorder log (descriptor and identity from sysfs, then one `E:` line per
+/// report, stamped with CLOCK_MONOTONIC when read), until `stop` is set (checked
+/// at least every [`STOP_CHECK_US`]). The device is not switched to multi-touch
+/// mode: the log shows what it sends as it is. Returns the number of reports.
+///
+/// Any hidraw node can be recorded, touch or not, so that a device this crate
+/// does not read can still be sent in a bug report.
+///
+/// # Errors
+/// [`Error::from_io`] of the sysfs reads and the open; [`Error::Unplugged`] when
+/// the device goes away; [`Error::Io`] (op `"write recording"`) when `w` fails.
+pub fn record_hidraw(node: &Path, w: impl std::io::Write, stop: &AtomicBool) -> Result<u64, Error> {
+    use nix::errno::Errno;
+    use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
+    use std::io::Read;
+    use std::os::fd::AsFd;
+    use std::os::unix::fs::OpenOptionsExt;
+    std::fs::metadata(node).map_err(|e| Error::from_io(node, "stat", e))?;
+    let dir = sysfs_dir(node)?;
+    let uevent = std::fs::read_to_string(dir.join("device/uevent"))
+        .map_err(|e| Error::from_io(node, "read sysfs uevent", e))?;
+    let uevent = parse_hid_uevent(&uevent).unwrap_or_default();
+    let descriptor = std::fs::read(dir.join("device/report_descriptor"))
+        .map_err(|e| Error::from_io(node, "read sysfs report_descriptor", e))?;
+    let mut file = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(nix::libc::O_NONBLOCK | nix::libc::O_CLOEXEC)
+        .open(node)
+        .map_err(|e| Error::from_io(node, "open", e))?;
+    let werr = |source| Error::Io {
+        node: node.to_path_buf(),
+        op: "write recording",
+        source,
+    };
+    let mut out = super::recorder::HidRecorderWriter::new(
+        w,
+        &descriptor,
+        &uevent.name,
+        uevent.bus,
+        uevent.vendor,
+        uevent.product,
+    )
+    .map_err(werr)?;
+    out.flush().map_err(werr)?;
+    let mut buf = vec![0u8; READ_BUFFER_BYTES];
+    let timeout = PollTimeout::from(u16::try_from(STOP_CHECK_US / 1000).unwrap_or(u16::MAX));
+    while !stop.load(Ordering::Relaxed) {
+        let ready = {
+            let mut fds = [PollFd::new(file.as_fd(), PollFlags::POLLIN)];
+            match poll(&mut fds, timeout) {
+                Ok(0) | Err(Errno::EINTR) => false,
+                Ok(_) => {
+                    let r = fds[0].revents().unwrap_or(PollFlags::empty());
+                    if r.intersects(PollFlags::POLLHUP | PollFlags::POLLERR)
+                        && !r.contains(PollFlags::POLLIN)
+                    {
+                        return Err(Error::Unplugged {
+                            node: node.to_path_buf(),
+                        });
+                    }
+                    true
+                }
+                Err(e) => return Err(Error::from_io(node, "poll", std::io::Error::from(e))),
+            }
+        };
+        if !ready {
+            continue;
+        }
+        // One report per read; drain what is queued.
+        loop {
+            match file.read(&mut buf) {
+                Ok(0) => {
+                    return Err(Error::Unplugged {
+                        node: node.to_path_buf(),
+                    })
+                }
+                Ok(n) => {
+                    let t = monotonic_now().0;
+                    out.report(t, &buf[..n]).map_err(werr)?;
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(Error::from_io(node, "read", e)),
+            }
+        }
+        out.flush().map_err(werr)?;
+    }
+    out.flush().map_err(werr)?;
+    Ok(out.reports())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -56,8 +56,8 @@ pub use descriptor::{
     describe, read_descriptor_file, touch_collections, Application, DescriptorFileError,
     FeatureSetting, Finger, HidField, NotTouch, TouchCollection, TouchReport,
 };
-pub use device::{enumerate, probe, HidOptions, HidReader};
-pub use recorder::{parse_hid_recorder, HidRecorderLog};
+pub use device::{enumerate, probe, record_hidraw, HidOptions, HidReader};
+pub use recorder::{parse_hid_recorder, HidRecorderLog, HidRecorderWriter};
 pub use report::{HidCounters, HidDecoder, ReportError};
 
 /// Usage pages and usages this module looks for (HID Usage Tables 1.5).

@@ -455,6 +455,85 @@ pub fn read_hid_recorder(
     decode_hid_recording(&log, path, on_bad)
 }
 
+/// Writes a hid-recorder log: the header (`R:`, `N:`, `I:`) and then one `E:`
+/// line per input report, with times relative to the first report as
+/// `hid-recorder` writes them. [`parse_hid_recorder`] (and `hid-replay` from
+/// hid-tools) read it back.
+#[derive(Debug)]
+pub struct HidRecorderWriter<W: std::io::Write> {
+    out: W,
+    first_us: Option<u64>,
+    reports: u64,
+}
+
+impl<W: std::io::Write> HidRecorderWriter<W> {
+    /// Writes the header: descriptor, name (line breaks replaced by spaces) and
+    /// bus/vendor/product.
+    ///
+    /// # Errors
+    /// The writer's.
+    pub fn new(
+        mut out: W,
+        descriptor: &[u8],
+        name: &str,
+        bus: u16,
+        vendor: u16,
+        product: u16,
+    ) -> std::io::Result<Self> {
+        write!(out, "R: {}", descriptor.len())?;
+        for b in descriptor {
+            write!(out, " {b:02x}")?;
+        }
+        writeln!(out)?;
+        let name: String = name
+            .chars()
+            .map(|c| if c.is_control() { ' ' } else { c })
+            .collect();
+        writeln!(out, "N: {}", name.trim())?;
+        writeln!(out, "I: {bus:x} {vendor:04x} {product:04x}")?;
+        Ok(HidRecorderWriter {
+            out,
+            first_us: None,
+            reports: 0,
+        })
+    }
+
+    /// Writes one input report read at `t_us` (any clock; only differences matter).
+    ///
+    /// # Errors
+    /// The writer's.
+    pub fn report(&mut self, t_us: u64, bytes: &[u8]) -> std::io::Result<()> {
+        let first = *self.first_us.get_or_insert(t_us);
+        let rel = t_us.saturating_sub(first);
+        write!(
+            self.out,
+            "E: {:06}.{:06} {}",
+            rel / 1_000_000,
+            rel % 1_000_000,
+            bytes.len()
+        )?;
+        for b in bytes {
+            write!(self.out, " {b:02x}")?;
+        }
+        writeln!(self.out)?;
+        self.reports += 1;
+        Ok(())
+    }
+
+    /// Flushes the writer.
+    ///
+    /// # Errors
+    /// The writer's.
+    pub fn flush(&mut self) -> std::io::Result<()> {
+        self.out.flush()
+    }
+
+    /// Reports written so far.
+    pub fn reports(&self) -> u64 {
+        self.reports
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -503,5 +582,30 @@ mod tests {
         let got: Vec<&[u8]> = log.events().map(|(_, b)| b).collect();
         assert_eq!(got, vec![&[1u8][..]]);
         assert!(log.warnings[0].message.contains("other devices"));
+    }
+
+    #[test]
+    fn writer_output_reads_back() {
+        let descriptor = [0x05u8, 0x0d, 0x09, 0x04, 0xa1, 0x01, 0xc0];
+        let mut buf = Vec::new();
+        let mut w =
+            HidRecorderWriter::new(&mut buf, &descriptor, "Panel\nOne", 3, 0x2101, 0x1011).unwrap();
+        w.report(5_000_000, &[0x01, 0xff, 0x10]).unwrap();
+        w.report(6_234_567, &[0x01, 0x00]).unwrap();
+        assert_eq!(w.reports(), 2);
+        let text = String::from_utf8(buf).unwrap();
+        assert!(text.contains("E: 000001.234567 2 01 00"), "{text}");
+        let log = parse_hid_recorder(&text, Path::new("w.hid"), OnBadFrame::Stop).unwrap();
+        assert_eq!(log.descriptor, descriptor);
+        assert_eq!(log.name.as_deref(), Some("Panel One"));
+        assert_eq!(
+            (log.bus, log.vendor, log.product),
+            (Some(3), Some(0x2101), Some(0x1011))
+        );
+        let ev: Vec<(u64, Vec<u8>)> = log.events().map(|(e, b)| (e.time_us, b.to_vec())).collect();
+        assert_eq!(
+            ev,
+            vec![(0, vec![0x01, 0xff, 0x10]), (1_234_567, vec![0x01, 0x00])]
+        );
     }
 }
