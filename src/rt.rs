@@ -69,10 +69,32 @@ pub fn make_idle(thread: &str) {
     }
 }
 
+/// The smallest `RLIMIT_MEMLOCK` under which the daemon locks its memory (bytes).
+///
+/// `mlockall(MCL_FUTURE)` makes every later mapping count against the limit: a thread
+/// stack, a client's buffers, a bigger crowd. Under a small limit (the kernel's default
+/// is 8 MiB) those allocations would fail later, far from the cause, so the daemon
+/// does not lock at all and says why. The shipped unit grants 256 MiB.
+pub const MIN_MEMLOCK_BYTES: u64 = 128 << 20;
+
 /// Locks the process's current and future memory into RAM. Returns whether it took
-/// effect; a refusal is logged.
+/// effect; a refusal is logged. Root (CAP_IPC_LOCK) is not bound by the limit; anyone
+/// else needs `RLIMIT_MEMLOCK` of at least [`MIN_MEMLOCK_BYTES`].
 pub fn lock_memory() -> bool {
     use nix::sys::mman::{mlockall, MlockAllFlags};
+    use nix::sys::resource::{getrlimit, Resource, RLIM_INFINITY};
+    if let Ok((soft, _)) = getrlimit(Resource::RLIMIT_MEMLOCK) {
+        if soft != RLIM_INFINITY && soft < MIN_MEMLOCK_BYTES && !nix::unistd::geteuid().is_root() {
+            log::warn!(
+                "not locking memory: RLIMIT_MEMLOCK is {} KiB, under the {} MiB the daemon needs \
+                 to keep allocating with its memory locked; page faults may delay frames. Grant \
+                 it (the systemd unit's LimitMEMLOCK=256M) or set pipeline.realtime.lock_memory: false",
+                soft / 1024,
+                MIN_MEMLOCK_BYTES >> 20
+            );
+            return false;
+        }
+    }
     match mlockall(MlockAllFlags::MCL_CURRENT | MlockAllFlags::MCL_FUTURE) {
         Ok(()) => true,
         Err(e) => {

@@ -330,7 +330,14 @@ pub struct EvdevReader {
     resync_failures: u64,
     /// `EVIOCGRAB` asked for and not yet done (a finger was down).
     grab_pending: bool,
+    /// `SYN_DROPPED` blocks already reported in the log.
+    drops_seen: u64,
+    /// When a `SYN_DROPPED` was last logged (the log is rate-limited).
+    last_drop_log: Option<Micros>,
 }
+
+/// Shortest interval between two log lines about `SYN_DROPPED` from one device (µs).
+pub const DROP_LOG_INTERVAL_US: u64 = 5_000_000;
 
 impl EvdevReader {
     /// Opens `node`: checks it is a touch device, switches its clock to
@@ -372,6 +379,8 @@ impl EvdevReader {
             initial: false,
             resync_failures: 0,
             grab_pending: opts.grab,
+            drops_seen: 0,
+            last_drop_log: None,
         };
         r.initial = r.query_and_resync(monotonic_now())?;
         r.grab_when_clear()?;
@@ -439,6 +448,29 @@ impl EvdevReader {
         Ok(())
     }
 
+    /// Logs (at most every [`DROP_LOG_INTERVAL_US`]) that the kernel dropped events
+    /// since the last call. Only reached after a `SYN_DROPPED`, never per event.
+    fn note_dropped(&mut self, t: Micros) {
+        let n = self.decoder.counters().dropped_sync;
+        if n <= self.drops_seen {
+            return;
+        }
+        self.drops_seen = n;
+        if self
+            .last_drop_log
+            .is_some_and(|l| t.saturating_since(l).0 < DROP_LOG_INTERVAL_US)
+        {
+            return;
+        }
+        self.last_drop_log = Some(t);
+        log::warn!(
+            "{}: the kernel dropped input events (SYN_DROPPED, {n} time(s) since open): this \
+             reader fell behind (system overloaded, or the daemon was stopped); touches \
+             resynchronised from the device's slot state",
+            self.info.node.display()
+        );
+    }
+
     /// Queries the state and resyncs the decoder into `self.frame`; on a failed
     /// query (other than unplug) cancels every contact instead. Returns whether
     /// the frame holds contacts to deliver.
@@ -482,7 +514,10 @@ impl DeviceReader for EvdevReader {
                 // A frame closed, or a dropped block ended and the resync
                 // produced one.
                 let ready = self.decoder.feed(&ev, &mut self.frame)
-                    || (self.decoder.wants_resync() && self.query_and_resync(ev.t)?);
+                    || (self.decoder.wants_resync() && {
+                        self.note_dropped(ev.t);
+                        self.query_and_resync(ev.t)?
+                    });
                 if ready {
                     sink.push(&self.frame);
                     if self.grab_pending {

@@ -806,6 +806,13 @@ fn snapshot_json_head(
         Some(l) => push_uint(out, l, b),
         None => out.extend_from_slice(b"null"),
     }
+    // The input event's own CLOCK_MONOTONIC time (the kernel timestamp), so a client
+    // on the same machine can measure input → its own read without the daemon's help.
+    out.extend_from_slice(b",\"input_t_us\":");
+    match s.input_t {
+        Some(t) => push_uint(out, t.0, b),
+        None => out.extend_from_slice(b"null"),
+    }
     out.extend_from_slice(b",\"dropped\":");
 }
 

@@ -85,6 +85,7 @@ fn json_snapshot_has_every_field() {
     assert_eq!(v["seq"], 42);
     assert_eq!(v["t_us"], 1_000_123);
     assert_eq!(v["latency_us"], 17);
+    assert_eq!(v["input_t_us"], 999_000);
     assert_eq!(v["dropped"], 5);
     assert_eq!(v["agents"], 3);
     assert_eq!(v["paused"], false);
@@ -110,6 +111,12 @@ fn json_snapshot_respects_fields_and_null_latency() {
     encode_snapshot_json(&s, None, 0, &fields, &mut out);
     let v: Value = serde_json::from_slice(&out).unwrap();
     assert!(v["latency_us"].is_null());
+    let mut no_input = s.clone();
+    no_input.input_t = None;
+    let mut out2 = Vec::new();
+    encode_snapshot_json(&no_input, None, 0, &fields, &mut out2);
+    let v2: Value = serde_json::from_slice(&out2).unwrap();
+    assert!(v2["input_t_us"].is_null());
     let keys: Vec<&str> = v.as_object().unwrap().keys().map(|k| k.as_str()).collect();
     for absent in [
         "velocities",
