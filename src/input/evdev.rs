@@ -12,7 +12,7 @@
 //! ```text
 //! open (O_RDONLY | O_NONBLOCK) → capabilities → EVIOCSCLOCKID(CLOCK_MONOTONIC)
 //!   → EVIOCGRAB (if asked) → query slots → resync (fingers already down)
-//! loop: poll(POLLIN, STOP_CHECK_US) → stop? → read ≤ READ_EVENTS events
+//! loop: flush held-back frames → poll(POLLIN, STOP_CHECK_US, or FLUSH_RETRY_US while frames are held back) → stop? → read ≤ READ_EVENTS events
 //!   → decoder.event each → frame? push to the sink
 //!                         → dropped block ended? query slots → resync → push
 //! ENODEV (or EOF) → Err(Unplugged)
@@ -30,7 +30,7 @@ use super::mt::{
     ABS_MT_TRACKING_ID, ABS_PRESSURE, ABS_X, ABS_Y, BTN_TOUCH, EV_ABS, MAX_SLOTS,
 };
 use super::record::{AbsAxisInfo, DecoderSetup, EvdevCapabilities};
-use super::{DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink, TouchFrame, STOP_CHECK_US};
+use super::{DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink, TouchFrame};
 use crate::sys;
 use crate::time::{monotonic_now, Micros};
 use nix::errno::Errno;
@@ -287,16 +287,21 @@ pub fn slot_state_from(
     state.selected = Some(selected);
 }
 
-/// Waits up to [`STOP_CHECK_US`] for `dev` to be readable and reads what it
+/// Waits up to `timeout_ms` for `dev` to be readable and reads what it
 /// has into `buf`; 0 bytes when nothing came (or a signal interrupted).
 ///
 /// # Errors
 /// [`Error::Unplugged`] on `ENODEV` or end of file; other errors classified by
 /// [`Error::from_io`].
-pub fn wait_read(dev: &RawDevice, node: &Path, buf: &mut [u8]) -> Result<usize, Error> {
+pub fn wait_read(
+    dev: &RawDevice,
+    node: &Path,
+    buf: &mut [u8],
+    timeout_ms: u16,
+) -> Result<usize, Error> {
     let fd = dev.as_fd();
     let mut fds = [PollFd::new(fd, PollFlags::POLLIN)];
-    let timeout = PollTimeout::from((STOP_CHECK_US / 1_000) as u16);
+    let timeout = PollTimeout::from(timeout_ms);
     match poll(&mut fds, timeout) {
         Ok(0) | Err(Errno::EINTR) => return Ok(0),
         Ok(_) => {}
@@ -504,7 +509,8 @@ impl DeviceReader for EvdevReader {
         }
         let node: PathBuf = self.info.node.clone();
         while !stop.load(Ordering::Relaxed) {
-            let n = wait_read(&self.dev, &node, &mut self.buf)?;
+            let timeout_ms = super::reader_timeout_ms(sink);
+            let n = wait_read(&self.dev, &node, &mut self.buf, timeout_ms)?;
             let mut at = 0;
             while at + INPUT_EVENT_BYTES <= n {
                 let Some(ev) = parse_input_event(&self.buf[at..n]) else {

@@ -740,7 +740,8 @@ pub fn record_evdev(node: &Path, w: impl Write, stop: &AtomicBool) -> Result<u64
     let mut out = EvemuWriter::new(&caps, w).map_err(werr)?;
     let mut buf = [0u8; super::evdev::READ_BUF_BYTES];
     while !stop.load(Ordering::Relaxed) {
-        let n = super::evdev::wait_read(&dev, node, &mut buf)?;
+        let n =
+            super::evdev::wait_read(&dev, node, &mut buf, (super::STOP_CHECK_US / 1000) as u16)?;
         for ev in super::evdev::parse_input_events(&buf[..n]) {
             out.event(&ev).map_err(werr)?;
         }

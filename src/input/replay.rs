@@ -259,7 +259,7 @@ impl ReplaySource {
                     let at = offset + f.t.saturating_since(t0);
                     let t = match self.pacing {
                         Pacing::RealTime => {
-                            if !sleep_until(start + at, stop) {
+                            if !sleep_until(start + at, stop, sink) {
                                 self.stop_now(sink);
                                 return;
                             }
@@ -301,7 +301,7 @@ impl ReplaySource {
 }
 
 /// Sleeps until `deadline` (CLOCK_MONOTONIC); `false` when `stop` was set first.
-fn sleep_until(deadline: Micros, stop: &AtomicBool) -> bool {
+fn sleep_until(deadline: Micros, stop: &AtomicBool, sink: &mut dyn FrameSink) -> bool {
     loop {
         if stop.load(Ordering::Relaxed) {
             return false;
@@ -310,7 +310,14 @@ fn sleep_until(deadline: Micros, stop: &AtomicBool) -> bool {
         if now >= deadline {
             return true;
         }
-        let wait = deadline.saturating_since(now).0.min(STOP_POLL_US);
+        // Frames the sink held back go on as soon as it can take them, not with the
+        // next frame of the recording.
+        let poll = if sink.flush() {
+            STOP_POLL_US
+        } else {
+            super::FLUSH_RETRY_US
+        };
+        let wait = deadline.saturating_since(now).0.min(poll);
         std::thread::sleep(Duration::from_micros(wait));
     }
 }

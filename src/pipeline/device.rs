@@ -135,6 +135,10 @@ impl FrameSink for TransformSink {
             None => self.queue.push(frame),
         }
     }
+
+    fn flush(&mut self) -> bool {
+        self.queue.flush()
+    }
 }
 
 impl DeviceSink for TransformSink {

@@ -228,6 +228,10 @@ impl FrameQueue {
 }
 
 impl FrameSink for FrameQueue {
+    fn flush(&mut self) -> bool {
+        FrameQueue::flush(self)
+    }
+
     fn push(&mut self, frame: &TouchFrame) {
         let mut f = *frame;
         self.map_ids(&mut f);
@@ -607,7 +611,8 @@ impl Daemon {
                     threads.push(spawn("input", move || {
                         realtime("input");
                         while !stop.load(Ordering::Relaxed) {
-                            match rx.recv_timeout(Duration::from_millis(50)) {
+                            let wait_ms = if queue.flush() { 50 } else { 1 };
+                            match rx.recv_timeout(Duration::from_millis(wait_ms)) {
                                 Ok(f) => queue.push(&f),
                                 Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
                                 Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break,
@@ -1214,5 +1219,32 @@ mod tests {
         assert_eq!(downs.len() as u32, n);
         assert_eq!(ups.len() as u32, n);
         assert_eq!(counters.transitions_lost.load(Ordering::Relaxed), 0);
+    }
+
+    /// Found by the hardware-in-the-loop overload scenario: after a burst filled the
+    /// queue, the last frame (a lift) stayed in the backlog until the next touch,
+    /// because the reader only flushed when it pushed. A waiting reader now retries
+    /// the backlog at `FLUSH_RETRY_US` and only then blocks for `STOP_CHECK_US`.
+    #[test]
+    fn a_waiting_reader_hands_on_held_frames_without_new_input() {
+        use crate::input::{reader_timeout_ms, FrameSink, FLUSH_RETRY_US, STOP_CHECK_US};
+        let (tx, rx) = bounded(1);
+        let counters = Arc::new(InputCounters::default());
+        let mut q = FrameQueue::new(tx, 0, Arc::clone(&counters));
+        q.push(&frame(1, &[(1, 0.5, ContactFlags::DOWN)]));
+        q.push(&frame(2, &[(1, 0.5, ContactFlags::UP)]));
+        assert_eq!(q.backlog(), 1, "the lift waits behind a full queue");
+        // The consumer is still busy: the reader waits only briefly.
+        assert_eq!(u64::from(reader_timeout_ms(&mut q)), FLUSH_RETRY_US / 1000);
+        let first = rx.try_recv().unwrap();
+        assert!(first.contacts()[0].flags.contains(ContactFlags::DOWN));
+        // The consumer took a frame: the next wait hands the lift on by itself.
+        assert_eq!(u64::from(reader_timeout_ms(&mut q)), STOP_CHECK_US / 1000);
+        assert_eq!(q.backlog(), 0);
+        let lift = rx
+            .try_recv()
+            .expect("the held lift reaches the control thread");
+        assert!(lift.contacts()[0].flags.ended());
+        assert!(FrameSink::flush(&mut q));
     }
 }

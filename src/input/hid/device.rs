@@ -389,8 +389,8 @@ impl DeviceReader for HidReader {
     }
 
     fn run(&mut self, sink: &mut dyn FrameSink, stop: &AtomicBool) -> Result<(), Error> {
-        let timeout_ms = i32::try_from(STOP_CHECK_US / 1000).unwrap_or(i32::MAX);
         while !stop.load(Ordering::Relaxed) {
+            let timeout_ms = i32::from(crate::input::reader_timeout_ms(sink));
             let n = self
                 .device
                 .read_timeout(&mut self.buf, timeout_ms)
