@@ -262,8 +262,28 @@ def _put(buf, f, value, base):
             buf[byte] &= ~(1 << sh) & 0xFF
 
 
+USAGE = """usage: hidgen.py describe FILE
+       hidgen.py reports FILE FRAME [FRAME ...]
+FRAME: contacts separated by commas, each ID:X:Y:TIP in logical units (TIP 1 or 0);
+prints each frame's input reports as hex, one frame per line, reports separated by
+spaces."""
+
+
+def main(argv):
+    if len(argv) >= 3 and argv[1] == "describe":
+        d = Descriptor(open(argv[2], "rb").read())
+        print(json.dumps([c.json() for c in d.touch_collections()], indent=1))
+        return 0
+    if len(argv) >= 4 and argv[1] == "reports":
+        layout = Descriptor(open(argv[2], "rb").read()).touch_collections()[0]
+        for k, frame in enumerate(argv[3:]):
+            contacts = [tuple(int(v) for v in c.split(":")) for c in frame.split(",") if c]
+            contacts = [(i, x, y, bool(t)) for i, x, y, t in contacts]
+            print(" ".join(r.hex() for r in layout.reports(contacts, 100 * (k + 1))))
+        return 0
+    print(USAGE, file=sys.stderr)
+    return 2
+
+
 if __name__ == "__main__":
-    if len(sys.argv) != 3 or sys.argv[1] != "describe":
-        sys.exit("usage: hidgen.py describe FILE")
-    d = Descriptor(open(sys.argv[2], "rb").read())
-    print(json.dumps([c.json() for c in d.touch_collections()], indent=1))
+    sys.exit(main(sys.argv))
