@@ -9,3 +9,4 @@ pub mod assigner;
 pub mod direct;
 pub mod mesh;
 pub mod mvc;
+pub mod scene;
