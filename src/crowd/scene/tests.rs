@@ -429,6 +429,24 @@ mod props {
             }
         }
 
+        /// A shipped scene with a slice cut out or repeated: an error with a place,
+        /// or still a valid scene; never a panic.
+        #[test]
+        fn mutated_shipped_scene_never_panics(a in 0usize..4000, len in 0usize..60, dup in proptest::bool::ANY) {
+            let t = include_str!("../../../config/scenes/obstacle_course.ron");
+            let a = a.min(t.len());
+            let b = (a + len).min(t.len());
+            if !t.is_char_boundary(a) || !t.is_char_boundary(b) {
+                return Ok(());
+            }
+            let m = if dup { format!("{}{}", &t[..b], &t[a..]) } else { format!("{}{}", &t[..a], &t[b..]) };
+            match Scene::from_str(&m, Path::new("m"), 0.15) {
+                Ok(s) => prop_assert!(s.sanity_check().is_ok()),
+                Err(SceneError::Invalid { issues, .. }) => prop_assert!(!issues.is_empty()),
+                Err(e) => prop_assert!(false, "unexpected error kind {e}"),
+            }
+        }
+
         /// Random numbers in every slot of a scene never panic validation; valid
         /// results pass the invariant checker.
         #[test]
