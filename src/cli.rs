@@ -22,6 +22,7 @@ mod calibrate;
 mod devices;
 mod hid;
 mod record;
+mod scene;
 mod svg;
 mod watch;
 
@@ -98,6 +99,10 @@ enum Cmd {
     /// Raw HID digitizer tools.
     #[command(subcommand)]
     Hid(hid::HidCmd),
+    /// Scene tools: `scene check FILE` validates a scene (obstacles, patches, moving
+    /// things, checkpoints).
+    #[command(subcommand)]
+    Scene(scene::SceneCmd),
     /// Regenerate the shipped recordings (deterministic).
     SynthRecordings {
         /// Output directory.
@@ -192,6 +197,7 @@ pub fn main() -> i32 {
             .and_then(|(cfg, path)| calibrate::calibrate(&cfg, path.as_deref(), input, write)),
         Cmd::Record(a) => record::record(a),
         Cmd::Hid(c) => hid::hid(c),
+        Cmd::Scene(c) => return scene::scene(c),
         Cmd::Devices { config, json } => find_config(config.as_deref())
             .and_then(|(cfg, _)| devices::devices(&cfg, json, Path::new("/"))),
     };

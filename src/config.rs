@@ -466,21 +466,7 @@ impl Config {
     /// # Errors
     /// [`Error::Io`], [`Error::TooLarge`] or [`Error::Invalid`] with every problem.
     pub fn load(path: &Path) -> Result<Config, Error> {
-        let meta = std::fs::metadata(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        if meta.len() > MAX_CONFIG_BYTES {
-            return Err(Error::TooLarge {
-                path: path.to_path_buf(),
-                size: meta.len(),
-                max: MAX_CONFIG_BYTES,
-            });
-        }
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = read_capped(path, MAX_CONFIG_BYTES)?;
         let mut cfg = Config::from_str(&text, path)?;
         let base = path.parent().unwrap_or(Path::new("."));
         cfg.resolve_paths(base);
@@ -493,21 +479,10 @@ impl Config {
     /// [`Error::Invalid`] listing every problem with line, column and field.
     #[allow(clippy::should_implement_trait)]
     pub fn from_str(text: &str, path: &Path) -> Result<Config, Error> {
-        let cfg: Config = match ron::Options::default().from_str(text) {
-            Ok(c) => c,
-            Err(e) => {
-                let field = field_of_ron_error(&e.code, text, e.position);
-                return Err(Error::Invalid {
-                    path: path.to_path_buf(),
-                    issues: vec![ConfigIssue {
-                        field,
-                        line: e.position.line,
-                        column: e.position.col,
-                        message: e.code.to_string(),
-                    }],
-                });
-            }
-        };
+        let cfg: Config = parse_strict(text).map_err(|issue| Error::Invalid {
+            path: path.to_path_buf(),
+            issues: vec![issue],
+        })?;
         let problems = cfg.validate();
         if problems.is_empty() {
             Ok(cfg)
@@ -876,6 +851,45 @@ impl Config {
             self.surface.world.height() / h_mm,
         )
     }
+}
+
+/// Reads a RON data file (config, scene, ...) of at most `max_bytes` bytes.
+///
+/// # Errors
+/// [`Error::Io`] when it cannot be read, [`Error::TooLarge`] past the cap.
+pub fn read_capped(path: &Path, max_bytes: u64) -> Result<String, Error> {
+    let meta = std::fs::metadata(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    if meta.len() > max_bytes {
+        return Err(Error::TooLarge {
+            path: path.to_path_buf(),
+            size: meta.len(),
+            max: max_bytes,
+        });
+    }
+    std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Deserialises strict RON text (types use `deny_unknown_fields`) into `T`. A
+/// syntax or schema error becomes one issue with its line, column and the dotted path
+/// of the field it is in; the shared parser for every RON file crowdtouch reads.
+///
+/// # Errors
+/// The first problem the parser meets.
+pub fn parse_strict<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, ConfigIssue> {
+    ron::Options::default()
+        .from_str(text)
+        .map_err(|e: ron::error::SpannedError| ConfigIssue {
+            field: field_of_ron_error(&e.code, text, e.position),
+            line: e.position.line,
+            column: e.position.col,
+            message: e.code.to_string(),
+        })
 }
 
 /// Parses `"vvvv:pppp"` (hex) into vendor and product ids.

@@ -26,6 +26,7 @@ fn help_lists_every_subcommand() {
         "calibrate",
         "record",
         "hid",
+        "scene",
     ] {
         assert!(text.contains(sub), "--help misses {sub}:\n{text}");
     }
@@ -397,4 +398,65 @@ fn record_without_the_device_explains() {
         .output()
         .unwrap();
     assert!(!out.status.success());
+}
+
+#[test]
+fn scene_check_summarises_a_good_scene_and_lists_every_error() {
+    let street = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("config/scenes/street.ron");
+    let out = bin()
+        .args(["scene", "check"])
+        .arg(&street)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("ok") && text.contains("16 x 9 m"), "{text}");
+    assert!(
+        text.contains("2 obstacles") && text.contains("4 dynamic (4 obstacles, 0 patches)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("1 patch,") && text.contains("0 checkpoints"),
+        "{text}"
+    );
+
+    let dir = tempfile::tempdir().unwrap();
+    let bad = write_tmp(
+        &dir,
+        "bad.ron",
+        "(\n    version: 1,\n    bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),\n    obstacles: [\n        (name: \"dent\", parts: [Polygon(vertices_m: [(2.0, 2.0), (4.0, 2.0), (3.0, 2.5), (4.0, 4.0), (2.0, 4.0)])]),\n        (name: \"near\", parts: [Circle(centre_m: (4.2, 6.0), radius_m: 0.1)]),\n        (name: \"close\", parts: [Circle(centre_m: (4.5, 6.0), radius_m: 0.1)]),\n    ],\n    patches: [(motion: crawl, speed_factor: Some(-1.0), parts: [Circle(centre_m: (9.0, 5.0), radius_m: 1.0)])],\n)\n",
+    );
+    let out = bin().args(["scene", "check"]).arg(&bad).output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 3, "{err}");
+    assert!(
+        lines[0].contains("bad.ron:5:")
+            && lines[0]
+                .contains(": obstacles[0].parts[0].vertices_m: polygon is not convex at vertex 2"),
+        "{err}"
+    );
+    assert!(
+        lines[1].contains("bad.ron:7:")
+            && lines[1].contains("obstacles[2].parts: is 0.100 m from obstacles[1] \"near\""),
+        "{err}"
+    );
+    assert!(
+        lines[2].contains("bad.ron:9:")
+            && lines[2].contains("patches[0].speed_factor: speed must be positive"),
+        "{err}"
+    );
+
+    let missing = bin()
+        .args(["scene", "check"])
+        .arg(dir.path().join("nope.ron"))
+        .output()
+        .unwrap();
+    assert_eq!(missing.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("nope.ron"));
 }

@@ -7,5 +7,7 @@ pub mod arap;
 pub mod assign;
 pub mod assigner;
 pub mod direct;
+pub mod field;
 pub mod mesh;
 pub mod mvc;
+pub mod scene;

@@ -1,0 +1,89 @@
+//! `crowdtouch scene …`: tools for scene files.
+
+use crowdtouch::config::Config;
+use crowdtouch::crowd::scene::{DynamicKind, Scene};
+use std::path::{Path, PathBuf};
+
+/// `crowdtouch scene` subcommands.
+#[derive(clap::Subcommand, Debug)]
+pub enum SceneCmd {
+    /// Validate a scene file: prints its bounds and counts, or every error as
+    /// `file:line:col: field: what` (exit code 1).
+    ///
+    /// Obstacles must be at least one agent diameter apart; the agent radius is the
+    /// default config's `crowd.agent_radius_m` unless given.
+    Check {
+        /// Scene file (RON).
+        file: PathBuf,
+        /// Agent radius (m) for the gap check.
+        #[arg(long)]
+        agent_radius_m: Option<f64>,
+    },
+}
+
+/// Runs a `scene` subcommand; returns the exit code.
+pub fn scene(cmd: SceneCmd) -> i32 {
+    match cmd {
+        SceneCmd::Check {
+            file,
+            agent_radius_m,
+        } => check(&file, agent_radius_m),
+    }
+}
+
+fn check(file: &Path, agent_radius_m: Option<f64>) -> i32 {
+    let radius = agent_radius_m.unwrap_or_else(|| Config::embedded_default().crowd.agent_radius_m);
+    if !(radius.is_finite() && radius > 0.0) {
+        eprintln!(
+            "crowdtouch: error: --agent-radius-m must be a positive number of metres, got {radius}"
+        );
+        return 2;
+    }
+    match Scene::load(file, radius) {
+        Ok(s) => {
+            let b = s.bounds();
+            let moving_obstacles = s
+                .dynamic()
+                .iter()
+                .filter(|d| d.kind == DynamicKind::Obstacle)
+                .count();
+            let parts: usize = s.obstacles().iter().map(|o| o.parts.len()).sum();
+            println!(
+                "{}: ok: {:?} {} x {} m from ({}, {}); {} obstacle{} ({} convex part{}), {} patch{}, {} dynamic ({} obstacle{}, {} patch{}), {} checkpoint{}; gaps checked for agent radius {} m",
+                file.display(),
+                s.name(),
+                b.width(),
+                b.height(),
+                b.min[0],
+                b.min[1],
+                s.obstacles().len(),
+                plural(s.obstacles().len(), "", "s"),
+                parts,
+                plural(parts, "", "s"),
+                s.patches().len(),
+                plural(s.patches().len(), "", "es"),
+                s.dynamic().len(),
+                moving_obstacles,
+                plural(moving_obstacles, "", "s"),
+                s.dynamic().len() - moving_obstacles,
+                plural(s.dynamic().len() - moving_obstacles, "", "es"),
+                s.checkpoints().len(),
+                plural(s.checkpoints().len(), "", "s"),
+                radius,
+            );
+            0
+        }
+        Err(e) => {
+            eprintln!("{e}");
+            1
+        }
+    }
+}
+
+fn plural(n: usize, one: &'static str, many: &'static str) -> &'static str {
+    if n == 1 {
+        one
+    } else {
+        many
+    }
+}
