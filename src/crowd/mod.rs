@@ -7,5 +7,6 @@ pub mod arap;
 pub mod assign;
 pub mod assigner;
 pub mod direct;
+pub mod eikonal;
 pub mod mesh;
 pub mod mvc;
