@@ -37,8 +37,6 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use std::cell::RefCell;
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
 
 use super::assign::{CostMatrix, CostProvider};
 use crate::geom::Vec2;
@@ -384,6 +382,107 @@ pub enum Sources<'a> {
     Cells(&'a [usize]),
 }
 
+/// "Not in the heap" in [`Heap::pos`].
+const ABSENT: u32 = u32::MAX;
+
+/// Children per node of [`Heap`] (4-ary: half the depth of a binary heap, and the
+/// children share a cache line).
+const HEAP_ARITY: usize = 4;
+
+/// Indexed 4-ary min-heap of trial cells keyed by their tentative `Φ`, with
+/// decrease-key (each cell at most once, so the heap holds only the front).
+#[derive(Clone, Debug, Default)]
+struct Heap {
+    items: Vec<(f64, u32)>,
+    pos: Vec<u32>,
+}
+
+impl Heap {
+    /// Empties the heap, keeping capacity; `n` cells.
+    fn clear(&mut self, n: usize) {
+        for &(_, i) in &self.items {
+            self.pos[i as usize] = ABSENT;
+        }
+        self.items.clear();
+        if self.pos.len() != n {
+            self.pos.clear();
+            self.pos.resize(n, ABSENT);
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+
+    /// Inserts `cell` with `key`, or lowers its key (`key` never rises).
+    #[inline]
+    fn push_or_decrease(&mut self, cell: u32, key: f64) {
+        let p = self.pos[cell as usize];
+        let hole = if p == ABSENT {
+            self.items.push((key, cell));
+            self.items.len() - 1
+        } else {
+            p as usize
+        };
+        self.sift_up(hole, (key, cell));
+    }
+
+    #[inline]
+    fn sift_up(&mut self, mut hole: usize, item: (f64, u32)) {
+        while hole > 0 {
+            let parent = (hole - 1) / HEAP_ARITY;
+            let pi = self.items[parent];
+            if pi.0 <= item.0 {
+                break;
+            }
+            self.items[hole] = pi;
+            self.pos[pi.1 as usize] = hole as u32;
+            hole = parent;
+        }
+        self.items[hole] = item;
+        self.pos[item.1 as usize] = hole as u32;
+    }
+
+    /// Removes and returns the cell with the smallest key.
+    #[inline]
+    fn pop(&mut self) -> Option<(f64, u32)> {
+        let top = *self.items.first()?;
+        self.pos[top.1 as usize] = ABSENT;
+        let last = self.items.pop().expect("non-empty");
+        let n = self.items.len();
+        if n > 0 {
+            // Sift the last item down from the root along the smallest children.
+            let mut hole = 0;
+            loop {
+                let first = HEAP_ARITY * hole + 1;
+                if first >= n {
+                    break;
+                }
+                let end = (first + HEAP_ARITY).min(n);
+                let mut c = first;
+                let mut ck = self.items[first].0;
+                for j in first + 1..end {
+                    let k = self.items[j].0;
+                    if k < ck {
+                        c = j;
+                        ck = k;
+                    }
+                }
+                if last.0 <= ck {
+                    break;
+                }
+                let ci = self.items[c];
+                self.items[hole] = ci;
+                self.pos[ci.1 as usize] = hole as u32;
+                hole = c;
+            }
+            self.items[hole] = last;
+            self.pos[last.1 as usize] = hole as u32;
+        }
+        Some(top)
+    }
+}
+
 /// Fast-marching solver for `|∇Φ| = C` with its reusable workspace.
 ///
 /// # Formula
@@ -417,7 +516,7 @@ pub enum Sources<'a> {
 pub struct Fmm {
     order: Order,
     state: Vec<u8>,
-    heap: BinaryHeap<Reverse<(u64, u32)>>,
+    heap: Heap,
     touched: Vec<u32>,
     marched: u64,
 }
@@ -485,7 +584,7 @@ impl Fmm {
             cost.iter()
                 .map(|&c| if c == f64::INFINITY { BLOCKED } else { FAR }),
         );
-        self.heap.clear();
+        self.heap.clear(grid.len());
         self.touched.clear();
         debug_assert_eq!(self.state.len(), grid.len());
     }
@@ -496,7 +595,8 @@ impl Fmm {
             self.state[i as usize] = FAR;
         }
         self.touched.clear();
-        self.heap.clear();
+        let n = self.state.len();
+        self.heap.clear(n);
     }
 
     /// Marks cell `i` as touched the first time it leaves the far state.
@@ -578,11 +678,8 @@ impl Fmm {
             self.update_neighbours(grid, cost, phi, i);
         }
         let mut frozen = band_end - band_start;
-        while let Some(Reverse((key, i))) = self.heap.pop() {
+        while let Some((_, i)) = self.heap.pop() {
             let i = i as usize;
-            if self.state[i] == KNOWN || phi[i].to_bits() != key {
-                continue;
-            }
             self.state[i] = KNOWN;
             frozen += 1;
             if is_target(&targets, i) {
@@ -603,35 +700,36 @@ impl Fmm {
     fn update_neighbours(&mut self, grid: &Grid, cost: &[f64], phi: &mut [f64], i: usize) {
         let (c, r) = (i % grid.cols, i / grid.cols);
         if c > 0 {
-            self.update(grid, cost, phi, i - 1);
+            self.update(grid, cost, phi, i - 1, c - 1, r);
         }
         if c + 1 < grid.cols {
-            self.update(grid, cost, phi, i + 1);
+            self.update(grid, cost, phi, i + 1, c + 1, r);
         }
         if r > 0 {
-            self.update(grid, cost, phi, i - grid.cols);
+            self.update(grid, cost, phi, i - grid.cols, c, r - 1);
         }
         if r + 1 < grid.rows {
-            self.update(grid, cost, phi, i + grid.cols);
+            self.update(grid, cost, phi, i + grid.cols, c, r + 1);
         }
     }
 
+    /// Recomputes the trial value of cell `n` = (`c`, `r`).
     #[inline]
-    fn update(&mut self, grid: &Grid, cost: &[f64], phi: &mut [f64], n: usize) {
+    fn update(&mut self, grid: &Grid, cost: &[f64], phi: &mut [f64], n: usize, c: usize, r: usize) {
         let s = self.state[n];
         if s == KNOWN || s == BLOCKED {
             return;
         }
-        let v = self.local(grid, cost[n], phi, n);
+        let v = self.local(grid, cost[n], phi, n, c, r);
         if v < phi[n] {
             self.touch(n);
             self.state[n] = TRIAL;
             phi[n] = v;
-            self.heap.push(Reverse((v.to_bits(), n as u32)));
+            self.heap.push_or_decrease(n as u32, v);
         }
     }
 
-    /// One axis of the upwind stencil at cell `i`: `(k, t)` of the smaller frozen
+    /// One axis of the upwind stencil at cell `i`: `(k, t, 1/√k)` of the smaller frozen
     /// neighbour, or `None` when neither neighbour is frozen. `stride` is 1 (x) or
     /// `cols` (y); `pos`/`len` the coordinate along the axis and its extent.
     #[inline]
@@ -642,7 +740,7 @@ impl Fmm {
         stride: usize,
         pos: usize,
         len: usize,
-    ) -> Option<(f64, f64)> {
+    ) -> Option<(f64, f64, f64)> {
         let known = |j: usize| self.state[j] == KNOWN;
         let lo = pos > 0 && known(i - stride);
         let hi = pos + 1 < len && known(i + stride);
@@ -665,26 +763,25 @@ impl Fmm {
             };
             if let Some(j) = far {
                 if known(j) && phi[j] <= a1 {
-                    return Some((2.25, (4.0 * a1 - phi[j]) / 3.0));
+                    return Some((2.25, (4.0 * a1 - phi[j]) * (1.0 / 3.0), 2.0 / 3.0));
                 }
             }
         }
-        Some((1.0, a1))
+        Some((1.0, a1, 1.0))
     }
 
     /// Trial value of cell `i` with unit cost `ci` from its frozen neighbours.
     #[inline]
-    fn local(&self, grid: &Grid, ci: f64, phi: &[f64], i: usize) -> f64 {
-        let (c, r) = (i % grid.cols, i / grid.cols);
+    fn local(&self, grid: &Grid, ci: f64, phi: &[f64], i: usize, c: usize, r: usize) -> f64 {
         let rhs = ci * grid.cell_m;
         let x = self.axis(phi, i, 1, c, grid.cols);
         let y = self.axis(phi, i, grid.cols, r, grid.rows);
         match (x, y) {
             (None, None) => f64::INFINITY,
-            (Some((k, t)), None) | (None, Some((k, t))) => t + rhs / k.sqrt(),
+            (Some((_, t, w)), None) | (None, Some((_, t, w))) => t + rhs * w,
             (Some(a), Some(b)) => {
-                let ((k1, t1), (k2, t2)) = if a.1 <= b.1 { (a, b) } else { (b, a) };
-                let one = t1 + rhs / k1.sqrt();
+                let ((k1, t1, w1), (k2, t2, _)) = if a.1 <= b.1 { (a, b) } else { (b, a) };
+                let one = t1 + rhs * w1;
                 if one <= t2 {
                     return one;
                 }
@@ -1551,7 +1648,7 @@ impl EikonalCosts {
             field.phi[i as usize] = f64::INFINITY;
         }
         field.touched.clear();
-        fmm.heap.clear();
+        fmm.heap.clear(self.grid.len());
         fmm.touched.clear();
         let before = fmm.marched;
         let src = [self.grid.center(cell)];
