@@ -11,11 +11,14 @@
 //!   `early_stop` marches each goal's field only until every agent's stencil is
 //!   frozen (no cache); `moving` adds the field cache while the crowd and the
 //!   formation drift by 2 cm per frame (sources change cell about every other frame);
-//!   `static` is the cache with nothing moving.
+//!   `static` is the cache with nothing moving; `coarse128` / `coarse64` run the
+//!   provider on the grid coarsened by 2 and 4 (`eikonal::coarsen`).
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use crowdtouch::crowd::assign::{CostMatrix, CostProvider};
-use crowdtouch::crowd::eikonal::{sample, EikonalCosts, EikonalOptions, Fmm, Grid, Order, Sources};
+use crowdtouch::crowd::eikonal::{
+    coarsen, sample, EikonalCosts, EikonalOptions, Fmm, Grid, Order, Sources,
+};
 use crowdtouch::geom::Vec2;
 
 /// splitmix64: small seeded PRNG so every run sees the same instances.
@@ -212,6 +215,53 @@ fn eikonal_costs(cr: &mut Criterion) {
             black_box(out.get(0, 0))
         })
     });
+
+    // The same scene on coarser grids (factor 2: 128², 8 cm; factor 4: 64², 16 cm).
+    for factor in [2usize, 4] {
+        let mut coarse_cost = Vec::new();
+        let coarse = coarsen(&grid, &cost, factor, &mut coarse_cost).expect("coarsen");
+        let n = coarse.cols();
+        let no_cache = EikonalCosts::new(
+            coarse,
+            &coarse_cost,
+            EikonalOptions {
+                cache_fields: 0,
+                ..EikonalOptions::default()
+            },
+        )
+        .expect("provider");
+        let mut k = 0;
+        g.bench_function(format!("100x100_coarse{n}/early_stop"), |b| {
+            b.iter(|| {
+                let (a, gl) = &fr[k % fr.len()];
+                k += 1;
+                no_cache.fill(black_box(a), black_box(gl), &mut out);
+                black_box(out.get(0, 0))
+            })
+        });
+        let cached =
+            EikonalCosts::new(coarse, &coarse_cost, EikonalOptions::default()).expect("provider");
+        let mut k = 0;
+        g.bench_function(format!("100x100_coarse{n}/moving"), |b| {
+            b.iter(|| {
+                let n = fr.len();
+                let f = if (k / n) % 2 == 0 {
+                    k % n
+                } else {
+                    n - 1 - k % n
+                };
+                k += 1;
+                let (a, gl) = &fr[f];
+                cached.fill(black_box(a), black_box(gl), &mut out);
+                black_box(out.get(0, 0))
+            })
+        });
+        let st = cached.stats();
+        eprintln!(
+            "coarse{n} moving: {} fills, {} fields marched, {} cache hits",
+            st.fills, st.fields, st.cache_hits
+        );
+    }
     g.finish();
 }
 

@@ -1309,6 +1309,52 @@ pub fn discomfort_into(
     Ok(())
 }
 
+/// A coarser copy of a cost grid: `factor × factor` cells become one.
+///
+/// A coarse cell is blocked if any of its fine cells is (so no path crosses a wall
+/// that the fine grid blocks; gaps narrower than `factor` cells close), else its cost
+/// is the mean of its fine cells. Fine cells past the last whole block count where
+/// they exist. Returns the coarse grid (same origin, `factor` times the cell size)
+/// and writes its costs into `out`.
+///
+/// # Errors
+/// [`EikonalError::InvalidInput`] for `factor == 0`; [`validate_cost`]'s errors.
+pub fn coarsen(
+    grid: &Grid,
+    cost: &[f64],
+    factor: usize,
+    out: &mut Vec<f64>,
+) -> Result<Grid, EikonalError> {
+    if factor == 0 {
+        return Err(EikonalError::InvalidInput {
+            what: "factor",
+            index: 0,
+        });
+    }
+    validate_cost(grid, cost)?;
+    let coarse = Grid::new(
+        grid.cols.div_ceil(factor),
+        grid.rows.div_ceil(factor),
+        grid.cell_m * factor as f64,
+        grid.origin,
+    )?;
+    out.clear();
+    out.resize(coarse.len(), 0.0);
+    let mut count = vec![0u32; coarse.len()];
+    for r in 0..grid.rows {
+        for c in 0..grid.cols {
+            let k = coarse.index(c / factor, r / factor);
+            out[k] += cost[grid.index(c, r)];
+            count[k] += 1;
+        }
+    }
+    for (v, &n) in out.iter_mut().zip(&count) {
+        // +inf stays +inf (any blocked fine cell blocks the coarse cell).
+        *v /= n as f64;
+    }
+    Ok(coarse)
+}
+
 // ---------------------------------------------------------------------------------
 // Assignment cost provider
 // ---------------------------------------------------------------------------------
@@ -1347,6 +1393,10 @@ impl Default for EikonalOptions {
         }
     }
 }
+
+/// How far, in cells, a source standing in a blocked cell (an agent pushed into an
+/// obstacle, or a coarse cell covering a wall) is moved to the nearest free cell.
+pub const SNAP_RADIUS_CELLS: usize = 2;
 
 /// Default number of cached fields: enough for 128 sources per fill.
 pub const DEFAULT_CACHE_FIELDS: usize = 128;
@@ -1527,7 +1577,9 @@ impl EikonalCosts {
     /// [`EikonalError::PointNotFinite`], [`EikonalError::SourceOutside`] or
     /// [`EikonalError::SourceBlocked`] for the first agent or goal (numbered agents
     /// first, then goals: goal `j` is point `agents.len() + j`) that is not finite,
-    /// lies outside the grid or in a blocked cell. `out` is unspecified then.
+    /// lies outside the grid, or in a blocked cell with no free cell within
+    /// [`SNAP_RADIUS_CELLS`] (a source in a blocked cell marches from the nearest
+    /// free one). `out` is unspecified then.
     ///
     /// # Complexity
     /// At most one march per distinct source cell, `O(N log N)` each, stopped early.
@@ -1546,7 +1598,7 @@ impl EikonalCosts {
                 .grid
                 .cell_of(p)
                 .ok_or(EikonalError::SourceOutside { index: point })?;
-            if self.cost[cell] == f64::INFINITY {
+            if self.source_cell(cell, p).is_none() {
                 return Err(EikonalError::SourceBlocked { index: point });
             }
         }
@@ -1579,6 +1631,7 @@ impl EikonalCosts {
         }
         for (k, &s) in sources.iter().enumerate() {
             let cell = self.grid.cell_of(s).expect("validated above");
+            let cell = self.source_cell(cell, s).expect("validated above");
             let field = self.field(inner, cell);
             for (m, &p) in readers.iter().enumerate() {
                 let v = sample(&self.grid, &field.phi, p);
@@ -1590,6 +1643,32 @@ impl EikonalCosts {
             }
         }
         Ok(())
+    }
+
+    /// The cell a source at `p` (in `cell`) marches from: `cell` if free, else the
+    /// free cell within [`SNAP_RADIUS_CELLS`] whose centre is nearest `p` (first in
+    /// index order on a tie), else `None`.
+    fn source_cell(&self, cell: usize, p: Vec2) -> Option<usize> {
+        if self.cost[cell] != f64::INFINITY {
+            return Some(cell);
+        }
+        let g = &self.grid;
+        let (c, r) = (cell % g.cols, cell / g.cols);
+        let k = SNAP_RADIUS_CELLS;
+        let mut best: Option<(f64, usize)> = None;
+        for rr in r.saturating_sub(k)..=(r + k).min(g.rows - 1) {
+            for cc in c.saturating_sub(k)..=(c + k).min(g.cols - 1) {
+                let i = g.index(cc, rr);
+                if self.cost[i] == f64::INFINITY {
+                    continue;
+                }
+                let d = (g.center(i) - p).norm_squared();
+                if best.is_none_or(|(bd, _)| d < bd) {
+                    best = Some((d, i));
+                }
+            }
+        }
+        best.map(|(_, i)| i)
     }
 
     /// The field from the centre of `cell`, covering the marked targets: from the
@@ -2289,6 +2368,8 @@ mod tests {
     #[test]
     fn provider_reports_bad_points_and_fills_infinity() {
         let (grid, cost) = scene();
+        let mut cost = cost;
+        block_rect(&grid, &mut cost, 0.0, 6.0, 1.0, 7.0);
         let prov = EikonalCosts::new(grid, &cost, EikonalOptions::default()).unwrap();
         let mut out = CostMatrix::new(0, 0);
         let agents = [Vec2::new(0.0, 3.0), Vec2::new(f64::NAN, 3.0)];
@@ -2304,11 +2385,26 @@ mod tests {
             prov.try_fill(&outside, &goals, &mut out),
             Err(EikonalError::SourceOutside { index: 1 })
         );
-        let wall = [Vec2::new(0.0, 3.0), Vec2::new(3.2, 3.0)];
+        let deep = [Vec2::new(0.0, 3.0), Vec2::new(0.5, 6.5)];
         assert_eq!(
-            prov.try_fill(&wall, &goals, &mut out),
+            prov.try_fill(&deep, &goals, &mut out),
             Err(EikonalError::SourceBlocked { index: 1 })
         );
+        // Inside a wall but within two cells of free space: marches from the nearest
+        // free cell, as that cell's own source would.
+        let wall = [
+            grid.center(grid.cell_of(Vec2::new(3.12, 3.0)).unwrap()),
+            Vec2::new(0.0, 3.0),
+        ];
+        prov.try_fill(&goals, &wall, &mut out).unwrap();
+        let near = [
+            grid.center(grid.cell_of(Vec2::new(2.95, 3.0)).unwrap()),
+            Vec2::new(0.0, 3.0),
+        ];
+        let mut want = CostMatrix::new(0, 0);
+        prov.try_fill(&goals, &near, &mut want).unwrap();
+        assert!(out.as_slice().iter().all(|v| v.is_finite()));
+        assert_eq!(out.get(0, 0), want.get(0, 0));
         let ok = [Vec2::new(0.0, 3.0), Vec2::new(1.0, 3.0)];
         prov.fill(&ok, &goals, &mut out);
         assert_eq!(prov.last_error(), None);
@@ -2340,6 +2436,24 @@ mod tests {
         let mut bad = cost.clone();
         bad[3] = f64::NAN;
         assert_eq!(prov.set_cost(&bad), Err(EikonalError::CostNan { cell: 3 }));
+    }
+
+    #[test]
+    fn coarsen_blocks_conservatively_and_averages() {
+        let grid = Grid::new(5, 4, 0.1, Vec2::new(1.0, 1.0)).unwrap();
+        let mut cost: Vec<f64> = (0..20).map(|i| 1.0 + i as f64).collect();
+        cost[grid.index(3, 0)] = f64::INFINITY;
+        let mut out = Vec::new();
+        let coarse = coarsen(&grid, &cost, 2, &mut out).unwrap();
+        assert_eq!((coarse.cols(), coarse.rows()), (3, 2));
+        assert!((coarse.cell_m() - 0.2).abs() < 1e-15);
+        assert_eq!(coarse.origin(), grid.origin());
+        // (0, 0) covers fine cells 0, 1, 5, 6.
+        assert!((out[0] - (1.0 + 2.0 + 6.0 + 7.0) / 4.0).abs() < 1e-12);
+        assert_eq!(out[1], f64::INFINITY);
+        // The last column covers one fine column.
+        assert!((out[2] - (5.0 + 10.0) / 2.0).abs() < 1e-12);
+        assert!(coarsen(&grid, &cost, 0, &mut out).is_err());
     }
 
     proptest! {
