@@ -856,6 +856,54 @@ impl Fmm {
     }
 }
 
+/// Relative slack of the neighbour bound of [`sanity_check`] (rounding level).
+pub const SANITY_REL_SLACK: f64 = 1e-9;
+
+/// Checks the invariants of a field `phi` solved on `grid` with `cost`: one entry
+/// per cell, no NaN, no negative value, `+inf` on every blocked cell, and for every
+/// pair of 4-adjacent finite cells `|Φ_i − Φ_j| ≤ h · C_max` with `C_max` the largest
+/// finite cost, up to [`SANITY_REL_SLACK`]. (The local bound `h · max(C_i, C_j)`
+/// holds for marched cells but not inside a point source's initial band, whose
+/// line integrals cross several cells: measured up to 2.1 times it on random costs.)
+///
+/// # Errors
+/// `Err(cell)` with the index of the first cell that breaks an invariant
+/// (`usize::MAX` for a size mismatch).
+pub fn sanity_check(grid: &Grid, cost: &[f64], phi: &[f64]) -> Result<(), usize> {
+    if cost.len() != grid.len() || phi.len() != grid.len() {
+        return Err(usize::MAX);
+    }
+    let h = grid.cell_m;
+    let cmax = cost
+        .iter()
+        .copied()
+        .filter(|c| c.is_finite())
+        .fold(0.0, f64::max);
+    let bound = h * cmax * (1.0 + SANITY_REL_SLACK);
+    for i in 0..grid.len() {
+        let v = phi[i];
+        if v.is_nan() || v < 0.0 || (cost[i] == f64::INFINITY && v != f64::INFINITY) {
+            return Err(i);
+        }
+        if !v.is_finite() {
+            continue;
+        }
+        let (c, r) = (i % grid.cols, i / grid.cols);
+        for j in [
+            (c + 1 < grid.cols).then(|| i + 1),
+            (r + 1 < grid.rows).then(|| i + grid.cols),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            if phi[j].is_finite() && (phi[j] - v).abs() > bound {
+                return Err(i);
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Checks the sources of a solve against the grid and the cost.
 fn validate_sources(grid: &Grid, cost: &[f64], sources: Sources<'_>) -> Result<(), EikonalError> {
     match sources {
@@ -1005,6 +1053,18 @@ fn walk_segment(grid: &Grid, a: Vec2, b: Vec2, mut f: impl FnMut(usize, f64) -> 
 ///
 /// # Panics
 /// If `phi` does not have one entry per cell.
+///
+/// # Example
+/// ```
+/// use crowdtouch::crowd::eikonal::{sample, Grid};
+/// use crowdtouch::geom::Vec2;
+/// let grid = Grid::new(2, 2, 1.0, Vec2::zeros()).unwrap();
+/// // Centres at (0.5, 0.5), (1.5, 0.5), (0.5, 1.5), (1.5, 1.5).
+/// let phi = [0.0, 1.0, 2.0, f64::INFINITY];
+/// assert!((sample(&grid, &phi, Vec2::new(1.0, 0.5)) - 0.5).abs() < 1e-12);
+/// // The infinite corner is left out: weights 1/4 each on the other three.
+/// assert!((sample(&grid, &phi, Vec2::new(1.0, 1.0)) - 1.0).abs() < 1e-12);
+/// ```
 pub fn sample(grid: &Grid, phi: &[f64], p: Vec2) -> f64 {
     assert_eq!(phi.len(), grid.len(), "field size");
     let (cells, tx, ty) = grid.stencil_cells(p);
@@ -1206,6 +1266,19 @@ pub struct CostInputs<'a> {
 /// [`EikonalError::InvalidInput`] for a weight that is negative or not finite, for
 /// `α f + β ≤ 0` (the cost must be positive), for a speed that is not finite and
 /// positive, or for a speed factor or discomfort that is negative or not finite.
+///
+/// # Example
+/// ```
+/// use crowdtouch::crowd::eikonal::{cost_field_into, CostInputs, CostWeights, Grid};
+/// use crowdtouch::geom::Vec2;
+/// let grid = Grid::new(2, 1, 0.5, Vec2::zeros()).unwrap();
+/// let mut c = [0.0; 2];
+/// let inputs = CostInputs { blocked: &[false, false], speed_factor: &[1.0, 0.33], discomfort: None };
+/// cost_field_into(&grid, CostWeights::default(), 1.4, inputs, &mut c).unwrap();
+/// // α = β = 1: (1.4 + 1) / 1.4 per metre in the open, divided by 0.33 when crawling.
+/// assert!((c[0] - 2.4 / 1.4).abs() < 1e-12);
+/// assert!((c[1] - c[0] / 0.33).abs() < 1e-12);
+/// ```
 pub fn cost_field_into(
     grid: &Grid,
     weights: CostWeights,
@@ -1854,6 +1927,7 @@ mod tests {
         Fmm::with_order(order)
             .solve_into(grid, cost, Sources::Points(src), &mut phi)
             .unwrap();
+        assert_eq!(sanity_check(grid, cost, &phi), Ok(()));
         phi
     }
 
@@ -2520,8 +2594,8 @@ mod tests {
 
         /// On random blocked cells and costs: no NaN; blocked cells infinite; Φ is
         /// bounded below by the cheapest straight line and above by the cost along
-        /// any straight segment that is free (within the stencil error); Φ is
-        /// consistent between frozen neighbours (|ΔΦ| ≤ h · max C).
+        /// any straight segment that is free (within the stencil error); the field
+        /// passes [`sanity_check`].
         #[test]
         fn prop_field_bounds(
             seed in any::<u64>(),
@@ -2541,6 +2615,7 @@ mod tests {
             let cmin = cost.iter().cloned().fold(f64::INFINITY, f64::min);
             let cmax = cost.iter().cloned().filter(|c| c.is_finite()).fold(0.0, f64::max);
             let h = grid.cell_m();
+            prop_assert_eq!(sanity_check(&grid, &cost, &phi), Ok(()));
             for (i, &v) in phi.iter().enumerate() {
                 prop_assert!(!v.is_nan());
                 if cost[i] == f64::INFINITY {
@@ -2551,10 +2626,7 @@ mod tests {
                     prop_assert!(v >= cmin * d - 0.3 * h * cmax, "lower bound at {}: {} < {}", i, v, cmin * d);
                     let line = segment_cost(&grid, &cost, s, grid.center(i));
                     prop_assert!(v <= line + 2.0 * h * cmax, "upper bound at {}: {} > {}", i, v, line);
-                    let c = i % n;
-                    if c + 1 < n && phi[i + 1].is_finite() {
-                        prop_assert!((phi[i + 1] - v).abs() <= h * cmax * 1.0001);
-                    }
+
                 }
             }
         }
