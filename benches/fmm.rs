@@ -46,12 +46,16 @@ fn scene(n: usize, obstacles: bool) -> (Grid, Vec<f64>) {
     let grid = Grid::new(n, n, CELL_M, Vec2::zeros()).expect("grid");
     let mut cost = vec![1.0; grid.len()];
     if obstacles {
-        let side = n as f64 * CELL_M;
+        // Cells whose centres lie in [x0, x1] × [y0, y1] (fractions of the side).
         let mut block = |x0: f64, y0: f64, x1: f64, y1: f64, v: f64| {
-            for (i, c) in cost.iter_mut().enumerate() {
-                let p = grid.center(i);
-                if p.x >= x0 * side && p.x <= x1 * side && p.y >= y0 * side && p.y <= y1 * side {
-                    *c = v;
+            let range = |a: f64, b: f64| {
+                let lo = (a * n as f64 - 0.5).ceil().max(0.0) as usize;
+                let hi = ((b * n as f64 - 0.5).floor() as usize).min(n - 1);
+                lo..=hi
+            };
+            for r in range(y0, y1) {
+                for c in range(x0, x1) {
+                    cost[grid.index(c, r)] = v;
                 }
             }
         };
