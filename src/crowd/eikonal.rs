@@ -136,14 +136,16 @@ pub const DEFAULT_DENSITY_DISCOMFORT_M2: f64 = 0.25;
 /// Largest number of cells a grid may have (indices are `u32`).
 pub const MAX_CELLS: usize = u32::MAX as usize;
 
-/// Cell state: not reached.
-const FAR: u8 = 0;
-/// Cell state: in the heap with a tentative value.
-const TRIAL: u8 = 1;
-/// Cell state: frozen, value final.
-const KNOWN: u8 = 2;
-/// Cell state: blocked (infinite cost), never marched.
-const BLOCKED: u8 = 3;
+// Cell states during a march live in `Φ` itself: `+inf` not reached (or blocked:
+// `cost = +inf`, never updated), positive finite a trial value in the heap, and a set
+// sign bit a frozen value stored as `-Φ` (`-0.0` at a source). The sign is cleared
+// when the march ends. One array fewer to load per neighbour.
+
+/// Whether a cell's stored value is frozen.
+#[inline]
+fn frozen(v: f64) -> bool {
+    v.is_sign_negative()
+}
 
 // ---------------------------------------------------------------------------------
 // Errors
@@ -569,7 +571,6 @@ impl Heap {
 #[derive(Clone, Debug, Default)]
 pub struct Fmm {
     order: Order,
-    state: Vec<u8>,
     heap: Heap,
     touched: Vec<u32>,
     marched: u64,
@@ -624,45 +625,34 @@ impl Fmm {
         validate_cost(grid, cost)?;
         check_len("out", grid, out.len())?;
         validate_sources(grid, cost, sources)?;
-        self.reset_full(grid, cost);
+        self.reset(grid.len());
         out.fill(f64::INFINITY);
         self.march(grid, cost, sources, out, None);
-        self.restore();
+        self.finish(out);
         Ok(())
     }
 
-    /// Sets every cell's state from the cost (blocked or far) and clears the heap.
-    fn reset_full(&mut self, grid: &Grid, cost: &[f64]) {
-        self.state.clear();
-        self.state.extend(
-            cost.iter()
-                .map(|&c| if c == f64::INFINITY { BLOCKED } else { FAR }),
-        );
-        self.heap.clear(grid.len());
+    /// Clears the heap and the touched list for a grid of `n` cells.
+    fn reset(&mut self, n: usize) {
+        self.heap.clear(n);
         self.touched.clear();
-        debug_assert_eq!(self.state.len(), grid.len());
     }
 
-    /// Returns the touched cells to their base state (far).
-    fn restore(&mut self) {
+    /// Ends a march: frozen values lose their sign bit, trial values (left by an
+    /// early stop) become `+inf`; the heap and the touched list are cleared.
+    fn finish(&mut self, phi: &mut [f64]) {
         for &i in &self.touched {
-            self.state[i as usize] = FAR;
+            let v = &mut phi[i as usize];
+            *v = if frozen(*v) { -*v } else { f64::INFINITY };
         }
         self.touched.clear();
-        let n = self.state.len();
+        let n = phi.len();
         self.heap.clear(n);
     }
 
-    /// Marks cell `i` as touched the first time it leaves the far state.
-    #[inline]
-    fn touch(&mut self, i: usize) {
-        if self.state[i] == FAR {
-            self.touched.push(i as u32);
-        }
-    }
-
-    /// The march itself. Sources are validated; `phi` is `+inf` wherever the state
-    /// is far or blocked. Returns whether the march ran to exhaustion.
+    /// The march itself. Sources are validated; `phi` is `+inf` everywhere and the
+    /// heap and touched list are empty. Leaves frozen values negated (see
+    /// [`Fmm::finish`]). Returns whether the march ran to exhaustion.
     fn march(
         &mut self,
         grid: &Grid,
@@ -680,9 +670,10 @@ impl Fmm {
         match sources {
             Sources::Cells(cells) => {
                 for &i in cells {
-                    self.touch(i);
-                    self.state[i] = KNOWN;
-                    phi[i] = 0.0;
+                    if phi[i] == f64::INFINITY {
+                        self.touched.push(i as u32);
+                    }
+                    phi[i] = -0.0;
                 }
             }
             Sources::Points(points) => {
@@ -695,7 +686,7 @@ impl Fmm {
                     for rr in (r0 - reach).max(0)..=(r0 + reach).min(grid.rows as isize - 1) {
                         for cc in (c0 - reach).max(0)..=(c0 + reach).min(grid.cols as isize - 1) {
                             let i = grid.index(cc as usize, rr as usize);
-                            if self.state[i] == BLOCKED {
+                            if cost[i] == f64::INFINITY {
                                 continue;
                             }
                             let centre = grid.center(i);
@@ -705,10 +696,16 @@ impl Fmm {
                                 continue;
                             }
                             let v = segment_cost(grid, cost, s, centre);
-                            if v < phi[i] {
-                                self.touch(i);
-                                self.state[i] = KNOWN;
-                                phi[i] = v;
+                            let cur = phi[i];
+                            if v == f64::INFINITY {
+                                // The straight segment crosses a blocked cell: march it.
+                                continue;
+                            }
+                            if cur == f64::INFINITY {
+                                self.touched.push(i as u32);
+                                phi[i] = -v;
+                            } else if v < -cur {
+                                phi[i] = -v;
                             }
                         }
                     }
@@ -734,7 +731,7 @@ impl Fmm {
         let mut frozen = band_end - band_start;
         while let Some((_, i)) = self.heap.pop() {
             let i = i as usize;
-            self.state[i] = KNOWN;
+            phi[i] = -phi[i];
             frozen += 1;
             if is_target(&targets, i) {
                 remaining -= 1;
@@ -770,14 +767,16 @@ impl Fmm {
     /// Recomputes the trial value of cell `n` = (`c`, `r`).
     #[inline]
     fn update(&mut self, grid: &Grid, cost: &[f64], phi: &mut [f64], n: usize, c: usize, r: usize) {
-        let s = self.state[n];
-        if s == KNOWN || s == BLOCKED {
+        let cur = phi[n];
+        let cn = cost[n];
+        if frozen(cur) || cn == f64::INFINITY {
             return;
         }
-        let v = self.local(grid, cost[n], phi, n, c, r);
-        if v < phi[n] {
-            self.touch(n);
-            self.state[n] = TRIAL;
+        let v = self.local(grid, cn, phi, n, c, r);
+        if v < cur {
+            if cur == f64::INFINITY {
+                self.touched.push(n as u32);
+            }
             phi[n] = v;
             self.heap.push_or_decrease(n as u32, v);
         }
@@ -795,19 +794,19 @@ impl Fmm {
         pos: usize,
         len: usize,
     ) -> Option<(f64, f64, f64)> {
-        let known = |j: usize| self.state[j] == KNOWN;
+        let known = |j: usize| frozen(phi[j]);
         let lo = pos > 0 && known(i - stride);
         let hi = pos + 1 < len && known(i + stride);
         let use_lo = match (lo, hi) {
             (false, false) => return None,
             (true, false) => true,
             (false, true) => false,
-            (true, true) => phi[i - stride] <= phi[i + stride],
+            (true, true) => -phi[i - stride] <= -phi[i + stride],
         };
         let a1 = if use_lo {
-            phi[i - stride]
+            -phi[i - stride]
         } else {
-            phi[i + stride]
+            -phi[i + stride]
         };
         if self.order == Order::Second {
             let far = if use_lo {
@@ -816,8 +815,8 @@ impl Fmm {
                 (pos + 2 < len).then(|| i + 2 * stride)
             };
             if let Some(j) = far {
-                if known(j) && phi[j] <= a1 {
-                    return Some((2.25, (4.0 * a1 - phi[j]) * (1.0 / 3.0), 2.0 / 3.0));
+                if known(j) && -phi[j] <= a1 {
+                    return Some((2.25, (4.0 * a1 + phi[j]) * (1.0 / 3.0), 2.0 / 3.0));
                 }
             }
         }
@@ -1626,7 +1625,7 @@ impl EikonalCosts {
     ) -> Result<EikonalCosts, EikonalError> {
         validate_cost(&grid, cost)?;
         let mut fmm = Fmm::with_order(options.order);
-        fmm.reset_full(&grid, cost);
+        fmm.reset(grid.len());
         Ok(EikonalCosts {
             grid,
             cost: cost.to_vec(),
@@ -1657,7 +1656,6 @@ impl EikonalCosts {
         }
         self.cost.copy_from_slice(cost);
         let inner = self.inner.get_mut();
-        inner.fmm.reset_full(&self.grid, &self.cost);
         for f in &mut inner.fields {
             f.valid = false;
         }
@@ -1854,8 +1852,7 @@ impl EikonalCosts {
             field.phi[i as usize] = f64::INFINITY;
         }
         field.touched.clear();
-        fmm.heap.clear(self.grid.len());
-        fmm.touched.clear();
+        fmm.reset(self.grid.len());
         let before = fmm.marched;
         let src = [self.grid.center(cell)];
         let t = Targets {
@@ -1870,13 +1867,8 @@ impl EikonalCosts {
             &mut field.phi,
             Some(t),
         );
-        for &i in &fmm.touched {
-            if fmm.state[i as usize] != KNOWN {
-                field.phi[i as usize] = f64::INFINITY;
-            }
-        }
         field.touched.extend_from_slice(&fmm.touched);
-        fmm.restore();
+        fmm.finish(&mut field.phi);
         stats.fields += 1;
         stats.cells_marched += fmm.marched - before;
         field.cell = cell as u32;
