@@ -59,6 +59,10 @@
 //! | 100 × 100 costs on the grid coarsened to 128² (8 cm): cold / drifting | 179 ms / 69 ms |
 //! | 100 × 100 costs on the grid coarsened to 64² (16 cm): cold / drifting | 43 ms / 6.9 ms |
 //!
+//! The table predates keeping the march state in the sign of `Φ` (one array load
+//! fewer per neighbour, same numbers); with the machine at load 5–6 afterwards the
+//! change could not be timed reliably.
+//!
 //! Peers measured on this kind of machine for one field: the Rust `eikonal` crate
 //! 9.2 ms at 256² and 221 ms at 1024², scikit-fmm 13.4 ms / 303 ms. The profile
 //! (perf) is the heap and the cache misses of the front's neighbours (cost and
