@@ -8,6 +8,7 @@ pub mod assign;
 pub mod assigner;
 pub mod direct;
 pub mod field;
+pub mod eikonal;
 pub mod mesh;
 pub mod mvc;
 pub mod scene;

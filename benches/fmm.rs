@@ -1,0 +1,305 @@
+//! Fast marching and environment-aware assignment costs (crowd assignment stage).
+//!
+//! Run: `cargo bench --bench fmm -- --warm-up-time 1 --measurement-time 3`.
+//! Inputs are generated deterministically (seeded) outside the measured closures.
+//!
+//! * `fmm_field/{uniform,obstacles}/{256,1024}`: one field from one point source,
+//!   second order (plus `first_order` at 256²).
+//! * `eikonal_costs/*`: the 100 agents × 100 goals cost matrix on a 256² grid
+//!   (10.24 m square, 4 cm cells) with walls and a slow patch between the crowd and
+//!   its formation: `per_goal_full` is the naive one full field per goal;
+//!   `early_stop` marches each goal's field only until every agent's stencil is
+//!   frozen (no cache); `moving` adds the field cache while the crowd and the
+//!   formation drift by 2 cm per frame (sources change cell about every other frame);
+//!   `static` is the cache with nothing moving; `coarse128` / `coarse64` run the
+//!   provider on the grid coarsened by 2 and 4 (`eikonal::coarsen`).
+
+use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Solver};
+use crowdtouch::crowd::eikonal::{
+    coarsen, sample, EikonalCosts, EikonalOptions, Fmm, Grid, Order, Sources,
+};
+use crowdtouch::geom::Vec2;
+
+/// splitmix64: small seeded PRNG so every run sees the same instances.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+}
+
+/// Cell size of every bench grid: 4 cm.
+const CELL_M: f64 = 0.04;
+
+/// A square `n²` grid at [`CELL_M`], uniform unit cost, or with walls (three long
+/// walls with gaps and 40 random blocks, ~12 % blocked) and a slow patch.
+fn scene(n: usize, obstacles: bool) -> (Grid, Vec<f64>) {
+    let grid = Grid::new(n, n, CELL_M, Vec2::zeros()).expect("grid");
+    let mut cost = vec![1.0; grid.len()];
+    if obstacles {
+        // Cells whose centres lie in [x0, x1] × [y0, y1] (fractions of the side).
+        let mut block = |x0: f64, y0: f64, x1: f64, y1: f64, v: f64| {
+            let range = |a: f64, b: f64| {
+                let lo = (a * n as f64 - 0.5).ceil().max(0.0) as usize;
+                let hi = ((b * n as f64 - 0.5).floor() as usize).min(n - 1);
+                lo..=hi
+            };
+            for r in range(y0, y1) {
+                for c in range(x0, x1) {
+                    cost[grid.index(c, r)] = v;
+                }
+            }
+        };
+        block(0.40, 0.00, 0.43, 0.45, f64::INFINITY);
+        block(0.40, 0.55, 0.43, 1.00, f64::INFINITY);
+        block(0.55, 0.20, 0.58, 0.80, f64::INFINITY);
+        block(0.45, 0.85, 0.55, 0.95, 1.0 / 0.33);
+        let mut rng = SplitMix(0xF33D ^ n as u64);
+        for _ in 0..40 {
+            let (x, y) = (0.05 + 0.9 * rng.unit(), 0.05 + 0.9 * rng.unit());
+            if (0.05..0.32).contains(&x) || (0.66..0.97).contains(&x) {
+                continue; // keep the crowd and formation areas open
+            }
+            block(x, y, x + 0.04, y + 0.04, f64::INFINITY);
+        }
+    }
+    (grid, cost)
+}
+
+fn fmm_field(cr: &mut Criterion) {
+    let mut g = cr.benchmark_group("fmm_field");
+    g.sample_size(10);
+    for (name, obstacles) in [("uniform", false), ("obstacles", true)] {
+        for n in [256usize, 1024] {
+            let (grid, cost) = scene(n, obstacles);
+            let src = [Vec2::new(0.2 * n as f64 * CELL_M, 0.3 * n as f64 * CELL_M)];
+            let mut phi = vec![0.0; grid.len()];
+            let orders: &[(Order, &str)] = if n == 256 {
+                &[(Order::Second, ""), (Order::First, "/first_order")]
+            } else {
+                &[(Order::Second, "")]
+            };
+            for &(order, suffix) in orders {
+                let mut fmm = Fmm::with_order(order);
+                fmm.solve_into(&grid, &cost, Sources::Points(&src), &mut phi)
+                    .expect("solve");
+                g.bench_function(format!("{name}/{n}{suffix}"), |b| {
+                    b.iter(|| {
+                        fmm.solve_into(
+                            black_box(&grid),
+                            black_box(&cost),
+                            Sources::Points(black_box(&src)),
+                            &mut phi,
+                        )
+                        .expect("solve");
+                        black_box(phi[phi.len() / 2])
+                    })
+                });
+            }
+        }
+    }
+    g.finish();
+}
+
+/// Frames of agent and goal positions: a crowd of 100 on the left, a formation of
+/// 100 (10×10 lattice) on the right, both drifting 2 cm per frame in y.
+fn frames(grid: &Grid, frames: usize) -> Vec<(Vec<Vec2>, Vec<Vec2>)> {
+    let side = grid.cols() as f64 * CELL_M;
+    let mut rng = SplitMix(0xA6E7);
+    let agents: Vec<Vec2> = (0..100)
+        .map(|_| {
+            Vec2::new(
+                (0.06 + 0.25 * rng.unit()) * side,
+                (0.1 + 0.6 * rng.unit()) * side,
+            )
+        })
+        .collect();
+    let goals: Vec<Vec2> = (0..100)
+        .map(|k| {
+            Vec2::new(
+                (0.70 + 0.025 * (k % 10) as f64) * side,
+                (0.15 + 0.04 * (k / 10) as f64) * side,
+            )
+        })
+        .collect();
+    (0..frames)
+        .map(|f| {
+            let d = Vec2::new(0.0, 0.02 * f as f64);
+            (
+                agents.iter().map(|&p| p + d).collect(),
+                goals.iter().map(|&p| p + d).collect(),
+            )
+        })
+        .collect()
+}
+
+fn eikonal_costs(cr: &mut Criterion) {
+    let mut g = cr.benchmark_group("eikonal_costs");
+    g.sample_size(10);
+    let (grid, cost) = scene(256, true);
+    let fr = frames(&grid, 32);
+    let mut out = CostMatrix::new(100, 100);
+
+    // Naive: one full field per goal.
+    let mut fmm = Fmm::new();
+    let mut phi = vec![0.0; grid.len()];
+    let (agents, goals) = &fr[0];
+    g.bench_function("100x100_256/per_goal_full", |b| {
+        b.iter(|| {
+            for (j, &goal) in black_box(goals).iter().enumerate() {
+                let c = grid.center(grid.cell_of(goal).expect("on grid"));
+                fmm.solve_into(&grid, &cost, Sources::Points(&[c]), &mut phi)
+                    .expect("solve");
+                for (i, &a) in agents.iter().enumerate() {
+                    out.set(i, j, sample(&grid, &phi, a));
+                }
+            }
+            black_box(out.get(0, 0))
+        })
+    });
+
+    let no_cache = EikonalCosts::new(
+        grid,
+        &cost,
+        EikonalOptions {
+            cache_fields: 0,
+            ..EikonalOptions::default()
+        },
+    )
+    .expect("provider");
+    let mut k = 0;
+    g.bench_function("100x100_256/early_stop", |b| {
+        b.iter(|| {
+            let (a, gl) = &fr[k % fr.len()];
+            k += 1;
+            no_cache.fill(black_box(a), black_box(gl), &mut out);
+            black_box(out.get(0, 0))
+        })
+    });
+
+    let cached = EikonalCosts::new(grid, &cost, EikonalOptions::default()).expect("provider");
+    let mut k = 0;
+    g.bench_function("100x100_256/moving", |b| {
+        b.iter(|| {
+            // Forth and back, so the drift never jumps.
+            let n = fr.len();
+            let f = if (k / n) % 2 == 0 {
+                k % n
+            } else {
+                n - 1 - k % n
+            };
+            k += 1;
+            let (a, gl) = &fr[f];
+            cached.fill(black_box(a), black_box(gl), &mut out);
+            black_box(out.get(0, 0))
+        })
+    });
+    let st = cached.stats();
+    eprintln!(
+        "moving: {} fills, {} fields marched, {} cache hits, {} cells per field",
+        st.fills,
+        st.fields,
+        st.cache_hits,
+        st.cells_marched / st.fields.max(1)
+    );
+
+    let (a, gl) = &fr[0];
+    g.bench_function("100x100_256/static", |b| {
+        b.iter(|| {
+            cached.fill(black_box(a), black_box(gl), &mut out);
+            black_box(out.get(0, 0))
+        })
+    });
+
+    // The same scene on coarser grids (factor 2: 128², 8 cm; factor 4: 64², 16 cm).
+    let mut fine = CostMatrix::new(0, 0);
+    cached.fill(a, gl, &mut fine);
+    let mut solver = Solver::new();
+    let best = {
+        solver.solve(&fine).expect("feasible");
+        solver.total_cost(&fine)
+    };
+    for factor in [2usize, 4] {
+        let mut coarse_cost = Vec::new();
+        let coarse = coarsen(&grid, &cost, factor, &mut coarse_cost).expect("coarsen");
+        let n = coarse.cols();
+        // Accuracy against the 256² costs (not timed): entry error and the fine cost
+        // of the assignment solved on the coarse costs.
+        let mut m = CostMatrix::new(0, 0);
+        EikonalCosts::new(coarse, &coarse_cost, EikonalOptions::default())
+            .expect("provider")
+            .fill(a, gl, &mut m);
+        let mut rel: Vec<f64> = m
+            .as_slice()
+            .iter()
+            .zip(fine.as_slice())
+            .map(|(c, f)| (c - f).abs() / f)
+            .collect();
+        rel.sort_by(f64::total_cmp);
+        let assignment = solver.solve(&m).expect("feasible").to_vec();
+        let got: f64 = assignment
+            .iter()
+            .enumerate()
+            .map(|(i, &j)| fine.get(i, j))
+            .sum();
+        eprintln!(
+            "coarse{n}: entry error vs 256² median {:.2} %, max {:.2} %; its assignment costs {:.3} % more than the 256² optimum",
+            100.0 * rel[rel.len() / 2],
+            100.0 * rel[rel.len() - 1],
+            100.0 * (got / best - 1.0)
+        );
+        let no_cache = EikonalCosts::new(
+            coarse,
+            &coarse_cost,
+            EikonalOptions {
+                cache_fields: 0,
+                ..EikonalOptions::default()
+            },
+        )
+        .expect("provider");
+        let mut k = 0;
+        g.bench_function(format!("100x100_coarse{n}/early_stop"), |b| {
+            b.iter(|| {
+                let (a, gl) = &fr[k % fr.len()];
+                k += 1;
+                no_cache.fill(black_box(a), black_box(gl), &mut out);
+                black_box(out.get(0, 0))
+            })
+        });
+        let cached =
+            EikonalCosts::new(coarse, &coarse_cost, EikonalOptions::default()).expect("provider");
+        let mut k = 0;
+        g.bench_function(format!("100x100_coarse{n}/moving"), |b| {
+            b.iter(|| {
+                let n = fr.len();
+                let f = if (k / n) % 2 == 0 {
+                    k % n
+                } else {
+                    n - 1 - k % n
+                };
+                k += 1;
+                let (a, gl) = &fr[f];
+                cached.fill(black_box(a), black_box(gl), &mut out);
+                black_box(out.get(0, 0))
+            })
+        });
+        let st = cached.stats();
+        eprintln!(
+            "coarse{n} moving: {} fills, {} fields marched, {} cache hits",
+            st.fills, st.fields, st.cache_hits
+        );
+    }
+    g.finish();
+}
+
+criterion_group!(benches, fmm_field, eikonal_costs);
+criterion_main!(benches);
