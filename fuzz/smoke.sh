@@ -16,7 +16,7 @@ for src in fuzz_targets/*.rs; do
     [ "$name" = common ] && continue
     mkdir -p "$work/$name" "$work/artifacts/$name"
     cp -r "corpus/$name/." "$work/$name/" 2>/dev/null || true
-    if out="$(./target/debug/"$name" -runs="$runs" -max_len=4096 -seed=1 \
+    if out="$(./target/debug/"$name" -runs="$runs" -max_len=16384 -seed=1 \
             -artifact_prefix="$work/artifacts/$name/" "$work/$name" 2>&1)"; then
         printf 'fuzz %-26s ok   (%s)\n' "$name" "$(grep -E '^Done' <<<"$out" | head -1)"
     else
