@@ -76,17 +76,22 @@ pub struct RenderArgs {
     pub out: PathBuf,
     /// Goal of the field, `X,Y` in metres (default: 1 m in from the east edge at
     /// mid-height, or the nearest free cell to it).
-    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+    #[arg(long, value_name = "X,Y", value_parser = parse_point, allow_hyphen_values = true)]
     pub goal: Option<[f64; 2]>,
     /// Number of agents, on a lattice in the config's crowd start rectangle
     /// (blocked cells skipped).
-    #[arg(long, default_value_t = DEFAULT_AGENTS)]
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_AGENTS)]
     pub agents: usize,
     /// Scene time (s): where moving obstacles and patches are.
-    #[arg(long = "t", default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        long = "t",
+        value_name = "S",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub t_s: f64,
     /// Cell size of the field grid (m).
-    #[arg(long, default_value_t = DEFAULT_CELL_M)]
+    #[arg(long, value_name = "M", default_value_t = DEFAULT_CELL_M)]
     pub cell_m: f64,
 }
 
