@@ -23,6 +23,7 @@ mod devices;
 mod hid;
 mod record;
 mod scene;
+mod scene_render;
 mod svg;
 mod watch;
 
@@ -100,7 +101,8 @@ enum Cmd {
     #[command(subcommand)]
     Hid(hid::HidCmd),
     /// Scene tools: `scene check FILE` validates a scene (obstacles, patches, moving
-    /// things, checkpoints).
+    /// things, checkpoints); `scene render FILE -o OUT.svg` draws it with the
+    /// travel-time field of a goal and the agents' routes.
     #[command(subcommand)]
     Scene(scene::SceneCmd),
     /// Regenerate the shipped recordings (deterministic).

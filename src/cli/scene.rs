@@ -19,6 +19,15 @@ pub enum SceneCmd {
         #[arg(long)]
         agent_radius_m: Option<f64>,
     },
+    /// Draw a scene as SVG: bounds, obstacles, travel-speed patches by motion type,
+    /// moving things at `--t` with their paths, checkpoints with their formations;
+    /// the travel-time field of one goal as a heat map with contours (seconds at the
+    /// default config's `crowd.max_speed_m_s`); agents in the default crowd start
+    /// and their routes down the field.
+    ///
+    /// Exit code 1 for a bad scene file or an output that cannot be written, 2 for
+    /// a bad argument (a goal outside the bounds or inside an obstacle).
+    Render(super::scene_render::RenderArgs),
 }
 
 /// Runs a `scene` subcommand; returns the exit code.
@@ -28,6 +37,7 @@ pub fn scene(cmd: SceneCmd) -> i32 {
             file,
             agent_radius_m,
         } => check(&file, agent_radius_m),
+        SceneCmd::Render(a) => super::scene_render::render(a),
     }
 }
 
