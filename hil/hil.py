@@ -629,6 +629,15 @@ def scenario_evdev_fingers(g, n):
     return sc
 
 
+def tap(g, touch, key, pos, what):
+    """One finger down at `pos` and up again; both must reach the socket."""
+    m = g.stream.mark()
+    touch.frame({key: (key + 40, pos)})
+    wait_snapshot(g, lambda s: len(s.get("touches") or []) == 1, m, what)
+    touch.frame({}, lifts=[key])
+    wait_snapshot(g, lambda s: not s.get("touches"), m, f"the lift after {what}")
+
+
 def device_add(g):
     """Adds virtio-multitouch back; QEMU finishes a device_del only once the guest has
     ejected the device, so an early add is retried."""
@@ -676,12 +685,7 @@ def scenario_evdev_hotplug(g):
         device_add(g)
         ev = wait_device(g, "attached", m2)
         sc.check(True, "`device` attached again", f"{ev.get('node')} id {ev.get('stable_id')}")
-        touch = VirtioTouch(g)
-        m = g.stream.mark()
-        touch.frame({0: (9, (8.0, 4.5))})
-        wait_snapshot(g, lambda s: len(s.get("touches") or []) == 1, m, "a touch on the re-added device")
-        touch.frame({}, lifts=[0])
-        wait_snapshot(g, lambda s: not s.get("touches"), m, "its lift")
+        tap(g, VirtioTouch(g), 0, (8.0, 4.5), "a touch on the re-added device")
         sc.check(True, "touches on the re-added device reach the socket")
     except StepError as e:
         sc.error(e)
@@ -768,12 +772,7 @@ def scenario_evdev_permissions(g):
         g.ctl(f"rm /tmp/hil-deny; chgrp {g.args.rule[0]} {node}; chmod {g.args.rule[1]} {node}")
         ev = wait_device(g, "attached", m, timeout=15)
         sc.check(True, "once the rule's group and mode are set, the daemon attaches by itself", ev.get("node", ""))
-        touch = VirtioTouch(g)
-        m = g.stream.mark()
-        touch.frame({0: (31, (8.0, 4.5))})
-        wait_snapshot(g, lambda s: len(s.get("touches") or []) == 1, m, "a touch after the fix")
-        touch.frame({}, lifts=[0])
-        wait_snapshot(g, lambda s: not s.get("touches"), m, "its lift")
+        tap(g, VirtioTouch(g), 0, (8.0, 4.5), "a touch after the fix")
         sc.check(True, "touches flow after the permissions were fixed")
     except StepError as e:
         sc.error(e)
@@ -844,12 +843,7 @@ def scenario_hidraw(g, name, rd, layout, fingers, vid, pid, hotplug):
             uhid_create(g, layout, vid, pid, name, rd)
             ev = wait_device(g, "attached", m, timeout=30)
             hp.check(True, "the re-created device was attached again", ev.get("node", ""))
-            touch = UhidTouch(g, layout)
-            m = g.stream.mark()
-            touch.frame({3: (0, (8.0, 4.5))})
-            wait_snapshot(g, lambda s: len(s.get("touches") or []) == 1, m, "a touch after re-creation")
-            touch.frame({}, lifts=[3])
-            wait_snapshot(g, lambda s: not s.get("touches"), m, "its lift")
+            tap(g, UhidTouch(g, layout), 3, (8.0, 4.5), "a touch after re-creation")
             hp.check(True, "touches flow again, none stuck")
         except StepError as e:
             hp.error(e)
