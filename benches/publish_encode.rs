@@ -47,6 +47,7 @@ fn snapshot(n: usize, seed: u64) -> Snapshot {
         assignment_seq: 123_450,
         touches,
         paused: false,
+        motions: Vec::new(),
     }
 }
 

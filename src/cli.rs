@@ -246,8 +246,12 @@ fn find_config(explicit: Option<&Path>) -> Result<(Config, Option<PathBuf>)> {
 fn check_config(file: &Path) -> i32 {
     match Config::load(file) {
         Ok(c) => {
+            let scene = match c.loaded_scene() {
+                Some(s) => format!(", scene \"{}\"", s.name()),
+                None => String::new(),
+            };
             println!(
-                "{}: ok ({} agents, {} input{}, socket {})",
+                "{}: ok ({} agents, {} input{}, socket {}{scene})",
                 file.display(),
                 c.crowd.agents,
                 c.inputs.len(),

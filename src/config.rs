@@ -11,10 +11,12 @@
 //! 3. `/etc/crowdtouch/crowdtouch.ron`
 //! 4. the embedded default.
 
+use crate::crowd::scene::Scene;
 use crate::geom::{Rect, Vec2};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// The config format version this build reads.
 pub const CONFIG_VERSION: u32 = 1;
@@ -444,6 +446,15 @@ pub struct Config {
     pub controls: ControlsConfig,
     /// Agent-to-goal assignment.
     pub assignment: AssignmentConfig,
+    /// The environment: a scene file (obstacles, travel-speed patches, moving things;
+    /// see [`crate::crowd::scene`]), relative to the config file. The shipped scenes
+    /// (`config/scenes/<name>.ron`) are also embedded in the binary and found by file
+    /// name when the path does not exist. `None`: open ground, no environment.
+    #[serde(default)]
+    pub scene: Option<PathBuf>,
+    /// The scene, loaded and validated with the config.
+    #[serde(skip)]
+    loaded_scene: Option<Arc<Scene>>,
     /// Threads, queues and budgets.
     pub pipeline: PipelineConfig,
     /// The Unix socket.
@@ -467,23 +478,39 @@ impl Config {
     /// [`Error::Io`], [`Error::TooLarge`] or [`Error::Invalid`] with every problem.
     pub fn load(path: &Path) -> Result<Config, Error> {
         let text = read_capped(path, MAX_CONFIG_BYTES)?;
-        let mut cfg = Config::from_str(&text, path)?;
         let base = path.parent().unwrap_or(Path::new("."));
-        cfg.resolve_paths(base);
-        Ok(cfg)
+        Config::from_str_at(&text, path, base)
     }
 
-    /// Parses and validates config text; `path` is used in messages only.
+    /// Parses and validates config text; `path` is used in messages only. Relative
+    /// paths (recordings, the scene) stay relative to the working directory.
     ///
     /// # Errors
     /// [`Error::Invalid`] listing every problem with line, column and field.
     #[allow(clippy::should_implement_trait)]
     pub fn from_str(text: &str, path: &Path) -> Result<Config, Error> {
-        let cfg: Config = parse_strict(text).map_err(|issue| Error::Invalid {
+        Config::from_str_at(text, path, Path::new(""))
+    }
+
+    /// [`Config::from_str`] with relative paths resolved against `base`; the scene
+    /// is loaded and validated (its problems are reported at the `scene` field).
+    fn from_str_at(text: &str, path: &Path, base: &Path) -> Result<Config, Error> {
+        let mut cfg: Config = parse_strict(text).map_err(|issue| Error::Invalid {
             path: path.to_path_buf(),
             issues: vec![issue],
         })?;
-        let problems = cfg.validate();
+        let mut problems = cfg.validate();
+        if problems.is_empty() {
+            cfg.resolve_paths(base);
+            if let Some(scene_path) = &cfg.scene {
+                match crate::embedded::load_scene(scene_path, cfg.crowd.agent_radius_m) {
+                    Ok(scene) => cfg.loaded_scene = Some(Arc::new(scene)),
+                    Err(e) => {
+                        problems.push(("scene".to_string(), format!("scene not usable:\n{e}")))
+                    }
+                }
+            }
+        }
         if problems.is_empty() {
             Ok(cfg)
         } else {
@@ -507,7 +534,23 @@ impl Config {
         }
     }
 
+    /// The loaded scene (`None` without a `scene` field).
+    pub fn loaded_scene(&self) -> Option<&Arc<Scene>> {
+        self.loaded_scene.as_ref()
+    }
+
+    /// Replaces the scene (tests and tools that build a scene in memory); the
+    /// `scene` path is left as it is.
+    pub fn set_loaded_scene(&mut self, scene: Option<Arc<Scene>>) {
+        self.loaded_scene = scene;
+    }
+
     fn resolve_paths(&mut self, base: &Path) {
+        if let Some(s) = &mut self.scene {
+            if s.is_relative() {
+                *s = base.join(&*s);
+            }
+        }
         for input in &mut self.inputs {
             match input {
                 InputConfig::Replay { files, .. } => {
@@ -1275,6 +1318,44 @@ mod tests {
             Err(Error::Invalid { issues, .. }) => issues,
             other => panic!("expected invalid, got {other:?}"),
         }
+    }
+
+    #[test]
+    fn scene_field_loads_shipped_embedded_and_reports_bad_scenes() {
+        let with = |scene: &str| DEFAULT_CONFIG_RON.replace("scene: None", scene);
+        // No scene: nothing loaded.
+        let c = Config::embedded_default();
+        assert!(c.scene.is_none() && c.loaded_scene().is_none());
+        // A shipped name that does not exist on disk resolves to the embedded copy.
+        let c = Config::from_str(
+            &with("scene: Some(\"/nonexistent/scenes/single_block.ron\")"),
+            Path::new("t.ron"),
+        )
+        .unwrap();
+        assert_eq!(c.loaded_scene().unwrap().name(), "single block");
+        // Relative to the config file.
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("bad.ron"),
+            "(version: 1, bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),\n obstacles: [(parts: [Circle(centre_m: (4.0, 4.0), radius_m: -1.0)])])",
+        )
+        .unwrap();
+        let cfg = dir.path().join("c.ron");
+        std::fs::write(&cfg, with("scene: Some(\"bad.ron\")")).unwrap();
+        let e = Config::load(&cfg).unwrap_err().to_string();
+        let line = with("scene: Some(\"bad.ron\")")
+            .lines()
+            .position(|l| l.contains("scene: Some"))
+            .unwrap()
+            + 1;
+        assert!(e.contains(&format!("c.ron:{line}:")), "{e}");
+        assert!(e.contains("field `scene`"), "{e}");
+        assert!(e.contains("bad.ron:2:"), "{e}");
+        // A missing file that is not a shipped name.
+        let e = Config::from_str(&with("scene: Some(\"nope.ron\")"), Path::new("t.ron"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("field `scene`") && e.contains("nope.ron"), "{e}");
     }
 
     #[test]

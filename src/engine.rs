@@ -9,7 +9,12 @@ use crate::config::{Config, MAX_AGENTS};
 use crate::crowd::agents::{AgentParams, Agents};
 use crate::crowd::assigner::Assigner;
 use crate::crowd::direct::{DirectController, DirectParams};
+use crate::crowd::environment::{
+    steer_target, Planner, PlannerParams, MESH_FIELD_RANGE_M, MESH_FIELD_STEP_M,
+};
+use crate::crowd::field::FieldParams;
 use crate::crowd::mesh::TriMesh;
+use crate::crowd::scene::{MotionType, Scene};
 use crate::geom::{Rect, Vec2};
 use crate::gesture::segment::{Segment, SegmentParams, Segmenter, TouchPoint};
 use crate::input::{ContactFlags, TouchFrame};
@@ -107,6 +112,14 @@ pub struct Engine {
     assignment_seq: u64,
     generation: u64,
     inline: Option<Assigner>,
+    scene: Option<Arc<Scene>>,
+    planner: Option<Planner>,
+    scene_t0: Option<Micros>,
+    scene_t_s: f64,
+    waypoints: Vec<Vec2>,
+    targets: Vec<Vec2>,
+    speed_factor: Vec<f64>,
+    motions: Vec<MotionType>,
     seq: u64,
     last_t: Option<Micros>,
     pending_input_t: Option<Micros>,
@@ -155,6 +168,14 @@ impl Engine {
             assignment_seq: 0,
             generation: 0,
             inline: inline_assignment.then(|| Assigner::new(cfg.assignment.cost)),
+            scene: cfg.loaded_scene().cloned(),
+            planner: None,
+            scene_t0: None,
+            scene_t_s: 0.0,
+            waypoints: vec![Vec2::repeat(f64::NAN); agents_n],
+            targets: Vec::with_capacity(agents_n),
+            speed_factor: Vec::with_capacity(agents_n),
+            motions: Vec::with_capacity(agents_n),
             seq: 0,
             last_t: None,
             pending_input_t: None,
@@ -170,7 +191,52 @@ impl Engine {
             counters: EngineCounters::default(),
         };
         e.fit_radius();
+        if inline_assignment {
+            e.planner = e.scene.as_ref().and_then(|s| {
+                Planner::new(Arc::clone(s), planner_params(cfg))
+                    .map_err(|err| {
+                        log::warn!("scene: no travel-cost planner ({err}); Euclidean costs")
+                    })
+                    .ok()
+            });
+        }
+        e.set_mesh_environment();
         e
+    }
+
+    /// The mesh's environment field at the current agent radius.
+    fn set_mesh_environment(&mut self) {
+        let env = self.scene.as_ref().and_then(|s| {
+            FieldParams::new(
+                MESH_FIELD_RANGE_M,
+                MESH_FIELD_STEP_M,
+                self.agent_params.radius_m,
+            )
+            .ok()
+            .map(|p| (Arc::clone(s), p))
+        });
+        self.direct.set_environment(env);
+    }
+
+    /// The scene in use, if any.
+    pub fn scene(&self) -> Option<&Arc<Scene>> {
+        self.scene.as_ref()
+    }
+
+    /// Scene time of the last tick (s since the first tick): where moving obstacles
+    /// are.
+    pub fn scene_time_s(&self) -> f64 {
+        self.scene_t_s
+    }
+
+    /// Each agent's waypoint (NaN: none; see [`crate::crowd::environment`]).
+    pub fn waypoints(&self) -> &[Vec2] {
+        &self.waypoints
+    }
+
+    /// Each agent's current motion type (empty without a scene).
+    pub fn motions(&self) -> &[MotionType] {
+        &self.motions
     }
 
     /// Applies a reloaded config's tunables. The crowd size, formation, mesh and world
@@ -193,6 +259,10 @@ impl Engine {
         self.segmenter.set_params(segment_params(cfg));
         self.direct.set_params(direct_params(cfg));
         self.fit_radius();
+        if cfg.loaded_scene() != self.scene.as_ref() {
+            ignored.push("scene");
+        }
+        self.set_mesh_environment();
         ignored
     }
 
@@ -234,6 +304,16 @@ impl Engine {
     /// Agent positions (m).
     pub fn agent_positions(&self) -> &[Vec2] {
         self.agents.positions()
+    }
+
+    /// Agent velocities (m/s).
+    pub fn agent_velocities(&self) -> &[Vec2] {
+        self.agents.velocities()
+    }
+
+    /// Goal index of each agent.
+    pub fn goal_of(&self) -> &[u32] {
+        &self.goal_of
     }
 
     /// Goal positions (m).
@@ -339,9 +419,13 @@ impl Engine {
             self.agents.teleport(self.direct.goals());
             self.goal_of.clear();
             self.goal_of.extend(0..self.agents.len() as u32);
+            self.waypoints.fill(Vec2::repeat(f64::NAN));
             self.generation += 1;
             if let Some(a) = &mut self.inline {
                 a.forget();
+            }
+            if let Some(p) = &mut self.planner {
+                p.forget();
             }
         }
         self.events.push(Event::Reset {
@@ -366,11 +450,18 @@ impl Engine {
         self.agents = Agents::new(self.direct.goals());
         self.goal_of.clear();
         self.goal_of.extend(0..count);
+        self.waypoints.clear();
+        self.waypoints
+            .resize(count as usize, Vec2::repeat(f64::NAN));
         self.generation += 1;
         if let Some(a) = &mut self.inline {
             a.forget();
         }
+        if let Some(p) = &mut self.planner {
+            p.forget();
+        }
         self.fit_radius();
+        self.set_mesh_environment();
         self.events.push(Event::Reset {
             agents: count,
             hard: true,
@@ -382,6 +473,18 @@ impl Engine {
     /// Uses an assignment solved elsewhere on the state of tick `seq` of `generation`.
     /// Returns false (and ignores it) when the crowd has changed since.
     pub fn apply_assignment(&mut self, generation: u64, seq: u64, goal_of: &[u32]) -> bool {
+        self.apply_plan(generation, seq, goal_of, &[])
+    }
+
+    /// [`apply_assignment`](Self::apply_assignment) with each agent's waypoint
+    /// (NaN, or an empty slice: none).
+    pub fn apply_plan(
+        &mut self,
+        generation: u64,
+        seq: u64,
+        goal_of: &[u32],
+        waypoints: &[Vec2],
+    ) -> bool {
         if generation != self.generation
             || goal_of.len() != self.agents.len()
             || seq < self.assignment_seq
@@ -391,6 +494,11 @@ impl Engine {
         }
         self.goal_of.clear();
         self.goal_of.extend_from_slice(goal_of);
+        if waypoints.len() == self.waypoints.len() {
+            self.waypoints.copy_from_slice(waypoints);
+        } else {
+            self.waypoints.fill(Vec2::repeat(f64::NAN));
+        }
         self.assignment_seq = seq;
         self.counters.assignments += 1;
         true
@@ -405,6 +513,9 @@ impl Engine {
         self.last_t = Some(now);
         self.seq += 1;
         self.segmenter.tick(now, &mut self.seg_out);
+        let t0 = *self.scene_t0.get_or_insert(now);
+        self.scene_t_s = now.saturating_since(t0).as_secs_f64();
+        self.direct.set_time(self.scene_t_s);
         let lag = self
             .agents
             .mean_goal_distance(self.direct.goals(), &self.goal_of);
@@ -418,8 +529,22 @@ impl Engine {
             }
         }
         if !self.paused {
-            self.agents
-                .step(self.direct.goals(), &self.goal_of, dt, &self.agent_params);
+            if self.scene.is_some() {
+                self.step_in_scene(dt);
+            } else {
+                self.agents
+                    .step(self.direct.goals(), &self.goal_of, dt, &self.agent_params);
+            }
+        }
+        if let Some(scene) = &self.scene {
+            self.motions.clear();
+            let t = self.scene_t_s;
+            self.motions.extend(
+                self.agents
+                    .positions()
+                    .iter()
+                    .map(|&p| scene.terrain_at(p, t).motion),
+            );
         }
         self.translate_segments(now);
         for v in &mut self.touches {
@@ -464,12 +589,36 @@ impl Engine {
             s.assignment_seq = self.assignment_seq;
             s.touches.clear();
             s.touches.extend_from_slice(&self.touches);
+            s.motions.clear();
+            s.motions.extend_from_slice(&self.motions);
             s.paused = self.paused;
         }
         self.snapshots.keep(&snap);
         self.counters.ticks += 1;
         // Inline assignment: solved on this tick's state, used from the next tick.
-        if let Some(a) = &mut self.inline {
+        if let Some(p) = &mut self.planner {
+            match p.plan(
+                self.agents.positions(),
+                self.direct.goals(),
+                self.scene_t_s,
+                &mut self.goal_of,
+                &mut self.waypoints,
+            ) {
+                Ok(()) => {
+                    self.assignment_seq = self.seq;
+                    self.counters.assignments += 1;
+                }
+                Err(e) => {
+                    self.counters.assign_errors += 1;
+                    if self.counters.assign_errors.is_power_of_two() {
+                        log::warn!(
+                            "internal: assignment failed ({} times): {e}",
+                            self.counters.assign_errors
+                        );
+                    }
+                }
+            }
+        } else if let Some(a) = &mut self.inline {
             match a.solve(
                 self.agents.positions(),
                 self.direct.goals(),
@@ -494,6 +643,40 @@ impl Engine {
             snapshot: snap,
             mesh,
             events: &self.events,
+        }
+    }
+
+    /// One agent step in the scene: steer at the goal or the waypoint, speed limit
+    /// scaled by the terrain, then out of obstacles by one agent radius
+    /// (mesh-formation-control sections 6.2.1 and 6.2.3). No allocation once the
+    /// buffers have the crowd's size.
+    fn step_in_scene(&mut self, dt: f64) {
+        let Some(scene) = &self.scene else {
+            return;
+        };
+        let t = self.scene_t_s;
+        let goals = self.direct.goals();
+        self.targets.clear();
+        self.speed_factor.clear();
+        for (i, &p) in self.agents.positions().iter().enumerate() {
+            let g = goals[self.goal_of[i] as usize];
+            let w = self
+                .waypoints
+                .get(i)
+                .copied()
+                .unwrap_or(Vec2::repeat(f64::NAN));
+            self.targets.push(steer_target(scene, p, g, w, t));
+            self.speed_factor.push(scene.terrain_at(p, t).speed_factor);
+        }
+        self.agents
+            .step_towards(&self.targets, &self.speed_factor, dt, &self.agent_params);
+        let r = self.agent_params.radius_m;
+        for i in 0..self.agents.len() {
+            let p = self.agents.positions()[i];
+            if scene.signed_distance(p, t) < r {
+                let q = scene.project_out(p, r, t);
+                self.agents.set_position(i, q);
+            }
         }
     }
 
@@ -562,6 +745,11 @@ impl Engine {
             self.events.push(ev);
         }
     }
+}
+
+/// The planner's parameters for `cfg` (the agents' speed limit as preferred speed).
+pub fn planner_params(cfg: &Config) -> PlannerParams {
+    PlannerParams::new(cfg.crowd.max_speed_m_s)
 }
 
 fn agent_params(cfg: &Config) -> AgentParams {

@@ -52,6 +52,9 @@ pub struct Snapshot {
     pub touches: Vec<TouchView>,
     /// Whether the simulation is paused (agents hold still).
     pub paused: bool,
+    /// Each agent's motion type: the patch it stands on (mesh-formation-control
+    /// section 6.2.3, Table 1); empty when the engine has no scene.
+    pub motions: Vec<crate::crowd::scene::MotionType>,
 }
 
 /// The deformable mesh: vertex positions (every change) and topology.

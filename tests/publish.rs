@@ -185,6 +185,7 @@ fn snapshot(seq: u64, n: usize) -> Snapshot {
             control: Some(4),
         }],
         paused: false,
+        motions: Vec::new(),
     }
 }
 

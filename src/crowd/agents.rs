@@ -112,14 +112,63 @@ impl Agents {
         let substeps = (dt_s / MAX_SUBSTEP_S).ceil().clamp(1.0, 64.0) as usize;
         let h = dt_s / substeps as f64;
         for _ in 0..substeps {
-            self.substep(goals, goal_of, h, p);
+            self.substep(|i| goals[goal_of[i] as usize], |_| 1.0, h, p);
         }
     }
 
-    fn substep(&mut self, goals: &[Vec2], goal_of: &[u32], h: f64, p: &AgentParams) {
+    /// Advances the agents by `dt_s` towards per-agent `targets` (a goal or a
+    /// waypoint on the way to it), agent `i`'s speed limit scaled by
+    /// `speed_factor[i]` (the travel speed of the terrain under it,
+    /// mesh-formation-control section 6.2.3: "the average travel speed determines
+    /// the speed of the agent as it passes through the patch").
+    ///
+    /// # Formula
+    /// As [`step`](Self::step) with `|v| ≤ speed_factor_i · max_speed`.
+    ///
+    /// # Panics
+    /// If `targets` or `speed_factor` has fewer entries than there are agents.
+    pub fn step_towards(
+        &mut self,
+        targets: &[Vec2],
+        speed_factor: &[f64],
+        dt_s: f64,
+        p: &AgentParams,
+    ) {
+        if dt_s.is_nan() || dt_s <= 0.0 || self.pos.is_empty() {
+            return;
+        }
+        let substeps = (dt_s / MAX_SUBSTEP_S).ceil().clamp(1.0, 64.0) as usize;
+        let h = dt_s / substeps as f64;
+        for _ in 0..substeps {
+            self.substep(|i| targets[i], |i| speed_factor[i], h, p);
+        }
+    }
+
+    /// Moves agent `i` to `pos` keeping its velocity's component along the move
+    /// (an obstacle stopped the rest).
+    pub fn set_position(&mut self, i: usize, pos: Vec2) {
+        let d = pos - self.pos[i];
+        let n2 = d.norm_squared();
+        if n2 > 0.0 {
+            // Remove the velocity pointing back into the obstacle (against d).
+            let into = self.vel[i].dot(&d);
+            if into < 0.0 {
+                self.vel[i] -= d * (into / n2);
+            }
+        }
+        self.pos[i] = pos;
+    }
+
+    fn substep(
+        &mut self,
+        target: impl Fn(usize) -> Vec2,
+        speed: impl Fn(usize) -> f64,
+        h: f64,
+        p: &AgentParams,
+    ) {
         let n = self.pos.len();
         for i in 0..n {
-            let g = goals[goal_of[i] as usize];
+            let g = target(i);
             self.acc[i] = (g - self.pos[i]) * p.kp_per_s2 - self.vel[i] * p.kd_per_s;
         }
         let two_r = 2.0 * p.radius_m;
@@ -134,8 +183,8 @@ impl Agents {
             });
         }
         let amax = p.max_accel_m_s2;
-        let vmax = p.max_speed_m_s;
         for i in 0..n {
+            let vmax = p.max_speed_m_s * speed(i);
             let mut a = self.acc[i];
             let an = a.norm();
             if an > amax {

@@ -19,12 +19,15 @@
 //! constraint speed less the opposing force proportional to the agents' lag.
 
 use super::arap::{Arap, ArapError, Constraint};
+use super::field::{displace_vertices, FieldParams};
 use super::mesh::{goal_positions, nearest_vertex, GoalSample, TriMesh};
 use super::mvc::{convex_hull, mean_value_coordinates, point_in_convex_polygon};
+use super::scene::Scene;
 use crate::geom::Vec2;
 use crate::gesture::segment::Control;
 use crate::input::ContactId;
 use crate::snapshot::ControlKind;
+use std::sync::Arc;
 
 /// Tunables of direct manipulation.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -183,7 +186,12 @@ pub struct DirectController {
     mesh: TriMesh,
     arap: Arap,
     params: DirectParams,
+    /// The user mesh `V_u` (ARAP output).
     verts: Vec<Vec2>,
+    /// The final mesh `V_f`: `verts` displaced by the environment (section 6.1).
+    final_verts: Vec<Vec2>,
+    env: Option<(Arc<Scene>, FieldParams)>,
+    t_s: f64,
     anchor: Vec<Vec2>,
     solved: Vec<Vec2>,
     rigs: Vec<Rig>,
@@ -212,6 +220,9 @@ impl DirectController {
             params,
             anchor: verts.clone(),
             solved: verts.clone(),
+            final_verts: verts.clone(),
+            env: None,
+            t_s: 0.0,
             verts,
             rigs: Vec::new(),
             constraints: Vec::with_capacity(n),
@@ -238,7 +249,51 @@ impl DirectController {
 
     /// Current vertex positions of the final mesh (m).
     pub fn vertices(&self) -> &[Vec2] {
+        &self.final_verts
+    }
+
+    /// Current vertex positions of the user mesh (m): the ARAP output before the
+    /// environment moved it (the same as [`vertices`](Self::vertices) without a
+    /// scene).
+    pub fn user_vertices(&self) -> &[Vec2] {
         &self.verts
+    }
+
+    /// Sets the environment: the final mesh becomes the user mesh displaced by the
+    /// scene's potential field and projected out of obstacles
+    /// (mesh-formation-control sections 5 and 6.1). `None`: the final mesh is the
+    /// user mesh.
+    pub fn set_environment(&mut self, env: Option<(Arc<Scene>, FieldParams)>) {
+        self.env = env;
+        self.finalize();
+    }
+
+    /// Sets the scene time (s) at which the environment is evaluated; with moving
+    /// obstacles the final mesh is recomputed.
+    pub fn set_time(&mut self, t_s: f64) {
+        self.t_s = t_s;
+        if self
+            .env
+            .as_ref()
+            .is_some_and(|(s, _)| !s.dynamic().is_empty())
+        {
+            self.finalize();
+        }
+    }
+
+    /// `V_f` from `V_u`, then the goals from `V_f`.
+    fn finalize(&mut self) {
+        self.final_verts.clone_from(&self.verts);
+        if let Some((scene, params)) = &self.env {
+            displace_vertices(scene, self.t_s, params, &mut self.final_verts);
+        }
+        goal_positions(
+            &self.mesh,
+            &self.samples,
+            &self.final_verts,
+            &mut self.goals,
+        );
+        self.changed = true;
     }
 
     /// Goal points on the current mesh (m), one per agent.
@@ -258,7 +313,7 @@ impl DirectController {
 
     /// Whether a world point is on the crowd (within `radius_m` of the mesh).
     pub fn hits(&self, p: Vec2, radius_m: f64) -> bool {
-        super::mesh::distance_to_mesh(&self.mesh, &self.verts, p) <= radius_m
+        super::mesh::distance_to_mesh(&self.mesh, &self.final_verts, p) <= radius_m
     }
 
     /// Back to the rest pose; rigs are dropped.
@@ -270,14 +325,18 @@ impl DirectController {
         // The rest shape is re-based at the next constraint change; forget the
         // current constraint set so that happens on the first touch.
         let _ = self.arap.set_constraints(&[]);
-        goal_positions(&self.mesh, &self.samples, &self.verts, &mut self.goals);
-        self.changed = true;
+        self.finalize();
     }
 
     /// New goal samples for a different agent count.
     pub fn set_agent_count(&mut self, agents: usize) {
         self.samples = super::mesh::sample_goals(&self.mesh, agents);
-        goal_positions(&self.mesh, &self.samples, &self.verts, &mut self.goals);
+        goal_positions(
+            &self.mesh,
+            &self.samples,
+            &self.final_verts,
+            &mut self.goals,
+        );
     }
 
     /// One tick: follow the segmenter's controls, deform, update goals.
@@ -310,8 +369,7 @@ impl DirectController {
         self.arap
             .solve(&self.targets, &self.anchor, &mut self.solved)?;
         std::mem::swap(&mut self.verts, &mut self.solved);
-        goal_positions(&self.mesh, &self.samples, &self.verts, &mut self.goals);
-        self.changed = true;
+        self.finalize();
         Ok(())
     }
 

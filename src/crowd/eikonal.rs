@@ -1774,6 +1774,24 @@ impl EikonalCosts {
         Ok(())
     }
 
+    /// The descent direction at `at` on the cached field of the source at `source`
+    /// ([`descent_direction`]): the way towards `source` for an agent routed by
+    /// gradient descent (mesh-formation-control section 6.2.1). `None` when that
+    /// field is not cached (never marched, evicted, or the cost grid changed since),
+    /// at the source, or where the field is not reachable.
+    pub fn descent(&self, source: Vec2, at: Vec2) -> Option<Vec2> {
+        if !(source.x.is_finite() && source.y.is_finite() && at.x.is_finite() && at.y.is_finite()) {
+            return None;
+        }
+        let cell = self.source_cell(self.grid.cell_of(source)?, source)?;
+        let inner = self.inner.borrow();
+        let f = inner
+            .fields
+            .iter()
+            .find(|f| f.valid && f.cell as usize == cell)?;
+        descent_direction(&self.grid, &f.phi, at)
+    }
+
     /// The cell a source at `p` (in `cell`) marches from: `cell` if free, else the
     /// free cell within [`SNAP_RADIUS_CELLS`] whose centre is nearest `p` (first in
     /// index order on a tie), else `None`.

@@ -8,6 +8,7 @@ pub mod assign;
 pub mod assigner;
 pub mod direct;
 pub mod eikonal;
+pub mod environment;
 pub mod field;
 pub mod mesh;
 pub mod mvc;

@@ -265,8 +265,12 @@ pub struct AssignJob {
     pub agents: Vec<Vec2>,
     /// Goal positions (m).
     pub goals: Vec<Vec2>,
+    /// Scene time of the tick (s): where moving obstacles are.
+    pub t_scene_s: f64,
     /// Answer: goal index per agent.
     pub goal_of: Vec<u32>,
+    /// Answer with a scene: each agent's waypoint around obstacles (NaN: none).
+    pub waypoints: Vec<Vec2>,
     /// Whether the solve succeeded.
     pub ok: bool,
     /// Solve time (µs).
@@ -511,8 +515,11 @@ impl Daemon {
         }
         if cfg.assignment.worker {
             let cost = cfg.assignment.cost;
+            let planner = cfg
+                .loaded_scene()
+                .map(|s| (Arc::clone(s), crate::engine::planner_params(&cfg)));
             threads.push(spawn("assign", move || {
-                assignment_worker(cost, job_rx, res_tx)
+                assignment_worker(cost, planner, job_rx, res_tx)
             })?);
         }
         {
@@ -821,6 +828,7 @@ impl ControlLoop {
             agents: Vec::with_capacity(n),
             goals: Vec::with_capacity(n),
             goal_of: Vec::with_capacity(n),
+            waypoints: Vec::with_capacity(n),
             ..AssignJob::default()
         };
         ControlLoop {
@@ -936,7 +944,7 @@ impl ControlLoop {
         while let Ok(job) = self.ch.results.try_recv() {
             if job.ok {
                 self.engine
-                    .apply_assignment(job.generation, job.seq, &job.goal_of);
+                    .apply_plan(job.generation, job.seq, &job.goal_of, &job.waypoints);
             }
             self.t_assign.record(job.solve_us);
             self.idle_job = Some(job);
@@ -966,6 +974,7 @@ impl ControlLoop {
             if let Some(mut job) = self.idle_job.take() {
                 job.generation = self.engine.generation();
                 job.seq = self.engine.seq();
+                job.t_scene_s = self.engine.scene_time_s();
                 job.agents.clear();
                 job.agents.extend_from_slice(self.engine.agent_positions());
                 job.goals.clear();
@@ -1037,28 +1046,55 @@ fn describe_event(e: &Event) -> Option<String> {
     }
 }
 
+/// The assignment worker: Euclidean costs ([`Assigner`]) without a scene, travel
+/// costs and waypoints ([`Planner`](crate::crowd::environment::Planner)) with one.
 fn assignment_worker(
     cost: crate::config::AssignmentCost,
+    planner: Option<(
+        Arc<crate::crowd::scene::Scene>,
+        crate::crowd::environment::PlannerParams,
+    )>,
     jobs: Receiver<Box<AssignJob>>,
     results: Sender<Box<AssignJob>>,
 ) {
     crate::rt::make_idle("assignment worker");
     let mut assigner = Assigner::new(cost);
+    let mut planner = planner.and_then(|(scene, params)| {
+        crate::crowd::environment::Planner::new(scene, params)
+            .map_err(|e| log::warn!("scene: no travel-cost planner ({e}); Euclidean costs"))
+            .ok()
+    });
     let mut generation = u64::MAX;
     let mut failures = 0u64;
     for mut job in jobs.iter() {
         let t0 = monotonic_now();
         if job.generation != generation {
             assigner.forget();
+            if let Some(p) = &mut planner {
+                p.forget();
+            }
             generation = job.generation;
         }
         let AssignJob {
             agents,
             goals,
             goal_of,
+            waypoints,
+            t_scene_s,
             ..
         } = &mut *job;
-        job.ok = match assigner.solve(agents, goals, goal_of) {
+        let solved = match &mut planner {
+            Some(p) => p
+                .plan(agents, goals, *t_scene_s, goal_of, waypoints)
+                .map_err(|e| e.to_string()),
+            None => {
+                waypoints.clear();
+                assigner
+                    .solve(agents, goals, goal_of)
+                    .map_err(|e| e.to_string())
+            }
+        };
+        job.ok = match solved {
             Ok(()) => true,
             Err(e) => {
                 failures += 1;

@@ -37,6 +37,7 @@ fn snap(n: usize) -> Snapshot {
             },
         ],
         paused: false,
+        motions: Vec::new(),
     }
 }
 
@@ -557,6 +558,7 @@ fn arb_snapshot() -> impl Strategy<Value = Snapshot> {
             assignment_seq: aseq,
             touches,
             paused,
+            motions: Vec::new(),
         })
 }
 

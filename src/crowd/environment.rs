@@ -1,0 +1,370 @@
+//! The crowd in its environment: the planner that assigns goals with Eikonal travel
+//! costs and gives agents waypoints around obstacles, and the per-agent rules the
+//! control thread applies (terrain speed, staying out of obstacles).
+//!
+//! mesh-formation-control section 6.2: the assignment cost of agent `i` and goal `j`
+//! is `Φ_j(a_i)` (eq. 6), `Φ_j` the fast-marching solution of `|∇Φ| = C` (eq. 5)
+//! zero at goal `j`, with the unit cost `C` of eq. 7 from the scene rasterised at the
+//! job's time (obstacles blocked, patches at their Table 1 travel speed) and a
+//! discomfort term from obstacle distance and crowd density (eq. 3). "Once a point in
+//! the mesh is assigned to an agent their route to the location is computed using
+//! gradient descent on the field."
+//!
+//! # Who does what
+//! * The **planner** ([`Planner`]) runs with the assignment, on the worker thread
+//!   (or inline in replays): it rasterises the scene on a grid of
+//!   [`DEFAULT_PLAN_CELL_M`] cells (the cell the Eikonal module recommends for
+//!   assignment costs), fills the cost matrix with [`EikonalCosts`], solves, then for
+//!   every agent whose goal is hidden behind an obstacle descends its goal's field
+//!   (reused from the cost provider's cache) and keeps the farthest point of that
+//!   path the agent can see as its **waypoint**.
+//! * The **control thread** only does O(obstacle parts) work per agent per tick: it
+//!   steers an agent straight at its goal when the goal is visible (or the agent has
+//!   no waypoint), else at its waypoint; scales its speed limit by the travel speed
+//!   of the patch under it ([`Scene::terrain_at`]); and after the step projects it
+//!   out of obstacles by one agent radius ([`Scene::project_out`]).
+
+use super::assign::{CostMatrix, CostProvider, Distance, Solver};
+use super::eikonal::{
+    cost_field_into, discomfort_into, CostInputs, CostWeights, DiscomfortParams, EikonalCosts,
+    EikonalError, EikonalOptions, FieldSources, Grid,
+};
+use super::scene::{Scene, SceneGrid};
+use crate::geom::Vec2;
+use std::sync::Arc;
+
+/// Cell side of the planning grid (m): the Eikonal module's recommended resolution
+/// for assignment costs (about 16 cm).
+pub const DEFAULT_PLAN_CELL_M: f64 = 0.16;
+/// The crowd-density part of the discomfort is recomputed at most this often (s of
+/// scene time): it changes the cost grid, which drops every cached field.
+pub const DEFAULT_DENSITY_REFRESH_S: f64 = 0.5;
+/// Most descent steps (one cell each) when tracing an agent's route.
+pub const MAX_ROUTE_STEPS: usize = 2048;
+/// Reach of the potential field pushing mesh vertices off obstacles (m; `r` of
+/// mesh-formation-control eq. 1).
+pub const MESH_FIELD_RANGE_M: f64 = 1.0;
+/// Mesh vertex displacement per unit of field (m).
+pub const MESH_FIELD_STEP_M: f64 = 0.3;
+
+/// Tunables of the planner.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct PlannerParams {
+    /// Planning grid cell (m).
+    pub cell_m: f64,
+    /// Preferred speed `f` of eq. 7 (m/s): the agents' speed limit.
+    pub preferred_speed_m_s: f64,
+    /// Weights of eq. 3.
+    pub weights: CostWeights,
+    /// Discomfort from obstacles and crowd density.
+    pub discomfort: DiscomfortParams,
+    /// Scene time between density refreshes (s).
+    pub density_refresh_s: f64,
+}
+
+impl PlannerParams {
+    /// The defaults for agents with speed limit `preferred_speed_m_s`.
+    pub fn new(preferred_speed_m_s: f64) -> PlannerParams {
+        PlannerParams {
+            cell_m: DEFAULT_PLAN_CELL_M,
+            preferred_speed_m_s,
+            weights: CostWeights::default(),
+            discomfort: DiscomfortParams::default(),
+            density_refresh_s: DEFAULT_DENSITY_REFRESH_S,
+        }
+    }
+}
+
+/// Why a plan could not be made.
+#[derive(Copy, Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PlanError {
+    /// The planning grid or cost field could not be built.
+    #[error("planning grid: {0}")]
+    Eikonal(#[from] EikonalError),
+    /// The assignment failed even with Euclidean costs.
+    #[error("assignment: {0}")]
+    Assign(#[from] super::assign::AssignError),
+    /// The scene bounds do not make a planning grid.
+    #[error("scene bounds do not make a planning grid")]
+    Grid,
+}
+
+/// Environment-aware assignment and routing (see the module doc). Keeps every
+/// workspace between plans.
+pub struct Planner {
+    scene: Arc<Scene>,
+    params: PlannerParams,
+    raster: SceneGrid,
+    grid: Grid,
+    blocked: Vec<bool>,
+    discomfort: Vec<f64>,
+    cost: Vec<f64>,
+    costs: EikonalCosts,
+    matrix: CostMatrix,
+    solver: Solver,
+    warm: bool,
+    agents: Vec<Vec2>,
+    goals: Vec<Vec2>,
+    rasterised: bool,
+    density_t_s: f64,
+    fallbacks: u64,
+}
+
+impl Planner {
+    /// A planner over `scene`.
+    ///
+    /// # Errors
+    /// [`PlanError::Grid`] when the scene bounds give no grid; [`PlanError::Eikonal`]
+    /// for bad parameters.
+    pub fn new(scene: Arc<Scene>, params: PlannerParams) -> Result<Planner, PlanError> {
+        let b = scene.bounds();
+        let raster = SceneGrid::for_bounds(b, params.cell_m).map_err(|_| PlanError::Grid)?;
+        let grid = Grid::new(raster.cols, raster.rows, raster.cell_m, raster.origin)?;
+        let n = grid.len();
+        let options = EikonalOptions {
+            sources: FieldSources::Goals,
+            ..EikonalOptions::default()
+        };
+        let costs = EikonalCosts::new(grid, &vec![1.0; n], options)?;
+        let mut p = Planner {
+            scene,
+            params,
+            raster,
+            grid,
+            blocked: vec![false; n],
+            discomfort: vec![0.0; n],
+            cost: vec![1.0; n],
+            costs,
+            matrix: CostMatrix::new(0, 0),
+            solver: Solver::new(),
+            warm: false,
+            agents: Vec::new(),
+            goals: Vec::new(),
+            rasterised: false,
+            density_t_s: f64::NEG_INFINITY,
+            fallbacks: 0,
+        };
+        p.rasterise(0.0);
+        Ok(p)
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &Arc<Scene> {
+        &self.scene
+    }
+
+    /// The travel-cost provider (its cost grid is the last plan's).
+    pub fn costs(&self) -> &EikonalCosts {
+        &self.costs
+    }
+
+    /// The planning grid.
+    pub fn grid(&self) -> &Grid {
+        &self.grid
+    }
+
+    /// Plans that fell back to Euclidean costs (a point outside the grid and stuck
+    /// in an obstacle, or an infeasible travel-cost assignment).
+    pub fn fallbacks(&self) -> u64 {
+        self.fallbacks
+    }
+
+    /// Forgets the previous solution (the next solve is cold).
+    pub fn forget(&mut self) {
+        self.warm = false;
+    }
+
+    fn rasterise(&mut self, t_s: f64) {
+        self.scene.rasterize_into(&mut self.raster, t_s);
+        // A cell whose centre is within a quarter cell of an obstacle is blocked too,
+        // so thin walls are not skipped between cell centres.
+        let guard = 0.25 * self.raster.cell_m;
+        for (b, (&inside, &d)) in self.blocked.iter_mut().zip(
+            self.raster
+                .blocked
+                .iter()
+                .zip(&self.raster.obstacle_distance_m),
+        ) {
+            *b = inside || d < guard;
+        }
+        self.rasterised = true;
+    }
+
+    /// Assigns `goals` to `agents` at scene time `t_s` and writes each agent's goal
+    /// index into `goal_of` and its waypoint into `waypoints` (NaN: head straight for
+    /// the goal).
+    ///
+    /// # Formula
+    /// Costs `Φ_j(a_i)` (mesh-formation-control eqs. 5–7); waypoints by gradient
+    /// descent on `Φ_j` (section 6.2.1). Falls back to Euclidean distance when the
+    /// travel costs cannot be computed or make the assignment infeasible.
+    ///
+    /// # Errors
+    /// [`PlanError`] when even the Euclidean assignment fails; the outputs are
+    /// untouched then.
+    pub fn plan(
+        &mut self,
+        agents: &[Vec2],
+        goals: &[Vec2],
+        t_s: f64,
+        goal_of: &mut Vec<u32>,
+        waypoints: &mut Vec<Vec2>,
+    ) -> Result<(), PlanError> {
+        let moving = !self.scene.dynamic().is_empty();
+        let density_due =
+            t_s - self.density_t_s >= self.params.density_refresh_s || t_s < self.density_t_s;
+        if moving || !self.rasterised {
+            self.rasterise(t_s);
+        }
+        if moving || density_due {
+            self.density_t_s = t_s;
+            self.rebuild_cost(agents)?;
+        }
+        // Points outside the grid are read at the nearest point inside it.
+        let clamp = clamp_to(self.grid_bounds());
+        self.agents.clear();
+        self.agents.extend(agents.iter().map(|&p| clamp(p)));
+        self.goals.clear();
+        self.goals.extend(goals.iter().map(|&p| clamp(p)));
+        let eikonal_ok = self
+            .costs
+            .try_fill(&self.agents, &self.goals, &mut self.matrix)
+            .is_ok();
+        let mut solved = eikonal_ok && self.solve().is_ok();
+        if !solved {
+            self.fallbacks += 1;
+            Distance.fill(agents, goals, &mut self.matrix);
+            self.warm = false;
+            self.solve()?;
+            solved = false;
+        }
+        let a = self.solver.assignment();
+        goal_of.clear();
+        goal_of.extend(a.iter().map(|&g| g as u32));
+        waypoints.clear();
+        waypoints.resize(agents.len(), Vec2::repeat(f64::NAN));
+        if solved {
+            for (i, &g) in goal_of.iter().enumerate() {
+                waypoints[i] = self.waypoint(agents[i], goals[g as usize], t_s);
+            }
+        }
+        Ok(())
+    }
+
+    fn solve(&mut self) -> Result<(), super::assign::AssignError> {
+        let r = if self.warm {
+            self.solver.solve_warm(&self.matrix).map(|_| ())
+        } else {
+            self.solver.solve(&self.matrix).map(|_| ())
+        };
+        self.warm = r.is_ok();
+        r
+    }
+
+    fn rebuild_cost(&mut self, agents: &[Vec2]) -> Result<(), PlanError> {
+        discomfort_into(
+            &self.grid,
+            &self.raster.obstacle_distance_m,
+            agents,
+            self.params.discomfort,
+            &mut self.discomfort,
+        )?;
+        cost_field_into(
+            &self.grid,
+            self.params.weights,
+            self.params.preferred_speed_m_s,
+            CostInputs {
+                blocked: &self.blocked,
+                speed_factor: &self.raster.speed_factor,
+                discomfort: Some(&self.discomfort),
+            },
+            &mut self.cost,
+        )?;
+        self.costs.set_cost(&self.cost)?;
+        Ok(())
+    }
+
+    fn grid_bounds(&self) -> (Vec2, Vec2) {
+        let g = &self.grid;
+        let lo = g.origin();
+        let hi = lo + Vec2::new(g.cols() as f64, g.rows() as f64) * g.cell_m();
+        let eps = 1e-6 * g.cell_m();
+        (lo + Vec2::repeat(eps), hi - Vec2::repeat(eps))
+    }
+
+    /// The route of an agent at `a` to `goal` by descent on the goal's field (from
+    /// the last plan's cache), one cell per step, ending where the goal is visible;
+    /// `out` gets the points after `a`. Empty when the goal is visible from `a` or
+    /// its field is not cached.
+    pub fn route(&self, a: Vec2, goal: Vec2, t_s: f64, out: &mut Vec<Vec2>) {
+        out.clear();
+        if self.scene.visible(a, goal, t_s) {
+            return;
+        }
+        let clamp = clamp_to(self.grid_bounds());
+        let (g, step) = (clamp(goal), self.grid.cell_m());
+        let mut p = clamp(a);
+        for _ in 0..MAX_ROUTE_STEPS {
+            let Some(d) = self.costs.descent(g, p) else {
+                return;
+            };
+            p += d * step;
+            out.push(p);
+            if self.scene.visible(p, goal, t_s) {
+                return;
+            }
+        }
+    }
+
+    /// The farthest point of the agent's route it can see (NaN when the goal is
+    /// visible or there is no route).
+    fn waypoint(&self, a: Vec2, goal: Vec2, t_s: f64) -> Vec2 {
+        let none = Vec2::repeat(f64::NAN);
+        if self.scene.visible(a, goal, t_s) {
+            return none;
+        }
+        let clamp = clamp_to(self.grid_bounds());
+        let (g, step) = (clamp(goal), self.grid.cell_m());
+        let mut p = clamp(a);
+        let mut best = none;
+        for _ in 0..MAX_ROUTE_STEPS {
+            let Some(d) = self.costs.descent(g, p) else {
+                break;
+            };
+            let q = p + d * step;
+            if !self.scene.visible(a, q, t_s) {
+                break;
+            }
+            p = q;
+            best = p;
+            if self.scene.visible(p, goal, t_s) {
+                break;
+            }
+        }
+        best
+    }
+}
+
+fn clamp_to((lo, hi): (Vec2, Vec2)) -> impl Fn(Vec2) -> Vec2 {
+    move |p: Vec2| {
+        if p.x.is_finite() && p.y.is_finite() {
+            Vec2::new(p.x.clamp(lo.x, hi.x), p.y.clamp(lo.y, hi.y))
+        } else {
+            p
+        }
+    }
+}
+
+/// Where the control thread steers an agent at `pos` assigned to `goal`: straight at
+/// the goal when it is visible at `t_s` or there is no waypoint (NaN), else at the
+/// waypoint the planner gave.
+///
+/// # Complexity
+/// O(obstacle parts) when the agent has a waypoint, O(1) otherwise.
+pub fn steer_target(scene: &Scene, pos: Vec2, goal: Vec2, waypoint: Vec2, t_s: f64) -> Vec2 {
+    if !waypoint.x.is_finite() || scene.visible(pos, goal, t_s) {
+        goal
+    } else {
+        waypoint
+    }
+}

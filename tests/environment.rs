@@ -1,0 +1,333 @@
+//! The crowd in the shipped scenes (mesh-formation-control sections 5–7): the
+//! environment-guided mesh, the Eikonal assignment against the Euclidean one (Fig. 5),
+//! a crowd passing around a block (Fig. 10), congestion sending agents to a slower
+//! path (Fig. 8b), and agents in patches moving at the patch's speed.
+//!
+//! Small crowds and the 16 cm planning grid keep these fast; the engine runs on a
+//! virtual clock with the assignment solved inside the tick.
+
+use crowdtouch::config::Config;
+use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Distance, Solver};
+use crowdtouch::crowd::environment::{Planner, PlannerParams};
+use crowdtouch::crowd::scene::{MotionType, Scene};
+use crowdtouch::embedded::load_scene;
+use crowdtouch::engine::Engine;
+use crowdtouch::geom::{Rect, Vec2};
+use crowdtouch::input::{Contact, ContactFlags, ContactId, TouchFrame};
+use crowdtouch::time::Micros;
+use std::path::Path;
+use std::sync::Arc;
+
+fn scene(name: &str) -> Arc<Scene> {
+    Arc::new(load_scene(Path::new(&format!("config/scenes/{name}.ron")), 0.15).unwrap())
+}
+
+/// The default config with a small crowd over `formation`, in `scene`.
+fn cfg(scene_name: &str, agents: u32, formation: Rect, mesh: u32) -> Config {
+    let mut c = Config::embedded_default();
+    c.crowd.agents = agents;
+    c.crowd.formation = formation;
+    c.mesh.cols = mesh;
+    c.mesh.rows = mesh;
+    c.set_loaded_scene(Some(scene(scene_name)));
+    c
+}
+
+fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Rect {
+    Rect {
+        min: [x0, y0],
+        max: [x1, y1],
+    }
+}
+
+const TICK_US: u64 = 1_000_000 / 60;
+
+/// A one-finger drag from `from` to `to` (world m) over `secs`, then `settle` s more
+/// of ticks with the finger lifted. Calls `each` after every tick.
+fn drag(
+    e: &mut Engine,
+    from: Vec2,
+    to: Vec2,
+    secs: f64,
+    settle: f64,
+    mut each: impl FnMut(&Engine),
+) {
+    let w = e.world();
+    let unit = |p: Vec2| {
+        (
+            ((p.x - w.min[0]) / w.width()) as f32,
+            ((p.y - w.min[1]) / w.height()) as f32,
+        )
+    };
+    let steps = (secs * 60.0) as u64;
+    let mut t = 1_000_000u64;
+    e.tick(Micros(t));
+    for k in 0..=steps + 1 {
+        t += TICK_US;
+        let s = (k as f64 / steps as f64).min(1.0);
+        let (x, y) = unit(from + (to - from) * s);
+        let mut f = TouchFrame::new(Micros(t));
+        let flags = if k == 0 {
+            ContactFlags::DOWN
+        } else if k == steps + 1 {
+            ContactFlags::UP
+        } else {
+            ContactFlags::NONE
+        };
+        f.push(Contact {
+            id: ContactId(1),
+            x,
+            y,
+            flags,
+            ..Contact::default()
+        })
+        .unwrap();
+        e.push_frame(&f);
+        e.tick(Micros(t));
+        e.clear_events();
+        each(e);
+    }
+    for _ in 0..(settle * 60.0) as u64 {
+        t += TICK_US;
+        e.tick(Micros(t));
+        e.clear_events();
+        each(e);
+    }
+}
+
+fn assert_outside(scene: &Scene, e: &Engine) {
+    let t = e.scene_time_s();
+    for (i, p) in e.agent_positions().iter().enumerate() {
+        assert!(
+            scene.obstacle_at(*p, t).is_none(),
+            "agent {i} at {p:?} inside an obstacle"
+        );
+    }
+}
+
+/// Section 5: dragging the crowd onto a block, the final mesh is pushed out of it and
+/// no goal ends inside.
+#[test]
+fn dragged_onto_a_block_no_goal_ends_inside() {
+    let s = scene("single_block");
+    // 6 x 6 mesh over (6,3.5)..(9,5.5): 36 vertices, 36 agents (goals at vertices).
+    let c = cfg("single_block", 36, rect(6.0, 3.5, 9.0, 5.5), 6);
+    let mut e = Engine::new(&c, None, true);
+    drag(
+        &mut e,
+        Vec2::new(7.5, 4.5),
+        Vec2::new(12.0, 4.5),
+        3.0,
+        0.5,
+        |_| {},
+    );
+    let t = e.scene_time_s();
+    for g in e.goals() {
+        assert!(
+            s.obstacle_at(*g, t).is_none(),
+            "goal {g:?} inside the block"
+        );
+    }
+    // The mesh really was dragged onto it: the mesh centre is past the block's west side.
+    let cx = e.goals().iter().map(|g| g.x).sum::<f64>() / e.goals().len() as f64;
+    assert!(cx > 10.0, "mesh centre x {cx}");
+    assert_outside(&s, &e);
+}
+
+/// Total travel cost of an assignment under the planner's Eikonal costs.
+fn travel(p: &Planner, agents: &[Vec2], goals: &[Vec2], goal_of: &[u32]) -> f64 {
+    let mut m = CostMatrix::new(0, 0);
+    p.costs().try_fill(agents, goals, &mut m).unwrap();
+    goal_of
+        .iter()
+        .enumerate()
+        .map(|(i, &g)| m.get(i, g as usize))
+        .sum()
+}
+
+/// Fig. 5: with an obstacle between the crowd and its target formation, assigning by
+/// travel cost gives a lower total travel cost than assigning by Euclidean distance.
+#[test]
+fn fig5_eikonal_assignment_travels_less_than_euclidean() {
+    let s = scene("single_block");
+    // A 4 x 4 crowd west of the block, its formation east of it, both centred on it.
+    let grid = |x0: f64, y0: f64, d: f64| -> Vec<Vec2> {
+        (0..16)
+            .map(|k| Vec2::new(x0 + (k % 4) as f64 * d, y0 + (k / 4) as f64 * d))
+            .collect()
+    };
+    let agents = grid(9.6, 3.6, 0.6);
+    let goals = grid(14.0, 3.9, 0.4);
+    let mut p = Planner::new(Arc::clone(&s), PlannerParams::new(1.5)).unwrap();
+    let (mut ge, mut wp) = (Vec::new(), Vec::new());
+    p.plan(&agents, &goals, 0.0, &mut ge, &mut wp).unwrap();
+    let mut m = CostMatrix::new(0, 0);
+    Distance.fill(&agents, &goals, &mut m);
+    let gd: Vec<u32> = Solver::new()
+        .solve(&m)
+        .unwrap()
+        .iter()
+        .map(|&g| g as u32)
+        .collect();
+    let (te, td) = (
+        travel(&p, &agents, &goals, &ge),
+        travel(&p, &agents, &goals, &gd),
+    );
+    eprintln!("fig5: eikonal total {te:.2}, euclidean assignment's travel total {td:.2}");
+    assert!(te < td - 1e-6, "eikonal {te} vs euclidean {td}");
+    // Agents hidden from their goal got a waypoint they can see.
+    let hidden = (0..16)
+        .filter(|&i| !s.visible(agents[i], goals[ge[i] as usize], 0.0))
+        .count();
+    assert!(hidden > 0);
+    for i in 0..16 {
+        if wp[i].x.is_finite() {
+            assert!(s.visible(agents[i], wp[i], 0.0));
+        }
+    }
+}
+
+/// Fig. 10: a square crowd dragged past a block splits around it and re-forms; no
+/// agent is blocked: every agent is within 20 cm (less than one agent diameter: what neighbours' push-back leaves) of its goal within 10 s of the
+/// drag's end, and no agent is ever inside the block.
+#[test]
+fn fig10_square_crowd_passes_around_a_block_and_remerges() {
+    let s = scene("single_block");
+    let c = cfg("single_block", 25, rect(7.5, 3.5, 9.5, 5.5), 5);
+    let mut e = Engine::new(&c, None, true);
+    let mut worst_inside = 0usize;
+    drag(
+        &mut e,
+        Vec2::new(8.5, 4.5),
+        Vec2::new(14.7, 4.5),
+        3.0,
+        10.0,
+        |e| {
+            let t = e.scene_time_s();
+            worst_inside += e
+                .agent_positions()
+                .iter()
+                .filter(|p| s.obstacle_at(**p, t).is_some())
+                .count();
+        },
+    );
+    assert_eq!(worst_inside, 0, "agent positions inside the block");
+    let snap_goals = e.goals().to_vec();
+    let (pos, goal_of) = (e.agent_positions(), e.goal_of());
+    let worst = pos
+        .iter()
+        .zip(goal_of)
+        .map(|(p, &g)| (p - snap_goals[g as usize]).norm())
+        .fold(0.0, f64::max);
+    eprintln!("fig10: worst agent-goal distance 10 s after the drag {worst:.3} m");
+    assert!(
+        worst < 0.20,
+        "an agent is {worst:.2} m from its goal 10 s after the drag"
+    );
+    // The formation reached the block (with this drag the opposing force of section
+    // 4.1 holds the handle while agents go around, and the mesh ends wrapped around
+    // the block rather than past it).
+    let cx = snap_goals.iter().map(|g| g.x).sum::<f64>() / snap_goals.len() as f64;
+    assert!(cx > 11.5, "formation centre x {cx}");
+}
+
+/// Fig. 8b: with the central path crowded, some agents are routed along a slower
+/// side path (the density discomfort of eq. 3 in the cost).
+#[test]
+fn fig8b_congestion_sends_some_agents_down_a_slower_side_path() {
+    let s = scene("multiple_paths");
+    // 40 agents packed in the central path's mouth, 20 more behind; goals at the exit.
+    let mut agents = Vec::new();
+    for k in 0..40 {
+        agents.push(Vec2::new(
+            11.0 + (k % 10) as f64 * 0.3,
+            4.0 + (k / 10) as f64 * 0.3,
+        ));
+    }
+    for k in 0..20 {
+        agents.push(Vec2::new(
+            9.0 + (k % 5) as f64 * 0.3,
+            3.9 + (k / 5) as f64 * 0.4,
+        ));
+    }
+    let goals: Vec<Vec2> = (0..60)
+        .map(|k| Vec2::new(15.35 + (k % 3) as f64 * 0.2, 0.3 + (k / 3) as f64 * 0.42))
+        .collect();
+    let mut params = PlannerParams::new(1.5);
+    params.discomfort.density_m2 = 2.0;
+    let mut p = Planner::new(Arc::clone(&s), params).unwrap();
+    let (mut goal_of, mut wp) = (Vec::new(), Vec::new());
+    p.plan(&agents, &goals, 0.0, &mut goal_of, &mut wp).unwrap();
+    let mut side = 0;
+    let mut route = Vec::new();
+    for i in 40..60 {
+        p.route(agents[i], goals[goal_of[i] as usize], 0.0, &mut route);
+        if route
+            .iter()
+            .any(|q| q.x > 11.5 && q.x < 14.5 && (q.y < 1.8 || q.y > 7.2))
+        {
+            side += 1;
+        }
+    }
+    // Without the crowd in the way, nobody behind takes a side path to goals level
+    // with the central path.
+    eprintln!("fig8b: {side} of 20 agents behind the crowd routed through a side path");
+    assert!(side > 0, "nobody took a side path");
+}
+
+/// Section 6.2.3: an agent in a patch moves at the patch's travel speed and reports
+/// its motion type.
+#[test]
+fn agents_in_a_patch_move_at_its_speed_and_report_its_motion() {
+    // The stream of the multiple-paths scene (swim, 0.46) spans (11.5,0)..(14.5,1.8).
+    let c = cfg("multiple_paths", 4, rect(11.8, 0.6, 12.2, 1.0), 2);
+    let mut e = Engine::new(&c, None, true);
+    let vmax = c.crowd.max_speed_m_s;
+    let mut fastest = 0.0f64;
+    let mut swim_ticks = 0;
+    drag(
+        &mut e,
+        Vec2::new(12.0, 0.8),
+        Vec2::new(14.0, 0.8),
+        0.5,
+        2.0,
+        |e| {
+            let t = e.scene_time_s();
+            let sc = e.scene().unwrap();
+            let snap_motions = e.motions();
+            for (i, p) in e.agent_positions().iter().enumerate() {
+                let terrain = sc.terrain_at(*p, t);
+                assert_eq!(snap_motions[i], terrain.motion);
+                if terrain.motion == MotionType::Swim && p.x > 12.3 && p.x < 13.9 {
+                    swim_ticks += 1;
+                }
+            }
+        },
+    );
+    // Measure: one more drag, tracking speed in the stream.
+    let mut e2 = Engine::new(&c, None, true);
+    drag(
+        &mut e2,
+        Vec2::new(12.0, 0.8),
+        Vec2::new(14.0, 0.8),
+        0.5,
+        2.0,
+        |e| {
+            let t = e.scene_time_s();
+            let sc = e.scene().unwrap();
+            for (p, v) in e.agent_positions().iter().zip(e.agent_velocities()) {
+                if sc.terrain_at(*p, t).motion == MotionType::Swim {
+                    fastest = fastest.max(v.norm());
+                }
+            }
+        },
+    );
+    let limit = 0.46 * vmax;
+    eprintln!("patch: fastest swimmer {fastest:.3} m/s, limit {limit:.3} m/s");
+    assert!(swim_ticks > 0);
+    assert!(fastest <= limit + 1e-9, "{fastest} > {limit}");
+    assert!(
+        fastest > 0.8 * limit,
+        "swimmers never reached the patch speed: {fastest}"
+    );
+}
