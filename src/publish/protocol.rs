@@ -156,6 +156,9 @@ pub struct FieldSet {
     pub assignment: bool,
     /// `touches`.
     pub touches: bool,
+    /// `motions` (each agent's motion type on its terrain; sent only when the daemon
+    /// runs a scene; JSON only — the binary format has no such array).
+    pub motions: bool,
 }
 
 impl FieldSet {
@@ -166,6 +169,7 @@ impl FieldSet {
         goals: true,
         assignment: true,
         touches: true,
+        motions: true,
     };
     /// No per-agent array: only the scalar header fields.
     pub const NONE: FieldSet = FieldSet {
@@ -174,10 +178,17 @@ impl FieldSet {
         goals: false,
         assignment: false,
         touches: false,
+        motions: false,
     };
     /// Wire names known to the parser, in wire order.
-    pub const NAMES: [&'static str; 5] =
-        ["positions", "velocities", "goals", "assignment", "touches"];
+    pub const NAMES: [&'static str; 6] = [
+        "positions",
+        "velocities",
+        "goals",
+        "assignment",
+        "touches",
+        "motions",
+    ];
 
     /// The names of the fields switched on, in wire order.
     pub fn names(&self) -> Vec<&'static str> {
@@ -187,6 +198,7 @@ impl FieldSet {
             self.goals,
             self.assignment,
             self.touches,
+            self.motions,
         ];
         Self::NAMES
             .iter()
@@ -224,6 +236,7 @@ impl FieldSet {
             "goals" => self.goals = true,
             "assignment" => self.assignment = true,
             "touches" => self.touches = true,
+            "motions" => self.motions = true,
             _ => return false,
         }
         true
@@ -788,6 +801,7 @@ fn json_size_hint(s: &Snapshot, fields: &FieldSet) -> usize {
     256 + s.agents.len() * per_agent
         + usize::from(fields.goals) * 18 * s.goals.len()
         + usize::from(fields.touches) * 64 * s.touches.len()
+        + usize::from(fields.motions) * 13 * s.motions.len()
 }
 
 /// Writes the part of a JSON snapshot before the dropped count; returns nothing.
@@ -861,6 +875,18 @@ fn snapshot_json_tail(s: &Snapshot, fields: &FieldSet, out: &mut Vec<u8>, b: &mu
                 None => out.extend_from_slice(b"null"),
             }
             out.push(b'}');
+        }
+        out.push(b']');
+    }
+    if fields.motions && !s.motions.is_empty() {
+        out.extend_from_slice(b",\"motions\":[");
+        for (i, m) in s.motions.iter().enumerate() {
+            if i > 0 {
+                out.push(b',');
+            }
+            out.push(b'"');
+            out.extend_from_slice(m.as_str().as_bytes());
+            out.push(b'"');
         }
         out.push(b']');
     }

@@ -648,3 +648,26 @@ fn device_event_encodes_as_documented() {
     assert_eq!(v["message"], "device unplugged");
     assert_eq!(v["t_us"], 7);
 }
+
+#[test]
+fn json_snapshot_carries_motions_only_with_a_scene() {
+    use crate::crowd::scene::MotionType;
+    let mut s = snap(3);
+    let mut out = Vec::new();
+    encode_snapshot_json(&s, None, 0, &FieldSet::ALL, &mut out);
+    let v: Value = serde_json::from_slice(&out).unwrap();
+    assert!(v.get("motions").is_none(), "no scene, no motions key");
+    s.motions = vec![MotionType::Run, MotionType::Swim, MotionType::ClimbUp];
+    out.clear();
+    encode_snapshot_json(&s, None, 0, &FieldSet::ALL, &mut out);
+    let v: Value = serde_json::from_slice(&out).unwrap();
+    assert_eq!(v["motions"], serde_json::json!(["run", "swim", "climb_up"]));
+    let only_positions = FieldSet {
+        positions: true,
+        ..FieldSet::NONE
+    };
+    out.clear();
+    encode_snapshot_json(&s, None, 0, &only_positions, &mut out);
+    let v: Value = serde_json::from_slice(&out).unwrap();
+    assert!(v.get("motions").is_none(), "not subscribed");
+}
