@@ -46,7 +46,10 @@
 //! assigned cost (so kept pairs start tight), prices every row against the new costs
 //! (step 1), keeps the pairs that are still tight, runs a short auction (its first ε
 //! sized by how far the broken pairs are off) if more than nine tenths of the rows lost
-//! their pair, and re-augments the freed rows (steps 3–4).
+//! their pair, otherwise a budgeted augmenting row reduction (Jonker–Volgenant 1987:
+//! a free row takes its cheapest listed column at the price that leaves it tight,
+//! bumping the previous row; prices only fall, every pair stays tight), and
+//! re-augments the rows still free (step 4).
 //!
 //! Rectangular problems (rows < cols) are exact: every column price starts at 0 and is
 //! only lowered, except that a column left free with a lowered price is raised back to
@@ -135,6 +138,10 @@ const AUCTION_EXACT_SECOND: bool = true;
 
 /// Candidate list slots relaxed at once when a scanned row's list is advanced.
 const RELAX_BATCH: usize = 8;
+
+/// Bid budget of the augmenting row reduction of a warm start, per free row
+/// ([`Solver::reduce_rows`]).
+const ROW_REDUCTION_BIDS_PER_FREE: usize = 4;
 
 /// Pricing rounds of the sparse strategy before it finishes densely.
 const MAX_ROUNDS: u32 = 16;
@@ -692,35 +699,29 @@ fn select_k<const BELOW: bool>(
     let (rt, vt) = (rch.remainder(), vch.remainder());
     let mut base = 0u32;
     for (r, vv) in rch.zip(vch) {
-        let hit = if BELOW {
-            // Candidates, and also NaN (every comparison false).
-            let mut hit = false;
-            for (a, b) in r.iter().zip(vv) {
+        let mut hits = 0u32;
+        if BELOW {
+            for (l, (a, b)) in r.iter().zip(vv).enumerate() {
                 let w = a - b;
-                hit |= !((w > thr) | (w < lo_w));
+                // Candidates, and also NaN (every comparison false).
+                hits |= u32::from(!((w > thr) | (w < lo_w))) << l;
             }
-            hit
-        } else {
+        } else if let (Ok(r8), Ok(v8)) =
+            (<&[f64; LANES]>::try_from(r), <&[f64; LANES]>::try_from(vv))
+        {
+            let w: [f64; LANES] = std::array::from_fn(|l| r8[l] - v8[l]);
             if check {
-                for (s, a) in sums.iter_mut().zip(r) {
-                    *s += a;
+                for (s, x) in sums.iter_mut().zip(&w) {
+                    *s += x;
                 }
             }
-            !(block_min(r, vv) > thr)
-        };
-        if !hit {
-            base += LANES as u32;
-            continue;
-        }
-        let mut hits = 0u32;
-        for (l, (a, b)) in r.iter().zip(vv).enumerate() {
-            let w = a - b;
-            let h = if BELOW {
-                !((w > thr) | (w < lo_w))
-            } else {
-                !(w > thr)
-            };
-            hits |= u32::from(h) << l;
+            if block_min(&w) > thr {
+                base += LANES as u32;
+                continue;
+            }
+            for (l, x) in w.iter().enumerate() {
+                hits |= u32::from(!(*x > thr)) << l;
+            }
         }
         while hits != 0 {
             let l = hits.trailing_zeros() as usize;
@@ -738,8 +739,9 @@ fn select_k<const BELOW: bool>(
     for (l, (a, b)) in rt.iter().zip(vt).enumerate() {
         admit(a - b, base + l as u32, &mut n, &mut thr_key, &mut thr);
     }
-    // The block filter of the unbounded selection skips NaN lanes: a NaN or `-inf`
-    // cost makes the row sum NaN or `-inf` (the price vector is finite).
+    // The block filter of the unbounded selection may skip NaN lanes: a NaN or `-inf`
+    // cost makes the sum of the row's `c - v` NaN or `-inf` (prices are never NaN,
+    // and a `-inf` price only comes with a `-inf` cost in its column).
     if !BELOW && check && bad.is_none() && !(sums.iter().sum::<f64>() > f64::NEG_INFINITY) {
         bad = row.iter().position(|&c| !(c > f64::NEG_INFINITY));
     }
@@ -751,10 +753,10 @@ fn select_k<const BELOW: bool>(
     (n, bad)
 }
 
-/// Smallest `row[l] - v[l]` of a block of [`LANES`] entries, as a branch-free
-/// reduction tree (NaN lanes may be skipped: callers detect NaN separately).
+/// Smallest entry of a block of [`LANES`] reduced costs, as a branch-free reduction
+/// tree (NaN lanes may be skipped: callers detect NaN separately).
 #[inline(always)]
-fn block_min(row: &[f64], v: &[f64]) -> f64 {
+fn block_min(w: &[f64; LANES]) -> f64 {
     #[inline(always)]
     fn mn(a: f64, b: f64) -> f64 {
         if a < b {
@@ -763,10 +765,6 @@ fn block_min(row: &[f64], v: &[f64]) -> f64 {
             b
         }
     }
-    let (Ok(row), Ok(v)) = (<&[f64; LANES]>::try_from(row), <&[f64; LANES]>::try_from(v)) else {
-        return f64::NEG_INFINITY;
-    };
-    let w: [f64; LANES] = std::array::from_fn(|l| row[l] - v[l]);
     let a: [f64; 4] = std::array::from_fn(|l| mn(w[l], w[l + 4]));
     let b = [mn(a[0], a[2]), mn(a[1], a[3])];
     mn(b[0], b[1])
@@ -836,6 +834,8 @@ pub struct Solver {
     dirty: Vec<bool>,
     dirty_rows: Vec<u32>,
     raise: Vec<u32>,
+    /// Free rows left to the exact searches by [`Solver::reduce_rows`].
+    deferred: Vec<u32>,
     stats: SolveStats,
 }
 
@@ -1116,6 +1116,7 @@ impl Solver {
         self.dirty.resize(rows, false);
         self.dirty_rows = Vec::with_capacity(rows);
         self.raise = Vec::with_capacity(rows + cols);
+        self.deferred = Vec::with_capacity(rows);
     }
 
     fn use_sparse(&self) -> bool {
@@ -1175,6 +1176,9 @@ impl Solver {
                 }
             }
             self.price_all_lists(costs);
+        }
+        if sparse && self.stats.warm {
+            self.reduce_rows(costs);
         }
         if sparse {
             loop {
@@ -1521,6 +1525,49 @@ impl Solver {
             }
             eps = (eps * AUCTION_FACTOR).max(eps_end);
         }
+    }
+
+    /// Augmenting row reduction (Jonker–Volgenant 1987) over the candidate lists: a
+    /// free row takes its cheapest column `j1` and lowers its price by the gap to its
+    /// second cheapest, so the new pair is tight and the row dual-feasible; the
+    /// column's previous row becomes free and bids in turn. Prices only fall (every
+    /// list bound stays valid) and every assigned pair stays tight, so the exact
+    /// searches can follow directly. A row tied between a taken cheapest column and
+    /// another, and every row beyond the bid budget, is left to the searches.
+    fn reduce_rows(&mut self, costs: &CostMatrix) {
+        let budget = ROW_REDUCTION_BIDS_PER_FREE * self.free_rows.len();
+        let mut bids = 0usize;
+        self.deferred.clear();
+        while let Some(i) = self.free_rows.pop() {
+            let i = i as usize;
+            if bids >= budget {
+                self.deferred.push(i as u32);
+                continue;
+            }
+            bids += 1;
+            let (w1, j1, w2) = self.best2(costs, i, true);
+            if j1 == NONE {
+                self.deferred.push(i as u32);
+                continue;
+            }
+            let prev = self.y[j1];
+            if prev != NONE && !(w1 < w2) {
+                self.deferred.push(i as u32);
+                continue;
+            }
+            if w2 < f64::INFINITY {
+                self.v[j1] -= w2 - w1;
+            }
+            self.x[i] = j1;
+            self.y[j1] = i;
+            if prev != NONE {
+                self.x[prev] = NONE;
+                self.free_rows.push(prev as u32);
+            }
+        }
+        self.stats.bids += bids as u64;
+        self.free_rows.extend_from_slice(&self.deferred);
+        self.deferred.clear();
     }
 
     /// After the auction: raises each assigned column's price by its row's slack so
@@ -1935,6 +1982,7 @@ impl Solver {
             f(&self.dirty),
             f(&self.dirty_rows),
             f(&self.raise),
+            f(&self.deferred),
         ]
     }
 }
