@@ -103,6 +103,14 @@ const AUTO_CANDIDATES_MIN: usize = 24;
 /// Upper clamp of the automatic candidate count.
 const AUTO_CANDIDATES_MAX: usize = 64;
 
+/// Warm solves build the candidate lists with `k * WARM_LIST_NUM / WARM_LIST_DEN`
+/// entries (at least 1): the old prices are near optimal, so the searches rarely go
+/// deep into a row, and shorter lists make the one full pass over the matrix cheaper
+/// (at 1000 × 1000, 16 instead of 25 entries: 15 % fewer instructions per warm solve).
+const WARM_LIST_NUM: usize = 2;
+/// See [`WARM_LIST_NUM`].
+const WARM_LIST_DEN: usize = 3;
+
 /// Candidate slots over which the local cost spread is measured for the auction.
 const AUCTION_SPREAD_SLOTS: usize = 8;
 /// First auction ε as a fraction of the mean local cost spread.
@@ -786,8 +794,11 @@ pub struct Solver {
     k_opt: usize,
     /// Sparse rounds before the dense finish if not [`MAX_ROUNDS`] (tests lower it).
     max_rounds: Option<u32>,
-    /// Candidates per row (sparse strategy) for the current dimensions.
+    /// Candidate slots per row (sparse strategy) for the current dimensions.
     k: usize,
+    /// Candidates the lists are built with in the current solve (`<= k`): `k` cold,
+    /// fewer warm ([`WARM_LIST_NUM`]).
+    k_eff: usize,
     rows: usize,
     cols: usize,
     /// Whether `x`, `u`, `v` hold a complete optimal solution of the last problem.
@@ -908,6 +919,7 @@ impl Solver {
         self.x.fill(NONE);
         self.y.fill(NONE);
         self.stats = SolveStats::default();
+        self.k_eff = self.k;
         self.finish(costs)
     }
 
@@ -942,6 +954,7 @@ impl Solver {
             ..SolveStats::default()
         };
         self.freed_slack = 0.0;
+        self.k_eff = (self.k * WARM_LIST_NUM / WARM_LIST_DEN).max(1);
         self.finish(costs)
     }
 
@@ -1084,6 +1097,7 @@ impl Solver {
             self.k_opt
         };
         self.k = k;
+        self.k_eff = k;
         self.solved = false;
         self.rows = rows;
         self.cols = cols;
@@ -1369,10 +1383,10 @@ impl Solver {
         check: bool,
     ) -> (f64, usize, Option<usize>) {
         let row = costs.row(i);
-        let k = self.k;
-        let base = i * k;
+        let k = self.k_eff;
+        let base = i * self.k;
         // Any k distinct columns bound the k-th smallest reduced cost from above.
-        let thr0 = if self.cand_len[i] as usize == k {
+        let thr0 = if self.cand_len[i] as usize >= k {
             self.cand_col[base..base + k]
                 .iter()
                 .map(|&c| row[c as usize] - self.v[c as usize])
