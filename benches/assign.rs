@@ -2,6 +2,10 @@
 //! squared-Euclidean cost, square N×N, one core.
 //!
 //! `cargo bench --bench assign -- --warm-up-time 1 --measurement-time 3`
+//!
+//! `assign_warm/1000` solves a clone of the solver after each cold solve (the clone's
+//! workspaces start without spare capacity); `assign_warm/alternating/1000` is the
+//! steady state: one solver warm-solving the two instances in turn.
 
 use criterion::{black_box, criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion};
 use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Solver, SquaredDistance};
@@ -80,6 +84,21 @@ fn assign_warm(cr: &mut Criterion) {
             },
             BatchSize::LargeInput,
         )
+    });
+    // Steady state: one solver warm-solving the two instances in turn (every goal
+    // moves by up to 2 % of the extent between consecutive solves), no clone, so the
+    // workspaces are reused as in the daemon's assignment worker.
+    let mut s = base.clone();
+    s.solve_warm(&c1).expect("feasible");
+    s.solve_warm(&c0).expect("feasible");
+    let mut flip = false;
+    g.bench_function(BenchmarkId::new("alternating", n), |b| {
+        b.iter(|| {
+            flip = !flip;
+            let c = if flip { &c1 } else { &c0 };
+            let a = s.solve_warm(black_box(c)).expect("feasible");
+            black_box(a.len())
+        })
     });
     g.finish();
 }

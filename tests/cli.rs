@@ -460,3 +460,62 @@ fn scene_check_summarises_a_good_scene_and_lists_every_error() {
     assert_eq!(missing.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("nope.ron"));
 }
+
+#[test]
+fn bench_assign_reports_quantiles_and_certificates() {
+    let dir = tempfile::tempdir().unwrap();
+    let dump = dir.path().join("instances.json");
+    for warm in [false, true] {
+        let mut cmd = bin();
+        cmd.args([
+            "bench",
+            "assign",
+            "--n",
+            "40",
+            "--repeats",
+            "5",
+            "--json",
+            "--dump",
+        ])
+        .arg(&dump);
+        if warm {
+            cmd.arg("--warm");
+        }
+        let out = cmd.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let row = &rows[0];
+        let want = if warm {
+            "assign_warm n=40"
+        } else {
+            "assign_cold n=40"
+        };
+        assert_eq!(row["workload"], want);
+        assert_eq!(row["samples"], 5);
+        let (p50, p99, max) = (
+            row["p50_us"].as_f64().unwrap(),
+            row["p99_us"].as_f64().unwrap(),
+            row["max_us"].as_f64().unwrap(),
+        );
+        assert!(0.0 < p50 && p50 <= p99 && p99 <= max, "{row}");
+        assert!(
+            row["note"].as_str().unwrap().contains("held on 5/5"),
+            "{row}"
+        );
+        let inst: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&dump).unwrap()).unwrap();
+        let frames = inst["frames"].as_array().unwrap();
+        assert_eq!(frames.len(), if warm { 6 } else { 5 });
+        assert_eq!(frames[0]["agents"].as_array().unwrap().len(), 40);
+    }
+    // Bad size: an error, not a panic.
+    let out = bin()
+        .args(["bench", "assign", "--n", "0"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+}

@@ -26,6 +26,9 @@ pub enum Workload {
     Arap,
     /// One control tick (segment + deform + step), without the assignment worker.
     Tick,
+    /// Exact assignment of `--n` agents to `--n` goals (uniform random points in the
+    /// unit square, squared-Euclidean cost), cold or `--warm`. Not part of `all`.
+    Assign,
 }
 
 /// Arguments of `bench`.
@@ -40,6 +43,20 @@ pub struct BenchArgs {
     /// Duration of the end-to-end run (s).
     #[arg(long, default_value_t = 10.0)]
     seconds: f64,
+    /// Agents and goals of the assignment workload.
+    #[arg(long, default_value_t = 1000)]
+    n: usize,
+    /// Assignment workload: warm solves over a chain of frames in which every goal
+    /// moves by up to 2 % of the extent (else cold solves of fresh instances).
+    #[arg(long)]
+    warm: bool,
+    /// Assignment workload: timed solves.
+    #[arg(long, default_value_t = 50)]
+    repeats: usize,
+    /// Assignment workload: also write the instances (points, as JSON) to this file,
+    /// for `benches/scipy_lsa.py`.
+    #[arg(long)]
+    dump: Option<std::path::PathBuf>,
     /// Machine-readable output.
     #[arg(long)]
     json: bool,
@@ -102,6 +119,9 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     if matches!(a.workload, Workload::All | Workload::Tick) {
         rows.push(control_tick(a.agents));
     }
+    if a.workload == Workload::Assign {
+        rows.push(assign(a.n, a.warm, a.repeats, a.dump.as_deref())?);
+    }
     if matches!(a.workload, Workload::All | Workload::E2e) {
         rows.extend(end_to_end(a.agents, a.seconds, !a.no_realtime)?);
     }
@@ -120,6 +140,123 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// splitmix64, the generator of the assignment instances (also in `benches/assign.rs`
+/// and `benches/scipy_lsa.py`, so all three see the same points).
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in `[0, 1)`, 53 bits.
+    fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+    fn points(&mut self, n: usize) -> Vec<Vec2> {
+        (0..n)
+            .map(|_| Vec2::new(self.unit(), self.unit()))
+            .collect()
+    }
+}
+
+/// Seed of instance `k` of size `n` (`k = 0` is the instance of `benches/assign.rs`).
+fn assign_seed(n: usize, k: usize) -> u64 {
+    (0xC0FFEE ^ n as u64).wrapping_add(k as u64)
+}
+
+/// Seed of the goal moves of the warm chain.
+const ASSIGN_MOVE_SEED: u64 = 0xBEEF;
+/// Largest goal move per frame of the warm chain, per axis, as a fraction of the
+/// extent (the unit square): moves are uniform in `[-0.02, 0.02)`.
+const ASSIGN_MOVE_FRACTION: f64 = 0.02;
+
+/// The assignment workload: `repeats` timed solves; every result is checked against
+/// its dual certificate outside the timing.
+fn assign(n: usize, warm: bool, repeats: usize, dump: Option<&std::path::Path>) -> Result<Row> {
+    use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Solver, SquaredDistance};
+    anyhow::ensure!(n >= 1, "--n must be at least 1");
+    let name = format!("assign_{} n={n}", if warm { "warm" } else { "cold" });
+    let mut samples = Vec::with_capacity(repeats);
+    let mut c = CostMatrix::new(n, n);
+    let mut solver = Solver::new();
+    let mut certified = 0usize;
+    let mut frames: Vec<(Vec<Vec2>, Vec<Vec2>)> = Vec::new();
+    let mut time_solve = |solver: &mut Solver, c: &CostMatrix, warm: bool| -> Result<()> {
+        let t0 = Instant::now();
+        let r = if warm {
+            solver.solve_warm(c)
+        } else {
+            solver.solve(c)
+        };
+        let dt = t0.elapsed().as_secs_f64() * 1e6;
+        r.map_err(|e| anyhow::anyhow!("assignment failed: {e}"))?;
+        samples.push(dt);
+        if solver.verify_optimal(c, 1e-9) {
+            certified += 1;
+        }
+        Ok(())
+    };
+    if warm {
+        let mut rng = SplitMix(assign_seed(n, 0));
+        let agents = rng.points(n);
+        let mut goals = rng.points(n);
+        SquaredDistance.fill(&agents, &goals, &mut c);
+        solver
+            .solve(&c)
+            .map_err(|e| anyhow::anyhow!("assignment failed: {e}"))?;
+        if dump.is_some() {
+            frames.push((agents.clone(), goals.clone()));
+        }
+        let mut moves = SplitMix(ASSIGN_MOVE_SEED);
+        for _ in 0..repeats {
+            for p in &mut goals {
+                p.x += 2.0 * ASSIGN_MOVE_FRACTION * (moves.unit() - 0.5);
+                p.y += 2.0 * ASSIGN_MOVE_FRACTION * (moves.unit() - 0.5);
+            }
+            SquaredDistance.fill(&agents, &goals, &mut c);
+            time_solve(&mut solver, &c, true)?;
+            if dump.is_some() {
+                frames.push((agents.clone(), goals.clone()));
+            }
+        }
+    } else {
+        for k in 0..repeats {
+            let mut rng = SplitMix(assign_seed(n, k));
+            let agents = rng.points(n);
+            let goals = rng.points(n);
+            SquaredDistance.fill(&agents, &goals, &mut c);
+            time_solve(&mut solver, &c, false)?;
+            if dump.is_some() {
+                frames.push((agents, goals));
+            }
+        }
+    }
+    if let Some(path) = dump {
+        let xy = |v: &[Vec2]| v.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>();
+        let json = serde_json::json!({
+            "n": n,
+            "warm": warm,
+            "cost": "squared_euclidean",
+            "frames": frames.iter().map(|(a, g)| serde_json::json!({"agents": xy(a), "goals": xy(g)})).collect::<Vec<_>>(),
+        });
+        std::fs::write(path, serde_json::to_vec(&json)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    let timed = samples.len();
+    Ok(row_from_samples(
+        &name,
+        samples,
+        format!(
+            "uniform random points, squared-Euclidean cost, one thread; dual certificate held on {certified}/{timed}{}",
+            if warm { "; every goal moves by up to 2 % of the extent per frame" } else { "; a fresh instance per solve" }
+        ),
+    ))
 }
 
 /// One ARAP step on a 20×20 mesh with a four-finger area control.

@@ -7,6 +7,7 @@ pub mod arap;
 pub mod assign;
 pub mod assigner;
 pub mod direct;
+pub mod effort;
 pub mod eikonal;
 pub mod environment;
 pub mod field;
