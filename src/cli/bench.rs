@@ -64,6 +64,10 @@ pub struct BenchArgs {
     /// (as on a machine that refuses them).
     #[arg(long)]
     no_realtime: bool,
+    /// End-to-end workload in a scene: a scene file, or a shipped name such as
+    /// `obstacle_course` (`config/scenes/<name>.ron`, embedded in the binary).
+    #[arg(long)]
+    scene: Option<std::path::PathBuf>,
 }
 
 #[derive(Serialize, Debug)]
@@ -123,7 +127,12 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         rows.push(assign(a.n, a.warm, a.repeats, a.dump.as_deref())?);
     }
     if matches!(a.workload, Workload::All | Workload::E2e) {
-        rows.extend(end_to_end(a.agents, a.seconds, !a.no_realtime)?);
+        rows.extend(end_to_end(
+            a.agents,
+            a.seconds,
+            !a.no_realtime,
+            a.scene.as_deref(),
+        )?);
     }
     if a.json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
@@ -352,9 +361,24 @@ fn control_tick(agents: u32) -> Row {
 }
 
 /// The full daemon replaying the shipped recordings at 120 Hz to one socket client.
-fn end_to_end(agents: u32, seconds: f64, realtime: bool) -> Result<Vec<Row>> {
+fn end_to_end(
+    agents: u32,
+    seconds: f64,
+    realtime: bool,
+    scene: Option<&std::path::Path>,
+) -> Result<Vec<Row>> {
     let mut cfg = Config::embedded_default();
     cfg.crowd.agents = agents;
+    if let Some(path) = scene {
+        let path = if path.extension().is_none() && !path.exists() {
+            std::path::PathBuf::from(format!("config/scenes/{}.ron", path.display()))
+        } else {
+            path.to_path_buf()
+        };
+        let loaded = crowdtouch::embedded::load_scene(&path, cfg.crowd.agent_radius_m)
+            .with_context(|| format!("bench scene {}", path.display()))?;
+        cfg.set_loaded_scene(Some(std::sync::Arc::new(loaded)));
+    }
     if !realtime {
         cfg.pipeline.realtime = Default::default();
     }
