@@ -10,32 +10,17 @@
 use criterion::{black_box, criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion};
 use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Solver, SquaredDistance};
 use crowdtouch::geom::Vec2;
+use crowdtouch::rng::SplitMix64;
 use pathfinding::kuhn_munkres::kuhn_munkres;
 use pathfinding::matrix::Matrix;
 
-/// splitmix64: small seeded PRNG so every run sees the same instances.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
-
-fn points(rng: &mut SplitMix, n: usize) -> Vec<Vec2> {
+fn points(rng: &mut SplitMix64, n: usize) -> Vec<Vec2> {
     (0..n).map(|_| Vec2::new(rng.unit(), rng.unit())).collect()
 }
 
 /// Agents, goals and their cost matrix for size `n`.
 fn instance(n: usize) -> (Vec<Vec2>, Vec<Vec2>, CostMatrix) {
-    let mut rng = SplitMix(0xC0FFEE ^ n as u64);
+    let mut rng = SplitMix64::new(0xC0FFEE ^ n as u64);
     let agents = points(&mut rng, n);
     let goals = points(&mut rng, n);
     let mut c = CostMatrix::new(n, n);
@@ -66,7 +51,7 @@ fn assign_warm(cr: &mut Criterion) {
     let n = 1000;
     let (agents, mut goals, c0) = instance(n);
     // Every goal moves by up to 2 % of the extent (unit square) in x and y.
-    let mut rng = SplitMix(0xBEEF);
+    let mut rng = SplitMix64::new(0xBEEF);
     for p in &mut goals {
         p.x += 0.04 * (rng.unit() - 0.5);
         p.y += 0.04 * (rng.unit() - 0.5);

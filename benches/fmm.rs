@@ -20,22 +20,7 @@ use crowdtouch::crowd::eikonal::{
     coarsen, sample, EikonalCosts, EikonalOptions, Fmm, Grid, Order, Sources,
 };
 use crowdtouch::geom::Vec2;
-
-/// splitmix64: small seeded PRNG so every run sees the same instances.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
+use crowdtouch::rng::SplitMix64;
 
 /// Cell size of every bench grid: 4 cm.
 const CELL_M: f64 = 0.04;
@@ -63,7 +48,7 @@ fn scene(n: usize, obstacles: bool) -> (Grid, Vec<f64>) {
         block(0.40, 0.55, 0.43, 1.00, f64::INFINITY);
         block(0.55, 0.20, 0.58, 0.80, f64::INFINITY);
         block(0.45, 0.85, 0.55, 0.95, 1.0 / 0.33);
-        let mut rng = SplitMix(0xF33D ^ n as u64);
+        let mut rng = SplitMix64::new(0xF33D ^ n as u64);
         for _ in 0..40 {
             let (x, y) = (0.05 + 0.9 * rng.unit(), 0.05 + 0.9 * rng.unit());
             if (0.05..0.32).contains(&x) || (0.66..0.97).contains(&x) {
@@ -114,7 +99,7 @@ fn fmm_field(cr: &mut Criterion) {
 /// 100 (10×10 lattice) on the right, both drifting 2 cm per frame in y.
 fn frames(grid: &Grid, frames: usize) -> Vec<(Vec<Vec2>, Vec<Vec2>)> {
     let side = grid.cols() as f64 * CELL_M;
-    let mut rng = SplitMix(0xA6E7);
+    let mut rng = SplitMix64::new(0xA6E7);
     let agents: Vec<Vec2> = (0..100)
         .map(|_| {
             Vec2::new(

@@ -19,6 +19,7 @@ pub mod gesture;
 pub mod input;
 pub mod pipeline;
 pub mod publish;
+pub mod rng;
 pub mod rt;
 pub mod snapshot;
 pub mod stats;

@@ -9,6 +9,7 @@ use crowdtouch::engine::Engine;
 use crowdtouch::geom::{Rect, Vec2};
 use crowdtouch::input::{Contact, ContactFlags, ContactId, TouchFrame};
 use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
+use crowdtouch::rng::SplitMix64;
 use crowdtouch::snapshot::StageStats;
 use crowdtouch::time::{monotonic_now, Micros};
 use serde::Serialize;
@@ -151,27 +152,10 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// splitmix64, the generator of the assignment instances (also in `benches/assign.rs`
-/// and `benches/scipy_lsa.py`, so all three see the same points).
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in `[0, 1)`, 53 bits.
-    fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-    fn points(&mut self, n: usize) -> Vec<Vec2> {
-        (0..n)
-            .map(|_| Vec2::new(self.unit(), self.unit()))
-            .collect()
-    }
+/// `n` points uniform in the unit square: the assignment instances (the same in
+/// `benches/assign.rs` and `benches/scipy_lsa.py`, so all three see the same points).
+fn unit_points(rng: &mut SplitMix64, n: usize) -> Vec<Vec2> {
+    (0..n).map(|_| Vec2::new(rng.unit(), rng.unit())).collect()
 }
 
 /// Seed of instance `k` of size `n` (`k = 0` is the instance of `benches/assign.rs`).
@@ -212,9 +196,9 @@ fn assign(n: usize, warm: bool, repeats: usize, dump: Option<&std::path::Path>) 
         Ok(())
     };
     if warm {
-        let mut rng = SplitMix(assign_seed(n, 0));
-        let agents = rng.points(n);
-        let mut goals = rng.points(n);
+        let mut rng = SplitMix64::new(assign_seed(n, 0));
+        let agents = unit_points(&mut rng, n);
+        let mut goals = unit_points(&mut rng, n);
         SquaredDistance.fill(&agents, &goals, &mut c);
         solver
             .solve(&c)
@@ -222,7 +206,7 @@ fn assign(n: usize, warm: bool, repeats: usize, dump: Option<&std::path::Path>) 
         if dump.is_some() {
             frames.push((agents.clone(), goals.clone()));
         }
-        let mut moves = SplitMix(ASSIGN_MOVE_SEED);
+        let mut moves = SplitMix64::new(ASSIGN_MOVE_SEED);
         for _ in 0..repeats {
             for p in &mut goals {
                 p.x += 2.0 * ASSIGN_MOVE_FRACTION * (moves.unit() - 0.5);
@@ -236,9 +220,9 @@ fn assign(n: usize, warm: bool, repeats: usize, dump: Option<&std::path::Path>) 
         }
     } else {
         for k in 0..repeats {
-            let mut rng = SplitMix(assign_seed(n, k));
-            let agents = rng.points(n);
-            let goals = rng.points(n);
+            let mut rng = SplitMix64::new(assign_seed(n, k));
+            let agents = unit_points(&mut rng, n);
+            let goals = unit_points(&mut rng, n);
             SquaredDistance.fill(&agents, &goals, &mut c);
             time_solve(&mut solver, &c, false)?;
             if dump.is_some() {

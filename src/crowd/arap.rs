@@ -1001,6 +1001,7 @@ fn fit_rotation(p: &[Vec2; 3], q: &[Vec2; 3]) -> (f64, f64) {
 mod tests {
     use super::*;
     use crate::geom::Rect;
+    use crate::rng::SplitMix64;
     use nalgebra::{DMatrix, DVector, Matrix2, Rotation2};
     use proptest::prelude::*;
     use proptest::test_runner::{Config as ProptestConfig, RngSeed};
@@ -1053,28 +1054,16 @@ mod tests {
             .fold(0.0, f64::max)
     }
 
-    /// Tiny deterministic generator for test inputs (SplitMix64).
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
-
     #[test]
     fn envelope_cholesky_matches_dense() {
         let n = 9;
         let first: Vec<usize> = (0..n).map(|i: usize| i.saturating_sub(1 + i % 3)).collect();
         let mut env = Envelope::new(first.clone());
         let mut dense = DMatrix::<f64>::zeros(n, n);
-        let mut rng = Rng(7);
+        let mut rng = SplitMix64::new(7);
         for i in 0..n {
             for j in first[i]..i {
-                let v = rng.next() - 0.5;
+                let v = rng.unit() - 0.5;
                 assert!(env.add(i, j, v));
                 dense[(i, j)] += v;
                 dense[(j, i)] += v;
@@ -1084,7 +1073,7 @@ mod tests {
         }
         assert!(!env.add(n - 1, 0, 1.0), "outside the envelope");
         assert_eq!(env.get(3, 1), dense[(3, 1)]);
-        let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+        let b: Vec<f64> = (0..n).map(|_| rng.unit()).collect();
         let expect = dense
             .clone()
             .cholesky()
@@ -1427,7 +1416,7 @@ mod tests {
     fn sparse_solves_equal_dense_solves() {
         let m = grid(6, 5);
         let n = m.vertex_count();
-        let mut rng = Rng(42);
+        let mut rng = SplitMix64::new(42);
         let cs = [
             Constraint {
                 vertex: 0,
@@ -1448,12 +1437,12 @@ mod tests {
         ];
         let targets: Vec<Vec2> = cs
             .iter()
-            .map(|c| m.rest()[c.vertex as usize] + Vec2::new(rng.next() - 0.5, rng.next() - 0.5))
+            .map(|c| m.rest()[c.vertex as usize] + Vec2::new(rng.unit() - 0.5, rng.unit() - 0.5))
             .collect();
         let anchor: Vec<Vec2> = m
             .rest()
             .iter()
-            .map(|p| p + 0.1 * Vec2::new(rng.next() - 0.5, rng.next() - 0.5))
+            .map(|p| p + 0.1 * Vec2::new(rng.unit() - 0.5, rng.unit() - 0.5))
             .collect();
         let mut arap = Arap::new(&m);
         arap.set_constraints(&cs).expect("valid");

@@ -2005,26 +2005,12 @@ impl Solver {
 mod tests {
     use super::Strategy as Algo;
     use super::*;
+    use crate::rng::SplitMix64;
     use proptest::prelude::{prop_assert, prop_oneof, proptest, Just, TestCaseError};
     use proptest::strategy::Strategy as _;
     use proptest::test_runner::{Config as ProptestConfig, RngSeed};
 
-    /// Small deterministic PRNG (splitmix64) for the larger instances.
-    struct SplitMix(u64);
-    impl SplitMix {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-        fn unit(&mut self) -> f64 {
-            (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-        }
-    }
-
-    fn points(rng: &mut SplitMix, n: usize) -> Vec<Vec2> {
+    fn points(rng: &mut SplitMix64, n: usize) -> Vec<Vec2> {
         (0..n).map(|_| Vec2::new(rng.unit(), rng.unit())).collect()
     }
 
@@ -2169,7 +2155,7 @@ mod tests {
     }
 
     fn run_chain(rows: usize, cols: usize, seed: u64, strategy: Algo) {
-        let mut rng = SplitMix(seed);
+        let mut rng = SplitMix64::new(seed);
         let mut agents = points(&mut rng, rows);
         let mut goals = points(&mut rng, cols);
         let mut c = CostMatrix::new(0, 0);
@@ -2205,7 +2191,7 @@ mod tests {
     /// A medium instance: random real or small-integer costs (ties), some `+inf`
     /// entries off a hidden feasible injection.
     fn medium(rows: usize, cols: usize, seed: u64, ints: bool, inf_per_mille: u64) -> CostMatrix {
-        let mut rng = SplitMix(seed);
+        let mut rng = SplitMix64::new(seed);
         let mut perm: Vec<usize> = (0..cols).collect();
         for i in (1..cols).rev() {
             perm.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
@@ -2256,7 +2242,7 @@ mod tests {
                 let (a, b) = (sparse.total_cost(&c), dense.total_cost(&c));
                 prop_assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "frame {}: {} vs {}", frame, a, b);
                 // Next frame: perturb the finite entries.
-                let mut rng = SplitMix(seed ^ (frame + 1));
+                let mut rng = SplitMix64::new(seed ^ (frame + 1));
                 for i in 0..rows {
                     for e in c.row_mut(i) {
                         if e.is_finite() && rng.next_u64() % 3 == 0 {
@@ -2282,7 +2268,7 @@ mod tests {
 
     #[test]
     fn sparse_with_one_candidate_matches_dense_on_200() {
-        let mut rng = SplitMix(5);
+        let mut rng = SplitMix64::new(5);
         let (a, g) = (points(&mut rng, 200), points(&mut rng, 230));
         let mut c = CostMatrix::new(0, 0);
         Distance.fill(&a, &g, &mut c);
@@ -2299,7 +2285,7 @@ mod tests {
         use pathfinding::kuhn_munkres::kuhn_munkres;
         use pathfinding::matrix::Matrix;
         for (seed, (rows, cols)) in [(10u64, (50, 50)), (11, (50, 50)), (12, (40, 50))] {
-            let mut rng = SplitMix(seed);
+            let mut rng = SplitMix64::new(seed);
             let ints: Vec<i64> = (0..rows * cols)
                 .map(|_| (rng.next_u64() % 100) as i64)
                 .collect();
@@ -2360,7 +2346,7 @@ mod tests {
     /// large entries must still be reported, cold and warm, at its exact position.
     #[test]
     fn not_finite_hidden_in_a_block_is_reported() {
-        let mut rng = SplitMix(21);
+        let mut rng = SplitMix64::new(21);
         let (a, g) = (points(&mut rng, 300), points(&mut rng, 300));
         let mut c = CostMatrix::new(0, 0);
         for bad in [f64::NAN, f64::NEG_INFINITY] {
@@ -2391,7 +2377,7 @@ mod tests {
     /// all-`+inf` row names its agent.
     #[test]
     fn unreachable_goals_in_a_large_problem() {
-        let mut rng = SplitMix(22);
+        let mut rng = SplitMix64::new(22);
         let (a, g) = (points(&mut rng, 300), points(&mut rng, 320));
         let mut c = CostMatrix::new(0, 0);
         SquaredDistance.fill(&a, &g, &mut c);
@@ -2423,7 +2409,7 @@ mod tests {
 
     #[test]
     fn repeated_same_size_solves_keep_buffers() {
-        let mut rng = SplitMix(9);
+        let mut rng = SplitMix64::new(9);
         let mut c = CostMatrix::new(0, 0);
         for (strategy, cols) in [(Algo::Dense, 300), (Algo::Sparse, 300), (Algo::Sparse, 350)] {
             let (mut a, g) = (points(&mut rng, 300), points(&mut rng, cols));

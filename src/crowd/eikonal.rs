@@ -1918,23 +1918,9 @@ impl CostProvider for EikonalCosts {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rng::SplitMix64;
     use proptest::prelude::*;
     use proptest::test_runner::{Config as ProptestConfig, RngSeed};
-
-    /// splitmix64, for seeded scenes.
-    struct SplitMix(u64);
-    impl SplitMix {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-        fn unit(&mut self) -> f64 {
-            (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-        }
-    }
 
     fn solve(grid: &Grid, cost: &[f64], src: &[Vec2], order: Order) -> Vec<f64> {
         let mut phi = vec![0.0; grid.len()];
@@ -2407,7 +2393,7 @@ mod tests {
     }
 
     fn free_points(
-        rng: &mut SplitMix,
+        rng: &mut SplitMix64,
         grid: &Grid,
         cost: &[f64],
         n: usize,
@@ -2443,7 +2429,7 @@ mod tests {
             (Order::First, FieldSources::Goals),
         ];
         for (order, sources) in cases {
-            let mut rng = SplitMix(0x5eed_f1e1d);
+            let mut rng = SplitMix64::new(0x5eed_f1e1d);
             let mut agents = free_points(&mut rng, &grid, &cost, 9, -0.9, 2.9);
             let mut goals = free_points(&mut rng, &grid, &cost, 12, 6.5, 10.9);
             goals[11] = pocket;
@@ -2492,7 +2478,7 @@ mod tests {
     #[test]
     fn field_direction_agrees_within_discretisation_error() {
         let (grid, cost) = scene();
-        let mut rng = SplitMix(7);
+        let mut rng = SplitMix64::new(7);
         let agents = free_points(&mut rng, &grid, &cost, 10, -0.9, 2.9);
         let goals = free_points(&mut rng, &grid, &cost, 10, 6.5, 10.9);
         let a = brute(&grid, &cost, &agents, &goals, true, Order::Second);
@@ -2618,7 +2604,7 @@ mod tests {
         ) {
             let n = 24;
             let grid = Grid::new(n, n, 0.25, Vec2::new(1.0, -2.0)).unwrap();
-            let mut rng = SplitMix(seed);
+            let mut rng = SplitMix64::new(seed);
             let mut cost: Vec<f64> = (0..grid.len())
                 .map(|_| if rng.unit() < density { f64::INFINITY } else { 0.5 + 2.0 * rng.unit() })
                 .collect();

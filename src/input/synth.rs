@@ -105,32 +105,8 @@ pub fn world_to_surface(p: Vec2) -> Vec2 {
     Vec2::new(p.x / WORLD_W_M, p.y / WORLD_H_M)
 }
 
-/// The splitmix64 generator (Steele, Lea, Flood 2014): tiny, seedable, good enough
-/// for noise.
-#[derive(Clone, Debug)]
-pub struct SplitMix64(u64);
-
-impl SplitMix64 {
-    /// A generator from a seed.
-    pub fn new(seed: u64) -> SplitMix64 {
-        SplitMix64(seed)
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[lo, hi)`.
-    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        let u = (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
-        lo + (hi - lo) * u
-    }
-}
+/// The splitmix64 generator (one for the whole project: [`crate::rng`]).
+pub use crate::rng::SplitMix64;
 
 /// Smoothstep ease-in/out: 0 → 0, 1 → 1, zero slope at both ends.
 fn ease(u: f64) -> f64 {
