@@ -851,14 +851,13 @@ def scenario_hidraw(g, name, rd, layout, fingers, vid, pid, hotplug):
 
 
 # ------------------------------------------------------------------ runs
-def shutdown(g, scenarios):
-    sc = scenarios[-1] if scenarios else Scenario("shutdown")
+def shutdown(g):
+    """SIGTERM to the daemon, as systemd sends it: a clean exit and `bye` to clients."""
     m = g.stream.mark()
     rc = g.stop()
     seg = g.stream.since(m)
     byes = [it for it in seg if it[3].get("type") == "bye"]
-    log = g.daemon_log()
-    panics = [t for t in log if "panicked" in t]
+    panics = [t for t in g.daemon_log() if "panicked" in t]
     res = Scenario(f"{g.name}-shutdown")
     res.check(rc == 0, "SIGTERM stops the daemon cleanly (exit 0)", f"rc={rc}")
     res.check(bool(byes), "clients got `bye`")
@@ -866,33 +865,17 @@ def shutdown(g, scenarios):
     return res
 
 
-def run_evdev(args, results):
-    want = [s for s in ("evdev-1", "evdev-2", "evdev-3", "evdev-5", "evdev-hotplug", "evdev-overload",
-                        "evdev-permissions") if selected(args, s)]
-    if not want:
-        return
-    print("== guest: virtio-multitouch (evdev)", flush=True)
-    g = Guest("evdev", args, config_ron("Auto", "Evdev"),
-              ["-device", "virtio-multitouch-pci,id=mt0,bus=rp1"], (HELLO_FAST, HELLO_CROWD))
+def run_guest(g, results, body):
+    """Runs `body(g)` (which returns its scenarios) on a booted guest, then the shutdown
+    scenario; a failed step becomes a failed scenario named after the guest, with the
+    end of the guest's console. The guest is killed whatever happens."""
     out = []
     try:
         print(f"  {g.wait_ready()}", flush=True)
-        wait_device(g, "attached", 0, timeout=30)
-        g.stream.wait(lambda it: it[1] == 1 and it[3].get("type") == "snapshot", 0, 10, "the crowd stream")
-        print(f"  booted in {g.boot_s:.1f} s; daemon attached", flush=True)
-        for name in want:
-            print(f"  -- {name}", flush=True)
-            if name.startswith("evdev-") and name[6:].isdigit():
-                out.append(scenario_evdev_fingers(g, int(name[6:])))
-            elif name == "evdev-hotplug":
-                out.append(scenario_evdev_hotplug(g))
-            elif name == "evdev-overload":
-                out.append(scenario_evdev_overload(g))
-            elif name == "evdev-permissions":
-                out.append(scenario_evdev_permissions(g))
-        out.append(shutdown(g, out))
+        out += body(g)
+        out.append(shutdown(g))
     except StepError as e:
-        sc = Scenario("evdev-guest")
+        sc = Scenario(f"{g.name}-guest")
         sc.error(e)
         out.append(sc)
         tail = "\n".join(g.daemon_log()[-25:])
@@ -902,6 +885,33 @@ def run_evdev(args, results):
     results += out
 
 
+def run_evdev(args, results):
+    want = [s for s in ("evdev-1", "evdev-2", "evdev-3", "evdev-5", "evdev-hotplug", "evdev-overload",
+                        "evdev-permissions") if selected(args, s)]
+    if not want:
+        return
+    scenarios = {"evdev-hotplug": scenario_evdev_hotplug, "evdev-overload": scenario_evdev_overload,
+                 "evdev-permissions": scenario_evdev_permissions}
+
+    def body(g):
+        wait_device(g, "attached", 0, timeout=30)
+        g.stream.wait(lambda it: it[1] == 1 and it[3].get("type") == "snapshot", 0, 10, "the crowd stream")
+        print(f"  booted in {g.boot_s:.1f} s; daemon attached", flush=True)
+        out = []
+        for name in want:
+            print(f"  -- {name}", flush=True)
+            if name[6:].isdigit():
+                out.append(scenario_evdev_fingers(g, int(name[6:])))
+            else:
+                out.append(scenarios[name](g))
+        return out
+
+    print("== guest: virtio-multitouch (evdev)", flush=True)
+    run_guest(Guest("evdev", args, config_ron("Auto", "Evdev"),
+                    ["-device", "virtio-multitouch-pci,id=mt0,bus=rp1"], (HELLO_FAST, HELLO_CROWD)),
+              results, body)
+
+
 def run_hidraw(args, results):
     for k, (name, fixture, vid, pid, fingers) in enumerate(HID_DEVICES):
         hotplug = k == 0 and selected(args, "hidraw-hotplug")
@@ -909,25 +919,15 @@ def run_hidraw(args, results):
             continue
         rd = open(os.path.join(ROOT, "tests", "fixtures", "hid", "descriptors", fixture), "rb").read()
         layout = hidgen.Descriptor(rd).touch_collections()[0]
-        print(f"== guest: uhid {name} ({fixture}, {vid:04x}:{pid:04x})", flush=True)
-        g = Guest(f"hidraw-{name}", args, config_ron(f'VendorProduct("{vid:04x}:{pid:04x}")', "Hidraw"), [],
-                  (HELLO_FAST, HELLO_CROWD))
-        out = []
-        try:
-            print(f"  {g.wait_ready()}", flush=True)
+
+        def body(g, name=name, rd=rd, layout=layout, fingers=fingers, vid=vid, pid=pid, hotplug=hotplug):
             g.console.wait(lambda it: it[1].startswith("BRIDGE READY"), 0, 10, "the uhid bridge")
             g.stream.wait(lambda it: it[1] == 1 and it[3].get("type") == "snapshot", 0, 20, "the crowd stream")
-            out += scenario_hidraw(g, name, rd, layout, fingers, vid, pid, hotplug)
-            out.append(shutdown(g, out))
-        except StepError as e:
-            sc = Scenario(f"hidraw-{name}")
-            sc.error(e)
-            out.append(sc)
-            tail = "\n".join(g.daemon_log()[-25:])
-            print(f"  guest console (last lines):\n{tail}", flush=True)
-        finally:
-            g.kill()
-        results += out
+            return scenario_hidraw(g, name, rd, layout, fingers, vid, pid, hotplug)
+
+        print(f"== guest: uhid {name} ({fixture}, {vid:04x}:{pid:04x})", flush=True)
+        run_guest(Guest(f"hidraw-{name}", args, config_ron(f'VendorProduct("{vid:04x}:{pid:04x}")', "Hidraw"),
+                        [], (HELLO_FAST, HELLO_CROWD)), results, body)
 
 
 def selected(args, name):
