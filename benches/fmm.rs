@@ -17,55 +17,21 @@
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Solver};
 use crowdtouch::crowd::eikonal::{
-    coarsen, sample, EikonalCosts, EikonalOptions, Fmm, Grid, Order, Sources,
+    bench_instance, coarsen, sample, EikonalCosts, EikonalOptions, Fmm, Grid, Order, Sources,
+    BENCH_CELL_M,
 };
 use crowdtouch::geom::Vec2;
 use crowdtouch::rng::SplitMix64;
 
 /// Cell size of every bench grid: 4 cm.
-const CELL_M: f64 = 0.04;
-
-/// A square `n²` grid at [`CELL_M`], uniform unit cost, or with walls (three long
-/// walls with gaps and 40 random blocks, ~12 % blocked) and a slow patch.
-fn scene(n: usize, obstacles: bool) -> (Grid, Vec<f64>) {
-    let grid = Grid::new(n, n, CELL_M, Vec2::zeros()).expect("grid");
-    let mut cost = vec![1.0; grid.len()];
-    if obstacles {
-        // Cells whose centres lie in [x0, x1] × [y0, y1] (fractions of the side).
-        let mut block = |x0: f64, y0: f64, x1: f64, y1: f64, v: f64| {
-            let range = |a: f64, b: f64| {
-                let lo = (a * n as f64 - 0.5).ceil().max(0.0) as usize;
-                let hi = ((b * n as f64 - 0.5).floor() as usize).min(n - 1);
-                lo..=hi
-            };
-            for r in range(y0, y1) {
-                for c in range(x0, x1) {
-                    cost[grid.index(c, r)] = v;
-                }
-            }
-        };
-        block(0.40, 0.00, 0.43, 0.45, f64::INFINITY);
-        block(0.40, 0.55, 0.43, 1.00, f64::INFINITY);
-        block(0.55, 0.20, 0.58, 0.80, f64::INFINITY);
-        block(0.45, 0.85, 0.55, 0.95, 1.0 / 0.33);
-        let mut rng = SplitMix64::new(0xF33D ^ n as u64);
-        for _ in 0..40 {
-            let (x, y) = (0.05 + 0.9 * rng.unit(), 0.05 + 0.9 * rng.unit());
-            if (0.05..0.32).contains(&x) || (0.66..0.97).contains(&x) {
-                continue; // keep the crowd and formation areas open
-            }
-            block(x, y, x + 0.04, y + 0.04, f64::INFINITY);
-        }
-    }
-    (grid, cost)
-}
+const CELL_M: f64 = BENCH_CELL_M;
 
 fn fmm_field(cr: &mut Criterion) {
     let mut g = cr.benchmark_group("fmm_field");
     g.sample_size(10);
     for (name, obstacles) in [("uniform", false), ("obstacles", true)] {
         for n in [256usize, 1024] {
-            let (grid, cost) = scene(n, obstacles);
+            let (grid, cost) = bench_instance(n, obstacles);
             let src = [Vec2::new(0.2 * n as f64 * CELL_M, 0.3 * n as f64 * CELL_M)];
             let mut phi = vec![0.0; grid.len()];
             let orders: &[(Order, &str)] = if n == 256 {
@@ -130,7 +96,7 @@ fn frames(grid: &Grid, frames: usize) -> Vec<(Vec<Vec2>, Vec<Vec2>)> {
 fn eikonal_costs(cr: &mut Criterion) {
     let mut g = cr.benchmark_group("eikonal_costs");
     g.sample_size(10);
-    let (grid, cost) = scene(256, true);
+    let (grid, cost) = bench_instance(256, true);
     let fr = frames(&grid, 32);
     let mut out = CostMatrix::new(100, 100);
 

@@ -30,6 +30,9 @@ pub enum Workload {
     /// Exact assignment of `--n` agents to `--n` goals (uniform random points in the
     /// unit square, squared-Euclidean cost), cold or `--warm`. Not part of `all`.
     Assign,
+    /// One fast-marching field (second order, one point source) on a `--grid`²
+    /// grid of 4 cm cells, uniform cost or `--obstacles`. Not part of `all`.
+    Fmm,
 }
 
 /// Arguments of `bench`.
@@ -58,6 +61,16 @@ pub struct BenchArgs {
     /// for `benches/scipy_lsa.py`.
     #[arg(long)]
     dump: Option<std::path::PathBuf>,
+    /// Fast-marching workload: cells per side of the square grid.
+    #[arg(long, default_value_t = 256)]
+    grid: usize,
+    /// Fast-marching workload: walls, blocks and a slow patch instead of a uniform
+    /// cost (the instance of `benches/fmm.rs`).
+    #[arg(long)]
+    obstacles: bool,
+    /// Fast-marching workload: first-order stencils instead of second order.
+    #[arg(long)]
+    first_order: bool,
     /// Machine-readable output.
     #[arg(long)]
     json: bool,
@@ -126,6 +139,9 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     }
     if a.workload == Workload::Assign {
         rows.push(assign(a.n, a.warm, a.repeats, a.dump.as_deref())?);
+    }
+    if a.workload == Workload::Fmm {
+        rows.push(fmm(a.grid, a.obstacles, a.first_order, a.repeats)?);
     }
     if matches!(a.workload, Workload::All | Workload::E2e) {
         rows.extend(end_to_end(
@@ -248,6 +264,61 @@ fn assign(n: usize, warm: bool, repeats: usize, dump: Option<&std::path::Path>) 
         format!(
             "uniform random points, squared-Euclidean cost, one thread; dual certificate held on {certified}/{timed}{}",
             if warm { "; every goal moves by up to 2 % of the extent per frame" } else { "; a fresh instance per solve" }
+        ),
+    ))
+}
+
+/// The fast-marching workload: `repeats` timed solves of one field from a point
+/// source at (0.2, 0.3) of the side; the field is checked outside the timing
+/// (`eikonal::sanity_check`, and on a uniform cost its largest deviation from the
+/// Euclidean distance).
+fn fmm(n: usize, obstacles: bool, first_order: bool, repeats: usize) -> Result<Row> {
+    use crowdtouch::crowd::eikonal::{bench_instance, sanity_check, Fmm, Order, Sources};
+    anyhow::ensure!(
+        (2..=8192).contains(&n),
+        "--grid must be between 2 and 8192 cells per side"
+    );
+    let (grid, cost) = bench_instance(n, obstacles);
+    let side = n as f64 * grid.cell_m();
+    let src = [Vec2::new(0.2 * side, 0.3 * side)];
+    let order = if first_order {
+        Order::First
+    } else {
+        Order::Second
+    };
+    let mut solver = Fmm::with_order(order);
+    let mut phi = vec![0.0; grid.len()];
+    let mut samples = Vec::with_capacity(repeats);
+    for _ in 0..repeats.max(1) {
+        let t0 = Instant::now();
+        solver.solve_into(&grid, &cost, Sources::Points(&src), &mut phi)?;
+        samples.push(t0.elapsed().as_secs_f64() * 1e6);
+    }
+    sanity_check(&grid, &cost, &phi)
+        .map_err(|cell| anyhow::anyhow!("the field breaks an invariant at cell {cell}"))?;
+    let reached = phi.iter().filter(|v| v.is_finite()).count();
+    let check = if obstacles {
+        format!("{reached} of {} cells reachable", grid.len())
+    } else {
+        let err = (0..grid.len())
+            .map(|i| (phi[i] - (grid.center(i) - src[0]).norm()).abs())
+            .fold(0.0, f64::max);
+        format!(
+            "largest deviation from the Euclidean distance {:.1} mm",
+            err * 1e3
+        )
+    };
+    let p50 = quantiles(samples.clone()).0;
+    Ok(row_from_samples(
+        &format!(
+            "fmm {n}x{n}{}{}",
+            if obstacles { " obstacles" } else { "" },
+            if first_order { " first order" } else { "" }
+        ),
+        samples,
+        format!(
+            "one field, one point source, 4 cm cells; {:.1} M cells/s at p50; {check}",
+            reached as f64 / p50
         ),
     ))
 }

@@ -137,19 +137,9 @@ pub const DEFAULT_OBSTACLE_DISCOMFORT: f64 = 1.0;
 /// one unit of discomfort ([`DiscomfortParams::default`]).
 pub const DEFAULT_DENSITY_DISCOMFORT_M2: f64 = 0.25;
 
-/// Largest number of cells a grid may have (indices are `u32`).
+/// Largest number of cells a grid may have, counting the solver's border of two
+/// cells on each side (indices are `u32`).
 pub const MAX_CELLS: usize = u32::MAX as usize;
-
-// Cell states during a march live in `Φ` itself: `+inf` not reached (or blocked:
-// `cost = +inf`, never updated), positive finite a trial value in the heap, and a set
-// sign bit a frozen value stored as `-Φ` (`-0.0` at a source). The sign is cleared
-// when the march ends. One array fewer to load per neighbour.
-
-/// Whether a cell's stored value is frozen.
-#[inline]
-fn frozen(v: f64) -> bool {
-    v.is_sign_negative()
-}
 
 // ---------------------------------------------------------------------------------
 // Errors
@@ -247,12 +237,16 @@ impl Grid {
     /// (0, 0) is at `origin`.
     ///
     /// # Errors
-    /// [`EikonalError::InvalidGrid`] if a dimension is zero, the cell count exceeds
-    /// [`MAX_CELLS`], or `cell_m` / `origin` are not finite (and `cell_m > 0`).
+    /// [`EikonalError::InvalidGrid`] if a dimension is zero, the cell count with the
+    /// solver's border of two cells on each side exceeds [`MAX_CELLS`], or `cell_m` / `origin` are not finite (and `cell_m > 0`).
     pub fn new(cols: usize, rows: usize, cell_m: f64, origin: Vec2) -> Result<Grid, EikonalError> {
         let ok = cols > 0
             && rows > 0
-            && cols.checked_mul(rows).is_some_and(|n| n <= MAX_CELLS)
+            && cols
+                .checked_add(2 * PAD)
+                .zip(rows.checked_add(2 * PAD))
+                .and_then(|(c, r)| c.checked_mul(r))
+                .is_some_and(|n| n <= MAX_CELLS)
             && cell_m.is_finite()
             && cell_m > 0.0
             && origin.x.is_finite()
@@ -442,103 +436,116 @@ pub enum Sources<'a> {
     Cells(&'a [usize]),
 }
 
-/// "Not in the heap" in [`Heap::pos`].
-const ABSENT: u32 = u32::MAX;
+/// Width, in cells, of the border around the solver's padded arrays ([`Fmm`]): two,
+/// so that the second-order stencil's far neighbour of any cell is inside the arrays
+/// and no stencil needs a bounds test.
+const PAD: usize = 2;
+
+/// A march that froze at least `1 / SEQUENTIAL_FRACTION` of the grid writes its
+/// result out and resets row by row ([`Fmm::finish`]).
+const SEQUENTIAL_FRACTION: usize = 8;
 
 /// Children per node of [`Heap`] (4-ary: half the depth of a binary heap, and the
 /// children share a cache line).
 const HEAP_ARITY: usize = 4;
 
-/// Indexed 4-ary min-heap of trial cells keyed by their tentative `Φ`, with
-/// decrease-key (each cell at most once, so the heap holds only the front).
+/// A trial cell in the heap: its tentative `Φ` (as the bits of a non-negative
+/// `f64`, which order as integers do), its index in the padded arrays and in the
+/// grid (16 bytes).
+#[derive(Copy, Clone, Debug)]
+struct Trial {
+    key: u64,
+    padded: u32,
+    cell: u32,
+}
+
+/// 4-ary min-heap of trial cells keyed by their tentative `Φ`, without
+/// decrease-key: a lowered value is pushed again and the stale entry is skipped when
+/// it surfaces (its cell is frozen by then, since the lower entry surfaced first).
+/// No position array to keep up to date on every move, and no trial-value array:
+/// every update pushes (a cell is pushed once per neighbour that freezes before it,
+/// at most four times).
 #[derive(Clone, Debug, Default)]
 struct Heap {
-    items: Vec<(f64, u32)>,
-    pos: Vec<u32>,
+    items: Vec<Trial>,
 }
 
 impl Heap {
-    /// Empties the heap, keeping capacity; `n` cells.
-    fn clear(&mut self, n: usize) {
-        for &(_, i) in &self.items {
-            self.pos[i as usize] = ABSENT;
-        }
+    fn clear(&mut self) {
         self.items.clear();
-        if self.pos.len() != n {
-            self.pos.clear();
-            self.pos.resize(n, ABSENT);
-        }
-    }
-
-    fn is_empty(&self) -> bool {
-        self.items.is_empty()
-    }
-
-    /// Inserts `cell` with `key`, or lowers its key (`key` never rises).
-    #[inline]
-    fn push_or_decrease(&mut self, cell: u32, key: f64) {
-        let p = self.pos[cell as usize];
-        let hole = if p == ABSENT {
-            self.items.push((key, cell));
-            self.items.len() - 1
-        } else {
-            p as usize
-        };
-        self.sift_up(hole, (key, cell));
     }
 
     #[inline]
-    fn sift_up(&mut self, mut hole: usize, item: (f64, u32)) {
+    fn push(&mut self, item: Trial) {
+        let mut hole = self.items.len();
+        self.items.push(item);
         while hole > 0 {
             let parent = (hole - 1) / HEAP_ARITY;
-            let pi = self.items[parent];
-            if pi.0 <= item.0 {
+            let p = self.items[parent];
+            if p.key <= item.key {
                 break;
             }
-            self.items[hole] = pi;
-            self.pos[pi.1 as usize] = hole as u32;
+            self.items[hole] = p;
             hole = parent;
         }
         self.items[hole] = item;
-        self.pos[item.1 as usize] = hole as u32;
     }
 
-    /// Removes and returns the cell with the smallest key.
+    /// Removes and returns the entry with the smallest key.
+    ///
+    /// Bottom-up (Floyd): the hole at the root moves down along the smallest
+    /// children to a leaf without comparing against the last item, which then sifts
+    /// up from there (it came from the bottom, so it rarely climbs). The smallest of
+    /// four children is found with selects, not branches.
     #[inline]
-    fn pop(&mut self) -> Option<(f64, u32)> {
+    fn pop(&mut self) -> Option<Trial> {
         let top = *self.items.first()?;
-        self.pos[top.1 as usize] = ABSENT;
         let last = self.items.pop().expect("non-empty");
         let n = self.items.len();
-        if n > 0 {
-            // Sift the last item down from the root along the smallest children.
-            let mut hole = 0;
-            loop {
-                let first = HEAP_ARITY * hole + 1;
-                if first >= n {
-                    break;
-                }
-                let end = (first + HEAP_ARITY).min(n);
-                let mut c = first;
-                let mut ck = self.items[first].0;
-                for j in first + 1..end {
-                    let k = self.items[j].0;
-                    if k < ck {
-                        c = j;
-                        ck = k;
-                    }
-                }
-                if last.0 <= ck {
-                    break;
-                }
-                let ci = self.items[c];
-                self.items[hole] = ci;
-                self.pos[ci.1 as usize] = hole as u32;
-                hole = c;
-            }
-            self.items[hole] = last;
-            self.pos[last.1 as usize] = hole as u32;
+        if n == 0 {
+            return Some(top);
         }
+        let items = &mut self.items;
+        let mut hole = 0;
+        loop {
+            let first = HEAP_ARITY * hole + 1;
+            let c = if first + HEAP_ARITY <= n {
+                let k = |j: usize| items[j].key;
+                let (a, ka) = if k(first + 1) < k(first) {
+                    (first + 1, k(first + 1))
+                } else {
+                    (first, k(first))
+                };
+                let (b, kb) = if k(first + 3) < k(first + 2) {
+                    (first + 3, k(first + 3))
+                } else {
+                    (first + 2, k(first + 2))
+                };
+                if kb < ka {
+                    b
+                } else {
+                    a
+                }
+            } else if first < n {
+                (first + 1..n).fold(
+                    first,
+                    |c, j| if items[j].key < items[c].key { j } else { c },
+                )
+            } else {
+                break;
+            };
+            items[hole] = items[c];
+            hole = c;
+        }
+        while hole > 0 {
+            let parent = (hole - 1) / HEAP_ARITY;
+            if items[parent].key <= last.key {
+                break;
+            }
+            items[hole] = items[parent];
+            hole = parent;
+        }
+        items[hole] = last;
         Some(top)
     }
 }
@@ -557,7 +564,11 @@ impl Heap {
 ///
 /// # Complexity
 /// `O(N log N)` for `N` reached cells; no allocation once the workspace has grown
-/// to the grid size.
+/// to the grid size. The workspace keeps the grid padded by a border of [`PAD`]
+/// cells: the cost (`+inf` on the border) and the frozen values (`+inf` where not
+/// frozen). A stencil is then two loads and a minimum per axis, without a state test
+/// or a bounds test, and a march touches 16 bytes per cell in its front (random
+/// access is what costs: the front is a ring across every row of the grid).
 ///
 /// # Example
 /// ```
@@ -576,7 +587,15 @@ impl Heap {
 pub struct Fmm {
     order: Order,
     heap: Heap,
-    touched: Vec<u32>,
+    /// `(cols, rows)` the padded arrays are laid out for.
+    dims: (usize, usize),
+    /// The cost times the cell size (`C h`, the right-hand side of the stencil) on
+    /// the padded grid; `+inf` on the border and on blocked cells.
+    rhs: Vec<f64>,
+    /// Frozen `Φ` on the padded grid; `+inf` where not frozen (always on the border).
+    frozen: Vec<f64>,
+    /// `(padded index, cell)` of every cell a march froze, to write out and reset.
+    touched: Vec<(u32, u32)>,
     marched: u64,
 }
 
@@ -629,55 +648,125 @@ impl Fmm {
         validate_cost(grid, cost)?;
         check_len("out", grid, out.len())?;
         validate_sources(grid, cost, sources)?;
-        self.reset(grid.len());
+        self.load(grid, cost);
         out.fill(f64::INFINITY);
-        self.march(grid, cost, sources, out, None);
+        self.march(grid, cost, sources, None);
         self.finish(out);
         Ok(())
     }
 
-    /// Clears the heap and the touched list for a grid of `n` cells.
-    fn reset(&mut self, n: usize) {
-        self.heap.clear(n);
-        self.touched.clear();
+    /// Lays the workspace out for `grid` (on a size change) and copies `cost` (valid,
+    /// one entry per cell) into it; every value `+inf`, the heap empty.
+    fn load(&mut self, grid: &Grid, cost: &[f64]) {
+        self.reset();
+        let (cols, rows) = (grid.cols, grid.rows);
+        let wp = cols + 2 * PAD;
+        if self.dims != (cols, rows) {
+            let n = wp * (rows + 2 * PAD);
+            for v in [&mut self.rhs, &mut self.frozen] {
+                v.clear();
+                v.resize(n, f64::INFINITY);
+            }
+            self.dims = (cols, rows);
+        }
+        let h = grid.cell_m;
+        for r in 0..rows {
+            let start = (r + PAD) * wp + PAD;
+            let dst = &mut self.rhs[start..start + cols];
+            for (d, &c) in dst.iter_mut().zip(&cost[r * cols..(r + 1) * cols]) {
+                *d = c * h;
+            }
+        }
     }
 
-    /// Ends a march: frozen values lose their sign bit, trial values (left by an
-    /// early stop) become `+inf`; the heap and the touched list are cleared.
-    fn finish(&mut self, phi: &mut [f64]) {
-        for &i in &self.touched {
-            let v = &mut phi[i as usize];
-            *v = if frozen(*v) { -*v } else { f64::INFINITY };
+    /// Whether a march that froze `touched` cells is better written out and reset
+    /// row by row than cell by cell: sequential passes are cheap, scattered ones pay
+    /// a cache miss per line.
+    fn sequential(&self, touched: usize) -> bool {
+        touched >= (self.dims.0 * self.dims.1) / SEQUENTIAL_FRACTION
+    }
+
+    /// Puts every frozen value back to `+inf` and empties the heap.
+    fn reset(&mut self) {
+        if self.sequential(self.touched.len()) {
+            let (cols, rows) = self.dims;
+            let wp = cols + 2 * PAD;
+            for r in 0..rows {
+                let start = (r + PAD) * wp + PAD;
+                self.frozen[start..start + cols].fill(f64::INFINITY);
+            }
+        } else {
+            for &(p, _) in &self.touched {
+                self.frozen[p as usize] = f64::INFINITY;
+            }
         }
         self.touched.clear();
-        let n = phi.len();
-        self.heap.clear(n);
+        self.heap.clear();
     }
 
-    /// The march itself. Sources are validated; `phi` is `+inf` everywhere and the
-    /// heap and touched list are empty. Leaves frozen values negated (see
-    /// [`Fmm::finish`]). Returns whether the march ran to exhaustion.
+    /// Ends a march: writes the frozen values into `phi` and resets the workspace.
+    /// Either every cell is written (`+inf` where not frozen) or only the frozen
+    /// ones, so every other cell of `phi` must be `+inf` already.
+    fn finish(&mut self, phi: &mut [f64]) {
+        if self.sequential(self.touched.len()) {
+            let (cols, rows) = self.dims;
+            let wp = cols + 2 * PAD;
+            for r in 0..rows {
+                let start = (r + PAD) * wp + PAD;
+                phi[r * cols..(r + 1) * cols].copy_from_slice(&self.frozen[start..start + cols]);
+            }
+        } else {
+            for &(p, i) in &self.touched {
+                phi[i as usize] = self.frozen[p as usize];
+            }
+        }
+        self.reset();
+    }
+
+    /// The march itself. Sources are validated; the workspace is loaded with the
+    /// grid's cost ([`Fmm::load`]) and reset. Returns whether the march ran to
+    /// exhaustion. The values stay in the workspace until [`Fmm::finish`].
     fn march(
         &mut self,
         grid: &Grid,
         cost: &[f64],
         sources: Sources<'_>,
-        phi: &mut [f64],
+        targets: Option<Targets<'_>>,
+    ) -> bool {
+        match self.order {
+            Order::First => self.march_with::<false>(grid, cost, sources, targets),
+            Order::Second => self.march_with::<true>(grid, cost, sources, targets),
+        }
+    }
+
+    /// [`Fmm::march`] with the stencil order fixed at compile time.
+    fn march_with<const SECOND: bool>(
+        &mut self,
+        grid: &Grid,
+        cost: &[f64],
+        sources: Sources<'_>,
         targets: Option<Targets<'_>>,
     ) -> bool {
         let h = grid.cell_m;
+        let cols = grid.cols;
+        let wp = cols + 2 * PAD;
+        let padded = |c: usize, r: usize| (r + PAD) * wp + c + PAD;
         let mut remaining = targets.as_ref().map_or(usize::MAX, |t| t.count);
         let is_target =
             |t: &Option<Targets<'_>>, i: usize| t.as_ref().is_some_and(|t| t.mark[i] == t.stamp);
         // Initial frozen band.
-        let band_start = self.touched.len();
+        let mut band = |p: usize, i: usize, v: f64| {
+            if self.frozen[p] == f64::INFINITY {
+                self.touched.push((p as u32, i as u32));
+            }
+            if v < self.frozen[p] {
+                self.frozen[p] = v;
+            }
+        };
         match sources {
             Sources::Cells(cells) => {
                 for &i in cells {
-                    if phi[i] == f64::INFINITY {
-                        self.touched.push(i as u32);
-                    }
-                    phi[i] = -0.0;
+                    band(padded(i % cols, i / cols), i, 0.0);
                 }
             }
             Sources::Points(points) => {
@@ -689,7 +778,8 @@ impl Fmm {
                     let r0 = (fy.floor() as isize).min(grid.rows as isize - 1);
                     for rr in (r0 - reach).max(0)..=(r0 + reach).min(grid.rows as isize - 1) {
                         for cc in (c0 - reach).max(0)..=(c0 + reach).min(grid.cols as isize - 1) {
-                            let i = grid.index(cc as usize, rr as usize);
+                            let (cu, ru) = (cc as usize, rr as usize);
+                            let i = grid.index(cu, ru);
                             if cost[i] == f64::INFINITY {
                                 continue;
                             }
@@ -700,161 +790,138 @@ impl Fmm {
                                 continue;
                             }
                             let v = segment_cost(grid, cost, s, centre);
-                            let cur = phi[i];
                             if v == f64::INFINITY {
                                 // The straight segment crosses a blocked cell: march it.
                                 continue;
                             }
-                            if cur == f64::INFINITY {
-                                self.touched.push(i as u32);
-                                phi[i] = -v;
-                            } else if v < -cur {
-                                phi[i] = -v;
-                            }
+                            band(padded(cu, ru), i, v);
                         }
                     }
                 }
             }
         }
         // Count targets inside the band, then push the band's neighbours.
-        let band_end = self.touched.len();
-        for k in band_start..band_end {
-            let i = self.touched[k] as usize;
-            if is_target(&targets, i) {
+        let band = self.touched.len();
+        for k in 0..band {
+            if is_target(&targets, self.touched[k].1 as usize) {
                 remaining -= 1;
             }
         }
         if remaining == 0 {
-            self.marched += (band_end - band_start) as u64;
+            self.marched += band as u64;
             return false;
         }
-        for k in band_start..band_end {
-            let i = self.touched[k] as usize;
-            self.update_neighbours(grid, cost, phi, i);
+        for k in 0..band {
+            let (p, i) = self.touched[k];
+            self.update_neighbours::<SECOND>(cols, p as usize, i as usize);
         }
-        let mut frozen = band_end - band_start;
-        while let Some((_, i)) = self.heap.pop() {
-            let i = i as usize;
-            phi[i] = -phi[i];
+        let mut frozen = band;
+        while let Some(t) = self.heap.pop() {
+            let p = t.padded as usize;
+            if self.frozen[p] != f64::INFINITY {
+                continue; // a stale entry: the cell froze at a lower value
+            }
+            self.frozen[p] = f64::from_bits(t.key);
             frozen += 1;
+            let i = t.cell as usize;
+            self.touched.push((t.padded, t.cell));
             if is_target(&targets, i) {
                 remaining -= 1;
                 if remaining == 0 {
                     self.marched += frozen as u64;
-                    return self.heap.is_empty();
+                    let fz = &self.frozen;
+                    return self
+                        .heap
+                        .items
+                        .iter()
+                        .all(|t| fz[t.padded as usize] != f64::INFINITY);
                 }
             }
-            self.update_neighbours(grid, cost, phi, i);
+            self.update_neighbours::<SECOND>(cols, p, i);
         }
         self.marched += frozen as u64;
         true
     }
 
-    /// Recomputes the trial value of each non-frozen, unblocked 4-neighbour of `i`.
+    /// Recomputes the trial value of each non-frozen, unblocked 4-neighbour of the
+    /// cell with padded index `p` and grid index `i` in a grid of `cols` columns. (A
+    /// neighbour across the grid's edge is a border cell, with `+inf` cost, so its
+    /// wrapped grid index is never used.)
     #[inline]
-    fn update_neighbours(&mut self, grid: &Grid, cost: &[f64], phi: &mut [f64], i: usize) {
-        let (c, r) = (i % grid.cols, i / grid.cols);
-        if c > 0 {
-            self.update(grid, cost, phi, i - 1, c - 1, r);
-        }
-        if c + 1 < grid.cols {
-            self.update(grid, cost, phi, i + 1, c + 1, r);
-        }
-        if r > 0 {
-            self.update(grid, cost, phi, i - grid.cols, c, r - 1);
-        }
-        if r + 1 < grid.rows {
-            self.update(grid, cost, phi, i + grid.cols, c, r + 1);
-        }
+    fn update_neighbours<const SECOND: bool>(&mut self, cols: usize, p: usize, i: usize) {
+        let wp = cols + 2 * PAD;
+        self.update::<SECOND>(wp, p - 1, i.wrapping_sub(1));
+        self.update::<SECOND>(wp, p + 1, i.wrapping_add(1));
+        self.update::<SECOND>(wp, p - wp, i.wrapping_sub(cols));
+        self.update::<SECOND>(wp, p + wp, i.wrapping_add(cols));
     }
 
-    /// Recomputes the trial value of cell `n` = (`c`, `r`).
-    #[inline]
-    fn update(&mut self, grid: &Grid, cost: &[f64], phi: &mut [f64], n: usize, c: usize, r: usize) {
-        let cur = phi[n];
-        let cn = cost[n];
-        if frozen(cur) || cn == f64::INFINITY {
+    /// Recomputes the trial value of the cell with padded index `p`, grid index `n`;
+    /// `wp` is the padded row length.
+    #[inline(always)]
+    fn update<const SECOND: bool>(&mut self, wp: usize, p: usize, n: usize) {
+        let rhs = self.rhs[p];
+        if self.frozen[p] != f64::INFINITY || rhs == f64::INFINITY {
             return;
         }
-        let v = self.local(grid, cn, phi, n, c, r);
-        if v < cur {
-            if cur == f64::INFINITY {
-                self.touched.push(n as u32);
-            }
-            phi[n] = v;
-            self.heap.push_or_decrease(n as u32, v);
-        }
+        let v = self.local::<SECOND>(rhs, p, wp);
+        self.heap.push(Trial {
+            key: v.to_bits(),
+            padded: p as u32,
+            cell: n as u32,
+        });
     }
 
-    /// One axis of the upwind stencil at cell `i`: `(k, t, 1/√k)` of the smaller frozen
-    /// neighbour, or `None` when neither neighbour is frozen. `stride` is 1 (x) or
-    /// `cols` (y); `pos`/`len` the coordinate along the axis and its extent.
+    /// One axis of the upwind stencil at padded index `p` with stride `s` (1 along x,
+    /// the padded row length along y): `(k, t)` of the smaller frozen neighbour, `t =
+    /// +inf` when neither is frozen.
     #[inline]
-    fn axis(
-        &self,
-        phi: &[f64],
-        i: usize,
-        stride: usize,
-        pos: usize,
-        len: usize,
-    ) -> Option<(f64, f64, f64)> {
-        let known = |j: usize| frozen(phi[j]);
-        let lo = pos > 0 && known(i - stride);
-        let hi = pos + 1 < len && known(i + stride);
-        let use_lo = match (lo, hi) {
-            (false, false) => return None,
-            (true, false) => true,
-            (false, true) => false,
-            (true, true) => -phi[i - stride] <= -phi[i + stride],
-        };
-        let a1 = if use_lo {
-            -phi[i - stride]
+    fn axis<const SECOND: bool>(&self, p: usize, s: usize) -> (f64, f64) {
+        let fz = &self.frozen;
+        let (lo, hi) = (fz[p - s], fz[p + s]);
+        let (a1, far) = if lo <= hi {
+            (lo, fz[p - 2 * s])
         } else {
-            -phi[i + stride]
+            (hi, fz[p + 2 * s])
         };
-        if self.order == Order::Second {
-            let far = if use_lo {
-                (pos > 1).then(|| i - 2 * stride)
-            } else {
-                (pos + 2 < len).then(|| i + 2 * stride)
-            };
-            if let Some(j) = far {
-                if known(j) && -phi[j] <= a1 {
-                    return Some((2.25, (4.0 * a1 + phi[j]) * (1.0 / 3.0), 2.0 / 3.0));
-                }
-            }
+        // (`a1 < inf`: with both neighbours and the far one unfrozen, 4·inf − inf
+        // would be NaN.)
+        if SECOND && far <= a1 && a1 < f64::INFINITY {
+            (2.25, (4.0 * a1 - far) * (1.0 / 3.0))
+        } else {
+            (1.0, a1)
         }
-        Some((1.0, a1, 1.0))
     }
 
-    /// Trial value of cell `i` with unit cost `ci` from its frozen neighbours.
+    /// Trial value of the cell with padded index `p` whose cost times the cell size
+    /// is `rhs`, from its frozen neighbours; `wp` is the padded row length.
     #[inline]
-    fn local(&self, grid: &Grid, ci: f64, phi: &[f64], i: usize, c: usize, r: usize) -> f64 {
-        let rhs = ci * grid.cell_m;
-        let x = self.axis(phi, i, 1, c, grid.cols);
-        let y = self.axis(phi, i, grid.cols, r, grid.rows);
-        match (x, y) {
-            (None, None) => f64::INFINITY,
-            (Some((_, t, w)), None) | (None, Some((_, t, w))) => t + rhs * w,
-            (Some(a), Some(b)) => {
-                let ((k1, t1, w1), (k2, t2, _)) = if a.1 <= b.1 { (a, b) } else { (b, a) };
-                let one = t1 + rhs * w1;
-                if one <= t2 {
-                    return one;
-                }
-                // k1 (Φ - t1)² + k2 (Φ - t2)² = rhs²; f(t2) < 0 here so the larger
-                // root exceeds t2 and the discriminant is positive.
-                let ks = k1 + k2;
-                let b_half = k1 * t1 + k2 * t2;
-                let cc = k1 * t1 * t1 + k2 * t2 * t2 - rhs * rhs;
-                let disc = (b_half * b_half - ks * cc).max(0.0);
-                let v = (b_half + disc.sqrt()) / ks;
-                if v >= t2 {
-                    v
-                } else {
-                    one
-                }
-            }
+    fn local<const SECOND: bool>(&self, rhs: f64, p: usize, wp: usize) -> f64 {
+        let (kx, tx) = self.axis::<SECOND>(p, 1);
+        let (ky, ty) = self.axis::<SECOND>(p, wp);
+        let ((k1, t1), (k2, t2)) = if tx <= ty {
+            ((kx, tx), (ky, ty))
+        } else {
+            ((ky, ty), (kx, tx))
+        };
+        // 1/√k: 1 (first order) or 2/3 (second order, k = 9/4).
+        let w1 = if k1 == 1.0 { 1.0 } else { 2.0 / 3.0 };
+        let one = t1 + rhs * w1;
+        if one <= t2 {
+            // Also the case t2 = +inf (one axis only), and +inf when neither is frozen.
+            return one;
+        }
+        // k1 (Φ - t1)² + k2 (Φ - t2)² = rhs²; f(t2) < 0 here so the larger root
+        // exceeds t2 and the discriminant is positive.
+        let ks = k1 + k2;
+        let b_half = k1 * t1 + k2 * t2;
+        let cc = k1 * t1 * t1 + k2 * t2 * t2 - rhs * rhs;
+        let disc = (b_half * b_half - ks * cc).max(0.0);
+        let v = (b_half + disc.sqrt()) / ks;
+        if v >= t2 {
+            v
+        } else {
+            one
         }
     }
 }
@@ -1629,7 +1696,7 @@ impl EikonalCosts {
     ) -> Result<EikonalCosts, EikonalError> {
         validate_cost(&grid, cost)?;
         let mut fmm = Fmm::with_order(options.order);
-        fmm.reset(grid.len());
+        fmm.load(&grid, cost);
         Ok(EikonalCosts {
             grid,
             cost: cost.to_vec(),
@@ -1660,6 +1727,7 @@ impl EikonalCosts {
         }
         self.cost.copy_from_slice(cost);
         let inner = self.inner.get_mut();
+        inner.fmm.load(&self.grid, cost);
         for f in &mut inner.fields {
             f.valid = false;
         }
@@ -1874,7 +1942,6 @@ impl EikonalCosts {
             field.phi[i as usize] = f64::INFINITY;
         }
         field.touched.clear();
-        fmm.reset(self.grid.len());
         let before = fmm.marched;
         let src = [self.grid.center(cell)];
         let t = Targets {
@@ -1882,14 +1949,8 @@ impl EikonalCosts {
             stamp: *stamp,
             count: targets.len(),
         };
-        let complete = fmm.march(
-            &self.grid,
-            &self.cost,
-            Sources::Points(&src),
-            &mut field.phi,
-            Some(t),
-        );
-        field.touched.extend_from_slice(&fmm.touched);
+        let complete = fmm.march(&self.grid, &self.cost, Sources::Points(&src), Some(t));
+        field.touched.extend(fmm.touched.iter().map(|&(_, i)| i));
         fmm.finish(&mut field.phi);
         stats.fields += 1;
         stats.cells_marched += fmm.marched - before;
@@ -1913,6 +1974,54 @@ impl CostProvider for EikonalCosts {
             }
         }
     }
+}
+
+// ---------------------------------------------------------------------------------
+// Benchmark instance
+// ---------------------------------------------------------------------------------
+
+/// Cell size of [`bench_instance`] grids: 4 cm (a 256² grid is a 10.24 m square).
+pub const BENCH_CELL_M: f64 = 0.04;
+
+/// The fast-marching benchmark instance shared by `benches/fmm.rs` and
+/// `crowdtouch bench fmm`: a square `n²` grid of [`BENCH_CELL_M`] cells at the origin
+/// with unit cost, or with `obstacles`: three long walls with gaps, 40 seeded random
+/// blocks (about 12 % of the cells blocked) and a slow patch (speed 0.33), keeping
+/// the strips `x ∈ [0.05, 0.32]` and `[0.66, 0.97]` of the side open.
+///
+/// # Panics
+/// If `n` is 0 or too large for a [`Grid`].
+pub fn bench_instance(n: usize, obstacles: bool) -> (Grid, Vec<f64>) {
+    let grid = Grid::new(n, n, BENCH_CELL_M, Vec2::zeros()).expect("bench grid size");
+    let mut cost = vec![1.0; grid.len()];
+    if obstacles {
+        // Cells whose centres lie in [x0, x1] × [y0, y1] (fractions of the side).
+        let mut block = |x0: f64, y0: f64, x1: f64, y1: f64, v: f64| {
+            let range = |a: f64, b: f64| {
+                let lo = (a * n as f64 - 0.5).ceil().max(0.0) as usize;
+                let hi = ((b * n as f64 - 0.5).floor() as usize).min(n - 1);
+                lo..=hi
+            };
+            for r in range(y0, y1) {
+                for c in range(x0, x1) {
+                    cost[grid.index(c, r)] = v;
+                }
+            }
+        };
+        block(0.40, 0.00, 0.43, 0.45, f64::INFINITY);
+        block(0.40, 0.55, 0.43, 1.00, f64::INFINITY);
+        block(0.55, 0.20, 0.58, 0.80, f64::INFINITY);
+        block(0.45, 0.85, 0.55, 0.95, 1.0 / 0.33);
+        let mut rng = crate::rng::SplitMix64::new(0xF33D ^ n as u64);
+        for _ in 0..40 {
+            let (x, y) = (0.05 + 0.9 * rng.unit(), 0.05 + 0.9 * rng.unit());
+            if (0.05..0.32).contains(&x) || (0.66..0.97).contains(&x) {
+                continue; // keep the crowd and formation areas open
+            }
+            block(x, y, x + 0.04, y + 0.04, f64::INFINITY);
+        }
+    }
+    (grid, cost)
 }
 
 #[cfg(test)]
