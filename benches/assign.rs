@@ -6,9 +6,15 @@
 //! `assign_warm/1000` solves a clone of the solver after each cold solve (the clone's
 //! workspaces start without spare capacity); `assign_warm/alternating/1000` is the
 //! steady state: one solver warm-solving the two instances in turn.
+//!
+//! `assign_cold_points/*` and `assign_warm_points/alternating/1000` solve the same
+//! instances from the positions (`PointCosts`: costs computed on demand, candidate
+//! lists from the spatial index, no matrix); the answers are identical.
 
 use criterion::{black_box, criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion};
-use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Solver, SquaredDistance};
+use crowdtouch::crowd::assign::{
+    CostMatrix, CostProvider, PointCosts, PointMetric, Solver, SquaredDistance,
+};
 use crowdtouch::geom::Vec2;
 use crowdtouch::rng::SplitMix64;
 use pathfinding::kuhn_munkres::kuhn_munkres;
@@ -42,6 +48,55 @@ fn assign_cold(cr: &mut Criterion) {
             })
         });
     }
+    g.finish();
+}
+
+fn assign_cold_points(cr: &mut Criterion) {
+    let mut g = cr.benchmark_group("assign_cold_points");
+    g.sample_size(10);
+    for n in [1000usize, 2000, 5000] {
+        let (agents, goals, _) = instance(n);
+        let mut pc = PointCosts::new(PointMetric::Squared);
+        pc.set(&agents, &goals);
+        let mut solver = Solver::new();
+        solver.solve_with(&pc).expect("feasible");
+        g.bench_function(BenchmarkId::from_parameter(n), |b| {
+            b.iter(|| {
+                let a = solver.solve_with(black_box(&pc)).expect("feasible");
+                black_box(a.len())
+            })
+        });
+    }
+    g.finish();
+}
+
+fn assign_warm_points(cr: &mut Criterion) {
+    let mut g = cr.benchmark_group("assign_warm_points");
+    g.sample_size(20);
+    let n = 1000;
+    let (agents, mut goals, _) = instance(n);
+    let mut p0 = PointCosts::new(PointMetric::Squared);
+    p0.set(&agents, &goals);
+    let mut rng = SplitMix64::new(0xBEEF);
+    for p in &mut goals {
+        p.x += 0.04 * (rng.unit() - 0.5);
+        p.y += 0.04 * (rng.unit() - 0.5);
+    }
+    let mut p1 = PointCosts::new(PointMetric::Squared);
+    p1.set(&agents, &goals);
+    let mut s = Solver::new();
+    s.solve_with(&p0).expect("feasible");
+    s.solve_warm_with(&p1).expect("feasible");
+    s.solve_warm_with(&p0).expect("feasible");
+    let mut flip = false;
+    g.bench_function(BenchmarkId::new("alternating", n), |b| {
+        b.iter(|| {
+            flip = !flip;
+            let pc = if flip { &p1 } else { &p0 };
+            let a = s.solve_warm_with(black_box(pc)).expect("feasible");
+            black_box(a.len())
+        })
+    });
     g.finish();
 }
 
@@ -110,5 +165,12 @@ fn pathfinding_kuhn_munkres(cr: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, assign_cold, assign_warm, pathfinding_kuhn_munkres);
+criterion_group!(
+    benches,
+    assign_cold,
+    assign_warm,
+    assign_cold_points,
+    assign_warm_points,
+    pathfinding_kuhn_munkres
+);
 criterion_main!(benches);

@@ -54,6 +54,11 @@ pub struct BenchArgs {
     /// moves by up to 2 % of the extent (else cold solves of fresh instances).
     #[arg(long)]
     warm: bool,
+    /// Assignment workload: solve from the positions (costs computed on demand,
+    /// candidate lists from a spatial index, no matrix: what the controllers run)
+    /// instead of from a filled cost matrix.
+    #[arg(long)]
+    points: bool,
     /// Assignment workload: timed solves.
     #[arg(long, default_value_t = 50)]
     repeats: usize,
@@ -138,7 +143,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         rows.push(control_tick(a.agents));
     }
     if a.workload == Workload::Assign {
-        rows.push(assign(a.n, a.warm, a.repeats, a.dump.as_deref())?);
+        rows.push(assign(a.n, a.warm, a.points, a.repeats, a.dump.as_deref())?);
     }
     if a.workload == Workload::Fmm {
         rows.push(fmm(a.grid, a.obstacles, a.first_order, a.repeats)?);
@@ -187,35 +192,52 @@ const ASSIGN_MOVE_FRACTION: f64 = 0.02;
 
 /// The assignment workload: `repeats` timed solves; every result is checked against
 /// its dual certificate outside the timing.
-fn assign(n: usize, warm: bool, repeats: usize, dump: Option<&std::path::Path>) -> Result<Row> {
-    use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Solver, SquaredDistance};
+fn assign(
+    n: usize,
+    warm: bool,
+    points: bool,
+    repeats: usize,
+    dump: Option<&std::path::Path>,
+) -> Result<Row> {
+    use crowdtouch::crowd::assign::{
+        CostMatrix, CostProvider, PointCosts, PointMetric, Solver, SquaredDistance,
+    };
     anyhow::ensure!(n >= 1, "--n must be at least 1");
-    let name = format!("assign_{} n={n}", if warm { "warm" } else { "cold" });
+    let name = format!(
+        "assign_{}{} n={n}",
+        if warm { "warm" } else { "cold" },
+        if points { "_points" } else { "" }
+    );
     let mut samples = Vec::with_capacity(repeats);
     let mut c = CostMatrix::new(n, n);
+    let mut pc = PointCosts::new(PointMetric::Squared);
     let mut solver = Solver::new();
     let mut certified = 0usize;
     let mut frames: Vec<(Vec<Vec2>, Vec<Vec2>)> = Vec::new();
-    let mut time_solve = |solver: &mut Solver, c: &CostMatrix, warm: bool| -> Result<()> {
-        let t0 = Instant::now();
-        let r = if warm {
-            solver.solve_warm(c)
-        } else {
-            solver.solve(c)
+    // The matrix is filled in every case (outside the timing) for the certificate.
+    let mut time_solve =
+        |solver: &mut Solver, c: &CostMatrix, pc: &PointCosts, warm: bool| -> Result<()> {
+            let t0 = Instant::now();
+            let r = match (points, warm) {
+                (false, true) => solver.solve_warm(c),
+                (false, false) => solver.solve(c),
+                (true, true) => solver.solve_warm_with(pc),
+                (true, false) => solver.solve_with(pc),
+            };
+            let dt = t0.elapsed().as_secs_f64() * 1e6;
+            r.map_err(|e| anyhow::anyhow!("assignment failed: {e}"))?;
+            samples.push(dt);
+            if solver.verify_optimal(c, 1e-9) {
+                certified += 1;
+            }
+            Ok(())
         };
-        let dt = t0.elapsed().as_secs_f64() * 1e6;
-        r.map_err(|e| anyhow::anyhow!("assignment failed: {e}"))?;
-        samples.push(dt);
-        if solver.verify_optimal(c, 1e-9) {
-            certified += 1;
-        }
-        Ok(())
-    };
     if warm {
         let mut rng = SplitMix64::new(assign_seed(n, 0));
         let agents = unit_points(&mut rng, n);
         let mut goals = unit_points(&mut rng, n);
         SquaredDistance.fill(&agents, &goals, &mut c);
+        pc.set(&agents, &goals);
         solver
             .solve(&c)
             .map_err(|e| anyhow::anyhow!("assignment failed: {e}"))?;
@@ -229,7 +251,8 @@ fn assign(n: usize, warm: bool, repeats: usize, dump: Option<&std::path::Path>) 
                 p.y += 2.0 * ASSIGN_MOVE_FRACTION * (moves.unit() - 0.5);
             }
             SquaredDistance.fill(&agents, &goals, &mut c);
-            time_solve(&mut solver, &c, true)?;
+            pc.set(&agents, &goals);
+            time_solve(&mut solver, &c, &pc, true)?;
             if dump.is_some() {
                 frames.push((agents.clone(), goals.clone()));
             }
@@ -240,7 +263,8 @@ fn assign(n: usize, warm: bool, repeats: usize, dump: Option<&std::path::Path>) 
             let agents = unit_points(&mut rng, n);
             let goals = unit_points(&mut rng, n);
             SquaredDistance.fill(&agents, &goals, &mut c);
-            time_solve(&mut solver, &c, false)?;
+            pc.set(&agents, &goals);
+            time_solve(&mut solver, &c, &pc, false)?;
             if dump.is_some() {
                 frames.push((agents, goals));
             }

@@ -327,6 +327,388 @@ impl CostProvider for Distance {
 }
 
 // ---------------------------------------------------------------------------------
+// Cost sources
+// ---------------------------------------------------------------------------------
+
+/// Where the solver reads its costs: a [`CostMatrix`], or [`PointCosts`] that
+/// compute each entry from positions when it is needed (no `rows × cols` matrix in
+/// memory, and a full row costs a pass over the goals, which stay in cache, instead
+/// of a pass over a matrix that does not).
+///
+/// Entries must not be NaN or `-inf` (a solve reports them as
+/// [`AssignError::NotFinite`]); `+inf` is an unreachable pair.
+pub trait CostSource {
+    /// Number of rows (agents).
+    fn rows(&self) -> usize;
+    /// Number of columns (goals).
+    fn cols(&self) -> usize;
+    /// Entry `(i, j)`.
+    fn get(&self, i: usize, j: usize) -> f64;
+    /// Row `i`: borrowed from the source, or computed into `buf` (resized to
+    /// [`CostSource::cols`]; no allocation when its capacity suffices).
+    fn row<'a>(&'a self, i: usize, buf: &'a mut Vec<f64>) -> &'a [f64];
+    /// The positions behind the costs, when the source has them: the solver then
+    /// finds each row's cheapest columns through their spatial index instead of a
+    /// pass over the row.
+    fn points(&self) -> Option<&PointCosts> {
+        None
+    }
+    /// Checks the source before a solve (a matrix is checked during the first pass).
+    ///
+    /// # Errors
+    /// [`AssignError::NotFinite`].
+    fn validate(&self) -> Result<(), AssignError> {
+        Ok(())
+    }
+}
+
+impl CostSource for CostMatrix {
+    fn rows(&self) -> usize {
+        self.rows
+    }
+    fn cols(&self) -> usize {
+        self.cols
+    }
+    #[inline]
+    fn get(&self, i: usize, j: usize) -> f64 {
+        self.data[i * self.cols + j]
+    }
+    #[inline]
+    fn row<'a>(&'a self, i: usize, _buf: &'a mut Vec<f64>) -> &'a [f64] {
+        &self.data[i * self.cols..(i + 1) * self.cols]
+    }
+}
+
+/// The metric of [`PointCosts`].
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub enum PointMetric {
+    /// `|a - g|²` in m², as [`SquaredDistance`].
+    #[default]
+    Squared,
+    /// `|a - g|` in metres, as [`Distance`].
+    Euclidean,
+}
+
+/// Costs computed from agent and goal positions on demand: entry `(i, j)` is
+/// [`SquaredDistance`]'s or [`Distance`]'s, bit for bit, without the matrix.
+///
+/// This is the solver's geometric fast path: the goals are bucketed on a uniform
+/// grid (about [`GOALS_PER_BUCKET`] per bucket), and a row's cheapest reduced costs
+/// `c_ij - v_j` are found by visiting buckets in rings around the agent until the
+/// ring's distance bound, less the largest column price, exceeds the k-th best found:
+/// no column further away can enter (see `PointCosts::select_near`). The lists
+/// are therefore exactly those a pass over the full row would give, so the answer,
+/// its dual certificate and the warm start are the same as on the matrix.
+///
+/// # Complexity
+/// [`PointCosts::set`] copies the positions into per-axis arrays and buckets the
+/// goals (a counting sort; reused, no allocation once grown): `O(agents + goals)`.
+/// An entry is `O(1)`; a candidate list visits the buckets within its radius.
+///
+/// # Example
+/// ```
+/// use crowdtouch::crowd::assign::{PointCosts, PointMetric, Solver};
+/// use crowdtouch::geom::Vec2;
+/// let agents = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0)];
+/// let goals = [Vec2::new(1.1, 0.0), Vec2::new(-0.1, 0.0)];
+/// let mut costs = PointCosts::new(PointMetric::Squared);
+/// costs.set(&agents, &goals);
+/// let mut solver = Solver::new();
+/// assert_eq!(solver.solve_with(&costs).unwrap(), &[1, 0]);
+/// assert!(solver.verify_optimal(&costs, 1e-12));
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct PointCosts {
+    metric: PointMetric,
+    ax: Vec<f64>,
+    ay: Vec<f64>,
+    gx: Vec<f64>,
+    gy: Vec<f64>,
+    /// Bucket side (world units) and the corner of bucket (0, 0).
+    cell: f64,
+    origin: (f64, f64),
+    /// Buckets along x and y.
+    nb: (usize, usize),
+    /// Start of each bucket in `order` (`nb.0 * nb.1 + 1` entries).
+    start: Vec<u32>,
+    /// Goal indices grouped by bucket, and their coordinates in that order.
+    order: Vec<u32>,
+    bx: Vec<f64>,
+    by: Vec<f64>,
+    /// Whether every position is finite (else the index is not built).
+    finite: bool,
+}
+
+/// Goals per bucket of the [`PointCosts`] index, on average over the goals' bounding
+/// box.
+pub const GOALS_PER_BUCKET: f64 = 2.0;
+
+/// Largest number of buckets per axis of the [`PointCosts`] index.
+const MAX_BUCKETS_PER_AXIS: usize = 1024;
+
+impl PointCosts {
+    /// Empty costs with the given metric.
+    pub fn new(metric: PointMetric) -> PointCosts {
+        PointCosts {
+            metric,
+            ..PointCosts::default()
+        }
+    }
+
+    /// The metric.
+    pub fn metric(&self) -> PointMetric {
+        self.metric
+    }
+
+    /// Takes new positions (agents are the rows, goals the columns).
+    pub fn set(&mut self, agents: &[Vec2], goals: &[Vec2]) {
+        fn axes(xs: &mut Vec<f64>, ys: &mut Vec<f64>, p: &[Vec2]) {
+            xs.clear();
+            ys.clear();
+            xs.extend(p.iter().map(|q| q.x));
+            ys.extend(p.iter().map(|q| q.y));
+        }
+        axes(&mut self.ax, &mut self.ay, agents);
+        axes(&mut self.gx, &mut self.gy, goals);
+        let fin = |v: &[f64]| v.iter().all(|c| c.is_finite());
+        self.finite = fin(&self.ax) && fin(&self.ay) && fin(&self.gx) && fin(&self.gy);
+        self.build_index();
+    }
+
+    /// Buckets the goals (counting sort) on a grid of square buckets over their
+    /// bounding box.
+    fn build_index(&mut self) {
+        let n = self.gx.len();
+        self.start.clear();
+        self.order.clear();
+        self.bx.clear();
+        self.by.clear();
+        if !self.finite || n == 0 {
+            self.nb = (0, 0);
+            return;
+        }
+        let (mut x0, mut x1, mut y0, mut y1) = (self.gx[0], self.gx[0], self.gy[0], self.gy[0]);
+        for (&x, &y) in self.gx.iter().zip(&self.gy) {
+            x0 = x0.min(x);
+            x1 = x1.max(x);
+            y0 = y0.min(y);
+            y1 = y1.max(y);
+        }
+        let (w, h) = (x1 - x0, y1 - y0);
+        let buckets = (n as f64 / GOALS_PER_BUCKET).max(1.0);
+        let mut cell = ((w.max(h * 1e-9) * h.max(w * 1e-9)) / buckets).sqrt();
+        if !(cell > 0.0 && cell.is_finite()) {
+            cell = 1.0; // every goal at one point
+        }
+        let axis = |len: f64| ((len / cell).floor() as usize + 1).min(MAX_BUCKETS_PER_AXIS);
+        let (nx, ny) = (axis(w), axis(h));
+        // With the per-axis cap the buckets may have to grow to cover the box.
+        let cell = cell.max(w / (nx as f64 - 0.5)).max(h / (ny as f64 - 0.5));
+        self.cell = cell;
+        self.origin = (x0, y0);
+        self.nb = (nx, ny);
+        let bucket = |x: f64, y: f64| {
+            let cx = (((x - x0) / cell) as usize).min(nx - 1);
+            let cy = (((y - y0) / cell) as usize).min(ny - 1);
+            cy * nx + cx
+        };
+        self.start.resize(nx * ny + 1, 0);
+        for (&x, &y) in self.gx.iter().zip(&self.gy) {
+            self.start[bucket(x, y) + 1] += 1;
+        }
+        for b in 1..self.start.len() {
+            self.start[b] += self.start[b - 1];
+        }
+        self.order.resize(n, 0);
+        self.bx.resize(n, 0.0);
+        self.by.resize(n, 0.0);
+        // Fill each bucket from its end down, using `start[b + 1]` as a cursor; the
+        // cursors end at the bucket starts.
+        for j in (0..n).rev() {
+            let b = bucket(self.gx[j], self.gy[j]);
+            self.start[b + 1] -= 1;
+            let at = self.start[b + 1] as usize;
+            self.order[at] = j as u32;
+            self.bx[at] = self.gx[j];
+            self.by[at] = self.gy[j];
+        }
+        // Now start[b + 1] is the start of bucket b; shift back by one.
+        self.start.rotate_left(1);
+        let last = self.start.len() - 1;
+        self.start[last] = n as u32;
+    }
+
+    /// The `k` smallest [`key`]s `key(c_ij - v_j, j ^ salt)` of row `i` that are at
+    /// least `lo`, sorted in `buf[..n]` (returns `n`): the same keys as [`select_k`]
+    /// over the full row, found through the bucket index. `v_hi` is an upper bound
+    /// of every price `v_j`; `thr0` as in [`select_k`]. Positions must be finite.
+    ///
+    /// # Proof of exactness
+    /// Buckets are visited in Chebyshev rings `r = 0, 1, ...` around the agent's
+    /// (clamped) bucket; every goal in ring `r ≥ 1` is at least `(r − 1)·s + m` away
+    /// (`s` the bucket side, `m` the agent's distance to its bucket's nearest side,
+    /// 0 outside the grid), so its reduced cost is at least `B = f((r − 1)·s + m) −
+    /// v_hi` with `f` the metric. Once at least `k` keys are held, all at or below
+    /// the admission threshold, and `key(B)` exceeds that threshold, no unvisited
+    /// goal can displace them. `B` is shrunk by a relative `1e-9` against rounding.
+    #[allow(clippy::too_many_arguments)]
+    fn select_near(
+        &self,
+        i: usize,
+        v: &[f64],
+        v_hi: f64,
+        k: usize,
+        mask: u64,
+        lo: u64,
+        thr0: f64,
+        salt: u32,
+        buf: &mut [u64],
+    ) -> usize {
+        let cap = buf.len();
+        debug_assert!(k >= 1 && cap >= 2 * k);
+        let (nx, ny) = self.nb;
+        let mut n = 0usize;
+        // As in `select_k`: keys above `thr_key` are rejected, and so are reduced
+        // costs above `thr` (never above `thr0`): the k smallest keys of the entries
+        // with `w <= thr0`, whatever the visiting order, so both give the same keys.
+        let (mut thr_key, mut thr) = if thr0 < f64::INFINITY {
+            (ord_bits(thr0) | mask, thr0)
+        } else {
+            (u64::MAX, f64::INFINITY)
+        };
+        let (x, y) = (self.ax[i], self.ay[i]);
+        let s = self.cell;
+        let (fx, fy) = ((x - self.origin.0) / s, (y - self.origin.1) / s);
+        let clampi = |f: f64, len: usize| (f.max(0.0) as usize).min(len - 1);
+        let (ci, cj) = (clampi(fx, nx), clampi(fy, ny));
+        // Distance from the agent to the nearest side of its (clamped) bucket.
+        let side = |f: f64, c: usize| {
+            let off = (f - c as f64).clamp(0.0, 1.0);
+            off.min(1.0 - off) * s
+        };
+        let m = side(fx, ci).min(side(fy, cj));
+        let rmax = ci.max(nx - 1 - ci).max(cj).max(ny - 1 - cj);
+        let squared = self.metric == PointMetric::Squared;
+        let visit = |b: usize, buf: &mut [u64], n: &mut usize, thr_key: &mut u64, thr: &mut f64| {
+            for t in self.start[b] as usize..self.start[b + 1] as usize {
+                let (dx, dy) = (x - self.bx[t], y - self.by[t]);
+                let d2 = dx * dx + dy * dy;
+                let c = if squared { d2 } else { d2.sqrt() };
+                let j = self.order[t];
+                let w = c - v[j as usize];
+                if w < f64::INFINITY && !(w > *thr) {
+                    let kk = key(w, j ^ salt, mask);
+                    if kk >= lo && kk <= *thr_key {
+                        buf[*n] = kk;
+                        *n += 1;
+                        if *n == cap {
+                            let (_, kth, _) = buf.select_nth_unstable(k - 1);
+                            *thr_key = *kth;
+                            *thr = from_ord_bits(*kth | mask).min(thr0);
+                            *n = k;
+                        }
+                    }
+                }
+            }
+        };
+        for r in 0..=rmax {
+            if r >= 1 && n >= k {
+                if n > k || thr_key == u64::MAX {
+                    let (_, kth, _) = buf[..n].select_nth_unstable(k - 1);
+                    if *kth < thr_key {
+                        thr_key = *kth;
+                        thr = from_ord_bits(*kth | mask).min(thr0);
+                    }
+                    n = k;
+                }
+                let d = ((r - 1) as f64 * s + m) * (1.0 - 1e-9);
+                let f = if squared { d * d } else { d };
+                let b = f - v_hi;
+                let b = b - 1e-9 * b.abs();
+                if (ord_bits(b) & !mask) > (thr_key | mask) {
+                    break;
+                }
+            }
+            let (x0, x1) = (ci.saturating_sub(r), (ci + r).min(nx - 1));
+            for yy in cj.saturating_sub(r)..=(cj + r).min(ny - 1) {
+                let row = yy * nx;
+                if yy + r == cj || yy == cj + r {
+                    for xx in x0..=x1 {
+                        visit(row + xx, buf, &mut n, &mut thr_key, &mut thr);
+                    }
+                } else {
+                    if ci >= r {
+                        visit(row + ci - r, buf, &mut n, &mut thr_key, &mut thr);
+                    }
+                    if r > 0 && ci + r < nx {
+                        visit(row + ci + r, buf, &mut n, &mut thr_key, &mut thr);
+                    }
+                }
+            }
+        }
+        if n > k {
+            buf[..n].select_nth_unstable(k - 1);
+            n = k;
+        }
+        buf[..n].sort_unstable();
+        n
+    }
+}
+
+impl CostSource for PointCosts {
+    fn rows(&self) -> usize {
+        self.ax.len()
+    }
+    fn cols(&self) -> usize {
+        self.gx.len()
+    }
+    #[inline]
+    fn get(&self, i: usize, j: usize) -> f64 {
+        let (dx, dy) = (self.ax[i] - self.gx[j], self.ay[i] - self.gy[j]);
+        let d2 = dx * dx + dy * dy;
+        match self.metric {
+            PointMetric::Squared => d2,
+            PointMetric::Euclidean => d2.sqrt(),
+        }
+    }
+    fn points(&self) -> Option<&PointCosts> {
+        Some(self)
+    }
+    fn validate(&self) -> Result<(), AssignError> {
+        if self.finite {
+            return Ok(());
+        }
+        let bad =
+            |x: &[f64], y: &[f64]| (0..x.len()).find(|&k| !(x[k].is_finite() && y[k].is_finite()));
+        if let Some(row) = bad(&self.ax, &self.ay) {
+            return Err(AssignError::NotFinite { row, col: 0 });
+        }
+        let col = bad(&self.gx, &self.gy).unwrap_or(0);
+        Err(AssignError::NotFinite { row: 0, col })
+    }
+    fn row<'a>(&'a self, i: usize, buf: &'a mut Vec<f64>) -> &'a [f64] {
+        let (ax, ay) = (self.ax[i], self.ay[i]);
+        buf.resize(self.gx.len(), 0.0);
+        let it = buf.iter_mut().zip(self.gx.iter().zip(&self.gy));
+        match self.metric {
+            PointMetric::Squared => {
+                for (o, (&gx, &gy)) in it {
+                    let (dx, dy) = (ax - gx, ay - gy);
+                    *o = dx * dx + dy * dy;
+                }
+            }
+            PointMetric::Euclidean => {
+                for (o, (&gx, &gy)) in it {
+                    let (dx, dy) = (ax - gx, ay - gy);
+                    *o = (dx * dx + dy * dy).sqrt();
+                }
+            }
+        }
+        buf
+    }
+}
+
+// ---------------------------------------------------------------------------------
 // Errors, options, statistics
 // ---------------------------------------------------------------------------------
 
@@ -687,7 +1069,8 @@ fn select_k<const BELOW: bool>(
             if check && bad.is_none() {
                 bad = Some(col as usize);
             }
-        } else if w < f64::INFINITY {
+        } else if w < f64::INFINITY && !(w > *thr) {
+            // (`thr` here too, not only in the block filter: the row's tail skips it.)
             let kk = key(w, col ^ salt, mask);
             if kk >= lo && kk <= *thr_key {
                 buf[*n] = kk;
@@ -695,7 +1078,7 @@ fn select_k<const BELOW: bool>(
                 if *n == cap {
                     let (_, kth, _) = buf.select_nth_unstable(k - 1);
                     *thr_key = *kth;
-                    *thr = from_ord_bits(*kth | mask);
+                    *thr = from_ord_bits(*kth | mask).min(thr0);
                     *n = k;
                 }
             }
@@ -847,6 +1230,11 @@ pub struct Solver {
     raise: Vec<u32>,
     /// Free rows left to the exact searches by [`Solver::reduce_rows`].
     deferred: Vec<u32>,
+    /// A row computed by a [`CostSource`] that has no matrix (`cols` entries).
+    rowbuf: Vec<f64>,
+    /// Upper bound of every column price during a solve (set when it starts, raised
+    /// with any price; the spatial lists of [`PointCosts`] rely on it).
+    v_hi: f64,
     stats: SolveStats,
 }
 
@@ -908,6 +1296,15 @@ impl Solver {
     /// [`AssignError::Infeasible`]. After an error [`Solver::assignment`] is empty and
     /// the next warm solve is cold.
     pub fn solve(&mut self, costs: &CostMatrix) -> Result<&[usize], AssignError> {
+        self.solve_with(costs)
+    }
+
+    /// [`Solver::solve`] on any [`CostSource`] (e.g. [`PointCosts`]: the same answer
+    /// as on the matrix they describe, without the matrix).
+    ///
+    /// # Errors
+    /// As [`Solver::solve`].
+    pub fn solve_with<S: CostSource>(&mut self, costs: &S) -> Result<&[usize], AssignError> {
         self.check_dims(costs)?;
         self.size_for(costs.rows(), costs.cols());
         if costs.rows() == costs.cols() {
@@ -935,9 +1332,17 @@ impl Solver {
     /// One streaming pricing pass over the matrix plus the re-augmentation of the freed
     /// rows; no allocation.
     pub fn solve_warm(&mut self, costs: &CostMatrix) -> Result<&[usize], AssignError> {
+        self.solve_warm_with(costs)
+    }
+
+    /// [`Solver::solve_warm`] on any [`CostSource`].
+    ///
+    /// # Errors
+    /// As [`Solver::solve`].
+    pub fn solve_warm_with<S: CostSource>(&mut self, costs: &S) -> Result<&[usize], AssignError> {
         self.check_dims(costs)?;
         if !self.solved || costs.rows() != self.rows || costs.cols() != self.cols {
-            return self.solve(costs);
+            return self.solve_with(costs);
         }
         self.shift_prices(costs);
         // Keep the prices bounded over long runs: shift so that max v = 0 (reduced
@@ -964,7 +1369,7 @@ impl Solver {
     /// part (the whole formation moving, turning or scaling a little) then leaves the
     /// reduced costs almost as they were. Rectangular problems keep the assigned
     /// prices at or below the free columns' 0.
-    fn shift_prices(&mut self, costs: &CostMatrix) {
+    fn shift_prices<S: CostSource>(&mut self, costs: &S) {
         let rect = self.rows < self.cols;
         for (i, &j) in self.x.iter().enumerate() {
             let c = costs.get(i, j);
@@ -987,7 +1392,7 @@ impl Solver {
 
     /// Total cost of the current assignment under `costs`; NaN if there is no
     /// assignment or the dimensions differ.
-    pub fn total_cost(&self, costs: &CostMatrix) -> f64 {
+    pub fn total_cost<S: CostSource>(&self, costs: &S) -> f64 {
         if !self.solved || costs.rows() != self.rows || costs.cols() != self.cols {
             return f64::NAN;
         }
@@ -1006,7 +1411,7 @@ impl Solver {
     ///
     /// # Complexity
     /// `O(rows · cols)`, no allocation.
-    pub fn verify_optimal(&self, costs: &CostMatrix, tol: f64) -> bool {
+    pub fn verify_optimal<S: CostSource>(&self, costs: &S, tol: f64) -> bool {
         if !self.solved || costs.rows() != self.rows || costs.cols() != self.cols {
             return false;
         }
@@ -1022,7 +1427,8 @@ impl Solver {
         }
         for i in 0..rows {
             let ui = self.u[i];
-            for (c, vj) in costs.row(i).iter().zip(&self.v) {
+            for (j, vj) in self.v.iter().enumerate() {
+                let c = costs.get(i, j);
                 // NaN fails this comparison too.
                 if !(c - ui - vj >= -tol) {
                     return false;
@@ -1042,7 +1448,7 @@ impl Solver {
 
     /// Tolerance of the debug certificate check: far above rounding, far below any
     /// real sub-optimality.
-    fn debug_tolerance(&self, costs: &CostMatrix) -> f64 {
+    fn debug_tolerance<S: CostSource>(&self, costs: &S) -> f64 {
         let mut scale = 0.0f64;
         for (i, &j) in self.x.iter().enumerate() {
             scale = scale.max(costs.get(i, j).abs()).max(self.u[i].abs());
@@ -1057,10 +1463,10 @@ impl Solver {
     /// reduction), which removes any large per-goal cost component (e.g. a crowd far
     /// from its formation) before candidate lists are chosen. Columns without a finite
     /// entry get 0.
-    fn column_reduction(&mut self, costs: &CostMatrix) {
+    fn column_reduction<S: CostSource>(&mut self, costs: &S) {
         self.v.fill(f64::INFINITY);
         for i in 0..costs.rows() {
-            for (vj, &c) in self.v.iter_mut().zip(costs.row(i)) {
+            for (vj, &c) in self.v.iter_mut().zip(costs.row(i, &mut self.rowbuf)) {
                 // `min` skips NaN; a `-inf` entry makes the price `-inf`, which the
                 // first pass then reports as NaN in that column (the solve stops).
                 *vj = vj.min(c);
@@ -1073,7 +1479,7 @@ impl Solver {
         }
     }
 
-    fn check_dims(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
+    fn check_dims<S: CostSource>(&mut self, costs: &S) -> Result<(), AssignError> {
         let (rows, cols) = (costs.rows(), costs.cols());
         if rows == 0 {
             self.solved = false;
@@ -1131,6 +1537,7 @@ impl Solver {
         self.dirty_rows = Vec::with_capacity(rows);
         self.raise = Vec::with_capacity(rows + cols);
         self.deferred = Vec::with_capacity(rows);
+        self.rowbuf = Vec::with_capacity(cols);
     }
 
     fn use_sparse(&self) -> bool {
@@ -1142,7 +1549,7 @@ impl Solver {
     }
 
     /// Common driver of cold and warm solves (state: prices `v`, partial matching).
-    fn finish(&mut self, costs: &CostMatrix) -> Result<&[usize], AssignError> {
+    fn finish<S: CostSource>(&mut self, costs: &S) -> Result<&[usize], AssignError> {
         self.solved = false;
         match self.run(costs) {
             Ok(()) => {
@@ -1171,8 +1578,14 @@ impl Solver {
         }
     }
 
-    fn run(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
+    fn run<S: CostSource>(&mut self, costs: &S) -> Result<(), AssignError> {
+        costs.validate()?;
         let sparse = self.use_sparse();
+        let rect = self.rows < self.cols;
+        self.v_hi = self
+            .v
+            .iter()
+            .fold(if rect { 0.0 } else { f64::NEG_INFINITY }, |a, &b| a.max(b));
         self.price_all(costs, sparse, true)?;
         if self.stats.warm {
             self.stats.kept_rows = self.x.iter().filter(|&&j| j != NONE).count();
@@ -1231,9 +1644,9 @@ impl Solver {
     /// With `check`: [`AssignError::NotFinite`] for the first NaN / `-inf` in
     /// row-major order, else [`AssignError::Infeasible`] for the first row without a
     /// finite entry.
-    fn price_all(
+    fn price_all<S: CostSource>(
         &mut self,
-        costs: &CostMatrix,
+        costs: &S,
         build: bool,
         check: bool,
     ) -> Result<(), AssignError> {
@@ -1254,7 +1667,7 @@ impl Solver {
 
     /// End of a sparse round: reprices the rows whose dual rose above their
     /// candidate threshold (the only rows that can have become violated).
-    fn price_dirty(&mut self, costs: &CostMatrix) {
+    fn price_dirty<S: CostSource>(&mut self, costs: &S) {
         self.free_rows.clear();
         for idx in 0..self.dirty_rows.len() {
             let i = self.dirty_rows[idx] as usize;
@@ -1277,9 +1690,9 @@ impl Solver {
     /// it; a free row takes its cheapest column if that column is free. With `build`,
     /// the row's candidate list is rebuilt; with `check`, NaN and `-inf` are reported.
     /// Returns whether the row has a finite entry.
-    fn price_row(
+    fn price_row<S: CostSource>(
         &mut self,
-        costs: &CostMatrix,
+        costs: &S,
         i: usize,
         build: bool,
         check: bool,
@@ -1288,7 +1701,7 @@ impl Solver {
         let (min_w, arg, bad) = if build {
             self.build_row(costs, i, check)
         } else {
-            let row = costs.row(i);
+            let row = costs.row(i, &mut self.rowbuf);
             let mut best = f64::INFINITY;
             let mut arg = NONE;
             let mut ok = true;
@@ -1321,13 +1734,12 @@ impl Solver {
 
     /// Among the listed columns of row `i` tied with its minimum `min_w` (at `arg`),
     /// one that is free if `arg` is taken (so that greedy assignment survives ties).
-    fn free_tie(&self, costs: &CostMatrix, i: usize, min_w: f64, arg: usize) -> usize {
+    fn free_tie<S: CostSource>(&self, costs: &S, i: usize, min_w: f64, arg: usize) -> usize {
         if arg == NONE || self.y[arg] == NONE {
             return arg;
         }
         let base = i * self.k;
         let len = self.cand_len[i] as usize;
-        let row = costs.row(i);
         for (&c, &wb) in self.cand_col[base..base + len]
             .iter()
             .zip(&self.cand_wb[base..base + len])
@@ -1336,7 +1748,7 @@ impl Solver {
             if wb > min_w {
                 break;
             }
-            if self.y[c] == NONE && row[c] - self.v[c] <= min_w {
+            if self.y[c] == NONE && costs.get(i, c) - self.v[c] <= min_w {
                 return c;
             }
         }
@@ -1345,15 +1757,14 @@ impl Solver {
 
     /// Keeps row `i` if its pair is tight against the row minimum `min_w` (at column
     /// `arg`), else frees it; a free row takes `arg` if that column is free.
-    fn settle_row(&mut self, costs: &CostMatrix, i: usize, min_w: f64, arg: usize) {
-        let row = costs.row(i);
+    fn settle_row<S: CostSource>(&mut self, costs: &S, i: usize, min_w: f64, arg: usize) {
         let xi = self.x[i];
         if xi != NONE {
-            let (c, vx) = (row[xi], self.v[xi]);
+            let (c, vx) = (costs.get(i, xi), self.v[xi]);
             let t = if arg == NONE {
                 0.0
             } else {
-                tol(c, vx, row[arg], self.v[arg])
+                tol(c, vx, costs.get(i, arg), self.v[arg])
             };
             if c - vx <= min_w + t {
                 return;
@@ -1376,32 +1787,39 @@ impl Solver {
     /// Rebuilds the candidate list of row `i` (its `k` smallest `(c - v, col)`) and
     /// its threshold. Returns the row's minimum `c - v`, its column, and (with
     /// `check`) the first column holding NaN or `-inf`.
-    fn build_row(
+    fn build_row<S: CostSource>(
         &mut self,
-        costs: &CostMatrix,
+        costs: &S,
         i: usize,
         check: bool,
     ) -> (f64, usize, Option<usize>) {
-        let row = costs.row(i);
         let k = self.k_eff;
         let base = i * self.k;
+        let mask = self.mask;
+        let salt = self.salt(i);
         // Any k distinct columns bound the k-th smallest reduced cost from above.
         let thr0 = if self.cand_len[i] as usize >= k {
             self.cand_col[base..base + k]
                 .iter()
-                .map(|&c| row[c as usize] - self.v[c as usize])
+                .map(|&c| costs.get(i, c as usize) - self.v[c as usize])
                 .fold(f64::NEG_INFINITY, f64::max)
         } else {
             f64::INFINITY
         };
-        let mask = self.mask;
-        let salt = self.salt(i);
-        let (n, bad) =
-            select_k::<false>(row, &self.v, k, mask, 0, thr0, check, salt, &mut self.buf);
+        let (n, bad) = match costs.points() {
+            Some(p) => {
+                let n = p.select_near(i, &self.v, self.v_hi, k, mask, 0, thr0, salt, &mut self.buf);
+                (n, None)
+            }
+            None => {
+                let row = costs.row(i, &mut self.rowbuf);
+                select_k::<false>(row, &self.v, k, mask, 0, thr0, check, salt, &mut self.buf)
+            }
+        };
         for (t, &kk) in self.buf[..n].iter().enumerate() {
             let c = key_col(kk, mask) ^ salt;
             self.cand_col[base + t] = c;
-            self.cand_cost[base + t] = row[c as usize];
+            self.cand_cost[base + t] = costs.get(i, c as usize);
             self.cand_wb[base + t] = key_floor(kk, mask);
         }
         self.cand_len[i] = n as u32;
@@ -1416,7 +1834,7 @@ impl Solver {
         match self.buf[..n].first() {
             Some(&kk) => {
                 let c = (key_col(kk, mask) ^ salt) as usize;
-                (row[c] - self.v[c], c, bad)
+                (costs.get(i, c) - self.v[c], c, bad)
             }
             None => (f64::INFINITY, NONE, bad),
         }
@@ -1426,7 +1844,12 @@ impl Solver {
     /// second smallest, from the candidate list and the threshold (the list is
     /// rebuilt when stale). The scan stops as soon as the sorted list bounds prove
     /// the minimum; with `exact_second` it goes on until the second is exact too.
-    fn best2(&mut self, costs: &CostMatrix, i: usize, exact_second: bool) -> (f64, usize, f64) {
+    fn best2<S: CostSource>(
+        &mut self,
+        costs: &S,
+        i: usize,
+        exact_second: bool,
+    ) -> (f64, usize, f64) {
         let mut rebuilt = false;
         loop {
             let base = i * self.k;
@@ -1466,7 +1889,7 @@ impl Solver {
     /// Forward auction with ε-scaling over the candidate lists (Bertsekas; prices
     /// only fall, so every list threshold stays valid). It only brings the prices
     /// close to optimal; exactness comes from the finish that follows.
-    fn auction(&mut self, costs: &CostMatrix) {
+    fn auction<S: CostSource>(&mut self, costs: &S) {
         let k = self.k;
         let (mut spread, mut count) = (0.0, 0usize);
         for i in 0..self.rows {
@@ -1548,7 +1971,7 @@ impl Solver {
     /// list bound stays valid) and every assigned pair stays tight, so the exact
     /// searches can follow directly. A row tied between a taken cheapest column and
     /// another, and every row beyond the bid budget, is left to the searches.
-    fn reduce_rows(&mut self, costs: &CostMatrix) {
+    fn reduce_rows<S: CostSource>(&mut self, costs: &S) {
         let budget = ROW_REDUCTION_BIDS_PER_FREE * self.free_rows.len();
         let mut bids = 0usize;
         self.deferred.clear();
@@ -1587,7 +2010,7 @@ impl Solver {
     /// After the auction: raises each assigned column's price by its row's slack so
     /// that the pair becomes tight (the pricing pass that follows frees the few rows
     /// this makes violated, and rebuilds every list).
-    fn tighten(&mut self, costs: &CostMatrix) {
+    fn tighten<S: CostSource>(&mut self, costs: &S) {
         let rect = self.rows < self.cols;
         let mut max_raise = 0.0f64;
         for i in 0..self.rows {
@@ -1603,6 +2026,7 @@ impl Solver {
                 if rect && self.v[xi] > 0.0 {
                     self.v[xi] = 0.0;
                 }
+                self.v_hi = self.v_hi.max(self.v[xi]);
                 max_raise = max_raise.max(self.v[xi] - old);
             }
         }
@@ -1625,7 +2049,7 @@ impl Solver {
 
     /// Pricing pass over every row using the candidate lists (a row is scanned in
     /// full only when its list is stale): as [`Solver::price_all`] otherwise.
-    fn price_all_lists(&mut self, costs: &CostMatrix) {
+    fn price_all_lists<S: CostSource>(&mut self, costs: &S) {
         self.free_rows.clear();
         for i in 0..self.rows {
             self.stats.rows_priced += 1;
@@ -1638,7 +2062,7 @@ impl Solver {
     /// Rectangular problems only: raises the price of every freed column back to the
     /// maximum (0), frees the assigned rows this makes non-tight (transitively), and
     /// keeps every row's candidate threshold a valid lower bound.
-    fn raise_free_columns(&mut self, costs: &CostMatrix) {
+    fn raise_free_columns<S: CostSource>(&mut self, costs: &S) {
         let sparse = self.use_sparse();
         while let Some(j) = self.raise.pop() {
             let j = j as usize;
@@ -1646,6 +2070,7 @@ impl Solver {
                 continue;
             }
             self.v[j] = 0.0;
+            self.v_hi = self.v_hi.max(0.0);
             for r in 0..self.rows {
                 let c = costs.get(r, j);
                 if !(c < f64::INFINITY) {
@@ -1716,7 +2141,7 @@ impl Solver {
     ///
     /// On success updates the prices of the settled columns and flips the path.
     /// Returns false only if no augmenting path exists in the whole matrix.
-    fn sparse_augment(&mut self, costs: &CostMatrix, i0: usize) -> bool {
+    fn sparse_augment<S: CostSource>(&mut self, costs: &S, i0: usize) -> bool {
         let ep = self.next_epoch();
         self.stats.augmentations += 1;
         self.heap.clear();
@@ -1841,26 +2266,43 @@ impl Solver {
 
     /// Relaxes the next `k` cheapest columns of a row beyond its list (one streaming
     /// pass) and queues the row again with the raised bound.
-    fn expand_row(&mut self, costs: &CostMatrix, p: Pending, ep: u32) {
+    fn expand_row<S: CostSource>(&mut self, costs: &S, p: Pending, ep: u32) {
         self.stats.expansions += 1;
         let k = self.k;
-        let row = costs.row(p.row as usize);
         let mask = self.mask;
         let salt = self.salt(p.row as usize);
-        let (n, _) = select_k::<true>(
-            row,
-            &self.v,
-            k,
-            mask,
-            p.lo,
-            f64::INFINITY,
-            false,
-            salt,
-            &mut self.buf,
-        );
+        let i = p.row as usize;
+        let n = match costs.points() {
+            Some(pc) => pc.select_near(
+                i,
+                &self.v,
+                self.v_hi,
+                k,
+                mask,
+                p.lo,
+                f64::INFINITY,
+                salt,
+                &mut self.buf,
+            ),
+            None => {
+                let row = costs.row(i, &mut self.rowbuf);
+                let (n, _) = select_k::<true>(
+                    row,
+                    &self.v,
+                    k,
+                    mask,
+                    p.lo,
+                    f64::INFINITY,
+                    false,
+                    salt,
+                    &mut self.buf,
+                );
+                n
+            }
+        };
         for t in 0..n {
             let c = (key_col(self.buf[t], mask) ^ salt) as usize;
-            let nd = p.off + (row[c] - self.v[c]);
+            let nd = p.off + (costs.get(i, c) - self.v[c]);
             self.relax_to(p.row, c, nd, ep);
         }
         if n == k {
@@ -1888,7 +2330,7 @@ impl Solver {
     }
 
     /// Dense augmentation of every free row, in index order.
-    fn dense_all(&mut self, costs: &CostMatrix) -> Result<(), AssignError> {
+    fn dense_all<S: CostSource>(&mut self, costs: &S) -> Result<(), AssignError> {
         self.free_rows.sort_unstable();
         for idx in 0..self.free_rows.len() {
             let i = self.free_rows[idx] as usize;
@@ -1903,10 +2345,10 @@ impl Solver {
     /// Dijkstra over full rows from free row `i0` (requires dual feasibility on the
     /// whole matrix). Settled columns get `d = +inf` and a masked price of `-inf`, so
     /// the relaxation loop runs branch-free over all columns and never touches them.
-    fn dense_augment(&mut self, costs: &CostMatrix, i0: usize) -> bool {
+    fn dense_augment<S: CostSource>(&mut self, costs: &S, i0: usize) -> bool {
         self.stats.augmentations += 1;
         self.scanned.clear();
-        let row0 = costs.row(i0);
+        let row0 = costs.row(i0, &mut self.rowbuf);
         for (((d, vm), p), (&c, &vj)) in self
             .dd
             .iter_mut()
@@ -1939,7 +2381,7 @@ impl Solver {
                 break (best, bj);
             }
             self.stats.rows_scanned += 1;
-            let row = costs.row(i);
+            let row = costs.row(i, &mut self.rowbuf);
             let off = best - (row[bj] - self.v[bj]);
             let iu = i as u32;
             for ((d, p), (&c, &vm)) in self
@@ -1988,6 +2430,7 @@ impl Solver {
             f(&self.heap.key),
             f(&self.heap.col),
             f(&self.heap.pos),
+            f(&self.rowbuf),
             f(&self.pending.items),
             f(&self.scanned),
             f(&self.dd),
@@ -2152,6 +2595,137 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Point sets for the geometric fast path: uniform, clustered (most goals in two
+    /// small clumps), duplicated positions, all goals on one line, and a crowd far
+    /// from its formation.
+    fn layout(rng: &mut SplitMix64, n: usize, kind: u8) -> Vec<Vec2> {
+        (0..n)
+            .map(|k| match kind {
+                0 => Vec2::new(rng.unit(), rng.unit()),
+                1 => {
+                    let c = if k % 3 == 0 { 0.2 } else { 0.8 };
+                    Vec2::new(c + 0.01 * rng.unit(), c + 0.01 * rng.unit())
+                }
+                2 => Vec2::new((k % 5) as f64 * 0.25, 0.5),
+                3 => Vec2::new(rng.unit(), 0.3),
+                _ => Vec2::new(40.0 + rng.unit(), -7.0 + rng.unit()),
+            })
+            .collect()
+    }
+
+    proptest! {
+        #![proptest_config(config(64, 0x09E0_FA57))]
+
+        /// The spatial candidate lists of `PointCosts` are exactly the streamed
+        /// ones: the same assignment and the same work counters as on the matrix,
+        /// cold and over warm frames in which the goals move, square and
+        /// rectangular, both metrics, every layout.
+        #[test]
+        fn point_costs_solve_exactly_as_the_matrix(
+            rows in 8usize..60,
+            extra in prop_oneof![Just(0usize), Just(3), Just(40)],
+            candidates in prop_oneof![Just(0usize), Just(2), Just(5)],
+            seed in 0u64..u64::MAX,
+            agents_kind in 0u8..5,
+            goals_kind in 0u8..5,
+            euclid: bool,
+        ) {
+            let mut rng = SplitMix64::new(seed);
+            let cols = rows + extra;
+            let agents = layout(&mut rng, rows, agents_kind);
+            let mut goals = layout(&mut rng, cols, goals_kind);
+            let metric = if euclid { PointMetric::Euclidean } else { PointMetric::Squared };
+            let mut pc = PointCosts::new(metric);
+            let mut c = CostMatrix::new(0, 0);
+            // The sparse strategy at any size (Auto turns to it above 128 columns);
+            // short lists exercise the list refills.
+            let solver = || Solver::with_options(Algo::Sparse, candidates);
+            let (mut sp, mut sm) = (solver(), solver());
+            for frame in 0..3 {
+                pc.set(&agents, &goals);
+                if euclid {
+                    Distance.fill(&agents, &goals, &mut c);
+                } else {
+                    SquaredDistance.fill(&agents, &goals, &mut c);
+                }
+                for i in 0..rows {
+                    for j in (0..cols).step_by(17) {
+                        prop_assert!(pc.get(i, j).to_bits() == c.get(i, j).to_bits());
+                    }
+                }
+                let a = sp.solve_warm_with(&pc).unwrap().to_vec();
+                let b = sm.solve_warm(&c).unwrap().to_vec();
+                prop_assert!(a == b, "frame {}: assignments differ", frame);
+                prop_assert!(sp.stats() == sm.stats(), "frame {}: {:?} vs {:?}", frame, sp.stats(), sm.stats());
+                prop_assert!(sp.verify_optimal(&c, 1e-9));
+                prop_assert!(sp.verify_optimal(&pc, 1e-9));
+                for g in &mut goals {
+                    g.x += 0.04 * (rng.unit() - 0.5);
+                    g.y += 0.04 * (rng.unit() - 0.5);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn point_costs_name_the_first_bad_position() {
+        let mut pc = PointCosts::new(PointMetric::Squared);
+        let mut s = Solver::new();
+        let ok = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 1.0)];
+        pc.set(&[ok[0], Vec2::new(f64::NAN, 0.0)], &ok);
+        assert_eq!(
+            s.solve_with(&pc),
+            Err(AssignError::NotFinite { row: 1, col: 0 })
+        );
+        pc.set(&ok, &[ok[1], Vec2::new(0.0, f64::INFINITY)]);
+        assert_eq!(
+            s.solve_with(&pc),
+            Err(AssignError::NotFinite { row: 0, col: 1 })
+        );
+        pc.set(&[], &ok);
+        assert_eq!(s.solve_with(&pc), Err(AssignError::Empty));
+        pc.set(&ok, &ok[..1]);
+        assert_eq!(
+            s.solve_with(&pc),
+            Err(AssignError::MoreRowsThanCols { rows: 2, cols: 1 })
+        );
+        // The solver recovers: the next good instance solves.
+        pc.set(&ok, &[ok[1], ok[0]]);
+        assert_eq!(s.solve_with(&pc).unwrap(), &[1, 0]);
+    }
+
+    #[test]
+    fn point_costs_do_not_reallocate_on_same_sized_frames() {
+        let mut rng = SplitMix64::new(7);
+        let agents = points(&mut rng, 300);
+        let mut goals = points(&mut rng, 300);
+        let mut pc = PointCosts::new(PointMetric::Squared);
+        let mut s = Solver::new();
+        pc.set(&agents, &goals);
+        s.solve_with(&pc).unwrap();
+        let caps = |p: &PointCosts| {
+            [&p.ax, &p.ay, &p.gx, &p.gy, &p.bx, &p.by]
+                .iter()
+                .map(|v| (v.as_ptr() as usize, v.capacity()))
+                .chain(
+                    [&p.start, &p.order]
+                        .iter()
+                        .map(|v| (v.as_ptr() as usize, v.capacity())),
+                )
+                .collect::<Vec<_>>()
+        };
+        let (before, fp) = (caps(&pc), s.buffer_fingerprint());
+        for _ in 0..5 {
+            for g in &mut goals {
+                g.x += 0.01 * (rng.unit() - 0.5);
+            }
+            pc.set(&agents, &goals);
+            s.solve_warm_with(&pc).unwrap();
+        }
+        assert_eq!(caps(&pc), before);
+        assert_eq!(s.buffer_fingerprint(), fp);
     }
 
     fn run_chain(rows: usize, cols: usize, seed: u64, strategy: Algo) {

@@ -1,5 +1,5 @@
-//! Agent-to-goal assignment as the controllers use it: a solver, its cost matrix and
-//! a cost function, reused from call to call.
+//! Agent-to-goal assignment as the controllers use it: a solver and the positions it
+//! reads its costs from, reused from call to call.
 //!
 //! mesh-formation-control section 6.1: "In this work, the source points correspond to
 //! the locations of the agents and the target points are the vertices of the mesh Vf
@@ -8,25 +8,32 @@
 //! at every time step." Weights of 1 on every source and target make the
 //! transportation problem an exact one-to-one assignment.
 
-use super::assign::{AssignError, CostMatrix, CostProvider, Distance, Solver, SquaredDistance};
+use super::assign::{AssignError, PointCosts, PointMetric, Solver};
 use crate::config::AssignmentCost;
 use crate::geom::Vec2;
 
-/// A reusable assignment: solver workspace, cost matrix and cost function.
+/// A reusable assignment: solver workspace and the positions behind the costs.
+///
+/// The costs are computed from the positions on demand ([`PointCosts`], the
+/// solver's geometric fast path): no `agents × goals` matrix is filled each frame,
+/// and each agent's cheapest goals come from a spatial index. The answer is the
+/// exact optimum, the same as on the full matrix.
 pub struct Assigner {
     solver: Solver,
-    costs: CostMatrix,
-    cost: AssignmentCost,
+    costs: PointCosts,
     warm: bool,
 }
 
 impl Assigner {
     /// An assigner with the given cost function.
     pub fn new(cost: AssignmentCost) -> Assigner {
+        let metric = match cost {
+            AssignmentCost::SquaredDistance => PointMetric::Squared,
+            AssignmentCost::Distance => PointMetric::Euclidean,
+        };
         Assigner {
             solver: Solver::new(),
-            costs: CostMatrix::new(0, 0),
-            cost,
+            costs: PointCosts::new(metric),
             warm: false,
         }
     }
@@ -48,15 +55,11 @@ impl Assigner {
         goals: &[Vec2],
         goal_of: &mut Vec<u32>,
     ) -> Result<(), AssignError> {
-        self.costs.resize(agents.len(), goals.len());
-        match self.cost {
-            AssignmentCost::SquaredDistance => SquaredDistance.fill(agents, goals, &mut self.costs),
-            AssignmentCost::Distance => Distance.fill(agents, goals, &mut self.costs),
-        }
+        self.costs.set(agents, goals);
         let result = if self.warm {
-            self.solver.solve_warm(&self.costs)
+            self.solver.solve_warm_with(&self.costs)
         } else {
-            self.solver.solve(&self.costs)
+            self.solver.solve_with(&self.costs)
         };
         let a = match result {
             Ok(a) => a,

@@ -564,7 +564,7 @@ impl Heap {
 ///
 /// # Complexity
 /// `O(N log N)` for `N` reached cells; no allocation once the workspace has grown
-/// to the grid size. The workspace keeps the grid padded by a border of [`PAD`]
+/// to the grid size. The workspace keeps the grid padded by a border of two
 /// cells: the cost (`+inf` on the border) and the frozen values (`+inf` where not
 /// frozen). A stencil is then two loads and a minimum per axis, without a state test
 /// or a bounds test, and a march touches 16 bytes per cell in its front (random
