@@ -1036,13 +1036,7 @@ fn binary_motions_reach_only_the_clients_that_name_them() {
     let mut no_scene = (*s).clone();
     no_scene.motions.clear();
     let mut expected = Vec::new();
-    protocol::encode_snapshot_binary(
-        &no_scene,
-        None,
-        0,
-        &FieldSet::BINARY_DEFAULT,
-        &mut expected,
-    );
+    protocol::encode_snapshot_binary(&no_scene, None, 0, &FieldSet::BINARY_DEFAULT, &mut expected);
     assert_eq!(frame, expected);
     assert_eq!(
         frame.len(),
