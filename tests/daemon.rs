@@ -354,10 +354,12 @@ fn in_moved_block(p: Vec2) -> bool {
     p.x > 7.401 && p.x < 8.599 && p.y > 3.901 && p.y < 5.099
 }
 
-/// A config file in `dir` naming the scene file `scene.ron` beside it (or no scene).
-fn scene_config(dir: &Path, with_scene: bool) -> PathBuf {
+/// A config file in `dir` naming the scene file `scene.ron` beside it (or no scene),
+/// with `agents` agents, assigned on the worker or inside the tick.
+fn scene_config(dir: &Path, with_scene: bool, agents: u32, worker: bool) -> PathBuf {
     let text = crowdtouch::config::DEFAULT_CONFIG_RON
-        .replacen("agents: 100", "agents: 60", 1)
+        .replacen("agents: 100", &format!("agents: {agents}"), 1)
+        .replacen("worker: true", &format!("worker: {worker}"), 1)
         .replacen(
             "scene: None",
             if with_scene {
@@ -381,15 +383,15 @@ fn motions(v: &Value) -> Vec<&str> {
 
 /// A reload re-reads the scene file: the edited scene (its block moved into the
 /// crowd, a pool added) applies while the crowd keeps running: no reset, ticks go
-/// on, no agent is ever inside the new block once the new scene is in use, agents in
-/// the pool report `swim`, and the worker keeps delivering assignments solved in the
-/// new scene. A reload without a scene returns to open ground.
-#[test]
-fn a_reload_swaps_in_the_edited_scene_while_the_crowd_keeps_running() {
+/// on, no agent is ever inside the new block once the new scene is in use (checked
+/// over `ticks_after` ticks), agents in the pool report `swim`, and assignments
+/// solved in the new scene keep coming. A reload without a scene returns to open
+/// ground.
+fn reload_swaps_the_scene(agents: u32, worker: bool, ticks_after: u64) {
     let dir = tempfile::tempdir().unwrap();
     let path = sock(&dir);
     std::fs::write(dir.path().join("scene.ron"), SCENE_EAST_BLOCK).unwrap();
-    let cfg_path = scene_config(dir.path(), true);
+    let cfg_path = scene_config(dir.path(), true, agents, worker);
     let cfg = Config::load(&cfg_path).unwrap();
     assert_eq!(cfg.loaded_scene().unwrap().name(), "east block");
     let mut daemon = start(cfg, &["07-open-space-swipe.jsonl"], &path);
@@ -421,7 +423,7 @@ fn a_reload_swaps_in_the_edited_scene_while_the_crowd_keeps_running() {
         if let Some(s) = swapped_at {
             solved_in_b |= v["assignment_seq"].as_u64().unwrap() >= s;
         }
-        solved_in_b && swapped_at.is_some_and(|s| seq > s + 120)
+        solved_in_b && swapped_at.is_some_and(|s| seq > s + ticks_after)
     });
     let swapped_at = swapped_at.expect("the new scene's pool never showed in motions");
     assert!(solved_in_b, "no assignment solved in the new scene");
@@ -431,7 +433,7 @@ fn a_reload_swaps_in_the_edited_scene_while_the_crowd_keeps_running() {
     );
     let mut checked = 0;
     for v in msgs.iter().filter(|v| v["type"] == "snapshot") {
-        assert_eq!(v["agents"], 60);
+        assert_eq!(v["agents"], agents);
         if v["seq"].as_u64().unwrap() < swapped_at {
             continue;
         }
@@ -444,10 +446,13 @@ fn a_reload_swaps_in_the_edited_scene_while_the_crowd_keeps_running() {
         }
         checked += 1;
     }
-    assert!(checked > 120, "only {checked} snapshots in the new scene");
+    assert!(
+        checked as u64 > ticks_after,
+        "only {checked} snapshots in the new scene"
+    );
 
     // The scene removed from the config: open ground, no motions.
-    daemon.reload(Config::load(&scene_config(dir.path(), false)).unwrap());
+    daemon.reload(Config::load(&scene_config(dir.path(), false, agents, worker)).unwrap());
     let msgs = read_until(&mut r, 5.0, |v| {
         v["type"] == "snapshot" && v.get("motions").is_none()
     });
@@ -456,4 +461,18 @@ fn a_reload_swaps_in_the_edited_scene_while_the_crowd_keeps_running() {
         "motions still sent without a scene"
     );
     daemon.shutdown();
+}
+
+/// [`reload_swaps_the_scene`] with the assignment worker: it builds its planner for
+/// the new scene on its own thread.
+#[test]
+fn a_reload_swaps_in_the_edited_scene_while_the_crowd_keeps_running() {
+    reload_swaps_the_scene(60, true, 120);
+}
+
+/// [`reload_swaps_the_scene`] with the assignment inside the tick: the reload hands
+/// the control thread a planner built for the new scene on the supervisor's thread.
+#[test]
+fn a_reload_with_inline_assignment_swaps_in_a_prepared_planner() {
+    reload_swaps_the_scene(20, false, 30);
 }
