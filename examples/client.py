@@ -2,10 +2,12 @@
 """A small crowdtouch client using only the Python standard library.
 
     python3 examples/client.py [--socket PATH] [--binary] [--rate HZ]
-                               [--subscribe snapshot,events] [--command pause]
+                               [--subscribe snapshot,events] [--fields positions,motions]
+                               [--command pause]
 
 Prints one line per message: a summary for snapshots (seq, agent count, latency,
-drops, centroid), the JSON for everything else. Protocol: docs/protocol.md.
+drops, centroid, and how many agents do each motion when the daemon runs a scene),
+the JSON for everything else. Protocol: docs/protocol.md.
 """
 
 import argparse
@@ -19,7 +21,9 @@ import sys
 HEADER = struct.Struct("<BBHQQQQQIIII")  # kind, version, flags, seq, t_us, latency_us,
 #                                          dropped, assignment_seq, agents, goals, touches, reserved
 FLAG_POSITIONS, FLAG_VELOCITIES, FLAG_GOALS, FLAG_ASSIGNMENT, FLAG_TOUCHES = 1, 2, 4, 8, 16
-FLAG_PAUSED, FLAG_LATENCY = 32, 64
+FLAG_PAUSED, FLAG_LATENCY, FLAG_MOTIONS = 32, 64, 128
+# Binary motion codes (docs/protocol.md, "Motions array"): the byte is the index.
+MOTIONS = ("run", "crawl", "duck", "swim", "jump", "climb_up", "climb_down")
 
 
 def default_socket():
@@ -78,6 +82,10 @@ def decode_binary_snapshot(body):
                             "control": None if control == 0xFFFFFFFF else control})
             at += 16
         snap["touches"] = touches
+    if flags & FLAG_MOTIONS:
+        # One byte per agent, then zero padding to a multiple of 4 (not read).
+        # A code newer than this client is None: draw it with your default animation.
+        snap["motions"] = [MOTIONS[c] if c < len(MOTIONS) else None for c in body[at:at + n]]
     return snap
 
 
@@ -87,8 +95,14 @@ def summarise(s):
     cx = sum(pos[0::2]) / n if n else 0.0
     cy = sum(pos[1::2]) / n if n else 0.0
     latency = "-" if s["latency_us"] is None else "%d us" % s["latency_us"]
-    return "snapshot seq=%d agents=%d latency=%s dropped=%d centroid=(%.3f, %.3f)" % (
+    line = "snapshot seq=%d agents=%d latency=%s dropped=%d centroid=(%.3f, %.3f)" % (
         s["seq"], s["agents"], latency, s["dropped"], cx, cy)
+    if s.get("motions"):
+        counts = {}
+        for m in s["motions"]:
+            counts[m] = counts.get(m, 0) + 1
+        line += " motions " + " ".join("%s=%d" % (m, c) for m, c in sorted(counts.items(), key=str))
+    return line
 
 
 def main():
@@ -97,6 +111,8 @@ def main():
     p.add_argument("--binary", action="store_true", help="binary snapshots")
     p.add_argument("--rate", type=float, help="most snapshots per second")
     p.add_argument("--subscribe", help="comma list of snapshot,mesh,events,stats")
+    p.add_argument("--fields", help="comma list of positions,velocities,goals,assignment,"
+                   "touches,motions (binary clients get motions only when named)")
     p.add_argument("--command", help="send a command: reset, pause, resume")
     a = p.parse_args()
 
@@ -110,11 +126,13 @@ def main():
     # The server speaks first: its hello, as a JSON line.
     print(json.dumps(read_message(f, False)[1]))
 
-    if a.binary or a.rate or a.subscribe:
+    if a.binary or a.rate or a.subscribe or a.fields:
         hello = {"type": "hello", "protocol": 1,
                  "format": "binary" if a.binary else "json", "max_rate_hz": a.rate}
         if a.subscribe:
             hello["subscribe"] = a.subscribe.split(",")
+        if a.fields:
+            hello["fields"] = a.fields.split(",")
         sock.sendall((json.dumps(hello) + "\n").encode())
     if a.command:
         sock.sendall((json.dumps({"type": "command", "id": 1, "name": a.command}) + "\n").encode())

@@ -3,10 +3,12 @@
 //!
 //! ```text
 //! cargo run --example client -- [--socket PATH] [--binary] [--rate HZ]
-//!                                [--subscribe snapshot,events] [--command pause]
+//!                                [--subscribe snapshot,events] [--fields positions,motions]
+//!                                [--command pause]
 //! ```
 //! Prints one line per message: a summary for snapshots (seq, agent count, latency,
-//! drops, centroid), the JSON for everything else. See docs/protocol.md.
+//! drops, centroid, and how many agents do each motion when the daemon runs a
+//! scene), the JSON for everything else. See docs/protocol.md.
 
 use serde_json::{json, Value};
 use std::io::{BufRead, BufReader, Read, Write};
@@ -46,6 +48,7 @@ struct Options {
     binary: bool,
     rate: Option<f64>,
     subscribe: Option<Vec<String>>,
+    fields: Option<Vec<String>>,
     command: Option<String>,
 }
 
@@ -55,6 +58,7 @@ fn options() -> Result<Options, String> {
         binary: false,
         rate: None,
         subscribe: None,
+        fields: None,
         command: None,
     };
     let mut args = std::env::args().skip(1);
@@ -65,8 +69,9 @@ fn options() -> Result<Options, String> {
             "--binary" => o.binary = true,
             "--rate" => o.rate = Some(value()?.parse().map_err(|e| format!("--rate: {e}"))?),
             "--subscribe" => o.subscribe = Some(value()?.split(',').map(String::from).collect()),
+            "--fields" => o.fields = Some(value()?.split(',').map(String::from).collect()),
             "--command" => o.command = Some(value()?),
-            "-h" | "--help" => return Err("usage: client [--socket PATH] [--binary] [--rate HZ] [--subscribe a,b] [--command NAME]".into()),
+            "-h" | "--help" => return Err("usage: client [--socket PATH] [--binary] [--rate HZ] [--subscribe a,b] [--fields a,b] [--command NAME]".into()),
             _ => return Err(format!("unknown argument {a}")),
         }
     }
@@ -114,6 +119,30 @@ fn u64_at(b: &[u8], at: usize) -> u64 {
     u64::from_le_bytes(a)
 }
 
+/// Binary motion codes (docs/protocol.md, "Motions array"): the byte is the index.
+const MOTIONS: [&str; 7] = [
+    "run",
+    "crawl",
+    "duck",
+    "swim",
+    "jump",
+    "climb_up",
+    "climb_down",
+];
+
+/// " motions run=40 swim=10" for a list of motion names; empty for none.
+fn motion_counts<'a>(names: impl Iterator<Item = &'a str>) -> String {
+    let mut counts = std::collections::BTreeMap::new();
+    for m in names {
+        *counts.entry(m).or_insert(0) += 1;
+    }
+    if counts.is_empty() {
+        return String::new();
+    }
+    let parts: Vec<String> = counts.iter().map(|(m, c)| format!("{m}={c}")).collect();
+    format!(" motions {}", parts.join(" "))
+}
+
 /// Summary of a binary snapshot frame (layout in docs/protocol.md).
 fn summarise_binary(f: &[u8]) -> String {
     if f.len() < 64 {
@@ -121,6 +150,7 @@ fn summarise_binary(f: &[u8]) -> String {
     }
     let flags = u16::from_le_bytes([f[6], f[7]]);
     let (seq, dropped, n) = (u64_at(f, 8), u64_at(f, 32), u32_at(f, 48) as usize);
+    let (g, k) = (u32_at(f, 52) as usize, u32_at(f, 56) as usize);
     let latency = if flags & 0x40 != 0 {
         format!("{} us", u64_at(f, 24))
     } else {
@@ -135,8 +165,23 @@ fn summarise_binary(f: &[u8]) -> String {
         }
         centroid = (centroid.0 / n as f64, centroid.1 / n as f64);
     }
+    // The arrays come in flag order; the motions (flag 0x80) are last, a byte each.
+    let has = |bit: u16| usize::from(flags & bit != 0);
+    let motions_at = 64
+        + 8 * n * (has(0x01) + has(0x02))
+        + 8 * g * has(0x04)
+        + 4 * n * has(0x08)
+        + 16 * k * has(0x10);
+    let motions = match f.get(motions_at..motions_at + n) {
+        Some(codes) if flags & 0x80 != 0 => motion_counts(
+            codes
+                .iter()
+                .map(|&c| MOTIONS.get(c as usize).copied().unwrap_or("unknown")),
+        ),
+        _ => String::new(),
+    };
     format!(
-        "snapshot seq={seq} agents={n} latency={latency} dropped={dropped} centroid=({:.3}, {:.3})",
+        "snapshot seq={seq} agents={n} latency={latency} dropped={dropped} centroid=({:.3}, {:.3}){motions}",
         centroid.0, centroid.1
     )
 }
@@ -157,8 +202,12 @@ fn summarise_json(v: &Value) -> String {
     let latency = v["latency_us"]
         .as_u64()
         .map_or("-".into(), |l| format!("{l} us"));
+    let motions = match v["motions"].as_array() {
+        Some(m) => motion_counts(m.iter().filter_map(Value::as_str)),
+        None => String::new(),
+    };
     format!(
-        "snapshot seq={} agents={n} latency={latency} dropped={} centroid=({:.3}, {:.3})",
+        "snapshot seq={} agents={n} latency={latency} dropped={} centroid=({:.3}, {:.3}){motions}",
         v["seq"], v["dropped"], centroid.0, centroid.1
     )
 }
@@ -195,13 +244,16 @@ fn main() {
     }
 
     // Ask for what we want (omitted keys take the defaults).
-    let wants_hello = o.binary || o.rate.is_some() || o.subscribe.is_some();
+    let wants_hello = o.binary || o.rate.is_some() || o.subscribe.is_some() || o.fields.is_some();
     if wants_hello {
         let mut hello = json!({"type": "hello", "protocol": 1,
                                "format": if o.binary { "binary" } else { "json" },
                                "max_rate_hz": o.rate});
         if let Some(s) = &o.subscribe {
             hello["subscribe"] = json!(s);
+        }
+        if let Some(f) = &o.fields {
+            hello["fields"] = json!(f);
         }
         writeln!(writer, "{hello}").expect("send hello");
     }

@@ -312,7 +312,9 @@ fn supervise(
                         daemon.reload(c);
                     }
                     Err(e) => {
-                        log::error!("SIGHUP: new config rejected, the old one keeps running:\n{e}")
+                        log::error!(
+                            "SIGHUP: new config rejected, the old config and scene keep running:\n{e}"
+                        )
                     }
                 },
                 None => {

@@ -450,6 +450,7 @@ pub struct Config {
     /// see [`crate::crowd::scene`]), relative to the config file. The shipped scenes
     /// (`config/scenes/<name>.ron`) are also embedded in the binary and found by file
     /// name when the path does not exist. `None`: open ground, no environment.
+    /// Loading a config (at start and on every SIGHUP) reads the scene file again.
     #[serde(default)]
     pub scene: Option<PathBuf>,
     /// The scene, loaded and validated with the config.

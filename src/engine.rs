@@ -114,6 +114,7 @@ pub struct Engine {
     inline: Option<Assigner>,
     scene: Option<Arc<Scene>>,
     planner: Option<Planner>,
+    planner_params: PlannerParams,
     scene_t0: Option<Micros>,
     scene_t_s: f64,
     waypoints: Vec<Vec2>,
@@ -170,6 +171,7 @@ impl Engine {
             inline: inline_assignment.then(|| Assigner::new(cfg.assignment.cost)),
             scene: cfg.loaded_scene().cloned(),
             planner: None,
+            planner_params: planner_params(cfg),
             scene_t0: None,
             scene_t_s: 0.0,
             waypoints: vec![Vec2::repeat(f64::NAN); agents_n],
@@ -192,13 +194,7 @@ impl Engine {
         };
         e.fit_radius();
         if inline_assignment {
-            e.planner = e.scene.as_ref().and_then(|s| {
-                Planner::new(Arc::clone(s), planner_params(cfg))
-                    .map_err(|err| {
-                        log::warn!("scene: no travel-cost planner ({err}); Euclidean costs")
-                    })
-                    .ok()
-            });
+            e.planner = inline_planner(cfg);
         }
         e.set_mesh_environment();
         e
@@ -223,6 +219,18 @@ impl Engine {
         self.scene.as_ref()
     }
 
+    /// The parameters a planner for the current scene and config uses (the worker
+    /// builds its planner with them).
+    pub fn planner_params(&self) -> PlannerParams {
+        self.planner_params
+    }
+
+    /// Whether the engine solves the assignment inside the tick (and so keeps its
+    /// own planner when it has a scene).
+    pub fn assigns_inline(&self) -> bool {
+        self.inline.is_some()
+    }
+
     /// Scene time of the last tick (s since the first tick): where moving obstacles
     /// are.
     pub fn scene_time_s(&self) -> f64 {
@@ -239,10 +247,36 @@ impl Engine {
         &self.motions
     }
 
-    /// Applies a reloaded config's tunables. The crowd size, formation, mesh and world
-    /// mapping need a restart (or `set_agent_count`); returns the names of changed
-    /// settings that were not applied.
+    /// Applies a reloaded config's tunables and its scene. The crowd size,
+    /// formation, mesh and world mapping need a restart (or `set_agent_count`);
+    /// returns the names of changed settings that were not applied.
+    ///
+    /// A scene that differs from the running one (another file, an edited one, or
+    /// none) replaces it from the next tick; see [`Engine::reconfigure_with`]. With
+    /// inline assignment this builds the new scene's planner here; the daemon builds
+    /// it off the control thread and passes it to `reconfigure_with` instead.
     pub fn reconfigure(&mut self, cfg: &Config) -> Vec<&'static str> {
+        self.reconfigure_with(cfg, None)
+    }
+
+    /// [`Engine::reconfigure`] with the inline planner for `cfg`'s scene already
+    /// built ([`inline_planner`]), so the swap itself is cheap: no allocation
+    /// beyond what dropping the old scene frees, O(mesh vertices × obstacle parts)
+    /// work to push the mesh out of the new obstacles. `planner` is used only when
+    /// the scene changes, the engine assigns inline, and it plans over that very
+    /// scene; otherwise it is dropped.
+    ///
+    /// On a scene change the agents keep their positions and velocities; their
+    /// waypoints are cleared and assignment results solved for the old scene are
+    /// discarded (the crowd generation changes), the mesh goals are pushed out of
+    /// the new obstacles, and from the next tick agents move at the new patches'
+    /// speeds, are kept out of the new obstacles and report the new motions. Scene
+    /// time runs on, so moving obstacles continue from where the clock is.
+    pub fn reconfigure_with(
+        &mut self,
+        cfg: &Config,
+        planner: Option<Planner>,
+    ) -> Vec<&'static str> {
         let mut ignored = Vec::new();
         if cfg.surface.world != self.world {
             ignored.push("surface.world");
@@ -259,11 +293,38 @@ impl Engine {
         self.segmenter.set_params(segment_params(cfg));
         self.direct.set_params(direct_params(cfg));
         self.fit_radius();
-        if cfg.loaded_scene() != self.scene.as_ref() {
-            ignored.push("scene");
+        let params = planner_params(cfg);
+        let scene_changed = !same_scene(cfg.loaded_scene(), self.scene.as_ref());
+        let params_changed = params != self.planner_params;
+        self.planner_params = params;
+        if scene_changed {
+            self.set_scene(cfg.loaded_scene().cloned());
+        }
+        if self.inline.is_some() && (scene_changed || params_changed) {
+            self.planner = match planner.filter(|p| {
+                self.scene
+                    .as_ref()
+                    .is_some_and(|s| Arc::ptr_eq(s, p.scene()))
+            }) {
+                Some(p) => Some(p),
+                None => self.scene.as_ref().and_then(|s| planner_for(s, params)),
+            };
         }
         self.set_mesh_environment();
         ignored
+    }
+
+    /// Swaps the scene (see [`Engine::reconfigure_with`]).
+    fn set_scene(&mut self, scene: Option<Arc<Scene>>) {
+        self.scene = scene;
+        if self.scene.is_none() {
+            self.motions.clear();
+        }
+        self.waypoints.fill(Vec2::repeat(f64::NAN));
+        self.generation += 1;
+        if let Some(a) = &mut self.inline {
+            a.forget();
+        }
     }
 
     /// Counters.
@@ -750,6 +811,30 @@ impl Engine {
 /// The planner's parameters for `cfg` (the agents' speed limit as preferred speed).
 pub fn planner_params(cfg: &Config) -> PlannerParams {
     PlannerParams::new(cfg.crowd.max_speed_m_s)
+}
+
+/// The travel-cost planner over `cfg`'s scene (`None` without a scene, or when the
+/// scene makes no planning grid: then Euclidean costs, with a warning). Building it
+/// rasterises the scene and sizes the fast-marching workspaces: the daemon does it
+/// off the control thread.
+pub fn inline_planner(cfg: &Config) -> Option<Planner> {
+    planner_for(cfg.loaded_scene()?, planner_params(cfg))
+}
+
+/// The travel-cost planner over `scene` (see [`inline_planner`]).
+pub fn planner_for(scene: &Arc<Scene>, params: PlannerParams) -> Option<Planner> {
+    Planner::new(Arc::clone(scene), params)
+        .map_err(|err| log::warn!("scene: no travel-cost planner ({err}); Euclidean costs"))
+        .ok()
+}
+
+/// Whether two optional scenes are the same: one `Arc`, or equal content.
+pub fn same_scene(a: Option<&Arc<Scene>>, b: Option<&Arc<Scene>>) -> bool {
+    match (a, b) {
+        (Some(a), Some(b)) => Arc::ptr_eq(a, b) || a == b,
+        (None, None) => true,
+        _ => false,
+    }
 }
 
 fn agent_params(cfg: &Config) -> AgentParams {

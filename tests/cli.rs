@@ -250,6 +250,138 @@ fn sighup_with_a_bad_config_keeps_the_old_one_running() {
     let _ = std::io::stderr().flush();
 }
 
+/// A scene whose one patch covers the crowd and the ground around it.
+fn patch_scene(name: &str, motion: &str, speed: &str) -> String {
+    format!(
+        "(\n    version: 1,\n    name: \"{name}\",\n    bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),\n    patches: [\n        (name: \"floor\", motion: {motion}, speed_factor: {speed}, parts: [\n            Polygon(vertices_m: [(3.0, 1.0), (13.0, 1.0), (13.0, 8.0), (3.0, 8.0)]),\n        ]),\n    ],\n)\n"
+    )
+}
+
+/// Reads snapshots for `secs`, or until `stop` is true of `extra` more snapshots
+/// after the one it was first true of, and returns the motions of each.
+fn snapshot_motions(
+    r: &mut BufReader<std::os::unix::net::UnixStream>,
+    secs: f64,
+    extra: usize,
+    stop: impl Fn(&[String]) -> bool,
+) -> Vec<Vec<String>> {
+    r.get_ref()
+        .set_read_timeout(Some(Duration::from_millis(200)))
+        .unwrap();
+    let end = Instant::now() + Duration::from_secs_f64(secs);
+    let mut out: Vec<Vec<String>> = Vec::new();
+    let mut line = String::new();
+    let mut stopped_at = None;
+    while Instant::now() < end && stopped_at.is_none_or(|at| out.len() <= at + extra) {
+        line.clear();
+        match r.read_line(&mut line) {
+            Ok(0) => break,
+            Ok(_) if line.starts_with("{\"type\":\"snapshot\"") => {
+                let v: serde_json::Value = serde_json::from_str(&line).unwrap();
+                out.push(
+                    v["motions"]
+                        .as_array()
+                        .map(|m| m.iter().map(|x| x.as_str().unwrap().to_string()).collect())
+                        .unwrap_or_default(),
+                );
+                if stopped_at.is_none() && stop(out.last().unwrap()) {
+                    stopped_at = Some(out.len() - 1);
+                }
+            }
+            Ok(_) => {}
+            Err(_) => {}
+        }
+    }
+    out
+}
+
+/// SIGHUP re-reads the scene file: a broken scene is rejected with its file, line
+/// and column in the log and the running scene stays; a fixed one is swapped in.
+#[test]
+fn sighup_reloads_the_scene_and_a_broken_scene_keeps_the_old_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg_path = dir.path().join("crowdtouch.ron");
+    let scene_path = dir.path().join("room.ron");
+    let rec = common::shipped("07-open-space-swipe.jsonl");
+    let base = crowdtouch::config::DEFAULT_CONFIG_RON;
+    let a = base.find("inputs: [").unwrap();
+    let b = a + base[a..].find("\n    ],\n").unwrap() + "\n    ],\n".len();
+    let text = format!(
+        "{}inputs: [Replay(files: [{:?}], looped: true)],\n{}",
+        &base[..a],
+        rec.display().to_string(),
+        &base[b..]
+    )
+    .replacen("agents: 100", "agents: 40", 1)
+    .replacen("scene: None", "scene: Some(\"room.ron\")", 1);
+    std::fs::write(&cfg_path, &text).unwrap();
+    std::fs::write(&scene_path, patch_scene("net room", "crawl", "None")).unwrap();
+    let sock = dir.path().join("run.sock");
+    let child = bin()
+        .args(["run", "--config"])
+        .arg(&cfg_path)
+        .arg("--socket")
+        .arg(&sock)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = nix::unistd::Pid::from_raw(child.id() as i32);
+    let t0 = Instant::now();
+    while !sock.exists() && t0.elapsed() < Duration::from_secs(5) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let mut r = BufReader::new(std::os::unix::net::UnixStream::connect(&sock).unwrap());
+    let all = |snaps: &[Vec<String>], motion: &str| {
+        !snaps.is_empty()
+            && snaps
+                .iter()
+                .all(|m| m.len() == 40 && m.iter().all(|x| x == motion))
+    };
+    let first = snapshot_motions(&mut r, 0.5, 0, |_| false);
+    assert!(all(&first, "crawl"), "scene at start: {:?}", first.last());
+
+    // Broken: a patch speed of -0.5 on line 6.
+    std::fs::write(&scene_path, patch_scene("pool room", "swim", "Some(-0.5)")).unwrap();
+    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGHUP).unwrap();
+    let kept = snapshot_motions(&mut r, 1.0, 0, |_| false);
+    assert!(
+        all(&kept, "crawl"),
+        "after a broken scene: {:?}",
+        kept.last()
+    );
+
+    // Fixed: the pool is swapped in while the daemon runs.
+    std::fs::write(&scene_path, patch_scene("pool room", "swim", "None")).unwrap();
+    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGHUP).unwrap();
+    let swim = |m: &[String]| !m.is_empty() && m.iter().all(|x| x == "swim");
+    let after = snapshot_motions(&mut r, 10.0, 60, swim);
+    let swapped = after
+        .iter()
+        .position(|m| swim(m))
+        .expect("the fixed scene was not swapped in");
+    assert!(all(&after[swapped..], "swim"), "{:?}", after.last());
+    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGTERM).unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success());
+    let log = String::from_utf8_lossy(&out.stderr);
+    let line = text
+        .lines()
+        .position(|l| l.contains("scene: Some"))
+        .unwrap()
+        + 1;
+    assert!(
+        log.contains("rejected")
+            && log.contains(&format!("crowdtouch.ron:{line}:"))
+            && log.contains("room.ron:6:")
+            && log.contains("speed must be positive"),
+        "{log}"
+    );
+    assert!(
+        log.contains("scene \"pool room\" loaded") && log.contains("replaces scene \"net room\""),
+        "{log}"
+    );
+}
+
 /// `replay --frames` prints the daemon's decoding of a real device recording.
 #[test]
 fn replay_frames_prints_decoded_touches() {

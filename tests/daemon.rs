@@ -318,3 +318,161 @@ fn shutdown_says_bye_and_nothing_is_left_down() {
         .count();
     assert!(ends >= 1);
 }
+
+/// Scene A of the reload tests: one block east of the crowd, open ground under it.
+const SCENE_EAST_BLOCK: &str = "(
+    version: 1,
+    name: \"east block\",
+    bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),
+    obstacles: [
+        (name: \"block\", parts: [
+            Polygon(vertices_m: [(11.5, 3.5), (13.5, 3.5), (13.5, 5.5), (11.5, 5.5)]),
+        ]),
+    ],
+)";
+
+/// Scene B: the block moved into the middle of the crowd, and a pool over the
+/// crowd's west part.
+const SCENE_BLOCK_IN_THE_CROWD: &str = "(
+    version: 1,
+    name: \"block in the crowd\",
+    bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),
+    obstacles: [
+        (name: \"block\", parts: [
+            Polygon(vertices_m: [(7.4, 3.9), (8.6, 3.9), (8.6, 5.1), (7.4, 5.1)]),
+        ]),
+    ],
+    patches: [
+        (name: \"pool\", motion: swim, parts: [
+            Polygon(vertices_m: [(5.0, 2.0), (6.9, 2.0), (6.9, 7.0), (5.0, 7.0)]),
+        ]),
+    ],
+)";
+
+/// Inside scene B's block, by more than the millimetre the wire rounds to.
+fn in_moved_block(p: Vec2) -> bool {
+    p.x > 7.401 && p.x < 8.599 && p.y > 3.901 && p.y < 5.099
+}
+
+/// A config file in `dir` naming the scene file `scene.ron` beside it (or no scene),
+/// with `agents` agents, assigned on the worker or inside the tick.
+fn scene_config(dir: &Path, with_scene: bool, agents: u32, worker: bool) -> PathBuf {
+    let text = crowdtouch::config::DEFAULT_CONFIG_RON
+        .replacen("agents: 100", &format!("agents: {agents}"), 1)
+        .replacen("worker: true", &format!("worker: {worker}"), 1)
+        .replacen(
+            "scene: None",
+            if with_scene {
+                "scene: Some(\"scene.ron\")"
+            } else {
+                "scene: None"
+            },
+            1,
+        );
+    let path = dir.join("crowdtouch.ron");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn motions(v: &Value) -> Vec<&str> {
+    v["motions"]
+        .as_array()
+        .map(|m| m.iter().map(|x| x.as_str().unwrap()).collect())
+        .unwrap_or_default()
+}
+
+/// A reload re-reads the scene file: the edited scene (its block moved into the
+/// crowd, a pool added) applies while the crowd keeps running: no reset, ticks go
+/// on, no agent is ever inside the new block once the new scene is in use (checked
+/// over `ticks_after` ticks), agents in the pool report `swim`, and assignments
+/// solved in the new scene keep coming. A reload without a scene returns to open
+/// ground.
+fn reload_swaps_the_scene(agents: u32, worker: bool, ticks_after: u64) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = sock(&dir);
+    std::fs::write(dir.path().join("scene.ron"), SCENE_EAST_BLOCK).unwrap();
+    let cfg_path = scene_config(dir.path(), true, agents, worker);
+    let cfg = Config::load(&cfg_path).unwrap();
+    assert_eq!(cfg.loaded_scene().unwrap().name(), "east block");
+    let mut daemon = start(cfg, &["07-open-space-swipe.jsonl"], &path);
+    let mut r = BufReader::new(UnixStream::connect(&path).unwrap());
+    // Scene A running: everyone on open ground, some agents where B's block will be.
+    let before = read_until(&mut r, 5.0, |v| {
+        v["type"] == "snapshot" && v["assignment_seq"].as_u64() > Some(0)
+    });
+    let last_a = before.last().unwrap();
+    assert_eq!(last_a["type"], "snapshot", "no snapshot in scene A");
+    assert!(motions(last_a).iter().all(|m| *m == "run"));
+    assert!(pairs(&last_a["positions"]).into_iter().any(in_moved_block));
+
+    std::fs::write(dir.path().join("scene.ron"), SCENE_BLOCK_IN_THE_CROWD).unwrap();
+    daemon.reload(Config::load(&cfg_path).unwrap());
+    let mut swapped_at = None;
+    let mut solved_in_b = false;
+    let mut last_seq = last_a["seq"].as_u64().unwrap();
+    let msgs = read_until(&mut r, 8.0, |v| {
+        if v["type"] != "snapshot" {
+            return false;
+        }
+        let seq = v["seq"].as_u64().unwrap();
+        assert!(seq > last_seq, "ticks go on in order");
+        last_seq = seq;
+        if swapped_at.is_none() && motions(v).contains(&"swim") {
+            swapped_at = Some(seq);
+        }
+        if let Some(s) = swapped_at {
+            solved_in_b |= v["assignment_seq"].as_u64().unwrap() >= s;
+        }
+        solved_in_b && swapped_at.is_some_and(|s| seq > s + ticks_after)
+    });
+    let swapped_at = swapped_at.expect("the new scene's pool never showed in motions");
+    assert!(solved_in_b, "no assignment solved in the new scene");
+    assert!(
+        !msgs.iter().any(|v| v["type"] == "reset"),
+        "a scene reload does not reset the crowd"
+    );
+    let mut checked = 0;
+    for v in msgs.iter().filter(|v| v["type"] == "snapshot") {
+        assert_eq!(v["agents"], agents);
+        if v["seq"].as_u64().unwrap() < swapped_at {
+            continue;
+        }
+        for (i, p) in pairs(&v["positions"]).into_iter().enumerate() {
+            assert!(
+                !in_moved_block(p),
+                "seq {}: agent {i} at {p} inside the new block",
+                v["seq"]
+            );
+        }
+        checked += 1;
+    }
+    assert!(
+        checked as u64 > ticks_after,
+        "only {checked} snapshots in the new scene"
+    );
+
+    // The scene removed from the config: open ground, no motions.
+    daemon.reload(Config::load(&scene_config(dir.path(), false, agents, worker)).unwrap());
+    let msgs = read_until(&mut r, 5.0, |v| {
+        v["type"] == "snapshot" && v.get("motions").is_none()
+    });
+    assert!(
+        msgs.last().unwrap().get("motions").is_none(),
+        "motions still sent without a scene"
+    );
+    daemon.shutdown();
+}
+
+/// [`reload_swaps_the_scene`] with the assignment worker: it builds its planner for
+/// the new scene on its own thread.
+#[test]
+fn a_reload_swaps_in_the_edited_scene_while_the_crowd_keeps_running() {
+    reload_swaps_the_scene(60, true, 120);
+}
+
+/// [`reload_swaps_the_scene`] with the assignment inside the tick: the reload hands
+/// the control thread a planner built for the new scene on the supervisor's thread.
+#[test]
+fn a_reload_with_inline_assignment_swaps_in_a_prepared_planner() {
+    reload_swaps_the_scene(20, false, 30);
+}

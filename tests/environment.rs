@@ -331,3 +331,107 @@ fn agents_in_a_patch_move_at_its_speed_and_report_its_motion() {
         "swimmers never reached the patch speed: {fastest}"
     );
 }
+
+/// The reloaded scene of the reload tests: a block in the middle of the default
+/// crowd start (6,3)..(10,6) and a pool over its west part.
+const BLOCK_IN_THE_CROWD: &str = "(
+    version: 1,
+    name: \"block in the crowd\",
+    bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),
+    obstacles: [
+        (name: \"block\", parts: [
+            Polygon(vertices_m: [(7.4, 3.9), (8.6, 3.9), (8.6, 5.1), (7.4, 5.1)]),
+        ]),
+    ],
+    patches: [
+        (name: \"pool\", motion: swim, parts: [
+            Polygon(vertices_m: [(5.0, 2.0), (6.9, 2.0), (6.9, 7.0), (5.0, 7.0)]),
+        ]),
+    ],
+)";
+
+fn inside_block(p: Vec2) -> bool {
+    p.x > 7.4 && p.x < 8.6 && p.y > 3.9 && p.y < 5.1
+}
+
+/// A config reload with another scene swaps it in between two ticks: the crowd
+/// keeps moving (no reset), from the next tick no agent is inside the new obstacle
+/// and no goal either, agents in the new patch report its motion; a reload without
+/// a scene returns to open ground.
+#[test]
+fn a_reconfigured_scene_applies_from_the_next_tick() {
+    let c = cfg("single_block", 60, rect(6.0, 3.0, 10.0, 6.0), 10);
+    let mut e = Engine::new(&c, None, true);
+    let mut t = 1_000_000u64;
+    for _ in 0..60 {
+        t += TICK_US;
+        e.tick(Micros(t));
+        e.clear_events();
+    }
+    assert!(e.motions().iter().all(|&m| m == MotionType::Run));
+    let inside_before = e
+        .agent_positions()
+        .iter()
+        .filter(|p| inside_block(**p))
+        .count();
+    assert!(inside_before > 0, "the new block would be empty");
+    let (seq, generation) = (e.seq(), e.generation());
+
+    let b = Arc::new(Scene::from_str(BLOCK_IN_THE_CROWD, Path::new("b.ron"), 0.15).unwrap());
+    let mut c2 = c.clone();
+    c2.set_loaded_scene(Some(Arc::clone(&b)));
+    let ignored = e.reconfigure(&c2);
+    assert!(ignored.is_empty(), "{ignored:?}");
+    assert!(Arc::ptr_eq(e.scene().unwrap(), &b));
+    assert!(e.generation() > generation, "old plans are discarded");
+    let mut swimmers = 0;
+    for k in 0..180 {
+        t += TICK_US;
+        let out = e.tick(Micros(t));
+        assert!(
+            !out.events
+                .iter()
+                .any(|ev| matches!(ev, crowdtouch::snapshot::Event::Reset { .. })),
+            "a scene reload does not reset the crowd"
+        );
+        assert_eq!(out.snapshot.agents.len(), 60);
+        assert_eq!(out.snapshot.motions.len(), 60);
+        e.clear_events();
+        for (i, p) in e.agent_positions().iter().enumerate() {
+            assert!(
+                !inside_block(*p),
+                "tick {k}: agent {i} at {p} in the new block"
+            );
+            assert_eq!(e.motions()[i], b.terrain_at(*p, e.scene_time_s()).motion);
+        }
+        for g in e.goals() {
+            assert!(!inside_block(*g), "tick {k}: goal {g} in the new block");
+        }
+        swimmers = swimmers.max(
+            e.motions()
+                .iter()
+                .filter(|&&m| m == MotionType::Swim)
+                .count(),
+        );
+    }
+    assert_eq!(e.seq(), seq + 180, "ticks go on");
+    assert!(swimmers > 0, "nobody in the new pool");
+
+    // The same scene again (another Arc, equal content): nothing is swapped.
+    let generation = e.generation();
+    let mut c3 = c.clone();
+    c3.set_loaded_scene(Some(Arc::new((*b).clone())));
+    e.reconfigure(&c3);
+    assert!(Arc::ptr_eq(e.scene().unwrap(), &b));
+    assert_eq!(e.generation(), generation);
+
+    // No scene: open ground, no motions.
+    let mut c4 = c.clone();
+    c4.set_loaded_scene(None);
+    e.reconfigure(&c4);
+    t += TICK_US;
+    let out = e.tick(Micros(t));
+    assert!(out.snapshot.motions.is_empty());
+    drop(out);
+    assert!(e.scene().is_none() && e.motions().is_empty());
+}

@@ -185,3 +185,117 @@ fn a_steady_control_tick_does_not_allocate() {
     });
     assert_eq!(n, 0, "480 control ticks allocated {n} times");
 }
+
+/// Warm-up ticks of the scene tests (1 s at 120 Hz): the drag into the scene.
+const SCENE_WARM_UP: u64 = 120;
+/// Ticks counted in the scene tests.
+const SCENE_STEADY: u64 = 240;
+
+/// Control ticks in a shipped scene, with an area control dragging the crowd
+/// 2.0 m east and 1.5 m south into it during the warm-up and then holding it there
+/// with small motions: returns the allocations of the [`SCENE_STEADY`] ticks after
+/// the [`SCENE_WARM_UP`] and the engine. (Scene queries are slow in a debug build:
+/// `agents` and the `mesh` size keep the run time in bounds.)
+fn scene_ticks(scene: &str, agents: u32, mesh: (u32, u32)) -> (u64, Engine) {
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = agents;
+    (cfg.mesh.cols, cfg.mesh.rows) = mesh;
+    let scene = crowdtouch::embedded::load_scene(
+        std::path::Path::new(&format!("config/scenes/{scene}.ron")),
+        cfg.crowd.agent_radius_m,
+    )
+    .expect("shipped scene loads");
+    cfg.set_loaded_scene(Some(Arc::new(scene)));
+    let mut engine = Engine::new(&cfg, None, false);
+    let fingers = [(0.48f32, 0.45f32), (0.52, 0.45), (0.50, 0.52)];
+    // Warm-up: to (+2.0 m, +1.5 m); then a 2 cm wobble.
+    let offset = |k: u64| -> (f32, f32) {
+        let s = (k.min(SCENE_WARM_UP) as f32) / SCENE_WARM_UP as f32;
+        let wobble = 0.001 * ((k as f32) * 0.05).sin();
+        (0.125 * s + wobble, 0.167 * s - wobble)
+    };
+    let frame_at = |k: u64, flags: ContactFlags| {
+        let mut f = TouchFrame::new(Micros(k * 8_333));
+        let (dx, dy) = offset(k);
+        for (i, &(x, y)) in fingers.iter().enumerate() {
+            let c = Contact {
+                id: ContactId(i as u32 + 1),
+                x: x + dx,
+                y: y + dy,
+                flags,
+                ..Contact::default()
+            };
+            f.push(c).unwrap();
+        }
+        f
+    };
+    for k in 0..SCENE_WARM_UP {
+        engine.push_frame(&frame_at(
+            k,
+            if k == 0 {
+                ContactFlags::DOWN
+            } else {
+                ContactFlags::NONE
+            },
+        ));
+        drop(engine.tick(Micros(k * 8_333)));
+        engine.clear_events();
+    }
+    let n = allocations(|| {
+        for k in SCENE_WARM_UP..SCENE_WARM_UP + SCENE_STEADY {
+            engine.push_frame(&frame_at(k, ContactFlags::NONE));
+            let out = engine.tick(Micros(k * 8_333));
+            assert!(out.events.is_empty());
+            drop(out);
+            engine.clear_events();
+        }
+    });
+    (n, engine)
+}
+
+/// The steady tick in the obstacle course: the mesh pushed off obstacles by the
+/// environment field, agents at their patch's speed, projected out of obstacles, and
+/// their motions published. The test also checks that the crowd really is where
+/// those paths run: some agents in a patch, some pressed against an obstacle.
+#[test]
+fn a_steady_control_tick_in_a_scene_does_not_allocate() {
+    let (n, engine) = scene_ticks("obstacle_course", 200, (10, 8));
+    let scene = Arc::clone(engine.scene().unwrap());
+    let t = engine.scene_time_s();
+    let r = engine.agent_radius_m();
+    let in_patch = engine
+        .motions()
+        .iter()
+        .filter(|m| **m != crowdtouch::crowd::scene::MotionType::Run)
+        .count();
+    let against = engine
+        .agent_positions()
+        .iter()
+        .filter(|p| scene.signed_distance(**p, t) < r + 0.02)
+        .count();
+    assert!(
+        in_patch > 0,
+        "no agent in a patch: the patch path did not run"
+    );
+    assert!(
+        against > 0,
+        "no agent at an obstacle: projection did not run"
+    );
+    assert_eq!(
+        n, 0,
+        "{SCENE_STEADY} control ticks in the obstacle course allocated {n} times"
+    );
+}
+
+/// The same with moving obstacles (the street's cars): the final mesh is recomputed
+/// every tick at the scene time. A small mesh: displacing and projecting its
+/// vertices against the moving parts dominates the tick.
+#[test]
+fn a_steady_control_tick_among_moving_obstacles_does_not_allocate() {
+    let (n, engine) = scene_ticks("street", 40, (6, 5));
+    assert!(!engine.scene().unwrap().dynamic().is_empty());
+    assert_eq!(
+        n, 0,
+        "{SCENE_STEADY} control ticks in the street allocated {n} times"
+    );
+}

@@ -994,3 +994,190 @@ fn socket_group_is_applied_or_reported() {
         assert_eq!(std::fs::metadata(&path).unwrap().gid(), gid.as_raw());
     }
 }
+
+/// A snapshot in a scene: one motion per agent, cycling through every type; no
+/// input time, so its encoding does not depend on when it is written.
+fn scene_snapshot(seq: u64, n: usize) -> Snapshot {
+    use crowdtouch::crowd::scene::MotionType;
+    let mut s = snapshot(seq, n);
+    s.input_t = None;
+    s.motions = (0..n)
+        .map(|i| MotionType::ALL[i % MotionType::ALL.len()])
+        .collect();
+    s
+}
+
+#[test]
+fn binary_motions_reach_only_the_clients_that_name_them() {
+    use crowdtouch::publish::protocol::{FieldSet, FLAG_MOTIONS};
+    let mut d = Daemon::start(socket_config(64));
+    // A binary client written before the motions array: no `fields`.
+    let mut old = Client::ready(&d.path);
+    let reply = old.hello(json!({"type":"hello","protocol":1,"format":"binary"}));
+    assert_eq!(
+        reply["fields"],
+        json!(["positions", "velocities", "goals", "assignment", "touches"])
+    );
+    // A binary client that asks for motions.
+    let mut new = Client::ready(&d.path);
+    let reply = new.hello(
+        json!({"type":"hello","protocol":1,"format":"binary","fields":["positions","motions"]}),
+    );
+    assert_eq!(reply["fields"], json!(["positions", "motions"]));
+    // A JSON client with the defaults.
+    let mut js = Client::ready(&d.path);
+    let n = 9;
+    let s = Arc::new(scene_snapshot(11, n));
+    d.send(Outgoing::Snapshot(Arc::clone(&s)));
+
+    // The old client's frame is byte for byte the frame of the same tick without a
+    // scene: the layout it was written for.
+    let frame = old.frame();
+    let mut no_scene = (*s).clone();
+    no_scene.motions.clear();
+    let mut expected = Vec::new();
+    protocol::encode_snapshot_binary(&no_scene, None, 0, &FieldSet::BINARY_DEFAULT, &mut expected);
+    assert_eq!(frame, expected);
+    assert_eq!(
+        frame.len(),
+        protocol::BINARY_HEADER_BYTES + 8 * n * 3 + 4 * n + protocol::BINARY_TOUCH_BYTES
+    );
+    let b = protocol::decode_snapshot_binary(&frame).unwrap();
+    assert!(b.motions.is_none());
+
+    // The new one gets a byte per agent after the positions, padded to 4.
+    let frame = new.frame();
+    assert_eq!(frame[4], FRAME_KIND_SNAPSHOT);
+    let flags = u16::from_le_bytes([frame[6], frame[7]]);
+    assert_ne!(flags & FLAG_MOTIONS, 0);
+    assert_eq!(frame.len(), protocol::BINARY_HEADER_BYTES + 8 * n + 12);
+    let b = protocol::decode_snapshot_binary(&frame).unwrap();
+    let names: Vec<&str> = b
+        .motions
+        .as_ref()
+        .unwrap()
+        .iter()
+        .map(|&c| protocol::motion_from_code(c).unwrap().as_str())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "run",
+            "crawl",
+            "duck",
+            "swim",
+            "jump",
+            "climb_up",
+            "climb_down",
+            "run",
+            "crawl"
+        ]
+    );
+    assert_eq!(
+        &frame[protocol::BINARY_HEADER_BYTES + 8 * n..],
+        &[0, 1, 2, 3, 4, 5, 6, 0, 1, 0, 0, 0]
+    );
+    assert_eq!(b.positions.unwrap().len(), n);
+
+    // The JSON client gets the same motions by name.
+    let v = js.json();
+    assert_eq!(v["type"], "snapshot");
+    let json_names: Vec<&str> = v["motions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m.as_str().unwrap())
+        .collect();
+    assert_eq!(json_names, names);
+
+    // Without a scene, even the client that asked gets no motions bytes.
+    d.send(Outgoing::Snapshot(Arc::new(no_scene)));
+    let frame = new.frame();
+    assert_eq!(frame.len(), protocol::BINARY_HEADER_BYTES + 8 * n);
+    assert!(protocol::decode_snapshot_binary(&frame)
+        .unwrap()
+        .motions
+        .is_none());
+    d.shutdown();
+}
+
+/// Runs `examples/client.py`'s binary decoder on each frame (length prefix
+/// included); `None` when python3 cannot run.
+fn python_decode(frames: &[Vec<u8>]) -> Option<Vec<Value>> {
+    let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let hex: Vec<String> = frames
+        .iter()
+        .map(|f| f[4..].iter().map(|b| format!("{b:02x}")).collect())
+        .collect();
+    let out = match std::process::Command::new("python3")
+        .arg("-c")
+        .arg(
+            "import json, sys\n\
+             sys.path.insert(0, sys.argv[1])\n\
+             import client\n\
+             for h in sys.argv[2:]:\n    print(json.dumps(client.decode_binary_snapshot(bytes.fromhex(h))))\n",
+        )
+        .arg(&examples)
+        .args(&hex)
+        .output()
+    {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("SKIPPED: python3 not runnable ({e})");
+            return None;
+        }
+    };
+    assert!(
+        out.status.success(),
+        "client.py failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    Some(
+        String::from_utf8(out.stdout)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect(),
+    )
+}
+
+/// The Python reference client reads the frames a real socket carries, with and
+/// without the motions array, as the crate's own decoder does.
+#[test]
+fn the_python_reference_client_decodes_binary_motions() {
+    let mut d = Daemon::start(socket_config(64));
+    let mut every = Client::ready(&d.path);
+    every.hello(json!({"type":"hello","protocol":1,"format":"binary","fields":["positions","velocities","goals","assignment","touches","motions"]}));
+    let mut old = Client::ready(&d.path);
+    old.hello(json!({"type":"hello","protocol":1,"format":"binary"}));
+    let n = 6;
+    d.send(Outgoing::Snapshot(Arc::new(scene_snapshot(3, n))));
+    let frames = vec![every.frame(), old.frame()];
+    d.shutdown();
+    let Some(decoded) = python_decode(&frames) else {
+        return;
+    };
+    for (frame, py) in frames.iter().zip(&decoded) {
+        let b = protocol::decode_snapshot_binary(frame).unwrap();
+        assert_eq!(py["seq"], 3);
+        assert_eq!(py["agents"], n);
+        let pos: Vec<f32> = flat(&py["positions"]).iter().map(|&x| x as f32).collect();
+        let ours: Vec<f32> = b.positions.unwrap().iter().flatten().copied().collect();
+        assert_eq!(pos, ours);
+        assert_eq!(py["touches"][0]["control"], 4);
+        match b.motions {
+            Some(codes) => {
+                let names: Vec<Value> = codes
+                    .iter()
+                    .map(|&c| json!(protocol::motion_from_code(c).unwrap().as_str()))
+                    .collect();
+                assert_eq!(py["motions"], Value::Array(names));
+            }
+            None => assert!(py.get("motions").is_none(), "{py}"),
+        }
+    }
+    assert_eq!(
+        decoded[0]["motions"],
+        json!(["run", "crawl", "duck", "swim", "jump", "climb_up"])
+    );
+}

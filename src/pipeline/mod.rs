@@ -16,6 +16,8 @@
 
 use crate::config::{Config, InputConfig};
 use crate::crowd::assigner::Assigner;
+use crate::crowd::environment::{Planner, PlannerParams};
+use crate::crowd::scene::Scene;
 use crate::engine::Engine;
 use crate::geom::Vec2;
 use crate::input::recording::{OnBadFrame, RecordingError};
@@ -267,6 +269,10 @@ pub struct AssignJob {
     pub goals: Vec<Vec2>,
     /// Scene time of the tick (s): where moving obstacles are.
     pub t_scene_s: f64,
+    /// The scene the tick ran in and the planner parameters for it (`None`: no
+    /// scene, Euclidean costs). The worker plans over exactly this scene, building
+    /// a new planner when it differs from the last job's.
+    pub environment: Option<(Arc<Scene>, PlannerParams)>,
     /// Answer: goal index per agent.
     pub goal_of: Vec<u32>,
     /// Answer with a scene: each agent's waypoint around obstacles (NaN: none).
@@ -425,7 +431,10 @@ pub struct Daemon {
     heartbeat_us: Arc<AtomicU64>,
     control_stats: Receiver<ControlStats>,
     out: Sender<Outgoing>,
-    reload: Sender<Arc<Config>>,
+    reload: Sender<Box<Reload>>,
+    scene: Option<Arc<Scene>>,
+    planner_params: PlannerParams,
+    inline_assignment: bool,
     e2e: StageTimer,
     encode: StageTimer,
     totals: Vec<StageTimer>,
@@ -491,7 +500,7 @@ impl Daemon {
         // Control → supervisor: bounded(4) stats once per interval, try_send.
         let (cstats_tx, cstats_rx) = bounded::<ControlStats>(4);
         // Supervisor → control: bounded(1) config reloads, try_send.
-        let (reload_tx, reload_rx) = bounded::<Arc<Config>>(1);
+        let (reload_tx, reload_rx) = bounded::<Box<Reload>>(1);
 
         let rt = cfg.pipeline.realtime.clone();
         if rt.lock_memory && crate::rt::lock_memory() {
@@ -515,11 +524,8 @@ impl Daemon {
         }
         if cfg.assignment.worker {
             let cost = cfg.assignment.cost;
-            let planner = cfg
-                .loaded_scene()
-                .map(|s| (Arc::clone(s), crate::engine::planner_params(&cfg)));
             threads.push(spawn("assign", move || {
-                assignment_worker(cost, planner, job_rx, res_tx)
+                assignment_worker(cost, job_rx, res_tx)
             })?);
         }
         {
@@ -632,6 +638,9 @@ impl Daemon {
         }
         drop(frame_tx);
         let b = &cfg.pipeline.budgets;
+        let scene = cfg.loaded_scene().cloned();
+        let planner_params = crate::engine::planner_params(&cfg);
+        let inline_assignment = !cfg.assignment.worker;
         Ok(Daemon {
             stop,
             input_stop,
@@ -643,6 +652,9 @@ impl Daemon {
             control_stats: cstats_rx,
             out: out_tx,
             reload: reload_tx,
+            scene,
+            planner_params,
+            inline_assignment,
             e2e: StageTimer::new("end_to_end", b.end_to_end_us),
             encode: StageTimer::new("publish", b.publish_us),
             totals: Vec::new(),
@@ -671,12 +683,44 @@ impl Daemon {
         monotonic_now().saturating_since(Micros(self.heartbeat_us.load(Ordering::Relaxed)))
     }
 
-    /// Hands a new config to the control thread (already validated).
-    pub fn reload(&mut self, cfg: Config) {
+    /// Hands a new config to the control thread (already validated, its scene
+    /// loaded: [`Config::load`] reads and checks the scene file, so a broken scene
+    /// never gets here and the running one stays).
+    ///
+    /// Everything heavy about a new scene happens here, on the caller's thread,
+    /// not on the control thread: comparing it with the running one (an unchanged
+    /// scene keeps the running one, so nothing is swapped) and, with inline
+    /// assignment, building its planner (rasterised scene, fast-marching
+    /// workspaces). The assignment worker builds its own planner when its first
+    /// job in the new scene arrives. The control thread only swaps the prepared
+    /// parts in, between two ticks.
+    pub fn reload(&mut self, mut cfg: Config) {
         self.e2e.set_budget(cfg.pipeline.budgets.end_to_end_us);
         self.encode.set_budget(cfg.pipeline.budgets.publish_us);
-        if self.reload.try_send(Arc::new(cfg)).is_err() {
-            log::warn!("config reload skipped: the previous reload is still being applied");
+        let same = crate::engine::same_scene(cfg.loaded_scene(), self.scene.as_ref());
+        if same {
+            cfg.set_loaded_scene(self.scene.clone());
+        }
+        let params = crate::engine::planner_params(&cfg);
+        let planner = if self.inline_assignment && (!same || params != self.planner_params) {
+            cfg.loaded_scene()
+                .and_then(|s| crate::engine::planner_for(s, params))
+        } else {
+            None
+        };
+        let scene = cfg.loaded_scene().cloned();
+        let change = (!same).then(|| describe_scene_change(&cfg, self.scene.as_deref()));
+        match self.reload.try_send(Box::new(Reload { cfg, planner })) {
+            Ok(()) => {
+                if let Some(c) = change {
+                    log::info!("{c}");
+                }
+                self.scene = scene;
+                self.planner_params = params;
+            }
+            Err(_) => {
+                log::warn!("config reload skipped: the previous reload is still being applied")
+            }
         }
     }
 
@@ -767,6 +811,26 @@ impl Daemon {
     }
 }
 
+/// One log line for a reload whose scene differs from the running `old` one.
+fn describe_scene_change(cfg: &Config, old: Option<&Scene>) -> String {
+    let old = match old {
+        Some(o) => format!("scene \"{}\"", o.name()),
+        None => "open ground".to_string(),
+    };
+    match (cfg.loaded_scene(), &cfg.scene) {
+        (Some(new), path) => format!(
+            "scene \"{}\" loaded{} ({} obstacles, {} patches, {} moving); it replaces {old} from the next tick",
+            new.name(),
+            path.as_ref()
+                .map_or(String::new(), |p| format!(" from {}", p.display())),
+            new.obstacles().len(),
+            new.patches().len(),
+            new.dynamic().len(),
+        ),
+        (None, _) => format!("no scene in the new config: open ground replaces {old} from the next tick"),
+    }
+}
+
 /// Hands on whatever an input thread still holds back before its sink goes away.
 fn drain_backlog(queue: &mut FrameQueue, stop: &AtomicBool) {
     while !queue.flush() && !stop.load(Ordering::Relaxed) {
@@ -786,10 +850,18 @@ fn blame(stage: &str) -> &'static str {
     }
 }
 
+/// A reload on its way to the control thread: the config, and what was prepared
+/// for its scene off the control thread.
+struct Reload {
+    cfg: Config,
+    /// With inline assignment and a changed scene: the new scene's planner.
+    planner: Option<Planner>,
+}
+
 struct ControlChannels {
     frames: Receiver<TouchFrame>,
     commands: Receiver<CommandRequest>,
-    reload: Receiver<Arc<Config>>,
+    reload: Receiver<Box<Reload>>,
     out: Sender<Outgoing>,
     stats: Sender<ControlStats>,
     jobs: Sender<Box<AssignJob>>,
@@ -863,7 +935,7 @@ impl ControlLoop {
                     Err(_) => frames = never(),
                 },
                 recv(self.ch.commands) -> msg => if let Ok(c) = msg { self.command(c) },
-                recv(self.ch.reload) -> msg => if let Ok(c) = msg { self.reconfigure(&c) },
+                recv(self.ch.reload) -> msg => if let Ok(r) = msg { self.reconfigure(*r) },
                 default(Duration::from_micros(timeout.0)) => {}
             }
             loop {
@@ -912,8 +984,10 @@ impl ControlLoop {
         }
     }
 
-    fn reconfigure(&mut self, cfg: &Config) {
-        let ignored = self.engine.reconfigure(cfg);
+    fn reconfigure(&mut self, reload: Reload) {
+        let Reload { cfg, planner } = reload;
+        let cfg = &cfg;
+        let ignored = self.engine.reconfigure_with(cfg, planner);
         let b = &cfg.pipeline.budgets;
         self.t_input.set_budget(b.input_us);
         self.t_queue.set_budget(b.queue_us);
@@ -975,6 +1049,12 @@ impl ControlLoop {
                 job.generation = self.engine.generation();
                 job.seq = self.engine.seq();
                 job.t_scene_s = self.engine.scene_time_s();
+                let params = self.engine.planner_params();
+                match (self.engine.scene(), &mut job.environment) {
+                    // The same scene as the last job: no reference count traffic.
+                    (Some(s), Some((js, jp))) if Arc::ptr_eq(s, js) => *jp = params,
+                    (s, env) => *env = s.map(|s| (Arc::clone(s), params)),
+                }
                 job.agents.clear();
                 job.agents.extend_from_slice(self.engine.agent_positions());
                 job.goals.clear();
@@ -1047,27 +1127,35 @@ fn describe_event(e: &Event) -> Option<String> {
 }
 
 /// The assignment worker: Euclidean costs ([`Assigner`]) without a scene, travel
-/// costs and waypoints ([`Planner`](crate::crowd::environment::Planner)) with one.
+/// costs and waypoints ([`Planner`]) with one. It plans over the scene each job
+/// names, building a new planner here (not on the control thread) when the scene or
+/// its parameters differ from the last job's, so a reloaded scene is planned for
+/// from the first job solved in it.
 fn assignment_worker(
     cost: crate::config::AssignmentCost,
-    planner: Option<(
-        Arc<crate::crowd::scene::Scene>,
-        crate::crowd::environment::PlannerParams,
-    )>,
     jobs: Receiver<Box<AssignJob>>,
     results: Sender<Box<AssignJob>>,
 ) {
     crate::rt::make_idle("assignment worker");
     let mut assigner = Assigner::new(cost);
-    let mut planner = planner.and_then(|(scene, params)| {
-        crate::crowd::environment::Planner::new(scene, params)
-            .map_err(|e| log::warn!("scene: no travel-cost planner ({e}); Euclidean costs"))
-            .ok()
-    });
+    let mut environment: Option<(Arc<Scene>, PlannerParams)> = None;
+    let mut planner: Option<Planner> = None;
     let mut generation = u64::MAX;
     let mut failures = 0u64;
     for mut job in jobs.iter() {
         let t0 = monotonic_now();
+        let same = match (&job.environment, &environment) {
+            (Some((a, pa)), Some((b, pb))) => Arc::ptr_eq(a, b) && pa == pb,
+            (None, None) => true,
+            _ => false,
+        };
+        if !same {
+            environment.clone_from(&job.environment);
+            planner = environment
+                .as_ref()
+                .and_then(|(scene, params)| crate::engine::planner_for(scene, *params));
+            generation = u64::MAX;
+        }
         if job.generation != generation {
             assigner.forget();
             if let Some(p) = &mut planner {

@@ -17,6 +17,7 @@
 //! scaled integers with `itoa`, never through float formatting. Everything else is
 //! rare (events, stats, replies) and goes through serde.
 
+use crate::crowd::scene::MotionType;
 use crate::geom::Vec2;
 use crate::snapshot::{ClientId, Command, Event, MeshView, Snapshot, StatsReport};
 use serde_json::{Map, Value};
@@ -61,6 +62,45 @@ pub const FLAG_TOUCHES: u16 = 1 << 4;
 pub const FLAG_PAUSED: u16 = 1 << 5;
 /// Binary snapshot flag: `latency_us` is valid (otherwise it is 0 and means "none").
 pub const FLAG_LATENCY: u16 = 1 << 6;
+/// Binary snapshot flag: the motions array is present (the client named `motions` in
+/// its `fields` and the daemon runs a scene).
+pub const FLAG_MOTIONS: u16 = 1 << 7;
+
+/// Wire code of each motion type in a binary snapshot's motions array, one byte per
+/// agent. The numbering is part of protocol 1: codes are never renumbered or reused,
+/// a new motion type gets the next free code (clients must tolerate codes they do
+/// not know). Documented in `docs/protocol.md`.
+pub const MOTION_CODES: [(u8, MotionType); 7] = [
+    (0, MotionType::Run),
+    (1, MotionType::Crawl),
+    (2, MotionType::Duck),
+    (3, MotionType::Swim),
+    (4, MotionType::Jump),
+    (5, MotionType::ClimbUp),
+    (6, MotionType::ClimbDown),
+];
+
+/// The binary wire code of a motion type (see [`MOTION_CODES`]).
+pub fn motion_code(m: MotionType) -> u8 {
+    match m {
+        MotionType::Run => 0,
+        MotionType::Crawl => 1,
+        MotionType::Duck => 2,
+        MotionType::Swim => 3,
+        MotionType::Jump => 4,
+        MotionType::ClimbUp => 5,
+        MotionType::ClimbDown => 6,
+    }
+}
+
+/// The motion type of a binary wire code; `None` for a code this version does not
+/// know.
+pub fn motion_from_code(code: u8) -> Option<MotionType> {
+    MOTION_CODES
+        .iter()
+        .find(|(c, _)| *c == code)
+        .map(|(_, m)| *m)
+}
 
 /// How a client wants its messages.
 #[derive(Copy, Clone, Debug, Default, PartialEq, Eq, Hash)]
@@ -157,7 +197,8 @@ pub struct FieldSet {
     /// `touches`.
     pub touches: bool,
     /// `motions` (each agent's motion type on its terrain; sent only when the daemon
-    /// runs a scene; JSON only — the binary format has no such array).
+    /// runs a scene). Binary clients get it only when they name it in `fields`
+    /// ([`FieldSet::BINARY_DEFAULT`]).
     pub motions: bool,
 }
 
@@ -171,6 +212,20 @@ impl FieldSet {
         touches: true,
         motions: true,
     };
+    /// What a binary client gets when its `hello` has no `fields`: every array of
+    /// the original binary layout, not `motions`, so a client written before the
+    /// motions array existed keeps its exact layout. Naming `motions` adds it.
+    pub const BINARY_DEFAULT: FieldSet = FieldSet {
+        motions: false,
+        ..FieldSet::ALL
+    };
+    /// The fields a `hello` without `fields` gets in `format`.
+    pub fn default_for(format: Format) -> FieldSet {
+        match format {
+            Format::Json => FieldSet::ALL,
+            Format::Binary => FieldSet::BINARY_DEFAULT,
+        }
+    }
     /// No per-agent array: only the scalar header fields.
     pub const NONE: FieldSet = FieldSet {
         positions: false,
@@ -208,7 +263,8 @@ impl FieldSet {
             .collect()
     }
 
-    /// The binary flag bits for this set.
+    /// The binary flag bits for this set's arrays that every snapshot carries when
+    /// asked ([`FLAG_MOTIONS`] also needs a scene: see [`encode_snapshot_binary`]).
     pub fn flags(&self) -> u16 {
         let mut f = 0;
         if self.positions {
@@ -538,15 +594,18 @@ fn parse_hello(map: Map<String, Value>) -> Result<ClientSettings, ProtocolError>
         )?;
         s.subscriptions = subs;
     }
-    if let Some(v) = map.get("fields").filter(|v| !v.is_null()) {
-        let mut fields = FieldSet::NONE;
-        names_into(
-            v,
-            "fields",
-            "a list of \"positions\", \"velocities\", \"goals\", \"assignment\", \"touches\"",
-            |n| fields.set(n),
-        )?;
-        s.fields = fields;
+    match map.get("fields").filter(|v| !v.is_null()) {
+        Some(v) => {
+            let mut fields = FieldSet::NONE;
+            names_into(
+                v,
+                "fields",
+                "a list of \"positions\", \"velocities\", \"goals\", \"assignment\", \"touches\", \"motions\"",
+                |n| fields.set(n),
+            )?;
+            s.fields = fields;
+        }
+        None => s.fields = FieldSet::default_for(s.format),
     }
     match map.get("max_rate_hz") {
         None | Some(Value::Null) => {}
@@ -943,6 +1002,12 @@ pub fn splice_dropped_json(shared: &[u8], at: usize, dropped: u64, out: &mut Vec
     out.extend_from_slice(&shared[at..]);
 }
 
+/// `bytes` rounded up to a multiple of 4, so the next array stays 4-byte aligned.
+#[inline]
+fn padded4(bytes: usize) -> usize {
+    bytes.div_ceil(4) * 4
+}
+
 #[inline]
 fn push_f32(out: &mut Vec<u8>, v: f64) {
     out.extend_from_slice(&(sanitize(v) as f32).to_le_bytes());
@@ -964,8 +1029,12 @@ fn push_f32(out: &mut Vec<u8>, v: f64) {
 ///    goals      f32[2g]  if FLAG_GOALS        (m)
 ///    assignment u32[n]   if FLAG_ASSIGNMENT
 ///    touches    k × {u32 id, u32 control (0xFFFFFFFF = none), f32 x, f32 y} if FLAG_TOUCHES
+///    motions    u8[n], zero-padded to a multiple of 4 bytes, if FLAG_MOTIONS
 /// ```
 /// Counts are always the true counts; an array is present only when its flag is set.
+/// `motions` ([`motion_code`] per agent) is sent when `fields.motions` is set and the
+/// snapshot has one motion per agent (the daemon runs a scene); without it the frame
+/// is byte for byte the layout that had no motions array.
 ///
 /// # Complexity
 /// O(agents + goals + touches), one reservation.
@@ -980,6 +1049,7 @@ pub fn encode_snapshot_binary(
     let n = s.agents.len();
     let g = s.goals.len();
     let k = s.touches.len();
+    let motions = fields.motions && n > 0 && s.motions.len() == n;
     let mut flags = fields.flags();
     if s.paused {
         flags |= FLAG_PAUSED;
@@ -987,10 +1057,14 @@ pub fn encode_snapshot_binary(
     if latency_us.is_some() {
         flags |= FLAG_LATENCY;
     }
+    if motions {
+        flags |= FLAG_MOTIONS;
+    }
     let body = 8 * n * (usize::from(fields.positions) + usize::from(fields.velocities))
         + 8 * g * usize::from(fields.goals)
         + 4 * n * usize::from(fields.assignment)
-        + BINARY_TOUCH_BYTES * k * usize::from(fields.touches);
+        + BINARY_TOUCH_BYTES * k * usize::from(fields.touches)
+        + padded4(n) * usize::from(motions);
     out.reserve(BINARY_HEADER_BYTES + body);
     out.extend_from_slice(&[0; 4]); // length, patched below
     out.push(FRAME_KIND_SNAPSHOT);
@@ -1036,6 +1110,10 @@ pub fn encode_snapshot_binary(
             push_f32(out, t.pos.x);
             push_f32(out, t.pos.y);
         }
+    }
+    if motions {
+        out.extend(s.motions.iter().map(|&m| motion_code(m)));
+        out.resize(out.len() + padded4(n) - n, 0);
     }
     let len = u32::try_from(out.len() - start - 4).unwrap_or(u32::MAX);
     out[start..start + 4].copy_from_slice(&len.to_le_bytes());
@@ -1117,6 +1195,9 @@ pub struct BinarySnapshot {
     pub assignment: Option<Vec<u32>>,
     /// Touches, when sent.
     pub touches: Option<Vec<BinaryTouch>>,
+    /// Each agent's motion wire code ([`motion_from_code`] gives the type), when
+    /// sent.
+    pub motions: Option<Vec<u8>>,
 }
 
 fn rd_u32(b: &[u8], at: usize) -> u32 {
@@ -1164,7 +1245,8 @@ pub fn decode_snapshot_binary(frame: &[u8]) -> Result<BinarySnapshot, DecodeErro
         + 8 * n * (usize::from(has(FLAG_POSITIONS)) + usize::from(has(FLAG_VELOCITIES)))
         + 8 * g * usize::from(has(FLAG_GOALS))
         + 4 * n * usize::from(has(FLAG_ASSIGNMENT))
-        + BINARY_TOUCH_BYTES * k * usize::from(has(FLAG_TOUCHES));
+        + BINARY_TOUCH_BYTES * k * usize::from(has(FLAG_TOUCHES))
+        + padded4(n) * usize::from(has(FLAG_MOTIONS));
     if total < need || have < need {
         return Err(DecodeError::Truncated {
             need,
@@ -1200,6 +1282,8 @@ pub fn decode_snapshot_binary(frame: &[u8]) -> Result<BinarySnapshot, DecodeErro
             })
             .collect()
     });
+    at += BINARY_TOUCH_BYTES * k * usize::from(has(FLAG_TOUCHES));
+    let motions = has(FLAG_MOTIONS).then(|| frame[at..at + n].to_vec());
     Ok(BinarySnapshot {
         seq: rd_u64(frame, 8),
         t_us: rd_u64(frame, 16),
@@ -1214,6 +1298,7 @@ pub fn decode_snapshot_binary(frame: &[u8]) -> Result<BinarySnapshot, DecodeErro
         goals,
         assignment,
         touches,
+        motions,
     })
 }
 

@@ -548,18 +548,32 @@ fn arb_snapshot() -> impl Strategy<Value = Snapshot> {
         proptest::collection::vec(touch, 0..5),
         any::<bool>(),
         any::<u64>(),
+        // A scene (one motion per agent) or none.
+        proptest::option::of(proptest::collection::vec(
+            0..crate::crowd::scene::MotionType::ALL.len(),
+            40,
+        )),
     )
-        .prop_map(|(seq, t, agents, goals, touches, paused, aseq)| Snapshot {
-            seq,
-            t: Micros(t),
-            input_t: None,
-            agents,
-            goals,
-            assignment_seq: aseq,
-            touches,
-            paused,
-            motions: Vec::new(),
-        })
+        .prop_map(
+            |(seq, t, agents, goals, touches, paused, aseq, scene)| Snapshot {
+                seq,
+                t: Micros(t),
+                input_t: None,
+                motions: scene
+                    .map(|m| {
+                        m.iter()
+                            .take(agents.len())
+                            .map(|&i| crate::crowd::scene::MotionType::ALL[i])
+                            .collect()
+                    })
+                    .unwrap_or_default(),
+                agents,
+                goals,
+                assignment_seq: aseq,
+                touches,
+                paused,
+            },
+        )
 }
 
 fn close(a: &[f64], b: impl Iterator<Item = f64>) -> bool {
@@ -623,6 +637,20 @@ proptest! {
             prop_assert!((f64::from(p[0]) - a.pos.x).abs() <= 1e-3);
         }
         prop_assert_eq!(d.touches.unwrap().len(), s.touches.len());
+        let motions: Option<Vec<_>> = d
+            .motions
+            .map(|m| m.iter().map(|&c| motion_from_code(c).unwrap()).collect());
+        let sent = (!s.motions.is_empty()).then(|| s.motions.clone());
+        prop_assert_eq!(motions, sent);
+        prop_assert_eq!(out.len() % 4, 0);
+        // Without motions in the fields, the frame is what it was without a scene.
+        let mut a = Vec::new();
+        let mut b = Vec::new();
+        let mut plain = s.clone();
+        plain.motions.clear();
+        encode_snapshot_binary(&s, None, dropped, &FieldSet::BINARY_DEFAULT, &mut a);
+        encode_snapshot_binary(&plain, None, dropped, &FieldSet::ALL, &mut b);
+        prop_assert_eq!(a, b);
     }
 }
 
@@ -670,4 +698,207 @@ fn json_snapshot_carries_motions_only_with_a_scene() {
     encode_snapshot_json(&s, None, 0, &only_positions, &mut out);
     let v: Value = serde_json::from_slice(&out).unwrap();
     assert!(v.get("motions").is_none(), "not subscribed");
+}
+
+/// One motion per agent, cycling through every type.
+fn with_motions(mut s: Snapshot) -> Snapshot {
+    use crate::crowd::scene::MotionType;
+    s.motions = (0..s.agents.len())
+        .map(|i| MotionType::ALL[i % MotionType::ALL.len()])
+        .collect();
+    s
+}
+
+#[test]
+fn binary_snapshot_carries_motions_when_named_and_in_a_scene() {
+    use crate::crowd::scene::MotionType;
+    // 5 agents: 5 motion bytes, padded to 8 after the touches.
+    let s = with_motions(snap(5));
+    let mut out = Vec::new();
+    encode_snapshot_binary(&s, Some(3), 0, &FieldSet::ALL, &mut out);
+    let flags = u16::from_le_bytes([out[6], out[7]]);
+    assert_ne!(flags & FLAG_MOTIONS, 0);
+    let touches_end = BINARY_HEADER_BYTES + 8 * 5 + 8 * 5 + 8 * 5 + 4 * 5 + 2 * BINARY_TOUCH_BYTES;
+    assert_eq!(out.len(), touches_end + 8, "5 codes and 3 bytes of padding");
+    assert_eq!(&out[touches_end..], &[0, 1, 2, 3, 4, 0, 0, 0]);
+    let d = decode_snapshot_binary(&out).unwrap();
+    let codes = d.motions.clone().expect("motions decoded");
+    let types: Vec<MotionType> = codes
+        .iter()
+        .map(|&c| motion_from_code(c).unwrap())
+        .collect();
+    assert_eq!(types, s.motions);
+    // The arrays before it are where they always were.
+    assert_eq!(d.touches.unwrap()[0].id, 7);
+    assert_eq!(d.assignment.unwrap(), vec![4, 3, 2, 1, 0]);
+    // Every type has its documented code and comes back.
+    for m in MotionType::ALL {
+        assert_eq!(motion_from_code(motion_code(m)), Some(m));
+    }
+    assert_eq!(motion_from_code(7), None);
+    assert_eq!(motion_from_code(255), None);
+    // A multiple of 4 agents needs no padding; alignment holds for any count.
+    for n in 1..=9 {
+        let s = with_motions(snap(n));
+        let only = FieldSet {
+            positions: true,
+            motions: true,
+            ..FieldSet::NONE
+        };
+        let mut out = Vec::new();
+        encode_snapshot_binary(&s, None, 0, &only, &mut out);
+        assert_eq!(out.len() % 4, 0, "n = {n}");
+        assert_eq!(out.len(), BINARY_HEADER_BYTES + 8 * n + n.div_ceil(4) * 4);
+        let d = decode_snapshot_binary(&out).unwrap();
+        assert_eq!(d.motions.unwrap().len(), n);
+        // A truncated motions array is reported, not read past.
+        assert!(matches!(
+            decode_snapshot_binary(&out[..out.len() - 1]),
+            Err(DecodeError::Truncated { .. })
+        ));
+    }
+}
+
+#[test]
+fn binary_snapshot_without_motions_keeps_the_previous_layout_exactly() {
+    let plain = snap(5);
+    let scene = with_motions(snap(5));
+    for fields in [
+        FieldSet::BINARY_DEFAULT,
+        FieldSet::NONE,
+        FieldSet {
+            positions: true,
+            touches: true,
+            ..FieldSet::NONE
+        },
+    ] {
+        // Not asked for: a scene changes nothing, byte for byte.
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        encode_snapshot_binary(&plain, Some(9), 2, &fields, &mut a);
+        encode_snapshot_binary(&scene, Some(9), 2, &fields, &mut b);
+        assert_eq!(a, b, "{fields:?}");
+        let flags = u16::from_le_bytes([b[6], b[7]]);
+        assert_eq!(flags & FLAG_MOTIONS, 0);
+        assert!(decode_snapshot_binary(&b).unwrap().motions.is_none());
+    }
+    // Asked for but no scene: no flag, no bytes.
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    encode_snapshot_binary(&plain, None, 0, &FieldSet::BINARY_DEFAULT, &mut a);
+    encode_snapshot_binary(&plain, None, 0, &FieldSet::ALL, &mut b);
+    assert_eq!(a, b);
+    // The documented example frame (docs/protocol.md, "Binary format") is unchanged.
+    let example = example_frame_snapshot();
+    let only = FieldSet {
+        positions: true,
+        touches: true,
+        ..FieldSet::NONE
+    };
+    let mut out = Vec::new();
+    encode_snapshot_binary(&example, Some(2248), 0, &only, &mut out);
+    assert_eq!(out, documented_frame("Here is a real frame"));
+    let mut out = Vec::new();
+    encode_snapshot_binary(
+        &with_motions(example.clone()),
+        Some(2248),
+        0,
+        &only,
+        &mut out,
+    );
+    assert_eq!(
+        out,
+        documented_frame("Here is a real frame"),
+        "motions not named"
+    );
+    let with = FieldSet {
+        motions: true,
+        ..only
+    };
+    let mut s = example;
+    s.motions = vec![MotionType::Run, MotionType::Swim, MotionType::Crawl];
+    let mut out = Vec::new();
+    encode_snapshot_binary(&s, Some(2248), 0, &with, &mut out);
+    assert_eq!(out, documented_frame("The same frame with motions"));
+}
+
+use crate::crowd::scene::MotionType;
+
+/// The snapshot of the example frames in docs/protocol.md.
+fn example_frame_snapshot() -> Snapshot {
+    Snapshot {
+        seq: 4812,
+        t: Micros(73_911_402_118),
+        input_t: None,
+        agents: [(1.2504, 0.8), (1.75, 0.8124), (1.5, 1.2331)]
+            .iter()
+            .map(|&(x, y)| AgentView {
+                pos: Vec2::new(x, y),
+                vel: Vec2::zeros(),
+                goal: 0,
+            })
+            .collect(),
+        goals: vec![Vec2::zeros(); 3],
+        assignment_seq: 4810,
+        touches: vec![TouchView {
+            id: 17,
+            pos: Vec2::new(1.41, 1.02),
+            control: Some(5),
+        }],
+        paused: false,
+        motions: Vec::new(),
+    }
+}
+
+/// The bytes of the hex dump that follows the paragraph starting with `intro` in
+/// docs/protocol.md.
+fn documented_frame(intro: &str) -> Vec<u8> {
+    let doc = include_str!("../../docs/protocol.md");
+    let at = doc
+        .find(intro)
+        .unwrap_or_else(|| panic!("no {intro:?} in the doc"));
+    let block = doc[at..].split("```").nth(1).expect("a code block");
+    block
+        .lines()
+        .filter(|l| l.len() > 6 && l.as_bytes()[..4].iter().all(u8::is_ascii_hexdigit))
+        .flat_map(|l| {
+            l[6..]
+                .split_whitespace()
+                .take_while(|w| w.len() == 2 && w.bytes().all(|b| b.is_ascii_hexdigit()))
+                .map(|w| u8::from_str_radix(w, 16).unwrap())
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+#[test]
+fn motion_codes_match_the_documented_table() {
+    let doc = include_str!("../../docs/protocol.md");
+    let mut rows = 0;
+    for (code, m) in MOTION_CODES {
+        let row = format!("| {code} | `{}` |", m.as_str());
+        assert!(doc.contains(&row), "docs/protocol.md lacks the row {row:?}");
+        assert_eq!(motion_code(m), code);
+        rows += 1;
+    }
+    assert_eq!(rows, MotionType::ALL.len(), "every motion type has a code");
+}
+
+#[test]
+fn a_binary_hello_without_fields_does_not_get_motions() {
+    let hello = |line: &str| match parse_client_message(line.as_bytes()).unwrap() {
+        ClientMessage::Hello(s) => s,
+        other => panic!("not a hello: {other:?}"),
+    };
+    let s = hello(r#"{"type":"hello","protocol":1,"format":"binary"}"#);
+    assert_eq!(s.fields, FieldSet::BINARY_DEFAULT);
+    assert!(!s.fields.names().contains(&"motions"));
+    let s = hello(r#"{"type":"hello","protocol":1,"format":"json"}"#);
+    assert_eq!(s.fields, FieldSet::ALL);
+    let s = hello(
+        r#"{"type":"hello","protocol":1,"format":"binary","fields":["positions","motions"]}"#,
+    );
+    assert_eq!(s.fields.names(), vec!["positions", "motions"]);
+    assert_eq!(
+        err(r#"{"type":"hello","protocol":1,"fields":["motion"]}"#).to_string(),
+        "`fields` in hello must be a list of \"positions\", \"velocities\", \"goals\", \"assignment\", \"touches\", \"motions\", got \"motion\""
+    );
 }
