@@ -203,6 +203,9 @@ pub struct DirectController {
     goals: Vec<Vec2>,
     spacing_m: f64,
     changed: bool,
+    /// Whether the scene time moved with moving obstacles since the final mesh was
+    /// computed ([`DirectController::set_time`]).
+    stale: bool,
 }
 
 impl DirectController {
@@ -233,6 +236,7 @@ impl DirectController {
             goals,
             spacing_m,
             changed: true,
+            stale: false,
             mesh,
         }
     }
@@ -269,7 +273,8 @@ impl DirectController {
     }
 
     /// Sets the scene time (s) at which the environment is evaluated; with moving
-    /// obstacles the final mesh is recomputed.
+    /// obstacles the final mesh is recomputed by the next [`update`](Self::update)
+    /// (once, whether or not a control deforms the mesh in that tick).
     pub fn set_time(&mut self, t_s: f64) {
         self.t_s = t_s;
         if self
@@ -277,12 +282,13 @@ impl DirectController {
             .as_ref()
             .is_some_and(|(s, _)| !s.dynamic().is_empty())
         {
-            self.finalize();
+            self.stale = true;
         }
     }
 
     /// `V_f` from `V_u`, then the goals from `V_f`.
     fn finalize(&mut self) {
+        self.stale = false;
         self.final_verts.clone_from(&self.verts);
         if let Some((scene, params)) = &self.env {
             displace_vertices(scene, self.t_s, params, &mut self.final_verts);
@@ -352,6 +358,15 @@ impl DirectController {
         dt_s: f64,
         lag_m: f64,
     ) -> Result<(), DirectError> {
+        let r = self.deform(controls, dt_s, lag_m);
+        if self.stale {
+            self.finalize();
+        }
+        r
+    }
+
+    /// The deformation of [`update`](Self::update): rigs, handles, ARAP, final mesh.
+    fn deform(&mut self, controls: &[Control], dt_s: f64, lag_m: f64) -> Result<(), DirectError> {
         self.sync_rigs(controls);
         if self.rigs.is_empty() {
             return Ok(());
