@@ -331,29 +331,6 @@ const SCENE_EAST_BLOCK: &str = "(
     ],
 )";
 
-/// Scene B: the block moved into the middle of the crowd, and a pool over the
-/// crowd's west part.
-const SCENE_BLOCK_IN_THE_CROWD: &str = "(
-    version: 1,
-    name: \"block in the crowd\",
-    bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),
-    obstacles: [
-        (name: \"block\", parts: [
-            Polygon(vertices_m: [(7.4, 3.9), (8.6, 3.9), (8.6, 5.1), (7.4, 5.1)]),
-        ]),
-    ],
-    patches: [
-        (name: \"pool\", motion: swim, parts: [
-            Polygon(vertices_m: [(5.0, 2.0), (6.9, 2.0), (6.9, 7.0), (5.0, 7.0)]),
-        ]),
-    ],
-)";
-
-/// Inside scene B's block, by more than the millimetre the wire rounds to.
-fn in_moved_block(p: Vec2) -> bool {
-    p.x > 7.401 && p.x < 8.599 && p.y > 3.901 && p.y < 5.099
-}
-
 /// A config file in `dir` naming the scene file `scene.ron` beside it (or no scene),
 /// with `agents` agents, assigned on the worker or inside the tick.
 fn scene_config(dir: &Path, with_scene: bool, agents: u32, worker: bool) -> PathBuf {
@@ -403,9 +380,11 @@ fn reload_swaps_the_scene(agents: u32, worker: bool, ticks_after: u64) {
     let last_a = before.last().unwrap();
     assert_eq!(last_a["type"], "snapshot", "no snapshot in scene A");
     assert!(motions(last_a).iter().all(|m| *m == "run"));
-    assert!(pairs(&last_a["positions"]).into_iter().any(in_moved_block));
+    assert!(pairs(&last_a["positions"])
+        .into_iter()
+        .any(|p| common::in_crowd_block(p, 0.001)));
 
-    std::fs::write(dir.path().join("scene.ron"), SCENE_BLOCK_IN_THE_CROWD).unwrap();
+    std::fs::write(dir.path().join("scene.ron"), common::BLOCK_IN_THE_CROWD).unwrap();
     daemon.reload(Config::load(&cfg_path).unwrap());
     let mut swapped_at = None;
     let mut solved_in_b = false;
@@ -439,7 +418,7 @@ fn reload_swaps_the_scene(agents: u32, worker: bool, ticks_after: u64) {
         }
         for (i, p) in pairs(&v["positions"]).into_iter().enumerate() {
             assert!(
-                !in_moved_block(p),
+                !common::in_crowd_block(p, 0.001),
                 "seq {}: agent {i} at {p} inside the new block",
                 v["seq"]
             );

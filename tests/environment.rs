@@ -6,6 +6,8 @@
 //! Small crowds and the 16 cm planning grid keep these fast; the engine runs on a
 //! virtual clock with the assignment solved inside the tick.
 
+mod common;
+
 use crowdtouch::config::Config;
 use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Distance, Solver};
 use crowdtouch::crowd::environment::{Planner, PlannerParams};
@@ -332,28 +334,6 @@ fn agents_in_a_patch_move_at_its_speed_and_report_its_motion() {
     );
 }
 
-/// The reloaded scene of the reload tests: a block in the middle of the default
-/// crowd start (6,3)..(10,6) and a pool over its west part.
-const BLOCK_IN_THE_CROWD: &str = "(
-    version: 1,
-    name: \"block in the crowd\",
-    bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),
-    obstacles: [
-        (name: \"block\", parts: [
-            Polygon(vertices_m: [(7.4, 3.9), (8.6, 3.9), (8.6, 5.1), (7.4, 5.1)]),
-        ]),
-    ],
-    patches: [
-        (name: \"pool\", motion: swim, parts: [
-            Polygon(vertices_m: [(5.0, 2.0), (6.9, 2.0), (6.9, 7.0), (5.0, 7.0)]),
-        ]),
-    ],
-)";
-
-fn inside_block(p: Vec2) -> bool {
-    p.x > 7.4 && p.x < 8.6 && p.y > 3.9 && p.y < 5.1
-}
-
 /// A config reload with another scene swaps it in between two ticks: the crowd
 /// keeps moving (no reset), from the next tick no agent is inside the new obstacle
 /// and no goal either, agents in the new patch report its motion; a reload without
@@ -372,12 +352,13 @@ fn a_reconfigured_scene_applies_from_the_next_tick() {
     let inside_before = e
         .agent_positions()
         .iter()
-        .filter(|p| inside_block(**p))
+        .filter(|p| common::in_crowd_block(**p, 0.0))
         .count();
     assert!(inside_before > 0, "the new block would be empty");
     let (seq, generation) = (e.seq(), e.generation());
 
-    let b = Arc::new(Scene::from_str(BLOCK_IN_THE_CROWD, Path::new("b.ron"), 0.15).unwrap());
+    let b =
+        Arc::new(Scene::from_str(common::BLOCK_IN_THE_CROWD, Path::new("b.ron"), 0.15).unwrap());
     let mut c2 = c.clone();
     c2.set_loaded_scene(Some(Arc::clone(&b)));
     let ignored = e.reconfigure(&c2);
@@ -399,13 +380,16 @@ fn a_reconfigured_scene_applies_from_the_next_tick() {
         e.clear_events();
         for (i, p) in e.agent_positions().iter().enumerate() {
             assert!(
-                !inside_block(*p),
+                !common::in_crowd_block(*p, 0.0),
                 "tick {k}: agent {i} at {p} in the new block"
             );
             assert_eq!(e.motions()[i], b.terrain_at(*p, e.scene_time_s()).motion);
         }
         for g in e.goals() {
-            assert!(!inside_block(*g), "tick {k}: goal {g} in the new block");
+            assert!(
+                !common::in_crowd_block(*g, 0.0),
+                "tick {k}: goal {g} in the new block"
+            );
         }
         swimmers = swimmers.max(
             e.motions()

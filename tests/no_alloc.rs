@@ -141,6 +141,36 @@ fn input_decode_and_queue_do_not_allocate() {
     assert_eq!(n, 0, "the input path allocated {n} times");
 }
 
+/// Ticks `engine` with `frame_at(k, flags)` for `k` in `0..warm` (the first frame
+/// puts the fingers down), then returns the allocations of the `steady` ticks that
+/// follow (no event expected in them).
+fn steady_allocations(
+    engine: &mut Engine,
+    frame_at: impl Fn(u64, ContactFlags) -> TouchFrame,
+    warm: u64,
+    steady: u64,
+) -> u64 {
+    for k in 0..warm {
+        let flags = if k == 0 {
+            ContactFlags::DOWN
+        } else {
+            ContactFlags::NONE
+        };
+        engine.push_frame(&frame_at(k, flags));
+        drop(engine.tick(Micros(k * 8_333)));
+        engine.clear_events();
+    }
+    allocations(|| {
+        for k in warm..warm + steady {
+            engine.push_frame(&frame_at(k, ContactFlags::NONE));
+            let out = engine.tick(Micros(k * 8_333));
+            assert!(out.events.is_empty());
+            drop(out);
+            engine.clear_events();
+        }
+    })
+}
+
 #[test]
 fn a_steady_control_tick_does_not_allocate() {
     let mut cfg = Config::embedded_default();
@@ -162,27 +192,7 @@ fn a_steady_control_tick_does_not_allocate() {
         f
     };
     // Warm-up: the control begins, the window closes, buffers reach their size.
-    for k in 0..120u64 {
-        engine.push_frame(&frame_at(
-            k,
-            if k == 0 {
-                ContactFlags::DOWN
-            } else {
-                ContactFlags::NONE
-            },
-        ));
-        drop(engine.tick(Micros(k * 8_333)));
-        engine.clear_events();
-    }
-    let n = allocations(|| {
-        for k in 120..600u64 {
-            engine.push_frame(&frame_at(k, ContactFlags::NONE));
-            let out = engine.tick(Micros(k * 8_333));
-            assert!(out.events.is_empty());
-            drop(out);
-            engine.clear_events();
-        }
-    });
+    let n = steady_allocations(&mut engine, frame_at, 120, 480);
     assert_eq!(n, 0, "480 control ticks allocated {n} times");
 }
 
@@ -229,27 +239,7 @@ fn scene_ticks(scene: &str, agents: u32, mesh: (u32, u32)) -> (u64, Engine) {
         }
         f
     };
-    for k in 0..SCENE_WARM_UP {
-        engine.push_frame(&frame_at(
-            k,
-            if k == 0 {
-                ContactFlags::DOWN
-            } else {
-                ContactFlags::NONE
-            },
-        ));
-        drop(engine.tick(Micros(k * 8_333)));
-        engine.clear_events();
-    }
-    let n = allocations(|| {
-        for k in SCENE_WARM_UP..SCENE_WARM_UP + SCENE_STEADY {
-            engine.push_frame(&frame_at(k, ContactFlags::NONE));
-            let out = engine.tick(Micros(k * 8_333));
-            assert!(out.events.is_empty());
-            drop(out);
-            engine.clear_events();
-        }
-    });
+    let n = steady_allocations(&mut engine, frame_at, SCENE_WARM_UP, SCENE_STEADY);
     (n, engine)
 }
 

@@ -133,3 +133,27 @@ pub fn rigid_fit(a: &[Vec2], b: &[Vec2]) -> (f64, f64) {
     }
     (th, worst)
 }
+
+/// The reloaded scene of the reload tests: a block in the middle of the default
+/// crowd start (6,3)..(10,6) and a pool over its west part.
+pub const BLOCK_IN_THE_CROWD: &str = "(
+    version: 1,
+    name: \"block in the crowd\",
+    bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),
+    obstacles: [
+        (name: \"block\", parts: [
+            Polygon(vertices_m: [(7.4, 3.9), (8.6, 3.9), (8.6, 5.1), (7.4, 5.1)]),
+        ]),
+    ],
+    patches: [
+        (name: \"pool\", motion: swim, parts: [
+            Polygon(vertices_m: [(5.0, 2.0), (6.9, 2.0), (6.9, 7.0), (5.0, 7.0)]),
+        ]),
+    ],
+)";
+
+/// Whether `p` is inside [`BLOCK_IN_THE_CROWD`]'s block shrunk by `margin_m` on
+/// every side (a millimetre covers the rounding of positions on the wire).
+pub fn in_crowd_block(p: Vec2, margin_m: f64) -> bool {
+    p.x > 7.4 + margin_m && p.x < 8.6 - margin_m && p.y > 3.9 + margin_m && p.y < 5.1 - margin_m
+}
