@@ -51,6 +51,15 @@
 //! bumping the previous row; prices only fall, every pair stays tight), and
 //! re-augments the rows still free (step 4).
 //!
+//! Costs come from a [`CostSource`]: a [`CostMatrix`], or [`PointCosts`] — the
+//! geometric fast path for costs that come from positions (squared or plain
+//! Euclidean distance). These compute entries on demand and find each row's candidate
+//! list (its `k` smallest reduced costs, the `k` nearest goals when the prices are
+//! equal) by a ring search over a bucket grid of the goals, stopped by a lower bound
+//! that accounts for the largest price; the lists are exactly those of step 1, so the
+//! sparse solve, its rounds and its dual certificate are unchanged (tested to give the
+//! same assignment and work counters as the matrix), without the `rows × cols` matrix.
+//!
 //! Rectangular problems (rows < cols) are exact: every column price starts at 0 and is
 //! only lowered, except that a column left free with a lowered price is raised back to
 //! 0 (freeing the rows it now undercuts and weakening the list bounds it affects), so at
