@@ -187,20 +187,25 @@ fn demo_serves_the_socket_and_prints_status() {
     assert!(child.wait().unwrap().success());
 }
 
-#[test]
-fn sighup_with_a_bad_config_keeps_the_old_one_running() {
-    let dir = tempfile::tempdir().unwrap();
-    let cfg_path = dir.path().join("crowdtouch.ron");
-    let rec = common::shipped("07-open-space-swipe.jsonl");
+/// The default config with its inputs replaced by one shipped recording, looped.
+fn looped_replay_config(recording: &str) -> String {
+    let rec = common::shipped(recording);
     let base = crowdtouch::config::DEFAULT_CONFIG_RON;
     let a = base.find("inputs: [").unwrap();
     let b = a + base[a..].find("\n    ],\n").unwrap() + "\n    ],\n".len();
-    let text = format!(
+    format!(
         "{}inputs: [Replay(files: [{:?}], looped: true)],\n{}",
         &base[..a],
         rec.display().to_string(),
         &base[b..]
-    );
+    )
+}
+
+#[test]
+fn sighup_with_a_bad_config_keeps_the_old_one_running() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg_path = dir.path().join("crowdtouch.ron");
+    let text = looped_replay_config("07-open-space-swipe.jsonl");
     std::fs::write(&cfg_path, &text).unwrap();
     let check = bin().arg("check-config").arg(&cfg_path).output().unwrap();
     assert!(
@@ -302,18 +307,9 @@ fn sighup_reloads_the_scene_and_a_broken_scene_keeps_the_old_one() {
     let dir = tempfile::tempdir().unwrap();
     let cfg_path = dir.path().join("crowdtouch.ron");
     let scene_path = dir.path().join("room.ron");
-    let rec = common::shipped("07-open-space-swipe.jsonl");
-    let base = crowdtouch::config::DEFAULT_CONFIG_RON;
-    let a = base.find("inputs: [").unwrap();
-    let b = a + base[a..].find("\n    ],\n").unwrap() + "\n    ],\n".len();
-    let text = format!(
-        "{}inputs: [Replay(files: [{:?}], looped: true)],\n{}",
-        &base[..a],
-        rec.display().to_string(),
-        &base[b..]
-    )
-    .replacen("agents: 100", "agents: 40", 1)
-    .replacen("scene: None", "scene: Some(\"room.ron\")", 1);
+    let text = looped_replay_config("07-open-space-swipe.jsonl")
+        .replacen("agents: 100", "agents: 40", 1)
+        .replacen("scene: None", "scene: Some(\"room.ron\")", 1);
     std::fs::write(&cfg_path, &text).unwrap();
     std::fs::write(&scene_path, patch_scene("net room", "crawl", "None")).unwrap();
     let sock = dir.path().join("run.sock");
