@@ -657,48 +657,43 @@ impl Engine {
         self.snapshots.keep(&snap);
         self.counters.ticks += 1;
         // Inline assignment: solved on this tick's state, used from the next tick.
-        if let Some(p) = &mut self.planner {
-            match p.plan(
-                self.agents.positions(),
-                self.direct.goals(),
-                self.scene_t_s,
-                &mut self.goal_of,
-                &mut self.waypoints,
-            ) {
-                Ok(()) => {
-                    self.assignment_seq = self.seq;
-                    self.counters.assignments += 1;
-                }
-                Err(e) => {
-                    self.counters.assign_errors += 1;
-                    if self.counters.assign_errors.is_power_of_two() {
-                        log::warn!(
-                            "internal: assignment failed ({} times): {e}",
-                            self.counters.assign_errors
-                        );
-                    }
+        // (The error's text is formed only on a failure, which is logged.)
+        let result = match (&mut self.planner, &mut self.inline) {
+            (Some(p), _) => Some(
+                p.plan(
+                    self.agents.positions(),
+                    self.direct.goals(),
+                    self.scene_t_s,
+                    &mut self.goal_of,
+                    &mut self.waypoints,
+                )
+                .map_err(|e| e.to_string()),
+            ),
+            (None, Some(a)) => Some(
+                a.solve(
+                    self.agents.positions(),
+                    self.direct.goals(),
+                    &mut self.goal_of,
+                )
+                .map_err(|e| e.to_string()),
+            ),
+            (None, None) => None,
+        };
+        match result {
+            Some(Ok(())) => {
+                self.assignment_seq = self.seq;
+                self.counters.assignments += 1;
+            }
+            Some(Err(e)) => {
+                self.counters.assign_errors += 1;
+                if self.counters.assign_errors.is_power_of_two() {
+                    log::warn!(
+                        "internal: assignment failed ({} times): {e}",
+                        self.counters.assign_errors
+                    );
                 }
             }
-        } else if let Some(a) = &mut self.inline {
-            match a.solve(
-                self.agents.positions(),
-                self.direct.goals(),
-                &mut self.goal_of,
-            ) {
-                Ok(()) => {
-                    self.assignment_seq = self.seq;
-                    self.counters.assignments += 1;
-                }
-                Err(e) => {
-                    self.counters.assign_errors += 1;
-                    if self.counters.assign_errors.is_power_of_two() {
-                        log::warn!(
-                            "internal: assignment failed ({} times): {e}",
-                            self.counters.assign_errors
-                        );
-                    }
-                }
-            }
+            None => {}
         }
         TickOutput {
             snapshot: snap,

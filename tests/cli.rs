@@ -187,6 +187,28 @@ fn demo_serves_the_socket_and_prints_status() {
     assert!(child.wait().unwrap().success());
 }
 
+/// `run --config cfg` on a socket in `dir`, stderr piped; returns once the socket
+/// exists (or after 5 s).
+fn run_daemon(
+    cfg: &std::path::Path,
+    dir: &std::path::Path,
+) -> (std::process::Child, std::path::PathBuf) {
+    let sock = dir.join("run.sock");
+    let child = bin()
+        .args(["run", "--config"])
+        .arg(cfg)
+        .arg("--socket")
+        .arg(&sock)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while !sock.exists() && t0.elapsed() < Duration::from_secs(5) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    (child, sock)
+}
+
 /// The default config with its inputs replaced by one shipped recording, looped.
 fn looped_replay_config(recording: &str) -> String {
     let rec = common::shipped(recording);
@@ -213,19 +235,7 @@ fn sighup_with_a_bad_config_keeps_the_old_one_running() {
         "{}",
         String::from_utf8_lossy(&check.stderr)
     );
-    let sock = dir.path().join("run.sock");
-    let child = bin()
-        .args(["run", "--config"])
-        .arg(&cfg_path)
-        .arg("--socket")
-        .arg(&sock)
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let t0 = Instant::now();
-    while !sock.exists() && t0.elapsed() < Duration::from_secs(5) {
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    let (child, sock) = run_daemon(&cfg_path, dir.path());
     std::fs::write(&cfg_path, "(version: 1, oops").unwrap();
     let pid = nix::unistd::Pid::from_raw(child.id() as i32);
     nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGHUP).unwrap();
@@ -312,20 +322,8 @@ fn sighup_reloads_the_scene_and_a_broken_scene_keeps_the_old_one() {
         .replacen("scene: None", "scene: Some(\"room.ron\")", 1);
     std::fs::write(&cfg_path, &text).unwrap();
     std::fs::write(&scene_path, patch_scene("net room", "crawl", "None")).unwrap();
-    let sock = dir.path().join("run.sock");
-    let child = bin()
-        .args(["run", "--config"])
-        .arg(&cfg_path)
-        .arg("--socket")
-        .arg(&sock)
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let (child, sock) = run_daemon(&cfg_path, dir.path());
     let pid = nix::unistd::Pid::from_raw(child.id() as i32);
-    let t0 = Instant::now();
-    while !sock.exists() && t0.elapsed() < Duration::from_secs(5) {
-        std::thread::sleep(Duration::from_millis(20));
-    }
     let mut r = BufReader::new(std::os::unix::net::UnixStream::connect(&sock).unwrap());
     let all = |snaps: &[Vec<String>], motion: &str| {
         !snaps.is_empty()
