@@ -645,3 +645,69 @@ fn bench_assign_reports_quantiles_and_certificates() {
         .unwrap();
     assert!(!out.status.success());
 }
+
+#[test]
+fn bench_assign_from_positions_and_bench_fmm_report_checked_rows() {
+    let out = bin()
+        .args([
+            "bench",
+            "assign",
+            "--n",
+            "150",
+            "--repeats",
+            "3",
+            "--warm",
+            "--points",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(rows[0]["workload"], "assign_warm_points n=150");
+    assert!(
+        rows[0]["note"].as_str().unwrap().contains("held on 3/3"),
+        "{}",
+        rows[0]
+    );
+    for obstacles in [false, true] {
+        let mut cmd = bin();
+        cmd.args(["bench", "fmm", "--grid", "48", "--repeats", "3", "--json"]);
+        if obstacles {
+            cmd.arg("--obstacles");
+        }
+        let out = cmd.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let note = rows[0]["note"].as_str().unwrap();
+        if obstacles {
+            assert_eq!(rows[0]["workload"], "fmm 48x48 obstacles");
+            assert!(note.contains("cells reachable"), "{note}");
+        } else {
+            assert_eq!(rows[0]["workload"], "fmm 48x48");
+            // Second order on a uniform cost: within about 1.5 cm of the distance.
+            let mm: f64 = note
+                .split("Euclidean distance ")
+                .nth(1)
+                .and_then(|s| s.split(' ').next())
+                .and_then(|s| s.parse().ok())
+                .unwrap_or_else(|| panic!("{note}"));
+            assert!(mm < 15.0, "{note}");
+        }
+    }
+    // Bad grid: an error naming the option, not a panic.
+    let out = bin()
+        .args(["bench", "fmm", "--grid", "1"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--grid"));
+}
