@@ -11,6 +11,7 @@
 //! 3. `/etc/crowdtouch/crowdtouch.ron`
 //! 4. the embedded default.
 
+use crate::crowd::formation::{FormationDef, FormationLibrary, DEFAULT_LAMBDA};
 use crate::crowd::scene::Scene;
 use crate::geom::{Rect, Vec2};
 use serde::{Deserialize, Serialize};
@@ -325,6 +326,34 @@ pub struct AssignmentConfig {
     pub worker: bool,
 }
 
+/// Formations the crowd switches between at a scene's checkpoints
+/// (mesh-formation-control section 7.3; see [`crate::crowd::formation`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FormationsConfig {
+    /// `λ` of the least-effort pairing of agents to the new formation's goals
+    /// (formation-transform eq. 3), in `[0, 1]`: 1 pairs by travel alone.
+    #[serde(default = "default_lambda")]
+    pub lambda: f64,
+    /// Shapes added to the shipped ones (`square`, `arrow`, `column`, `line`,
+    /// `wedge`, `diamond`); one with a shipped name replaces it.
+    #[serde(default)]
+    pub shapes: Vec<FormationDef>,
+}
+
+impl Default for FormationsConfig {
+    fn default() -> Self {
+        FormationsConfig {
+            lambda: DEFAULT_LAMBDA,
+            shapes: Vec::new(),
+        }
+    }
+}
+
+fn default_lambda() -> f64 {
+    DEFAULT_LAMBDA
+}
+
 /// Per-stage budgets (µs): overruns are counted, logged at a rate limit and published.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -456,6 +485,12 @@ pub struct Config {
     /// The scene, loaded and validated with the config.
     #[serde(skip)]
     loaded_scene: Option<Arc<Scene>>,
+    /// Formation shapes a scene's checkpoints switch to.
+    #[serde(default)]
+    pub formations: FormationsConfig,
+    /// The shipped shapes and `formations.shapes`, validated with the config.
+    #[serde(skip)]
+    library: Arc<FormationLibrary>,
     /// Threads, queues and budgets.
     pub pipeline: PipelineConfig,
     /// The Unix socket.
@@ -501,10 +536,19 @@ impl Config {
             issues: vec![issue],
         })?;
         let mut problems = cfg.validate();
+        match FormationLibrary::with(&cfg.formations.shapes) {
+            Ok(lib) => cfg.library = Arc::new(lib),
+            Err(e) => problems.extend(
+                e.into_iter()
+                    .map(|(i, m)| (format!("formations.shapes[{i}]"), m)),
+            ),
+        }
         if problems.is_empty() {
             cfg.resolve_paths(base);
             if let Some(scene_path) = &cfg.scene {
-                match crate::embedded::load_scene(scene_path, cfg.crowd.agent_radius_m) {
+                match crate::embedded::load_scene(scene_path, cfg.crowd.agent_radius_m)
+                    .and_then(|s| s.check_formations(scene_path, &cfg.library).map(|()| s))
+                {
                     Ok(scene) => cfg.loaded_scene = Some(Arc::new(scene)),
                     Err(e) => {
                         problems.push(("scene".to_string(), format!("scene not usable:\n{e}")))
@@ -538,6 +582,11 @@ impl Config {
     /// The loaded scene (`None` without a `scene` field).
     pub fn loaded_scene(&self) -> Option<&Arc<Scene>> {
         self.loaded_scene.as_ref()
+    }
+
+    /// The formation shapes: shipped and `formations.shapes`.
+    pub fn formation_library(&self) -> &Arc<FormationLibrary> {
+        &self.library
     }
 
     /// Replaces the scene (tests and tools that build a scene in memory); the
@@ -880,6 +929,12 @@ impl Config {
                 format!("CPU list must be non-empty CPU numbers, got {cpus:?}"),
             );
         }
+        let l = self.formations.lambda;
+        check(
+            (0.0..=1.0).contains(&l),
+            "formations.lambda",
+            format!("least-effort weight must be in 0 ..= 1, got {l}"),
+        );
 
         p
     }

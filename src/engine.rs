@@ -7,12 +7,15 @@
 
 use crate::config::{Config, MAX_AGENTS};
 use crate::crowd::agents::{AgentParams, Agents};
+use crate::crowd::assign::{CostMatrix, CostProvider, Solver};
 use crate::crowd::assigner::Assigner;
 use crate::crowd::direct::{DirectController, DirectParams};
+use crate::crowd::effort::LeastEffort;
 use crate::crowd::environment::{
     steer_target, Planner, PlannerParams, MESH_FIELD_RANGE_M, MESH_FIELD_STEP_M,
 };
 use crate::crowd::field::FieldParams;
+use crate::crowd::formation::{FormationLibrary, Placement, START};
 use crate::crowd::mesh::TriMesh;
 use crate::crowd::scene::{MotionType, Scene};
 use crate::geom::{Rect, Vec2};
@@ -95,6 +98,10 @@ pub struct EngineCounters {
     pub deform_errors: u64,
     /// Assignment failures.
     pub assign_errors: u64,
+    /// Formation switches at checkpoints.
+    pub formation_switches: u64,
+    /// Checkpoint formations that could not be built (the crowd kept its formation).
+    pub formation_errors: u64,
 }
 
 /// The control core.
@@ -134,6 +141,18 @@ pub struct Engine {
     outline: Arc<Vec<u32>>,
     topology: u64,
     counters: EngineCounters,
+    /// Formation shapes the scene's checkpoints name.
+    formations: Arc<FormationLibrary>,
+    /// `λ` of the least-effort pairing at a switch.
+    formation_lambda: f64,
+    /// The formation the crowd is in ([`START`] or a library name).
+    formation_name: String,
+    /// The mesh the crowd starts in (and a reset brings back).
+    start_mesh: Arc<TriMesh>,
+    /// Agent centroid after the last tick, to see checkpoints being crossed.
+    prev_centroid: Option<Vec2>,
+    switch_costs: CostMatrix,
+    switch_solver: Solver,
 }
 
 impl Engine {
@@ -147,6 +166,7 @@ impl Engine {
             cfg.mesh.rows as usize,
         );
         let agents_n = cfg.crowd.agents as usize;
+        let start_mesh = Arc::new(mesh.clone());
         let direct = DirectController::new(mesh, agents_n, direct_params(cfg));
         let agents = Agents::new(direct.goals());
         let triangles = Arc::new(direct.mesh().triangles().to_vec());
@@ -191,6 +211,13 @@ impl Engine {
             outline,
             topology: 1,
             counters: EngineCounters::default(),
+            formations: Arc::clone(cfg.formation_library()),
+            formation_lambda: cfg.formations.lambda,
+            formation_name: START.to_string(),
+            start_mesh,
+            prev_centroid: None,
+            switch_costs: CostMatrix::new(0, 0),
+            switch_solver: Solver::new(),
         };
         e.fit_radius();
         if inline_assignment {
@@ -289,6 +316,8 @@ impl Engine {
         }
         self.grab_radius_m = cfg.controls.grab_radius_m;
         self.configured_radius_m = cfg.crowd.agent_radius_m;
+        self.formations = Arc::clone(cfg.formation_library());
+        self.formation_lambda = cfg.formations.lambda;
         self.agent_params = agent_params(cfg);
         self.segmenter.set_params(segment_params(cfg));
         self.direct.set_params(direct_params(cfg));
@@ -317,6 +346,7 @@ impl Engine {
     /// Swaps the scene (see [`Engine::reconfigure_with`]).
     fn set_scene(&mut self, scene: Option<Arc<Scene>>) {
         self.scene = scene;
+        self.prev_centroid = None;
         if self.scene.is_none() {
             self.motions.clear();
         }
@@ -472,11 +502,16 @@ impl Engine {
         }
     }
 
-    /// Mesh back to rest; controls end. `hard` teleports agents to their goals.
+    /// Mesh back to rest in the start formation; controls end. `hard` teleports
+    /// agents to their goals.
     pub fn reset(&mut self, hard: bool, now: Micros) {
         self.segmenter.cancel_all(now, &mut self.seg_out);
+        if self.formation_name != START {
+            self.switch_formation(START, None, Vec2::zeros(), now);
+        }
         self.direct.reset();
         if hard {
+            self.prev_centroid = None;
             self.agents.teleport(self.direct.goals());
             self.goal_of.clear();
             self.goal_of.extend(0..self.agents.len() as u32);
@@ -509,6 +544,7 @@ impl Engine {
         }
         self.direct.set_agent_count(count as usize);
         self.agents = Agents::new(self.direct.goals());
+        self.prev_centroid = None;
         self.goal_of.clear();
         self.goal_of.extend(0..count);
         self.waypoints.clear();
@@ -607,6 +643,7 @@ impl Engine {
                     .map(|&p| scene.terrain_at(p, t).motion),
             );
         }
+        self.pass_checkpoints(now);
         self.translate_segments(now);
         for v in &mut self.touches {
             v.control = self
@@ -699,6 +736,166 @@ impl Engine {
             snapshot: snap,
             mesh,
             events: &self.events,
+        }
+    }
+
+    /// The formation the crowd is in: [`START`] (the config's `crowd.formation`
+    /// grid) or the name of a formation a checkpoint switched to.
+    pub fn formation(&self) -> &str {
+        &self.formation_name
+    }
+
+    /// Switches formation when the crowd's centroid passed a scene checkpoint since
+    /// the last tick (mesh-formation-control section 7.3; the last one passed wins
+    /// when a tick crosses several). Passing a checkpoint that names the current
+    /// formation changes nothing. No allocation unless a switch happens.
+    fn pass_checkpoints(&mut self, now: Micros) {
+        let n = self.agents.len();
+        if n == 0 {
+            return;
+        }
+        let c = self.agents.positions().iter().sum::<Vec2>() / n as f64;
+        let prev = self.prev_centroid.replace(c);
+        let (Some(scene), Some(prev)) = (&self.scene, prev) else {
+            return;
+        };
+        let Some(cp) = scene.crossed_checkpoints(prev, c).last() else {
+            return;
+        };
+        if cp.formation == self.formation_name {
+            return;
+        }
+        // The scene outlives the switch (an `Arc` clone, no allocation).
+        let scene = Arc::clone(scene);
+        let Some(cp) = scene.crossed_checkpoints(prev, c).last() else {
+            return;
+        };
+        self.switch_formation(&cp.formation, Some(&cp.name), c - prev, now);
+    }
+
+    /// Replaces the mesh by formation `name` (mesh-formation-control section 7.3).
+    ///
+    /// A library formation is laid out with the user mesh's current area and
+    /// centroid, its `+x` along `heading` (the crowd's motion), shifted inside the
+    /// world when it fits, with about as many vertices as the start mesh; [`START`]
+    /// is the start mesh where it was configured. Live drags go on over the new mesh
+    /// ([`DirectController::set_mesh`]). Agents are paired with the new goals by the
+    /// least-effort cost of formation-transform eq. 3 and that pairing is used at
+    /// once; the running assignment (Euclidean or Eikonal) takes over from its next
+    /// result, and results solved for the old goals are discarded.
+    ///
+    /// Allocates and costs `O(agents²)` for the pairing (a one-off, like a resize).
+    /// A formation that cannot be meshed is logged and counted, and the crowd keeps
+    /// its formation.
+    fn switch_formation(
+        &mut self,
+        name: &str,
+        checkpoint: Option<&str>,
+        heading: Vec2,
+        now: Micros,
+    ) {
+        let mesh = if name == START {
+            (*self.start_mesh).clone()
+        } else {
+            let Some(f) = self.formations.get(name) else {
+                self.formation_failed(name, "the config defines no formation of that name");
+                return;
+            };
+            let mut place = Placement {
+                centre_m: Vec2::zeros(),
+                heading,
+                area_m2: self.user_mesh_area(),
+            };
+            let user = self.direct.user_vertices();
+            place.centre_m = user.iter().sum::<Vec2>() / user.len().max(1) as f64;
+            place.centre_m += shift_inside(&f.placed_outline(&place), self.world);
+            match f.mesh(&place, self.start_mesh.vertex_count()) {
+                Ok(m) => m,
+                Err(e) => {
+                    self.formation_failed(name, &e.to_string());
+                    return;
+                }
+            }
+        };
+        self.direct.set_mesh(mesh);
+        self.triangles = Arc::new(self.direct.mesh().triangles().to_vec());
+        self.outline = Arc::new(self.direct.mesh().outline().to_vec());
+        self.topology += 1;
+        // Formation-transform eq. 3: the least-effort pairing, used until the
+        // running assignment's first result for the new goals.
+        LeastEffort::new(self.formation_lambda).fill(
+            self.agents.positions(),
+            self.direct.goals(),
+            &mut self.switch_costs,
+        );
+        match self.switch_solver.solve(&self.switch_costs) {
+            Ok(cols) => {
+                self.goal_of.clear();
+                self.goal_of.extend(cols.iter().map(|&j| j as u32));
+            }
+            Err(e) => {
+                self.counters.assign_errors += 1;
+                log::warn!("formation `{name}`: least-effort pairing failed: {e}");
+            }
+        }
+        self.waypoints.fill(Vec2::repeat(f64::NAN));
+        self.generation += 1;
+        self.assignment_seq = self.seq;
+        if let Some(a) = &mut self.inline {
+            a.forget();
+        }
+        if let Some(p) = &mut self.planner {
+            p.forget();
+        }
+        self.formation_name.clear();
+        self.formation_name.push_str(name);
+        if checkpoint.is_some() {
+            self.counters.formation_switches += 1;
+        }
+        log::info!(
+            "formation `{name}`{} ({} vertices)",
+            checkpoint
+                .map(|c| format!(" at checkpoint `{c}`"))
+                .unwrap_or_default(),
+            self.direct.mesh().vertex_count()
+        );
+        self.events.push(Event::Formation {
+            name: name.to_string(),
+            checkpoint: checkpoint.map(str::to_string),
+            vertices: self.direct.mesh().vertex_count() as u32,
+            t: now,
+        });
+    }
+
+    fn formation_failed(&mut self, name: &str, why: &str) {
+        self.counters.formation_errors += 1;
+        if self.counters.formation_errors.is_power_of_two() {
+            log::warn!(
+                "formation `{name}` not used ({} times): {why}; the crowd keeps formation `{}`",
+                self.counters.formation_errors,
+                self.formation_name
+            );
+        }
+    }
+
+    /// Area of the user mesh in its current pose (m²).
+    fn user_mesh_area(&self) -> f64 {
+        let v = self.direct.user_vertices();
+        let a: f64 = self
+            .direct
+            .mesh()
+            .triangles()
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| v[i as usize]);
+                let (u, w) = (b - a, c - a);
+                0.5 * (u.x * w.y - u.y * w.x)
+            })
+            .sum();
+        if a.is_finite() && a > 0.0 {
+            a
+        } else {
+            self.start_mesh.area()
         }
     }
 
@@ -849,6 +1046,34 @@ fn segment_params(cfg: &Config) -> SegmentParams {
         group_window: Micros(cfg.controls.group_window_ms * 1000),
         hand_span_mm: cfg.controls.hand_span_mm,
         gesture_grace: Micros(cfg.controls.gesture_grace_ms * 1000),
+    }
+}
+
+/// The translation that brings `poly`'s bounding box inside `world` (centred on
+/// an axis where it does not fit).
+fn shift_inside(poly: &[Vec2], world: Rect) -> Vec2 {
+    let mut d = Vec2::zeros();
+    if poly.is_empty() {
+        return d;
+    }
+    for k in 0..2 {
+        let lo = poly.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+        let hi = poly.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+        let (w0, w1) = (world.min[k], world.max[k]);
+        d[k] = if hi - lo > w1 - w0 {
+            0.5 * (w0 + w1) - 0.5 * (lo + hi)
+        } else if lo < w0 {
+            w0 - lo
+        } else if hi > w1 {
+            w1 - hi
+        } else {
+            0.0
+        };
+    }
+    if d.x.is_finite() && d.y.is_finite() {
+        d
+    } else {
+        Vec2::zeros()
     }
 }
 

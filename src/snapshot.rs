@@ -192,6 +192,18 @@ pub enum Event {
         /// When.
         t: Micros,
     },
+    /// The crowd switched formation: it passed a scene checkpoint
+    /// (mesh-formation-control section 7.3), or a reset brought back the start.
+    Formation {
+        /// The formation now (`start` for the config's starting formation).
+        name: String,
+        /// The checkpoint passed (`None` for a reset).
+        checkpoint: Option<String>,
+        /// Vertices of the new mesh (its triangles come with the next `mesh`).
+        vertices: u32,
+        /// When.
+        t: Micros,
+    },
     /// The simulation was paused or resumed.
     Paused {
         /// Paused after this event.

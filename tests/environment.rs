@@ -16,6 +16,7 @@ use crowdtouch::embedded::load_scene;
 use crowdtouch::engine::Engine;
 use crowdtouch::geom::{Rect, Vec2};
 use crowdtouch::input::{Contact, ContactFlags, ContactId, TouchFrame};
+use crowdtouch::snapshot::Event;
 use crowdtouch::time::Micros;
 use std::path::Path;
 use std::sync::Arc;
@@ -45,7 +46,8 @@ fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Rect {
 const TICK_US: u64 = 1_000_000 / 60;
 
 /// A one-finger drag from `from` to `to` (world m) over `secs`, then `settle` s more
-/// of ticks with the finger lifted. Calls `each` after every tick.
+/// of ticks with the finger lifted. Calls `each` after every tick; returns the
+/// events of every tick.
 fn drag(
     e: &mut Engine,
     from: Vec2,
@@ -53,7 +55,8 @@ fn drag(
     secs: f64,
     settle: f64,
     mut each: impl FnMut(&Engine),
-) {
+) -> Vec<Event> {
+    let mut events = Vec::new();
     let w = e.world();
     let unit = |p: Vec2| {
         (
@@ -85,16 +88,17 @@ fn drag(
         })
         .unwrap();
         e.push_frame(&f);
-        e.tick(Micros(t));
+        events.extend_from_slice(e.tick(Micros(t)).events);
         e.clear_events();
         each(e);
     }
     for _ in 0..(settle * 60.0) as u64 {
         t += TICK_US;
-        e.tick(Micros(t));
+        events.extend_from_slice(e.tick(Micros(t)).events);
         e.clear_events();
         each(e);
     }
+    events
 }
 
 fn assert_outside(scene: &Scene, e: &Engine) {
@@ -115,7 +119,7 @@ fn dragged_onto_a_block_no_goal_ends_inside() {
     // 6 x 6 mesh over (6,3.5)..(9,5.5): 36 vertices, 36 agents (goals at vertices).
     let c = cfg("single_block", 36, rect(6.0, 3.5, 9.0, 5.5), 6);
     let mut e = Engine::new(&c, None, true);
-    drag(
+    let _ = drag(
         &mut e,
         Vec2::new(7.5, 4.5),
         Vec2::new(12.0, 4.5),
@@ -198,7 +202,7 @@ fn fig10_square_crowd_passes_around_a_block_and_remerges() {
     let c = cfg("single_block", 25, rect(7.5, 3.5, 9.5, 5.5), 5);
     let mut e = Engine::new(&c, None, true);
     let mut worst_inside = 0usize;
-    drag(
+    let _ = drag(
         &mut e,
         Vec2::new(8.5, 4.5),
         Vec2::new(14.7, 4.5),
@@ -287,7 +291,7 @@ fn agents_in_a_patch_move_at_its_speed_and_report_its_motion() {
     let vmax = c.crowd.max_speed_m_s;
     let mut fastest = 0.0f64;
     let mut swim_ticks = 0;
-    drag(
+    let _ = drag(
         &mut e,
         Vec2::new(12.0, 0.8),
         Vec2::new(14.0, 0.8),
@@ -408,4 +412,89 @@ fn a_reconfigured_scene_applies_from_the_next_tick() {
     assert!(out.snapshot.motions.is_empty());
     drop(out);
     assert!(e.scene().is_none() && e.motions().is_empty());
+}
+
+/// Section 7.3 and Fig. 9: dragged east through the corridor scene, the crowd turns
+/// into an arrow at the checkpoint before the corridor, passes the corridor with no
+/// agent inside a wall, and turns back into a square at the checkpoint after it.
+#[test]
+fn fig9_checkpoints_switch_the_formation_through_the_corridor() {
+    let s = scene("corridor");
+    let c = cfg("corridor", 40, rect(6.0, 3.0, 10.0, 6.0), 6);
+    let mut e = Engine::new(&c, None, true);
+    assert_eq!(e.formation(), "start");
+    let mut inside = 0usize;
+    // Shape of the goals a moment after each switch: (formation, length along x
+    // over width along y).
+    let mut shapes: Vec<(String, f64)> = Vec::new();
+    let mut last = e.formation().to_string();
+    let events = drag(
+        &mut e,
+        Vec2::new(8.0, 4.5),
+        Vec2::new(15.6, 4.5),
+        14.0,
+        10.0,
+        |e| {
+            let t = e.scene_time_s();
+            inside += e
+                .agent_positions()
+                .iter()
+                .filter(|p| s.obstacle_at(**p, t).is_some())
+                .count();
+            if e.formation() != last {
+                last = e.formation().to_string();
+                let m = e.mesh_view();
+                let (lo, hi) = m.vertices.iter().fold(
+                    (Vec2::repeat(f64::MAX), Vec2::repeat(f64::MIN)),
+                    |(l, h), p| (l.inf(p), h.sup(p)),
+                );
+                shapes.push((last.clone(), (hi.x - lo.x) / (hi.y - lo.y)));
+            }
+        },
+    );
+    let switches: Vec<(String, Option<String>)> = events
+        .iter()
+        .filter_map(|ev| match ev {
+            Event::Formation {
+                name, checkpoint, ..
+            } => Some((name.clone(), checkpoint.clone())),
+            _ => None,
+        })
+        .collect();
+    eprintln!("fig9: switches {switches:?}, shapes {shapes:?}");
+    assert_eq!(
+        switches,
+        vec![
+            ("arrow".to_string(), Some("before the corridor".to_string())),
+            ("square".to_string(), Some("after the corridor".to_string())),
+        ]
+    );
+    assert_eq!(inside, 0, "agent positions inside a wall");
+    // The arrow is longer than wide along the heading (its outline is 2 : 1.1);
+    // the square is as wide as long.
+    assert!(shapes[0].1 > 1.4, "arrow length / width {}", shapes[0].1);
+    assert!(
+        (0.8..1.25).contains(&shapes[1].1),
+        "square length / width {}",
+        shapes[1].1
+    );
+    // The crowd came through (its square, pushed inside the world's east edge,
+    // reaches back into the corridor's mouth) and stands at its goals.
+    let pos = e.agent_positions();
+    let cx = pos.iter().map(|p| p.x).sum::<f64>() / pos.len() as f64;
+    let west = pos.iter().filter(|p| p.x < 11.5).count();
+    eprintln!("fig9: crowd centre x {cx:.2}, {west} agents west of the corridor");
+    assert!(cx > 14.0, "crowd centre x {cx}");
+    assert_eq!(west, 0, "{west} agents did not enter the corridor");
+    let goals = e.goals();
+    let worst = pos
+        .iter()
+        .zip(e.goal_of())
+        .map(|(p, &g)| (p - goals[g as usize]).norm())
+        .fold(0.0, f64::max);
+    assert!(worst < 0.25, "an agent is {worst:.2} m from its goal");
+    assert_eq!(e.counters().formation_switches, 2);
+    // A reset brings back the start formation.
+    e.reset(true, Micros(100_000_000));
+    assert_eq!(e.formation(), "start");
 }

@@ -11,13 +11,18 @@ pub enum SceneCmd {
     /// `file:line:col: field: what` (exit code 1).
     ///
     /// Obstacles must be at least one agent diameter apart; the agent radius is the
-    /// default config's `crowd.agent_radius_m` unless given.
+    /// config's `crowd.agent_radius_m` unless given. Checkpoints must name a
+    /// formation of the config (the shipped shapes and its `formations.shapes`).
     Check {
         /// Scene file (RON).
         file: PathBuf,
         /// Agent radius (m) for the gap check.
         #[arg(long)]
         agent_radius_m: Option<f64>,
+        /// Config whose agent radius and formations to check against (default:
+        /// the embedded default config).
+        #[arg(long)]
+        config: Option<PathBuf>,
     },
     /// Draw a scene as SVG: bounds, obstacles, travel-speed patches by motion type,
     /// moving things at `--t` with their paths, checkpoints with their formations;
@@ -36,20 +41,34 @@ pub fn scene(cmd: SceneCmd) -> i32 {
         SceneCmd::Check {
             file,
             agent_radius_m,
-        } => check(&file, agent_radius_m),
+            config,
+        } => check(&file, agent_radius_m, config.as_deref()),
         SceneCmd::Render(a) => super::scene_render::render(a),
     }
 }
 
-fn check(file: &Path, agent_radius_m: Option<f64>) -> i32 {
-    let radius = agent_radius_m.unwrap_or_else(|| Config::embedded_default().crowd.agent_radius_m);
+fn check(file: &Path, agent_radius_m: Option<f64>, config: Option<&Path>) -> i32 {
+    let cfg = match config {
+        Some(p) => match Config::load(p) {
+            Ok(c) => c,
+            Err(e) => {
+                eprintln!("{e}");
+                return 1;
+            }
+        },
+        None => Config::embedded_default(),
+    };
+    let radius = agent_radius_m.unwrap_or(cfg.crowd.agent_radius_m);
     if !(radius.is_finite() && radius > 0.0) {
         eprintln!(
             "crowdtouch: error: --agent-radius-m must be a positive number of metres, got {radius}"
         );
         return 2;
     }
-    match Scene::load(file, radius) {
+    match Scene::load(file, radius).and_then(|s| {
+        s.check_formations(file, cfg.formation_library())
+            .map(|()| s)
+    }) {
         Ok(s) => {
             let b = s.bounds();
             let moving_obstacles = s

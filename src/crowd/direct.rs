@@ -86,6 +86,13 @@ impl Path {
     fn front(&self) -> Option<Vec2> {
         (self.len > 0).then(|| self.get(0))
     }
+    /// Moves every check point by `d`.
+    fn shift(&mut self, d: Vec2) {
+        for i in 0..self.len {
+            let k = (self.head + i) % PATH_CAPACITY;
+            self.pts[k] += d;
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -331,6 +338,48 @@ impl DirectController {
         // The rest shape is re-based at the next constraint change; forget the
         // current constraint set so that happens on the first touch.
         let _ = self.arap.set_constraints(&[]);
+        self.finalize();
+    }
+
+    /// Replaces the mesh: a formation switch (mesh-formation-control section 7.3).
+    ///
+    /// The new mesh at its rest pose becomes the user mesh and the rest shape ARAP
+    /// keeps rigid to; the goals are resampled for the same number of agents. Live
+    /// rigs keep their fingers: each handle moves to the new mesh's vertex nearest
+    /// to it, and its finger offset takes up the difference, so a drag goes on
+    /// without a jump; line and area supports are rebuilt on the new vertices.
+    ///
+    /// Allocates (a new ARAP system, new goal samples): meant for a switch, not for
+    /// every tick.
+    pub fn set_mesh(&mut self, mesh: TriMesh) {
+        let agents = self.goals.len();
+        self.arap = Arap::new(&mesh);
+        self.verts.clear();
+        self.verts.extend_from_slice(mesh.rest());
+        self.anchor.clone_from(&self.verts);
+        self.solved.clone_from(&self.verts);
+        let n = self.verts.len();
+        self.best_weight.clear();
+        self.best_weight.resize(n, 0.0);
+        self.best_target.clear();
+        self.best_target.resize(n, Vec2::zeros());
+        self.samples = super::mesh::sample_goals(&mesh, agents);
+        self.spacing_m = mean_edge_length(&mesh);
+        self.mesh = mesh;
+        let mut rigs = std::mem::take(&mut self.rigs);
+        for rig in &mut rigs {
+            for h in &mut rig.handles {
+                let (v, _) = nearest_vertex(&self.verts, h.pos);
+                let d = self.verts[v] - h.pos;
+                h.vertex = v as u32;
+                h.offset += d;
+                h.pos += d;
+                h.goal += d;
+                h.path.shift(d);
+            }
+            self.build_support(rig);
+        }
+        self.rigs = rigs;
         self.finalize();
     }
 

@@ -11,6 +11,7 @@ pub mod effort;
 pub mod eikonal;
 pub mod environment;
 pub mod field;
+pub mod formation;
 pub mod mesh;
 pub mod mvc;
 pub mod scene;

@@ -70,6 +70,7 @@
 //! [`Scene::load`].
 
 use crate::config::{self, ConfigIssue};
+use crate::crowd::formation::FormationLibrary;
 use crate::geom::{Rect, Vec2};
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -478,6 +479,14 @@ pub enum Problem {
     /// A checkpoint naming no formation.
     #[error("formation name is empty")]
     EmptyFormation,
+    /// A checkpoint naming a formation the config does not define.
+    #[error("no formation is called `{name}`; the config defines {known}")]
+    UnknownFormation {
+        /// The name.
+        name: String,
+        /// The names there are, comma-separated.
+        known: String,
+    },
 }
 
 /// One problem, located in the file.
@@ -770,6 +779,8 @@ pub struct Checkpoint {
     pub region: Part,
     /// Formation to switch to.
     pub formation: String,
+    /// Line and column of `formation` in the scene file (0 when unknown).
+    pub formation_at: (usize, usize),
 }
 
 impl Checkpoint {
@@ -1067,7 +1078,7 @@ impl Scene {
                     problem: Problem::Syntax { message: i.message },
                 }],
             })?;
-        Scene::from_file(&file, agent_radius_m).map_err(|problems| {
+        let scene = Scene::from_file(&file, agent_radius_m).map_err(|problems| {
             let mut issues: Vec<SceneIssue> = problems
                 .into_iter()
                 .map(|(field, problem)| {
@@ -1085,7 +1096,49 @@ impl Scene {
                 path: path.to_path_buf(),
                 issues,
             }
-        })
+        });
+        let mut scene = scene?;
+        for (i, c) in scene.checkpoints.iter_mut().enumerate() {
+            c.formation_at = config::locate_field(text, &format!("checkpoints[{i}].formation"))
+                .unwrap_or((0, 0));
+        }
+        Ok(scene)
+    }
+
+    /// Checks that every checkpoint names a formation of `library`; `path` is the
+    /// scene file, for messages.
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] with a [`Problem::UnknownFormation`] per checkpoint
+    /// that names an unknown one, at its `formation` field.
+    pub fn check_formations(
+        &self,
+        path: &Path,
+        library: &FormationLibrary,
+    ) -> Result<(), SceneError> {
+        let issues: Vec<SceneIssue> = self
+            .checkpoints
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| !library.knows(&c.formation))
+            .map(|(i, c)| SceneIssue {
+                field: format!("checkpoints[{i}].formation"),
+                line: c.formation_at.0,
+                column: c.formation_at.1,
+                problem: Problem::UnknownFormation {
+                    name: c.formation.clone(),
+                    known: library.names_list(),
+                },
+            })
+            .collect();
+        if issues.is_empty() {
+            Ok(())
+        } else {
+            Err(SceneError::Invalid {
+                path: path.to_path_buf(),
+                issues,
+            })
+        }
     }
 
     /// Validates a parsed scene. A non-finite or non-positive `agent_radius_m` is
@@ -1244,6 +1297,7 @@ impl Scene {
                     name: c.name.clone(),
                     region,
                     formation: c.formation.clone(),
+                    formation_at: (0, 0),
                 })
             })
             .collect();

@@ -1384,6 +1384,12 @@ enum Wire<'a> {
         paused: bool,
         t_us: u64,
     },
+    Formation {
+        name: &'a str,
+        checkpoint: Option<&'a str>,
+        vertices: u32,
+        t_us: u64,
+    },
     Device {
         input: u16,
         state: crate::snapshot::DeviceState,
@@ -1422,7 +1428,8 @@ enum Wire<'a> {
     },
 }
 
-/// Appends one event JSON line (`control`, `gesture`, `reset`, `paused` or `device`).
+/// Appends one event JSON line (`control`, `gesture`, `reset`, `formation`, `paused`
+/// or `device`).
 pub fn encode_event(e: &Event, out: &mut Vec<u8>) {
     let w = match e {
         Event::ControlBegin {
@@ -1497,6 +1504,17 @@ pub fn encode_event(e: &Event, out: &mut Vec<u8>) {
         },
         Event::Paused { paused, t } => Wire::Paused {
             paused: *paused,
+            t_us: t.0,
+        },
+        Event::Formation {
+            name,
+            checkpoint,
+            vertices,
+            t,
+        } => Wire::Formation {
+            name,
+            checkpoint: checkpoint.as_deref(),
+            vertices: *vertices,
             t_us: t.0,
         },
         Event::Device {
