@@ -540,7 +540,7 @@ impl Config {
             Ok(lib) => cfg.library = Arc::new(lib),
             Err(e) => problems.extend(
                 e.into_iter()
-                    .map(|(i, m)| (format!("formations.shapes[{i}]"), m)),
+                    .map(|(f, m)| (format!("formations.shapes{f}"), m)),
             ),
         }
         if problems.is_empty() {
@@ -1374,6 +1374,77 @@ mod tests {
             Err(Error::Invalid { issues, .. }) => issues,
             other => panic!("expected invalid, got {other:?}"),
         }
+    }
+
+    #[test]
+    fn formation_shapes_and_checkpoint_names_are_checked_where_they_are_written() {
+        let shapes = |text: &str| DEFAULT_CONFIG_RON.replace("        shapes: [],", text);
+        // A bow tie and a shape given twice, each at its own entry.
+        let text = shapes(
+            "        shapes: [\n            (name: \"bow\", outline: [(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)]),\n            (name: \"t\", outline: [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]),\n            (name: \"t\", outline: [(0.0, 0.0), (2.0, 0.0), (0.0, 1.0)]),\n        ],",
+        );
+        let e = Config::from_str(&text, Path::new("f.ron"))
+            .unwrap_err()
+            .to_string();
+        let line = |needle: &str| text.lines().position(|l| l.contains(needle)).unwrap() + 1;
+        assert!(
+            e.contains(&format!("f.ron:{}:", line("\"bow\"")))
+                && e.contains("field `formations.shapes[0].outline`: edges 0 and 2 cross or touch"),
+            "{e}"
+        );
+        assert!(
+            e.contains(&format!("f.ron:{}:", line("(2.0, 0.0)")))
+                && e.contains("field `formations.shapes[2].name`: formation `t` is defined twice"),
+            "{e}"
+        );
+        let lambda = DEFAULT_CONFIG_RON.replace("lambda: 0.5", "lambda: 1.5");
+        let e = Config::from_str(&lambda, Path::new("l.ron"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(
+                "field `formations.lambda`: least-effort weight must be in 0 ..= 1, got 1.5"
+            ),
+            "{e}"
+        );
+        // A config without the section gets the shipped shapes; one that adds a
+        // shape can use it in a scene.
+        let bare: String = {
+            let start = DEFAULT_CONFIG_RON.find("    formations: (").unwrap();
+            let end = start + DEFAULT_CONFIG_RON[start..].find("    ),\n").unwrap() + 7;
+            format!(
+                "{}{}",
+                &DEFAULT_CONFIG_RON[..start],
+                &DEFAULT_CONFIG_RON[end..]
+            )
+        };
+        let c = Config::from_str(&bare, Path::new("b.ron")).unwrap();
+        assert!(c.formation_library().knows("arrow") && !c.formation_library().knows("t"));
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("gate.ron"),
+            "(version: 1, bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),\n checkpoints: [(name: \"g\", formation: \"t\", region: Circle(centre_m: (3.0, 3.0), radius_m: 1.0))])",
+        )
+        .unwrap();
+        let with_scene = |t: &str| t.replace("scene: None", "scene: Some(\"gate.ron\")");
+        let cfg = dir.path().join("c.ron");
+        std::fs::write(&cfg, with_scene(&bare)).unwrap();
+        let e = Config::load(&cfg).unwrap_err().to_string();
+        assert!(
+            e.contains("field `scene`")
+                && e.contains("gate.ron:2:")
+                && e.contains("checkpoints[0].formation: no formation is called `t`"),
+            "{e}"
+        );
+        std::fs::write(
+            &cfg,
+            with_scene(&shapes(
+                "        shapes: [(name: \"t\", outline: [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)])],",
+            )),
+        )
+        .unwrap();
+        let c = Config::load(&cfg).unwrap();
+        assert_eq!(c.loaded_scene().unwrap().checkpoints()[0].formation, "t");
     }
 
     #[test]

@@ -54,19 +54,47 @@ pub fn make_realtime(priority: u8, thread: &str) -> bool {
     }
 }
 
-/// Runs the calling thread under SCHED_IDLE: it gets the CPU only when nothing else
-/// wants it. For the assignment worker, so a long solve never delays a frame.
-pub fn make_idle(thread: &str) {
+/// Nice value of the assignment worker ([`make_background`]).
+pub const WORKER_NICE: i32 = 10;
+
+/// Lowers the calling thread to nice [`WORKER_NICE`] (SCHED_OTHER): for the
+/// assignment worker, so a long solve takes mostly what the latency path leaves.
+/// The real-time threads (SCHED_FIFO) always preempt it. Without real-time
+/// scheduling it weighs 110 against a normal thread's 1024 in the kernel's fair
+/// share. Neither SCHED_IDLE nor nice 19: on a machine kept busy by something else
+/// (a renderer on the same box, a parallel build) such a thread gets nearly nothing,
+/// and the assignment would stop refreshing.
+pub fn make_background(thread: &str) {
     use thread_priority::unix::{
         set_thread_priority_and_policy, thread_native_id, NormalThreadSchedulePolicy,
         ThreadSchedulePolicy,
     };
-    use thread_priority::ThreadPriority;
-    let policy = ThreadSchedulePolicy::Normal(NormalThreadSchedulePolicy::Idle);
-    if let Err(e) = set_thread_priority_and_policy(thread_native_id(), ThreadPriority::Min, policy)
-    {
-        log::warn!("could not run the {thread} thread under SCHED_IDLE ({e:?}); it competes with the latency path");
+    use thread_priority::{ThreadPriority, ThreadPriorityValue};
+    // thread-priority maps 0..=99 linearly onto nice 19..=-20 for normal policies:
+    // 22 is nice 10.
+    let r = ThreadPriorityValue::try_from(22u8)
+        .map_err(|e| format!("{e:?}"))
+        .and_then(|v| {
+            set_thread_priority_and_policy(
+                thread_native_id(),
+                ThreadPriority::Crossplatform(v),
+                ThreadSchedulePolicy::Normal(NormalThreadSchedulePolicy::Other),
+            )
+            .map_err(|e| format!("{e:?}"))
+        });
+    if let Err(e) = r {
+        log::warn!(
+            "could not lower the {thread} thread to nice {WORKER_NICE} ({e}); it competes with the latency path"
+        );
     }
+}
+
+/// The calling thread's nice value, from `/proc/thread-self/stat` (Linux).
+pub fn thread_nice() -> Option<i32> {
+    let stat = std::fs::read_to_string("/proc/thread-self/stat").ok()?;
+    // Fields after the parenthesised command name; nice is field 19 overall.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    rest.split_whitespace().nth(16)?.parse().ok()
 }
 
 /// The smallest `RLIMIT_MEMLOCK` under which the daemon locks its memory (bytes).
@@ -126,5 +154,21 @@ pub fn pin_to_cpus(cpus: &[usize], thread: &str) -> bool {
             );
             false
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_worker_thread_runs_at_nice_10() {
+        let nice = std::thread::spawn(|| {
+            super::make_background("test");
+            super::thread_nice()
+        })
+        .join()
+        .unwrap();
+        assert_eq!(nice, Some(super::WORKER_NICE));
+        // The caller's own thread is untouched.
+        assert_ne!(super::thread_nice(), Some(super::WORKER_NICE));
     }
 }

@@ -578,6 +578,42 @@ fn scene_check_summarises_a_good_scene_and_lists_every_error() {
         "{err}"
     );
 
+    // A checkpoint must name a formation of the config: the shipped shapes, or
+    // the config's own with --config.
+    let gate = write_tmp(
+        &dir,
+        "gate.ron",
+        "(\n    version: 1,\n    bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),\n    checkpoints: [\n        (name: \"gate\", formation: \"star\",\n         region: Circle(centre_m: (8.0, 4.0), radius_m: 1.0)),\n    ],\n)\n",
+    );
+    let out = bin().args(["scene", "check"]).arg(&gate).output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("gate.ron:5:")
+            && err.contains("checkpoints[0].formation: no formation is called `star`; the config defines start, square, arrow, column, line, wedge, diamond"),
+        "{err}"
+    );
+    let cfg = write_tmp(
+        &dir,
+        "star.ron",
+        &crowdtouch::config::DEFAULT_CONFIG_RON.replace(
+            "        shapes: [],",
+            "        shapes: [(name: \"star\", outline: [(1.0, 0.0), (0.2, 0.2), (0.0, 1.0), (-0.2, 0.2), (-1.0, 0.0), (-0.2, -0.2), (0.0, -1.0), (0.2, -0.2)])],",
+        ),
+    );
+    let out = bin()
+        .args(["scene", "check", "--config"])
+        .arg(&cfg)
+        .arg(&gate)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("1 checkpoint;"));
+
     let missing = bin()
         .args(["scene", "check"])
         .arg(dir.path().join("nope.ron"))

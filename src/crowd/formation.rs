@@ -132,6 +132,16 @@ pub enum FormationError {
     NoArea,
 }
 
+impl FormationError {
+    /// The field of [`FormationDef`] the problem is in (`name` or `outline`).
+    pub fn field(&self) -> &'static str {
+        match self {
+            FormationError::EmptyName | FormationError::ReservedName => "name",
+            _ => "outline",
+        }
+    }
+}
+
 /// A validated formation shape.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Formation {
@@ -495,14 +505,15 @@ impl FormationLibrary {
     /// same name.
     ///
     /// # Errors
-    /// Every `(index in defs, problem)`: an invalid shape, a name given twice, more
-    /// than [`MAX_FORMATIONS`] definitions (reported at index [`MAX_FORMATIONS`]).
-    pub fn with(defs: &[FormationDef]) -> Result<FormationLibrary, Vec<(usize, String)>> {
+    /// Every `(field, problem)` with `field` relative to the list (`[2].outline`):
+    /// an invalid shape, a name given twice, more than [`MAX_FORMATIONS`]
+    /// definitions (reported at the list itself, field `""`).
+    pub fn with(defs: &[FormationDef]) -> Result<FormationLibrary, Vec<(String, String)>> {
         let mut lib = FormationLibrary::shipped();
         let mut problems = Vec::new();
         if defs.len() > MAX_FORMATIONS {
             problems.push((
-                MAX_FORMATIONS,
+                String::new(),
                 format!(
                     "at most {MAX_FORMATIONS} formation shapes, got {}",
                     defs.len()
@@ -512,7 +523,10 @@ impl FormationLibrary {
         }
         for (i, d) in defs.iter().enumerate() {
             if defs[..i].iter().any(|e| e.name == d.name) {
-                problems.push((i, format!("formation `{}` is defined twice", d.name)));
+                problems.push((
+                    format!("[{i}].name"),
+                    format!("formation `{}` is defined twice", d.name),
+                ));
                 continue;
             }
             match Formation::new(d) {
@@ -520,7 +534,7 @@ impl FormationLibrary {
                     Some(g) => *g = f,
                     None => lib.formations.push(f),
                 },
-                Err(e) => problems.push((i, e.to_string())),
+                Err(e) => problems.push((format!("[{i}].{}", e.field()), e.to_string())),
             }
         }
         if problems.is_empty() {
@@ -771,7 +785,8 @@ mod tests {
         );
         let e = FormationLibrary::with(&[star.clone(), def("x", &[(0.0, 0.0)]), star]).unwrap_err();
         assert_eq!(e.len(), 2);
-        assert_eq!(e[0].0, 1);
+        assert_eq!(e[0].0, "[1].outline");
+        assert_eq!(e[1].0, "[2].name");
         assert!(e[1].1.contains("defined twice"), "{e:?}");
         assert!(lib.names_list().starts_with("start, square, arrow"));
     }

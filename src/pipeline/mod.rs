@@ -1136,7 +1136,7 @@ fn assignment_worker(
     jobs: Receiver<Box<AssignJob>>,
     results: Sender<Box<AssignJob>>,
 ) {
-    crate::rt::make_idle("assignment worker");
+    crate::rt::make_background("assignment worker");
     let mut assigner = Assigner::new(cost);
     let mut environment: Option<(Arc<Scene>, PlannerParams)> = None;
     let mut planner: Option<Planner> = None;

@@ -262,6 +262,12 @@ fn events_and_replies_are_json_lines() {
             paused: true,
             t: Micros(9),
         },
+        Event::Formation {
+            name: "arrow".into(),
+            checkpoint: Some("gate".into()),
+            vertices: 36,
+            t: Micros(10),
+        },
     ];
     let mut out = Vec::new();
     for e in &evs {
@@ -285,6 +291,10 @@ fn events_and_replies_are_json_lines() {
     assert_eq!(lines[3]["type"], "reset");
     assert_eq!(lines[4]["paused"], true);
     assert_eq!(lines[4]["t_us"], 9);
+    assert_eq!(
+        lines[5],
+        serde_json::json!({"type":"formation","name":"arrow","checkpoint":"gate","vertices":36,"t_us":10})
+    );
 
     let mut r = Vec::new();
     encode_ack(&Value::from("x"), &mut r);
