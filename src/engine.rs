@@ -479,6 +479,7 @@ impl Engine {
             Command::SetAgentCount { count } => {
                 self.set_agent_count(*count, now).map_err(|e| e.to_string())
             }
+            Command::SetFormation { formation } => self.set_formation(formation, now),
             Command::Pause => {
                 if !self.paused {
                     self.paused = true;
@@ -743,6 +744,41 @@ impl Engine {
     /// grid) or the name of a formation a checkpoint switched to.
     pub fn formation(&self) -> &str {
         &self.formation_name
+    }
+
+    /// Switches to formation `name` now, as a checkpoint would (see
+    /// [`Engine::formation`]), heading the way the crowd moves (`+x` when it
+    /// stands still). The current formation is left as it is.
+    ///
+    /// # Errors
+    /// A message naming the known formations when `name` is not one, or why the
+    /// formation could not be built.
+    pub fn set_formation(&mut self, name: &str, now: Micros) -> Result<(), String> {
+        if !self.formations.knows(name) {
+            return Err(format!(
+                "no formation is called `{name}`; the config defines {}",
+                self.formations.names_list()
+            ));
+        }
+        if name == self.formation_name {
+            return Ok(());
+        }
+        let n = self.agents.len().max(1) as f64;
+        let v = self.agents.velocities().iter().sum::<Vec2>() / n;
+        let heading = if v.norm() > 1e-3 {
+            v
+        } else {
+            Vec2::new(1.0, 0.0)
+        };
+        let errors = self.counters.formation_errors;
+        self.switch_formation(name, None, heading, now);
+        if self.counters.formation_errors > errors {
+            Err(format!(
+                "formation `{name}` could not be meshed at the crowd's size and place"
+            ))
+        } else {
+            Ok(())
+        }
     }
 
     /// Switches formation when the crowd's centroid passed a scene checkpoint since

@@ -193,11 +193,12 @@ pub enum Event {
         t: Micros,
     },
     /// The crowd switched formation: it passed a scene checkpoint
-    /// (mesh-formation-control section 7.3), or a reset brought back the start.
+    /// (mesh-formation-control section 7.3), a `set_formation` command asked for
+    /// it, or a reset brought back the start.
     Formation {
         /// The formation now (`start` for the config's starting formation).
         name: String,
-        /// The checkpoint passed (`None` for a reset).
+        /// The checkpoint passed (`None`: a command or a reset).
         checkpoint: Option<String>,
         /// Vertices of the new mesh (its triangles come with the next `mesh`).
         vertices: u32,
@@ -306,6 +307,12 @@ pub enum Command {
     SetAgentCount {
         /// New count (1 ..= the configured maximum).
         count: u32,
+    },
+    /// Switch to a formation of the config's library (mesh-formation-control
+    /// section 7.3: "a basic button interface"), or `start`.
+    SetFormation {
+        /// Formation name.
+        formation: String,
     },
     /// Freeze agents.
     Pause,

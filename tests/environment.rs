@@ -498,3 +498,99 @@ fn fig9_checkpoints_switch_the_formation_through_the_corridor() {
     e.reset(true, Micros(100_000_000));
     assert_eq!(e.formation(), "start");
 }
+
+/// `set_formation` (the "button interface" of section 7.3) in the middle of a drag:
+/// unknown names are refused with the names there are; the crowd turns into the
+/// wedge at once (new topology, one goal per agent, every agent paired with its own
+/// goal), and the finger keeps dragging the new mesh: where it lifts, the
+/// formation is, and agents stand at their goals.
+#[test]
+fn set_formation_mid_drag_keeps_the_drag_going() {
+    let c = cfg("corridor", 30, rect(1.0, 1.0, 4.0, 4.0), 6);
+    let mut e = Engine::new(&c, None, true);
+    let err = e.set_formation("hexagon", Micros(0)).unwrap_err();
+    assert!(
+        err.contains("`hexagon`")
+            && err.contains("start, square, arrow, column, line, wedge, diamond"),
+        "{err}"
+    );
+    let topology = e.mesh_view().topology;
+    let w = e.world();
+    let unit = |p: Vec2| {
+        (
+            ((p.x - w.min[0]) / w.width()) as f32,
+            ((p.y - w.min[1]) / w.height()) as f32,
+        )
+    };
+    let (from, to) = (Vec2::new(2.5, 2.5), Vec2::new(2.5, 7.0));
+    let mut t = 1_000_000u64;
+    e.tick(Micros(t));
+    let mut evs = Vec::new();
+    let steps = 240u64;
+    for k in 0..=steps + 1 {
+        t += TICK_US;
+        let s = (k as f64 / steps as f64).min(1.0);
+        let (x, y) = unit(from + (to - from) * s);
+        let mut f = TouchFrame::new(Micros(t));
+        let flags = match k {
+            0 => ContactFlags::DOWN,
+            k if k == steps + 1 => ContactFlags::UP,
+            _ => ContactFlags::NONE,
+        };
+        f.push(Contact {
+            id: ContactId(1),
+            x,
+            y,
+            flags,
+            ..Contact::default()
+        })
+        .unwrap();
+        e.push_frame(&f);
+        if k == steps / 2 {
+            e.set_formation("wedge", Micros(t)).unwrap();
+            assert_eq!(e.formation(), "wedge");
+            let m = e.mesh_view();
+            assert_ne!(m.topology, topology);
+            assert_eq!(e.goals().len(), 30);
+            let mut seen = e.goal_of().to_vec();
+            seen.sort_unstable();
+            assert_eq!(
+                seen,
+                (0..30).collect::<Vec<u32>>(),
+                "not one goal per agent"
+            );
+            assert_eq!(e.control_count(), 1, "the drag goes on");
+        }
+        evs.extend_from_slice(e.tick(Micros(t)).events);
+        e.clear_events();
+    }
+    for _ in 0..360 {
+        t += TICK_US;
+        evs.extend_from_slice(e.tick(Micros(t)).events);
+        e.clear_events();
+    }
+    let f: Vec<_> = evs
+        .iter()
+        .filter_map(|ev| match ev {
+            Event::Formation {
+                name, checkpoint, ..
+            } => Some((name.as_str(), checkpoint.clone())),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(f, vec![("wedge", None)]);
+    let goals = e.goals();
+    let gc = goals.iter().sum::<Vec2>() / goals.len() as f64;
+    eprintln!("set_formation: formation centre {gc:?} after dragging to {to:?}");
+    assert!(
+        (gc - to).norm() < 1.0,
+        "formation centre {gc:?}, finger lifted at {to:?}"
+    );
+    let worst = e
+        .agent_positions()
+        .iter()
+        .zip(e.goal_of())
+        .map(|(p, &g)| (p - goals[g as usize]).norm())
+        .fold(0.0, f64::max);
+    assert!(worst < 0.25, "an agent is {worst:.2} m from its goal");
+}

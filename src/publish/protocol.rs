@@ -416,7 +416,9 @@ pub enum ProtocolError {
         supported: u32,
     },
     /// A command name the daemon does not know.
-    #[error("unknown command `{name}` (known: reset, set_agent_count, pause, resume)")]
+    #[error(
+        "unknown command `{name}` (known: reset, set_agent_count, set_formation, pause, resume)"
+    )]
     UnknownCommand {
         /// The name sent (shortened).
         name: String,
@@ -702,7 +704,7 @@ fn parse_command(mut map: Map<String, Value>) -> Result<ClientMessage, ProtocolE
     };
     if !matches!(
         name.as_str(),
-        "reset" | "set_agent_count" | "pause" | "resume"
+        "reset" | "set_agent_count" | "set_formation" | "pause" | "resume"
     ) {
         return Err(in_command(
             id,

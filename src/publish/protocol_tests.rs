@@ -414,6 +414,18 @@ fn commands_parse() {
             command: Command::Reset { hard: true }
         }
     );
+    assert_eq!(
+        parse_client_message(
+            b"{\"type\":\"command\",\"id\":4,\"name\":\"set_formation\",\"formation\":\"arrow\"}"
+        )
+        .unwrap(),
+        ClientMessage::Command {
+            id: Value::from(4),
+            command: Command::SetFormation {
+                formation: "arrow".into()
+            }
+        }
+    );
     let m = parse_client_message(
         b"{\"type\":\"command\",\"id\":\"a\",\"name\":\"set_agent_count\",\"count\":50}\r",
     )
@@ -491,6 +503,11 @@ fn errors_say_what_and_where() {
         (
             "{\"type\":\"command\",\"id\":1,\"name\":\"set_agent_count\"}",
             "invalid arguments for command `set_agent_count`: missing field `count`",
+            false,
+        ),
+        (
+            "{\"type\":\"command\",\"id\":1,\"name\":\"set_formation\",\"formation\":3}",
+            "invalid arguments for command `set_formation`",
             false,
         ),
         (
