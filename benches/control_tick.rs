@@ -1,6 +1,7 @@
 //! One control tick (segment + ARAP + goals + agent step + snapshot), without the
 //! assignment worker, for crowds of 100 to 10,000 agents with a three-finger area
 //! control moving. `crowdtouch bench tick` measures the same workload's distribution.
+//! Also one formation switch (`formation_switch/{prepare,apply}/N`).
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use crowdtouch::config::Config;
@@ -58,5 +59,50 @@ fn control_tick(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, control_tick);
+/// A formation switch (mesh-formation-control section 7.3), as a checkpoint or a
+/// `set_formation` command makes it, in its two parts: `prepare` is what the
+/// daemon's formation thread does (the arrow meshed at the crowd's area with the
+/// default mesh's 80 vertices, one goal sample per agent, and the least-effort
+/// pairing of formation-transform eq. 3: an agents × agents cost matrix and its
+/// exact solve); `apply` is what the control thread does with the result (the new
+/// ARAP system, goals, topology, pairing), inside one tick.
+fn formation_switch(c: &mut Criterion) {
+    let mut g = c.benchmark_group("formation_switch");
+    g.sample_size(10);
+    for agents in [100u32, 1000] {
+        let mut cfg = Config::embedded_default();
+        cfg.crowd.agents = agents;
+        let request = || {
+            let mut e = Engine::new(&cfg, None, false);
+            e.set_switch_worker(true);
+            e.set_formation("arrow", Micros(0)).unwrap();
+            let r = e.take_switch_request().unwrap();
+            (e, r)
+        };
+        g.bench_with_input(BenchmarkId::new("prepare", agents), &agents, |b, _| {
+            b.iter_batched(
+                request,
+                |(e, r)| (e, r.prepare()),
+                criterion::BatchSize::LargeInput,
+            )
+        });
+        g.bench_with_input(BenchmarkId::new("apply", agents), &agents, |b, _| {
+            b.iter_batched(
+                || {
+                    let (e, r) = request();
+                    (e, r.prepare())
+                },
+                |(mut e, p)| {
+                    e.apply_switch(p, Micros(1));
+                    black_box(e.goals().len());
+                    e
+                },
+                criterion::BatchSize::LargeInput,
+            )
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, control_tick, formation_switch);
 criterion_main!(benches);

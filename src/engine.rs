@@ -7,15 +7,14 @@
 
 use crate::config::{Config, MAX_AGENTS};
 use crate::crowd::agents::{AgentParams, Agents};
-use crate::crowd::assign::{CostMatrix, CostProvider, Solver};
 use crate::crowd::assigner::Assigner;
 use crate::crowd::direct::{DirectController, DirectParams};
-use crate::crowd::effort::LeastEffort;
 use crate::crowd::environment::{
     steer_target, Planner, PlannerParams, MESH_FIELD_RANGE_M, MESH_FIELD_STEP_M,
 };
 use crate::crowd::field::FieldParams;
-use crate::crowd::formation::{FormationLibrary, Placement, START};
+use crate::crowd::formation::{FormationLibrary, Placement, PreparedSwitch, SwitchRequest, START};
+use crate::crowd::mesh::GoalSample;
 use crate::crowd::mesh::TriMesh;
 use crate::crowd::scene::{MotionType, Scene};
 use crate::geom::{Rect, Vec2};
@@ -151,8 +150,19 @@ pub struct Engine {
     start_mesh: Arc<TriMesh>,
     /// Agent centroid after the last tick, to see checkpoints being crossed.
     prev_centroid: Option<Vec2>,
-    switch_costs: CostMatrix,
-    switch_solver: Solver,
+    /// Goal samples of the start mesh for the current crowd size (for a reset).
+    start_samples: Vec<GoalSample>,
+    /// Switches are prepared by the daemon's formation thread
+    /// ([`Engine::take_switch_request`], [`Engine::apply_switch`]), not in the tick.
+    switch_worker: bool,
+    /// Bumped by a reset or resize: a switch prepared before it is stale.
+    switch_epoch: u64,
+    /// The formation a request is out for.
+    switch_pending: Option<String>,
+    /// The last switch asked for while one was out: `(name, checkpoint, heading)`.
+    switch_queued: Option<(String, Option<String>, Vec2)>,
+    /// A request for the formation thread, until the pipeline takes it.
+    switch_outbox: Option<SwitchRequest>,
 }
 
 impl Engine {
@@ -216,9 +226,14 @@ impl Engine {
             formation_name: START.to_string(),
             start_mesh,
             prev_centroid: None,
-            switch_costs: CostMatrix::new(0, 0),
-            switch_solver: Solver::new(),
+            start_samples: Vec::new(),
+            switch_worker: false,
+            switch_epoch: 0,
+            switch_pending: None,
+            switch_queued: None,
+            switch_outbox: None,
         };
+        e.start_samples = e.direct.samples().to_vec();
         e.fit_radius();
         if inline_assignment {
             e.planner = inline_planner(cfg);
@@ -507,8 +522,9 @@ impl Engine {
     /// agents to their goals.
     pub fn reset(&mut self, hard: bool, now: Micros) {
         self.segmenter.cancel_all(now, &mut self.seg_out);
+        self.forget_switches();
         if self.formation_name != START {
-            self.switch_formation(START, None, Vec2::zeros(), now);
+            self.restore_start(now);
         }
         self.direct.reset();
         if hard {
@@ -546,6 +562,12 @@ impl Engine {
         self.direct.set_agent_count(count as usize);
         self.agents = Agents::new(self.direct.goals());
         self.prev_centroid = None;
+        self.forget_switches();
+        self.start_samples = if self.formation_name == START {
+            self.direct.samples().to_vec()
+        } else {
+            crate::crowd::mesh::sample_goals(&self.start_mesh, count as usize)
+        };
         self.goal_of.clear();
         self.goal_of.extend(0..count);
         self.waypoints.clear();
@@ -746,22 +768,21 @@ impl Engine {
         &self.formation_name
     }
 
-    /// Switches to formation `name` now, as a checkpoint would (see
+    /// Switches to formation `name`, as a checkpoint would (see
     /// [`Engine::formation`]), heading the way the crowd moves (`+x` when it
-    /// stands still). The current formation is left as it is.
+    /// stands still). Asking for the current formation changes nothing. With the
+    /// formation thread ([`Engine::set_switch_worker`]) the switch happens a few
+    /// ticks later, when it is ready; a `formation` event says when.
     ///
     /// # Errors
-    /// A message naming the known formations when `name` is not one, or why the
-    /// formation could not be built.
+    /// A message naming the known formations when `name` is not one; without the
+    /// formation thread, also why the formation could not be built.
     pub fn set_formation(&mut self, name: &str, now: Micros) -> Result<(), String> {
         if !self.formations.knows(name) {
             return Err(format!(
                 "no formation is called `{name}`; the config defines {}",
                 self.formations.names_list()
             ));
-        }
-        if name == self.formation_name {
-            return Ok(());
         }
         let n = self.agents.len().max(1) as f64;
         let v = self.agents.velocities().iter().sum::<Vec2>() / n;
@@ -771,7 +792,7 @@ impl Engine {
             Vec2::new(1.0, 0.0)
         };
         let errors = self.counters.formation_errors;
-        self.switch_formation(name, None, heading, now);
+        self.request_switch(name, None, heading, now);
         if self.counters.formation_errors > errors {
             Err(format!(
                 "formation `{name}` could not be meshed at the crowd's size and place"
@@ -781,10 +802,23 @@ impl Engine {
         }
     }
 
+    /// Prepares formation switches on the daemon's formation thread instead of
+    /// inside the tick (the daemon; replays keep them in the tick, deterministic).
+    pub fn set_switch_worker(&mut self, on: bool) {
+        self.switch_worker = on;
+    }
+
+    /// The switch request for the formation thread, if one is waiting
+    /// ([`SwitchRequest::prepare`] it, then [`Engine::apply_switch`]).
+    pub fn take_switch_request(&mut self) -> Option<SwitchRequest> {
+        self.switch_outbox.take()
+    }
+
     /// Switches formation when the crowd's centroid passed a scene checkpoint since
     /// the last tick (mesh-formation-control section 7.3; the last one passed wins
     /// when a tick crosses several). Passing a checkpoint that names the current
-    /// formation changes nothing. No allocation unless a switch happens.
+    /// formation (or the one being prepared) changes nothing. No allocation unless
+    /// a switch is asked for.
     fn pass_checkpoints(&mut self, now: Micros) {
         let n = self.agents.len();
         if n == 0 {
@@ -798,81 +832,131 @@ impl Engine {
         let Some(cp) = scene.crossed_checkpoints(prev, c).last() else {
             return;
         };
-        if cp.formation == self.formation_name {
+        let target = self
+            .switch_pending
+            .as_deref()
+            .unwrap_or(&self.formation_name);
+        if cp.formation == target {
             return;
         }
-        // The scene outlives the switch (an `Arc` clone, no allocation).
+        // The scene outlives the request (an `Arc` clone, no allocation).
         let scene = Arc::clone(scene);
         let Some(cp) = scene.crossed_checkpoints(prev, c).last() else {
             return;
         };
-        self.switch_formation(&cp.formation, Some(&cp.name), c - prev, now);
+        self.request_switch(&cp.formation, Some(&cp.name), c - prev, now);
     }
 
-    /// Replaces the mesh by formation `name` (mesh-formation-control section 7.3).
+    /// Asks for formation `name` (mesh-formation-control section 7.3).
     ///
     /// A library formation is laid out with the user mesh's current area and
     /// centroid, its `+x` along `heading` (the crowd's motion), shifted inside the
     /// world when it fits, with about as many vertices as the start mesh; [`START`]
-    /// is the start mesh where it was configured. Live drags go on over the new mesh
-    /// ([`DirectController::set_mesh`]). Agents are paired with the new goals by the
-    /// least-effort cost of formation-transform eq. 3 and that pairing is used at
-    /// once; the running assignment (Euclidean or Eikonal) takes over from its next
-    /// result, and results solved for the old goals are discarded.
-    ///
-    /// Allocates and costs `O(agents²)` for the pairing (a one-off, like a resize).
-    /// A formation that cannot be meshed is logged and counted, and the crowd keeps
-    /// its formation.
-    fn switch_formation(
-        &mut self,
-        name: &str,
-        checkpoint: Option<&str>,
-        heading: Vec2,
-        now: Micros,
-    ) {
-        let mesh = if name == START {
-            (*self.start_mesh).clone()
+    /// is the start mesh where it was configured. The mesh, its goal samples and
+    /// the least-effort pairing (formation-transform eq. 3) are prepared by
+    /// [`SwitchRequest::prepare`]: here at once, or on the formation thread, in
+    /// which case a request asked for while one is out waits for it (the last
+    /// one asked for wins).
+    fn request_switch(&mut self, name: &str, checkpoint: Option<&str>, heading: Vec2, now: Micros) {
+        if self.switch_pending.is_some() {
+            self.switch_queued = Some((name.to_string(), checkpoint.map(str::to_string), heading));
+            return;
+        }
+        if name == self.formation_name {
+            return;
+        }
+        let target = if name == START {
+            None
         } else {
             let Some(f) = self.formations.get(name) else {
                 self.formation_failed(name, "the config defines no formation of that name");
                 return;
             };
             let mut place = Placement {
-                centre_m: Vec2::zeros(),
+                centre_m: self.user_centroid(),
                 heading,
                 area_m2: self.user_mesh_area(),
             };
-            let user = self.direct.user_vertices();
-            place.centre_m = user.iter().sum::<Vec2>() / user.len().max(1) as f64;
             place.centre_m += shift_inside(&f.placed_outline(&place), self.world);
-            match f.mesh(&place, self.start_mesh.vertex_count()) {
-                Ok(m) => m,
-                Err(e) => {
-                    self.formation_failed(name, &e.to_string());
-                    return;
-                }
-            }
+            Some((f.clone(), place))
         };
-        self.direct.set_mesh(mesh);
+        let req = SwitchRequest {
+            name: name.to_string(),
+            checkpoint: checkpoint.map(str::to_string),
+            epoch: self.switch_epoch,
+            target,
+            anchor_m: self.user_centroid(),
+            start_mesh: Arc::clone(&self.start_mesh),
+            vertices: self.start_mesh.vertex_count(),
+            agents: self.agents.positions().to_vec(),
+            lambda: self.formation_lambda,
+        };
+        self.switch_pending = Some(name.to_string());
+        if self.switch_worker {
+            self.switch_outbox = Some(req);
+        } else {
+            let p = req.prepare();
+            self.apply_switch(p, now);
+        }
+    }
+
+    /// Uses a prepared switch: the new mesh replaces the old one (moved by as much
+    /// as the crowd moved since it was asked for, so a drag does not jump back),
+    /// live drags go on over it ([`DirectController::set_mesh_sampled`]), agents
+    /// take the least-effort pairing at once and the running assignment (Euclidean
+    /// or Eikonal) takes over from its next result; results solved for the old
+    /// goals are discarded. A switch asked for before a reset or resize is dropped.
+    /// Allocates (a one-off, like a resize). A formation that could not be meshed
+    /// is logged and counted, and the crowd keeps its formation.
+    pub fn apply_switch(&mut self, p: PreparedSwitch, now: Micros) {
+        if p.epoch != self.switch_epoch {
+            return;
+        }
+        self.switch_pending = None;
+        match p.built {
+            Err(e) => self.formation_failed(&p.name, &e),
+            Ok(b) => {
+                let mut mesh = b.mesh;
+                if let Some(c0) = p.anchor_m {
+                    mesh.translate(self.user_centroid() - c0);
+                }
+                self.install(mesh, b.samples, &b.goal_of);
+                self.formation_name.clear();
+                self.formation_name.push_str(&p.name);
+                if p.checkpoint.is_some() {
+                    self.counters.formation_switches += 1;
+                }
+                log::info!(
+                    "formation `{}`{} ({} vertices)",
+                    p.name,
+                    p.checkpoint
+                        .as_ref()
+                        .map(|c| format!(" at checkpoint `{c}`"))
+                        .unwrap_or_default(),
+                    self.direct.mesh().vertex_count()
+                );
+                self.events.push(Event::Formation {
+                    name: p.name,
+                    checkpoint: p.checkpoint,
+                    vertices: self.direct.mesh().vertex_count() as u32,
+                    t: now,
+                });
+            }
+        }
+        if let Some((name, checkpoint, heading)) = self.switch_queued.take() {
+            self.request_switch(&name, checkpoint.as_deref(), heading, now);
+        }
+    }
+
+    /// The new mesh in the controller, its topology for clients, `goal_of` (when
+    /// it pairs every agent), a new crowd generation.
+    fn install(&mut self, mesh: TriMesh, samples: Vec<GoalSample>, goal_of: &[u32]) {
+        self.direct.set_mesh_sampled(mesh, samples);
         self.triangles = Arc::new(self.direct.mesh().triangles().to_vec());
         self.outline = Arc::new(self.direct.mesh().outline().to_vec());
         self.topology += 1;
-        // Formation-transform eq. 3: the least-effort pairing, used until the
-        // running assignment's first result for the new goals.
-        LeastEffort::new(self.formation_lambda).fill(
-            self.agents.positions(),
-            self.direct.goals(),
-            &mut self.switch_costs,
-        );
-        match self.switch_solver.solve(&self.switch_costs) {
-            Ok(cols) => {
-                self.goal_of.clear();
-                self.goal_of.extend(cols.iter().map(|&j| j as u32));
-            }
-            Err(e) => {
-                self.counters.assign_errors += 1;
-                log::warn!("formation `{name}`: least-effort pairing failed: {e}");
-            }
+        if goal_of.len() == self.goal_of.len() {
+            self.goal_of.copy_from_slice(goal_of);
         }
         self.waypoints.fill(Vec2::repeat(f64::NAN));
         self.generation += 1;
@@ -883,24 +967,29 @@ impl Engine {
         if let Some(p) = &mut self.planner {
             p.forget();
         }
+    }
+
+    /// The start mesh back where it was configured (a reset), with its cached goal
+    /// samples: no slow work.
+    fn restore_start(&mut self, now: Micros) {
+        let samples = self.start_samples.clone();
+        self.install((*self.start_mesh).clone(), samples, &[]);
         self.formation_name.clear();
-        self.formation_name.push_str(name);
-        if checkpoint.is_some() {
-            self.counters.formation_switches += 1;
-        }
-        log::info!(
-            "formation `{name}`{} ({} vertices)",
-            checkpoint
-                .map(|c| format!(" at checkpoint `{c}`"))
-                .unwrap_or_default(),
-            self.direct.mesh().vertex_count()
-        );
+        self.formation_name.push_str(START);
         self.events.push(Event::Formation {
-            name: name.to_string(),
-            checkpoint: checkpoint.map(str::to_string),
+            name: START.to_string(),
+            checkpoint: None,
             vertices: self.direct.mesh().vertex_count() as u32,
             t: now,
         });
+    }
+
+    /// Drops switches asked for or queued (a reset or resize).
+    fn forget_switches(&mut self) {
+        self.switch_epoch += 1;
+        self.switch_pending = None;
+        self.switch_queued = None;
+        self.switch_outbox = None;
     }
 
     fn formation_failed(&mut self, name: &str, why: &str) {
@@ -912,6 +1001,12 @@ impl Engine {
                 self.formation_name
             );
         }
+    }
+
+    /// Mean of the user mesh's vertices (m).
+    fn user_centroid(&self) -> Vec2 {
+        let user = self.direct.user_vertices();
+        user.iter().sum::<Vec2>() / user.len().max(1) as f64
     }
 
     /// Area of the user mesh in its current pose (m²).

@@ -594,3 +594,92 @@ fn set_formation_mid_drag_keeps_the_drag_going() {
         .fold(0.0, f64::max);
     assert!(worst < 0.25, "an agent is {worst:.2} m from its goal");
 }
+
+/// The daemon's way (`set_switch_worker`): the tick only asks for the switch and
+/// the slow part is prepared elsewhere. Applied later, the new mesh lands where the
+/// dragged crowd is by then, not where it was when asked; a request asked for
+/// while one is out waits and the last one wins; a reset drops a switch prepared
+/// before it.
+#[test]
+fn switches_prepared_off_the_tick_follow_the_drag_queue_and_go_stale() {
+    let c = cfg("corridor", 30, rect(1.0, 2.0, 4.0, 5.0), 6);
+    let mut e = Engine::new(&c, None, true);
+    e.set_switch_worker(true);
+    let w = e.world();
+    let mut t = 1_000_000u64;
+    let mut k = 0u32;
+    // One finger on the crowd, moving east 2 cm a tick.
+    let mut step = |e: &mut Engine, flags: ContactFlags| {
+        t += TICK_US;
+        k += 1;
+        let p = Vec2::new(2.5 + 0.02 * k as f64, 3.5);
+        let mut f = TouchFrame::new(Micros(t));
+        f.push(Contact {
+            id: ContactId(1),
+            x: ((p.x - w.min[0]) / w.width()) as f32,
+            y: ((p.y - w.min[1]) / w.height()) as f32,
+            flags,
+            ..Contact::default()
+        })
+        .unwrap();
+        e.push_frame(&f);
+        let evs = e.tick(Micros(t)).events.to_vec();
+        e.clear_events();
+        evs
+    };
+    // Commands and applied switches carry this time (their events are not checked).
+    let now = Micros(2_000_000);
+    step(&mut e, ContactFlags::DOWN);
+    for _ in 0..30 {
+        step(&mut e, ContactFlags::NONE);
+    }
+    e.set_formation("column", now).unwrap();
+    assert_eq!(e.formation(), "start", "nothing changes until it is ready");
+    let req = e
+        .take_switch_request()
+        .expect("a request for the formation thread");
+    assert!(e.take_switch_request().is_none());
+    let centre = |e: &Engine| {
+        let v = e.mesh_view().vertices;
+        v.iter().sum::<Vec2>() / v.len() as f64
+    };
+    let asked_at = centre(&e);
+    // Asked for while the column is out: queued, the last one wins.
+    e.set_formation("arrow", now).unwrap();
+    e.set_formation("line", now).unwrap();
+    assert!(e.take_switch_request().is_none());
+    for _ in 0..40 {
+        step(&mut e, ContactFlags::NONE);
+    }
+    let before = centre(&e);
+    assert!((before - asked_at).x > 0.3, "the drag moved the crowd on");
+    e.apply_switch(req.prepare(), now);
+    assert_eq!(e.formation(), "column");
+    let after = centre(&e);
+    assert!(
+        (after - before).norm() < 0.25,
+        "the column landed at {after:?}, the crowd is at {before:?} (asked at {asked_at:?})"
+    );
+    // The event goes out with the next tick.
+    let evs = step(&mut e, ContactFlags::NONE);
+    let names: Vec<&str> = evs
+        .iter()
+        .filter_map(|ev| match ev {
+            Event::Formation { name, .. } => Some(name.as_str()),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(names, ["column"]);
+    // The queued `line` is asked for now; a reset before it is ready drops it.
+    let line = e.take_switch_request().expect("the queued switch");
+    assert_eq!(line.name, "line");
+    e.reset(false, now);
+    assert_eq!(e.formation(), "start");
+    e.apply_switch(line.prepare(), now);
+    assert_eq!(
+        e.formation(),
+        "start",
+        "a switch from before the reset is stale"
+    );
+    assert!(e.take_switch_request().is_none());
+}

@@ -352,7 +352,14 @@ impl DirectController {
     /// Allocates (a new ARAP system, new goal samples): meant for a switch, not for
     /// every tick.
     pub fn set_mesh(&mut self, mesh: TriMesh) {
-        let agents = self.goals.len();
+        let samples = super::mesh::sample_goals(&mesh, self.goals.len());
+        self.set_mesh_sampled(mesh, samples);
+    }
+
+    /// [`set_mesh`](Self::set_mesh) with the goal samples already drawn on `mesh`
+    /// ([`super::mesh::sample_goals`], one per agent: the slow part, which the
+    /// daemon does off the control thread).
+    pub fn set_mesh_sampled(&mut self, mesh: TriMesh, samples: Vec<GoalSample>) {
         self.arap = Arap::new(&mesh);
         self.verts.clear();
         self.verts.extend_from_slice(mesh.rest());
@@ -363,7 +370,7 @@ impl DirectController {
         self.best_weight.resize(n, 0.0);
         self.best_target.clear();
         self.best_target.resize(n, Vec2::zeros());
-        self.samples = super::mesh::sample_goals(&mesh, agents);
+        self.samples = samples;
         self.spacing_m = mean_edge_length(&mesh);
         self.mesh = mesh;
         let mut rigs = std::mem::take(&mut self.rigs);
@@ -381,6 +388,11 @@ impl DirectController {
         }
         self.rigs = rigs;
         self.finalize();
+    }
+
+    /// The goal samples on the mesh, one per agent.
+    pub fn samples(&self) -> &[GoalSample] {
+        &self.samples
     }
 
     /// New goal samples for a different agent count.

@@ -302,6 +302,13 @@ impl TriMesh {
         })
     }
 
+    /// Moves the rest pose by `d` (m); topology and goal samples stay valid.
+    pub fn translate(&mut self, d: Vec2) {
+        for p in &mut self.rest {
+            *p += d;
+        }
+    }
+
     /// Rest positions (metres), one per vertex.
     pub fn rest(&self) -> &[Vec2] {
         &self.rest

@@ -17,6 +17,7 @@
 use crate::config::{Config, InputConfig};
 use crate::crowd::assigner::Assigner;
 use crate::crowd::environment::{Planner, PlannerParams};
+use crate::crowd::formation::{PreparedSwitch, SwitchRequest};
 use crate::crowd::scene::Scene;
 use crate::engine::Engine;
 use crate::geom::Vec2;
@@ -470,7 +471,8 @@ impl Daemon {
             SourceSpec::Replay { glass_mm, .. } | SourceSpec::Channel { glass_mm, .. } => *glass_mm,
             SourceSpec::Device { transform, .. } => transform.size_mm,
         });
-        let engine = Engine::new(&cfg, glass, !cfg.assignment.worker);
+        let mut engine = Engine::new(&cfg, glass, !cfg.assignment.worker);
+        engine.set_switch_worker(true);
         let hello = HelloInfo {
             world: cfg.surface.world,
             agents: engine.agent_count() as u32,
@@ -497,6 +499,9 @@ impl Daemon {
         // side blocks on the other (control try_sends / try_recvs).
         let (job_tx, job_rx) = bounded::<Box<AssignJob>>(1);
         let (res_tx, res_rx) = bounded::<Box<AssignJob>>(1);
+        // Control ⇄ formation thread: formation switches, try_send / try_recv both ways.
+        let (switch_tx, switch_job_rx) = bounded::<Box<SwitchRequest>>(2);
+        let (switch_res_tx, switch_rx) = bounded::<Box<PreparedSwitch>>(2);
         // Control → supervisor: bounded(4) stats once per interval, try_send.
         let (cstats_tx, cstats_rx) = bounded::<ControlStats>(4);
         // Supervisor → control: bounded(1) config reloads, try_send.
@@ -528,6 +533,9 @@ impl Daemon {
                 assignment_worker(cost, job_rx, res_tx)
             })?);
         }
+        threads.push(spawn("formation", move || {
+            formation_worker(switch_job_rx, switch_res_tx)
+        })?);
         {
             let ctl = ControlLoop::new(
                 &cfg,
@@ -540,6 +548,8 @@ impl Daemon {
                     stats: cstats_tx,
                     jobs: job_tx,
                     results: res_rx,
+                    switches: switch_tx,
+                    switched: switch_rx,
                 },
                 Arc::clone(&stop),
                 Arc::clone(&heartbeat_us),
@@ -866,6 +876,8 @@ struct ControlChannels {
     stats: Sender<ControlStats>,
     jobs: Sender<Box<AssignJob>>,
     results: Receiver<Box<AssignJob>>,
+    switches: Sender<Box<SwitchRequest>>,
+    switched: Receiver<Box<PreparedSwitch>>,
 }
 
 struct ControlLoop {
@@ -877,6 +889,8 @@ struct ControlLoop {
     stats_interval: Micros,
     worker: bool,
     idle_job: Option<Box<AssignJob>>,
+    /// A formation switch request the formation thread had no room for yet.
+    switch_out: Option<Box<SwitchRequest>>,
     t_input: StageTimer,
     t_queue: StageTimer,
     t_control: StageTimer,
@@ -912,6 +926,7 @@ impl ControlLoop {
             stats_interval: Micros(cfg.pipeline.stats_interval_ms * 1000),
             worker: cfg.assignment.worker,
             idle_job: Some(Box::new(job)),
+            switch_out: None,
             t_input: StageTimer::new("input", b.input_us),
             t_queue: StageTimer::new("queue", b.queue_us),
             t_control: StageTimer::new("control", b.control_us),
@@ -1023,6 +1038,9 @@ impl ControlLoop {
             self.t_assign.record(job.solve_us);
             self.idle_job = Some(job);
         }
+        while let Ok(p) = self.ch.switched.try_recv() {
+            self.engine.apply_switch(*p, now);
+        }
         let out = self.engine.tick(now);
         let snapshot = out.snapshot;
         let mesh = out.mesh;
@@ -1044,6 +1062,15 @@ impl ControlLoop {
             self.send(Outgoing::Mesh(m));
         }
         self.send(Outgoing::Snapshot(snapshot));
+        // A formation switch asked for by this tick or a command before it.
+        if let Some(r) = self.engine.take_switch_request() {
+            self.switch_out = Some(Box::new(r));
+        }
+        if let Some(r) = self.switch_out.take() {
+            if let Err(TrySendError::Full(r)) = self.ch.switches.try_send(r) {
+                self.switch_out = Some(r);
+            }
+        }
         if self.worker {
             if let Some(mut job) = self.idle_job.take() {
                 job.generation = self.engine.generation();
@@ -1194,6 +1221,18 @@ fn assignment_worker(
         };
         job.solve_us = monotonic_now().saturating_since(t0).0;
         if results.send(job).is_err() {
+            break;
+        }
+    }
+}
+
+/// The formation thread: prepares formation switches (the new mesh, its goal
+/// samples, the least-effort pairing; [`SwitchRequest::prepare`]) so the control
+/// thread never does that slow work. At nice 10, like the assignment worker.
+fn formation_worker(requests: Receiver<Box<SwitchRequest>>, done: Sender<Box<PreparedSwitch>>) {
+    crate::rt::make_background("formation");
+    for r in requests.iter() {
+        if done.send(Box::new(r.prepare())).is_err() {
             break;
         }
     }
