@@ -8,6 +8,33 @@
 /// A world position or displacement in metres (velocities in m/s where named).
 pub type Vec2 = nalgebra::Vector2<f64>;
 
+/// `u × v = u.x v.y − u.y v.x`: twice the signed area of the triangle `0, u, v`
+/// (positive when `v` is counter-clockwise of `u`).
+#[inline]
+pub fn cross(u: Vec2, v: Vec2) -> f64 {
+    u.x * v.y - u.y * v.x
+}
+
+/// The point of segment `a`–`b` nearest to `p`, with its parameter in `[0, 1]`
+/// (`a` for a segment of no length).
+#[inline]
+pub fn nearest_on_segment(a: Vec2, b: Vec2, p: Vec2) -> (Vec2, f64) {
+    let d = b - a;
+    let len2 = d.norm_squared();
+    let s = if len2 > 0.0 {
+        ((p - a).dot(&d) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a + d * s, s)
+}
+
+/// Squared distance from `p` to the segment `a`–`b` (m²).
+#[inline]
+pub fn segment_distance_squared(p: Vec2, a: Vec2, b: Vec2) -> f64 {
+    (nearest_on_segment(a, b, p).0 - p).norm_squared()
+}
+
 /// An axis-aligned rectangle in world metres.
 #[derive(Copy, Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Rect {

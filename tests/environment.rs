@@ -101,6 +101,25 @@ fn drag(
     events
 }
 
+/// Agents inside an obstacle of `scene` at the engine's scene time.
+fn inside_count(scene: &Scene, e: &Engine) -> usize {
+    let t = e.scene_time_s();
+    e.agent_positions()
+        .iter()
+        .filter(|p| scene.obstacle_at(**p, t).is_some())
+        .count()
+}
+
+/// The largest distance from an agent to its assigned goal (m).
+fn worst_goal_distance(e: &Engine) -> f64 {
+    let goals = e.goals();
+    e.agent_positions()
+        .iter()
+        .zip(e.goal_of())
+        .map(|(p, &g)| (p - goals[g as usize]).norm())
+        .fold(0.0, f64::max)
+}
+
 fn assert_outside(scene: &Scene, e: &Engine) {
     let t = e.scene_time_s();
     for (i, p) in e.agent_positions().iter().enumerate() {
@@ -208,23 +227,11 @@ fn fig10_square_crowd_passes_around_a_block_and_remerges() {
         Vec2::new(14.7, 4.5),
         3.0,
         10.0,
-        |e| {
-            let t = e.scene_time_s();
-            worst_inside += e
-                .agent_positions()
-                .iter()
-                .filter(|p| s.obstacle_at(**p, t).is_some())
-                .count();
-        },
+        |e| worst_inside += inside_count(&s, e),
     );
     assert_eq!(worst_inside, 0, "agent positions inside the block");
     let snap_goals = e.goals().to_vec();
-    let (pos, goal_of) = (e.agent_positions(), e.goal_of());
-    let worst = pos
-        .iter()
-        .zip(goal_of)
-        .map(|(p, &g)| (p - snap_goals[g as usize]).norm())
-        .fold(0.0, f64::max);
+    let worst = worst_goal_distance(&e);
     eprintln!("fig10: worst agent-goal distance 10 s after the drag {worst:.3} m");
     assert!(
         worst < 0.20,
@@ -435,12 +442,7 @@ fn fig9_checkpoints_switch_the_formation_through_the_corridor() {
         14.0,
         10.0,
         |e| {
-            let t = e.scene_time_s();
-            inside += e
-                .agent_positions()
-                .iter()
-                .filter(|p| s.obstacle_at(**p, t).is_some())
-                .count();
+            inside += inside_count(&s, e);
             if e.formation() != last {
                 last = e.formation().to_string();
                 let m = e.mesh_view();
@@ -486,12 +488,7 @@ fn fig9_checkpoints_switch_the_formation_through_the_corridor() {
     eprintln!("fig9: crowd centre x {cx:.2}, {west} agents west of the corridor");
     assert!(cx > 14.0, "crowd centre x {cx}");
     assert_eq!(west, 0, "{west} agents did not enter the corridor");
-    let goals = e.goals();
-    let worst = pos
-        .iter()
-        .zip(e.goal_of())
-        .map(|(p, &g)| (p - goals[g as usize]).norm())
-        .fold(0.0, f64::max);
+    let worst = worst_goal_distance(&e);
     assert!(worst < 0.25, "an agent is {worst:.2} m from its goal");
     assert_eq!(e.counters().formation_switches, 2);
     // A reset brings back the start formation.
@@ -586,12 +583,7 @@ fn set_formation_mid_drag_keeps_the_drag_going() {
         (gc - to).norm() < 1.0,
         "formation centre {gc:?}, finger lifted at {to:?}"
     );
-    let worst = e
-        .agent_positions()
-        .iter()
-        .zip(e.goal_of())
-        .map(|(p, &g)| (p - goals[g as usize]).norm())
-        .fold(0.0, f64::max);
+    let worst = worst_goal_distance(&e);
     assert!(worst < 0.25, "an agent is {worst:.2} m from its goal");
 }
 

@@ -29,7 +29,7 @@
 use crate::crowd::assign::{CostMatrix, CostProvider, Solver};
 use crate::crowd::effort::LeastEffort;
 use crate::crowd::mesh::{goal_positions, sample_goals, GoalSample, MeshError, TriMesh};
-use crate::geom::Vec2;
+use crate::geom::{cross, segment_distance_squared, Vec2};
 use serde::{Deserialize, Serialize};
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 use std::sync::Arc;
@@ -164,10 +164,6 @@ pub struct Placement {
     pub area_m2: f64,
 }
 
-fn cross(a: Vec2, b: Vec2) -> f64 {
-    a.x * b.y - a.y * b.x
-}
-
 /// Twice the signed area (CCW positive).
 fn twice_area(p: &[Vec2]) -> f64 {
     (0..p.len())
@@ -210,14 +206,7 @@ fn inside(poly: &[Vec2], p: Vec2) -> bool {
 }
 
 fn segment_distance(a: Vec2, b: Vec2, p: Vec2) -> f64 {
-    let ab = b - a;
-    let l2 = ab.norm_squared();
-    let t = if l2 > 0.0 {
-        ((p - a).dot(&ab) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a + ab * t - p).norm()
+    segment_distance_squared(p, a, b).sqrt()
 }
 
 impl Formation {

@@ -22,7 +22,7 @@
 use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap, HashSet};
 
-use crate::geom::{Rect, Vec2};
+use crate::geom::{cross, segment_distance_squared, Rect, Vec2};
 
 /// Candidate points per requested goal sample in [`sample_goals`] (density of the
 /// candidate set that farthest-point sampling chooses from; dimensionless).
@@ -108,11 +108,6 @@ pub enum MeshError {
 fn orient(a: Vec2, b: Vec2, c: Vec2) -> f64 {
     let co = |v: Vec2| robust::Coord { x: v.x, y: v.y };
     robust::orient2d(co(a), co(b), co(c))
-}
-
-/// `u × v = u.x v.y - u.y v.x`.
-fn cross(u: Vec2, v: Vec2) -> f64 {
-    u.x * v.y - u.y * v.x
 }
 
 /// `‖a - b‖²`, spelled out (the sampling loops run it millions of times, also in
@@ -453,18 +448,6 @@ pub fn nearest_vertex(positions: &[Vec2], p: Vec2) -> (usize, f64) {
         }
     }
     (best.0, best.1.sqrt())
-}
-
-/// Squared distance from `p` to the segment `a`–`b`.
-fn segment_distance_squared(p: Vec2, a: Vec2, b: Vec2) -> f64 {
-    let ab = b - a;
-    let len2 = ab.norm_squared();
-    let t = if len2 > 0.0 {
-        ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a + ab * t - p).norm_squared()
 }
 
 /// Distance from `p` to the mesh whose vertices are at `positions` (0 inside any

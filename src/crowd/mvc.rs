@@ -7,7 +7,7 @@
 //! When the fingers move, the supplementary targets are `Σ λ_i c_i` of the moved touch
 //! points `c_i`.
 
-use crate::geom::Vec2;
+use crate::geom::{cross, Vec2};
 
 /// A point closer to a polygon vertex than `MVC_VERTEX_EPS` × (polygon bounding-box
 /// diagonal) gets the one-hot coordinates of that vertex (dimensionless).
@@ -41,11 +41,6 @@ pub enum MvcError {
     /// coordinates are undefined).
     #[error("mean value coordinates are undefined here (degenerate polygon)")]
     Degenerate,
-}
-
-/// `u × v = u.x v.y - u.y v.x`.
-fn cross(u: Vec2, v: Vec2) -> f64 {
-    u.x * v.y - u.y * v.x
 }
 
 /// Exact orientation sign of `(a, b, c)`: positive when CCW.

@@ -16,7 +16,7 @@
 //!     +------------------> x
 //! ```
 
-use crate::geom::{Rect, Vec2};
+use crate::geom::{cross, nearest_on_segment, Rect, Vec2};
 
 /// Two parts whose projections overlap by less than this (m) only touch: their
 /// interiors are disjoint.
@@ -125,22 +125,6 @@ pub struct BoundaryPoint {
     pub normal: Vec2,
     /// Signed distance of the query point (m): negative inside.
     pub signed_distance_m: f64,
-}
-
-fn cross(a: Vec2, b: Vec2) -> f64 {
-    a.x * b.y - a.y * b.x
-}
-
-/// Nearest point of segment `a`–`b` to `p`, with its parameter in `[0, 1]`.
-fn nearest_on_segment(a: Vec2, b: Vec2, p: Vec2) -> (Vec2, f64) {
-    let d = b - a;
-    let len2 = d.norm_squared();
-    let s = if len2 > 0.0 {
-        ((p - a).dot(&d) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a + d * s, s)
 }
 
 impl ConvexPolygon {
