@@ -54,7 +54,7 @@ fn drag(
     to: Vec2,
     secs: f64,
     settle: f64,
-    mut each: impl FnMut(&Engine),
+    mut each: impl FnMut(&mut Engine),
 ) -> Vec<Event> {
     let mut events = Vec::new();
     let w = e.world();
@@ -512,42 +512,14 @@ fn set_formation_mid_drag_keeps_the_drag_going() {
         "{err}"
     );
     let topology = e.mesh_view().topology;
-    let w = e.world();
-    let unit = |p: Vec2| {
-        (
-            ((p.x - w.min[0]) / w.width()) as f32,
-            ((p.y - w.min[1]) / w.height()) as f32,
-        )
-    };
     let (from, to) = (Vec2::new(2.5, 2.5), Vec2::new(2.5, 7.0));
-    let mut t = 1_000_000u64;
-    e.tick(Micros(t));
-    let mut evs = Vec::new();
-    let steps = 240u64;
-    for k in 0..=steps + 1 {
-        t += TICK_US;
-        let s = (k as f64 / steps as f64).min(1.0);
-        let (x, y) = unit(from + (to - from) * s);
-        let mut f = TouchFrame::new(Micros(t));
-        let flags = match k {
-            0 => ContactFlags::DOWN,
-            k if k == steps + 1 => ContactFlags::UP,
-            _ => ContactFlags::NONE,
-        };
-        f.push(Contact {
-            id: ContactId(1),
-            x,
-            y,
-            flags,
-            ..Contact::default()
-        })
-        .unwrap();
-        e.push_frame(&f);
-        if k == steps / 2 {
-            e.set_formation("wedge", Micros(t)).unwrap();
+    let mut ticks = 0;
+    let evs = drag(&mut e, from, to, 4.0, 6.0, |e| {
+        ticks += 1;
+        if ticks == 120 {
+            e.set_formation("wedge", Micros(3_000_000)).unwrap();
             assert_eq!(e.formation(), "wedge");
-            let m = e.mesh_view();
-            assert_ne!(m.topology, topology);
+            assert_ne!(e.mesh_view().topology, topology);
             assert_eq!(e.goals().len(), 30);
             let mut seen = e.goal_of().to_vec();
             seen.sort_unstable();
@@ -558,14 +530,7 @@ fn set_formation_mid_drag_keeps_the_drag_going() {
             );
             assert_eq!(e.control_count(), 1, "the drag goes on");
         }
-        evs.extend_from_slice(e.tick(Micros(t)).events);
-        e.clear_events();
-    }
-    for _ in 0..360 {
-        t += TICK_US;
-        evs.extend_from_slice(e.tick(Micros(t)).events);
-        e.clear_events();
-    }
+    });
     let f: Vec<_> = evs
         .iter()
         .filter_map(|ev| match ev {
