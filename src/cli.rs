@@ -20,6 +20,7 @@ use std::time::Duration;
 mod bench;
 mod calibrate;
 mod devices;
+mod formations;
 mod hid;
 mod record;
 mod scene;
@@ -105,6 +106,17 @@ enum Cmd {
     /// travel-time field of a goal and the agents' routes.
     #[command(subcommand)]
     Scene(scene::SceneCmd),
+    /// List the formation shapes a config defines (the shipped ones and its
+    /// `formations.shapes`), meshed as a checkpoint switch lays them out for its
+    /// crowd; `-o OUT.svg` draws them with their goals.
+    Formations {
+        /// Config (default: the search path above).
+        #[arg(long, short)]
+        config: Option<PathBuf>,
+        /// Write a picture of every formation (SVG).
+        #[arg(long, short)]
+        output: Option<PathBuf>,
+    },
     /// Regenerate the shipped recordings (deterministic).
     SynthRecordings {
         /// Output directory.
@@ -200,6 +212,8 @@ pub fn main() -> i32 {
         Cmd::Record(a) => record::record(a),
         Cmd::Hid(c) => hid::hid(c),
         Cmd::Scene(c) => return scene::scene(c),
+        Cmd::Formations { config, output } => find_config(config.as_deref())
+            .and_then(|(cfg, _)| formations::formations(&cfg, output.as_deref())),
         Cmd::Devices { config, json } => find_config(config.as_deref())
             .and_then(|(cfg, _)| devices::devices(&cfg, json, Path::new("/"))),
     };

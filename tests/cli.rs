@@ -624,6 +624,45 @@ fn scene_check_summarises_a_good_scene_and_lists_every_error() {
 }
 
 #[test]
+fn formations_lists_and_draws_every_shape_of_the_config() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = write_tmp(
+        &dir,
+        "c.ron",
+        &crowdtouch::config::DEFAULT_CONFIG_RON.replace(
+            "        shapes: [],",
+            "        shapes: [(name: \"tee\", outline: [(0.0, 0.0), (3.0, 0.0), (3.0, 1.0), (2.0, 1.0), (2.0, 3.0), (1.0, 3.0), (1.0, 1.0), (0.0, 1.0)])],",
+        ),
+    );
+    let svg = dir.path().join("f.svg");
+    let out = bin()
+        .args(["formations", "--config"])
+        .arg(&cfg)
+        .arg("-o")
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    for name in [
+        "start", "square", "arrow", "column", "line", "wedge", "diamond", "tee",
+    ] {
+        assert!(
+            text.lines().any(|l| l.starts_with(&format!("{name} "))),
+            "{name} missing:\n{text}"
+        );
+    }
+    let pic = std::fs::read_to_string(&svg).unwrap();
+    assert!(pic.starts_with("<svg") && pic.contains(">tee</text>"));
+    // 100 goals drawn per formation.
+    assert_eq!(pic.matches("<circle").count(), 8 * 100);
+}
+
+#[test]
 fn bench_assign_reports_quantiles_and_certificates() {
     let dir = tempfile::tempdir().unwrap();
     let dump = dir.path().join("instances.json");
