@@ -779,8 +779,10 @@ impl Engine {
     /// formation thread, also why the formation could not be built.
     pub fn set_formation(&mut self, name: &str, now: Micros) -> Result<(), String> {
         if !self.formations.knows(name) {
+            let shown: String = name.chars().take(64).collect();
+            let cut = if shown.len() < name.len() { "…" } else { "" };
             return Err(format!(
-                "no formation is called `{name}`; the config defines {}",
+                "no formation is called `{shown}{cut}`; the config defines {}",
                 self.formations.names_list()
             ));
         }

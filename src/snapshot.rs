@@ -291,6 +291,12 @@ pub struct StatsReport {
     /// The most recent control or gesture, described for people (`"area control, 3
     /// fingers"`).
     pub last_gesture: Option<String>,
+    /// The formation the crowd is in (`start`, or the last one switched to).
+    #[serde(default)]
+    pub formation: String,
+    /// Formation switches at scene checkpoints since start.
+    #[serde(default)]
+    pub formation_switches: u64,
 }
 
 /// A command a client may send (protocol `command` message).

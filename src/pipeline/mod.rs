@@ -301,6 +301,10 @@ pub struct ControlStats {
     pub controls: u32,
     /// Most recent control or gesture.
     pub last_gesture: Option<String>,
+    /// The formation the crowd is in.
+    pub formation: String,
+    /// Formation switches at checkpoints since start.
+    pub formation_switches: u64,
     /// Messages to the publisher dropped because its queue was full.
     pub publish_overflow: u64,
 }
@@ -785,6 +789,8 @@ impl Daemon {
             controls: cs.controls,
             rss_bytes: crate::stats::rss_bytes(),
             last_gesture: cs.last_gesture,
+            formation: cs.formation,
+            formation_switches: cs.formation_switches,
         });
         let _ = self.out.try_send(Outgoing::Stats(Arc::clone(&report)));
         Some(report)
@@ -1122,6 +1128,8 @@ impl ControlLoop {
                 agents: self.engine.agent_count() as u32,
                 controls: self.engine.control_count() as u32,
                 last_gesture: self.last_gesture.clone(),
+                formation: self.engine.formation().to_string(),
+                formation_switches: c.formation_switches,
                 publish_overflow: self.publish_overflow,
             };
             let _ = self.ch.stats.try_send(cs);
