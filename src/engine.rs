@@ -854,7 +854,8 @@ impl Engine {
     /// A library formation is laid out with the user mesh's current area and
     /// centroid, its `+x` along `heading` (the crowd's motion), shifted inside the
     /// world when it fits, with about as many vertices as the start mesh; [`START`]
-    /// is the start mesh where it was configured. The mesh, its goal samples and
+    /// is the start mesh's grid moved to the crowd (a reset, by contrast, brings it
+    /// back where it was configured). The mesh, its goal samples and
     /// the least-effort pairing (formation-transform eq. 3) are prepared by
     /// [`SwitchRequest::prepare`]: here at once, or on the formation thread, in
     /// which case a request asked for while one is out waits for it (the last
@@ -867,7 +868,14 @@ impl Engine {
         if name == self.formation_name {
             return;
         }
+        let centre = self.user_centroid();
+        let mut start_at_m = centre;
         let target = if name == START {
+            // The start grid's shape where the crowd is, inside the world.
+            let r = self.start_mesh.rest();
+            let c = r.iter().sum::<Vec2>() / r.len().max(1) as f64;
+            let moved: Vec<Vec2> = r.iter().map(|p| p - c + centre).collect();
+            start_at_m += shift_inside(&moved, self.world);
             None
         } else {
             let Some(f) = self.formations.get(name) else {
@@ -875,7 +883,7 @@ impl Engine {
                 return;
             };
             let mut place = Placement {
-                centre_m: self.user_centroid(),
+                centre_m: centre,
                 heading,
                 area_m2: self.user_mesh_area(),
             };
@@ -887,7 +895,8 @@ impl Engine {
             checkpoint: checkpoint.map(str::to_string),
             epoch: self.switch_epoch,
             target,
-            anchor_m: self.user_centroid(),
+            start_at_m,
+            anchor_m: centre,
             start_mesh: Arc::clone(&self.start_mesh),
             vertices: self.start_mesh.vertex_count(),
             agents: self.agents.positions().to_vec(),
@@ -919,9 +928,7 @@ impl Engine {
             Err(e) => self.formation_failed(&p.name, &e),
             Ok(b) => {
                 let mut mesh = b.mesh;
-                if let Some(c0) = p.anchor_m {
-                    mesh.translate(self.user_centroid() - c0);
-                }
+                mesh.translate(self.user_centroid() - p.anchor_m);
                 self.install(mesh, b.samples, &b.goal_of);
                 self.formation_name.clear();
                 self.formation_name.push_str(&p.name);

@@ -550,6 +550,17 @@ fn set_formation_mid_drag_keeps_the_drag_going() {
     );
     let worst = worst_goal_distance(&e);
     assert!(worst < 0.25, "an agent is {worst:.2} m from its goal");
+    // Back to the start grid by command: its shape, where the crowd is now (a
+    // reset would take it back where it was configured).
+    e.set_formation("start", Micros(9_000_000)).unwrap();
+    assert_eq!(e.formation(), "start");
+    assert_eq!(e.mesh_view().vertices.len(), 36);
+    let goals = e.goals();
+    let sc = goals.iter().sum::<Vec2>() / goals.len() as f64;
+    assert!(
+        (sc - gc).norm() < 0.5,
+        "start grid at {sc:?}, the crowd at {gc:?}"
+    );
 }
 
 /// The daemon's way (`set_switch_worker`): the tick only asks for the switch and

@@ -570,8 +570,11 @@ pub struct SwitchRequest {
     pub checkpoint: Option<String>,
     /// The engine's switch epoch when asked; a reset or resize makes it stale.
     pub epoch: u64,
-    /// The shape and where it goes; `None`: `start_mesh` as configured.
+    /// The shape and where it goes; `None`: the start mesh's grid, its vertex
+    /// centroid moved to `start_at_m`.
     pub target: Option<(Formation, Placement)>,
+    /// Where the start mesh goes when `target` is `None` (m).
+    pub start_at_m: Vec2,
     /// The user mesh's centroid when asked (m): the applied mesh follows the crowd
     /// by as much as this moved meanwhile.
     pub anchor_m: Vec2,
@@ -606,9 +609,8 @@ pub struct PreparedSwitch {
     pub checkpoint: Option<String>,
     /// As requested.
     pub epoch: u64,
-    /// The user mesh's centroid when asked (m); `None` for the start mesh, which
-    /// stays where it was configured.
-    pub anchor_m: Option<Vec2>,
+    /// The user mesh's centroid when asked (m).
+    pub anchor_m: Vec2,
     /// The result, or why the shape could not be meshed.
     pub built: Result<BuiltSwitch, String>,
 }
@@ -626,18 +628,21 @@ impl SwitchRequest {
             checkpoint,
             epoch,
             target,
+            start_at_m,
             anchor_m,
             start_mesh,
             vertices,
             agents,
             lambda,
         } = self;
-        let (mesh, anchor_m) = match &target {
-            None => (Ok((*start_mesh).clone()), None),
-            Some((f, place)) => (
-                f.mesh(place, vertices).map_err(|e| e.to_string()),
-                Some(anchor_m),
-            ),
+        let mesh = match &target {
+            None => {
+                let mut m = (*start_mesh).clone();
+                let c = m.rest().iter().sum::<Vec2>() / m.vertex_count().max(1) as f64;
+                m.translate(start_at_m - c);
+                Ok(m)
+            }
+            Some((f, place)) => f.mesh(place, vertices).map_err(|e| e.to_string()),
         };
         let built = mesh.map(|mesh| {
             let samples = sample_goals(&mesh, agents.len());
