@@ -59,6 +59,15 @@ fn replay_output_is_byte_identical_across_runs() {
     );
 }
 
+/// Asserts that a command exited with success, showing its stderr when not.
+fn assert_success(out: &std::process::Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn write_tmp(dir: &tempfile::TempDir, name: &str, text: &str) -> std::path::PathBuf {
     let p = dir.path().join(name);
     std::fs::write(&p, text).unwrap();
@@ -97,11 +106,7 @@ fn skip_bad_frames_replays_the_rest_with_a_warning() {
         .arg("--skip-bad-frames")
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains(":6") && err.contains("skipped"), "{err}");
     assert!(!out.stdout.is_empty());
@@ -113,11 +118,7 @@ fn check_config_reports_every_error_with_place_and_field() {
     let good = crowdtouch::config::DEFAULT_CONFIG_RON;
     let ok = write_tmp(&dir, "ok.ron", good);
     let out = bin().arg("check-config").arg(&ok).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let bad = write_tmp(
         &dir,
         "bad.ron",
@@ -387,11 +388,7 @@ fn replay_frames_prints_decoded_touches() {
         .arg(&rec)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let text = String::from_utf8(out.stdout).unwrap();
     let (mut downs, mut ends, mut frames) = (0, 0, 0);
     for line in text.lines() {
@@ -428,11 +425,7 @@ fn fixture(name: &str) -> std::path::PathBuf {
 fn hid_describe_prints_the_layout_or_why_not() {
     let describe = |path: &std::path::Path| {
         let out = bin().args(["hid", "describe"]).arg(path).output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_success(&out);
         serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
     };
     // The ActionStar in the R:/N:/I: form: 2 fingers per report, report id 1.
@@ -484,11 +477,7 @@ fn replay_frames_reads_hid_recorder_logs() {
         ))
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let text = String::from_utf8(out.stdout).unwrap();
     let mut ids = std::collections::BTreeSet::new();
     let mut frames = 0;
@@ -534,11 +523,7 @@ fn scene_check_summarises_a_good_scene_and_lists_every_error() {
         .arg(&street)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("ok") && text.contains("16 x 9 m"), "{text}");
     assert!(
@@ -607,11 +592,7 @@ fn scene_check_summarises_a_good_scene_and_lists_every_error() {
         .arg(&gate)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     assert!(String::from_utf8_lossy(&out.stdout).contains("1 checkpoint;"));
 
     let missing = bin()
@@ -642,11 +623,7 @@ fn formations_lists_and_draws_every_shape_of_the_config() {
         .arg(&svg)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let text = String::from_utf8_lossy(&out.stdout);
     for name in [
         "start", "square", "arrow", "column", "line", "wedge", "diamond", "tee",
@@ -683,11 +660,7 @@ fn bench_assign_reports_quantiles_and_certificates() {
             cmd.arg("--warm");
         }
         let out = cmd.output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_success(&out);
         let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         let row = &rows[0];
         let want = if warm {
@@ -737,11 +710,7 @@ fn bench_assign_from_positions_and_bench_fmm_report_checked_rows() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(rows[0]["workload"], "assign_warm_points n=150");
     assert!(
@@ -756,11 +725,7 @@ fn bench_assign_from_positions_and_bench_fmm_report_checked_rows() {
             cmd.arg("--obstacles");
         }
         let out = cmd.output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_success(&out);
         let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         let note = rows[0]["note"].as_str().unwrap();
         if obstacles {
