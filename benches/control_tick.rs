@@ -93,7 +93,7 @@ fn formation_switch(c: &mut Criterion) {
                     (e, r.prepare())
                 },
                 |(mut e, p)| {
-                    e.apply_switch(p, Micros(1));
+                    e.apply_switch(p, Micros(1)).unwrap();
                     black_box(e.goals().len());
                     e
                 },

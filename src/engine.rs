@@ -793,15 +793,8 @@ impl Engine {
         } else {
             Vec2::new(1.0, 0.0)
         };
-        let errors = self.counters.formation_errors;
-        self.request_switch(name, None, heading, now);
-        if self.counters.formation_errors > errors {
-            Err(format!(
-                "formation `{name}` could not be meshed at the crowd's size and place"
-            ))
-        } else {
-            Ok(())
-        }
+        self.request_switch(name, None, heading, now)
+            .map_err(|e| format!("formation `{name}` could not be built: {e}"))
     }
 
     /// Prepares formation switches on the daemon's formation thread instead of
@@ -831,22 +824,24 @@ impl Engine {
         let (Some(scene), Some(prev)) = (&self.scene, prev) else {
             return;
         };
-        let Some(cp) = scene.crossed_checkpoints(prev, c).last() else {
+        let Some(k) = scene
+            .checkpoints()
+            .iter()
+            .rposition(|cp| cp.crossed(prev, c))
+        else {
             return;
         };
         let target = self
             .switch_pending
             .as_deref()
             .unwrap_or(&self.formation_name);
-        if cp.formation == target {
+        if scene.checkpoints()[k].formation == target {
             return;
         }
         // The scene outlives the request (an `Arc` clone, no allocation).
         let scene = Arc::clone(scene);
-        let Some(cp) = scene.crossed_checkpoints(prev, c).last() else {
-            return;
-        };
-        self.request_switch(&cp.formation, Some(&cp.name), c - prev, now);
+        let cp = &scene.checkpoints()[k];
+        let _ = self.request_switch(&cp.formation, Some(&cp.name), c - prev, now);
     }
 
     /// Asks for formation `name` (mesh-formation-control section 7.3).
@@ -860,13 +855,19 @@ impl Engine {
     /// [`SwitchRequest::prepare`]: here at once, or on the formation thread, in
     /// which case a request asked for while one is out waits for it (the last
     /// one asked for wins).
-    fn request_switch(&mut self, name: &str, checkpoint: Option<&str>, heading: Vec2, now: Micros) {
+    fn request_switch(
+        &mut self,
+        name: &str,
+        checkpoint: Option<&str>,
+        heading: Vec2,
+        now: Micros,
+    ) -> Result<(), String> {
         if self.switch_pending.is_some() {
             self.switch_queued = Some((name.to_string(), checkpoint.map(str::to_string), heading));
-            return;
+            return Ok(());
         }
         if name == self.formation_name {
-            return;
+            return Ok(());
         }
         let centre = self.user_centroid();
         let mut start_at_m = centre;
@@ -879,8 +880,9 @@ impl Engine {
             None
         } else {
             let Some(f) = self.formations.get(name) else {
-                self.formation_failed(name, "the config defines no formation of that name");
-                return;
+                let why = "the config defines no formation of that name";
+                self.formation_failed(name, why);
+                return Err(why.to_string());
             };
             let mut place = Placement {
                 centre_m: centre,
@@ -905,9 +907,9 @@ impl Engine {
         self.switch_pending = Some(name.to_string());
         if self.switch_worker {
             self.switch_outbox = Some(req);
+            Ok(())
         } else {
-            let p = req.prepare();
-            self.apply_switch(p, now);
+            self.apply_switch(req.prepare(), now)
         }
     }
 
@@ -918,43 +920,52 @@ impl Engine {
     /// or Eikonal) takes over from its next result; results solved for the old
     /// goals are discarded. A switch asked for before a reset or resize is dropped.
     /// Allocates (a one-off, like a resize). A formation that could not be meshed
-    /// is logged and counted, and the crowd keeps its formation.
-    pub fn apply_switch(&mut self, p: PreparedSwitch, now: Micros) {
+    /// is logged and counted, and the crowd keeps its formation; the error says why.
+    pub fn apply_switch(&mut self, p: PreparedSwitch, now: Micros) -> Result<(), String> {
         if p.epoch != self.switch_epoch {
-            return;
+            return Ok(());
         }
         self.switch_pending = None;
-        match p.built {
-            Err(e) => self.formation_failed(&p.name, &e),
+        let result = match p.built {
+            Err(e) => {
+                self.formation_failed(&p.name, &e);
+                Err(e)
+            }
             Ok(b) => {
                 let mut mesh = b.mesh;
                 mesh.translate(self.user_centroid() - p.anchor_m);
                 self.install(mesh, b.samples, &b.goal_of);
-                self.formation_name.clear();
-                self.formation_name.push_str(&p.name);
                 if p.checkpoint.is_some() {
                     self.counters.formation_switches += 1;
                 }
-                log::info!(
-                    "formation `{}`{} ({} vertices)",
-                    p.name,
-                    p.checkpoint
-                        .as_ref()
-                        .map(|c| format!(" at checkpoint `{c}`"))
-                        .unwrap_or_default(),
-                    self.direct.mesh().vertex_count()
-                );
-                self.events.push(Event::Formation {
-                    name: p.name,
-                    checkpoint: p.checkpoint,
-                    vertices: self.direct.mesh().vertex_count() as u32,
-                    t: now,
-                });
+                self.switched(p.name, p.checkpoint, now);
+                Ok(())
             }
-        }
+        };
         if let Some((name, checkpoint, heading)) = self.switch_queued.take() {
-            self.request_switch(&name, checkpoint.as_deref(), heading, now);
+            let _ = self.request_switch(&name, checkpoint.as_deref(), heading, now);
         }
+        result
+    }
+
+    /// The crowd is in formation `name` now: logged, and a `formation` event.
+    fn switched(&mut self, name: String, checkpoint: Option<String>, now: Micros) {
+        let vertices = self.direct.mesh().vertex_count();
+        log::info!(
+            "formation `{name}`{} ({vertices} vertices)",
+            checkpoint
+                .as_ref()
+                .map(|c| format!(" at checkpoint `{c}`"))
+                .unwrap_or_default(),
+        );
+        self.formation_name.clear();
+        self.formation_name.push_str(&name);
+        self.events.push(Event::Formation {
+            name,
+            checkpoint,
+            vertices: vertices as u32,
+            t: now,
+        });
     }
 
     /// The new mesh in the controller, its topology for clients, `goal_of` (when
@@ -983,14 +994,7 @@ impl Engine {
     fn restore_start(&mut self, now: Micros) {
         let samples = self.start_samples.clone();
         self.install((*self.start_mesh).clone(), samples, &[]);
-        self.formation_name.clear();
-        self.formation_name.push_str(START);
-        self.events.push(Event::Formation {
-            name: START.to_string(),
-            checkpoint: None,
-            vertices: self.direct.mesh().vertex_count() as u32,
-            t: now,
-        });
+        self.switched(START.to_string(), None, now);
     }
 
     /// Drops switches asked for or queued (a reset or resize).
@@ -1020,18 +1024,7 @@ impl Engine {
 
     /// Area of the user mesh in its current pose (m²).
     fn user_mesh_area(&self) -> f64 {
-        let v = self.direct.user_vertices();
-        let a: f64 = self
-            .direct
-            .mesh()
-            .triangles()
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| v[i as usize]);
-                let (u, w) = (b - a, c - a);
-                0.5 * (u.x * w.y - u.y * w.x)
-            })
-            .sum();
+        let a = self.direct.mesh().area_at(self.direct.user_vertices());
         if a.is_finite() && a > 0.0 {
             a
         } else {

@@ -15,6 +15,14 @@ pub fn cross(u: Vec2, v: Vec2) -> f64 {
     u.x * v.y - u.y * v.x
 }
 
+/// Twice the signed area of the polygon `p` (m²; counter-clockwise positive), by
+/// the shoelace formula.
+pub fn twice_signed_area(p: &[Vec2]) -> f64 {
+    (0..p.len())
+        .map(|i| cross(p[i], p[(i + 1) % p.len()]))
+        .sum()
+}
+
 /// The point of segment `a`–`b` nearest to `p`, with its parameter in `[0, 1]`
 /// (`a` for a segment of no length).
 #[inline]

@@ -621,7 +621,7 @@ fn switches_prepared_off_the_tick_follow_the_drag_queue_and_go_stale() {
     }
     let before = centre(&e);
     assert!((before - asked_at).x > 0.3, "the drag moved the crowd on");
-    e.apply_switch(req.prepare(), now);
+    e.apply_switch(req.prepare(), now).unwrap();
     assert_eq!(e.formation(), "column");
     let after = centre(&e);
     assert!(
@@ -643,7 +643,7 @@ fn switches_prepared_off_the_tick_follow_the_drag_queue_and_go_stale() {
     assert_eq!(line.name, "line");
     e.reset(false, now);
     assert_eq!(e.formation(), "start");
-    e.apply_switch(line.prepare(), now);
+    e.apply_switch(line.prepare(), now).unwrap();
     assert_eq!(
         e.formation(),
         "start",

@@ -344,21 +344,15 @@ impl DirectController {
     /// Replaces the mesh: a formation switch (mesh-formation-control section 7.3).
     ///
     /// The new mesh at its rest pose becomes the user mesh and the rest shape ARAP
-    /// keeps rigid to; the goals are resampled for the same number of agents. Live
+    /// keeps rigid to; the goals come from `samples`. Live
     /// rigs keep their fingers: each handle moves to the new mesh's vertex nearest
     /// to it, and its finger offset takes up the difference, so a drag goes on
     /// without a jump; line and area supports are rebuilt on the new vertices.
     ///
-    /// Allocates (a new ARAP system, new goal samples): meant for a switch, not for
+    /// `samples` are the goal samples drawn on `mesh`, one per agent
+    /// ([`super::mesh::sample_goals`]: the slow part, which the daemon does off the
+    /// control thread). Allocates (a new ARAP system): meant for a switch, not for
     /// every tick.
-    pub fn set_mesh(&mut self, mesh: TriMesh) {
-        let samples = super::mesh::sample_goals(&mesh, self.goals.len());
-        self.set_mesh_sampled(mesh, samples);
-    }
-
-    /// [`set_mesh`](Self::set_mesh) with the goal samples already drawn on `mesh`
-    /// ([`super::mesh::sample_goals`], one per agent: the slow part, which the
-    /// daemon does off the control thread).
     pub fn set_mesh_sampled(&mut self, mesh: TriMesh, samples: Vec<GoalSample>) {
         self.arap = Arap::new(&mesh);
         self.verts.clear();

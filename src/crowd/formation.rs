@@ -29,7 +29,7 @@
 use crate::crowd::assign::{CostMatrix, CostProvider, Solver};
 use crate::crowd::effort::LeastEffort;
 use crate::crowd::mesh::{goal_positions, sample_goals, GoalSample, MeshError, TriMesh};
-use crate::geom::{cross, segment_distance_squared, Vec2};
+use crate::geom::{cross, segment_distance_squared, twice_signed_area, Vec2};
 use serde::{Deserialize, Serialize};
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 use std::sync::Arc;
@@ -164,13 +164,6 @@ pub struct Placement {
     pub area_m2: f64,
 }
 
-/// Twice the signed area (CCW positive).
-fn twice_area(p: &[Vec2]) -> f64 {
-    (0..p.len())
-        .map(|i| cross(p[i], p[(i + 1) % p.len()]))
-        .sum()
-}
-
 /// Whether closed segments `ab` and `cd` share a point.
 fn segments_touch(a: Vec2, b: Vec2, c: Vec2, d: Vec2) -> bool {
     let o = |p: Vec2, q: Vec2, r: Vec2| cross(q - p, r - p);
@@ -277,7 +270,7 @@ impl Formation {
                 }
             }
         }
-        let a2 = twice_area(&p);
+        let a2 = twice_signed_area(&p);
         if a2.is_nan() || a2.abs() <= 1e-9 {
             return Err(FormationError::NoArea);
         }
@@ -358,7 +351,7 @@ impl Formation {
             return Err(MeshError::NonFinite { vertex });
         }
         let n = poly.len();
-        let area = 0.5 * twice_area(&poly);
+        let area = 0.5 * twice_signed_area(&poly);
         let perimeter: f64 = (0..n).map(|i| (poly[(i + 1) % n] - poly[i]).norm()).sum();
         let target = vertices.clamp(n, MAX_MESH_VERTICES) as f64;
         let h = (perimeter + (perimeter * perimeter + 4.0 * target * area).sqrt()) / (2.0 * target);
@@ -728,7 +721,7 @@ mod tests {
         let lib = FormationLibrary::shipped();
         assert_eq!(lib.names().count(), SHIPPED.len());
         for f in &lib.formations {
-            assert!((0.5 * twice_area(f.outline()) - 1.0).abs() < 1e-12);
+            assert!((0.5 * twice_signed_area(f.outline()) - 1.0).abs() < 1e-12);
             let p = place(8.0, 4.5, 1.0, 0.0, 12.0);
             let m = check_mesh(f, &p, 100);
             let v = m.vertex_count();
@@ -849,7 +842,7 @@ mod tests {
         // Either winding is fine and gives the same shape.
         let cw = Formation::new(&def("t", &[(0.0, 0.0), (0.0, 1.0), (1.0, 0.0)])).unwrap();
         let ccw = Formation::new(&def("t", &[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)])).unwrap();
-        assert!(twice_area(cw.outline()) > 0.0);
+        assert!(twice_signed_area(cw.outline()) > 0.0);
         let mut a: Vec<_> = cw.outline().iter().map(|p| (p.x, p.y)).collect();
         let mut b: Vec<_> = ccw.outline().iter().map(|p| (p.x, p.y)).collect();
         a.sort_by(|p, q| p.partial_cmp(q).unwrap());

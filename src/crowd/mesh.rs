@@ -329,10 +329,19 @@ impl TriMesh {
     /// # Complexity
     /// O(T).
     pub fn area(&self) -> f64 {
+        self.area_at(&self.rest)
+    }
+
+    /// Total signed area in m² with the vertices at `positions` (a deformed pose;
+    /// a missing vertex counts as the origin).
+    ///
+    /// # Complexity
+    /// O(T).
+    pub fn area_at(&self, positions: &[Vec2]) -> f64 {
         self.triangles
             .iter()
             .map(|t| {
-                let [a, b, c] = t.map(|v| self.rest.get(v as usize).copied().unwrap_or_default());
+                let [a, b, c] = t.map(|v| positions.get(v as usize).copied().unwrap_or_default());
                 0.5 * cross(b - a, c - a)
             })
             .sum()

@@ -7,7 +7,7 @@
 //! When the fingers move, the supplementary targets are `Σ λ_i c_i` of the moved touch
 //! points `c_i`.
 
-use crate::geom::{cross, Vec2};
+use crate::geom::{cross, twice_signed_area, Vec2};
 
 /// A point closer to a polygon vertex than `MVC_VERTEX_EPS` × (polygon bounding-box
 /// diagonal) gets the one-hot coordinates of that vertex (dimensionless).
@@ -245,7 +245,7 @@ pub fn point_in_convex_polygon(poly: &[Vec2], p: Vec2) -> bool {
     if !poly.iter().all(|v| v.x.is_finite() && v.y.is_finite()) {
         return false;
     }
-    let area2: f64 = (0..n).map(|i| cross(poly[i], poly[(i + 1) % n])).sum();
+    let area2 = twice_signed_area(poly);
     if area2 == 0.0 {
         return false;
     }

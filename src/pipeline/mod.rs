@@ -1045,7 +1045,8 @@ impl ControlLoop {
             self.idle_job = Some(job);
         }
         while let Ok(p) = self.ch.switched.try_recv() {
-            self.engine.apply_switch(*p, now);
+            // A switch that could not be built is logged and counted by the engine.
+            let _ = self.engine.apply_switch(*p, now);
         }
         let out = self.engine.tick(now);
         let snapshot = out.snapshot;
