@@ -503,7 +503,8 @@ impl Daemon {
         // side blocks on the other (control try_sends / try_recvs).
         let (job_tx, job_rx) = bounded::<Box<AssignJob>>(1);
         let (res_tx, res_rx) = bounded::<Box<AssignJob>>(1);
-        // Control ⇄ formation thread: formation switches, try_send / try_recv both ways.
+        // Control ⇄ formation thread: switch requests and results; the control side
+        // only try_sends / try_recvs, the formation thread blocks on its own side.
         let (switch_tx, switch_job_rx) = bounded::<Box<SwitchRequest>>(2);
         let (switch_res_tx, switch_rx) = bounded::<Box<PreparedSwitch>>(2);
         // Control → supervisor: bounded(4) stats once per interval, try_send.
