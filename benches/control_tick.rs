@@ -6,8 +6,8 @@
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use crowdtouch::config::Config;
 use crowdtouch::engine::Engine;
-use crowdtouch::input::{Contact, ContactFlags, ContactId, TouchFrame};
-use crowdtouch::time::Micros;
+use crowdtouch::vocab::Micros;
+use crowdtouch::vocab::{Contact, ContactFlags, ContactId, TouchFrame};
 
 const PERIOD_US: u64 = 8_333;
 

@@ -14,8 +14,8 @@ use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criteri
 use crowdtouch::input::hid::recorder::parse_hid_recorder;
 use crowdtouch::input::hid::{touch_collections, HidDecoder, HidField, TouchCollection};
 use crowdtouch::input::recording::OnBadFrame;
-use crowdtouch::input::TouchFrame;
-use crowdtouch::time::Micros;
+use crowdtouch::vocab::Micros;
+use crowdtouch::vocab::TouchFrame;
 use std::path::Path;
 
 /// A small deterministic generator (xorshift64*), so inputs are the same every run.

@@ -10,7 +10,7 @@ use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughpu
 use crowdtouch::input::evdev::{parse_input_events, INPUT_EVENT_BYTES};
 use crowdtouch::input::mt::{MtDecoder, RawEvent};
 use crowdtouch::input::recording::read_evemu_raw;
-use crowdtouch::input::TouchFrame;
+use crowdtouch::vocab::TouchFrame;
 use std::path::Path;
 
 fn fixture(name: &str) -> String {

@@ -6,9 +6,9 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use crowdtouch::config::{Config, LogLevel};
-use crowdtouch::input::{Contact, ContactFlags, ContactId, TouchFrame};
 use crowdtouch::pipeline::{Daemon, DaemonOptions, SourceSpec};
-use crowdtouch::time::monotonic_now;
+use crowdtouch::vocab::monotonic_now;
+use crowdtouch::vocab::{Contact, ContactFlags, ContactId, TouchFrame};
 use std::io::{BufRead, BufReader};
 use std::os::unix::net::UnixStream;
 use std::time::{Duration, Instant};

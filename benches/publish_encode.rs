@@ -5,8 +5,8 @@
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use crowdtouch::geom::Vec2;
 use crowdtouch::publish::protocol::{encode_snapshot_binary, encode_snapshot_json, FieldSet};
-use crowdtouch::snapshot::{AgentView, Snapshot, TouchView};
-use crowdtouch::time::Micros;
+use crowdtouch::vocab::Micros;
+use crowdtouch::vocab::{AgentView, Snapshot, TouchView};
 
 /// A small deterministic generator (xorshift64*), so inputs are the same every run.
 struct Rng(u64);

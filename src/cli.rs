@@ -9,8 +9,8 @@ use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
 use crowdtouch::publish::protocol::{
     encode_event, encode_mesh_json, encode_snapshot_json, FieldSet,
 };
-use crowdtouch::snapshot::StatsReport;
-use crowdtouch::time::{monotonic_now, Micros};
+use crowdtouch::vocab::StatsReport;
+use crowdtouch::vocab::{monotonic_now, Micros};
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -544,8 +544,8 @@ fn replay(a: ReplayArgs) -> Result<()> {
 
 /// One decoded frame as a JSON object: `t_us` and the contacts (unit-square
 /// coordinates, life-cycle state, optional pressure and size).
-pub fn frame_json(f: &crowdtouch::input::TouchFrame) -> serde_json::Value {
-    use crowdtouch::input::ContactFlags;
+pub fn frame_json(f: &crowdtouch::vocab::TouchFrame) -> serde_json::Value {
+    use crowdtouch::vocab::ContactFlags;
     let contacts: Vec<serde_json::Value> = f
         .contacts()
         .iter()

@@ -16,12 +16,13 @@ use crate::crowd::field::FieldParams;
 use crate::crowd::formation::{FormationLibrary, Placement, PreparedSwitch, SwitchRequest, START};
 use crate::crowd::mesh::GoalSample;
 use crate::crowd::mesh::TriMesh;
-use crate::crowd::scene::{MotionType, Scene};
+use crate::crowd::scene::Scene;
 use crate::geom::{Rect, Vec2};
 use crate::gesture::segment::{Segment, SegmentParams, Segmenter, TouchPoint};
-use crate::input::{ContactFlags, TouchFrame};
-use crate::snapshot::{AgentView, Command, Event, MeshView, Snapshot, TouchView};
-use crate::time::Micros;
+use crate::vocab::Micros;
+use crate::vocab::MotionType;
+use crate::vocab::{AgentView, Command, Event, MeshView, Snapshot, TouchView};
+use crate::vocab::{ContactFlags, TouchFrame};
 use std::sync::Arc;
 
 /// Longest time step the engine integrates in one tick (s); a longer gap (a stall,
@@ -671,7 +672,7 @@ impl Engine {
         for v in &mut self.touches {
             v.control = self
                 .segmenter
-                .control_of(crate::input::ContactId(v.id))
+                .control_of(crate::vocab::ContactId(v.id))
                 .map(|c| c.id);
         }
         let mesh = if self.direct.take_changed() {
@@ -1082,7 +1083,7 @@ impl Engine {
                         .find(|c| c.id == id)
                         .map(|c| c.fingers.iter().map(|f| f.id.0).collect::<Vec<_>>())
                         .unwrap_or_default();
-                    let kind = crate::snapshot::ControlKind::for_fingers(fingers.len());
+                    let kind = crate::gesture::segment::control_kind(fingers.len());
                     let vertices = self.direct.handle_vertices(id);
                     if matches!(s, Segment::ControlBegin(_)) {
                         Event::ControlBegin {

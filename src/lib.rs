@@ -21,7 +21,6 @@ pub mod pipeline;
 pub mod publish;
 pub mod rng;
 pub mod rt;
-pub mod snapshot;
 pub mod stats;
 pub mod sys;
-pub mod time;
+pub mod vocab;

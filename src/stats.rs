@@ -4,7 +4,7 @@
 //! sample: the histogram's range is fixed up front) and hands [`StageStats`]
 //! summaries on once per stats interval.
 
-use crate::snapshot::StageStats;
+use crate::vocab::StageStats;
 use hdrhistogram::Histogram;
 
 /// Largest value a stage histogram records (µs); larger samples are clamped.

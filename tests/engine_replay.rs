@@ -7,7 +7,7 @@ mod common;
 use common::*;
 use crowdtouch::config::Config;
 use crowdtouch::geom::Vec2;
-use crowdtouch::snapshot::{ControlKind, Event};
+use crowdtouch::vocab::{ControlKind, Event};
 
 fn cfg() -> Config {
     Config::embedded_default()

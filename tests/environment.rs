@@ -11,13 +11,14 @@ mod common;
 use crowdtouch::config::Config;
 use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Distance, Solver};
 use crowdtouch::crowd::environment::{Planner, PlannerParams};
-use crowdtouch::crowd::scene::{MotionType, Scene};
+use crowdtouch::crowd::scene::Scene;
 use crowdtouch::embedded::load_scene;
 use crowdtouch::engine::Engine;
 use crowdtouch::geom::{Rect, Vec2};
-use crowdtouch::input::{Contact, ContactFlags, ContactId, TouchFrame};
-use crowdtouch::snapshot::Event;
-use crowdtouch::time::Micros;
+use crowdtouch::vocab::Event;
+use crowdtouch::vocab::Micros;
+use crowdtouch::vocab::MotionType;
+use crowdtouch::vocab::{Contact, ContactFlags, ContactId, TouchFrame};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -373,7 +374,7 @@ fn a_reconfigured_scene_applies_from_the_next_tick() {
         assert!(
             !out.events
                 .iter()
-                .any(|ev| matches!(ev, crowdtouch::snapshot::Event::Reset { .. })),
+                .any(|ev| matches!(ev, crowdtouch::vocab::Event::Reset { .. })),
             "a scene reload does not reset the crowd"
         );
         assert_eq!(out.snapshot.agents.len(), 60);

@@ -14,8 +14,9 @@ use crowdtouch::input::record::{EvdevCapabilities, EvemuTime, EvemuWriter, NotTo
 use crowdtouch::input::recording::{
     parse_recording, read_evemu_raw, read_evemu_with_desc, read_recording, OnBadFrame,
 };
-use crowdtouch::input::{AxisRange, ContactFlags, TouchFrame, MAX_CONTACTS};
-use crowdtouch::time::Micros;
+use crowdtouch::input::AxisRange;
+use crowdtouch::vocab::Micros;
+use crowdtouch::vocab::{ContactFlags, TouchFrame, MAX_CONTACTS};
 use proptest::prelude::*;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;

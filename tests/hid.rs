@@ -16,8 +16,8 @@ use crowdtouch::input::hid::{
 use crowdtouch::input::recording::{
     parse_recording, read_recording, OnBadFrame, Recording, RecordingError,
 };
-use crowdtouch::input::{ContactFlags, TouchFrame, MAX_CONTACTS};
-use crowdtouch::time::Micros;
+use crowdtouch::vocab::Micros;
+use crowdtouch::vocab::{ContactFlags, TouchFrame, MAX_CONTACTS};
 use proptest::prelude::*;
 use serde_json::Value;
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -554,7 +554,7 @@ fn wacom_two_fingers_match_the_oracle() {
     assert!((c.major_mm.unwrap() - 2.0 / 41.0 * 22.38).abs() < 1e-4);
     assert!((c.minor_mm.unwrap() - 2.0 / 31.0 * 14.81).abs() < 1e-4);
     // A vertical movement: Y travels several times further than X.
-    let span = |axis: fn(&crowdtouch::input::Contact) -> f32| {
+    let span = |axis: fn(&crowdtouch::vocab::Contact) -> f32| {
         let v: Vec<f32> = rec
             .frames
             .iter()

@@ -8,8 +8,8 @@
 //! passes, as the HIL stage itself is then skipped too.
 
 use crowdtouch::input::hid::{touch_collections, HidDecoder};
-use crowdtouch::input::{ContactFlags, TouchFrame};
-use crowdtouch::time::Micros;
+use crowdtouch::vocab::Micros;
+use crowdtouch::vocab::{ContactFlags, TouchFrame};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

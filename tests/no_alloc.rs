@@ -5,9 +5,10 @@
 use crowdtouch::config::Config;
 use crowdtouch::engine::Engine;
 use crowdtouch::input::mt::{MtAxes, MtDecoder, EV_ABS, EV_SYN};
-use crowdtouch::input::{AxisRange, Contact, ContactFlags, ContactId, TouchFrame};
+use crowdtouch::input::AxisRange;
 use crowdtouch::pipeline::{FrameQueue, InputCounters};
-use crowdtouch::time::Micros;
+use crowdtouch::vocab::Micros;
+use crowdtouch::vocab::{Contact, ContactFlags, ContactId, TouchFrame};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::sync::Arc;
@@ -256,7 +257,7 @@ fn a_steady_control_tick_in_a_scene_does_not_allocate() {
     let in_patch = engine
         .motions()
         .iter()
-        .filter(|m| **m != crowdtouch::crowd::scene::MotionType::Run)
+        .filter(|m| **m != crowdtouch::vocab::MotionType::Run)
         .count();
     let against = engine
         .agent_positions()

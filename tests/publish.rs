@@ -6,12 +6,13 @@ use crossbeam_channel::{bounded, Receiver, Sender};
 use crowdtouch::config::SocketConfig;
 use crowdtouch::geom::{Rect, Vec2};
 use crowdtouch::publish::protocol::{self, FRAME_KIND_JSON, FRAME_KIND_SNAPSHOT};
+use crowdtouch::publish::Outgoing;
 use crowdtouch::publish::{Error, HelloInfo, PublisherStats, Server};
-use crowdtouch::snapshot::{
-    AgentView, Command, CommandRequest, ControlKind, Event, MeshView, Outgoing, Snapshot,
-    StatsReport, TouchView,
+use crowdtouch::vocab::{monotonic_now, Micros};
+use crowdtouch::vocab::{
+    AgentView, Command, CommandRequest, ControlKind, Event, MeshView, Snapshot, StatsReport,
+    TouchView,
 };
-use crowdtouch::time::{monotonic_now, Micros};
 use serde_json::{json, Value};
 use std::io::{BufRead, BufReader, ErrorKind, Read, Write};
 use std::os::unix::fs::PermissionsExt;
@@ -998,7 +999,7 @@ fn socket_group_is_applied_or_reported() {
 /// A snapshot in a scene: one motion per agent, cycling through every type; no
 /// input time, so its encoding does not depend on when it is written.
 fn scene_snapshot(seq: u64, n: usize) -> Snapshot {
-    use crowdtouch::crowd::scene::MotionType;
+    use crowdtouch::vocab::MotionType;
     let mut s = snapshot(seq, n);
     s.input_t = None;
     s.motions = (0..n)

@@ -7,8 +7,9 @@ use crowdtouch::input::recording::{
     parse_recording, read_evemu_with_desc, read_recording, write_jsonl, OnBadFrame, Recording,
     RecordingError, UnsupportedReason,
 };
-use crowdtouch::input::{synth, ContactFlags, TouchFrame};
-use crowdtouch::time::Micros;
+use crowdtouch::input::synth;
+use crowdtouch::vocab::Micros;
+use crowdtouch::vocab::{ContactFlags, TouchFrame};
 use proptest::prelude::*;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
@@ -204,7 +205,7 @@ fn ntrig_protocol_a_decodes() {
     assert!(rec.warnings.is_empty(), "{:?}", rec.warnings);
     assert_eq!(
         rec.surface.max_contacts as usize,
-        crowdtouch::input::MAX_CONTACTS
+        crowdtouch::vocab::MAX_CONTACTS
     );
 }
 

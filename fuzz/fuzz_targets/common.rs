@@ -4,7 +4,7 @@ use crowdtouch::input::recording::{OnBadFrame, Recording, RecordingError};
 pub fn check(result: Result<Recording, RecordingError>) {
     if let Ok(rec) = result {
         for f in &rec.frames {
-            assert!(f.len() <= crowdtouch::input::MAX_CONTACTS);
+            assert!(f.len() <= crowdtouch::vocab::MAX_CONTACTS);
             for c in f.contacts() {
                 assert!((0.0..=1.0).contains(&c.x) && (0.0..=1.0).contains(&c.y));
             }

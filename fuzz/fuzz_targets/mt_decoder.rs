@@ -5,8 +5,9 @@
 //! slots, each with tracking id `(value >> 4i) & 0xf) - 1` and a position
 //! derived from `code` and `value`.
 use crowdtouch::input::mt::{MtAxes, MtDecoder, MtProtocol, MtSlotState};
-use crowdtouch::input::{AxisRange, ContactFlags, TouchFrame, MAX_CONTACTS};
-use crowdtouch::time::Micros;
+use crowdtouch::input::AxisRange;
+use crowdtouch::vocab::{ContactFlags, TouchFrame, MAX_CONTACTS};
+use crowdtouch::vocab::Micros;
 use libfuzzer_sys::fuzz_target;
 use std::collections::HashMap;
 

@@ -9,8 +9,9 @@
 use anyhow::{anyhow, bail, Context, Result};
 use crowdtouch::config::{CalibrationConfig, Config, InputConfig};
 use crowdtouch::input::calibrate::{apply_matrix, solve_matrix, Calibration, Matrix};
-use crowdtouch::input::{ContactFlags, ContactId, FrameSink, TouchFrame};
+use crowdtouch::input::FrameSink;
 use crowdtouch::pipeline::device::{DeviceEnv, SystemEnv};
+use crowdtouch::vocab::{ContactFlags, ContactId, TouchFrame};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -291,8 +292,8 @@ pub fn calibrate(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crowdtouch::input::Contact;
-    use crowdtouch::time::Micros;
+    use crowdtouch::vocab::Contact;
+    use crowdtouch::vocab::Micros;
 
     fn frame(t_ms: u64, id: u32, p: (f64, f64), flags: ContactFlags) -> TouchFrame {
         let mut f = TouchFrame::new(Micros(t_ms * 1000));

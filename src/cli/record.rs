@@ -12,8 +12,9 @@ use crowdtouch::input::discover::{discover, select};
 use crowdtouch::input::evdev::{EvdevOptions, EvdevReader};
 use crowdtouch::input::hid::{HidOptions, HidReader};
 use crowdtouch::input::recording::JsonlWriter;
-use crowdtouch::input::{DeviceKind, DeviceReader, FrameSink, TouchFrame};
+use crowdtouch::input::{DeviceKind, DeviceReader, FrameSink};
 use crowdtouch::pipeline::device::{preference, selector, SystemProber};
+use crowdtouch::vocab::TouchFrame;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -90,7 +91,7 @@ fn record_frames(
     // Contacts still down when the recording stops end as cancelled, so the file
     // replays without a stuck finger.
     let mut last = TouchFrame::default();
-    if reader.cancel_all(crowdtouch::time::monotonic_now(), &mut last) {
+    if reader.cancel_all(crowdtouch::vocab::monotonic_now(), &mut last) {
         sink.push(&last);
     }
     if let Some(e) = sink.error {

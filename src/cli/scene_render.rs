@@ -31,9 +31,10 @@ use crowdtouch::crowd::eikonal::{
     Sources,
 };
 use crowdtouch::crowd::scene::{
-    DynamicKind, MotionType, ObstacleId, Part, PathMode, Placement, Scene, SceneGrid,
+    DynamicKind, ObstacleId, Part, PathMode, Placement, Scene, SceneGrid,
 };
 use crowdtouch::geom::{Rect, Vec2};
+use crowdtouch::vocab::MotionType;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 

@@ -4,7 +4,7 @@
 //! (thin lines, start dot hollow, end dot filled) and the fingers' paths (red).
 
 use crowdtouch::geom::{Rect, Vec2};
-use crowdtouch::snapshot::{MeshView, Snapshot};
+use crowdtouch::vocab::{MeshView, Snapshot};
 use std::collections::BTreeMap;
 use std::fmt::Write;
 

@@ -25,8 +25,8 @@ use super::mvc::{convex_hull, mean_value_coordinates, point_in_convex_polygon};
 use super::scene::Scene;
 use crate::geom::Vec2;
 use crate::gesture::segment::Control;
-use crate::input::ContactId;
-use crate::snapshot::ControlKind;
+use crate::vocab::ContactId;
+use crate::vocab::ControlKind;
 use std::sync::Arc;
 
 /// Tunables of direct manipulation.
@@ -491,7 +491,7 @@ impl DirectController {
 
     /// Supplementary points of section 4.2 for a rig whose handles are in place.
     fn build_support(&self, rig: &mut Rig) {
-        rig.kind = ControlKind::for_fingers(rig.handles.len());
+        rig.kind = crate::gesture::segment::control_kind(rig.handles.len());
         rig.supp.clear();
         rig.frame.clear();
         let handle_vertex = |v: u32| rig.handles.iter().any(|h| h.vertex == v);
@@ -763,7 +763,7 @@ mod tests {
     use super::*;
     use crate::geom::Rect;
     use crate::gesture::segment::{ControlState, Finger};
-    use crate::time::Micros;
+    use crate::vocab::Micros;
 
     fn params() -> DirectParams {
         DirectParams {

@@ -33,9 +33,19 @@
 //! they left it; the control ends when its last finger is up.
 
 use crate::geom::Vec2;
-use crate::input::{ContactFlags, ContactId};
-use crate::snapshot::ControlKind;
-use crate::time::Micros;
+use crate::vocab::ControlKind;
+use crate::vocab::Micros;
+use crate::vocab::{ContactFlags, ContactId};
+
+/// The control kind for a number of fingers: one a point control, two a line, three
+/// or more an area (mesh-formation-control section 4.2).
+pub fn control_kind(fingers: usize) -> ControlKind {
+    match fingers {
+        0 | 1 => ControlKind::Point,
+        2 => ControlKind::Line,
+        _ => ControlKind::Area,
+    }
+}
 
 /// Most fingers one control or gesture holds; more fingers start a new one.
 pub const MAX_FINGERS: usize = 10;
@@ -166,7 +176,7 @@ pub struct Control {
 impl Control {
     /// Point, line or area, from the number of fingers.
     pub fn kind(&self) -> ControlKind {
-        ControlKind::for_fingers(self.fingers.len())
+        control_kind(self.fingers.len())
     }
     fn down_count(&self) -> usize {
         self.fingers.iter().filter(|f| f.down).count()
@@ -578,10 +588,7 @@ mod tests {
             }
             run(&mut seg, &steps, |_| true);
             assert_eq!(seg.controls().len(), 1);
-            assert_eq!(
-                seg.controls()[0].kind(),
-                ControlKind::for_fingers(n as usize)
-            );
+            assert_eq!(seg.controls()[0].kind(), control_kind(n as usize));
         }
     }
 

@@ -34,7 +34,7 @@
 //! [`Calibration::matrix`] (with `rotation: 0` and no flips, since the solved matrix
 //! already contains them).
 
-use crate::input::{ContactFlags, TouchFrame};
+use crate::vocab::{ContactFlags, TouchFrame};
 use serde::{Deserialize, Serialize};
 
 /// A calibration matrix, row-major `[a, b, c, d, e, f]`: `x' = a·x + b·y + c`,
@@ -536,8 +536,8 @@ pub fn solve_matrix(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::input::{Contact, ContactId};
-    use crate::time::Micros;
+    use crate::vocab::Micros;
+    use crate::vocab::{Contact, ContactId};
     use proptest::prelude::*;
 
     /// Tolerance for exact maps computed in f64.

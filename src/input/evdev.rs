@@ -30,9 +30,10 @@ use super::mt::{
     ABS_MT_TRACKING_ID, ABS_PRESSURE, ABS_X, ABS_Y, BTN_TOUCH, EV_ABS, MAX_SLOTS,
 };
 use super::record::{AbsAxisInfo, DecoderSetup, EvdevCapabilities};
-use super::{DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink, TouchFrame};
+use super::{DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink};
 use crate::sys;
-use crate::time::{monotonic_now, Micros};
+use crate::vocab::TouchFrame;
+use crate::vocab::{monotonic_now, Micros};
 use nix::errno::Errno;
 use nix::libc;
 use nix::poll::{poll, PollFd, PollFlags, PollTimeout};

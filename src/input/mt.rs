@@ -107,8 +107,9 @@
 //!   in one slot before a `SYN_REPORT`) are not reported; they are counted in
 //!   [`MtCounters::transient_contacts`].
 
-use super::{AxisRange, Contact, ContactFlags, ContactId, TouchFrame, MAX_CONTACTS};
-use crate::time::Micros;
+use super::AxisRange;
+use crate::vocab::Micros;
+use crate::vocab::{Contact, ContactFlags, ContactId, TouchFrame, MAX_CONTACTS};
 
 /// Event type: synchronisation.
 pub const EV_SYN: u16 = 0;
@@ -710,7 +711,8 @@ pub fn assign_min_cost(
 /// # Example
 /// ```
 /// use crowdtouch::input::mt::*;
-/// use crowdtouch::input::{AxisRange, ContactFlags, TouchFrame};
+/// use crowdtouch::input::AxisRange;
+/// use crowdtouch::vocab::{ContactFlags, TouchFrame};
 /// use crowdtouch::time::Micros;
 ///
 /// let r = AxisRange { min: 0.0, max: 1000.0, resolution: 10.0 };

@@ -36,7 +36,8 @@ use super::mt::{
     ABS_MT_PRESSURE, ABS_MT_SLOT, ABS_MT_TOUCH_MAJOR, ABS_MT_TOUCH_MINOR, ABS_PRESSURE, ABS_X,
     ABS_Y, BTN_TOUCH, EV_ABS, EV_KEY, EV_MSC, EV_SYN,
 };
-use super::{AxisRange, SurfaceInfo, MAX_CONTACTS};
+use super::{AxisRange, SurfaceInfo};
+use crate::vocab::MAX_CONTACTS;
 use std::fmt;
 use std::io::{self, Write};
 use std::path::Path;
@@ -756,7 +757,7 @@ pub fn record_evdev(node: &Path, w: impl Write, stop: &AtomicBool) -> Result<u64
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::time::Micros;
+    use crate::vocab::Micros;
 
     fn caps() -> EvdevCapabilities {
         let mut c = EvdevCapabilities::new("Test\nPanel");

@@ -71,8 +71,9 @@
 
 use super::mt::{self, MtAxes, MtDecoder, RawEvent, ABS_MAX};
 use super::record::{AbsAxisInfo, EvdevCapabilities, EV_CNT, MASK_BYTES, PROP_BYTES};
-use super::{AxisRange, Contact, ContactFlags, ContactId, SurfaceInfo, TouchFrame, MAX_CONTACTS};
-use crate::time::Micros;
+use super::{AxisRange, SurfaceInfo};
+use crate::vocab::Micros;
+use crate::vocab::{Contact, ContactFlags, ContactId, TouchFrame, MAX_CONTACTS};
 use serde::Serialize;
 use serde_json::{Map, Value};
 use std::fmt;

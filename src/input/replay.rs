@@ -26,8 +26,9 @@
 //! The per-frame loop neither allocates nor locks: it copies each recorded frame
 //! into one preallocated [`TouchFrame`], remaps ids, and pushes it.
 
-use super::{Contact, ContactFlags, ContactId, FrameSink, TouchFrame, MAX_CONTACTS};
-use crate::time::{monotonic_now, Micros};
+use super::FrameSink;
+use crate::vocab::{monotonic_now, Micros};
+use crate::vocab::{Contact, ContactFlags, ContactId, TouchFrame, MAX_CONTACTS};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 

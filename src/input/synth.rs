@@ -48,9 +48,10 @@
 //! A at x 6.1 m, 3.2 m is only 242 mm of glass, and the hands must be more than
 //! 250 mm apart (they are at least [`TWO_HANDS_MIN_GAP_MM`] apart in every frame).
 
-use super::{AxisRange, Contact, ContactFlags, ContactId, SurfaceInfo, TouchFrame};
+use super::{AxisRange, SurfaceInfo};
 use crate::geom::Vec2;
-use crate::time::Micros;
+use crate::vocab::Micros;
+use crate::vocab::{Contact, ContactFlags, ContactId, TouchFrame};
 use std::path::{Path, PathBuf};
 
 /// Name of the synthetic device.

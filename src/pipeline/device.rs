@@ -19,9 +19,10 @@
 //! real one ([`SystemEnv`]) uses discovery, inotify and the evdev/hidraw readers.
 
 use crate::config::{DeviceInterface, DeviceSelect};
-use crate::input::{DeviceInfo, DeviceReader, FrameSink, TouchFrame};
-use crate::snapshot::DeviceState;
-use crate::time::{monotonic_now, Micros};
+use crate::input::{DeviceInfo, DeviceReader, FrameSink};
+use crate::vocab::DeviceState;
+use crate::vocab::TouchFrame;
+use crate::vocab::{monotonic_now, Micros};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
@@ -438,7 +439,8 @@ impl DeviceEnv for SystemEnv {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::input::{AxisRange, Contact, ContactFlags, ContactId, DeviceKind, SurfaceInfo};
+    use crate::input::{AxisRange, DeviceKind, SurfaceInfo};
+    use crate::vocab::{Contact, ContactFlags, ContactId};
     use std::collections::VecDeque;
     use std::path::PathBuf;
     use std::sync::Arc;

@@ -23,11 +23,13 @@ use crate::engine::Engine;
 use crate::geom::Vec2;
 use crate::input::recording::{OnBadFrame, RecordingError};
 use crate::input::replay::{Pacing, ReplayItem, ReplaySource};
-use crate::input::{FrameSink, TouchFrame};
+use crate::input::FrameSink;
+use crate::publish::Outgoing;
 use crate::publish::{HelloInfo, PublisherStats, Server};
-use crate::snapshot::{Command, CommandRequest, Event, Outgoing, StageStats, StatsReport};
 use crate::stats::StageTimer;
-use crate::time::{monotonic_now, Micros};
+use crate::vocab::TouchFrame;
+use crate::vocab::{monotonic_now, Micros};
+use crate::vocab::{Command, CommandRequest, Event, StageStats, StatsReport};
 pub mod device;
 
 use crossbeam_channel::{bounded, never, select, Receiver, Sender, TryRecvError, TrySendError};
@@ -116,7 +118,7 @@ pub struct FrameQueue {
 
 /// Contacts one source may have down at once (twice a frame's capacity: ends and
 /// begins of one frame).
-const ID_MAP_CAPACITY: usize = 2 * crate::input::MAX_CONTACTS;
+const ID_MAP_CAPACITY: usize = 2 * crate::vocab::MAX_CONTACTS;
 
 impl FrameQueue {
     /// A sink for device index `device` feeding `tx`.
@@ -147,7 +149,7 @@ impl FrameQueue {
             let found = self.ids[..self.ids_len]
                 .iter()
                 .position(|&(l, _)| l == local);
-            let begins = c.flags.contains(crate::input::ContactFlags::DOWN);
+            let begins = c.flags.contains(crate::vocab::ContactFlags::DOWN);
             let slot = match (found, begins) {
                 (Some(i), false) => i,
                 (found, _) => {
@@ -178,7 +180,7 @@ impl FrameQueue {
                     }
                 }
             };
-            c.id = crate::input::ContactId(self.ids[slot].1);
+            c.id = crate::vocab::ContactId(self.ids[slot].1);
             if c.flags.ended() {
                 self.ids.copy_within(slot + 1..self.ids_len, slot);
                 self.ids_len -= 1;
@@ -1251,7 +1253,7 @@ fn formation_worker(requests: Receiver<Box<SwitchRequest>>, done: Sender<Box<Pre
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::input::{Contact, ContactFlags, ContactId};
+    use crate::vocab::{Contact, ContactFlags, ContactId};
 
     fn frame(t: u64, contacts: &[(u32, f32, ContactFlags)]) -> TouchFrame {
         let mut f = TouchFrame::new(Micros(t));

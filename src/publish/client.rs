@@ -8,8 +8,8 @@
 use super::protocol::{self, ClientMessage, ClientSettings, Format, ServerHello};
 use super::server::PublisherStats;
 use super::{CLOSE_GRACE, MAX_BACKLOG_BYTES, MAX_BACKLOG_MESSAGES};
-use crate::snapshot::{ClientId, CommandRequest, MeshView};
-use crate::time::{monotonic_now, Micros};
+use crate::vocab::{monotonic_now, Micros};
+use crate::vocab::{ClientId, CommandRequest, MeshView};
 use crossbeam_channel::{Sender, TrySendError};
 use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, ErrorKind, Read};

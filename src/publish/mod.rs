@@ -1,6 +1,6 @@
 //! The Unix-socket publisher: snapshots in, bytes out to every client.
 //!
-//! The control thread sends [`Outgoing`](crate::snapshot::Outgoing) messages to the
+//! The control thread sends [`Outgoing`](crate::publish::Outgoing) messages to the
 //! publisher thread ([`Server::run`]). The publisher serialises each snapshot once per
 //! wire encoding in use (format × field set), shares the bytes (`Arc`) with every
 //! client, and never blocks on a client. The wire format is in [`protocol`] and, for
@@ -44,9 +44,11 @@
 //! [`PublisherStats::take_end_to_end`]'s histogram.
 
 mod client;
+mod outgoing;
 pub mod protocol;
 mod server;
 
+pub use outgoing::Outgoing;
 pub use server::{PublisherStats, Server};
 
 use std::path::PathBuf;

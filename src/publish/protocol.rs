@@ -17,9 +17,9 @@
 //! scaled integers with `itoa`, never through float formatting. Everything else is
 //! rare (events, stats, replies) and goes through serde.
 
-use crate::crowd::scene::MotionType;
 use crate::geom::Vec2;
-use crate::snapshot::{ClientId, Command, Event, MeshView, Snapshot, StatsReport};
+use crate::vocab::MotionType;
+use crate::vocab::{ClientId, Command, Event, MeshView, Snapshot, StatsReport};
 use serde_json::{Map, Value};
 
 /// The protocol version this server speaks.
@@ -1355,7 +1355,7 @@ enum Wire<'a> {
     Control {
         phase: &'static str,
         id: u32,
-        kind: crate::snapshot::ControlKind,
+        kind: crate::vocab::ControlKind,
         #[serde(skip_serializing_if = "Option::is_none")]
         fingers: Option<&'a [u32]>,
         #[serde(skip_serializing_if = "Option::is_none")]
@@ -1394,7 +1394,7 @@ enum Wire<'a> {
     },
     Device {
         input: u16,
-        state: crate::snapshot::DeviceState,
+        state: crate::vocab::DeviceState,
         name: &'a str,
         node: &'a str,
         stable_id: &'a str,

@@ -2,8 +2,8 @@
 
 use super::*;
 use crate::geom::Rect;
-use crate::snapshot::{AgentView, ControlKind, TouchView};
-use crate::time::Micros;
+use crate::vocab::Micros;
+use crate::vocab::{AgentView, ControlKind, TouchView};
 use proptest::prelude::*;
 use std::sync::Arc;
 
@@ -577,7 +577,7 @@ fn arb_snapshot() -> impl Strategy<Value = Snapshot> {
         any::<u64>(),
         // A scene (one motion per agent) or none.
         proptest::option::of(proptest::collection::vec(
-            0..crate::crowd::scene::MotionType::ALL.len(),
+            0..crate::vocab::MotionType::ALL.len(),
             40,
         )),
     )
@@ -590,7 +590,7 @@ fn arb_snapshot() -> impl Strategy<Value = Snapshot> {
                     .map(|m| {
                         m.iter()
                             .take(agents.len())
-                            .map(|&i| crate::crowd::scene::MotionType::ALL[i])
+                            .map(|&i| crate::vocab::MotionType::ALL[i])
                             .collect()
                     })
                     .unwrap_or_default(),
@@ -687,7 +687,7 @@ fn device_event_encodes_as_documented() {
     encode_event(
         &Event::Device {
             input: 0,
-            state: crate::snapshot::DeviceState::Unplugged,
+            state: crate::vocab::DeviceState::Unplugged,
             name: "Dell Canvas".into(),
             node: "/dev/input/event5".into(),
             stable_id: "pci-0000:00:14.0-usb-0:2:1.0".into(),
@@ -706,7 +706,7 @@ fn device_event_encodes_as_documented() {
 
 #[test]
 fn json_snapshot_carries_motions_only_with_a_scene() {
-    use crate::crowd::scene::MotionType;
+    use crate::vocab::MotionType;
     let mut s = snap(3);
     let mut out = Vec::new();
     encode_snapshot_json(&s, None, 0, &FieldSet::ALL, &mut out);
@@ -729,7 +729,7 @@ fn json_snapshot_carries_motions_only_with_a_scene() {
 
 /// One motion per agent, cycling through every type.
 fn with_motions(mut s: Snapshot) -> Snapshot {
-    use crate::crowd::scene::MotionType;
+    use crate::vocab::MotionType;
     s.motions = (0..s.agents.len())
         .map(|i| MotionType::ALL[i % MotionType::ALL.len()])
         .collect();
@@ -738,7 +738,7 @@ fn with_motions(mut s: Snapshot) -> Snapshot {
 
 #[test]
 fn binary_snapshot_carries_motions_when_named_and_in_a_scene() {
-    use crate::crowd::scene::MotionType;
+    use crate::vocab::MotionType;
     // 5 agents: 5 motion bytes, padded to 8 after the touches.
     let s = with_motions(snap(5));
     let mut out = Vec::new();
@@ -847,7 +847,7 @@ fn binary_snapshot_without_motions_keeps_the_previous_layout_exactly() {
     assert_eq!(out, documented_frame("The same frame with motions"));
 }
 
-use crate::crowd::scene::MotionType;
+use crate::vocab::MotionType;
 
 /// The snapshot of the example frames in docs/protocol.md.
 fn example_frame_snapshot() -> Snapshot {

@@ -13,8 +13,9 @@
 //!  origin            origin + (cols·cell_m, 0)
 //! ```
 
-use super::{DynamicKind, MotionType, Placement, Scene, Terrain};
+use super::{DynamicKind, Placement, Scene, Terrain};
 use crate::geom::{Rect, Vec2};
+use crate::vocab::MotionType;
 
 /// Most cells a grid may have.
 pub const MAX_GRID_CELLS: usize = 1 << 22;

@@ -26,8 +26,8 @@ use super::report::{HidCounters, HidDecoder};
 use crate::input::recording::{
     OnBadFrame, Recording, RecordingError, RecordingIssue, END_CANCEL_US, MAX_WARNINGS,
 };
-use crate::input::TouchFrame;
-use crate::time::Micros;
+use crate::vocab::Micros;
+use crate::vocab::TouchFrame;
 use std::path::Path;
 
 /// One `E:` line.

@@ -67,8 +67,8 @@
 //! counted and ignored. Never panics.
 
 use super::descriptor::{Finger, HidField, TouchCollection};
-use crate::input::{Contact, ContactFlags, ContactId, TouchFrame, MAX_CONTACTS};
-use crate::time::Micros;
+use crate::vocab::Micros;
+use crate::vocab::{Contact, ContactFlags, ContactId, TouchFrame, MAX_CONTACTS};
 
 /// Contacts the table holds: every contact down plus those that ended in the
 /// frame under way.
@@ -255,7 +255,7 @@ struct Entry {
 /// # Example
 /// ```
 /// use crowdtouch::input::hid::{touch_collections, HidDecoder};
-/// use crowdtouch::input::{ContactFlags, TouchFrame};
+/// use crowdtouch::vocab::{ContactFlags, TouchFrame};
 /// use crowdtouch::time::Micros;
 ///
 /// // ActionStar 2101:1011 (hid-tools' test_multitouch.py), first report of its

@@ -1,0 +1,23 @@
+//! The shared vocabulary: the plain data types every layer speaks.
+//!
+//! Time ([`Micros`] on CLOCK_MONOTONIC), touch frames as sources produce them, motion
+//! types, and what the control thread publishes (snapshots, meshes, events, stats) or
+//! takes from clients (commands). Nothing here does work: `input` fills touch frames,
+//! `gesture` and `crowd` read them, `engine` fills snapshots, `publish` encodes them.
+//! It depends on [`geom`](crate::geom) only, so every other module may use it.
+
+mod command;
+mod event;
+mod motion;
+mod snapshot;
+mod stats;
+pub mod time;
+mod touch;
+
+pub use command::{ClientId, Command, CommandRequest};
+pub use event::{ControlKind, DeviceState, Event};
+pub use motion::MotionType;
+pub use snapshot::{AgentView, MeshView, Snapshot, TouchView};
+pub use stats::{StageStats, StatsReport};
+pub use time::{monotonic_now, Micros};
+pub use touch::{Contact, ContactFlags, ContactId, FrameFull, TouchFrame, MAX_CONTACTS};

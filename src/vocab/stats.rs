@@ -1,0 +1,65 @@
+//! Pipeline health: the figures published in `stats` messages.
+
+use super::time::Micros;
+use serde::{Deserialize, Serialize};
+
+/// Timing of one pipeline stage over the last stats interval.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StageStats {
+    /// Stage name (`input`, `queue`, `control`, `publish`, `end_to_end`, ...).
+    pub stage: String,
+    /// Samples in the interval.
+    pub count: u64,
+    /// Median (µs).
+    pub p50_us: u64,
+    /// 99th percentile (µs).
+    pub p99_us: u64,
+    /// Maximum (µs).
+    pub max_us: u64,
+    /// Budget from the config (µs).
+    pub budget_us: u64,
+    /// Samples over budget in the interval.
+    pub overruns: u64,
+}
+
+/// Pipeline health, published periodically.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StatsReport {
+    /// Time of the report (CLOCK_MONOTONIC µs).
+    pub t: Micros,
+    /// Length of the interval these figures cover (µs).
+    pub interval_us: u64,
+    /// Per-stage timings over the interval.
+    pub stages: Vec<StageStats>,
+    /// Touch frames received since start.
+    pub frames: u64,
+    /// Motion-only frames merged into others because the queue was full, since start.
+    pub frames_coalesced: u64,
+    /// Touch-down or touch-up transitions lost since start (must stay 0).
+    pub transitions_lost: u64,
+    /// Control ticks since start.
+    pub ticks: u64,
+    /// Assignments applied since start.
+    pub assignments: u64,
+    /// Assignments applied per second over the interval.
+    pub assignment_hz: f64,
+    /// Snapshots dropped for slow clients since start (all clients).
+    pub snapshots_dropped: u64,
+    /// Connected clients.
+    pub clients: u32,
+    /// Agents.
+    pub agents: u32,
+    /// Active controls.
+    pub controls: u32,
+    /// Resident memory of the process (bytes), when known.
+    pub rss_bytes: Option<u64>,
+    /// The most recent control or gesture, described for people (`"area control, 3
+    /// fingers"`).
+    pub last_gesture: Option<String>,
+    /// The formation the crowd is in (`start`, or the last one switched to).
+    #[serde(default)]
+    pub formation: String,
+    /// Formation switches at scene checkpoints since start.
+    #[serde(default)]
+    pub formation_switches: u64,
+}
