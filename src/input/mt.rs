@@ -713,7 +713,7 @@ pub fn assign_min_cost(
 /// use crowdtouch::input::mt::*;
 /// use crowdtouch::input::AxisRange;
 /// use crowdtouch::vocab::{ContactFlags, TouchFrame};
-/// use crowdtouch::time::Micros;
+/// use crowdtouch::vocab::Micros;
 ///
 /// let r = AxisRange { min: 0.0, max: 1000.0, resolution: 10.0 };
 /// let axes = MtAxes { x: r, y: r, slots: 2, pressure: None, touch_major: None, touch_minor: None };

@@ -256,7 +256,7 @@ struct Entry {
 /// ```
 /// use crowdtouch::input::hid::{touch_collections, HidDecoder};
 /// use crowdtouch::vocab::{ContactFlags, TouchFrame};
-/// use crowdtouch::time::Micros;
+/// use crowdtouch::vocab::Micros;
 ///
 /// // ActionStar 2101:1011 (hid-tools' test_multitouch.py), first report of its
 /// // in-range sequence: two fingers down.
