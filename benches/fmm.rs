@@ -16,7 +16,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Solver};
-use crowdtouch::crowd::eikonal::{
+use crowdtouch::crowd::environment::eikonal::{
     bench_instance, coarsen, sample, EikonalCosts, EikonalOptions, Fmm, Grid, Order, Sources,
     BENCH_CELL_M,
 };

@@ -4,9 +4,9 @@
 //! Inputs are generated deterministically outside the measured closures.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use crowdtouch::crowd::arap::{Arap, Constraint};
+use crowdtouch::crowd::mesh::{convex_hull, mean_value_coordinates, point_in_convex_polygon};
 use crowdtouch::crowd::mesh::{goal_positions, sample_goals, TriMesh};
-use crowdtouch::crowd::mvc::{convex_hull, mean_value_coordinates, point_in_convex_polygon};
+use crowdtouch::crowd::mesh::{Arap, Constraint};
 use crowdtouch::geom::{Rect, Vec2};
 
 /// Handle (hard) and supplementary (soft) weights of an area control.

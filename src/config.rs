@@ -11,8 +11,8 @@
 //! 3. `/etc/crowdtouch/crowdtouch.ron`
 //! 4. the embedded default.
 
+use crate::crowd::environment::Scene;
 use crate::crowd::formation::{FormationDef, FormationLibrary, DEFAULT_LAMBDA};
-use crate::crowd::scene::Scene;
 use crate::geom::{Rect, Vec2};
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -476,7 +476,7 @@ pub struct Config {
     /// Agent-to-goal assignment.
     pub assignment: AssignmentConfig,
     /// The environment: a scene file (obstacles, travel-speed patches, moving things;
-    /// see [`crate::crowd::scene`]), relative to the config file. The shipped scenes
+    /// see [`crate::crowd::environment`]), relative to the config file. The shipped scenes
     /// (`config/scenes/<name>.ron`) are also embedded in the binary and found by file
     /// name when the path does not exist. `None`: open ground, no environment.
     /// Loading a config (at start and on every SIGHUP) reads the scene file again.

@@ -1,7 +1,7 @@
 //! Data compiled into the binary: the shipped recordings and scenes, so `demo` and the
 //! embedded default config work from any directory and on a machine with no touchscreen.
 
-use crate::crowd::scene::{Scene, SceneError};
+use crate::crowd::environment::{Scene, SceneError};
 
 use crate::input::recording::{
     parse_recording, read_recording, OnBadFrame, Recording, RecordingError,

@@ -7,16 +7,16 @@
 
 use crate::config::{Config, MAX_AGENTS};
 use crate::crowd::agents::{AgentParams, Agents};
-use crate::crowd::assigner::Assigner;
-use crate::crowd::direct::{DirectController, DirectParams};
+use crate::crowd::assign::Assigner;
+use crate::crowd::control::{DirectController, DirectParams};
+use crate::crowd::environment::FieldParams;
+use crate::crowd::environment::Scene;
 use crate::crowd::environment::{
     steer_target, Planner, PlannerParams, MESH_FIELD_RANGE_M, MESH_FIELD_STEP_M,
 };
-use crate::crowd::field::FieldParams;
 use crate::crowd::formation::{FormationLibrary, Placement, PreparedSwitch, SwitchRequest, START};
 use crate::crowd::mesh::GoalSample;
 use crate::crowd::mesh::TriMesh;
-use crate::crowd::scene::Scene;
 use crate::geom::{Rect, Vec2};
 use crate::gesture::segment::{Segment, SegmentParams, Segmenter, TouchPoint};
 use crate::vocab::Micros;

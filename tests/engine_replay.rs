@@ -143,11 +143,11 @@ fn line_pinch_keeps_the_segment_straight_and_shortens_it() {
 
 fn inside_hull_of(rest: &[Vec2], handles: &[usize]) -> Vec<usize> {
     let pts: Vec<Vec2> = handles.iter().map(|&h| rest[h]).collect();
-    let hull = crowdtouch::crowd::mvc::convex_hull(&pts);
+    let hull = crowdtouch::crowd::mesh::convex_hull(&pts);
     let poly: Vec<Vec2> = hull.iter().map(|&i| pts[i]).collect();
     (0..rest.len())
         .filter(|&v| {
-            crowdtouch::crowd::mvc::point_in_convex_polygon(&poly, rest[v]) || handles.contains(&v)
+            crowdtouch::crowd::mesh::point_in_convex_polygon(&poly, rest[v]) || handles.contains(&v)
         })
         .collect()
 }

@@ -10,8 +10,8 @@ mod common;
 
 use crowdtouch::config::Config;
 use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Distance, Solver};
+use crowdtouch::crowd::environment::Scene;
 use crowdtouch::crowd::environment::{Planner, PlannerParams};
-use crowdtouch::crowd::scene::Scene;
 use crowdtouch::embedded::load_scene;
 use crowdtouch::engine::Engine;
 use crowdtouch::geom::{Rect, Vec2};

@@ -1,7 +1,7 @@
 //! The shipped scenes in `config/scenes/` load and validate, and each shows what its
 //! comment says.
 
-use crowdtouch::crowd::scene::{Scene, SceneGrid, DEFAULT_AGENT_RADIUS_M};
+use crowdtouch::crowd::environment::{Scene, SceneGrid, DEFAULT_AGENT_RADIUS_M};
 use crowdtouch::geom::Vec2;
 use crowdtouch::vocab::MotionType;
 use std::path::{Path, PathBuf};

@@ -2,7 +2,7 @@
 //! Arbitrary scene files: `Scene::from_str` answers with a scene or located errors,
 //! never a panic; an accepted scene passes its own `sanity_check`, and its geometry
 //! queries (projection out of obstacles, terrain lookup) stay finite.
-use crowdtouch::crowd::scene::Scene;
+use crowdtouch::crowd::environment::Scene;
 use crowdtouch::geom::Vec2;
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;

@@ -3,8 +3,8 @@
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use crowdtouch::config::Config;
-use crowdtouch::crowd::arap::{Arap, Constraint};
 use crowdtouch::crowd::mesh::TriMesh;
+use crowdtouch::crowd::mesh::{Arap, Constraint};
 use crowdtouch::engine::Engine;
 use crowdtouch::geom::{Rect, Vec2};
 use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
@@ -297,7 +297,9 @@ fn assign(
 /// (`eikonal::sanity_check`, and on a uniform cost its largest deviation from the
 /// Euclidean distance).
 fn fmm(n: usize, obstacles: bool, first_order: bool, repeats: usize) -> Result<Row> {
-    use crowdtouch::crowd::eikonal::{bench_instance, sanity_check, Fmm, Order, Sources};
+    use crowdtouch::crowd::environment::eikonal::{
+        bench_instance, sanity_check, Fmm, Order, Sources,
+    };
     anyhow::ensure!(
         (2..=8192).contains(&n),
         "--grid must be between 2 and 8192 cells per side"

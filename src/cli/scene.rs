@@ -1,7 +1,7 @@
 //! `crowdtouch scene …`: tools for scene files.
 
 use crowdtouch::config::Config;
-use crowdtouch::crowd::scene::{DynamicKind, Scene};
+use crowdtouch::crowd::environment::{DynamicKind, Scene};
 use std::path::{Path, PathBuf};
 
 /// `crowdtouch scene` subcommands.

@@ -26,11 +26,11 @@
 //! same bytes.
 
 use crowdtouch::config::Config;
-use crowdtouch::crowd::eikonal::{
+use crowdtouch::crowd::environment::eikonal::{
     cost_field_into, descent_direction, sample, CostInputs, CostWeights, EikonalError, Fmm, Grid,
     Sources,
 };
-use crowdtouch::crowd::scene::{
+use crowdtouch::crowd::environment::{
     DynamicKind, ObstacleId, Part, PathMode, Placement, Scene, SceneGrid,
 };
 use crowdtouch::geom::{Rect, Vec2};

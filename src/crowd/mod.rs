@@ -1,17 +1,22 @@
-//! The crowd: agents, the deformable mesh, assignment, and the controllers.
+//! The crowd: agents, the deformable mesh over them, assignment, the environment and
+//! the controllers that move them.
 //!
-//! Pure geometry and numerics: nothing here knows about threads, sockets or devices.
+//! Pure geometry and numerics: nothing here knows about threads, sockets, devices,
+//! the config or the clock (callers pass `now` and parameter structs). One folder per
+//! job:
+//!
+//! | folder | what | paper |
+//! |---|---|---|
+//! | [`mesh`] | the triangle mesh, goal points on it, ARAP deformation, mean value coordinates | mesh-formation-control 4.1–4.2, 6.1 |
+//! | [`assign`] | exact agent-to-goal assignment: cost sources, the solver, the least-effort cost | mesh-formation-control 6.1; formation-transform 3.2 |
+//! | [`environment`] | scenes, the potential field, fast marching, the travel-cost planner | mesh-formation-control 5, 6.2 |
+//! | [`formation`] | formation shapes the crowd switches between, meshed for a crowd | mesh-formation-control 7.3 |
+//! | [`control`] | the controllers: direct manipulation by touch, formation switches | mesh-formation-control 4, 7.3 |
+//! | [`agents`] | agents following their goals (PD control, overlap resolution) | mesh-formation-control 6.2.1 |
 
 pub mod agents;
-pub mod arap;
 pub mod assign;
-pub mod assigner;
-pub mod direct;
-pub mod effort;
-pub mod eikonal;
+pub mod control;
 pub mod environment;
-pub mod field;
 pub mod formation;
 pub mod mesh;
-pub mod mvc;
-pub mod scene;

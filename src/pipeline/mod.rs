@@ -15,10 +15,10 @@
 //! Every channel states its policy where it is created.
 
 use crate::config::{Config, InputConfig};
-use crate::crowd::assigner::Assigner;
+use crate::crowd::assign::Assigner;
+use crate::crowd::environment::Scene;
 use crate::crowd::environment::{Planner, PlannerParams};
 use crate::crowd::formation::{PreparedSwitch, SwitchRequest};
-use crate::crowd::scene::Scene;
 use crate::engine::Engine;
 use crate::geom::Vec2;
 use crate::input::recording::{OnBadFrame, RecordingError};

@@ -1,6 +1,6 @@
 //! The Unix-socket publisher: snapshots in, bytes out to every client.
 //!
-//! The control thread sends [`Outgoing`](crate::publish::Outgoing) messages to the
+//! The control thread sends [`Outgoing`] messages to the
 //! publisher thread ([`Server::run`]). The publisher serialises each snapshot once per
 //! wire encoding in use (format × field set), shares the bytes (`Arc`) with every
 //! client, and never blocks on a client. The wire format is in [`protocol`] and, for

@@ -2,7 +2,7 @@
 //!
 //! A HID touch device describes its reports in a *report descriptor*; this module
 //! turns that description into a layout of bit fields ([`descriptor`]), decodes
-//! input reports with it into [`TouchFrame`](super::TouchFrame)s ([`report`]),
+//! input reports with it into [`TouchFrame`](crate::vocab::TouchFrame)s ([`report`]),
 //! reads `hid-recorder` logs ([`recorder`]) and opens hidraw nodes through hidapi
 //! ([`device`]). Everything but `device` is pure and runs on captured bytes.
 //!

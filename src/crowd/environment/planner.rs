@@ -24,12 +24,12 @@
 //!   of the patch under it ([`Scene::terrain_at`]); and after the step projects it
 //!   out of obstacles by one agent radius ([`Scene::project_out`]).
 
-use super::assign::{CostMatrix, CostProvider, Distance, Solver};
-use super::eikonal::{
+use crate::crowd::assign::{CostMatrix, CostProvider, Distance, Solver};
+use crate::crowd::environment::eikonal::{
     cost_field_into, discomfort_into, CostInputs, CostWeights, DiscomfortParams, EikonalCosts,
     EikonalError, EikonalOptions, FieldSources, Grid,
 };
-use super::scene::{Scene, SceneGrid};
+use crate::crowd::environment::{Scene, SceneGrid};
 use crate::geom::Vec2;
 use std::sync::Arc;
 
@@ -83,7 +83,7 @@ pub enum PlanError {
     Eikonal(#[from] EikonalError),
     /// The assignment failed even with Euclidean costs.
     #[error("assignment: {0}")]
-    Assign(#[from] super::assign::AssignError),
+    Assign(#[from] crate::crowd::assign::AssignError),
     /// The scene bounds do not make a planning grid.
     #[error("scene bounds do not make a planning grid")]
     Grid,
@@ -251,7 +251,7 @@ impl Planner {
         Ok(())
     }
 
-    fn solve(&mut self) -> Result<(), super::assign::AssignError> {
+    fn solve(&mut self) -> Result<(), crate::crowd::assign::AssignError> {
         let r = if self.warm {
             self.solver.solve_warm(&self.matrix).map(|_| ())
         } else {

@@ -16,7 +16,7 @@
 //!          0   r
 //! ```
 
-use crate::crowd::scene::{Part, Placement, Scene};
+use crate::crowd::environment::{Part, Placement, Scene};
 use crate::geom::Vec2;
 
 /// A point this close to a part's centre gets no direction, hence no push (m).
@@ -94,7 +94,7 @@ impl FieldParams {
 /// `d_m`, `range_m` in metres; the result is dimensionless in `[0, 1]`.
 ///
 /// ```
-/// use crowdtouch::crowd::field::magnitude;
+/// use crowdtouch::crowd::environment::magnitude;
 /// assert!((magnitude(0.25, 1.0) - 0.75).abs() < 1e-12);
 /// assert_eq!(magnitude(1.5, 1.0), 0.0);
 /// assert_eq!(magnitude(-0.1, 1.0), 1.0);

@@ -7,7 +7,7 @@
 //! squared travel distance plus the squared change of its local edge length, balanced
 //! by `λ`, and the exact assignment solver minimises the sum (eq. 6).
 
-use super::assign::{CostMatrix, CostProvider};
+use crate::crowd::assign::{CostMatrix, CostProvider};
 use crate::geom::Vec2;
 use spade::{DelaunayTriangulation, Point2, Triangulation};
 
@@ -24,14 +24,14 @@ use spade::{DelaunayTriangulation, Point2, Triangulation};
 /// ```
 ///
 /// where `{s_i}_np` are the triangulation neighbours of `s_i` (likewise for `t_j`).
-/// `λ = 1` is the plain squared distance ([`super::assign::SquaredDistance`]); `λ = 0`
+/// `λ = 1` is the plain squared distance ([`crate::crowd::assign::SquaredDistance`]); `λ = 0`
 /// pairs by local structure alone.
 ///
 /// A point without triangulation neighbours (a formation of one point) has `δ = 0`.
 /// Points at the same position share one triangulation vertex and so one `δ`. A point
 /// the triangulation rejects (a coordinate that is NaN, infinite or beyond spade's
 /// range) gets `δ = 0`; its distance term is then not finite either where it is
-/// NaN, which the solver reports ([`super::assign::AssignError::NotFinite`]).
+/// NaN, which the solver reports ([`crate::crowd::assign::AssignError::NotFinite`]).
 ///
 /// # Units
 /// Positions in metres; `λ` dimensionless in `[0, 1]`; costs in m².
@@ -44,7 +44,7 @@ use spade::{DelaunayTriangulation, Point2, Triangulation};
 /// # Example
 /// ```
 /// use crowdtouch::crowd::assign::{CostMatrix, CostProvider};
-/// use crowdtouch::crowd::effort::LeastEffort;
+/// use crowdtouch::crowd::assign::LeastEffort;
 /// use crowdtouch::geom::Vec2;
 /// // A unit right triangle and the same triangle scaled by 2.
 /// let s = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0)];

@@ -26,8 +26,8 @@
 //!        ╱                                          └──┘
 //! ```
 
+use crate::crowd::assign::LeastEffort;
 use crate::crowd::assign::{CostMatrix, CostProvider, Solver};
-use crate::crowd::effort::LeastEffort;
 use crate::crowd::mesh::{goal_positions, sample_goals, GoalSample, MeshError, TriMesh};
 use crate::geom::{cross, segment_distance_squared, twice_signed_area, Vec2};
 use serde::{Deserialize, Serialize};

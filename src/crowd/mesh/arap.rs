@@ -486,7 +486,7 @@ fn sim_entry((a, b): (f64, f64), r: usize, s: usize) -> f64 {
 /// the centred rest triangles for the rotation fit, and the solve workspaces.
 ///
 /// ```
-/// use crowdtouch::crowd::arap::{Arap, Constraint};
+/// use crowdtouch::crowd::mesh::{Arap, Constraint};
 /// use crowdtouch::crowd::mesh::TriMesh;
 /// use crowdtouch::geom::{Rect, Vec2};
 /// let mesh = TriMesh::grid(Rect { min: [0.0, 0.0], max: [4.0, 3.0] }, 5, 4);

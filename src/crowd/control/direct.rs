@@ -18,11 +18,11 @@
 //! points by dividing the trajectory into segments of a pre-defined length"), at the
 //! constraint speed less the opposing force proportional to the agents' lag.
 
-use super::arap::{Arap, ArapError, Constraint};
-use super::field::{displace_vertices, FieldParams};
-use super::mesh::{goal_positions, nearest_vertex, GoalSample, TriMesh};
-use super::mvc::{convex_hull, mean_value_coordinates, point_in_convex_polygon};
-use super::scene::Scene;
+use crate::crowd::environment::Scene;
+use crate::crowd::environment::{displace_vertices, FieldParams};
+use crate::crowd::mesh::{convex_hull, mean_value_coordinates, point_in_convex_polygon};
+use crate::crowd::mesh::{goal_positions, nearest_vertex, GoalSample, TriMesh};
+use crate::crowd::mesh::{Arap, ArapError, Constraint};
 use crate::geom::Vec2;
 use crate::gesture::segment::Control;
 use crate::vocab::ContactId;
@@ -221,7 +221,7 @@ impl DirectController {
         let arap = Arap::new(&mesh);
         let verts = mesh.rest().to_vec();
         let n = verts.len();
-        let samples = super::mesh::sample_goals(&mesh, agents);
+        let samples = crate::crowd::mesh::sample_goals(&mesh, agents);
         let mut goals = Vec::with_capacity(agents);
         goal_positions(&mesh, &samples, &verts, &mut goals);
         let spacing_m = mean_edge_length(&mesh);
@@ -326,7 +326,7 @@ impl DirectController {
 
     /// Whether a world point is on the crowd (within `radius_m` of the mesh).
     pub fn hits(&self, p: Vec2, radius_m: f64) -> bool {
-        super::mesh::distance_to_mesh(&self.mesh, &self.final_verts, p) <= radius_m
+        crate::crowd::mesh::distance_to_mesh(&self.mesh, &self.final_verts, p) <= radius_m
     }
 
     /// Back to the rest pose; rigs are dropped.
@@ -350,7 +350,7 @@ impl DirectController {
     /// without a jump; line and area supports are rebuilt on the new vertices.
     ///
     /// `samples` are the goal samples drawn on `mesh`, one per agent
-    /// ([`super::mesh::sample_goals`]: the slow part, which the daemon does off the
+    /// ([`crate::crowd::mesh::sample_goals`]: the slow part, which the daemon does off the
     /// control thread). Allocates (a new ARAP system): meant for a switch, not for
     /// every tick.
     pub fn set_mesh_sampled(&mut self, mesh: TriMesh, samples: Vec<GoalSample>) {
@@ -391,7 +391,7 @@ impl DirectController {
 
     /// New goal samples for a different agent count.
     pub fn set_agent_count(&mut self, agents: usize) {
-        self.samples = super::mesh::sample_goals(&self.mesh, agents);
+        self.samples = crate::crowd::mesh::sample_goals(&self.mesh, agents);
         goal_positions(
             &self.mesh,
             &self.samples,

@@ -75,7 +75,7 @@ fn orient(a: Vec2, b: Vec2, c: Vec2) -> f64 {
 /// [`MvcError::Degenerate`]; on error `out` (when of the right length) is zeroed.
 ///
 /// ```
-/// use crowdtouch::crowd::mvc::mean_value_coordinates;
+/// use crowdtouch::crowd::mesh::mean_value_coordinates;
 /// use crowdtouch::geom::Vec2;
 /// let square = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)];
 /// let p = Vec2::new(0.25, 0.5);
@@ -174,7 +174,7 @@ pub fn mean_value_coordinates(poly: &[Vec2], p: Vec2, out: &mut [f64]) -> Result
 /// None.
 ///
 /// ```
-/// use crowdtouch::crowd::mvc::convex_hull;
+/// use crowdtouch::crowd::mesh::convex_hull;
 /// use crowdtouch::geom::Vec2;
 /// let pts = [Vec2::new(0.0, 0.0), Vec2::new(2.0, 0.0), Vec2::new(1.0, 0.5),
 ///            Vec2::new(2.0, 2.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 2.0)];

@@ -25,7 +25,7 @@ const SQUARE_2_2: &str = "Polygon(vertices_m: [(2.0, 2.0), (4.0, 2.0), (4.0, 4.0
 
 #[test]
 fn the_module_example_loads() {
-    let text = include_str!("../scene.rs")
+    let text = include_str!("mod.rs")
         .lines()
         .skip_while(|l| !l.starts_with("//! ```ron"))
         .skip(1)
@@ -433,7 +433,7 @@ mod props {
         /// or still a valid scene; never a panic.
         #[test]
         fn mutated_shipped_scene_never_panics(a in 0usize..4000, len in 0usize..60, dup in proptest::bool::ANY) {
-            let t = include_str!("../../../config/scenes/obstacle_course.ron");
+            let t = include_str!("../../../../config/scenes/obstacle_course.ron");
             let a = a.min(t.len());
             let b = (a + len).min(t.len());
             if !t.is_char_boundary(a) || !t.is_char_boundary(b) {

@@ -8,8 +8,8 @@
 //! at every time step." Weights of 1 on every source and target make the
 //! transportation problem an exact one-to-one assignment.
 
-use super::assign::{AssignError, PointCosts, PointMetric, Solver};
 use crate::config::AssignmentCost;
+use crate::crowd::assign::{AssignError, PointCosts, PointMetric, Solver};
 use crate::geom::Vec2;
 
 /// A reusable assignment: solver workspace and the positions behind the costs.

@@ -96,7 +96,7 @@
 
 use std::cell::RefCell;
 
-use super::assign::{CostMatrix, CostProvider};
+use crate::crowd::assign::{CostMatrix, CostProvider};
 use crate::geom::Vec2;
 
 // ---------------------------------------------------------------------------------
@@ -572,7 +572,7 @@ impl Heap {
 ///
 /// # Example
 /// ```
-/// use crowdtouch::crowd::eikonal::{Fmm, Grid, Sources};
+/// use crowdtouch::crowd::environment::eikonal::{Fmm, Grid, Sources};
 /// use crowdtouch::geom::Vec2;
 /// let grid = Grid::new(64, 64, 0.1, Vec2::zeros()).unwrap();
 /// let cost = vec![1.0; grid.len()];
@@ -1126,7 +1126,7 @@ fn walk_segment(grid: &Grid, a: Vec2, b: Vec2, mut f: impl FnMut(usize, f64) -> 
 ///
 /// # Example
 /// ```
-/// use crowdtouch::crowd::eikonal::{sample, Grid};
+/// use crowdtouch::crowd::environment::eikonal::{sample, Grid};
 /// use crowdtouch::geom::Vec2;
 /// let grid = Grid::new(2, 2, 1.0, Vec2::zeros()).unwrap();
 /// // Centres at (0.5, 0.5), (1.5, 0.5), (0.5, 1.5), (1.5, 1.5).
@@ -1339,7 +1339,7 @@ pub struct CostInputs<'a> {
 ///
 /// # Example
 /// ```
-/// use crowdtouch::crowd::eikonal::{cost_field_into, CostInputs, CostWeights, Grid};
+/// use crowdtouch::crowd::environment::eikonal::{cost_field_into, CostInputs, CostWeights, Grid};
 /// use crowdtouch::geom::Vec2;
 /// let grid = Grid::new(2, 1, 0.5, Vec2::zeros()).unwrap();
 /// let mut c = [0.0; 2];

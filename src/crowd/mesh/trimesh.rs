@@ -4,7 +4,7 @@
 //! 4.1): a uniform grid over the formation rectangle ([`TriMesh::grid`]) or an arbitrary
 //! triangulation of a formation shape ([`TriMesh::from_triangles`]). Fingers grab its
 //! vertices ([`nearest_vertex`]); the deformation itself lives in
-//! [`crate::crowd::arap`]. Agents' goals are points on the mesh given by a triangle and
+//! [`crate::crowd::mesh`]. Agents' goals are points on the mesh given by a triangle and
 //! barycentric coordinates ([`GoalSample`], [`sample_goals`], [`goal_positions`]), so the
 //! number of agents is independent of the number of vertices.
 //!
