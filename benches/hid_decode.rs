@@ -11,8 +11,8 @@
 //! `cargo bench --bench hid_decode -- --warm-up-time 1 --measurement-time 3`
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use crowdtouch::input::hid::recorder::parse_hid_recorder;
 use crowdtouch::input::hid::{touch_collections, HidDecoder, HidField, TouchCollection};
+use crowdtouch::input::recording::parse_hid_recorder;
 use crowdtouch::input::recording::OnBadFrame;
 use crowdtouch::vocab::Micros;
 use crowdtouch::vocab::TouchFrame;

@@ -8,7 +8,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use crowdtouch::input::evdev::{parse_input_events, INPUT_EVENT_BYTES};
-use crowdtouch::input::mt::{MtDecoder, RawEvent};
+use crowdtouch::input::evdev::{MtDecoder, RawEvent};
 use crowdtouch::input::recording::read_evemu_raw;
 use crowdtouch::vocab::TouchFrame;
 use std::path::Path;

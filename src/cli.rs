@@ -465,7 +465,7 @@ fn replay(a: ReplayArgs) -> Result<()> {
     } else {
         OnBadFrame::Stop
     };
-    let rec = crowdtouch::embedded::load_recording(&a.file, on_bad)?;
+    let rec = crowdtouch::input::recording::load_recording(&a.file, on_bad)?;
     for w in &rec.warnings {
         eprintln!("{}:{}: skipped: {}", a.file.display(), w.line, w.message);
     }

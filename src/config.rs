@@ -546,7 +546,7 @@ impl Config {
         if problems.is_empty() {
             cfg.resolve_paths(base);
             if let Some(scene_path) = &cfg.scene {
-                match crate::embedded::load_scene(scene_path, cfg.crowd.agent_radius_m)
+                match crate::crowd::environment::load_scene(scene_path, cfg.crowd.agent_radius_m)
                     .and_then(|s| s.check_formations(scene_path, &cfg.library).map(|()| s))
                 {
                     Ok(scene) => cfg.loaded_scene = Some(Arc::new(scene)),

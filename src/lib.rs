@@ -12,7 +12,6 @@
 
 pub mod config;
 pub mod crowd;
-pub mod embedded;
 pub mod engine;
 pub mod geom;
 pub mod gesture;

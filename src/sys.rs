@@ -10,7 +10,6 @@
 #![allow(unsafe_code)]
 #![deny(clippy::undocumented_unsafe_blocks)]
 
-use crate::input::mt::MAX_SLOTS;
 use nix::libc;
 use std::io;
 use std::os::fd::{AsRawFd, BorrowedFd};
@@ -26,6 +25,12 @@ mod raw {
     // EVIOCGKEY(len): _IOC(_IOC_READ, 'E', 0x18, len).
     nix::ioctl_read_buf!(eviocgkey, b'E', 0x18, u8);
 }
+
+/// Highest `EV_ABS` code the kernel defines (`ABS_MAX` in `linux/input-event-codes.h`).
+pub const ABS_MAX: u16 = 0x3f;
+
+/// Most slots one `EVIOCGMTSLOTS` request reads (the decoders' slot capacity).
+pub const MAX_SLOTS: usize = 64;
 
 /// Words of the largest `EVIOCGMTSLOTS` request: the code, then one value per slot.
 pub const MT_REQUEST_WORDS: usize = 1 + MAX_SLOTS;
@@ -100,7 +105,7 @@ pub fn mt_slots(fd: BorrowedFd<'_>, code: u16, out: &mut [i32]) -> io::Result<()
 /// `EINVAL` (without a system call) for a code above `ABS_MAX`; otherwise the
 /// ioctl's error.
 pub fn abs_info(fd: BorrowedFd<'_>, code: u16) -> io::Result<[i32; 6]> {
-    if code > crate::input::mt::ABS_MAX {
+    if code > ABS_MAX {
         return Err(io::Error::from_raw_os_error(libc::EINVAL));
     }
     let mut info = libc::input_absinfo {
@@ -155,7 +160,10 @@ pub fn key_state(fd: BorrowedFd<'_>, out: &mut [u8; KEY_STATE_BYTES]) -> io::Res
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::input::mt::{ABS_MT_POSITION_X, ABS_MT_TRACKING_ID};
+
+    /// `linux/input-event-codes.h`.
+    const ABS_MT_POSITION_X: u16 = 0x35;
+    const ABS_MT_TRACKING_ID: u16 = 0x39;
     use std::os::fd::AsFd;
 
     #[test]

@@ -10,9 +10,9 @@ mod common;
 
 use crowdtouch::config::Config;
 use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Distance, Solver};
+use crowdtouch::crowd::environment::load_scene;
 use crowdtouch::crowd::environment::Scene;
 use crowdtouch::crowd::environment::{Planner, PlannerParams};
-use crowdtouch::embedded::load_scene;
 use crowdtouch::engine::Engine;
 use crowdtouch::geom::{Rect, Vec2};
 use crowdtouch::vocab::Event;

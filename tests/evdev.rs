@@ -6,11 +6,11 @@
 //! these tests (spliced drops, mocked slot states, the four-finger type-A
 //! stream) is synthetic and says so where it is made.
 
+use crowdtouch::input::evdev::*;
 use crowdtouch::input::evdev::{
     device_info, parse_input_events, slot_codes, slot_state_from, INPUT_EVENT_BYTES,
 };
-use crowdtouch::input::mt::*;
-use crowdtouch::input::record::{EvdevCapabilities, EvemuTime, EvemuWriter, NotTouchReason};
+use crowdtouch::input::evdev::{EvdevCapabilities, EvemuTime, EvemuWriter, NotTouchReason};
 use crowdtouch::input::recording::{
     parse_recording, read_evemu_raw, read_evemu_with_desc, read_recording, OnBadFrame,
 };
@@ -994,7 +994,7 @@ proptest! {
         events in proptest::collection::vec((0u64..5_000_000, any::<u16>(), any::<u16>(), any::<i32>()), 1..50),
         relative in any::<bool>(),
     ) {
-        use crowdtouch::input::record::AbsAxisInfo;
+        use crowdtouch::input::evdev::AbsAxisInfo;
         let mut caps = EvdevCapabilities::new(name);
         [caps.bus, caps.vendor, caps.product, caps.version] = id;
         for b in 0..8 {

@@ -8,11 +8,11 @@
 //! fixture collection's README, established independently of this decoder.
 //! Reports marked SYNTHETIC are built here on a real device's layout.
 
-use crowdtouch::input::hid::recorder::parse_hid_recorder;
 use crowdtouch::input::hid::{
     describe, read_descriptor_file, touch_collections, Application, HidCounters, HidDecoder,
     ReportError, TouchCollection,
 };
+use crowdtouch::input::recording::parse_hid_recorder;
 use crowdtouch::input::recording::{
     parse_recording, read_recording, OnBadFrame, Recording, RecordingError,
 };
@@ -405,7 +405,7 @@ fn descriptor_files_in_every_form() {
 
 #[test]
 fn device_info_from_sysfs_facts() {
-    use crowdtouch::input::hid::device::{device_info, parse_hid_uevent};
+    use crowdtouch::input::hid::{device_info, parse_hid_uevent};
     use crowdtouch::input::{DeviceKind, Error};
     let u = parse_hid_uevent("HID_ID=0003:00002101:00001011\nHID_NAME=ActionStar\nHID_UNIQ=\n")
         .unwrap();

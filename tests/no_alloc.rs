@@ -4,7 +4,7 @@
 
 use crowdtouch::config::Config;
 use crowdtouch::engine::Engine;
-use crowdtouch::input::mt::{MtAxes, MtDecoder, EV_ABS, EV_SYN};
+use crowdtouch::input::evdev::{MtAxes, MtDecoder, EV_ABS, EV_SYN};
 use crowdtouch::input::AxisRange;
 use crowdtouch::pipeline::{FrameQueue, InputCounters};
 use crowdtouch::vocab::Micros;
@@ -211,7 +211,7 @@ fn scene_ticks(scene: &str, agents: u32, mesh: (u32, u32)) -> (u64, Engine) {
     let mut cfg = Config::embedded_default();
     cfg.crowd.agents = agents;
     (cfg.mesh.cols, cfg.mesh.rows) = mesh;
-    let scene = crowdtouch::embedded::load_scene(
+    let scene = crowdtouch::crowd::environment::load_scene(
         std::path::Path::new(&format!("config/scenes/{scene}.ron")),
         cfg.crowd.agent_radius_m,
     )

@@ -848,7 +848,7 @@ fn shipped_recordings_are_what_they_say() {
 // MtDecoder on arbitrary event streams
 
 fn mt_event() -> impl Strategy<Value = (u16, u16, i32)> {
-    use crowdtouch::input::mt::*;
+    use crowdtouch::input::evdev::*;
     prop_oneof![
         3 => Just((EV_SYN, SYN_REPORT, 0)),
         1 => (0u16..4).prop_map(|c| (EV_SYN, c, 0)),
@@ -868,7 +868,7 @@ proptest! {
     /// and `cancel_all` ends everything.
     #[test]
     fn mt_decoder_keeps_life_cycle(events in proptest::collection::vec(mt_event(), 0..300), slots in 1usize..5) {
-        use crowdtouch::input::mt::{MtAxes, MtDecoder};
+        use crowdtouch::input::evdev::{MtAxes, MtDecoder};
         use crowdtouch::input::AxisRange;
         let r = AxisRange { min: 0.0, max: 1000.0, resolution: 0.0 };
         let mut dec = MtDecoder::new(MtAxes { x: r, y: r, slots, pressure: None, touch_major: None, touch_minor: None }, 1);

@@ -34,7 +34,7 @@ fn every_shipped_config_file_loads() {
     }
     assert!(n >= 6, "at least six shipped recordings, found {n}");
     assert_eq!(
-        crowdtouch::embedded::RECORDINGS.len(),
+        crowdtouch::input::recording::RECORDINGS.len(),
         n,
         "every shipped recording is embedded"
     );

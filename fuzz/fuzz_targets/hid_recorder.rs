@@ -1,7 +1,7 @@
 #![no_main]
 //! hid-recorder text through `parse_recording` (an `R:` line with the ActionStar
 //! descriptor is prepended when the input has none) and `parse_hid_recorder`.
-use crowdtouch::input::hid::recorder::parse_hid_recorder;
+use crowdtouch::input::recording::parse_hid_recorder;
 use crowdtouch::input::recording::parse_recording;
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;

@@ -4,7 +4,7 @@
 //! (`/ 3 % 80`). A chunk whose type is `0xffff` is a resync instead: `code % 9`
 //! slots, each with tracking id `(value >> 4i) & 0xf) - 1` and a position
 //! derived from `code` and `value`.
-use crowdtouch::input::mt::{MtAxes, MtDecoder, MtProtocol, MtSlotState};
+use crowdtouch::input::evdev::{MtAxes, MtDecoder, MtProtocol, MtSlotState};
 use crowdtouch::input::AxisRange;
 use crowdtouch::vocab::{ContactFlags, TouchFrame, MAX_CONTACTS};
 use crowdtouch::vocab::Micros;

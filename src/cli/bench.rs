@@ -456,7 +456,7 @@ fn end_to_end(
         } else {
             path.to_path_buf()
         };
-        let loaded = crowdtouch::embedded::load_scene(&path, cfg.crowd.agent_radius_m)
+        let loaded = crowdtouch::crowd::environment::load_scene(&path, cfg.crowd.agent_radius_m)
             .with_context(|| format!("bench scene {}", path.display()))?;
         cfg.set_loaded_scene(Some(std::sync::Arc::new(loaded)));
     }

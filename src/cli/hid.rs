@@ -1,7 +1,7 @@
 //! `crowdtouch hid …`: tools for raw HID digitizers.
 
 use anyhow::Result;
-use crowdtouch::input::hid::descriptor::{describe, read_descriptor_file};
+use crowdtouch::input::hid::{describe, read_descriptor_file};
 use std::path::PathBuf;
 
 /// `crowdtouch hid` subcommands.

@@ -240,7 +240,7 @@ pub fn record(a: RecordArgs) -> Result<()> {
         record_frames(&node, kind, out, &stop)
     } else {
         match kind {
-            DeviceKind::Evdev => crowdtouch::input::record::record_evdev(&node, out, &stop),
+            DeviceKind::Evdev => crowdtouch::input::evdev::record_evdev(&node, out, &stop),
             DeviceKind::Hidraw => crowdtouch::input::hid::record_hidraw(&node, out, &stop),
         }
         .map_err(anyhow::Error::from)

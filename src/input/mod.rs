@@ -10,8 +10,6 @@ pub mod discover;
 pub mod evdev;
 pub mod hid;
 pub mod hotplug;
-pub mod mt;
-pub mod record;
 pub mod recording;
 pub mod replay;
 pub mod synth;

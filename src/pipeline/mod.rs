@@ -371,7 +371,7 @@ pub fn sources_from_config(cfg: &Config) -> Result<Vec<SourceSpec>, Error> {
                 let mut items = Vec::new();
                 let mut glass = None;
                 for f in files {
-                    let rec = crate::embedded::load_recording(f, OnBadFrame::Stop)?;
+                    let rec = crate::input::recording::load_recording(f, OnBadFrame::Stop)?;
                     if glass.is_none() {
                         glass = rec.surface.size_mm();
                     }

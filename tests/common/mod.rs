@@ -20,7 +20,7 @@ pub fn shipped(name: &str) -> PathBuf {
 
 /// Loads a shipped recording.
 pub fn load(name: &str) -> Recording {
-    crowdtouch::embedded::load_recording(&shipped(name), OnBadFrame::Stop)
+    crowdtouch::input::recording::load_recording(&shipped(name), OnBadFrame::Stop)
         .expect("shipped recording loads")
 }
 

@@ -306,7 +306,7 @@ impl std::fmt::Debug for HidReader {
 
 impl HidReader {
     /// Opens a hidraw node, builds the decoder and switches the device to
-    /// multi-touch reporting (see the [module docs](self)).
+    /// multi-touch reporting (see the [module docs](crate::input::hid)).
     ///
     /// # Errors
     /// [`Error::NotFound`], [`Error::PermissionDenied`], [`Error::Busy`] from the
@@ -446,7 +446,7 @@ pub fn record_hidraw(node: &Path, w: impl std::io::Write, stop: &AtomicBool) -> 
         op: "write recording",
         source,
     };
-    let mut out = super::recorder::HidRecorderWriter::new(
+    let mut out = crate::input::recording::HidRecorderWriter::new(
         w,
         &descriptor,
         &uevent.name,

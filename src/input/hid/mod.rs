@@ -1,10 +1,12 @@
-//! Raw HID digitizers: report descriptors, input reports, hid-recorder logs, hidraw devices.
+//! Raw HID digitizers: report descriptors, input reports, hidraw devices.
 //!
 //! A HID touch device describes its reports in a *report descriptor*; this module
-//! turns that description into a layout of bit fields ([`descriptor`]), decodes
-//! input reports with it into [`TouchFrame`](crate::vocab::TouchFrame)s ([`report`]),
-//! reads `hid-recorder` logs ([`recorder`]) and opens hidraw nodes through hidapi
-//! ([`device`]). Everything but `device` is pure and runs on captured bytes.
+//! turns that description into a layout of bit fields (`descriptor.rs`:
+//! [`touch_collections`]), decodes input reports with it into
+//! [`TouchFrame`](crate::vocab::TouchFrame)s (`report.rs`: [`HidDecoder`]) and opens
+//! hidraw nodes through hidapi (`device.rs`: [`HidReader`]). Everything but
+//! `device.rs` is pure and runs on captured bytes; `hid-recorder` logs are read by
+//! [`crate::input::recording`].
 //!
 //! ```text
 //!  report descriptor ──touch_collections──► TouchCollection ──HidDecoder::new──► HidDecoder
@@ -28,7 +30,7 @@
 //! # Where `hidreport` falls short
 //!
 //! Descriptors are parsed by the `hidreport` 0.6 crate. Three things in it need
-//! help, done in [`descriptor`] before the bytes reach it (with `hidreport`'s own
+//! help, done in `descriptor.rs` before the bytes reach it (with `hidreport`'s own
 //! item tokenizer, not a second parser):
 //!
 //! * it panics on some malformed input (a Usage with no Usage Page in effect:
@@ -47,69 +49,20 @@
 //! Units are decoded here from the raw 32-bit value ([`descriptor::unit_name`]), never
 //! through `hidreport::Unit`.
 
-pub mod descriptor;
-pub mod device;
-pub mod recorder;
-pub mod report;
+mod descriptor;
+mod device;
+mod hex;
+mod report;
+pub mod usage;
 
 pub use descriptor::{
-    describe, read_descriptor_file, touch_collections, Application, DescriptorFileError,
+    describe, read_descriptor_file, touch_collections, unit_name, Application, DescriptorFileError,
     FeatureSetting, Finger, HidField, NotTouch, TouchCollection, TouchReport,
+    MAX_DECLARED_CONTACTS, MAX_DESCRIPTOR_BYTES, MAX_REPORT_COUNT, MAX_REPORT_SIZE_BITS,
 };
-pub use device::{enumerate, probe, record_hidraw, HidOptions, HidReader};
-pub use recorder::{parse_hid_recorder, HidRecorderLog, HidRecorderWriter};
+pub use device::{
+    device_info, enumerate, parse_hid_uevent, probe, record_hidraw, HidOptions, HidReader,
+    HidUevent,
+};
+pub(crate) use hex::{parse_hex_bytes, parse_r_line};
 pub use report::{HidCounters, HidDecoder, ReportError};
-
-/// Usage pages and usages this module looks for (HID Usage Tables 1.5).
-pub mod usage {
-    /// Generic Desktop page.
-    pub const PAGE_GENERIC_DESKTOP: u16 = 0x01;
-    /// Digitizer page.
-    pub const PAGE_DIGITIZER: u16 = 0x0D;
-    /// The vendor page on which Wacom touch nodes mirror the digitizer usages.
-    pub const PAGE_VENDOR_FF00: u16 = 0xFF00;
-    /// Generic Desktop X.
-    pub const X: u16 = 0x30;
-    /// Generic Desktop Y.
-    pub const Y: u16 = 0x31;
-    /// Wacom vendor-page X (0xFF00:0x130).
-    pub const VENDOR_X: u16 = 0x130;
-    /// Wacom vendor-page Y (0xFF00:0x131).
-    pub const VENDOR_Y: u16 = 0x131;
-    /// Digitizer: Touch Screen application.
-    pub const TOUCH_SCREEN: u16 = 0x04;
-    /// Digitizer: Touch Pad application.
-    pub const TOUCH_PAD: u16 = 0x05;
-    /// Digitizer: Device Configuration application (holds Input Mode).
-    pub const DEVICE_CONFIGURATION: u16 = 0x0E;
-    /// Digitizer: Finger logical collection.
-    pub const FINGER: u16 = 0x22;
-    /// Digitizer: Tip Pressure.
-    pub const TIP_PRESSURE: u16 = 0x30;
-    /// Digitizer: In Range.
-    pub const IN_RANGE: u16 = 0x32;
-    /// Digitizer: Azimuth.
-    pub const AZIMUTH: u16 = 0x3F;
-    /// Digitizer: Tip Switch.
-    pub const TIP_SWITCH: u16 = 0x42;
-    /// Digitizer: Confidence (0 = palm or other unintended contact).
-    pub const CONFIDENCE: u16 = 0x47;
-    /// Digitizer: Width.
-    pub const WIDTH: u16 = 0x48;
-    /// Digitizer: Height.
-    pub const HEIGHT: u16 = 0x49;
-    /// Digitizer: Contact Identifier.
-    pub const CONTACT_ID: u16 = 0x51;
-    /// Digitizer: Input Mode (formerly Device Mode) feature.
-    pub const INPUT_MODE: u16 = 0x52;
-    /// Digitizer: Contact Count.
-    pub const CONTACT_COUNT: u16 = 0x54;
-    /// Digitizer: Contact Count Maximum feature.
-    pub const CONTACT_COUNT_MAX: u16 = 0x55;
-    /// Digitizer: Scan Time.
-    pub const SCAN_TIME: u16 = 0x56;
-    /// Digitizer: Surface Switch feature (touchpads: report contacts).
-    pub const SURFACE_SWITCH: u16 = 0x57;
-    /// Digitizer: Button Switch feature (touchpads: report buttons).
-    pub const BUTTON_SWITCH: u16 = 0x58;
-}

@@ -79,11 +79,13 @@ use std::path::{Path, PathBuf};
 
 pub mod grid;
 pub mod shape;
+mod shipped;
 #[cfg(test)]
 mod tests;
 
 pub use grid::{GridError, SceneGrid};
 pub use shape::{BoundaryPoint, Circle, ConvexPolygon, Part, Placement};
+pub use shipped::{load_scene, SCENES};
 
 /// The scene format version this build reads.
 pub const SCENE_VERSION: u32 = 1;

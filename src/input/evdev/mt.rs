@@ -107,7 +107,7 @@
 //!   in one slot before a `SYN_REPORT`) are not reported; they are counted in
 //!   [`MtCounters::transient_contacts`].
 
-use super::AxisRange;
+use crate::input::AxisRange;
 use crate::vocab::Micros;
 use crate::vocab::{Contact, ContactFlags, ContactId, TouchFrame, MAX_CONTACTS};
 
@@ -181,7 +181,7 @@ pub const ABS_MT_TOOL_X: u16 = 0x3c;
 /// `EV_ABS` code: tool centre Y.
 pub const ABS_MT_TOOL_Y: u16 = 0x3d;
 /// Highest `EV_ABS` code the kernel defines.
-pub const ABS_MAX: u16 = 0x3f;
+pub use crate::sys::ABS_MAX;
 
 /// `ABS_MT_TOOL_TYPE` value: a finger.
 pub const MT_TOOL_FINGER: i32 = 0;
@@ -192,6 +192,9 @@ pub const MT_TOOL_PALM: i32 = 2;
 
 /// Most slots a decoder tracks; slots of larger devices are counted as out of range.
 pub const MAX_SLOTS: usize = MAX_CONTACTS;
+
+// One `EVIOCGMTSLOTS` request reads every slot a decoder holds.
+const _: () = assert!(MAX_SLOTS <= crate::sys::MAX_SLOTS);
 
 /// Protocol A: farthest a contact moves between two frames and is still the
 /// same contact, in millimetres (used when both position resolutions are known).
@@ -627,7 +630,7 @@ const FORBIDDEN_COST_FACTOR: f64 = 4.0;
 /// None.
 ///
 /// ```
-/// use crowdtouch::input::mt::{assign_min_cost, ASSIGN_MAX};
+/// use crowdtouch::input::evdev::{assign_min_cost, ASSIGN_MAX};
 /// let c = [[4.0, 1.0, 3.0], [2.0, 0.0, 5.0], [3.0, 2.0, 2.0]];
 /// let mut col = [0usize; ASSIGN_MAX];
 /// assign_min_cost(3, |r, k| c[r][k], &mut col);
@@ -710,7 +713,7 @@ pub fn assign_min_cost(
 ///
 /// # Example
 /// ```
-/// use crowdtouch::input::mt::*;
+/// use crowdtouch::input::evdev::*;
 /// use crowdtouch::input::AxisRange;
 /// use crowdtouch::vocab::{ContactFlags, TouchFrame};
 /// use crowdtouch::vocab::Micros;

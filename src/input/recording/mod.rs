@@ -40,7 +40,7 @@
 //!   keys are ignored; only the first device is read.
 //! * **hid-recorder** (raw HID): `R:` report descriptor, `N:`, `I:`, then
 //!   `E: sec.usec len bytes` input reports; decoded by
-//!   [`hid::recorder`](super::hid::recorder) with the first touch collection of
+//!   [`read_hid_recorder`] with the first touch collection of
 //!   the descriptor.
 //!
 //! evemu and libinput record go through [`MtDecoder`], so they must describe a
@@ -69,9 +69,20 @@
 //! after it, that ends them as `CANCELLED`, so nothing sticks when the recording
 //! is replayed.
 
-use super::mt::{self, MtAxes, MtDecoder, RawEvent, ABS_MAX};
-use super::record::{AbsAxisInfo, EvdevCapabilities, EV_CNT, MASK_BYTES, PROP_BYTES};
-use super::{AxisRange, SurfaceInfo};
+mod hid_recorder;
+mod shipped;
+
+pub use hid_recorder::{
+    decode_hid_recording, parse_hid_recorder, read_hid_recorder, HidEvent, HidRecorderLog,
+    HidRecorderWriter,
+};
+pub use shipped::{load_recording, RECORDINGS};
+
+use crate::input::evdev::{
+    self as mt, AbsAxisInfo, EvdevCapabilities, MtAxes, MtDecoder, RawEvent, ABS_MAX, EV_CNT,
+    MASK_BYTES, PROP_BYTES,
+};
+use crate::input::{AxisRange, SurfaceInfo};
 use crate::vocab::Micros;
 use crate::vocab::{Contact, ContactFlags, ContactId, TouchFrame, MAX_CONTACTS};
 use serde::Serialize;
@@ -343,9 +354,7 @@ pub fn parse_recording(
         Ok(Some(Format::Jsonl)) => parse_jsonl(text, name, on_bad),
         Ok(Some(Format::Evemu)) => parse_evemu(None, text, name, on_bad),
         Ok(Some(Format::LibinputYaml)) => parse_libinput_yaml(text, name, on_bad),
-        Ok(Some(Format::HidRecorder)) => {
-            super::hid::recorder::read_hid_recorder(text, name, on_bad)
-        }
+        Ok(Some(Format::HidRecorder)) => hid_recorder::read_hid_recorder(text, name, on_bad),
         Ok(None) => Err(RecordingError::Empty {
             path: name.to_path_buf(),
         }),

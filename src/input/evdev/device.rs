@@ -30,7 +30,7 @@ use super::mt::{
     ABS_MT_TRACKING_ID, ABS_PRESSURE, ABS_X, ABS_Y, BTN_TOUCH, EV_ABS, MAX_SLOTS,
 };
 use super::record::{AbsAxisInfo, DecoderSetup, EvdevCapabilities};
-use super::{DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink};
+use crate::input::{DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink};
 use crate::sys;
 use crate::vocab::TouchFrame;
 use crate::vocab::{monotonic_now, Micros};
@@ -510,7 +510,7 @@ impl DeviceReader for EvdevReader {
         }
         let node: PathBuf = self.info.node.clone();
         while !stop.load(Ordering::Relaxed) {
-            let timeout_ms = super::reader_timeout_ms(sink);
+            let timeout_ms = crate::input::reader_timeout_ms(sink);
             let n = wait_read(&self.dev, &node, &mut self.buf, timeout_ms)?;
             let mut at = 0;
             while at + INPUT_EVENT_BYTES <= n {
@@ -544,7 +544,7 @@ impl DeviceReader for EvdevReader {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::input::mt::{EV_SYN, SYN_REPORT};
+    use crate::input::evdev::{EV_SYN, SYN_REPORT};
 
     fn raw(sec: i64, usec: i64, ty: u16, code: u16, value: i32) -> Vec<u8> {
         let mut b = Vec::new();

@@ -2,7 +2,7 @@
 //!
 //! [`EvdevCapabilities`] is a snapshot of what an evdev device declares: name,
 //! input id, property bits, a code bitmask per event type, and the absinfo of
-//! each absolute axis. It comes from a device ([`super::evdev::capabilities`])
+//! each absolute axis. It comes from a device ([`super::device::capabilities`])
 //! or from a parsed evemu file ([`super::recording::read_evemu_raw`]), and it
 //! decides how the device is decoded ([`EvdevCapabilities::decoder_setup`]).
 //!
@@ -36,7 +36,7 @@ use super::mt::{
     ABS_MT_PRESSURE, ABS_MT_SLOT, ABS_MT_TOUCH_MAJOR, ABS_MT_TOUCH_MINOR, ABS_PRESSURE, ABS_X,
     ABS_Y, BTN_TOUCH, EV_ABS, EV_KEY, EV_MSC, EV_SYN,
 };
-use super::{AxisRange, SurfaceInfo};
+use crate::input::{AxisRange, SurfaceInfo};
 use crate::vocab::MAX_CONTACTS;
 use std::fmt;
 use std::io::{self, Write};
@@ -719,7 +719,7 @@ pub fn code_name(ev_type: u16, code: u16) -> &'static str {
 }
 
 /// Records the raw events of the evdev device `node` into `w` as an evemu file,
-/// until `stop` is set (checked at least every [`super::STOP_CHECK_US`]).
+/// until `stop` is set (checked at least every [`crate::input::STOP_CHECK_US`]).
 ///
 /// Every event the device sends is written as it came (a `SYN_DROPPED` too),
 /// with times relative to the first one. The device is not grabbed and its
@@ -727,23 +727,31 @@ pub fn code_name(ev_type: u16, code: u16) -> &'static str {
 /// of events written.
 ///
 /// # Errors
-/// [`super::Error`] from opening the node, `Unplugged` when it goes away, and
-/// [`super::Error::Io`] (op `"write recording"`) when `w` fails.
-pub fn record_evdev(node: &Path, w: impl Write, stop: &AtomicBool) -> Result<u64, super::Error> {
-    let dev = super::evdev::open_node(node)?;
-    let caps = super::evdev::capabilities(&dev)
-        .map_err(|e| super::Error::from_io(node, "query capabilities", e))?;
-    let werr = |source| super::Error::Io {
+/// [`crate::input::Error`] from opening the node, `Unplugged` when it goes away, and
+/// [`crate::input::Error::Io`] (op `"write recording"`) when `w` fails.
+pub fn record_evdev(
+    node: &Path,
+    w: impl Write,
+    stop: &AtomicBool,
+) -> Result<u64, crate::input::Error> {
+    let dev = super::device::open_node(node)?;
+    let caps = super::device::capabilities(&dev)
+        .map_err(|e| crate::input::Error::from_io(node, "query capabilities", e))?;
+    let werr = |source| crate::input::Error::Io {
         node: node.to_path_buf(),
         op: "write recording",
         source,
     };
     let mut out = EvemuWriter::new(&caps, w).map_err(werr)?;
-    let mut buf = [0u8; super::evdev::READ_BUF_BYTES];
+    let mut buf = [0u8; super::device::READ_BUF_BYTES];
     while !stop.load(Ordering::Relaxed) {
-        let n =
-            super::evdev::wait_read(&dev, node, &mut buf, (super::STOP_CHECK_US / 1000) as u16)?;
-        for ev in super::evdev::parse_input_events(&buf[..n]) {
+        let n = super::device::wait_read(
+            &dev,
+            node,
+            &mut buf,
+            (crate::input::STOP_CHECK_US / 1000) as u16,
+        )?;
+        for ev in super::device::parse_input_events(&buf[..n]) {
             out.event(&ev).map_err(werr)?;
         }
         if n > 0 {

@@ -1,0 +1,54 @@
+//! The shipped recordings (`config/recordings/`), compiled into the binary so `demo`
+//! and the embedded default config work from any directory and on a machine with no
+//! touchscreen.
+
+use super::{parse_recording, read_recording, OnBadFrame, Recording, RecordingError};
+use std::path::Path;
+
+/// The shipped recordings (`config/recordings/`), by file name.
+pub const RECORDINGS: [(&str, &str); 7] = [
+    (
+        "01-point-drag.jsonl",
+        include_str!("../../../config/recordings/01-point-drag.jsonl"),
+    ),
+    (
+        "02-line-drag.jsonl",
+        include_str!("../../../config/recordings/02-line-drag.jsonl"),
+    ),
+    (
+        "03-line-pinch.jsonl",
+        include_str!("../../../config/recordings/03-line-pinch.jsonl"),
+    ),
+    (
+        "04-area-drag.jsonl",
+        include_str!("../../../config/recordings/04-area-drag.jsonl"),
+    ),
+    (
+        "05-area-twist.jsonl",
+        include_str!("../../../config/recordings/05-area-twist.jsonl"),
+    ),
+    (
+        "06-two-hands.jsonl",
+        include_str!("../../../config/recordings/06-two-hands.jsonl"),
+    ),
+    (
+        "07-open-space-swipe.jsonl",
+        include_str!("../../../config/recordings/07-open-space-swipe.jsonl"),
+    ),
+];
+
+/// Reads a recording from disk, or — when no such file exists and its name is one of
+/// the shipped recordings — from the copy compiled into the binary.
+///
+/// # Errors
+/// The reader's error for the file (or the embedded copy).
+pub fn load_recording(path: &Path, on_bad: OnBadFrame) -> Result<Recording, RecordingError> {
+    if !path.exists() {
+        if let Some(name) = path.file_name().and_then(|n| n.to_str()) {
+            if let Some((_, text)) = RECORDINGS.iter().find(|(n, _)| *n == name) {
+                return parse_recording(text, path, on_bad);
+            }
+        }
+    }
+    read_recording(path, on_bad)
+}
