@@ -14,8 +14,11 @@
 use crate::crowd::environment::Scene;
 use crate::crowd::formation::{FormationDef, FormationLibrary, DEFAULT_LAMBDA};
 use crate::geom::{Rect, Vec2};
+pub use crate::located::Issue as ConfigIssue;
+use crate::located::{
+    field_positions, format_issues, locate_field, parse_strict, read_capped, ReadError,
+};
 use serde::{Deserialize, Serialize};
-use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -28,19 +31,6 @@ pub const MAX_AGENTS: u32 = 20_000;
 
 /// The embedded default config text (`config/crowdtouch.ron`).
 pub const DEFAULT_CONFIG_RON: &str = include_str!("../config/crowdtouch.ron");
-
-/// One problem in a config.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ConfigIssue {
-    /// Dotted path of the field (`crowd.agents`), or empty for syntax errors.
-    pub field: String,
-    /// 1-based line, 0 when unknown.
-    pub line: usize,
-    /// 1-based column, 0 when unknown.
-    pub column: usize,
-    /// What is wrong.
-    pub message: String,
-}
 
 /// Why a config could not be used.
 #[derive(Debug, thiserror::Error)]
@@ -74,27 +64,13 @@ pub enum Error {
     },
 }
 
-fn format_issues(path: &Path, issues: &[ConfigIssue]) -> String {
-    let mut s = String::new();
-    for (i, is) in issues.iter().enumerate() {
-        if i > 0 {
-            s.push('\n');
+impl From<ReadError> for Error {
+    fn from(e: ReadError) -> Error {
+        match e {
+            ReadError::Io { path, source } => Error::Io { path, source },
+            ReadError::TooLarge { path, size, max } => Error::TooLarge { path, size, max },
         }
-        let field = if is.field.is_empty() {
-            String::new()
-        } else {
-            format!(" field `{}`:", is.field)
-        };
-        s.push_str(&format!(
-            "{}:{}:{}:{} {}",
-            path.display(),
-            is.line,
-            is.column,
-            field,
-            is.message
-        ));
     }
-    s
 }
 
 /// Log verbosity.
@@ -513,7 +489,7 @@ impl Config {
     /// # Errors
     /// [`Error::Io`], [`Error::TooLarge`] or [`Error::Invalid`] with every problem.
     pub fn load(path: &Path) -> Result<Config, Error> {
-        let text = read_capped(path, MAX_CONFIG_BYTES)?;
+        let text = read_capped(path, MAX_CONFIG_BYTES).map_err(Error::from)?;
         let base = path.parent().unwrap_or(Path::new("."));
         Config::from_str_at(&text, path, base)
     }
@@ -547,8 +523,10 @@ impl Config {
             cfg.resolve_paths(base);
             if let Some(scene_path) = &cfg.scene {
                 match crate::crowd::environment::load_scene(scene_path, cfg.crowd.agent_radius_m)
-                    .and_then(|s| s.check_formations(scene_path, &cfg.library).map(|()| s))
-                {
+                    .and_then(|s| {
+                        s.check_formations(scene_path, &cfg.library.known_names())
+                            .map(|()| s)
+                    }) {
                     Ok(scene) => cfg.loaded_scene = Some(Arc::new(scene)),
                     Err(e) => {
                         problems.push(("scene".to_string(), format!("scene not usable:\n{e}")))
@@ -952,45 +930,6 @@ impl Config {
     }
 }
 
-/// Reads a RON data file (config, scene, ...) of at most `max_bytes` bytes.
-///
-/// # Errors
-/// [`Error::Io`] when it cannot be read, [`Error::TooLarge`] past the cap.
-pub fn read_capped(path: &Path, max_bytes: u64) -> Result<String, Error> {
-    let meta = std::fs::metadata(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    if meta.len() > max_bytes {
-        return Err(Error::TooLarge {
-            path: path.to_path_buf(),
-            size: meta.len(),
-            max: max_bytes,
-        });
-    }
-    std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })
-}
-
-/// Deserialises strict RON text (types use `deny_unknown_fields`) into `T`. A
-/// syntax or schema error becomes one issue with its line, column and the dotted path
-/// of the field it is in; the shared parser for every RON file crowdtouch reads.
-///
-/// # Errors
-/// The first problem the parser meets.
-pub fn parse_strict<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, ConfigIssue> {
-    ron::Options::default()
-        .from_str(text)
-        .map_err(|e: ron::error::SpannedError| ConfigIssue {
-            field: field_of_ron_error(&e.code, text, e.position),
-            line: e.position.line,
-            column: e.position.col,
-            message: e.code.to_string(),
-        })
-}
-
 /// Parses `"vvvv:pppp"` (hex) into vendor and product ids.
 pub fn parse_vendor_product(s: &str) -> Option<(u16, u16)> {
     let (v, p) = s.trim().split_once(':')?;
@@ -1002,234 +941,6 @@ pub fn parse_vendor_product(s: &str) -> Option<(u16, u16)> {
 
 fn finite_rect(r: &Rect) -> bool {
     r.min.iter().chain(r.max.iter()).all(|v| v.is_finite())
-}
-
-/// Best-effort field name for a ron parse error.
-fn field_of_ron_error(code: &ron::error::Error, text: &str, pos: ron::error::Position) -> String {
-    use ron::error::Error as E;
-    match code {
-        E::NoSuchStructField { found, .. } => {
-            let path = enclosing_path(text, pos.line, pos.col);
-            if path == *found || path.ends_with(&format!(".{found}")) {
-                path
-            } else {
-                join_path(&path, found)
-            }
-        }
-        E::MissingStructField { field, .. } | E::DuplicateStructField { field, .. } => {
-            let path = enclosing_path(text, pos.line, pos.col);
-            join_path(&path, field)
-        }
-        _ => enclosing_path(text, pos.line, pos.col),
-    }
-}
-
-fn join_path(parent: &str, field: &str) -> String {
-    if parent.is_empty() {
-        field.to_string()
-    } else {
-        format!("{parent}.{field}")
-    }
-}
-
-/// A token of the RON text with its position: identifiers followed by `:` open a
-/// field, brackets nest.
-struct Scanner<'a> {
-    text: &'a str,
-}
-
-#[derive(Debug, Clone)]
-enum Tok {
-    Field(String),
-    Open(char),
-    Close,
-    Comma,
-}
-
-impl<'a> Scanner<'a> {
-    /// Tokens (fields, brackets, commas) with 1-based line/column, skipping strings and comments.
-    fn tokens(&self) -> Vec<(Tok, usize, usize)> {
-        let mut out = Vec::new();
-        let chars: Vec<char> = self.text.chars().collect();
-        let (mut i, mut line, mut col) = (0usize, 1usize, 1usize);
-        fn adv(chars: &[char], i: &mut usize, line: &mut usize, col: &mut usize) {
-            let c = chars[*i];
-            *i += 1;
-            if c == '\n' {
-                *line += 1;
-                *col = 1;
-            } else {
-                *col += 1;
-            }
-        }
-        while i < chars.len() {
-            let c = chars[i];
-            if c == '/' && chars.get(i + 1) == Some(&'/') {
-                while i < chars.len() && chars[i] != '\n' {
-                    adv(&chars, &mut i, &mut line, &mut col);
-                }
-                continue;
-            }
-            if c == '/' && chars.get(i + 1) == Some(&'*') {
-                while i < chars.len() && !(chars[i] == '*' && chars.get(i + 1) == Some(&'/')) {
-                    adv(&chars, &mut i, &mut line, &mut col);
-                }
-                for _ in 0..2 {
-                    if i < chars.len() {
-                        adv(&chars, &mut i, &mut line, &mut col);
-                    }
-                }
-                continue;
-            }
-            if c == '"' {
-                adv(&chars, &mut i, &mut line, &mut col);
-                while i < chars.len() && chars[i] != '"' {
-                    if chars[i] == '\\' {
-                        adv(&chars, &mut i, &mut line, &mut col);
-                    }
-                    if i < chars.len() {
-                        adv(&chars, &mut i, &mut line, &mut col);
-                    }
-                }
-                if i < chars.len() {
-                    adv(&chars, &mut i, &mut line, &mut col);
-                }
-                continue;
-            }
-            if c.is_alphabetic() || c == '_' {
-                let (sl, sc) = (line, col);
-                let mut ident = String::new();
-                while i < chars.len() && (chars[i].is_alphanumeric() || chars[i] == '_') {
-                    ident.push(chars[i]);
-                    adv(&chars, &mut i, &mut line, &mut col);
-                }
-                let mut j = i;
-                while j < chars.len() && (chars[j] == ' ' || chars[j] == '\t') {
-                    j += 1;
-                }
-                if chars.get(j) == Some(&':') {
-                    out.push((Tok::Field(ident), sl, sc));
-                }
-                continue;
-            }
-            match c {
-                '(' | '[' | '{' => out.push((Tok::Open(c), line, col)),
-                ')' | ']' | '}' => out.push((Tok::Close, line, col)),
-                ',' => out.push((Tok::Comma, line, col)),
-                _ => {}
-            }
-            adv(&chars, &mut i, &mut line, &mut col);
-        }
-        out
-    }
-}
-
-/// Walks the token stream, yielding `(path, line, col)` for every field.
-fn field_positions(text: &str) -> Vec<(String, usize, usize)> {
-    let toks = Scanner { text }.tokens();
-    // Stack of (field name for this nesting level, list index when inside [ ]).
-    let mut stack: Vec<(Option<String>, Option<usize>)> = Vec::new();
-    let mut pending: Option<String> = None;
-    let mut out = Vec::new();
-    let path_of = |stack: &[(Option<String>, Option<usize>)]| -> String {
-        let mut s = String::new();
-        for (name, idx) in stack {
-            if let Some(n) = name {
-                if !s.is_empty() {
-                    s.push('.');
-                }
-                s.push_str(n);
-            }
-            if let Some(i) = idx {
-                s.push_str(&format!("[{i}]"));
-            }
-        }
-        s
-    };
-    for (tok, line, col) in toks {
-        match tok {
-            Tok::Field(name) => {
-                let parent = path_of(&stack);
-                out.push((join_path(&parent, &name), line, col));
-                pending = Some(name);
-            }
-            Tok::Open(ch) => {
-                let idx = if ch == '[' { Some(0) } else { None };
-                stack.push((pending.take(), idx));
-            }
-            Tok::Close => {
-                stack.pop();
-                pending = None;
-            }
-            Tok::Comma => {
-                pending = None;
-                if let Some((_, Some(i))) = stack.last_mut() {
-                    *i += 1;
-                }
-            }
-        }
-    }
-    out
-}
-
-/// Line and column of a field given by its dotted path (`crowd.agents`), or of its
-/// nearest enclosing field that appears in the text.
-pub fn locate_field(text: &str, path: &str) -> Option<(usize, usize)> {
-    let fields = field_positions(text);
-    let mut p = path.to_string();
-    loop {
-        if let Some((_, l, c)) = fields.iter().find(|(fp, _, _)| *fp == p) {
-            return Some((*l, *c));
-        }
-        // Strip the last component ("a.b[2].c" -> "a.b[2]" -> "a.b" -> "a").
-        if let Some(i) = p.rfind(['.', '[']) {
-            p.truncate(i);
-        } else {
-            return None;
-        }
-    }
-}
-
-/// Dotted path of the innermost field enclosing a position.
-fn enclosing_path(text: &str, line: usize, col: usize) -> String {
-    let toks = Scanner { text }.tokens();
-    let mut stack: Vec<(Option<String>, Option<usize>)> = Vec::new();
-    let mut pending: Option<String> = None;
-    for (tok, l, c) in toks {
-        if (l, c) >= (line, col) {
-            break;
-        }
-        match tok {
-            Tok::Field(name) => pending = Some(name),
-            Tok::Open(ch) => stack.push((pending.take(), (ch == '[').then_some(0))),
-            Tok::Close => {
-                stack.pop();
-                pending = None;
-            }
-            Tok::Comma => {
-                pending = None;
-                if let Some((_, Some(i))) = stack.last_mut() {
-                    *i += 1;
-                }
-            }
-        }
-    }
-    let mut s = String::new();
-    for (name, idx) in &stack {
-        if let Some(n) = name {
-            if !s.is_empty() {
-                s.push('.');
-            }
-            s.push_str(n);
-        }
-        if let Some(i) = idx {
-            s.push_str(&format!("[{i}]"));
-        }
-    }
-    if let Some(n) = pending {
-        s = join_path(&s, &n);
-    }
-    s
 }
 
 /// Writes a calibration matrix into the config text of input `input` (a `Device`
@@ -1353,16 +1064,6 @@ pub fn search_path() -> Vec<PathBuf> {
     }
     v.push(PathBuf::from("/etc/crowdtouch/crowdtouch.ron"));
     v
-}
-
-impl fmt::Display for ConfigIssue {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "{}:{}: field `{}`: {}",
-            self.line, self.column, self.field, self.message
-        )
-    }
 }
 
 #[cfg(test)]
@@ -1598,14 +1299,6 @@ mod tests {
     fn missing_file_names_the_path() {
         let e = Config::load(Path::new("/nonexistent/crowdtouch.ron")).unwrap_err();
         assert!(e.to_string().contains("/nonexistent/crowdtouch.ron"), "{e}");
-    }
-
-    #[test]
-    fn locate_finds_nested_fields_and_list_items() {
-        let t = "(\n a: (\n  b: 1,\n ),\n l: [\n  X(f: 1),\n  Y(f: 2),\n ],\n)";
-        assert_eq!(locate_field(t, "a.b"), Some((3, 3)));
-        assert_eq!(locate_field(t, "l[1].f"), Some((7, 5)));
-        assert_eq!(locate_field(t, "a.zz"), Some((2, 2)));
     }
 
     proptest::proptest! {

@@ -647,7 +647,7 @@ fn check(files: &BTreeMap<String, String>) -> Vec<String> {
         let line = e.entry(target.to_string()).or_insert(m.line);
         *line = (*line).min(m.line);
     }
-    problems.sort_by(|a, b| natural_key(a).cmp(&natural_key(b)));
+    problems.sort_by_key(|p| natural_key(p));
 
     for cycle in cycles(&edges) {
         let mut s = String::from("import cycle:");

@@ -5,9 +5,10 @@
 use crossbeam_channel::{bounded, Receiver, Sender};
 use crowdtouch::config::SocketConfig;
 use crowdtouch::geom::{Rect, Vec2};
+use crowdtouch::pipeline::socket_options;
 use crowdtouch::publish::protocol::{self, FRAME_KIND_JSON, FRAME_KIND_SNAPSHOT};
 use crowdtouch::publish::Outgoing;
-use crowdtouch::publish::{Error, HelloInfo, PublisherStats, Server};
+use crowdtouch::publish::{Error, HelloInfo, PublisherStats, Server, SocketOptions};
 use crowdtouch::vocab::{monotonic_now, Micros};
 use crowdtouch::vocab::{
     AgentView, Command, CommandRequest, ControlKind, Event, MeshView, Snapshot, StatsReport,
@@ -26,14 +27,15 @@ use std::time::{Duration, Instant};
 /// How long a test client waits for a message before the test fails.
 const READ_TIMEOUT: Duration = Duration::from_secs(10);
 
-fn socket_config(client_queue: u32) -> SocketConfig {
-    SocketConfig {
+/// The socket options the daemon derives from a config's `socket` section.
+fn socket_config(client_queue: u32) -> SocketOptions {
+    socket_options(&SocketConfig {
         path: None,
         mode: "0660".into(),
         group: None,
         client_queue,
         max_clients: 32,
-    }
+    })
 }
 
 fn hello_info() -> HelloInfo {
@@ -67,11 +69,11 @@ enum ControlSide {
 }
 
 impl Daemon {
-    fn start(cfg: SocketConfig) -> Daemon {
+    fn start(cfg: SocketOptions) -> Daemon {
         Daemon::start_with(cfg, true)
     }
 
-    fn start_with(cfg: SocketConfig, answer: bool) -> Daemon {
+    fn start_with(cfg: SocketOptions, answer: bool) -> Daemon {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("crowdtouch.sock");
         let server = Server::bind(&cfg, &path, hello_info()).unwrap();
@@ -680,7 +682,7 @@ fn a_client_whose_event_backlog_passes_the_cap_is_disconnected() {
     let mut good = Client::ready(&d.path);
     good.hello(json!({"type":"hello","protocol":1,"subscribe":["events"]}));
     // More than the socket buffer plus MAX_BACKLOG_MESSAGES.
-    let n = 3 * crowdtouch::publish::MAX_BACKLOG_MESSAGES as u32;
+    let n = 3 * crowdtouch::publish::socket::MAX_BACKLOG_MESSAGES as u32;
     let progress = Arc::new(std::sync::atomic::AtomicU32::new(0));
     let good_reader = {
         let progress = Arc::clone(&progress);
@@ -967,8 +969,13 @@ fn socket_mode_is_applied() {
     for (mode, bits) in [("0600", 0o600), ("0660", 0o660), ("0666", 0o666)] {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("s.sock");
-        let mut cfg = socket_config(8);
-        cfg.mode = mode.into();
+        let cfg = socket_options(&SocketConfig {
+            path: None,
+            mode: mode.into(),
+            group: None,
+            client_queue: 8,
+            max_clients: 32,
+        });
         let _server = Server::bind(&cfg, &path, hello_info()).unwrap();
         let got = std::fs::metadata(&path).unwrap().permissions().mode() & 0o777;
         assert_eq!(got, bits, "mode {mode}");

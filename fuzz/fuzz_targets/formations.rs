@@ -2,7 +2,7 @@
 //! Arbitrary `formations.shapes` lists: parsing and validation answer with a library
 //! or located problems, never a panic; every accepted shape meshes at any placement
 //! into a mesh that passes its own `sanity_check` (or a clear mesh error).
-use crowdtouch::config::parse_strict;
+use crowdtouch::located::parse_strict;
 use crowdtouch::crowd::formation::{FormationDef, FormationLibrary, Placement};
 use crowdtouch::geom::Vec2;
 use libfuzzer_sys::fuzz_target;

@@ -500,7 +500,7 @@ fn end_to_end(
         .load(std::sync::atomic::Ordering::Relaxed);
     let coalesced = input.coalesced.load(std::sync::atomic::Ordering::Relaxed);
     let dropped = daemon.publisher_stats().snapshots_dropped();
-    let rss = crowdtouch::stats::rss_bytes().unwrap_or(0);
+    let rss = crowdtouch::pipeline::timing::rss_bytes().unwrap_or(0);
     daemon.shutdown();
     let snapshots = reader.join().unwrap_or(0);
     let find = |n: &str| totals.iter().find(|s| s.stage == n);

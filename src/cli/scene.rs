@@ -66,7 +66,7 @@ fn check(file: &Path, agent_radius_m: Option<f64>, config: Option<&Path>) -> i32
         return 2;
     }
     match Scene::load(file, radius).and_then(|s| {
-        s.check_formations(file, cfg.formation_library())
+        s.check_formations(file, &cfg.formation_library().known_names())
             .map(|()| s)
     }) {
         Ok(s) => {

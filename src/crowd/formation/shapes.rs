@@ -544,12 +544,14 @@ impl FormationLibrary {
         name == START || self.get(name).is_some()
     }
 
+    /// Every name a checkpoint or command may give: [`START`], then the library's.
+    pub fn known_names(&self) -> Vec<&str> {
+        std::iter::once(START).chain(self.names()).collect()
+    }
+
     /// `start, square, arrow, …` for messages.
     pub fn names_list(&self) -> String {
-        std::iter::once(START)
-            .chain(self.names())
-            .collect::<Vec<_>>()
-            .join(", ")
+        self.known_names().join(", ")
     }
 }
 

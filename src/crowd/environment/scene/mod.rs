@@ -69,9 +69,8 @@
 //! Nothing here panics on any input, reads a clock, or touches a file except
 //! [`Scene::load`].
 
-use crate::config::{self, ConfigIssue};
-use crate::crowd::formation::FormationLibrary;
 use crate::geom::{Rect, Vec2};
+use crate::located::{self, format_issues, Issue, Located, ReadError};
 use crate::vocab::MotionType;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -462,21 +461,16 @@ pub enum SceneError {
     },
 }
 
-fn format_issues(path: &Path, issues: &[SceneIssue]) -> String {
-    let mut s = String::new();
-    for (i, is) in issues.iter().enumerate() {
-        if i > 0 {
-            s.push('\n');
-        }
-        s.push_str(&format!(
-            "{}:{}:{}: {}",
-            path.display(),
-            is.line,
-            is.column,
-            is
-        ));
+impl Located for SceneIssue {
+    fn line(&self) -> usize {
+        self.line
     }
-    s
+    fn column(&self) -> usize {
+        self.column
+    }
+    fn fmt_what(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(self, f)
+    }
 }
 
 impl fmt::Display for SceneIssue {
@@ -978,13 +972,9 @@ impl Scene {
     /// [`SceneError::Io`], [`SceneError::TooLarge`] or [`SceneError::Invalid`] with
     /// every problem.
     pub fn load(path: &Path, agent_radius_m: f64) -> Result<Scene, SceneError> {
-        let text = config::read_capped(path, MAX_SCENE_BYTES).map_err(|e| match e {
-            config::Error::TooLarge { path, size, max } => SceneError::TooLarge { path, size, max },
-            config::Error::Io { path, source } => SceneError::Io { path, source },
-            config::Error::Invalid { path, .. } => SceneError::Io {
-                path,
-                source: std::io::Error::other("unreadable"),
-            },
+        let text = located::read_capped(path, MAX_SCENE_BYTES).map_err(|e| match e {
+            ReadError::TooLarge { path, size, max } => SceneError::TooLarge { path, size, max },
+            ReadError::Io { path, source } => SceneError::Io { path, source },
         })?;
         Scene::from_str(&text, path, agent_radius_m)
     }
@@ -996,7 +986,7 @@ impl Scene {
     #[allow(clippy::should_implement_trait)]
     pub fn from_str(text: &str, path: &Path, agent_radius_m: f64) -> Result<Scene, SceneError> {
         let file: SceneFile =
-            config::parse_strict(text).map_err(|i: ConfigIssue| SceneError::Invalid {
+            located::parse_strict(text).map_err(|i: Issue| SceneError::Invalid {
                 path: path.to_path_buf(),
                 issues: vec![SceneIssue {
                     field: i.field,
@@ -1009,7 +999,7 @@ impl Scene {
             let mut issues: Vec<SceneIssue> = problems
                 .into_iter()
                 .map(|(field, problem)| {
-                    let (line, column) = config::locate_field(text, &field).unwrap_or((0, 0));
+                    let (line, column) = located::locate_field(text, &field).unwrap_or((0, 0));
                     SceneIssue {
                         field,
                         line,
@@ -1026,35 +1016,32 @@ impl Scene {
         });
         let mut scene = scene?;
         for (i, c) in scene.checkpoints.iter_mut().enumerate() {
-            c.formation_at = config::locate_field(text, &format!("checkpoints[{i}].formation"))
+            c.formation_at = located::locate_field(text, &format!("checkpoints[{i}].formation"))
                 .unwrap_or((0, 0));
         }
         Ok(scene)
     }
 
-    /// Checks that every checkpoint names a formation of `library`; `path` is the
-    /// scene file, for messages.
+    /// Checks that every checkpoint names one of the `known` formations (`start` and
+    /// the formation library's names, as `FormationLibrary::known_names` lists them);
+    /// `path` is the scene file, for messages.
     ///
     /// # Errors
     /// [`SceneError::Invalid`] with a [`Problem::UnknownFormation`] per checkpoint
     /// that names an unknown one, at its `formation` field.
-    pub fn check_formations(
-        &self,
-        path: &Path,
-        library: &FormationLibrary,
-    ) -> Result<(), SceneError> {
+    pub fn check_formations(&self, path: &Path, known: &[&str]) -> Result<(), SceneError> {
         let issues: Vec<SceneIssue> = self
             .checkpoints
             .iter()
             .enumerate()
-            .filter(|(_, c)| !library.knows(&c.formation))
+            .filter(|(_, c)| !known.contains(&c.formation.as_str()))
             .map(|(i, c)| SceneIssue {
                 field: format!("checkpoints[{i}].formation"),
                 line: c.formation_at.0,
                 column: c.formation_at.1,
                 problem: Problem::UnknownFormation {
                     name: c.formation.clone(),
-                    known: library.names_list(),
+                    known: known.join(", "),
                 },
             })
             .collect();

@@ -1,20 +1,20 @@
 //! The listening socket and the publisher thread.
 
-use super::client::{self, ClientShared, EncodedSnapshot, Hub, Item};
-use super::protocol::{self, FieldSet, Format};
-use super::{Error, HelloInfo, CLIENT_SNDBUF_BYTES, CLOSE_GRACE, WRITE_STALL_TIMEOUT};
-use crate::config::SocketConfig;
+use super::client::{self, ClientShared, EncodedSnapshot, Hub, CLOSE_GRACE};
+use super::error::Error;
+use super::stats::{lock, PublisherStats};
+use crate::publish::output::{Output, OutputContext, OutputStats, Overflow, QueuePolicy};
+use crate::publish::protocol::{self, FieldSet, Format, HelloInfo};
 use crate::publish::Outgoing;
-use crate::vocab::{monotonic_now, Micros};
+use crate::vocab::monotonic_now;
 use crate::vocab::{ClientId, CommandRequest, Event, MeshView, Snapshot};
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender};
-use hdrhistogram::Histogram;
 use std::io::ErrorKind;
 use std::net::Shutdown;
 use std::os::unix::fs::{FileTypeExt, MetadataExt, PermissionsExt};
 use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
@@ -26,139 +26,25 @@ const POLL_INTERVAL: Duration = Duration::from_millis(10);
 const ACCEPT_INTERVAL: Duration = Duration::from_millis(5);
 /// Least time between two log lines about a failing `accept`.
 const ACCEPT_LOG_INTERVAL: Duration = Duration::from_secs(10);
-/// Largest latency a histogram records (µs); larger values are clamped to it.
-const HISTOGRAM_MAX_US: u64 = 60_000_000;
-/// Significant figures kept by the latency histograms.
-const HISTOGRAM_SIGFIG: u8 = 3;
+/// Send buffer requested for each client socket (bytes): room for several
+/// 1,000-agent snapshots, so a reader that is briefly late never blocks the write.
+pub const CLIENT_SNDBUF_BYTES: usize = 1 << 20;
+/// A client whose socket takes no bytes for this long is disconnected.
+pub const WRITE_STALL_TIMEOUT: Duration = Duration::from_secs(10);
+/// Messages the control thread may have in flight to the publisher thread.
+pub const QUEUE_CAPACITY: usize = 1024;
 
-fn new_histogram() -> Histogram<u64> {
-    // Constant bounds that hdrhistogram accepts (checked by a unit test): not input.
-    #[allow(clippy::expect_used)]
-    Histogram::new_with_bounds(1, HISTOGRAM_MAX_US, HISTOGRAM_SIGFIG)
-        .expect("valid histogram bounds")
-}
-
-/// Counters shared with the rest of the daemon.
-///
-/// Counts are atomics (read often, by the stats reporter). The two histograms are a
-/// `Mutex<Histogram>` each: writers are client writer threads and the publisher, none
-/// of them real-time, and each holds the lock for one `record` (tens of ns); readers
-/// take a copy and reset ("interval" semantics).
-#[derive(Debug)]
-pub struct PublisherStats {
-    clients: AtomicU32,
-    clients_accepted: AtomicU64,
-    clients_refused: AtomicU64,
-    snapshots_sent: AtomicU64,
-    snapshots_dropped: AtomicU64,
-    snapshots_rate_skipped: AtomicU64,
-    messages_sent: AtomicU64,
-    bytes_written: AtomicU64,
-    protocol_errors: AtomicU64,
-    commands_busy: AtomicU64,
-    end_to_end: Mutex<Histogram<u64>>,
-    encode: Mutex<Histogram<u64>>,
-}
-
-impl Default for PublisherStats {
-    fn default() -> Self {
-        PublisherStats {
-            clients: AtomicU32::new(0),
-            clients_accepted: AtomicU64::new(0),
-            clients_refused: AtomicU64::new(0),
-            snapshots_sent: AtomicU64::new(0),
-            snapshots_dropped: AtomicU64::new(0),
-            snapshots_rate_skipped: AtomicU64::new(0),
-            messages_sent: AtomicU64::new(0),
-            bytes_written: AtomicU64::new(0),
-            protocol_errors: AtomicU64::new(0),
-            commands_busy: AtomicU64::new(0),
-            end_to_end: Mutex::new(new_histogram()),
-            encode: Mutex::new(new_histogram()),
-        }
-    }
-}
-
-impl PublisherStats {
-    /// Clients connected now.
-    pub fn clients(&self) -> u32 {
-        self.clients.load(Ordering::Relaxed)
-    }
-    /// Clients accepted since start.
-    pub fn clients_accepted(&self) -> u64 {
-        self.clients_accepted.load(Ordering::Relaxed)
-    }
-    /// Connections refused because `max_clients` were connected, since start.
-    pub fn clients_refused(&self) -> u64 {
-        self.clients_refused.load(Ordering::Relaxed)
-    }
-    /// Snapshots written to clients since start (all clients).
-    pub fn snapshots_sent(&self) -> u64 {
-        self.snapshots_sent.load(Ordering::Relaxed)
-    }
-    /// Snapshots dropped for slow clients since start (all clients).
-    pub fn snapshots_dropped(&self) -> u64 {
-        self.snapshots_dropped.load(Ordering::Relaxed)
-    }
-    /// Snapshots not sent because of a client's `max_rate_hz`, since start (not "dropped").
-    pub fn snapshots_rate_skipped(&self) -> u64 {
-        self.snapshots_rate_skipped.load(Ordering::Relaxed)
-    }
-    /// Messages of every kind written since start.
-    pub fn messages_sent(&self) -> u64 {
-        self.messages_sent.load(Ordering::Relaxed)
-    }
-    /// Bytes written to client sockets since start.
-    pub fn bytes_written(&self) -> u64 {
-        self.bytes_written.load(Ordering::Relaxed)
-    }
-    /// Invalid client messages since start (fatal or not).
-    pub fn protocol_errors(&self) -> u64 {
-        self.protocol_errors.load(Ordering::Relaxed)
-    }
-    /// Commands refused "busy" because the command queue was full, since start.
-    pub fn commands_busy(&self) -> u64 {
-        self.commands_busy.load(Ordering::Relaxed)
-    }
-
-    /// End-to-end latency histogram (input timestamp → snapshot bytes written to a
-    /// client socket, µs) over all clients since the last call; resets it.
-    pub fn take_end_to_end(&self) -> Histogram<u64> {
-        take(&self.end_to_end)
-    }
-
-    /// Serialisation time per snapshot encoding (µs) since the last call; resets it.
-    pub fn take_encode(&self) -> Histogram<u64> {
-        take(&self.encode)
-    }
-
-    pub(crate) fn record_write(&self, bytes: usize, item: &Item, input_t: Option<Micros>) {
-        self.bytes_written
-            .fetch_add(bytes as u64, Ordering::Relaxed);
-        self.messages_sent.fetch_add(1, Ordering::Relaxed);
-        if let Item::Snapshot(_) = item {
-            self.snapshots_sent.fetch_add(1, Ordering::Relaxed);
-            if let Some(t) = input_t {
-                let us = client::end_to_end_us(t);
-                client::lock(&self.end_to_end).saturating_record(us.max(1));
-            }
-        }
-    }
-
-    pub(crate) fn count_protocol_error(&self) {
-        self.protocol_errors.fetch_add(1, Ordering::Relaxed);
-    }
-
-    pub(crate) fn count_busy(&self) {
-        self.commands_busy.fetch_add(1, Ordering::Relaxed);
-    }
-}
-
-fn take(h: &Mutex<Histogram<u64>>) -> Histogram<u64> {
-    let mut g = client::lock(h);
-    let copy = g.clone();
-    g.reset();
-    copy
+/// How the socket is set up and whom it serves: the config's `socket` section.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SocketOptions {
+    /// File mode of the socket (`0o660`).
+    pub mode: u32,
+    /// Group to give the socket to, `None` to keep the process's group.
+    pub group: Option<String>,
+    /// Snapshots queued per client before the oldest are dropped.
+    pub client_queue: u32,
+    /// Most clients at once.
+    pub max_clients: u32,
 }
 
 /// The bound socket, ready to [`run`](Server::run).
@@ -182,13 +68,13 @@ impl Server {
     /// If something exists there: a socket that accepts a connection belongs to a
     /// live daemon (`Err(InUse)`); a socket that refuses is stale and is replaced;
     /// anything that is not a socket is left alone (`Err(NotASocket)`). Then applies
-    /// `cfg.mode_bits()` and `cfg.group`. The socket file is removed on drop (only if
+    /// `opts.mode` and `opts.group`. The socket file is removed on drop (only if
     /// it is still the one this server created).
     ///
     /// # Errors
     /// [`Error::InUse`], [`Error::NotASocket`], [`Error::Bind`], [`Error::Permissions`],
     /// [`Error::UnknownGroup`], [`Error::Group`], [`Error::Io`].
-    pub fn bind(cfg: &SocketConfig, path: &Path, hello: HelloInfo) -> Result<Server, Error> {
+    pub fn bind(opts: &SocketOptions, path: &Path, hello: HelloInfo) -> Result<Server, Error> {
         let path = path.to_path_buf();
         match std::fs::symlink_metadata(&path) {
             Ok(meta) if !meta.file_type().is_socket() => {
@@ -236,7 +122,7 @@ impl Server {
             let _ = std::fs::remove_file(&path);
             e
         };
-        let mode = cfg.mode_bits();
+        let mode = opts.mode;
         std::fs::set_permissions(&path, std::fs::Permissions::from_mode(mode)).map_err(
             |source| {
                 cleanup(Error::Permissions {
@@ -246,7 +132,7 @@ impl Server {
                 })
             },
         )?;
-        if let Some(group) = &cfg.group {
+        if let Some(group) = &opts.group {
             let gid = match nix::unistd::Group::from_name(group) {
                 Ok(Some(g)) => g.gid,
                 Ok(None) => {
@@ -284,8 +170,8 @@ impl Server {
             listener,
             path,
             ident,
-            client_queue: cfg.client_queue,
-            max_clients: cfg.max_clients,
+            client_queue: opts.client_queue,
+            max_clients: opts.max_clients,
             realtime: None,
             hello,
             stats: Arc::new(PublisherStats::default()),
@@ -355,6 +241,27 @@ impl Server {
         }
         p.shutdown();
         log::info!("{}: closed", self.path.display());
+    }
+}
+
+impl Output for Server {
+    fn name(&self) -> &'static str {
+        "publisher"
+    }
+
+    fn queue(&self) -> QueuePolicy {
+        QueuePolicy {
+            capacity: QUEUE_CAPACITY,
+            overflow: Overflow::DropNewest,
+        }
+    }
+
+    fn stats(&self) -> Arc<dyn OutputStats> {
+        Arc::clone(&self.stats) as Arc<dyn OutputStats>
+    }
+
+    fn run(self: Box<Self>, ctx: OutputContext) {
+        (*self).run(ctx.messages, ctx.commands, ctx.stop)
     }
 }
 
@@ -630,7 +537,7 @@ impl Publisher<'_> {
     }
 
     fn mesh(&mut self, m: Arc<MeshView>) {
-        *client::lock(&self.hub.latest_mesh) = Some(Arc::clone(&m));
+        *lock(&self.hub.latest_mesh) = Some(Arc::clone(&m));
         let mut with: Option<Arc<[u8]>> = None;
         let mut without: Option<Arc<[u8]>> = None;
         for c in &self.clients {
@@ -738,7 +645,7 @@ fn encode(
         }
     };
     let us = u64::try_from(t0.elapsed().as_micros()).unwrap_or(u64::MAX);
-    client::lock(&stats.encode).saturating_record(us.max(1));
+    stats.record_encode(us);
     EncodedSnapshot {
         format,
         bytes,

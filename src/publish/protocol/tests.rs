@@ -338,7 +338,7 @@ fn stats_carry_every_report_field_with_t_us() {
 
 #[test]
 fn server_hello_echoes_settings() {
-    let info = super::super::HelloInfo {
+    let info = crate::publish::HelloInfo {
         world: Rect {
             min: [0.0, 0.0],
             max: [4.0, 3.0],
@@ -878,7 +878,7 @@ fn example_frame_snapshot() -> Snapshot {
 /// The bytes of the hex dump that follows the paragraph starting with `intro` in
 /// docs/protocol.md.
 fn documented_frame(intro: &str) -> Vec<u8> {
-    let doc = include_str!("../../docs/protocol.md");
+    let doc = include_str!("../../../docs/protocol.md");
     let at = doc
         .find(intro)
         .unwrap_or_else(|| panic!("no {intro:?} in the doc"));
@@ -898,7 +898,7 @@ fn documented_frame(intro: &str) -> Vec<u8> {
 
 #[test]
 fn motion_codes_match_the_documented_table() {
-    let doc = include_str!("../../docs/protocol.md");
+    let doc = include_str!("../../../docs/protocol.md");
     let mut rows = 0;
     for (code, m) in MOTION_CODES {
         let row = format!("| {code} | `{}` |", m.as_str());

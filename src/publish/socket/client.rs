@@ -5,10 +5,9 @@
 //! never waits on a socket. The writer turns queue items into bytes for this client
 //! (splicing in its own `dropped` count) and writes them with blocking I/O.
 
-use super::protocol::{self, ClientMessage, ClientSettings, Format, ServerHello};
-use super::server::PublisherStats;
-use super::{CLOSE_GRACE, MAX_BACKLOG_BYTES, MAX_BACKLOG_MESSAGES};
-use crate::vocab::{monotonic_now, Micros};
+use super::stats::{lock, PublisherStats};
+use crate::publish::protocol::{self, ClientMessage, ClientSettings, Format, ServerHello};
+use crate::vocab::Micros;
 use crate::vocab::{ClientId, CommandRequest, MeshView};
 use crossbeam_channel::{Sender, TrySendError};
 use std::collections::VecDeque;
@@ -16,13 +15,15 @@ use std::io::{BufRead, BufReader, ErrorKind, Read};
 use std::net::Shutdown;
 use std::os::unix::net::UnixStream;
 use std::sync::atomic::{AtomicU32, Ordering};
-use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
-use std::time::Instant;
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
 
-/// Locks, ignoring poisoning: every critical section leaves the data consistent.
-pub(crate) fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(PoisonError::into_inner)
-}
+/// Most non-snapshot messages queued for one client before it is disconnected.
+pub const MAX_BACKLOG_MESSAGES: usize = 4096;
+/// Most bytes of non-snapshot messages queued for one client before it is disconnected.
+pub const MAX_BACKLOG_BYTES: usize = 16 << 20;
+/// Time a closing client gets to read its last messages (`error`, `bye`).
+pub const CLOSE_GRACE: Duration = Duration::from_secs(1);
 
 /// A snapshot encoded once for every client with the same format and field set.
 #[derive(Debug)]
@@ -287,7 +288,7 @@ impl ClientShared {
 #[derive(Debug)]
 pub(crate) struct Hub {
     /// Static hello facts.
-    pub info: super::HelloInfo,
+    pub info: crate::publish::protocol::HelloInfo,
     /// Current agent count (from the newest snapshot).
     pub agents: AtomicU32,
     /// `socket.client_queue`.
@@ -362,7 +363,10 @@ pub(crate) fn writer_loop(
                     let _ = stream.shutdown(Shutdown::Both);
                     return;
                 }
-                q = shared.ready.wait(q).unwrap_or_else(PoisonError::into_inner);
+                q = shared
+                    .ready
+                    .wait(q)
+                    .unwrap_or_else(std::sync::PoisonError::into_inner);
             }
         };
         buf.clear();
@@ -408,7 +412,7 @@ pub(crate) fn writer_loop(
             let _ = stream.shutdown(Shutdown::Both);
             return;
         }
-        stats.record_write(buf.len(), &item, input_t);
+        stats.record_write(buf.len(), matches!(item, Item::Snapshot(_)), input_t);
     }
 }
 
@@ -585,11 +589,6 @@ fn handle_message(shared: &ClientShared, hub: &Hub, msg: ClientMessage) {
             push_reply(shared, json);
         }
     }
-}
-
-/// Time of a write, for end-to-end latency.
-pub(crate) fn end_to_end_us(input_t: Micros) -> u64 {
-    monotonic_now().saturating_since(input_t).0
 }
 
 #[cfg(test)]

@@ -1589,7 +1589,7 @@ pub fn encode_bye(reason: &str, out: &mut Vec<u8>) {
 #[derive(Clone, Debug)]
 pub struct ServerHello<'a> {
     /// Static facts.
-    pub info: &'a super::HelloInfo,
+    pub info: &'a HelloInfo,
     /// The client's id (appears in the daemon's log lines about it).
     pub client: ClientId,
     /// Current agent count.
@@ -1621,6 +1621,16 @@ pub fn encode_server_hello(h: &ServerHello<'_>, out: &mut Vec<u8>) {
     push_json_line(out, &v);
 }
 
+/// Static facts sent in the server hello.
+#[derive(Clone, Debug)]
+pub struct HelloInfo {
+    /// The world rectangle (m).
+    pub world: crate::geom::Rect,
+    /// Agent count at start (the hello reports the current count once snapshots flow).
+    pub agents: u32,
+    /// Agent radius (m).
+    pub agent_radius_m: f64,
+}
+
 #[cfg(test)]
-#[path = "protocol_tests.rs"]
 mod tests;

@@ -1,0 +1,11 @@
+//! Located errors: problems in the text files people hand the daemon (config, scenes,
+//! formation shapes), named by file, line, column and field, and the strict-RON
+//! reading those files share. A bottom module: it knows no file kind.
+
+mod issue;
+mod read;
+mod strict_ron;
+
+pub use issue::{format_issues, Issue, Located};
+pub use read::{read_capped, ReadError};
+pub use strict_ron::{field_positions, locate_field, parse_strict};

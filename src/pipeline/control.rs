@@ -1,0 +1,339 @@
+//! The control thread: takes frames, commands and reloads, ticks the engine, hands
+//! slow work to the workers and publishes every tick's snapshot to the outputs.
+
+use super::timing::StageTimer;
+use super::workers::AssignJob;
+use crate::config::Config;
+use crate::crowd::environment::Planner;
+use crate::crowd::formation::{PreparedSwitch, SwitchRequest};
+use crate::engine::Engine;
+use crate::publish::{Outgoing, Outputs};
+use crate::vocab::{monotonic_now, CommandRequest, Event, Micros, TouchFrame};
+use crossbeam_channel::{never, select, Receiver, Sender, TryRecvError, TrySendError};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+/// The "client" id of commands the daemon sends itself (replay resets).
+pub const INTERNAL_CLIENT: u64 = 0;
+
+/// The control thread's figures for one stats interval.
+#[derive(Clone, Debug, Default)]
+pub struct ControlStats {
+    /// When.
+    pub t: Micros,
+    /// Stages timed on the control thread, with their histograms for the interval.
+    pub stages: Vec<StageTimer>,
+    /// Ticks since start.
+    pub ticks: u64,
+    /// Assignments applied since start.
+    pub assignments: u64,
+    /// Agents.
+    pub agents: u32,
+    /// Live controls.
+    pub controls: u32,
+    /// Most recent control or gesture.
+    pub last_gesture: Option<String>,
+    /// The formation the crowd is in.
+    pub formation: String,
+    /// Formation switches at checkpoints since start.
+    pub formation_switches: u64,
+    /// Messages to the publisher dropped because its queue was full.
+    pub publish_overflow: u64,
+}
+
+/// A reload on its way to the control thread: the config, and what was prepared
+/// for its scene off the control thread.
+pub(super) struct Reload {
+    pub(super) cfg: Config,
+    /// With inline assignment and a changed scene: the new scene's planner.
+    pub(super) planner: Option<Planner>,
+}
+
+pub(super) struct ControlChannels {
+    pub(super) frames: Receiver<TouchFrame>,
+    pub(super) commands: Receiver<CommandRequest>,
+    pub(super) reload: Receiver<Box<Reload>>,
+    pub(super) out: Outputs,
+    pub(super) stats: Sender<ControlStats>,
+    pub(super) jobs: Sender<Box<AssignJob>>,
+    pub(super) results: Receiver<Box<AssignJob>>,
+    pub(super) switches: Sender<Box<SwitchRequest>>,
+    pub(super) switched: Receiver<Box<PreparedSwitch>>,
+}
+
+pub(super) struct ControlLoop {
+    engine: Engine,
+    ch: ControlChannels,
+    stop: Arc<AtomicBool>,
+    heartbeat_us: Arc<AtomicU64>,
+    period: Micros,
+    stats_interval: Micros,
+    worker: bool,
+    idle_job: Option<Box<AssignJob>>,
+    /// A formation switch request the formation thread had no room for yet.
+    switch_out: Option<Box<SwitchRequest>>,
+    t_input: StageTimer,
+    t_queue: StageTimer,
+    t_control: StageTimer,
+    t_assign: StageTimer,
+    last_stats: Micros,
+    last_gesture: Option<String>,
+    publish_overflow: u64,
+}
+
+impl ControlLoop {
+    pub(super) fn new(
+        cfg: &Config,
+        engine: Engine,
+        ch: ControlChannels,
+        stop: Arc<AtomicBool>,
+        heartbeat_us: Arc<AtomicU64>,
+    ) -> ControlLoop {
+        let b = &cfg.pipeline.budgets;
+        let n = engine.agent_count();
+        let job = AssignJob {
+            agents: Vec::with_capacity(n),
+            goals: Vec::with_capacity(n),
+            goal_of: Vec::with_capacity(n),
+            waypoints: Vec::with_capacity(n),
+            ..AssignJob::default()
+        };
+        ControlLoop {
+            engine,
+            ch,
+            stop,
+            heartbeat_us,
+            period: Micros((1e6 / cfg.pipeline.tick_hz) as u64),
+            stats_interval: Micros(cfg.pipeline.stats_interval_ms * 1000),
+            worker: cfg.assignment.worker,
+            idle_job: Some(Box::new(job)),
+            switch_out: None,
+            t_input: StageTimer::new("input", b.input_us),
+            t_queue: StageTimer::new("queue", b.queue_us),
+            t_control: StageTimer::new("control", b.control_us),
+            t_assign: StageTimer::new("assignment", b.assignment_us),
+            last_stats: monotonic_now(),
+            last_gesture: None,
+            publish_overflow: 0,
+        }
+    }
+
+    pub(super) fn run(mut self) {
+        let mut frames = self.ch.frames.clone();
+        let mut next_tick = monotonic_now() + self.period;
+        while !self.stop.load(Ordering::Relaxed) {
+            let timeout = next_tick.saturating_since(monotonic_now());
+            let mut input = false;
+            select! {
+                recv(frames) -> msg => match msg {
+                    Ok(f) => { self.take_frame(&f); input = true; }
+                    // Every input has ended: keep ticking on the timer.
+                    Err(_) => frames = never(),
+                },
+                recv(self.ch.commands) -> msg => if let Ok(c) = msg { self.command(c) },
+                recv(self.ch.reload) -> msg => if let Ok(r) = msg { self.reconfigure(*r) },
+                default(Duration::from_micros(timeout.0)) => {}
+            }
+            loop {
+                match frames.try_recv() {
+                    Ok(f) => {
+                        self.take_frame(&f);
+                        input = true;
+                    }
+                    Err(TryRecvError::Empty) => break,
+                    Err(TryRecvError::Disconnected) => {
+                        frames = never();
+                        break;
+                    }
+                }
+            }
+            while let Ok(c) = self.ch.commands.try_recv() {
+                self.command(c);
+            }
+            let now = monotonic_now();
+            if input || now >= next_tick {
+                self.tick(now);
+                next_tick = now + self.period;
+            }
+        }
+        // Shutdown: end every control and publish the final state.
+        let now = monotonic_now();
+        self.engine.reset(false, now);
+        self.tick(now);
+    }
+
+    fn take_frame(&mut self, f: &TouchFrame) {
+        let now = monotonic_now();
+        self.t_input.record(f.t_queued.saturating_since(f.t).0);
+        self.t_queue.record(now.saturating_since(f.t_queued).0);
+        self.engine.push_frame(f);
+    }
+
+    fn command(&mut self, req: CommandRequest) {
+        let result = self.engine.command(&req.command, monotonic_now());
+        if req.client != INTERNAL_CLIENT {
+            self.send(Outgoing::Reply {
+                client: req.client,
+                id: req.id,
+                result,
+            });
+        }
+    }
+
+    fn reconfigure(&mut self, reload: Reload) {
+        let Reload { cfg, planner } = reload;
+        let cfg = &cfg;
+        let ignored = self.engine.reconfigure_with(cfg, planner);
+        let b = &cfg.pipeline.budgets;
+        self.t_input.set_budget(b.input_us);
+        self.t_queue.set_budget(b.queue_us);
+        self.t_control.set_budget(b.control_us);
+        self.t_assign.set_budget(b.assignment_us);
+        self.period = Micros((1e6 / cfg.pipeline.tick_hz) as u64);
+        if ignored.is_empty() {
+            log::info!("config reloaded");
+        } else {
+            log::warn!(
+                "config reloaded; these changes need a restart: {}",
+                ignored.join(", ")
+            );
+        }
+    }
+
+    fn send(&mut self, m: Outgoing) {
+        for _ in 0..self.ch.out.send(m) {
+            self.publish_overflow += 1;
+            if self.publish_overflow.is_power_of_two() {
+                log::warn!("publisher queue full: {} messages dropped (internal: publisher thread stalled)", self.publish_overflow);
+            }
+        }
+    }
+
+    fn tick(&mut self, now: Micros) {
+        let start = monotonic_now();
+        while let Ok(job) = self.ch.results.try_recv() {
+            if job.ok {
+                self.engine
+                    .apply_plan(job.generation, job.seq, &job.goal_of, &job.waypoints);
+            }
+            self.t_assign.record(job.solve_us);
+            self.idle_job = Some(job);
+        }
+        while let Ok(p) = self.ch.switched.try_recv() {
+            // A switch that could not be built is logged and counted by the engine.
+            let _ = self.engine.apply_switch(*p, now);
+        }
+        let out = self.engine.tick(now);
+        let snapshot = out.snapshot;
+        let mesh = out.mesh;
+        let mut describe = None;
+        let events: Vec<Arc<Event>> = out.events.iter().cloned().map(Arc::new).collect();
+        for e in &events {
+            if let Some(d) = describe_event(e) {
+                describe = Some(d);
+            }
+        }
+        self.engine.clear_events();
+        if let Some(d) = describe {
+            self.last_gesture = Some(d);
+        }
+        for e in events {
+            self.send(Outgoing::Event(e));
+        }
+        if let Some(m) = mesh {
+            self.send(Outgoing::Mesh(m));
+        }
+        self.send(Outgoing::Snapshot(snapshot));
+        // A formation switch asked for by this tick or a command before it.
+        if let Some(r) = self.engine.take_switch_request() {
+            self.switch_out = Some(Box::new(r));
+        }
+        if let Some(r) = self.switch_out.take() {
+            if let Err(TrySendError::Full(r)) = self.ch.switches.try_send(r) {
+                self.switch_out = Some(r);
+            }
+        }
+        if self.worker {
+            if let Some(mut job) = self.idle_job.take() {
+                job.generation = self.engine.generation();
+                job.seq = self.engine.seq();
+                job.t_scene_s = self.engine.scene_time_s();
+                let params = self.engine.planner_params();
+                match (self.engine.scene(), &mut job.environment) {
+                    // The same scene as the last job: no reference count traffic.
+                    (Some(s), Some((js, jp))) if Arc::ptr_eq(s, js) => *jp = params,
+                    (s, env) => *env = s.map(|s| (Arc::clone(s), params)),
+                }
+                job.agents.clear();
+                job.agents.extend_from_slice(self.engine.agent_positions());
+                job.goals.clear();
+                job.goals.extend_from_slice(self.engine.goals());
+                match self.ch.jobs.try_send(job) {
+                    Ok(()) => {}
+                    Err(TrySendError::Full(j)) | Err(TrySendError::Disconnected(j)) => {
+                        self.idle_job = Some(j)
+                    }
+                }
+            }
+        }
+        let end = monotonic_now();
+        self.t_control.record(end.saturating_since(start).0);
+        self.heartbeat_us.store(end.0, Ordering::Relaxed);
+        if end.saturating_since(self.last_stats) >= self.stats_interval {
+            self.last_stats = end;
+            let c = self.engine.counters();
+            let cs = ControlStats {
+                t: end,
+                // Once per interval: the histograms are copied (an allocation the
+                // control thread allows itself at this rate) and restarted.
+                stages: [
+                    &mut self.t_input,
+                    &mut self.t_queue,
+                    &mut self.t_control,
+                    &mut self.t_assign,
+                ]
+                .into_iter()
+                .map(|t| {
+                    let copy = t.clone();
+                    t.take();
+                    copy
+                })
+                .collect(),
+                ticks: c.ticks,
+                assignments: c.assignments,
+                agents: self.engine.agent_count() as u32,
+                controls: self.engine.control_count() as u32,
+                last_gesture: self.last_gesture.clone(),
+                formation: self.engine.formation().to_string(),
+                formation_switches: c.formation_switches,
+                publish_overflow: self.publish_overflow,
+            };
+            let _ = self.ch.stats.try_send(cs);
+        }
+    }
+}
+
+fn describe_event(e: &Event) -> Option<String> {
+    match e {
+        Event::ControlBegin { kind, fingers, .. } | Event::ControlUpdate { kind, fingers, .. } => {
+            Some(format!(
+                "{} control, {} finger{}",
+                kind.as_str(),
+                fingers.len(),
+                if fingers.len() == 1 { "" } else { "s" }
+            ))
+        }
+        Event::GestureEnd {
+            fingers,
+            duration_us,
+            ..
+        } => Some(format!(
+            "gesture, {} finger{}, {:.1} s",
+            fingers,
+            if *fingers == 1 { "" } else { "s" },
+            *duration_us as f64 * 1e-6
+        )),
+        _ => None,
+    }
+}

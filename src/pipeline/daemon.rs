@@ -1,0 +1,531 @@
+//! The daemon: starts every thread with its queues, supervises them (stats, reloads,
+//! the watchdog's heartbeat) and stops them in order.
+
+use super::control::{ControlChannels, ControlLoop, ControlStats, Reload, INTERNAL_CLIENT};
+use super::device;
+use super::error::Error;
+use super::outputs::socket_options;
+use super::queue::{FrameQueue, InputCounters};
+use super::sources::SourceSpec;
+use super::timing::StageTimer;
+use super::workers::{assignment_worker, formation_worker, AssignJob};
+use crate::config::Config;
+use crate::crowd::environment::{PlannerParams, Scene};
+use crate::crowd::formation::{PreparedSwitch, SwitchRequest};
+use crate::engine::Engine;
+use crate::input::replay::{Pacing, ReplaySource};
+use crate::input::FrameSink;
+use crate::publish::{HelloInfo, Outgoing, OutputContext, OutputSet, OutputStats, Outputs};
+use crate::publish::{PublisherStats, Server};
+use crate::vocab::{
+    monotonic_now, Command, CommandRequest, Event, Micros, StageStats, StatsReport, TouchFrame,
+};
+use crossbeam_channel::{bounded, Receiver, Sender};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+/// Commands in flight from clients to the control thread.
+pub const COMMAND_CAPACITY: usize = 64;
+
+/// Options of a daemon run.
+pub struct DaemonOptions {
+    /// Socket path (already resolved).
+    pub socket_path: PathBuf,
+}
+
+/// The running daemon: its threads and the handles the supervisor needs.
+pub struct Daemon {
+    stop: Arc<AtomicBool>,
+    input_stop: Arc<AtomicBool>,
+    threads: Vec<(&'static str, JoinHandle<()>)>,
+    socket_path: PathBuf,
+    publisher: Arc<PublisherStats>,
+    /// Every output's counters (the socket's among them).
+    outputs: Vec<Arc<dyn OutputStats>>,
+    input_counters: Arc<InputCounters>,
+    heartbeat_us: Arc<AtomicU64>,
+    control_stats: Receiver<ControlStats>,
+    out: Outputs,
+    reload: Sender<Box<Reload>>,
+    scene: Option<Arc<Scene>>,
+    planner_params: PlannerParams,
+    inline_assignment: bool,
+    e2e: StageTimer,
+    encode: StageTimer,
+    totals: Vec<StageTimer>,
+    interval_us: u64,
+    last_report: Micros,
+}
+
+fn spawn(
+    name: &'static str,
+    f: impl FnOnce() + Send + 'static,
+) -> Result<(&'static str, JoinHandle<()>), Error> {
+    std::thread::Builder::new()
+        .name(format!("ct-{name}"))
+        .spawn(f)
+        .map(|h| (name, h))
+        .map_err(|source| Error::Thread { name, source })
+}
+
+/// What every thread is started with: the stop flags and the thread settings.
+struct Start {
+    threads: Vec<(&'static str, JoinHandle<()>)>,
+    stop: Arc<AtomicBool>,
+    input_stop: Arc<AtomicBool>,
+    /// SCHED_FIFO priority for the latency-path threads (`None`: normal scheduling).
+    priority: Option<u8>,
+    input_cpus: Option<Vec<usize>>,
+}
+
+impl Start {
+    fn spawn(
+        &mut self,
+        name: &'static str,
+        f: impl FnOnce() + Send + 'static,
+    ) -> Result<(), Error> {
+        self.threads.push(spawn(name, f)?);
+        Ok(())
+    }
+
+    /// Makes the calling thread real-time when configured.
+    fn realtime(priority: Option<u8>, thread: &str) {
+        if let Some(p) = priority {
+            crate::rt::make_realtime(p, thread);
+        }
+    }
+}
+
+impl Daemon {
+    /// Binds the socket and starts every thread.
+    ///
+    /// # Errors
+    /// Socket problems ([`Error::Publish`]) and thread creation.
+    pub fn start(
+        cfg: Config,
+        sources: Vec<SourceSpec>,
+        opts: DaemonOptions,
+    ) -> Result<Daemon, Error> {
+        if sources.is_empty() {
+            return Err(Error::NoInputs);
+        }
+        let glass = sources.iter().find_map(|s| match s {
+            SourceSpec::Replay { glass_mm, .. } | SourceSpec::Channel { glass_mm, .. } => *glass_mm,
+            SourceSpec::Device { transform, .. } => transform.size_mm,
+        });
+        let mut engine = Engine::new(&cfg, glass, !cfg.assignment.worker);
+        engine.set_switch_worker(true);
+        let hello = HelloInfo {
+            world: cfg.surface.world,
+            agents: engine.agent_count() as u32,
+            agent_radius_m: engine.agent_radius_m(),
+        };
+        // The outputs: the Unix socket first. A new output is registered here with
+        // one `outputs.add(...)` (see ARCHITECTURE.md, "Adding an output").
+        let server = Server::bind(&socket_options(&cfg.socket), &opts.socket_path, hello)?;
+        let socket_path = server.path().to_path_buf();
+        let publisher = server.stats();
+        let rt = &cfg.pipeline.realtime;
+        let mut outputs = OutputSet::default();
+        outputs.add(Box::new(server.with_realtime(rt.priority)));
+        let output_stats = outputs.stats();
+
+        let mut start = Start {
+            threads: Vec::new(),
+            stop: Arc::new(AtomicBool::new(false)),
+            input_stop: Arc::new(AtomicBool::new(false)),
+            priority: rt.priority,
+            input_cpus: rt.input_cpus.clone(),
+        };
+        let heartbeat_us = Arc::new(AtomicU64::new(monotonic_now().0));
+        let input_counters = Arc::new(InputCounters::default());
+
+        // Input → control: bounded(queue_frames); inputs try_send (FrameQueue policy),
+        // control blocks in select with a tick timeout.
+        let (frame_tx, frame_rx) = bounded::<TouchFrame>(cfg.pipeline.queue_frames as usize);
+        // Clients → control: bounded(COMMAND_CAPACITY); outputs try_send and answer
+        // "busy" when full; control drains with try_recv.
+        let (cmd_tx, cmd_rx) = bounded::<CommandRequest>(COMMAND_CAPACITY);
+        // Control ↔ worker: bounded(1) each way, exactly one job in flight; neither
+        // side blocks on the other (control try_sends / try_recvs).
+        let (job_tx, job_rx) = bounded::<Box<AssignJob>>(1);
+        let (res_tx, res_rx) = bounded::<Box<AssignJob>>(1);
+        // Control ⇄ formation thread: switch requests and results; the control side
+        // only try_sends / try_recvs, the formation thread blocks on its own side.
+        let (switch_tx, switch_job_rx) = bounded::<Box<SwitchRequest>>(2);
+        let (switch_res_tx, switch_rx) = bounded::<Box<PreparedSwitch>>(2);
+        // Control → supervisor: bounded(4) stats once per interval, try_send.
+        let (cstats_tx, cstats_rx) = bounded::<ControlStats>(4);
+        // Supervisor → control: bounded(1) config reloads, try_send.
+        let (reload_tx, reload_rx) = bounded::<Box<Reload>>(1);
+
+        if rt.lock_memory && crate::rt::lock_memory() {
+            log::info!("memory locked");
+        }
+        // Control, supervisor and device threads → each output: its own bounded
+        // queue and drop policy (publish::output); nobody blocks on an output.
+        let out = start.spawn_outputs(outputs, &cmd_tx)?;
+        if cfg.assignment.worker {
+            let cost = cfg.assignment.cost;
+            start.spawn("assign", move || assignment_worker(cost, job_rx, res_tx))?;
+        }
+        start.spawn("formation", move || {
+            formation_worker(switch_job_rx, switch_res_tx)
+        })?;
+        let ctl = ControlLoop::new(
+            &cfg,
+            engine,
+            ControlChannels {
+                frames: frame_rx,
+                commands: cmd_rx,
+                reload: reload_rx,
+                out: out.clone(),
+                stats: cstats_tx,
+                jobs: job_tx,
+                results: res_rx,
+                switches: switch_tx,
+                switched: switch_rx,
+            },
+            Arc::clone(&start.stop),
+            Arc::clone(&heartbeat_us),
+        );
+        let priority = start.priority;
+        start.spawn("control", move || {
+            Start::realtime(priority, "control");
+            ctl.run()
+        })?;
+        for (i, source) in sources.into_iter().enumerate() {
+            let queue = FrameQueue::new(frame_tx.clone(), i as u16, Arc::clone(&input_counters));
+            start.spawn_input(source, queue, &cmd_tx, &out)?;
+        }
+        drop(frame_tx);
+        let b = &cfg.pipeline.budgets;
+        let scene = cfg.loaded_scene().cloned();
+        let planner_params = crate::engine::planner_params(&cfg);
+        let inline_assignment = !cfg.assignment.worker;
+        Ok(Daemon {
+            stop: start.stop,
+            input_stop: start.input_stop,
+            threads: start.threads,
+            socket_path,
+            publisher,
+            outputs: output_stats,
+            input_counters,
+            heartbeat_us,
+            control_stats: cstats_rx,
+            out,
+            reload: reload_tx,
+            scene,
+            planner_params,
+            inline_assignment,
+            e2e: StageTimer::new("end_to_end", b.end_to_end_us),
+            encode: StageTimer::new("publish", b.publish_us),
+            totals: Vec::new(),
+            interval_us: cfg.pipeline.stats_interval_ms * 1000,
+            last_report: monotonic_now(),
+        })
+    }
+
+    /// The socket path clients connect to.
+    pub fn socket_path(&self) -> &Path {
+        &self.socket_path
+    }
+
+    /// The socket output's counters.
+    pub fn publisher_stats(&self) -> &Arc<PublisherStats> {
+        &self.publisher
+    }
+
+    /// Input counters.
+    pub fn input_counters(&self) -> &Arc<InputCounters> {
+        &self.input_counters
+    }
+
+    /// Time since the control thread last ticked.
+    pub fn heartbeat_age(&self) -> Micros {
+        monotonic_now().saturating_since(Micros(self.heartbeat_us.load(Ordering::Relaxed)))
+    }
+
+    /// Hands a new config to the control thread (already validated, its scene
+    /// loaded: [`Config::load`] reads and checks the scene file, so a broken scene
+    /// never gets here and the running one stays).
+    ///
+    /// Everything heavy about a new scene happens here, on the caller's thread,
+    /// not on the control thread: comparing it with the running one (an unchanged
+    /// scene keeps the running one, so nothing is swapped) and, with inline
+    /// assignment, building its planner (rasterised scene, fast-marching
+    /// workspaces). The assignment worker builds its own planner when its first
+    /// job in the new scene arrives. The control thread only swaps the prepared
+    /// parts in, between two ticks.
+    pub fn reload(&mut self, mut cfg: Config) {
+        self.e2e.set_budget(cfg.pipeline.budgets.end_to_end_us);
+        self.encode.set_budget(cfg.pipeline.budgets.publish_us);
+        let same = crate::engine::same_scene(cfg.loaded_scene(), self.scene.as_ref());
+        if same {
+            cfg.set_loaded_scene(self.scene.clone());
+        }
+        let params = crate::engine::planner_params(&cfg);
+        let planner = if self.inline_assignment && (!same || params != self.planner_params) {
+            cfg.loaded_scene()
+                .and_then(|s| crate::engine::planner_for(s, params))
+        } else {
+            None
+        };
+        let scene = cfg.loaded_scene().cloned();
+        let change = (!same).then(|| describe_scene_change(&cfg, self.scene.as_deref()));
+        match self.reload.try_send(Box::new(Reload { cfg, planner })) {
+            Ok(()) => {
+                if let Some(c) = change {
+                    log::info!("{c}");
+                }
+                self.scene = scene;
+                self.planner_params = params;
+            }
+            Err(_) => {
+                log::warn!("config reload skipped: the previous reload is still being applied")
+            }
+        }
+    }
+
+    /// Waits up to `timeout` for the control thread's interval figures, merges them
+    /// with the publisher's and publishes `stats`. Returns the report when one was made.
+    pub fn next_report(&mut self, timeout: Duration) -> Option<Arc<StatsReport>> {
+        let cs = self.control_stats.recv_timeout(timeout).ok()?;
+        let now = monotonic_now();
+        for o in &self.outputs {
+            self.e2e.absorb(&o.take_end_to_end());
+            self.encode.absorb(&o.take_encode());
+        }
+        let mut timers = cs.stages;
+        timers.push(self.encode.clone());
+        timers.push(self.e2e.clone());
+        self.encode.take();
+        self.e2e.take();
+        for t in &timers {
+            match self.totals.iter_mut().find(|x| x.name() == t.name()) {
+                Some(total) => total.absorb(t.histogram()),
+                None => self.totals.push(t.clone()),
+            }
+        }
+        let stages: Vec<StageStats> = timers.iter().map(StageTimer::peek).collect();
+        let interval_us = now.saturating_since(self.last_report).0.max(1);
+        self.last_report = now;
+        for s in &stages {
+            if s.overruns > 0 {
+                log::warn!(
+                    "{} over its {} µs budget {} times in the last {:.1} s (p99 {} µs, max {} µs){}",
+                    s.stage,
+                    s.budget_us,
+                    s.overruns,
+                    interval_us as f64 * 1e-6,
+                    s.p99_us,
+                    s.max_us,
+                    blame(&s.stage)
+                );
+            }
+        }
+        let report = Arc::new(StatsReport {
+            t: now,
+            interval_us,
+            stages,
+            frames: self.input_counters.frames.load(Ordering::Relaxed),
+            frames_coalesced: self.input_counters.coalesced.load(Ordering::Relaxed),
+            transitions_lost: self.input_counters.transitions_lost.load(Ordering::Relaxed),
+            ticks: cs.ticks,
+            assignments: cs.assignments,
+            assignment_hz: 0.0,
+            snapshots_dropped: self.outputs.iter().map(|o| o.snapshots_dropped()).sum(),
+            clients: self.outputs.iter().map(|o| o.clients()).sum(),
+            agents: cs.agents,
+            controls: cs.controls,
+            rss_bytes: crate::pipeline::timing::rss_bytes(),
+            last_gesture: cs.last_gesture,
+            formation: cs.formation,
+            formation_switches: cs.formation_switches,
+        });
+        self.out.send(Outgoing::Stats(Arc::clone(&report)));
+        Some(report)
+    }
+
+    /// Stops every thread: inputs first (their touches are cancelled), then the
+    /// control thread publishes a final snapshot, then the publisher says `bye`.
+    pub fn shutdown(mut self) {
+        self.input_stop.store(true, Ordering::SeqCst);
+        let (inputs, rest): (Vec<_>, Vec<_>) =
+            self.threads.drain(..).partition(|(n, _)| *n == "input");
+        for (_, h) in inputs {
+            let _ = h.join();
+        }
+        // Let the control thread take the final frames before it stops.
+        std::thread::sleep(Duration::from_millis(20));
+        self.stop.store(true, Ordering::SeqCst);
+        drop(self.out);
+        for (name, h) in rest {
+            if h.join().is_err() {
+                log::error!("internal bug: the {name} thread panicked");
+            }
+        }
+    }
+
+    /// Every stage's figures since start (p50/p99/max over the whole run).
+    pub fn totals(&self) -> Vec<StageStats> {
+        self.totals.iter().map(StageTimer::peek).collect()
+    }
+
+    /// Stats interval (µs).
+    pub fn interval_us(&self) -> u64 {
+        self.interval_us
+    }
+}
+
+/// One log line for a reload whose scene differs from the running `old` one.
+fn describe_scene_change(cfg: &Config, old: Option<&Scene>) -> String {
+    let old = match old {
+        Some(o) => format!("scene \"{}\"", o.name()),
+        None => "open ground".to_string(),
+    };
+    match (cfg.loaded_scene(), &cfg.scene) {
+        (Some(new), path) => format!(
+            "scene \"{}\" loaded{} ({} obstacles, {} patches, {} moving); it replaces {old} from the next tick",
+            new.name(),
+            path.as_ref()
+                .map_or(String::new(), |p| format!(" from {}", p.display())),
+            new.obstacles().len(),
+            new.patches().len(),
+            new.dynamic().len(),
+        ),
+        (None, _) => format!("no scene in the new config: open ground replaces {old} from the next tick"),
+    }
+}
+
+/// Hands on whatever an input thread still holds back before its sink goes away.
+pub(super) fn drain_backlog(queue: &mut FrameQueue, stop: &AtomicBool) {
+    while !queue.flush() && !stop.load(Ordering::Relaxed) {
+        std::thread::sleep(Duration::from_millis(1));
+    }
+}
+
+fn blame(stage: &str) -> &'static str {
+    match stage {
+        "input" => " — input thread or device timestamps (device)",
+        "queue" => " — control thread busy (internal: crowd too large for the budget?)",
+        "control" => " — control tick (internal: crowd or mesh too large for the budget?)",
+        "assignment" => " — assignment solver (internal: refresh rate drops, results stay exact)",
+        "publish" => " — snapshot encoding (internal)",
+        "end_to_end" => " — whole path (system load or a slow client)",
+        _ => "",
+    }
+}
+
+impl Start {
+    /// One thread per output, reading its own queue; returns the sending side.
+    fn spawn_outputs(
+        &mut self,
+        outputs: OutputSet,
+        commands: &Sender<CommandRequest>,
+    ) -> Result<Outputs, Error> {
+        let (out, running) = outputs.connect();
+        for (output, messages) in running {
+            let ctx = OutputContext {
+                messages,
+                commands: commands.clone(),
+                stop: Arc::clone(&self.stop),
+            };
+            let name = output.name();
+            let priority = self.priority;
+            self.spawn(name, move || {
+                Start::realtime(priority, name);
+                output.run(ctx)
+            })?;
+        }
+        Ok(out)
+    }
+
+    /// The thread of one input source, handing frames to `queue`.
+    fn spawn_input(
+        &mut self,
+        source: SourceSpec,
+        mut queue: FrameQueue,
+        commands: &Sender<CommandRequest>,
+        out: &Outputs,
+    ) -> Result<(), Error> {
+        let stop = Arc::clone(&self.input_stop);
+        let priority = self.priority;
+        match source {
+            SourceSpec::Replay {
+                items,
+                looped,
+                gap,
+                reset_between,
+                ..
+            } => {
+                let mut src = ReplaySource::new(items, looped, gap, Pacing::RealTime);
+                let cmd_tx = commands.clone();
+                self.spawn("input", move || {
+                    Start::realtime(priority, "input");
+                    let mut on_item = |i: usize| {
+                        if reset_between && i > 0 {
+                            let _ = cmd_tx.try_send(CommandRequest {
+                                client: INTERNAL_CLIENT,
+                                id: serde_json::Value::Null,
+                                command: Command::Reset { hard: false },
+                            });
+                        }
+                    };
+                    src.run(&mut queue, &stop, &mut on_item);
+                    drain_backlog(&mut queue, &stop);
+                })
+            }
+            SourceSpec::Device {
+                input,
+                select,
+                interface,
+                grab,
+                transform,
+            } => {
+                let out = out.clone();
+                let cpus = self.input_cpus.clone();
+                self.spawn("input", move || {
+                    Start::realtime(priority, "input");
+                    if let Some(cpus) = &cpus {
+                        crate::rt::pin_to_cpus(cpus, "input");
+                    }
+                    let mut env = device::SystemEnv::new(Path::new("/"), grab);
+                    let mut sink = device::TransformSink::new(queue, transform);
+                    let mut notify = |n: device::DeviceNotice| {
+                        let info = n.info.as_ref();
+                        let ev = Event::Device {
+                            input,
+                            state: n.state,
+                            name: info.map(|i| i.name.clone()).unwrap_or_default(),
+                            node: info
+                                .map(|i| i.node.display().to_string())
+                                .unwrap_or_default(),
+                            stable_id: info.map(|i| i.stable_id.clone()).unwrap_or_default(),
+                            message: n.message,
+                            t: n.t,
+                        };
+                        out.send(Outgoing::Event(Arc::new(ev)));
+                    };
+                    device::supervise(&mut env, &select, interface, &mut sink, &stop, &mut notify);
+                    drain_backlog(sink.queue(), &stop);
+                })
+            }
+            SourceSpec::Channel { rx, .. } => self.spawn("input", move || {
+                Start::realtime(priority, "input");
+                while !stop.load(Ordering::Relaxed) {
+                    let wait_ms = if queue.flush() { 50 } else { 1 };
+                    match rx.recv_timeout(Duration::from_millis(wait_ms)) {
+                        Ok(f) => queue.push(&f),
+                        Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
+                        Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break,
+                    }
+                }
+                drain_backlog(&mut queue, &stop);
+            }),
+        }
+    }
+}

@@ -1,0 +1,120 @@
+//! The inputs a config names, made ready to run: recordings read, devices described.
+
+use super::device;
+use super::error::Error;
+use crate::config::{Config, DeviceInterface, DeviceSelect, InputConfig};
+use crate::input::recording::OnBadFrame;
+use crate::input::replay::ReplayItem;
+use crate::vocab::{Micros, TouchFrame};
+use crossbeam_channel::Receiver;
+use std::path::Path;
+
+/// An input source the daemon runs.
+pub enum SourceSpec {
+    /// Recordings replayed in real time.
+    Replay {
+        /// The files, parsed.
+        items: Vec<ReplayItem>,
+        /// Play forever.
+        looped: bool,
+        /// Pause between files.
+        gap: Micros,
+        /// Reset the crowd before each file.
+        reset_between: bool,
+        /// Surface size (mm) from the first recording, if known.
+        glass_mm: Option<(f64, f64)>,
+    },
+    /// A touch device found by discovery and re-attached after unplugging.
+    Device {
+        /// Index of the input in the config.
+        input: u16,
+        /// Which device, and through which interface.
+        select: DeviceSelect,
+        /// evdev, hidraw or either.
+        interface: DeviceInterface,
+        /// Exclusive grab.
+        grab: bool,
+        /// Calibration, region and palm settings applied to its frames.
+        transform: device::TransformSettings,
+    },
+    /// Frames handed in by the embedding program through a channel: a virtual
+    /// device for tests, benchmarks and tools. Frames keep the time stamp they were
+    /// given (stamp them with [`monotonic_now`](crate::vocab::monotonic_now) when sent to measure latency). The
+    /// source ends when the sender is dropped.
+    Channel {
+        /// Where the frames come from.
+        rx: Receiver<TouchFrame>,
+        /// Surface size (mm), if known.
+        glass_mm: Option<(f64, f64)>,
+    },
+}
+
+/// Reads the recordings a config names.
+///
+/// # Errors
+/// [`Error::Recording`] naming the file and line; [`Error::NoInputs`].
+pub fn sources_from_config(cfg: &Config) -> Result<Vec<SourceSpec>, Error> {
+    if cfg.inputs.is_empty() {
+        return Err(Error::NoInputs);
+    }
+    let mut out = Vec::new();
+    for (i, input) in cfg.inputs.iter().enumerate() {
+        match input {
+            InputConfig::Replay {
+                files,
+                looped,
+                gap_ms,
+                reset_between,
+            } => {
+                let mut items = Vec::new();
+                let mut glass = None;
+                for f in files {
+                    let rec = crate::input::recording::load_recording(f, OnBadFrame::Stop)?;
+                    if glass.is_none() {
+                        glass = rec.surface.size_mm();
+                    }
+                    items.push(ReplayItem {
+                        name: display_name(f),
+                        frames: rec.frames,
+                    });
+                }
+                out.push(SourceSpec::Replay {
+                    items,
+                    looped: *looped,
+                    gap: Micros(gap_ms * 1000),
+                    reset_between: *reset_between,
+                    glass_mm: glass,
+                });
+            }
+            InputConfig::Device {
+                select,
+                interface,
+                grab,
+                region,
+                calibration,
+                palm_max_mm,
+                size_mm,
+            } => {
+                out.push(SourceSpec::Device {
+                    input: i as u16,
+                    select: select.clone(),
+                    interface: *interface,
+                    grab: *grab,
+                    transform: device::TransformSettings {
+                        calibration: calibration.clone(),
+                        region: *region,
+                        palm_max_mm: *palm_max_mm,
+                        size_mm: size_mm.or(cfg.surface.size_mm),
+                    },
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn display_name(p: &Path) -> String {
+    p.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| p.display().to_string())
+}

@@ -1,0 +1,173 @@
+//! The socket output's counters, shared with the rest of the daemon.
+
+use crate::vocab::{monotonic_now, Micros};
+use hdrhistogram::Histogram;
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+use std::sync::{Mutex, MutexGuard, PoisonError};
+
+/// Largest latency a histogram records (µs); larger values are clamped to it.
+const HISTOGRAM_MAX_US: u64 = 60_000_000;
+/// Significant figures kept by the latency histograms.
+const HISTOGRAM_SIGFIG: u8 = 3;
+
+fn new_histogram() -> Histogram<u64> {
+    // Constant bounds that hdrhistogram accepts (checked by a unit test): not input.
+    #[allow(clippy::expect_used)]
+    Histogram::new_with_bounds(1, HISTOGRAM_MAX_US, HISTOGRAM_SIGFIG)
+        .expect("valid histogram bounds")
+}
+
+/// Counters shared with the rest of the daemon.
+///
+/// Counts are atomics (read often, by the stats reporter). The two histograms are a
+/// `Mutex<Histogram>` each: writers are client writer threads and the publisher, none
+/// of them real-time, and each holds the lock for one `record` (tens of ns); readers
+/// take a copy and reset ("interval" semantics).
+#[derive(Debug)]
+pub struct PublisherStats {
+    pub(super) clients: AtomicU32,
+    pub(super) clients_accepted: AtomicU64,
+    pub(super) clients_refused: AtomicU64,
+    pub(super) snapshots_sent: AtomicU64,
+    pub(super) snapshots_dropped: AtomicU64,
+    pub(super) snapshots_rate_skipped: AtomicU64,
+    pub(super) messages_sent: AtomicU64,
+    pub(super) bytes_written: AtomicU64,
+    pub(super) protocol_errors: AtomicU64,
+    pub(super) commands_busy: AtomicU64,
+    pub(super) end_to_end: Mutex<Histogram<u64>>,
+    pub(super) encode: Mutex<Histogram<u64>>,
+}
+
+impl Default for PublisherStats {
+    fn default() -> Self {
+        PublisherStats {
+            clients: AtomicU32::new(0),
+            clients_accepted: AtomicU64::new(0),
+            clients_refused: AtomicU64::new(0),
+            snapshots_sent: AtomicU64::new(0),
+            snapshots_dropped: AtomicU64::new(0),
+            snapshots_rate_skipped: AtomicU64::new(0),
+            messages_sent: AtomicU64::new(0),
+            bytes_written: AtomicU64::new(0),
+            protocol_errors: AtomicU64::new(0),
+            commands_busy: AtomicU64::new(0),
+            end_to_end: Mutex::new(new_histogram()),
+            encode: Mutex::new(new_histogram()),
+        }
+    }
+}
+
+impl PublisherStats {
+    /// Clients connected now.
+    pub fn clients(&self) -> u32 {
+        self.clients.load(Ordering::Relaxed)
+    }
+    /// Clients accepted since start.
+    pub fn clients_accepted(&self) -> u64 {
+        self.clients_accepted.load(Ordering::Relaxed)
+    }
+    /// Connections refused because `max_clients` were connected, since start.
+    pub fn clients_refused(&self) -> u64 {
+        self.clients_refused.load(Ordering::Relaxed)
+    }
+    /// Snapshots written to clients since start (all clients).
+    pub fn snapshots_sent(&self) -> u64 {
+        self.snapshots_sent.load(Ordering::Relaxed)
+    }
+    /// Snapshots dropped for slow clients since start (all clients).
+    pub fn snapshots_dropped(&self) -> u64 {
+        self.snapshots_dropped.load(Ordering::Relaxed)
+    }
+    /// Snapshots not sent because of a client's `max_rate_hz`, since start (not "dropped").
+    pub fn snapshots_rate_skipped(&self) -> u64 {
+        self.snapshots_rate_skipped.load(Ordering::Relaxed)
+    }
+    /// Messages of every kind written since start.
+    pub fn messages_sent(&self) -> u64 {
+        self.messages_sent.load(Ordering::Relaxed)
+    }
+    /// Bytes written to client sockets since start.
+    pub fn bytes_written(&self) -> u64 {
+        self.bytes_written.load(Ordering::Relaxed)
+    }
+    /// Invalid client messages since start (fatal or not).
+    pub fn protocol_errors(&self) -> u64 {
+        self.protocol_errors.load(Ordering::Relaxed)
+    }
+    /// Commands refused "busy" because the command queue was full, since start.
+    pub fn commands_busy(&self) -> u64 {
+        self.commands_busy.load(Ordering::Relaxed)
+    }
+
+    /// End-to-end latency histogram (input timestamp → snapshot bytes written to a
+    /// client socket, µs) over all clients since the last call; resets it.
+    pub fn take_end_to_end(&self) -> Histogram<u64> {
+        take(&self.end_to_end)
+    }
+
+    /// Serialisation time per snapshot encoding (µs) since the last call; resets it.
+    pub fn take_encode(&self) -> Histogram<u64> {
+        take(&self.encode)
+    }
+
+    /// Counts one message written (`bytes` long); a snapshot also records its
+    /// end-to-end latency from `input_t`.
+    pub(crate) fn record_write(&self, bytes: usize, snapshot: bool, input_t: Option<Micros>) {
+        self.bytes_written
+            .fetch_add(bytes as u64, Ordering::Relaxed);
+        self.messages_sent.fetch_add(1, Ordering::Relaxed);
+        if snapshot {
+            self.snapshots_sent.fetch_add(1, Ordering::Relaxed);
+            if let Some(t) = input_t {
+                let us = end_to_end_us(t);
+                lock(&self.end_to_end).saturating_record(us.max(1));
+            }
+        }
+    }
+
+    /// Records the time one snapshot encoding took (µs).
+    pub(crate) fn record_encode(&self, us: u64) {
+        lock(&self.encode).saturating_record(us.max(1));
+    }
+
+    pub(crate) fn count_protocol_error(&self) {
+        self.protocol_errors.fetch_add(1, Ordering::Relaxed);
+    }
+
+    pub(crate) fn count_busy(&self) {
+        self.commands_busy.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+fn take(h: &Mutex<Histogram<u64>>) -> Histogram<u64> {
+    let mut g = lock(h);
+    let copy = g.clone();
+    g.reset();
+    copy
+}
+
+/// Locks, ignoring poisoning: every critical section leaves the data consistent.
+pub(crate) fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Time of a write, for end-to-end latency.
+pub(crate) fn end_to_end_us(input_t: Micros) -> u64 {
+    monotonic_now().saturating_since(input_t).0
+}
+
+impl crate::publish::output::OutputStats for PublisherStats {
+    fn clients(&self) -> u32 {
+        PublisherStats::clients(self)
+    }
+    fn snapshots_dropped(&self) -> u64 {
+        PublisherStats::snapshots_dropped(self)
+    }
+    fn take_end_to_end(&self) -> Histogram<u64> {
+        PublisherStats::take_end_to_end(self)
+    }
+    fn take_encode(&self) -> Histogram<u64> {
+        PublisherStats::take_encode(self)
+    }
+}
