@@ -7,7 +7,7 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use crowdtouch::config::{Config, LogLevel};
 use crowdtouch::pipeline::{Daemon, DaemonOptions, SourceSpec};
-use crowdtouch::vocab::monotonic_now;
+use crowdtouch::rt::monotonic_now;
 use crowdtouch::vocab::{Contact, ContactFlags, ContactId, TouchFrame};
 use std::io::{BufRead, BufReader};
 use std::os::unix::net::UnixStream;

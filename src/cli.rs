@@ -9,8 +9,9 @@ use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
 use crowdtouch::publish::protocol::{
     encode_event, encode_mesh_json, encode_snapshot_json, FieldSet,
 };
+use crowdtouch::rt::monotonic_now;
+use crowdtouch::vocab::Micros;
 use crowdtouch::vocab::StatsReport;
-use crowdtouch::vocab::{monotonic_now, Micros};
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -1,4 +1,9 @@
-//! Real-time scheduling for the latency path.
+//! The thread shells' view of the system: the clock, and real-time scheduling for
+//! the latency path.
+//!
+//! [`monotonic_now`] reads CLOCK_MONOTONIC; only thread shells (input, control loop,
+//! outputs, workers) call it, the cores (`gesture`, `crowd`, `engine`) are given
+//! `now`, which keeps replays deterministic.
 //!
 //! The input, control and publisher threads (and each client's writer) run under
 //! SCHED_FIFO when the config asks for it, so a busy machine — a renderer on the
@@ -8,6 +13,7 @@
 //! shipped systemd unit, or CAP_SYS_NICE / CAP_IPC_LOCK); when the system refuses,
 //! the daemon says so once and carries on at normal priority.
 
+use crate::vocab::Micros;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 static REFUSAL_LOGGED: AtomicBool = AtomicBool::new(false);
@@ -154,6 +160,16 @@ pub fn pin_to_cpus(cpus: &[usize], thread: &str) -> bool {
             );
             false
         }
+    }
+}
+
+/// Reads CLOCK_MONOTONIC.
+///
+pub fn monotonic_now() -> Micros {
+    match nix::time::clock_gettime(nix::time::ClockId::CLOCK_MONOTONIC) {
+        Ok(ts) => Micros(ts.tv_sec() as u64 * 1_000_000 + ts.tv_nsec() as u64 / 1_000),
+        // CLOCK_MONOTONIC cannot fail on Linux; fall back to zero rather than panic.
+        Err(_) => Micros::ZERO,
     }
 }
 

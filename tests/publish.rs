@@ -9,7 +9,8 @@ use crowdtouch::pipeline::socket_options;
 use crowdtouch::publish::protocol::{self, FRAME_KIND_JSON, FRAME_KIND_SNAPSHOT};
 use crowdtouch::publish::Outgoing;
 use crowdtouch::publish::{Error, HelloInfo, PublisherStats, Server, SocketOptions};
-use crowdtouch::vocab::{monotonic_now, Micros};
+use crowdtouch::rt::monotonic_now;
+use crowdtouch::vocab::Micros;
 use crowdtouch::vocab::{
     AgentView, Command, CommandRequest, ControlKind, Event, MeshView, Snapshot, StatsReport,
     TouchView,

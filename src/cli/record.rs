@@ -91,7 +91,7 @@ fn record_frames(
     // Contacts still down when the recording stops end as cancelled, so the file
     // replays without a stuck finger.
     let mut last = TouchFrame::default();
-    if reader.cancel_all(crowdtouch::vocab::monotonic_now(), &mut last) {
+    if reader.cancel_all(crowdtouch::rt::monotonic_now(), &mut last) {
         sink.push(&last);
     }
     if let Some(e) = sink.error {

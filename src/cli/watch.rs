@@ -4,7 +4,8 @@
 //! touches (their control id, or `g` for a gesture), with a latency line underneath.
 
 use anyhow::Result;
-use crowdtouch::vocab::{monotonic_now, Micros};
+use crowdtouch::rt::monotonic_now;
+use crowdtouch::vocab::Micros;
 use serde_json::Value;
 use std::io::Write;
 use std::path::PathBuf;

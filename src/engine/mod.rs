@@ -5,9 +5,9 @@
 //! in real time (`pipeline`); `replay` drives it on a virtual clock, which makes
 //! replays deterministic.
 
-use crate::config::{Config, MAX_AGENTS};
+use crate::config::{AssignmentCost, Config, MAX_AGENTS};
 use crate::crowd::agents::{AgentParams, Agents};
-use crate::crowd::assign::Assigner;
+use crate::crowd::assign::{Assigner, PointMetric};
 use crate::crowd::control::{DirectController, DirectParams};
 use crate::crowd::environment::FieldParams;
 use crate::crowd::environment::Scene;
@@ -199,7 +199,7 @@ impl Engine {
             goal_of: (0..agents_n as u32).collect(),
             assignment_seq: 0,
             generation: 0,
-            inline: inline_assignment.then(|| Assigner::new(cfg.assignment.cost)),
+            inline: inline_assignment.then(|| Assigner::new(point_metric(cfg.assignment.cost))),
             scene: cfg.loaded_scene().cloned(),
             planner: None,
             planner_params: planner_params(cfg),
@@ -1160,6 +1160,14 @@ pub fn same_scene(a: Option<&Arc<Scene>>, b: Option<&Arc<Scene>>) -> bool {
         (Some(a), Some(b)) => Arc::ptr_eq(a, b) || a == b,
         (None, None) => true,
         _ => false,
+    }
+}
+
+/// The assignment cost the config names, as the solver's metric.
+pub fn point_metric(cost: AssignmentCost) -> PointMetric {
+    match cost {
+        AssignmentCost::SquaredDistance => PointMetric::Squared,
+        AssignmentCost::Distance => PointMetric::Euclidean,
     }
 }
 

@@ -153,7 +153,7 @@ impl Error {
 pub trait DeviceReader: Send {
     /// What the device is.
     fn info(&self) -> &DeviceInfo;
-    /// Reads until `stop` is set (checked at least every [`STOP_CHECK_US`]) or the device fails.
+    /// Reads until `stop` is set (checked at least every [`STOP_CHECK_US`](super::STOP_CHECK_US)) or the device fails.
     ///
     /// # Errors
     /// [`Error::Unplugged`] when the device goes away; other variants for I/O failures.
@@ -161,6 +161,3 @@ pub trait DeviceReader: Send {
     /// A frame ending every contact still down (CANCELLED); false if none is down.
     fn cancel_all(&mut self, t: Micros, out: &mut TouchFrame) -> bool;
 }
-
-/// Longest a device reader blocks before checking its stop flag (µs).
-pub const STOP_CHECK_US: u64 = 100_000;

@@ -27,7 +27,8 @@
 //! into one preallocated [`TouchFrame`], remaps ids, and pushes it.
 
 use super::FrameSink;
-use crate::vocab::{monotonic_now, Micros};
+use crate::rt::monotonic_now;
+use crate::vocab::Micros;
 use crate::vocab::{Contact, ContactFlags, ContactId, TouchFrame, MAX_CONTACTS};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;

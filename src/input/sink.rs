@@ -1,6 +1,5 @@
 //! Where a source puts its frames.
 
-use super::device::STOP_CHECK_US;
 use crate::vocab::TouchFrame;
 
 /// Where a source puts its frames: the bounded queue to the control thread.
@@ -18,6 +17,9 @@ pub trait FrameSink {
         true
     }
 }
+
+/// Longest a device reader blocks before checking its stop flag (µs).
+pub const STOP_CHECK_US: u64 = 100_000;
 
 /// How long a reader waits for input while its sink still holds frames back (µs):
 /// it retries [`FrameSink::flush`] at least this often.

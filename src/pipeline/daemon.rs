@@ -17,9 +17,8 @@ use crate::input::replay::{Pacing, ReplaySource};
 use crate::input::FrameSink;
 use crate::publish::{HelloInfo, Outgoing, OutputContext, OutputSet, OutputStats, Outputs};
 use crate::publish::{PublisherStats, Server};
-use crate::vocab::{
-    monotonic_now, Command, CommandRequest, Event, Micros, StageStats, StatsReport, TouchFrame,
-};
+use crate::rt::monotonic_now;
+use crate::vocab::{Command, CommandRequest, Event, Micros, StageStats, StatsReport, TouchFrame};
 use crossbeam_channel::{bounded, Receiver, Sender};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -169,7 +168,7 @@ impl Daemon {
         // queue and drop policy (publish::output); nobody blocks on an output.
         let out = start.spawn_outputs(outputs, &cmd_tx)?;
         if cfg.assignment.worker {
-            let cost = cfg.assignment.cost;
+            let cost = crate::engine::point_metric(cfg.assignment.cost);
             start.spawn("assign", move || assignment_worker(cost, job_rx, res_tx))?;
         }
         start.spawn("formation", move || {

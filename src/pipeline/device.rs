@@ -20,9 +20,10 @@
 
 use crate::config::{DeviceInterface, DeviceSelect};
 use crate::input::{DeviceInfo, DeviceReader, FrameSink};
+use crate::rt::monotonic_now;
 use crate::vocab::DeviceState;
+use crate::vocab::Micros;
 use crate::vocab::TouchFrame;
-use crate::vocab::{monotonic_now, Micros};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 

@@ -2,7 +2,8 @@
 //! touch-down and lift, and gives contacts their daemon-wide ids.
 
 use crate::input::FrameSink;
-use crate::vocab::{monotonic_now, TouchFrame, MAX_CONTACTS};
+use crate::rt::monotonic_now;
+use crate::vocab::{TouchFrame, MAX_CONTACTS};
 use crossbeam_channel::{Sender, TrySendError};
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::Arc;

@@ -39,7 +39,7 @@ pub enum SourceSpec {
     },
     /// Frames handed in by the embedding program through a channel: a virtual
     /// device for tests, benchmarks and tools. Frames keep the time stamp they were
-    /// given (stamp them with [`monotonic_now`](crate::vocab::monotonic_now) when sent to measure latency). The
+    /// given (stamp them with [`monotonic_now`](crate::rt::monotonic_now) when sent to measure latency). The
     /// source ends when the sender is dropped.
     Channel {
         /// Where the frames come from.

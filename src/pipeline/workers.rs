@@ -1,11 +1,11 @@
 //! The slow work the control thread hands off: assignment solves and formation
 //! switches, each on a worker thread of its own at nice 10.
 
-use crate::crowd::assign::Assigner;
+use crate::crowd::assign::{Assigner, PointMetric};
 use crate::crowd::environment::{Planner, PlannerParams, Scene};
 use crate::crowd::formation::{PreparedSwitch, SwitchRequest};
 use crate::geom::Vec2;
-use crate::vocab::monotonic_now;
+use crate::rt::monotonic_now;
 use crossbeam_channel::{Receiver, Sender};
 use std::sync::Arc;
 
@@ -43,7 +43,7 @@ pub struct AssignJob {
 /// its parameters differ from the last job's, so a reloaded scene is planned for
 /// from the first job solved in it.
 pub(super) fn assignment_worker(
-    cost: crate::config::AssignmentCost,
+    cost: PointMetric,
     jobs: Receiver<Box<AssignJob>>,
     results: Sender<Box<AssignJob>>,
 ) {

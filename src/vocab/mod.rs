@@ -11,7 +11,7 @@ mod event;
 mod motion;
 mod snapshot;
 mod stats;
-pub mod time;
+mod time;
 mod touch;
 
 pub use command::{ClientId, Command, CommandRequest};
@@ -19,5 +19,5 @@ pub use event::{ControlKind, DeviceState, Event};
 pub use motion::MotionType;
 pub use snapshot::{AgentView, MeshView, Snapshot, TouchView};
 pub use stats::{StageStats, StatsReport};
-pub use time::{monotonic_now, Micros};
+pub use time::Micros;
 pub use touch::{Contact, ContactFlags, ContactId, FrameFull, TouchFrame, MAX_CONTACTS};

@@ -4,7 +4,7 @@
 //! input event time (evdev switched with `EVIOCSCLOCKID`), the control tick time and
 //! the instant bytes were written to a client all share one clock, so their
 //! differences are latencies. Cores take `now` as a parameter and never read a
-//! clock themselves; only the thread shells call [`monotonic_now`].
+//! clock themselves; only the thread shells read it (`rt::monotonic_now`).
 
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -57,28 +57,9 @@ impl fmt::Display for Micros {
     }
 }
 
-/// Reads CLOCK_MONOTONIC.
-///
-/// Only thread shells (input, control loop, publisher) call this; cores are given `now`.
-pub fn monotonic_now() -> Micros {
-    match nix::time::clock_gettime(nix::time::ClockId::CLOCK_MONOTONIC) {
-        Ok(ts) => Micros(ts.tv_sec() as u64 * 1_000_000 + ts.tv_nsec() as u64 / 1_000),
-        // CLOCK_MONOTONIC cannot fail on Linux; fall back to zero rather than panic.
-        Err(_) => Micros::ZERO,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn monotonic_clock_advances() {
-        let a = monotonic_now();
-        std::thread::sleep(std::time::Duration::from_millis(2));
-        let b = monotonic_now();
-        assert!(b.0 >= a.0 + 1_000, "{a} then {b}");
-    }
 
     #[test]
     fn conversions_round_trip() {

@@ -8,7 +8,6 @@
 //! at every time step." Weights of 1 on every source and target make the
 //! transportation problem an exact one-to-one assignment.
 
-use crate::config::AssignmentCost;
 use crate::crowd::assign::{AssignError, PointCosts, PointMetric, Solver};
 use crate::geom::Vec2;
 
@@ -26,11 +25,7 @@ pub struct Assigner {
 
 impl Assigner {
     /// An assigner with the given cost function.
-    pub fn new(cost: AssignmentCost) -> Assigner {
-        let metric = match cost {
-            AssignmentCost::SquaredDistance => PointMetric::Squared,
-            AssignmentCost::Distance => PointMetric::Euclidean,
-        };
+    pub fn new(metric: PointMetric) -> Assigner {
         Assigner {
             solver: Solver::new(),
             costs: PointCosts::new(metric),

@@ -31,9 +31,10 @@ use super::mt::{
 };
 use super::record::{AbsAxisInfo, DecoderSetup, EvdevCapabilities};
 use crate::input::{DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink};
+use crate::rt::monotonic_now;
 use crate::sys;
+use crate::vocab::Micros;
 use crate::vocab::TouchFrame;
-use crate::vocab::{monotonic_now, Micros};
 use nix::errno::Errno;
 use nix::libc;
 use nix::poll::{poll, PollFd, PollFlags, PollTimeout};

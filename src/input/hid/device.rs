@@ -31,8 +31,9 @@
 use super::descriptor::{touch_collections, Application, FeatureSetting, TouchCollection};
 use super::report::HidDecoder;
 use crate::input::{DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink, STOP_CHECK_US};
+use crate::rt::monotonic_now;
+use crate::vocab::Micros;
 use crate::vocab::TouchFrame;
-use crate::vocab::{monotonic_now, Micros};
 use std::ffi::CString;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -6,7 +6,7 @@ use super::stats::{lock, PublisherStats};
 use crate::publish::output::{Output, OutputContext, OutputStats, Overflow, QueuePolicy};
 use crate::publish::protocol::{self, FieldSet, Format, HelloInfo};
 use crate::publish::Outgoing;
-use crate::vocab::monotonic_now;
+use crate::rt::monotonic_now;
 use crate::vocab::{ClientId, CommandRequest, Event, MeshView, Snapshot};
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender};
 use std::io::ErrorKind;

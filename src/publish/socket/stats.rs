@@ -1,6 +1,7 @@
 //! The socket output's counters, shared with the rest of the daemon.
 
-use crate::vocab::{monotonic_now, Micros};
+use crate::rt::monotonic_now;
+use crate::vocab::Micros;
 use hdrhistogram::Histogram;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::{Mutex, MutexGuard, PoisonError};
