@@ -10,10 +10,11 @@ use crowdtouch::input::evdev::*;
 use crowdtouch::input::evdev::{
     device_info, parse_input_events, slot_codes, slot_state_from, INPUT_EVENT_BYTES,
 };
-use crowdtouch::input::evdev::{EvdevCapabilities, EvemuTime, EvemuWriter, NotTouchReason};
+use crowdtouch::input::evdev::{EvdevCapabilities, NotTouchReason};
 use crowdtouch::input::recording::{
     parse_recording, read_evemu_raw, read_evemu_with_desc, read_recording, OnBadFrame,
 };
+use crowdtouch::input::recording::{EvemuTime, EvemuWriter};
 use crowdtouch::input::AxisRange;
 use crowdtouch::vocab::Micros;
 use crowdtouch::vocab::{ContactFlags, TouchFrame, MAX_CONTACTS};

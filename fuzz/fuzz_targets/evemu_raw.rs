@@ -1,7 +1,8 @@
 #![no_main]
 //! `read_evemu_raw` on arbitrary text; what it accepts must survive
 //! `EvemuWriter` and read back to the same capabilities and events.
-use crowdtouch::input::evdev::{AbsAxisInfo, EvemuTime, EvemuWriter};
+use crowdtouch::input::evdev::AbsAxisInfo;
+use crowdtouch::input::recording::{EvemuTime, EvemuWriter};
 use crowdtouch::input::recording::read_evemu_raw;
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;

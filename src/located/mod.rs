@@ -1,11 +1,14 @@
 //! Located errors: problems in the text files people hand the daemon (config, scenes,
 //! formation shapes), named by file, line, column and field, and the strict-RON
-//! reading those files share. A bottom module: it knows no file kind.
+//! reading those files share, and the words parsers use for what they found. A
+//! bottom module: it knows no file kind.
 
 mod issue;
+mod json;
 mod read;
 mod strict_ron;
 
 pub use issue::{format_issues, Issue, Located};
+pub use json::json_kind;
 pub use read::{read_capped, ReadError};
 pub use strict_ron::{field_positions, locate_field, parse_strict};

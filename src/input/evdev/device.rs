@@ -24,12 +24,12 @@
 //! The loop allocates nothing: a fixed read buffer, a fixed frame, a fixed
 //! [`MtSlotState`].
 
+use super::capabilities::{AbsAxisInfo, DecoderSetup, EvdevCapabilities};
 use super::mt::{
     MtDecoder, MtProtocol, MtSlotState, RawEvent, ABS_MT_POSITION_X, ABS_MT_POSITION_Y,
     ABS_MT_PRESSURE, ABS_MT_SLOT, ABS_MT_TOOL_TYPE, ABS_MT_TOUCH_MAJOR, ABS_MT_TOUCH_MINOR,
     ABS_MT_TRACKING_ID, ABS_PRESSURE, ABS_X, ABS_Y, BTN_TOUCH, EV_ABS, MAX_SLOTS,
 };
-use super::record::{AbsAxisInfo, DecoderSetup, EvdevCapabilities};
 use crate::input::{DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink};
 use crate::rt::monotonic_now;
 use crate::sys;
@@ -155,16 +155,16 @@ pub fn capabilities(dev: &RawDevice) -> io::Result<EvdevCapabilities> {
         set(super::mt::EV_MSC, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_switches() {
-        set(super::record::EV_SW, &mut s.iter().map(|k| k.0));
+        set(super::capabilities::EV_SW, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_leds() {
-        set(super::record::EV_LED, &mut s.iter().map(|k| k.0));
+        set(super::capabilities::EV_LED, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_sounds() {
-        set(super::record::EV_SND, &mut s.iter().map(|k| k.0));
+        set(super::capabilities::EV_SND, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_ff() {
-        set(super::record::EV_FF, &mut s.iter().map(|k| k.0));
+        set(super::capabilities::EV_FF, &mut s.iter().map(|k| k.0));
     }
     for (code, a) in dev.get_absinfo()? {
         c.set_abs(

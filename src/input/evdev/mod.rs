@@ -1,11 +1,20 @@
-//! evdev touch devices: the kernel's event codes, the multi-touch decoder
-//! (protocol B slots, protocol A matching), what a device declares, the device
-//! shell that reads a node, and recording a node as an evemu file.
+//! evdev touch devices: the kernel's event codes and their names, the multi-touch
+//! decoder (protocol B slots, protocol A matching), what a device declares
+//! (capabilities), the device shell that reads a node, and recording a node as an
+//! evemu file.
 
+mod capabilities;
 mod device;
 mod mt;
+mod names;
 mod record;
 
+#[cfg(test)]
+pub(crate) use capabilities::sample_panel;
+pub use capabilities::{
+    AbsAxisInfo, DecoderSetup, EvdevCapabilities, NotTouchReason, ABS_CNT, EV_CNT, EV_FF, EV_LED,
+    EV_REP, EV_SND, EV_SW, INPUT_PROP_DIRECT, INPUT_PROP_POINTER, MASK_BYTES, PROP_BYTES,
+};
 pub use device::{
     capabilities, device_info, open_node, parse_input_event, parse_input_events, probe,
     single_touch_state, slot_codes, slot_state_from, timeval_micros, wait_read, EvdevOptions,
@@ -21,9 +30,5 @@ pub use mt::{
     EV_KEY, EV_MSC, EV_REL, EV_SYN, MAX_SLOTS, MT_TOOL_FINGER, MT_TOOL_PALM, MT_TOOL_PEN,
     SYN_CONFIG, SYN_DROPPED, SYN_MT_REPORT, SYN_REPORT, TYPE_A_MAX_JUMP_MM, TYPE_A_MAX_JUMP_UNIT,
 };
-pub use record::{
-    code_name, record_evdev, type_name, write_evemu_header, AbsAxisInfo, DecoderSetup,
-    EvdevCapabilities, EvemuTime, EvemuWriter, NotTouchReason, ABS_CNT, EVEMU_VERSION, EV_CNT,
-    EV_FF, EV_LED, EV_REP, EV_SND, EV_SW, INPUT_PROP_DIRECT, INPUT_PROP_POINTER, MASK_BYTES,
-    PROP_BYTES,
-};
+pub use names::{code_name, type_name};
+pub use record::record_evdev;

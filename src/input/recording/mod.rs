@@ -69,9 +69,11 @@
 //! after it, that ends them as `CANCELLED`, so nothing sticks when the recording
 //! is replayed.
 
+mod evemu_writer;
 mod hid_recorder;
 mod shipped;
 
+pub use evemu_writer::{write_evemu_header, EvemuTime, EvemuWriter, EVEMU_VERSION};
 pub use hid_recorder::{
     decode_hid_recording, parse_hid_recorder, read_hid_recorder, HidEvent, HidRecorderLog,
     HidRecorderWriter,
@@ -83,6 +85,7 @@ use crate::input::evdev::{
     MASK_BYTES, PROP_BYTES,
 };
 use crate::input::{AxisRange, SurfaceInfo};
+use crate::located::json_kind;
 use crate::vocab::Micros;
 use crate::vocab::{Contact, ContactFlags, ContactId, TouchFrame, MAX_CONTACTS};
 use serde::Serialize;
@@ -1521,17 +1524,6 @@ fn yaml_event(n: &Node, field: &str) -> Result<(u64, u16, u16, i32), String> {
 
 // ---------------------------------------------------------------------------
 // crowdtouch JSON Lines
-
-fn json_kind(v: &Value) -> &'static str {
-    match v {
-        Value::Null => "null",
-        Value::Bool(_) => "a boolean",
-        Value::Number(_) => "a number",
-        Value::String(_) => "a string",
-        Value::Array(_) => "an array",
-        Value::Object(_) => "an object",
-    }
-}
 
 fn want_obj<'v>(v: Option<&'v Value>, field: &str) -> Result<&'v Map<String, Value>, String> {
     match v {

@@ -18,6 +18,7 @@
 //! rare (events, stats, replies) and goes through serde.
 
 use crate::geom::Vec2;
+use crate::located::json_kind;
 use crate::vocab::MotionType;
 use crate::vocab::{ClientId, Command, Event, MeshView, Snapshot, StatsReport};
 use serde_json::{Map, Value};
@@ -476,17 +477,6 @@ fn shorten(s: &str) -> String {
         .to_string()
 }
 
-fn kind_of(v: &Value) -> &'static str {
-    match v {
-        Value::Null => "null",
-        Value::Bool(_) => "a boolean",
-        Value::Number(_) => "a number",
-        Value::String(_) => "a string",
-        Value::Array(_) => "an array",
-        Value::Object(_) => "an object",
-    }
-}
-
 /// Parses one client line (without its newline; a trailing `\r` is ignored).
 ///
 /// # Errors
@@ -520,7 +510,7 @@ pub fn parse_client_message(line: &[u8]) -> Result<ClientMessage, ProtocolError>
         Value::Object(m) => m,
         other => {
             return Err(ProtocolError::NotObject {
-                found: kind_of(&other),
+                found: json_kind(&other),
             })
         }
     };
