@@ -18,6 +18,7 @@ pub use crate::located::Issue as ConfigIssue;
 use crate::located::{
     field_positions, format_issues, locate_field, parse_strict, read_capped, ReadError,
 };
+use crate::vocab::parse_vendor_product;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -928,15 +929,6 @@ impl Config {
             self.surface.world.height() / h_mm,
         )
     }
-}
-
-/// Parses `"vvvv:pppp"` (hex) into vendor and product ids.
-pub fn parse_vendor_product(s: &str) -> Option<(u16, u16)> {
-    let (v, p) = s.trim().split_once(':')?;
-    Some((
-        u16::from_str_radix(v, 16).ok()?,
-        u16::from_str_radix(p, 16).ok()?,
-    ))
 }
 
 fn finite_rect(r: &Rect) -> bool {

@@ -27,6 +27,7 @@
 use crate::input::calibrate::CalibrationError;
 use crate::input::udev::{self, UdevDb};
 use crate::input::{AxisRange, DeviceInfo, DeviceKind, Error, SurfaceInfo};
+use crate::vocab::parse_vendor_product;
 use serde::{Deserialize, Serialize};
 use std::cmp::Ordering;
 use std::collections::BTreeMap;
@@ -889,15 +890,6 @@ pub enum SelectError {
     },
 }
 
-/// Parses `"2575:0204"` into `(vendor, product)`.
-pub fn parse_vendor_product(s: &str) -> Option<(u16, u16)> {
-    let (v, p) = s.trim().split_once(':')?;
-    Some((
-        u16::from_str_radix(v, 16).ok()?,
-        u16::from_str_radix(p, 16).ok()?,
-    ))
-}
-
 /// Case-insensitive glob: `*` any run of characters, `?` one character.
 fn glob_match(pattern: &[char], text: &[char]) -> bool {
     let (mut p, mut t) = (0, 0);
@@ -1134,14 +1126,6 @@ mod tests {
         assert!(!name_matches(n, "advanced*touch"));
         assert!(!name_matches(n, "egalax"));
         assert!(name_matches(n, "*"));
-    }
-
-    #[test]
-    fn vendor_product_parses() {
-        assert_eq!(parse_vendor_product("2575:0204"), Some((0x2575, 0x0204)));
-        assert_eq!(parse_vendor_product("06CB:2968"), Some((0x06cb, 0x2968)));
-        assert_eq!(parse_vendor_product("2575"), None);
-        assert_eq!(parse_vendor_product("12345:1"), None);
     }
 
     /// A minimal keyboard descriptor (Generic Desktop / Keyboard, 8 modifier bits).

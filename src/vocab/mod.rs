@@ -7,6 +7,7 @@
 //! It depends on [`geom`](crate::geom) only, so every other module may use it.
 
 mod command;
+mod device;
 mod event;
 mod motion;
 mod snapshot;
@@ -15,6 +16,7 @@ mod time;
 mod touch;
 
 pub use command::{ClientId, Command, CommandRequest};
+pub use device::parse_vendor_product;
 pub use event::{ControlKind, DeviceState, Event};
 pub use motion::MotionType;
 pub use snapshot::{AgentView, MeshView, Snapshot, TouchView};
