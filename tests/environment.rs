@@ -506,7 +506,10 @@ fn fig9_checkpoints_switch_the_formation_through_the_corridor() {
 fn set_formation_mid_drag_keeps_the_drag_going() {
     let c = cfg("corridor", 30, rect(1.0, 1.0, 4.0, 4.0), 6);
     let mut e = Engine::new(&c, None, true);
-    let err = e.set_formation("hexagon", Micros(0)).unwrap_err();
+    let err = e
+        .set_formation("hexagon", Micros(0))
+        .unwrap_err()
+        .to_string();
     assert!(
         err.contains("`hexagon`")
             && err.contains("start, square, arrow, column, line, wedge, diamond"),

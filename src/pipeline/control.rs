@@ -4,8 +4,8 @@
 use super::timing::StageTimer;
 use super::workers::AssignJob;
 use crate::config::Config;
+use crate::crowd::control::{PreparedSwitch, SwitchRequest};
 use crate::crowd::environment::Planner;
-use crate::crowd::formation::{PreparedSwitch, SwitchRequest};
 use crate::engine::Engine;
 use crate::publish::{Outgoing, Outputs};
 use crate::rt::monotonic_now;
@@ -177,7 +177,8 @@ impl ControlLoop {
             self.send(Outgoing::Reply {
                 client: req.client,
                 id: req.id,
-                result,
+                // The client reads the refusal's message in its `error` reply.
+                result: result.map_err(|e| e.to_string()),
             });
         }
     }

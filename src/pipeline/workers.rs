@@ -2,8 +2,8 @@
 //! switches, each on a worker thread of its own at nice 10.
 
 use crate::crowd::assign::{Assigner, PointMetric};
+use crate::crowd::control::{PreparedSwitch, SwitchRequest};
 use crate::crowd::environment::{Planner, PlannerParams, Scene};
-use crate::crowd::formation::{PreparedSwitch, SwitchRequest};
 use crate::geom::Vec2;
 use crate::rt::monotonic_now;
 use crossbeam_channel::{Receiver, Sender};

@@ -319,11 +319,6 @@ impl DirectController {
         std::mem::replace(&mut self.changed, false)
     }
 
-    /// Number of live rigs.
-    pub fn rig_count(&self) -> usize {
-        self.rigs.len()
-    }
-
     /// Whether a world point is on the crowd (within `radius_m` of the mesh).
     pub fn hits(&self, p: Vec2, radius_m: f64) -> bool {
         crate::crowd::mesh::distance_to_mesh(&self.mesh, &self.final_verts, p) <= radius_m

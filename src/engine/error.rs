@@ -1,0 +1,52 @@
+//! Why a command or a formation switch could not be applied. The messages go to the
+//! client that asked (as an `error` reply) and to the log.
+
+use crate::crowd::mesh::MeshError;
+
+/// Why a client command could not be applied.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CommandError {
+    /// `set_agent_count` outside `1..=max`.
+    #[error("agent count {count} is out of range 1..={max}")]
+    AgentCount {
+        /// Requested.
+        count: u32,
+        /// Maximum.
+        max: u32,
+    },
+    /// `set_formation` named a formation the config does not define.
+    #[error("no formation is called `{}`; the config defines {known}", shorten(.name))]
+    UnknownFormation {
+        /// The name asked for.
+        name: String,
+        /// The formations the config defines (`start, square, …`).
+        known: String,
+    },
+    /// The formation could not be laid out for the crowd (without the formation
+    /// thread; with it, the failure is logged when the switch arrives).
+    #[error("formation `{name}` could not be built: {why}")]
+    FormationNotBuilt {
+        /// The formation.
+        name: String,
+        /// Why.
+        why: SwitchError,
+    },
+}
+
+/// Why a formation switch could not be made; the crowd keeps its formation.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SwitchError {
+    /// A checkpoint names a formation the library does not hold.
+    #[error("the config defines no formation of that name")]
+    NotInLibrary,
+    /// The shape could not be meshed for the crowd.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+}
+
+/// A client-given name as shown in a message: at most 64 characters, `…` when cut.
+fn shorten(name: &str) -> String {
+    let shown: String = name.chars().take(64).collect();
+    let cut = if shown.len() < name.len() { "…" } else { "" };
+    format!("{shown}{cut}")
+}

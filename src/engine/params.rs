@@ -1,0 +1,78 @@
+//! The one place where the config becomes the parameters of the crowd, gesture and
+//! assignment code, which know nothing of the config.
+
+use crate::config::{AssignmentCost, Config};
+use crate::crowd::agents::AgentParams;
+use crate::crowd::assign::PointMetric;
+use crate::crowd::control::DirectParams;
+use crate::crowd::environment::{Planner, PlannerParams, Scene};
+use crate::gesture::segment::SegmentParams;
+use crate::vocab::Micros;
+use std::sync::Arc;
+
+/// The planner's parameters for `cfg` (the agents' speed limit as preferred speed).
+pub fn planner_params(cfg: &Config) -> PlannerParams {
+    PlannerParams::new(cfg.crowd.max_speed_m_s)
+}
+
+/// The travel-cost planner over `cfg`'s scene (`None` without a scene, or when the
+/// scene makes no planning grid: then Euclidean costs, with a warning). Building it
+/// rasterises the scene and sizes the fast-marching workspaces: the daemon does it
+/// off the control thread.
+pub fn inline_planner(cfg: &Config) -> Option<Planner> {
+    planner_for(cfg.loaded_scene()?, planner_params(cfg))
+}
+
+/// The travel-cost planner over `scene` (see [`inline_planner`]).
+pub fn planner_for(scene: &Arc<Scene>, params: PlannerParams) -> Option<Planner> {
+    Planner::new(Arc::clone(scene), params)
+        .map_err(|err| log::warn!("scene: no travel-cost planner ({err}); Euclidean costs"))
+        .ok()
+}
+
+/// Whether two optional scenes are the same: one `Arc`, or equal content.
+pub fn same_scene(a: Option<&Arc<Scene>>, b: Option<&Arc<Scene>>) -> bool {
+    match (a, b) {
+        (Some(a), Some(b)) => Arc::ptr_eq(a, b) || a == b,
+        (None, None) => true,
+        _ => false,
+    }
+}
+
+/// The assignment cost the config names, as the solver's metric.
+pub fn point_metric(cost: AssignmentCost) -> PointMetric {
+    match cost {
+        AssignmentCost::SquaredDistance => PointMetric::Squared,
+        AssignmentCost::Distance => PointMetric::Euclidean,
+    }
+}
+
+pub(super) fn agent_params(cfg: &Config) -> AgentParams {
+    let c = &cfg.crowd;
+    AgentParams {
+        radius_m: c.agent_radius_m,
+        max_speed_m_s: c.max_speed_m_s,
+        max_accel_m_s2: c.max_accel_m_s2,
+        kp_per_s2: c.kp_per_s2,
+        kd_per_s: c.kd_per_s,
+        push_stiffness_per_s2: c.push_stiffness_per_s2,
+    }
+}
+
+pub(super) fn segment_params(cfg: &Config) -> SegmentParams {
+    SegmentParams {
+        group_window: Micros(cfg.controls.group_window_ms * 1000),
+        hand_span_mm: cfg.controls.hand_span_mm,
+        gesture_grace: Micros(cfg.controls.gesture_grace_ms * 1000),
+    }
+}
+
+pub(super) fn direct_params(cfg: &Config) -> DirectParams {
+    DirectParams {
+        handle_weight: cfg.mesh.handle_weight,
+        soft_weight: cfg.mesh.soft_weight,
+        checkpoint_spacing_m: cfg.controls.checkpoint_spacing_m,
+        max_constraint_speed_m_s: cfg.controls.max_constraint_speed_m_s,
+        opposing_gain_per_s: cfg.controls.opposing_gain_per_s,
+    }
+}

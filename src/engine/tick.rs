@@ -1,0 +1,327 @@
+//! One tick: segment the touches, deform the mesh, step the agents, publish a
+//! snapshot and, with inline assignment, solve the next assignment.
+
+use super::state::{Engine, MAX_TICK_S};
+use crate::crowd::environment::steer_target;
+use crate::geom::Vec2;
+use crate::gesture::segment::{control_kind, Segment, TouchPoint};
+use crate::vocab::{AgentView, ContactFlags, ContactId, Event, MeshView, Micros, Snapshot};
+use crate::vocab::{TouchFrame, TouchView};
+use std::sync::Arc;
+
+/// What one tick produced.
+pub struct TickOutput<'a> {
+    /// The new snapshot.
+    pub snapshot: Arc<Snapshot>,
+    /// The mesh, when it changed this tick.
+    pub mesh: Option<Arc<MeshView>>,
+    /// Events of this tick.
+    pub events: &'a [Event],
+}
+
+impl Engine {
+    pub(super) fn to_world(&self, x: f32, y: f32) -> Vec2 {
+        Vec2::new(
+            self.world.min[0] + x as f64 * self.world.width(),
+            self.world.min[1] + y as f64 * self.world.height(),
+        )
+    }
+
+    /// Feeds one input frame (segmentation happens at the frame's own time stamp).
+    pub fn push_frame(&mut self, frame: &TouchFrame) {
+        let t = frame.t;
+        for c in frame.contacts() {
+            let world = self.to_world(c.x, c.y);
+            let tp = TouchPoint {
+                id: c.id,
+                world,
+                glass_mm: Vec2::new(c.x as f64 * self.glass_mm.x, c.y as f64 * self.glass_mm.y),
+                flags: c.flags,
+            };
+            let on_crowd =
+                c.flags.contains(ContactFlags::DOWN) && self.direct.hits(world, self.grab_radius_m);
+            self.segmenter.touch(t, &tp, on_crowd, &mut self.seg_out);
+            if c.flags.ended() {
+                self.touches.retain(|v| v.id != c.id.0);
+            } else if let Some(v) = self.touches.iter_mut().find(|v| v.id == c.id.0) {
+                v.pos = world;
+            } else if !c.flags.contains(ContactFlags::PALM) {
+                self.touches.push(TouchView {
+                    id: c.id.0,
+                    pos: world,
+                    control: None,
+                });
+            }
+        }
+        self.pending_input_t = Some(self.pending_input_t.map_or(t, |p| p.max(t)));
+    }
+
+    /// Uses an assignment solved elsewhere on the state of tick `seq` of `generation`.
+    /// Returns false (and ignores it) when the crowd has changed since.
+    pub fn apply_assignment(&mut self, generation: u64, seq: u64, goal_of: &[u32]) -> bool {
+        self.apply_plan(generation, seq, goal_of, &[])
+    }
+
+    /// [`apply_assignment`](Self::apply_assignment) with each agent's waypoint
+    /// (NaN, or an empty slice: none).
+    pub fn apply_plan(
+        &mut self,
+        generation: u64,
+        seq: u64,
+        goal_of: &[u32],
+        waypoints: &[Vec2],
+    ) -> bool {
+        if generation != self.generation
+            || goal_of.len() != self.agents.len()
+            || seq < self.assignment_seq
+        {
+            self.counters.stale_assignments += 1;
+            return false;
+        }
+        self.goal_of.clear();
+        self.goal_of.extend_from_slice(goal_of);
+        if waypoints.len() == self.waypoints.len() {
+            self.waypoints.copy_from_slice(waypoints);
+        } else {
+            self.waypoints.fill(Vec2::repeat(f64::NAN));
+        }
+        self.assignment_seq = seq;
+        self.counters.assignments += 1;
+        true
+    }
+
+    /// One tick at `now`.
+    pub fn tick(&mut self, now: Micros) -> TickOutput<'_> {
+        let dt = match self.last_t {
+            Some(t0) => now.saturating_since(t0).as_secs_f64().min(MAX_TICK_S),
+            None => 0.0,
+        };
+        self.last_t = Some(now);
+        self.seq += 1;
+        self.segmenter.tick(now, &mut self.seg_out);
+        let t0 = *self.scene_t0.get_or_insert(now);
+        self.scene_t_s = now.saturating_since(t0).as_secs_f64();
+        self.direct.set_time(self.scene_t_s);
+        let lag = self
+            .agents
+            .mean_goal_distance(self.direct.goals(), &self.goal_of);
+        if let Err(e) = self.direct.update(self.segmenter.controls(), dt, lag) {
+            self.counters.deform_errors += 1;
+            if self.counters.deform_errors.is_power_of_two() {
+                log::warn!(
+                    "internal: mesh deformation failed ({} times): {e}",
+                    self.counters.deform_errors
+                );
+            }
+        }
+        if !self.paused {
+            if self.scene.is_some() {
+                self.step_in_scene(dt);
+            } else {
+                self.agents
+                    .step(self.direct.goals(), &self.goal_of, dt, &self.agent_params);
+            }
+        }
+        if let Some(scene) = &self.scene {
+            self.motions.clear();
+            let t = self.scene_t_s;
+            self.motions.extend(
+                self.agents
+                    .positions()
+                    .iter()
+                    .map(|&p| scene.terrain_at(p, t).motion),
+            );
+        }
+        self.pass_checkpoints(now);
+        self.translate_segments(now);
+        for v in &mut self.touches {
+            v.control = self.segmenter.control_of(ContactId(v.id)).map(|c| c.id);
+        }
+        let mesh = if self.direct.take_changed() {
+            let mut m = self.meshes.acquire();
+            {
+                let mv = Arc::make_mut(&mut m);
+                mv.seq = self.seq;
+                mv.vertices.clear();
+                mv.vertices.extend_from_slice(self.direct.vertices());
+                mv.triangles = Arc::clone(&self.triangles);
+                mv.outline = Arc::clone(&self.outline);
+                mv.topology = self.topology;
+            }
+            self.meshes.keep(&m);
+            Some(m)
+        } else {
+            None
+        };
+        let mut snap = self.snapshots.acquire();
+        {
+            let s = Arc::make_mut(&mut snap);
+            s.seq = self.seq;
+            s.t = now;
+            s.input_t = self.pending_input_t.take();
+            s.agents.clear();
+            s.agents.extend(
+                self.agents
+                    .positions()
+                    .iter()
+                    .zip(self.agents.velocities())
+                    .zip(&self.goal_of)
+                    .map(|((&pos, &vel), &goal)| AgentView { pos, vel, goal }),
+            );
+            s.goals.clear();
+            s.goals.extend_from_slice(self.direct.goals());
+            s.assignment_seq = self.assignment_seq;
+            s.touches.clear();
+            s.touches.extend_from_slice(&self.touches);
+            s.motions.clear();
+            s.motions.extend_from_slice(&self.motions);
+            s.paused = self.paused;
+        }
+        self.snapshots.keep(&snap);
+        self.counters.ticks += 1;
+        // Inline assignment: solved on this tick's state, used from the next tick.
+        // (The error's text is formed only on a failure, which is logged.)
+        let result = match (&mut self.planner, &mut self.inline) {
+            (Some(p), _) => Some(
+                p.plan(
+                    self.agents.positions(),
+                    self.direct.goals(),
+                    self.scene_t_s,
+                    &mut self.goal_of,
+                    &mut self.waypoints,
+                )
+                .map_err(|e| e.to_string()),
+            ),
+            (None, Some(a)) => Some(
+                a.solve(
+                    self.agents.positions(),
+                    self.direct.goals(),
+                    &mut self.goal_of,
+                )
+                .map_err(|e| e.to_string()),
+            ),
+            (None, None) => None,
+        };
+        match result {
+            Some(Ok(())) => {
+                self.assignment_seq = self.seq;
+                self.counters.assignments += 1;
+            }
+            Some(Err(e)) => {
+                self.counters.assign_errors += 1;
+                if self.counters.assign_errors.is_power_of_two() {
+                    log::warn!(
+                        "internal: assignment failed ({} times): {e}",
+                        self.counters.assign_errors
+                    );
+                }
+            }
+            None => {}
+        }
+        TickOutput {
+            snapshot: snap,
+            mesh,
+            events: &self.events,
+        }
+    }
+
+    /// One agent step in the scene: steer at the goal or the waypoint, speed limit
+    /// scaled by the terrain, then out of obstacles by one agent radius
+    /// (mesh-formation-control sections 6.2.1 and 6.2.3). No allocation once the
+    /// buffers have the crowd's size.
+    pub(super) fn step_in_scene(&mut self, dt: f64) {
+        let Some(scene) = &self.scene else {
+            return;
+        };
+        let t = self.scene_t_s;
+        let goals = self.direct.goals();
+        self.targets.clear();
+        self.speed_factor.clear();
+        for (i, &p) in self.agents.positions().iter().enumerate() {
+            let g = goals[self.goal_of[i] as usize];
+            let w = self
+                .waypoints
+                .get(i)
+                .copied()
+                .unwrap_or(Vec2::repeat(f64::NAN));
+            self.targets.push(steer_target(scene, p, g, w, t));
+            self.speed_factor.push(scene.terrain_at(p, t).speed_factor);
+        }
+        self.agents
+            .step_towards(&self.targets, &self.speed_factor, dt, &self.agent_params);
+        let r = self.agent_params.radius_m;
+        for i in 0..self.agents.len() {
+            let p = self.agents.positions()[i];
+            if scene.signed_distance(p, t) < r {
+                let q = scene.project_out(p, r, t);
+                self.agents.set_position(i, q);
+            }
+        }
+    }
+
+    /// Clears the events of the last tick (call after publishing them).
+    pub fn clear_events(&mut self) {
+        self.events.clear();
+    }
+
+    pub(super) fn translate_segments(&mut self, now: Micros) {
+        for s in self.seg_out.drain(..) {
+            let ev = match s {
+                Segment::ControlBegin(id) | Segment::ControlUpdate(id) => {
+                    let fingers = self
+                        .segmenter
+                        .controls()
+                        .iter()
+                        .find(|c| c.id == id)
+                        .map(|c| c.fingers.iter().map(|f| f.id.0).collect::<Vec<_>>())
+                        .unwrap_or_default();
+                    let kind = control_kind(fingers.len());
+                    let vertices = self.direct.handle_vertices(id);
+                    if matches!(s, Segment::ControlBegin(_)) {
+                        Event::ControlBegin {
+                            id,
+                            kind,
+                            fingers,
+                            vertices,
+                            t: now,
+                        }
+                    } else {
+                        Event::ControlUpdate {
+                            id,
+                            kind,
+                            fingers,
+                            vertices,
+                            t: now,
+                        }
+                    }
+                }
+                Segment::ControlEnd {
+                    id,
+                    kind,
+                    cancelled,
+                } => Event::ControlEnd {
+                    id,
+                    kind,
+                    cancelled,
+                    t: now,
+                },
+                Segment::GestureBegin(id) => Event::GestureBegin { id, t: now },
+                Segment::GestureEnd {
+                    id,
+                    fingers,
+                    contacts,
+                    duration,
+                    cancelled,
+                } => Event::GestureEnd {
+                    id,
+                    fingers,
+                    contacts,
+                    duration_us: duration.0,
+                    cancelled,
+                    t: now,
+                },
+            };
+            self.events.push(ev);
+        }
+    }
+}
