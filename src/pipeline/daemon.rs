@@ -4,7 +4,7 @@
 use super::control::{ControlChannels, ControlLoop, ControlStats, Reload, INTERNAL_CLIENT};
 use super::device;
 use super::error::Error;
-use super::outputs::socket_options;
+use super::outputs::{register_outputs, Registered};
 use super::queue::{FrameQueue, InputCounters};
 use super::sources::SourceSpec;
 use super::timing::StageTimer;
@@ -15,8 +15,8 @@ use crate::crowd::environment::{PlannerParams, Scene};
 use crate::engine::Engine;
 use crate::input::replay::{Pacing, ReplaySource};
 use crate::input::FrameSink;
+use crate::publish::PublisherStats;
 use crate::publish::{HelloInfo, Outgoing, OutputContext, OutputSet, OutputStats, Outputs};
-use crate::publish::{PublisherStats, Server};
 use crate::rt::monotonic_now;
 use crate::vocab::{Command, CommandRequest, Event, Micros, StageStats, StatsReport, TouchFrame};
 use crossbeam_channel::{bounded, Receiver, Sender};
@@ -122,15 +122,13 @@ impl Daemon {
             agents: engine.agent_count() as u32,
             agent_radius_m: engine.agent_radius_m(),
         };
-        // The outputs: the Unix socket first. A new output is registered here with
-        // one `outputs.add(...)` (see ARCHITECTURE.md, "Adding an output").
-        let server = Server::bind(&socket_options(&cfg.socket), &opts.socket_path, hello)?;
-        let socket_path = server.path().to_path_buf();
-        let publisher = server.stats();
-        let rt = &cfg.pipeline.realtime;
-        let mut outputs = OutputSet::default();
-        outputs.add(Box::new(server.with_realtime(rt.priority)));
+        let Registered {
+            outputs,
+            socket_path,
+            publisher,
+        } = register_outputs(&cfg, &opts.socket_path, hello)?;
         let output_stats = outputs.stats();
+        let rt = &cfg.pipeline.realtime;
 
         let mut start = Start {
             threads: Vec::new(),
