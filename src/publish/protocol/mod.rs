@@ -951,9 +951,8 @@ fn snapshot_json_tail(s: &Snapshot, fields: &FieldSet, out: &mut Vec<u8>, b: &mu
 /// exactly 3 decimals (mm precision).
 ///
 /// # Complexity
-/// O(agents + goals + touches), one reservation. About 65 µs for 1000 agents with
-/// every field, 22 µs with positions only, in a release build on the reference
-/// machine (`benches/publish_encode.rs`).
+/// O(agents + goals + touches), one reservation (`benches/publish_encode.rs`
+/// measures it).
 pub fn encode_snapshot_json(
     s: &Snapshot,
     latency_us: Option<u64>,
