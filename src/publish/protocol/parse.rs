@@ -1,0 +1,411 @@
+//! Parsing client lines: `hello` (the settings a client asks for) and `command`,
+//! with errors that say what is wrong and where.
+
+use super::hello::{
+    ClientSettings, FieldSet, Format, Subscriptions, MAX_LINE_BYTES, PROTOCOL_VERSION,
+};
+use crate::located::json_kind;
+use crate::vocab::Command;
+use serde_json::{Map, Value};
+
+/// A parsed client line.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ClientMessage {
+    /// `hello`: (re)negotiate format, subscriptions, rate and fields.
+    Hello(ClientSettings),
+    /// `command`: ask the daemon to do something; answered by `ack` or `error`.
+    Command {
+        /// The client's id for it (number or string), echoed in the reply.
+        id: Value,
+        /// What to do.
+        command: Command,
+    },
+}
+
+/// Why a client line is not a valid client message.
+///
+/// Every error is fatal (the server answers with `error` and disconnects) except
+/// [`ProtocolError::InCommand`]: a well-framed `command` whose body is wrong is
+/// answered with a non-fatal `error` echoing the command's id.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ProtocolError {
+    /// The line exceeds [`MAX_LINE_BYTES`].
+    #[error("line is {len} bytes, more than the {max} byte limit")]
+    LineTooLong {
+        /// Its length (bytes, at least this many).
+        len: usize,
+        /// The limit.
+        max: usize,
+    },
+    /// The line is not valid JSON.
+    #[error("line is not JSON at column {column}: {reason}")]
+    NotJson {
+        /// 1-based column (byte) of the problem.
+        column: usize,
+        /// What the JSON parser expected.
+        reason: String,
+    },
+    /// The line is JSON but not an object.
+    #[error("message is {found}, not a JSON object")]
+    NotObject {
+        /// What it is (`an array`, `a number`, ...).
+        found: &'static str,
+    },
+    /// The object has no `type`.
+    #[error("missing `type` in message")]
+    MissingType,
+    /// The `type` is not one a client may send.
+    #[error("unknown message type {found} (a client sends \"hello\" or \"command\")")]
+    UnknownType {
+        /// The `type` value, as JSON (shortened).
+        found: String,
+    },
+    /// A key the message does not have.
+    #[error("unknown field `{field}` in {message}")]
+    UnknownField {
+        /// Message type.
+        message: &'static str,
+        /// The key.
+        field: String,
+    },
+    /// A required key is absent.
+    #[error("missing `{field}` in {message}")]
+    MissingField {
+        /// Message type.
+        message: &'static str,
+        /// The key.
+        field: &'static str,
+    },
+    /// A key has a value of the wrong kind or out of range.
+    #[error("`{field}` in {message} must be {expected}, got {found}")]
+    InvalidValue {
+        /// Message type.
+        message: &'static str,
+        /// The key.
+        field: &'static str,
+        /// What is allowed.
+        expected: &'static str,
+        /// The value, as JSON (shortened).
+        found: String,
+    },
+    /// The client speaks another protocol version.
+    #[error("protocol version {found} is not supported: this server speaks protocol {supported}")]
+    VersionMismatch {
+        /// The client's `protocol` value, as JSON.
+        found: String,
+        /// [`PROTOCOL_VERSION`].
+        supported: u32,
+    },
+    /// A command name the daemon does not know.
+    #[error(
+        "unknown command `{name}` (known: reset, set_agent_count, set_formation, pause, resume)"
+    )]
+    UnknownCommand {
+        /// The name sent (shortened).
+        name: String,
+    },
+    /// The arguments do not fit the command.
+    #[error("invalid arguments for command `{name}`: {reason}")]
+    CommandArguments {
+        /// Command name.
+        name: String,
+        /// What is wrong with them.
+        reason: String,
+    },
+    /// A problem inside a `command` message; not fatal, answered with its id.
+    #[error("{detail}")]
+    InCommand {
+        /// The command's id, or `null` when it had none usable.
+        id: Value,
+        /// The problem.
+        detail: Box<ProtocolError>,
+    },
+}
+
+impl ProtocolError {
+    /// Whether the server disconnects the client after reporting this.
+    pub fn is_fatal(&self) -> bool {
+        !matches!(self, ProtocolError::InCommand { .. })
+    }
+
+    /// The id to echo in the `error` reply, when the message was a command with one.
+    pub fn command_id(&self) -> Option<&Value> {
+        match self {
+            ProtocolError::InCommand { id, .. } if !id.is_null() => Some(id),
+            _ => None,
+        }
+    }
+}
+
+/// Longest JSON rendering of a bad value quoted back in an error message.
+const MAX_QUOTED_CHARS: usize = 40;
+
+fn quote(v: &Value) -> String {
+    let s = v.to_string();
+    if s.chars().count() <= MAX_QUOTED_CHARS {
+        s
+    } else {
+        let mut t: String = s.chars().take(MAX_QUOTED_CHARS).collect();
+        t.push('…');
+        t
+    }
+}
+
+fn shorten(s: &str) -> String {
+    quote(&Value::String(s.to_string()))
+        .trim_matches('"')
+        .to_string()
+}
+
+/// Parses one client line (without its newline; a trailing `\r` is ignored).
+///
+/// # Errors
+/// A [`ProtocolError`] that says what is wrong and where (column for JSON syntax,
+/// message and field otherwise). See [`ProtocolError::is_fatal`].
+///
+/// # Complexity
+/// Linear in the line length; the line is capped at [`MAX_LINE_BYTES`] and serde_json
+/// caps nesting depth, so arbitrary bytes cannot exhaust time or stack.
+pub fn parse_client_message(line: &[u8]) -> Result<ClientMessage, ProtocolError> {
+    let line = line.strip_suffix(b"\r").unwrap_or(line);
+    if line.len() > MAX_LINE_BYTES {
+        return Err(ProtocolError::LineTooLong {
+            len: line.len(),
+            max: MAX_LINE_BYTES,
+        });
+    }
+    let value: Value = serde_json::from_slice(line).map_err(|e| {
+        let full = e.to_string();
+        // serde_json appends " at line L column C"; the line is always 1 here.
+        let reason = match full.rfind(" at line ") {
+            Some(i) => full[..i].to_string(),
+            None => full,
+        };
+        ProtocolError::NotJson {
+            column: e.column().max(1),
+            reason,
+        }
+    })?;
+    let mut map = match value {
+        Value::Object(m) => m,
+        other => {
+            return Err(ProtocolError::NotObject {
+                found: json_kind(&other),
+            })
+        }
+    };
+    let ty = map.remove("type").ok_or(ProtocolError::MissingType)?;
+    match ty.as_str() {
+        Some("hello") => parse_hello(map).map(ClientMessage::Hello),
+        Some("command") => parse_command(map),
+        _ => Err(ProtocolError::UnknownType { found: quote(&ty) }),
+    }
+}
+
+fn parse_hello(map: Map<String, Value>) -> Result<ClientSettings, ProtocolError> {
+    const MSG: &str = "hello";
+    for key in map.keys() {
+        if !matches!(
+            key.as_str(),
+            "protocol" | "format" | "subscribe" | "max_rate_hz" | "fields"
+        ) {
+            return Err(ProtocolError::UnknownField {
+                message: MSG,
+                field: shorten(key),
+            });
+        }
+    }
+    match map.get("protocol") {
+        None => {
+            return Err(ProtocolError::MissingField {
+                message: MSG,
+                field: "protocol",
+            })
+        }
+        Some(v) if v.as_u64() == Some(u64::from(PROTOCOL_VERSION)) => {}
+        Some(v) if v.is_u64() => {
+            return Err(ProtocolError::VersionMismatch {
+                found: quote(v),
+                supported: PROTOCOL_VERSION,
+            })
+        }
+        Some(v) => {
+            return Err(ProtocolError::InvalidValue {
+                message: MSG,
+                field: "protocol",
+                expected: "a positive integer",
+                found: quote(v),
+            })
+        }
+    }
+    let mut s = ClientSettings::default();
+    match map.get("format") {
+        None | Some(Value::Null) => {}
+        Some(v) => {
+            s.format = match v.as_str() {
+                Some("json") => Format::Json,
+                Some("binary") => Format::Binary,
+                _ => {
+                    return Err(ProtocolError::InvalidValue {
+                        message: MSG,
+                        field: "format",
+                        expected: "\"json\" or \"binary\"",
+                        found: quote(v),
+                    })
+                }
+            }
+        }
+    }
+    if let Some(v) = map.get("subscribe").filter(|v| !v.is_null()) {
+        let mut subs = Subscriptions::NONE;
+        names_into(
+            v,
+            "subscribe",
+            "a list of \"snapshot\", \"mesh\", \"events\", \"stats\"",
+            |n| subs.set(n),
+        )?;
+        s.subscriptions = subs;
+    }
+    match map.get("fields").filter(|v| !v.is_null()) {
+        Some(v) => {
+            let mut fields = FieldSet::NONE;
+            names_into(
+                v,
+                "fields",
+                "a list of \"positions\", \"velocities\", \"goals\", \"assignment\", \"touches\", \"motions\"",
+                |n| fields.set(n),
+            )?;
+            s.fields = fields;
+        }
+        None => s.fields = FieldSet::default_for(s.format),
+    }
+    match map.get("max_rate_hz") {
+        None | Some(Value::Null) => {}
+        Some(v) => match v.as_f64() {
+            Some(hz) if hz.is_finite() && hz > 0.0 => s.max_rate_hz = Some(hz),
+            _ => {
+                return Err(ProtocolError::InvalidValue {
+                    message: MSG,
+                    field: "max_rate_hz",
+                    expected: "a positive number or null",
+                    found: quote(v),
+                })
+            }
+        },
+    }
+    Ok(s)
+}
+
+/// Applies every name of a JSON string array; `set` returns false for unknown names.
+fn names_into(
+    v: &Value,
+    field: &'static str,
+    expected: &'static str,
+    mut set: impl FnMut(&str) -> bool,
+) -> Result<(), ProtocolError> {
+    let bad = |found: &Value| ProtocolError::InvalidValue {
+        message: "hello",
+        field,
+        expected,
+        found: quote(found),
+    };
+    let items = v.as_array().ok_or_else(|| bad(v))?;
+    for item in items {
+        match item.as_str() {
+            Some(n) if set(n) => {}
+            _ => return Err(bad(item)),
+        }
+    }
+    Ok(())
+}
+
+fn parse_command(mut map: Map<String, Value>) -> Result<ClientMessage, ProtocolError> {
+    const MSG: &str = "command";
+    let in_command = |id: Value, detail: ProtocolError| ProtocolError::InCommand {
+        id,
+        detail: Box::new(detail),
+    };
+    let id = match map.remove("id") {
+        None => {
+            return Err(in_command(
+                Value::Null,
+                ProtocolError::MissingField {
+                    message: MSG,
+                    field: "id",
+                },
+            ))
+        }
+        Some(v @ (Value::Number(_) | Value::String(_))) => v,
+        Some(v) => {
+            return Err(in_command(
+                Value::Null,
+                ProtocolError::InvalidValue {
+                    message: MSG,
+                    field: "id",
+                    expected: "a number or a string",
+                    found: quote(&v),
+                },
+            ))
+        }
+    };
+    let name = match map.get("name") {
+        None => {
+            return Err(in_command(
+                id,
+                ProtocolError::MissingField {
+                    message: MSG,
+                    field: "name",
+                },
+            ))
+        }
+        Some(Value::String(n)) => n.clone(),
+        Some(v) => {
+            let found = quote(v);
+            return Err(in_command(
+                id,
+                ProtocolError::InvalidValue {
+                    message: MSG,
+                    field: "name",
+                    expected: "a string",
+                    found,
+                },
+            ));
+        }
+    };
+    if !matches!(
+        name.as_str(),
+        "reset" | "set_agent_count" | "set_formation" | "pause" | "resume"
+    ) {
+        return Err(in_command(
+            id,
+            ProtocolError::UnknownCommand {
+                name: shorten(&name),
+            },
+        ));
+    }
+    let keys: Vec<String> = map.keys().cloned().collect();
+    match serde_json::from_value::<Command>(Value::Object(map)) {
+        Ok(command) => {
+            // serde ignores extra keys on unit variants (`pause`, `resume`) even with
+            // `deny_unknown_fields`: every key sent must be one the command has.
+            let known = serde_json::to_value(&command).unwrap_or(Value::Null);
+            match keys.into_iter().find(|k| known.get(k).is_none()) {
+                None => Ok(ClientMessage::Command { id, command }),
+                Some(k) => Err(in_command(
+                    id,
+                    ProtocolError::CommandArguments {
+                        name,
+                        reason: format!("unknown field `{}`", shorten(&k)),
+                    },
+                )),
+            }
+        }
+        Err(e) => Err(in_command(
+            id,
+            ProtocolError::CommandArguments {
+                name,
+                reason: e.to_string(),
+            },
+        )),
+    }
+}

@@ -1,0 +1,9 @@
+//! Unit and property tests of the wire protocol, one file per operation (encoders,
+//! decoder, parser), with the snapshots they share in `fixtures`.
+
+mod binary;
+mod fixtures;
+mod json;
+mod messages;
+mod numbers;
+mod parse;

@@ -1,0 +1,202 @@
+//! Parsing client lines: hellos, commands and the errors for everything else.
+
+use crate::publish::protocol::{
+    parse_client_message, ClientMessage, ClientSettings, FieldSet, Format, ProtocolError,
+    MAX_LINE_BYTES,
+};
+use crate::vocab::Command;
+use proptest::prelude::*;
+use serde_json::Value;
+
+fn err(line: &str) -> ProtocolError {
+    parse_client_message(line.as_bytes()).unwrap_err()
+}
+
+#[test]
+fn hello_parses_with_defaults() {
+    let m = parse_client_message(br#"{"type":"hello","protocol":1}"#).unwrap();
+    assert_eq!(m, ClientMessage::Hello(ClientSettings::default()));
+    let m = parse_client_message(
+        br#"{"type":"hello","protocol":1,"format":"binary","subscribe":["events"],"max_rate_hz":30,"fields":["positions","touches"]}"#,
+    )
+    .unwrap();
+    let ClientMessage::Hello(s) = m else {
+        panic!("not a hello")
+    };
+    assert_eq!(s.format, Format::Binary);
+    assert_eq!(s.subscriptions.names(), vec!["events"]);
+    assert_eq!(s.max_rate_hz, Some(30.0));
+    assert_eq!(s.min_interval_us(), Some(33_333));
+    assert_eq!(s.fields.names(), vec!["positions", "touches"]);
+}
+
+#[test]
+fn commands_parse() {
+    let m =
+        parse_client_message(br#"{"type":"command","id":3,"name":"reset","hard":true}"#).unwrap();
+    assert_eq!(
+        m,
+        ClientMessage::Command {
+            id: Value::from(3),
+            command: Command::Reset { hard: true }
+        }
+    );
+    assert_eq!(
+        parse_client_message(
+            b"{\"type\":\"command\",\"id\":4,\"name\":\"set_formation\",\"formation\":\"arrow\"}"
+        )
+        .unwrap(),
+        ClientMessage::Command {
+            id: Value::from(4),
+            command: Command::SetFormation {
+                formation: "arrow".into()
+            }
+        }
+    );
+    let m = parse_client_message(
+        b"{\"type\":\"command\",\"id\":\"a\",\"name\":\"set_agent_count\",\"count\":50}\r",
+    )
+    .unwrap();
+    assert_eq!(
+        m,
+        ClientMessage::Command {
+            id: Value::from("a"),
+            command: Command::SetAgentCount { count: 50 }
+        }
+    );
+}
+
+#[test]
+fn errors_say_what_and_where() {
+    let cases = [
+        (
+            "{\"type\":\"hello\",   x}",
+            "line is not JSON at column 20: key must be a string",
+            true,
+        ),
+        ("[1,2]", "message is an array, not a JSON object", true),
+        ("{\"id\":1}", "missing `type` in message", true),
+        (
+            "{\"type\":\"snapshot\"}",
+            "unknown message type \"snapshot\"",
+            true,
+        ),
+        (
+            "{\"type\":\"hello\",\"protocol\":1,\"foo\":1}",
+            "unknown field `foo` in hello",
+            true,
+        ),
+        ("{\"type\":\"hello\"}", "missing `protocol` in hello", true),
+        (
+            "{\"type\":\"hello\",\"protocol\":2}",
+            "protocol version 2 is not supported",
+            true,
+        ),
+        (
+            "{\"type\":\"hello\",\"protocol\":1,\"format\":\"xml\"}",
+            "`format` in hello must be \"json\" or \"binary\", got \"xml\"",
+            true,
+        ),
+        (
+            "{\"type\":\"hello\",\"protocol\":1,\"subscribe\":[\"snapshot\",\"nope\"]}",
+            "`subscribe` in hello must be a list of",
+            true,
+        ),
+        (
+            "{\"type\":\"hello\",\"protocol\":1,\"max_rate_hz\":0}",
+            "`max_rate_hz` in hello must be a positive number or null, got 0",
+            true,
+        ),
+        (
+            "{\"type\":\"command\",\"name\":\"pause\"}",
+            "missing `id` in command",
+            false,
+        ),
+        (
+            "{\"type\":\"command\",\"id\":[1],\"name\":\"pause\"}",
+            "`id` in command must be a number or a string",
+            false,
+        ),
+        (
+            "{\"type\":\"command\",\"id\":1}",
+            "missing `name` in command",
+            false,
+        ),
+        (
+            "{\"type\":\"command\",\"id\":1,\"name\":\"explode\"}",
+            "unknown command `explode`",
+            false,
+        ),
+        (
+            "{\"type\":\"command\",\"id\":1,\"name\":\"set_agent_count\"}",
+            "invalid arguments for command `set_agent_count`: missing field `count`",
+            false,
+        ),
+        (
+            "{\"type\":\"command\",\"id\":1,\"name\":\"set_formation\",\"formation\":3}",
+            "invalid arguments for command `set_formation`",
+            false,
+        ),
+        (
+            "{\"type\":\"command\",\"id\":1,\"name\":\"pause\",\"x\":1}",
+            "invalid arguments for command `pause`",
+            false,
+        ),
+    ];
+    for (line, want, fatal) in cases {
+        let e = err(line);
+        assert!(
+            e.to_string().contains(want),
+            "{line}: got `{e}`, want `{want}`"
+        );
+        assert_eq!(e.is_fatal(), fatal, "{line}");
+    }
+    assert_eq!(
+        err("{\"type\":\"command\",\"id\":9,\"name\":\"explode\"}").command_id(),
+        Some(&Value::from(9))
+    );
+    assert_eq!(
+        err("{\"type\":\"command\",\"name\":\"pause\"}").command_id(),
+        None
+    );
+    let long = vec![b' '; MAX_LINE_BYTES + 1];
+    assert!(matches!(
+        parse_client_message(&long),
+        Err(ProtocolError::LineTooLong { .. })
+    ));
+}
+
+#[test]
+fn a_binary_hello_without_fields_does_not_get_motions() {
+    let hello = |line: &str| match parse_client_message(line.as_bytes()).unwrap() {
+        ClientMessage::Hello(s) => s,
+        other => panic!("not a hello: {other:?}"),
+    };
+    let s = hello(r#"{"type":"hello","protocol":1,"format":"binary"}"#);
+    assert_eq!(s.fields, FieldSet::BINARY_DEFAULT);
+    assert!(!s.fields.names().contains(&"motions"));
+    let s = hello(r#"{"type":"hello","protocol":1,"format":"json"}"#);
+    assert_eq!(s.fields, FieldSet::ALL);
+    let s = hello(
+        r#"{"type":"hello","protocol":1,"format":"binary","fields":["positions","motions"]}"#,
+    );
+    assert_eq!(s.fields.names(), vec!["positions", "motions"]);
+    assert_eq!(
+        err(r#"{"type":"hello","protocol":1,"fields":["motion"]}"#).to_string(),
+        "`fields` in hello must be a list of \"positions\", \"velocities\", \"goals\", \"assignment\", \"touches\", \"motions\", got \"motion\""
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, rng_seed: proptest::test_runner::RngSeed::Fixed(0x5eed), ..ProptestConfig::default() })]
+
+    #[test]
+    fn parse_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..300)) {
+        let _ = parse_client_message(&bytes);
+    }
+
+    #[test]
+    fn parse_never_panics_on_jsonish(s in "\\{(\"(type|id|name|protocol|format|subscribe|fields|max_rate_hz|count|hard)\":(1|-1|2.5|null|true|\"hello\"|\"command\"|\"pause\"|\"binary\"|\\[\"events\"\\]|\\{\\}),?){0,6}\\}") {
+        let _ = parse_client_message(s.as_bytes());
+    }
+}
