@@ -1,0 +1,155 @@
+//! Editing config text in place: comments and layout are kept.
+
+use super::inputs::InputConfig;
+use super::model::Config;
+use crate::located::field_positions;
+use std::path::Path;
+
+/// Writes a calibration matrix into the config text of input `input` (a `Device`
+/// input), keeping every comment and the rest of the text as it is: replaces the
+/// value of `inputs[N].calibration.matrix`, or adds the field. The result is
+/// validated before it is returned.
+///
+/// # Errors
+/// A message when input `input` is not a `Device` input, the text cannot be edited
+/// safely, or the result is not a valid config.
+pub fn set_calibration_matrix(text: &str, input: usize, m: [f64; 6]) -> Result<String, String> {
+    let value = format!(
+        "Some(({}, {}, {}, {}, {}, {}))",
+        fmt6(m[0]),
+        fmt6(m[1]),
+        fmt6(m[2]),
+        fmt6(m[3]),
+        fmt6(m[4]),
+        fmt6(m[5])
+    );
+    let cfg = Config::from_str(text, Path::new("<config>")).map_err(|e| e.to_string())?;
+    if !matches!(cfg.inputs.get(input), Some(InputConfig::Device { .. })) {
+        return Err(format!("inputs[{input}] is not a Device input"));
+    }
+    let fields = field_positions(text);
+    let offset = |line: usize, col: usize| -> Option<usize> {
+        let mut off = 0;
+        for (i, l) in text.split_inclusive('\n').enumerate() {
+            if i + 1 == line {
+                return l.char_indices().nth(col - 1).map(|(b, _)| off + b);
+            }
+            off += l.len();
+        }
+        None
+    };
+    let find = |path: &str| {
+        fields
+            .iter()
+            .find(|(p, _, _)| p == path)
+            .and_then(|(_, l, c)| offset(*l, *c))
+    };
+    let edited = if let Some(at) = find(&format!("inputs[{input}].calibration.matrix")) {
+        // Replace the value after `matrix:` up to the end of `None` or the `Some(...)`.
+        let colon = at + text[at..].find(':').ok_or("no ':' after matrix")? + 1;
+        let start = colon + (text[colon..].len() - text[colon..].trim_start().len());
+        let rest = &text[start..];
+        let end = if rest.starts_with("None") {
+            start + 4
+        } else if rest.starts_with("Some") {
+            let open = start + rest.find('(').ok_or("no '(' after Some")?;
+            let mut depth = 0usize;
+            let mut end = None;
+            for (i, ch) in text[open..].char_indices() {
+                match ch {
+                    '(' | '[' => depth += 1,
+                    ')' | ']' => {
+                        depth -= 1;
+                        if depth == 0 {
+                            end = Some(open + i + 1);
+                            break;
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            end.ok_or("unbalanced parentheses in matrix")?
+        } else {
+            return Err("the matrix value is neither None nor Some(...)".into());
+        };
+        format!("{}{}{}", &text[..start], value, &text[end..])
+    } else if let Some(at) = find(&format!("inputs[{input}].calibration")) {
+        let open = at + text[at..].find('(').ok_or("no '(' after calibration")? + 1;
+        format!("{}matrix: {}, {}", &text[..open], value, &text[open..])
+    } else {
+        // Neither: add `calibration: (...)` right after `Device(` of that input.
+        let inputs_at = find("inputs").ok_or("no inputs field")?;
+        let mut idx = 0;
+        let mut search = inputs_at;
+        let mut pos = None;
+        while let Some(rel) = text[search..].find("Device(") {
+            let p = search + rel;
+            if idx == input {
+                pos = Some(p + "Device(".len());
+                break;
+            }
+            idx += 1;
+            search = p + 1;
+        }
+        let p = pos.ok_or("cannot find the Device input in the text")?;
+        format!(
+            "{}calibration: (matrix: {}), {}",
+            &text[..p],
+            value,
+            &text[p..]
+        )
+    };
+    Config::from_str(&edited, Path::new("<edited>"))
+        .map_err(|e| format!("the edited config is invalid: {e}"))?;
+    Ok(edited)
+}
+
+fn fmt6(v: f64) -> String {
+    let s = format!("{v:.6}");
+    if s == "-0.000000" {
+        "0.000000".into()
+    } else {
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::load::DEFAULT_CONFIG_RON;
+
+    #[test]
+    fn calibration_matrix_is_written_in_place_keeping_comments() {
+        let kiosk = include_str!("../../config/kiosk.ron");
+        let m = [0.0, -1.0, 1.0, 1.0, 0.0, 0.0];
+        let out = set_calibration_matrix(kiosk, 0, m).unwrap();
+        let c = Config::from_str(&out, Path::new("k")).unwrap();
+        match &c.inputs[0] {
+            InputConfig::Device { calibration, .. } => assert_eq!(calibration.matrix, Some(m)),
+            _ => panic!("not a device"),
+        }
+        // Only the value changed: every comment line is still there.
+        let comments = |t: &str| {
+            t.lines()
+                .filter(|l| l.trim_start().starts_with("//"))
+                .count()
+        };
+        assert_eq!(comments(&out), comments(kiosk));
+        // Writing again replaces the Some(...) value.
+        let again = set_calibration_matrix(&out, 0, [1.0, 0.0, 0.0, 0.0, 1.0, 0.0]).unwrap();
+        assert!(again.contains(
+            "matrix: Some((1.000000, 0.000000, 0.000000, 0.000000, 1.000000, 0.000000))"
+        ));
+        // An input without a calibration field gets one.
+        let bare = kiosk.replace(
+            "            calibration: (rotation: 0, flip_x: false, flip_y: false, matrix: None),\n",
+            "",
+        );
+        let added = set_calibration_matrix(&bare, 0, m).unwrap();
+        assert!(Config::from_str(&added, Path::new("k")).is_ok());
+        // Replay inputs cannot be calibrated.
+        assert!(set_calibration_matrix(DEFAULT_CONFIG_RON, 0, m)
+            .unwrap_err()
+            .contains("not a Device"));
+    }
+}

@@ -1,0 +1,46 @@
+//! Why a config could not be used.
+
+pub use crate::located::Issue as ConfigIssue;
+use crate::located::{format_issues, ReadError};
+use std::path::PathBuf;
+
+/// Why a config could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The file could not be read.
+    #[error("{path}: cannot read config: {source}")]
+    Io {
+        /// File.
+        path: PathBuf,
+        /// Cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is larger than [`MAX_CONFIG_BYTES`](crate::config::MAX_CONFIG_BYTES).
+    #[error("{path}: config is {size} bytes, more than the {max} byte limit")]
+    TooLarge {
+        /// File.
+        path: PathBuf,
+        /// Its size.
+        size: u64,
+        /// The limit.
+        max: u64,
+    },
+    /// The text is not a valid config; every problem found is listed.
+    #[error("{}", format_issues(.path, .issues))]
+    Invalid {
+        /// File (or `<embedded>` / `<text>`).
+        path: PathBuf,
+        /// Problems, in file order.
+        issues: Vec<ConfigIssue>,
+    },
+}
+
+impl From<ReadError> for Error {
+    fn from(e: ReadError) -> Error {
+        match e {
+            ReadError::Io { path, source } => Error::Io { path, source },
+            ReadError::TooLarge { path, size, max } => Error::TooLarge { path, size, max },
+        }
+    }
+}
