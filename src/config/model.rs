@@ -4,7 +4,7 @@
 use super::inputs::InputConfig;
 use crate::crowd::environment::Scene;
 use crate::crowd::formation::{FormationDef, FormationLibrary, DEFAULT_LAMBDA};
-use crate::geom::{Rect, Vec2};
+use crate::geom::Rect;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -316,17 +316,5 @@ impl Config {
     /// `scene` path is left as it is.
     pub fn set_loaded_scene(&mut self, scene: Option<Arc<Scene>>) {
         self.loaded_scene = scene;
-    }
-
-    /// Metres in the world per millimetre on the surface, per axis.
-    pub fn world_per_mm(&self, surface_mm: Option<(f64, f64)>) -> Vec2 {
-        let (w_mm, h_mm) = surface_mm.or(self.surface.size_mm).unwrap_or((
-            1000.0,
-            1000.0 * self.surface.world.height() / self.surface.world.width(),
-        ));
-        Vec2::new(
-            self.surface.world.width() / w_mm,
-            self.surface.world.height() / h_mm,
-        )
     }
 }
