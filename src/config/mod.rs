@@ -19,7 +19,7 @@ mod model;
 mod validate;
 
 pub use edit::set_calibration_matrix;
-pub use error::{ConfigIssue, Error};
+pub use error::{ConfigIssue, EditError, Error};
 pub use inputs::{
     CalibrationConfig, DeviceInterface, DeviceSelect, InputConfig, DEFAULT_PALM_MAX_MM,
 };
