@@ -1,0 +1,346 @@
+//! Loading: the embedded default, files (size-capped), text, the search path; the
+//! scene and the formation library are loaded and checked with the config.
+
+use super::error::{ConfigIssue, Error};
+use super::inputs::InputConfig;
+use super::model::Config;
+use crate::crowd::formation::FormationLibrary;
+use crate::located::{locate_field, parse_strict, read_capped};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Largest config file read (bytes).
+pub const MAX_CONFIG_BYTES: u64 = 1 << 20;
+
+/// The embedded default config text (`config/crowdtouch.ron`).
+pub const DEFAULT_CONFIG_RON: &str = include_str!("../../config/crowdtouch.ron");
+
+impl Config {
+    /// The embedded default (`config/crowdtouch.ron`).
+    pub fn embedded_default() -> Config {
+        match Config::from_str(DEFAULT_CONFIG_RON, Path::new("<embedded>")) {
+            Ok(c) => c,
+            // The shipped file is checked by tests; reaching this is a build defect.
+            Err(e) => panic!("embedded default config is invalid: {e}"),
+        }
+    }
+
+    /// Reads and validates a config file. Relative input paths are resolved against
+    /// the file's directory.
+    ///
+    /// # Errors
+    /// [`Error::Io`], [`Error::TooLarge`] or [`Error::Invalid`] with every problem.
+    pub fn load(path: &Path) -> Result<Config, Error> {
+        let text = read_capped(path, MAX_CONFIG_BYTES).map_err(Error::from)?;
+        let base = path.parent().unwrap_or(Path::new("."));
+        Config::from_str_at(&text, path, base)
+    }
+
+    /// Parses and validates config text; `path` is used in messages only. Relative
+    /// paths (recordings, the scene) stay relative to the working directory.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] listing every problem with line, column and field.
+    #[allow(clippy::should_implement_trait)]
+    pub fn from_str(text: &str, path: &Path) -> Result<Config, Error> {
+        Config::from_str_at(text, path, Path::new(""))
+    }
+
+    /// [`Config::from_str`] with relative paths resolved against `base`; the scene
+    /// is loaded and validated (its problems are reported at the `scene` field).
+    fn from_str_at(text: &str, path: &Path, base: &Path) -> Result<Config, Error> {
+        let mut cfg: Config = parse_strict(text).map_err(|issue| Error::Invalid {
+            path: path.to_path_buf(),
+            issues: vec![issue],
+        })?;
+        let mut problems = cfg.validate();
+        match FormationLibrary::with(&cfg.formations.shapes) {
+            Ok(lib) => cfg.library = Arc::new(lib),
+            Err(e) => problems.extend(
+                e.into_iter()
+                    .map(|(f, m)| (format!("formations.shapes{f}"), m)),
+            ),
+        }
+        if problems.is_empty() {
+            cfg.resolve_paths(base);
+            if let Some(scene_path) = &cfg.scene {
+                match crate::crowd::environment::load_scene(scene_path, cfg.crowd.agent_radius_m)
+                    .and_then(|s| {
+                        s.check_formations(scene_path, &cfg.library.known_names())
+                            .map(|()| s)
+                    }) {
+                    Ok(scene) => cfg.loaded_scene = Some(Arc::new(scene)),
+                    Err(e) => {
+                        problems.push(("scene".to_string(), format!("scene not usable:\n{e}")))
+                    }
+                }
+            }
+        }
+        if problems.is_empty() {
+            Ok(cfg)
+        } else {
+            let mut issues: Vec<ConfigIssue> = problems
+                .into_iter()
+                .map(|(field, message)| {
+                    let (line, column) = locate_field(text, &field).unwrap_or((0, 0));
+                    ConfigIssue {
+                        field,
+                        line,
+                        column,
+                        message,
+                    }
+                })
+                .collect();
+            issues.sort_by_key(|i| (i.line, i.column));
+            Err(Error::Invalid {
+                path: path.to_path_buf(),
+                issues,
+            })
+        }
+    }
+
+    fn resolve_paths(&mut self, base: &Path) {
+        if let Some(s) = &mut self.scene {
+            if s.is_relative() {
+                *s = base.join(&*s);
+            }
+        }
+        for input in &mut self.inputs {
+            match input {
+                InputConfig::Replay { files, .. } => {
+                    for f in files.iter_mut() {
+                        if f.is_relative() {
+                            *f = base.join(&*f);
+                        }
+                    }
+                }
+                InputConfig::Device { .. } => {}
+            }
+        }
+    }
+}
+
+/// Where `run` looks for its config when `--config` is not given, in order.
+pub fn search_path() -> Vec<PathBuf> {
+    let mut v = Vec::new();
+    if let Some(p) = std::env::var_os("CROWDTOUCH_CONFIG") {
+        v.push(PathBuf::from(p));
+    }
+    if let Some(d) = std::env::var_os("XDG_CONFIG_HOME") {
+        v.push(PathBuf::from(d).join("crowdtouch/crowdtouch.ron"));
+    } else if let Some(h) = std::env::var_os("HOME") {
+        v.push(PathBuf::from(h).join(".config/crowdtouch/crowdtouch.ron"));
+    }
+    v.push(PathBuf::from("/etc/crowdtouch/crowdtouch.ron"));
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn issues(text: &str) -> Vec<ConfigIssue> {
+        match Config::from_str(text, Path::new("t.ron")) {
+            Err(Error::Invalid { issues, .. }) => issues,
+            other => panic!("expected invalid, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn formation_shapes_and_checkpoint_names_are_checked_where_they_are_written() {
+        let shapes = |text: &str| DEFAULT_CONFIG_RON.replace("        shapes: [],", text);
+        // A bow tie and a shape given twice, each at its own entry.
+        let text = shapes(
+            "        shapes: [\n            (name: \"bow\", outline: [(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)]),\n            (name: \"t\", outline: [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]),\n            (name: \"t\", outline: [(0.0, 0.0), (2.0, 0.0), (0.0, 1.0)]),\n        ],",
+        );
+        let e = Config::from_str(&text, Path::new("f.ron"))
+            .unwrap_err()
+            .to_string();
+        let line = |needle: &str| text.lines().position(|l| l.contains(needle)).unwrap() + 1;
+        assert!(
+            e.contains(&format!("f.ron:{}:", line("\"bow\"")))
+                && e.contains("field `formations.shapes[0].outline`: edges 0 and 2 cross or touch"),
+            "{e}"
+        );
+        assert!(
+            e.contains(&format!("f.ron:{}:", line("(2.0, 0.0)")))
+                && e.contains("field `formations.shapes[2].name`: formation `t` is defined twice"),
+            "{e}"
+        );
+        let lambda = DEFAULT_CONFIG_RON.replace("lambda: 0.5", "lambda: 1.5");
+        let e = Config::from_str(&lambda, Path::new("l.ron"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(
+                "field `formations.lambda`: least-effort weight must be in 0 ..= 1, got 1.5"
+            ),
+            "{e}"
+        );
+        // A config without the section gets the shipped shapes; one that adds a
+        // shape can use it in a scene.
+        let bare: String = {
+            let start = DEFAULT_CONFIG_RON.find("    formations: (").unwrap();
+            let end = start + DEFAULT_CONFIG_RON[start..].find("    ),\n").unwrap() + 7;
+            format!(
+                "{}{}",
+                &DEFAULT_CONFIG_RON[..start],
+                &DEFAULT_CONFIG_RON[end..]
+            )
+        };
+        let c = Config::from_str(&bare, Path::new("b.ron")).unwrap();
+        assert!(c.formation_library().knows("arrow") && !c.formation_library().knows("t"));
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("gate.ron"),
+            "(version: 1, bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),\n checkpoints: [(name: \"g\", formation: \"t\", region: Circle(centre_m: (3.0, 3.0), radius_m: 1.0))])",
+        )
+        .unwrap();
+        let with_scene = |t: &str| t.replace("scene: None", "scene: Some(\"gate.ron\")");
+        let cfg = dir.path().join("c.ron");
+        std::fs::write(&cfg, with_scene(&bare)).unwrap();
+        let e = Config::load(&cfg).unwrap_err().to_string();
+        assert!(
+            e.contains("field `scene`")
+                && e.contains("gate.ron:2:")
+                && e.contains("checkpoints[0].formation: no formation is called `t`"),
+            "{e}"
+        );
+        std::fs::write(
+            &cfg,
+            with_scene(&shapes(
+                "        shapes: [(name: \"t\", outline: [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)])],",
+            )),
+        )
+        .unwrap();
+        let c = Config::load(&cfg).unwrap();
+        assert_eq!(c.loaded_scene().unwrap().checkpoints()[0].formation, "t");
+    }
+
+    #[test]
+    fn scene_field_loads_shipped_embedded_and_reports_bad_scenes() {
+        let with = |scene: &str| DEFAULT_CONFIG_RON.replace("scene: None", scene);
+        // No scene: nothing loaded.
+        let c = Config::embedded_default();
+        assert!(c.scene.is_none() && c.loaded_scene().is_none());
+        // A shipped name that does not exist on disk resolves to the embedded copy.
+        let c = Config::from_str(
+            &with("scene: Some(\"/nonexistent/scenes/single_block.ron\")"),
+            Path::new("t.ron"),
+        )
+        .unwrap();
+        assert_eq!(c.loaded_scene().unwrap().name(), "single block");
+        // Relative to the config file.
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("bad.ron"),
+            "(version: 1, bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),\n obstacles: [(parts: [Circle(centre_m: (4.0, 4.0), radius_m: -1.0)])])",
+        )
+        .unwrap();
+        let cfg = dir.path().join("c.ron");
+        std::fs::write(&cfg, with("scene: Some(\"bad.ron\")")).unwrap();
+        let e = Config::load(&cfg).unwrap_err().to_string();
+        let line = with("scene: Some(\"bad.ron\")")
+            .lines()
+            .position(|l| l.contains("scene: Some"))
+            .unwrap()
+            + 1;
+        assert!(e.contains(&format!("c.ron:{line}:")), "{e}");
+        assert!(e.contains("field `scene`"), "{e}");
+        assert!(e.contains("bad.ron:2:"), "{e}");
+        // A missing file that is not a shipped name.
+        let e = Config::from_str(&with("scene: Some(\"nope.ron\")"), Path::new("t.ron"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("field `scene`") && e.contains("nope.ron"), "{e}");
+    }
+
+    #[test]
+    fn embedded_default_is_valid() {
+        let c = Config::embedded_default();
+        assert_eq!(c.crowd.agents, 100);
+        assert_eq!(c.controls.group_window_ms, 150);
+    }
+
+    #[test]
+    fn unknown_field_is_an_error_with_its_place() {
+        let text =
+            DEFAULT_CONFIG_RON.replacen("agents: 100,", "agents: 100,\n        agnets: 5,", 1);
+        let is = issues(&text);
+        assert_eq!(is.len(), 1);
+        assert_eq!(is[0].field, "crowd.agnets");
+        let expect_line = text.lines().position(|l| l.contains("agnets")).unwrap() + 1;
+        assert_eq!(is[0].line, expect_line);
+        assert!(is[0].message.contains("agnets"), "{}", is[0].message);
+    }
+
+    #[test]
+    fn syntax_error_has_position() {
+        let is = issues("(version: 1,, )");
+        assert_eq!(is[0].line, 1);
+        assert!(is[0].column > 0);
+    }
+
+    #[test]
+    fn missing_field_is_named() {
+        let text = DEFAULT_CONFIG_RON.replacen("max_speed_m_s: 1.5,", "", 1);
+        let is = issues(&text);
+        assert!(is[0].field.ends_with("max_speed_m_s"), "{is:?}");
+        assert!(is[0].message.contains("max_speed_m_s"));
+    }
+
+    #[test]
+    fn missing_file_names_the_path() {
+        let e = Config::load(Path::new("/nonexistent/crowdtouch.ron")).unwrap_err();
+        assert!(e.to_string().contains("/nonexistent/crowdtouch.ron"), "{e}");
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig { cases: 256, ..Default::default() })]
+        /// Arbitrary text never panics the parser, and every error points inside it.
+        #[test]
+        fn arbitrary_text_never_panics(text in "\\PC{0,200}") {
+            if let Err(Error::Invalid { issues, .. }) = Config::from_str(&text, Path::new("p.ron")) {
+                let lines = text.lines().count().max(1);
+                for i in issues {
+                    proptest::prop_assert!(i.line <= lines + 1, "line {} of {}", i.line, lines);
+                }
+            }
+        }
+
+        /// The default config with a slice cut out or repeated: an error with a place,
+        /// or (rarely) still a valid config; never a panic.
+        #[test]
+        fn mutated_default_never_panics(a in 0usize..4000, len in 0usize..80, dup in proptest::bool::ANY) {
+            let t = DEFAULT_CONFIG_RON;
+            let a = a.min(t.len());
+            let b = (a + len).min(t.len());
+            if !t.is_char_boundary(a) || !t.is_char_boundary(b) {
+                return Ok(());
+            }
+            let mutated = if dup { format!("{}{}", &t[..b], &t[a..]) } else { format!("{}{}", &t[..a], &t[b..]) };
+            match Config::from_str(&mutated, Path::new("m.ron")) {
+                Ok(_) => {}
+                Err(Error::Invalid { issues, .. }) => proptest::prop_assert!(!issues.is_empty()),
+                Err(e) => proptest::prop_assert!(false, "unexpected error kind {e}"),
+            }
+        }
+    }
+
+    #[test]
+    fn garbage_never_panics() {
+        for t in [
+            "",
+            "(",
+            ")",
+            "((((",
+            "\"",
+            "/*",
+            "(version: \"x\")",
+            "[1,2",
+            "\u{0}",
+        ] {
+            assert!(Config::from_str(t, Path::new("g")).is_err());
+        }
+    }
+}

@@ -1,0 +1,32 @@
+//! The daemon's configuration: RON, strict, validated, with errors that point.
+//!
+//! `config/crowdtouch.ron` is the documented default and is embedded in the binary
+//! ([`Config::embedded_default`]). Unknown fields are errors; every range is checked;
+//! every error names the file, the line and column, and the field. Reads are
+//! size-capped ([`MAX_CONFIG_BYTES`]).
+//!
+//! # Search path (`run` without `--config`)
+//! 1. `$CROWDTOUCH_CONFIG`
+//! 2. `$XDG_CONFIG_HOME/crowdtouch/crowdtouch.ron` (or `~/.config/crowdtouch/crowdtouch.ron`)
+//! 3. `/etc/crowdtouch/crowdtouch.ron`
+//! 4. the embedded default.
+
+mod edit;
+mod error;
+mod inputs;
+mod load;
+mod model;
+mod validate;
+
+pub use edit::set_calibration_matrix;
+pub use error::{ConfigIssue, EditError, Error};
+pub use inputs::{
+    CalibrationConfig, DeviceInterface, DeviceSelect, InputConfig, DEFAULT_PALM_MAX_MM,
+};
+pub use load::{search_path, DEFAULT_CONFIG_RON, MAX_CONFIG_BYTES};
+pub use model::{
+    AssignmentConfig, AssignmentCost, BudgetsConfig, Config, ControlsConfig, CrowdConfig,
+    FormationsConfig, LogLevel, MeshConfig, PipelineConfig, RealtimeConfig, SocketConfig,
+    SurfaceConfig, CONFIG_VERSION,
+};
+pub use validate::MAX_AGENTS;

@@ -1,0 +1,320 @@
+//! The config model: [`Config`] and its sections (the `inputs` sections are in
+//! a file of their own).
+
+use super::inputs::InputConfig;
+use crate::crowd::environment::Scene;
+use crate::crowd::formation::{FormationDef, FormationLibrary, DEFAULT_LAMBDA};
+use crate::geom::Rect;
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// The config format version this build reads.
+pub const CONFIG_VERSION: u32 = 1;
+
+/// Log verbosity.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LogLevel {
+    /// Errors only.
+    Error,
+    /// Warnings and errors.
+    Warn,
+    /// Normal operation.
+    Info,
+    /// Developer detail.
+    Debug,
+    /// Everything.
+    Trace,
+}
+
+impl LogLevel {
+    /// As a `log` filter.
+    pub fn filter(self) -> log::LevelFilter {
+        match self {
+            LogLevel::Error => log::LevelFilter::Error,
+            LogLevel::Warn => log::LevelFilter::Warn,
+            LogLevel::Info => log::LevelFilter::Info,
+            LogLevel::Debug => log::LevelFilter::Debug,
+            LogLevel::Trace => log::LevelFilter::Trace,
+        }
+    }
+}
+
+/// How the touch surface maps onto the world.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceConfig {
+    /// The world rectangle the whole surface shows (m).
+    pub world: Rect,
+    /// Physical size of the surface (mm), used when the device does not report its
+    /// resolution. `None` assumes 1 mm per 1/1000 of the width.
+    #[serde(default)]
+    pub size_mm: Option<(f64, f64)>,
+}
+
+/// The crowd.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CrowdConfig {
+    /// Number of agents.
+    pub agents: u32,
+    /// Agent radius (m); agents push each other apart below twice this distance.
+    pub agent_radius_m: f64,
+    /// Maximum agent speed (m/s).
+    pub max_speed_m_s: f64,
+    /// Maximum agent acceleration (m/s²).
+    pub max_accel_m_s2: f64,
+    /// Proportional gain of the PD controller towards the goal (1/s²).
+    pub kp_per_s2: f64,
+    /// Derivative gain of the PD controller (1/s).
+    pub kd_per_s: f64,
+    /// Stiffness of the spring-mass push-back between overlapping agents (1/s²).
+    pub push_stiffness_per_s2: f64,
+    /// Initial formation: rectangle the crowd fills at start and after a reset (m).
+    pub formation: Rect,
+}
+
+/// The deformable mesh.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshConfig {
+    /// Vertices along x.
+    pub cols: u32,
+    /// Vertices along y.
+    pub rows: u32,
+    /// Weight of a finger's own vertex in the ARAP solve (hard-ish constraint).
+    pub handle_weight: f64,
+    /// Weight of supplementary line/area points (soft constraints).
+    pub soft_weight: f64,
+}
+
+/// Grouping touches into controls and gestures.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControlsConfig {
+    /// Fingers landing within this window of a control's first finger join it (ms).
+    pub group_window_ms: u64,
+    /// ...and only if within this distance of one of its fingers on the surface (mm).
+    pub hand_span_mm: f64,
+    /// A touch grabs the crowd if it lands within this distance of the mesh (m).
+    pub grab_radius_m: f64,
+    /// A gesture ends this long after its last finger lifts (ms).
+    pub gesture_grace_ms: u64,
+    /// Spacing of check points along a finger's trajectory (m).
+    pub checkpoint_spacing_m: f64,
+    /// Fastest a constraint may move towards its finger (m/s).
+    pub max_constraint_speed_m_s: f64,
+    /// Gain of the opposing force that slows constraints while agents lag (1/s):
+    /// force = gain × mean agent-to-goal distance, never more than the constraint speed.
+    pub opposing_gain_per_s: f64,
+}
+
+/// Cost of sending an agent to a goal.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum AssignmentCost {
+    /// Squared Euclidean distance: stable, crossing-free assignments (default).
+    SquaredDistance,
+    /// Euclidean distance (the paper's travel length with no scene).
+    Distance,
+}
+
+/// How often the optimal assignment is refreshed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AssignmentConfig {
+    /// Cost function.
+    pub cost: AssignmentCost,
+    /// Solve on a worker thread; the control thread uses the newest result (true), or
+    /// solve inside the tick (false; replays always solve inside the tick).
+    pub worker: bool,
+}
+
+/// Formations the crowd switches between at a scene's checkpoints
+/// (mesh-formation-control section 7.3; see [`crate::crowd::formation`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FormationsConfig {
+    /// `λ` of the least-effort pairing of agents to the new formation's goals
+    /// (formation-transform eq. 3), in `[0, 1]`: 1 pairs by travel alone.
+    #[serde(default = "default_lambda")]
+    pub lambda: f64,
+    /// Shapes added to the shipped ones (`square`, `arrow`, `column`, `line`,
+    /// `wedge`, `diamond`); one with a shipped name replaces it.
+    #[serde(default)]
+    pub shapes: Vec<FormationDef>,
+}
+
+impl Default for FormationsConfig {
+    fn default() -> Self {
+        FormationsConfig {
+            lambda: DEFAULT_LAMBDA,
+            shapes: Vec::new(),
+        }
+    }
+}
+
+fn default_lambda() -> f64 {
+    DEFAULT_LAMBDA
+}
+
+/// Per-stage budgets (µs): overruns are counted, logged at a rate limit and published.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BudgetsConfig {
+    /// Kernel timestamp → frame on the queue.
+    pub input_us: u64,
+    /// Frame on the queue → control thread picks it up.
+    pub queue_us: u64,
+    /// One control tick (segment + deform + step + snapshot).
+    pub control_us: u64,
+    /// Serialising a snapshot.
+    pub publish_us: u64,
+    /// Kernel timestamp → snapshot bytes written to a client.
+    pub end_to_end_us: u64,
+    /// One assignment solve on the worker.
+    pub assignment_us: u64,
+}
+
+/// Real-time scheduling of the latency path (input, control, publisher threads).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RealtimeConfig {
+    /// SCHED_FIFO priority 1..=99 for the latency-path threads; `None` keeps normal
+    /// scheduling. Needs RLIMIT_RTPRIO (the systemd unit grants it); when refused the
+    /// daemon logs it once and runs at normal priority.
+    #[serde(default)]
+    pub priority: Option<u8>,
+    /// Lock all memory into RAM (mlockall), so the latency path never page-faults.
+    #[serde(default)]
+    pub lock_memory: bool,
+    /// CPUs the input threads may run on (`None`: any).
+    #[serde(default)]
+    pub input_cpus: Option<Vec<usize>>,
+}
+
+/// Threads and queues.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PipelineConfig {
+    /// Control ticks per second when no input arrives (input frames also tick).
+    pub tick_hz: f64,
+    /// Capacity of the input → control queue (frames).
+    pub queue_frames: u32,
+    /// Stage budgets.
+    pub budgets: BudgetsConfig,
+    /// How often `stats` is published (ms).
+    pub stats_interval_ms: u64,
+    /// Real-time scheduling and memory locking.
+    #[serde(default)]
+    pub realtime: RealtimeConfig,
+}
+
+/// The Unix socket.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SocketConfig {
+    /// Socket path; `None` uses `$RUNTIME_DIRECTORY/crowdtouch.sock` under systemd,
+    /// else `$XDG_RUNTIME_DIR/crowdtouch.sock`, else `/tmp/crowdtouch-$UID.sock`.
+    #[serde(default)]
+    pub path: Option<PathBuf>,
+    /// File mode of the socket, octal as a string ("0660").
+    pub mode: String,
+    /// Group owning the socket, `None` to keep the process's group.
+    #[serde(default)]
+    pub group: Option<String>,
+    /// Snapshots queued per client before the oldest are dropped.
+    pub client_queue: u32,
+    /// Most clients at once.
+    pub max_clients: u32,
+}
+
+impl SocketConfig {
+    /// The socket mode as a number.
+    pub fn mode_bits(&self) -> u32 {
+        u32::from_str_radix(self.mode.trim_start_matches("0o"), 8).unwrap_or(0o660)
+    }
+
+    /// The socket path this config resolves to in the current environment.
+    pub fn resolved_path(&self) -> PathBuf {
+        if let Some(p) = &self.path {
+            return p.clone();
+        }
+        if let Some(dir) = std::env::var_os("RUNTIME_DIRECTORY") {
+            // systemd may list several directories separated by ':'.
+            let first = dir
+                .to_string_lossy()
+                .split(':')
+                .next()
+                .unwrap_or("")
+                .to_string();
+            if !first.is_empty() {
+                return PathBuf::from(first).join("crowdtouch.sock");
+            }
+        }
+        if let Some(dir) = std::env::var_os("XDG_RUNTIME_DIR") {
+            return PathBuf::from(dir).join("crowdtouch.sock");
+        }
+        PathBuf::from(format!("/tmp/crowdtouch-{}.sock", nix::unistd::getuid()))
+    }
+}
+
+/// The whole config.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    /// Format version; must be [`CONFIG_VERSION`].
+    pub version: u32,
+    /// Log verbosity (`RUST_LOG` overrides).
+    pub log_level: LogLevel,
+    /// Input sources.
+    pub inputs: Vec<InputConfig>,
+    /// Surface to world mapping.
+    pub surface: SurfaceConfig,
+    /// The crowd.
+    pub crowd: CrowdConfig,
+    /// The deformable mesh.
+    pub mesh: MeshConfig,
+    /// Controls and gestures.
+    pub controls: ControlsConfig,
+    /// Agent-to-goal assignment.
+    pub assignment: AssignmentConfig,
+    /// The environment: a scene file (obstacles, travel-speed patches, moving things;
+    /// see [`crate::crowd::environment`]), relative to the config file. The shipped scenes
+    /// (`config/scenes/<name>.ron`) are also embedded in the binary and found by file
+    /// name when the path does not exist. `None`: open ground, no environment.
+    /// Loading a config (at start and on every SIGHUP) reads the scene file again.
+    #[serde(default)]
+    pub scene: Option<PathBuf>,
+    /// The scene, loaded and validated with the config.
+    #[serde(skip)]
+    pub(super) loaded_scene: Option<Arc<Scene>>,
+    /// Formation shapes a scene's checkpoints switch to.
+    #[serde(default)]
+    pub formations: FormationsConfig,
+    /// The shipped shapes and `formations.shapes`, validated with the config.
+    #[serde(skip)]
+    pub(super) library: Arc<FormationLibrary>,
+    /// Threads, queues and budgets.
+    pub pipeline: PipelineConfig,
+    /// The Unix socket.
+    pub socket: SocketConfig,
+}
+
+impl Config {
+    /// The loaded scene (`None` without a `scene` field).
+    pub fn loaded_scene(&self) -> Option<&Arc<Scene>> {
+        self.loaded_scene.as_ref()
+    }
+
+    /// The formation shapes: shipped and `formations.shapes`.
+    pub fn formation_library(&self) -> &Arc<FormationLibrary> {
+        &self.library
+    }
+
+    /// Replaces the scene (tests and tools that build a scene in memory); the
+    /// `scene` path is left as it is.
+    pub fn set_loaded_scene(&mut self, scene: Option<Arc<Scene>>) {
+        self.loaded_scene = scene;
+    }
+}

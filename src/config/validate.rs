@@ -1,0 +1,395 @@
+//! Range checks on a parsed config: every problem as a `(field path, message)` pair.
+
+use super::inputs::{DeviceSelect, InputConfig};
+use super::model::{Config, CONFIG_VERSION};
+use crate::geom::Rect;
+use crate::vocab::parse_vendor_product;
+
+/// Most agents the daemon accepts.
+pub const MAX_AGENTS: u32 = 20_000;
+
+impl Config {
+    /// Range checks; returns `(field path, message)` for every problem.
+    pub fn validate(&self) -> Vec<(String, String)> {
+        let mut p = Vec::new();
+        let mut check = |ok: bool, field: &str, msg: String| {
+            if !ok {
+                p.push((field.to_string(), msg));
+            }
+        };
+        check(
+            self.version == CONFIG_VERSION,
+            "version",
+            format!(
+                "version {} is not supported (this build reads version {CONFIG_VERSION})",
+                self.version
+            ),
+        );
+        let w = &self.surface.world;
+        check(
+            finite_rect(w) && w.width() > 0.0 && w.height() > 0.0,
+            "surface.world",
+            format!(
+                "world rectangle must have finite min < max, got {:?} .. {:?}",
+                w.min, w.max
+            ),
+        );
+        if let Some((mw, mh)) = self.surface.size_mm {
+            check(
+                mw.is_finite() && mh.is_finite() && mw > 0.0 && mh > 0.0,
+                "surface.size_mm",
+                format!("surface size must be positive millimetres, got ({mw}, {mh})"),
+            );
+        }
+        let c = &self.crowd;
+        check(
+            (1..=MAX_AGENTS).contains(&c.agents),
+            "crowd.agents",
+            format!("agent count must be 1..={MAX_AGENTS}, got {}", c.agents),
+        );
+        check(
+            c.agent_radius_m > 0.0 && c.agent_radius_m <= 5.0,
+            "crowd.agent_radius_m",
+            format!("agent radius must be in (0, 5] m, got {}", c.agent_radius_m),
+        );
+        check(
+            c.max_speed_m_s > 0.0 && c.max_speed_m_s <= 50.0,
+            "crowd.max_speed_m_s",
+            format!("max speed must be in (0, 50] m/s, got {}", c.max_speed_m_s),
+        );
+        check(
+            c.max_accel_m_s2 > 0.0 && c.max_accel_m_s2 <= 1000.0,
+            "crowd.max_accel_m_s2",
+            format!(
+                "max acceleration must be in (0, 1000] m/s², got {}",
+                c.max_accel_m_s2
+            ),
+        );
+        check(
+            c.kp_per_s2 > 0.0 && c.kp_per_s2.is_finite(),
+            "crowd.kp_per_s2",
+            format!("kp must be positive, got {}", c.kp_per_s2),
+        );
+        check(
+            c.kd_per_s >= 0.0 && c.kd_per_s.is_finite(),
+            "crowd.kd_per_s",
+            format!("kd must be zero or positive, got {}", c.kd_per_s),
+        );
+        check(
+            c.push_stiffness_per_s2 >= 0.0 && c.push_stiffness_per_s2.is_finite(),
+            "crowd.push_stiffness_per_s2",
+            format!(
+                "push stiffness must be zero or positive, got {}",
+                c.push_stiffness_per_s2
+            ),
+        );
+        let f = &c.formation;
+        check(
+            finite_rect(f) && f.width() > 0.0 && f.height() > 0.0,
+            "crowd.formation",
+            format!(
+                "formation rectangle must have finite min < max, got {:?} .. {:?}",
+                f.min, f.max
+            ),
+        );
+        let m = &self.mesh;
+        check(
+            (2..=200).contains(&m.cols),
+            "mesh.cols",
+            format!("mesh columns must be 2..=200, got {}", m.cols),
+        );
+        check(
+            (2..=200).contains(&m.rows),
+            "mesh.rows",
+            format!("mesh rows must be 2..=200, got {}", m.rows),
+        );
+        check(
+            m.handle_weight > 0.0 && m.handle_weight.is_finite(),
+            "mesh.handle_weight",
+            format!("handle weight must be positive, got {}", m.handle_weight),
+        );
+        check(
+            m.soft_weight > 0.0 && m.soft_weight.is_finite(),
+            "mesh.soft_weight",
+            format!("soft weight must be positive, got {}", m.soft_weight),
+        );
+        let k = &self.controls;
+        check(
+            k.group_window_ms <= 5_000,
+            "controls.group_window_ms",
+            format!(
+                "group window must be at most 5000 ms, got {}",
+                k.group_window_ms
+            ),
+        );
+        check(
+            k.hand_span_mm > 0.0 && k.hand_span_mm.is_finite(),
+            "controls.hand_span_mm",
+            format!(
+                "hand span must be positive millimetres, got {}",
+                k.hand_span_mm
+            ),
+        );
+        check(
+            k.grab_radius_m >= 0.0 && k.grab_radius_m.is_finite(),
+            "controls.grab_radius_m",
+            format!(
+                "grab radius must be zero or positive, got {}",
+                k.grab_radius_m
+            ),
+        );
+        check(
+            k.gesture_grace_ms <= 10_000,
+            "controls.gesture_grace_ms",
+            format!(
+                "gesture grace must be at most 10000 ms, got {}",
+                k.gesture_grace_ms
+            ),
+        );
+        check(
+            k.checkpoint_spacing_m > 0.0 && k.checkpoint_spacing_m.is_finite(),
+            "controls.checkpoint_spacing_m",
+            format!(
+                "check point spacing must be positive, got {}",
+                k.checkpoint_spacing_m
+            ),
+        );
+        check(
+            k.max_constraint_speed_m_s > 0.0 && k.max_constraint_speed_m_s.is_finite(),
+            "controls.max_constraint_speed_m_s",
+            format!(
+                "max constraint speed must be positive, got {}",
+                k.max_constraint_speed_m_s
+            ),
+        );
+        check(
+            k.opposing_gain_per_s >= 0.0 && k.opposing_gain_per_s.is_finite(),
+            "controls.opposing_gain_per_s",
+            format!(
+                "opposing gain must be zero or positive, got {}",
+                k.opposing_gain_per_s
+            ),
+        );
+        let pl = &self.pipeline;
+        check(
+            pl.tick_hz >= 1.0 && pl.tick_hz <= 2000.0,
+            "pipeline.tick_hz",
+            format!("tick rate must be 1..=2000 Hz, got {}", pl.tick_hz),
+        );
+        check(
+            (2..=65_536).contains(&pl.queue_frames),
+            "pipeline.queue_frames",
+            format!("queue must hold 2..=65536 frames, got {}", pl.queue_frames),
+        );
+        check(
+            (100..=3_600_000).contains(&pl.stats_interval_ms),
+            "pipeline.stats_interval_ms",
+            format!(
+                "stats interval must be 100..=3600000 ms, got {}",
+                pl.stats_interval_ms
+            ),
+        );
+        if let Some(prio) = pl.realtime.priority {
+            check(
+                (1..=99).contains(&prio),
+                "pipeline.realtime.priority",
+                format!("real-time priority must be 1..=99 (or None), got {prio}"),
+            );
+        }
+        let b = &pl.budgets;
+        for (name, v) in [
+            ("input_us", b.input_us),
+            ("queue_us", b.queue_us),
+            ("control_us", b.control_us),
+            ("publish_us", b.publish_us),
+            ("end_to_end_us", b.end_to_end_us),
+            ("assignment_us", b.assignment_us),
+        ] {
+            check(
+                v > 0,
+                &format!("pipeline.budgets.{name}"),
+                "budget must be positive microseconds".to_string(),
+            );
+        }
+        let s = &self.socket;
+        check(
+            u32::from_str_radix(s.mode.trim_start_matches("0o"), 8)
+                .map(|m| m <= 0o777)
+                .unwrap_or(false),
+            "socket.mode",
+            format!("socket mode must be octal like \"0660\", got {:?}", s.mode),
+        );
+        check(
+            (1..=4096).contains(&s.client_queue),
+            "socket.client_queue",
+            format!(
+                "client queue must be 1..=4096 snapshots, got {}",
+                s.client_queue
+            ),
+        );
+        check(
+            (1..=1024).contains(&s.max_clients),
+            "socket.max_clients",
+            format!("max clients must be 1..=1024, got {}", s.max_clients),
+        );
+        if let Some(g) = &s.group {
+            check(
+                !g.is_empty(),
+                "socket.group",
+                "group name is empty".to_string(),
+            );
+        }
+        for (i, input) in self.inputs.iter().enumerate() {
+            match input {
+                InputConfig::Replay { files, .. } => check(
+                    !files.is_empty(),
+                    &format!("inputs[{i}].files"),
+                    "a replay input needs at least one file".to_string(),
+                ),
+                InputConfig::Device {
+                    select,
+                    region,
+                    calibration,
+                    palm_max_mm,
+                    size_mm,
+                    ..
+                } => {
+                    match select {
+                        DeviceSelect::Name(n) | DeviceSelect::Id(n) => check(
+                            !n.trim().is_empty(),
+                            &format!("inputs[{i}].select"),
+                            "the name or id to select is empty".to_string(),
+                        ),
+                        DeviceSelect::VendorProduct(vp) => check(
+                            parse_vendor_product(vp).is_some(),
+                            &format!("inputs[{i}].select"),
+                            format!("vendor:product must be two hex numbers like \"2575:0204\", got {vp:?}"),
+                        ),
+                        DeviceSelect::Path(p) => check(
+                            p.is_absolute(),
+                            &format!("inputs[{i}].select"),
+                            format!("device path must be absolute, got {}", p.display()),
+                        ),
+                        DeviceSelect::Auto => {}
+                    }
+                    if let Some(r) = region {
+                        check(
+                            finite_rect(r) && r.min[0] >= 0.0 && r.min[1] >= 0.0 && r.max[0] <= 1.0 && r.max[1] <= 1.0
+                                && r.width() > 0.0 && r.height() > 0.0,
+                            &format!("inputs[{i}].region"),
+                            format!("region must be a rectangle inside the unit square (table units), got {:?} .. {:?}", r.min, r.max),
+                        );
+                    }
+                    check(
+                        matches!(calibration.rotation, 0 | 90 | 180 | 270),
+                        &format!("inputs[{i}].calibration.rotation"),
+                        format!(
+                            "rotation must be 0, 90, 180 or 270 degrees, got {}",
+                            calibration.rotation
+                        ),
+                    );
+                    if let Some(m) = calibration.matrix {
+                        check(
+                            m.iter().all(|v| v.is_finite()),
+                            &format!("inputs[{i}].calibration.matrix"),
+                            "calibration matrix values must be finite".to_string(),
+                        );
+                    }
+                    if let Some(p) = palm_max_mm {
+                        check(
+                            p.is_finite() && *p > 0.0,
+                            &format!("inputs[{i}].palm_max_mm"),
+                            format!("palm size must be positive millimetres, got {p}"),
+                        );
+                    }
+                    if let Some((w, h)) = size_mm {
+                        check(
+                            w.is_finite() && h.is_finite() && *w > 0.0 && *h > 0.0,
+                            &format!("inputs[{i}].size_mm"),
+                            format!("size must be positive millimetres, got ({w}, {h})"),
+                        );
+                    }
+                }
+            }
+        }
+        if let Some(cpus) = &pl.realtime.input_cpus {
+            let n = std::thread::available_parallelism()
+                .map(|n| n.get())
+                .unwrap_or(1024)
+                .max(1024);
+            check(
+                !cpus.is_empty() && cpus.iter().all(|&c| c < n),
+                "pipeline.realtime.input_cpus",
+                format!("CPU list must be non-empty CPU numbers, got {cpus:?}"),
+            );
+        }
+        let l = self.formations.lambda;
+        check(
+            (0.0..=1.0).contains(&l),
+            "formations.lambda",
+            format!("least-effort weight must be in 0 ..= 1, got {l}"),
+        );
+
+        p
+    }
+}
+
+fn finite_rect(r: &Rect) -> bool {
+    r.min.iter().chain(r.max.iter()).all(|v| v.is_finite())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::error::{ConfigIssue, Error};
+    use crate::config::load::DEFAULT_CONFIG_RON;
+    use crate::config::model::RealtimeConfig;
+    use std::path::Path;
+
+    fn issues(text: &str) -> Vec<ConfigIssue> {
+        match Config::from_str(text, Path::new("t.ron")) {
+            Err(Error::Invalid { issues, .. }) => issues,
+            other => panic!("expected invalid, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn out_of_range_values_name_field_line_and_column() {
+        let text = DEFAULT_CONFIG_RON.replacen("agents: 100", "agents: 0", 1);
+        let is = issues(&text);
+        assert_eq!(is.len(), 1, "{is:?}");
+        assert_eq!(is[0].field, "crowd.agents");
+        let expect_line = text.lines().position(|l| l.contains("agents: 0")).unwrap() + 1;
+        assert_eq!(is[0].line, expect_line);
+        assert!(is[0].column > 1);
+        assert!(is[0].message.contains("1..="), "{}", is[0].message);
+    }
+
+    #[test]
+    fn every_range_problem_is_reported() {
+        let text = DEFAULT_CONFIG_RON
+            .replacen("agents: 100", "agents: 0", 1)
+            .replacen("tick_hz: 120.0", "tick_hz: 0.0", 1)
+            .replacen("mode: \"0660\"", "mode: \"rw\"", 1);
+        let fields: Vec<String> = issues(&text).into_iter().map(|i| i.field).collect();
+        assert_eq!(
+            fields,
+            vec!["crowd.agents", "pipeline.tick_hz", "socket.mode"]
+        );
+    }
+
+    #[test]
+    fn realtime_priority_is_range_checked_and_optional() {
+        let text = DEFAULT_CONFIG_RON.replacen("priority: Some(20)", "priority: Some(0)", 1);
+        let is = issues(&text);
+        assert_eq!(is[0].field, "pipeline.realtime.priority");
+        let none = DEFAULT_CONFIG_RON.replacen("priority: Some(20)", "priority: None", 1);
+        assert!(Config::from_str(&none, Path::new("t.ron")).is_ok());
+        // The whole section may be left out: normal scheduling.
+        let a = DEFAULT_CONFIG_RON.find("        realtime: (").unwrap();
+        let b = a + DEFAULT_CONFIG_RON[a..].find("        ),\n").unwrap() + "        ),\n".len();
+        let without = format!("{}{}", &DEFAULT_CONFIG_RON[..a], &DEFAULT_CONFIG_RON[b..]);
+        let c = Config::from_str(&without, Path::new("t.ron")).unwrap();
+        assert_eq!(c.pipeline.realtime, RealtimeConfig::default());
+    }
+}
