@@ -1,13 +1,6 @@
-//! Exact one-to-one assignment of agents (rows) to goal points (columns).
-//!
-//! The control thread assigns every agent to one goal point of the formation each
-//! frame, minimising the total cost. This is the transportation problem of
-//! mesh-formation-control section 6.1 (eq. 2) with unit supply and demand weights,
-//! i.e. the linear assignment problem
-//!
-//! ```text
-//!   minimise   sum_i c[i][sigma(i)]     over injections sigma: rows -> cols (rows <= cols)
-//! ```
+//! [`Solver`]: exact assignment of rows (agents) to columns (goals) with dual prices,
+//! reusable workspaces and warm start; its [`Strategy`] and work counters
+//! ([`SolveStats`]).
 //!
 //! # Algorithm
 //!
@@ -16,49 +9,25 @@
 //! pairs; `v` are the column prices). Two ways of running it:
 //!
 //! * **Dense** ([`Strategy::Dense`]): each free row runs a Dijkstra search over the full
-//!   reduced-cost matrix, scanning whole contiguous rows (settled columns are masked
-//!   with `d = +inf`, price `-inf`, so the relaxation loop is branch-free).
-//!   `O(cols)` per scanned row; used for small problems and as the safety net.
+//!   reduced-cost matrix (`dense.rs`); used for small problems and as the safety net.
 //! * **Sparse** ([`Strategy::Sparse`], the default above 128 columns), in four steps:
-//!   1. One streaming pass over the matrix (which also validates it) keeps, per row,
-//!      the `k` columns of smallest reduced cost `w = c - v`, sorted, and a threshold
-//!      `theta` below which no other column of the row lies. Prices only ever fall
-//!      during the solve (except where noted below), so these stay lower bounds.
-//!   2. A forward auction with ε-scaling (Bertsekas) on the lists brings the prices
-//!      close to optimal cheaply; a row whose list went stale (its best entry rose
-//!      above `theta`) rebuilds it with one streaming pass. The auction is only a
-//!      price initialiser; exactness comes from the next steps.
-//!   3. Each assigned column's price is raised by its row's slack (at most the last
-//!      ε) so the pairs become tight, the list bounds are lowered by as much, and every
-//!      row is priced against its list: rows whose pair is not tight are freed.
-//!   4. Exact Dijkstra from each free row over the sorted lists, with lazy relaxation
-//!      (a scanned row relaxes its list a few slots at a time, in order of the bound
-//!      `offset + w_listed`; past the list, `offset + theta` guards the rest of the
-//!      row, fetched `k` columns at a time by a streaming pass only if the search gets
-//!      that far). A row whose dual outgrew its `theta` is repriced on the spot (and
-//!      released if no longer tight). The searches are therefore exact on the full
-//!      matrix, not just on the lists. A final check reprices the rows whose dual
-//!      outgrew their threshold; rounds repeat until no row is violated (a bounded
-//!      number, then a full dense finish) — at that point the full certificate holds.
+//!   1. one streaming pass over the matrix keeps, per row, the `k` columns of smallest
+//!      reduced cost and a threshold below which no other column lies (`pricing.rs`);
+//!   2. an auction with ε-scaling on these lists brings the prices close to optimal
+//!      cheaply (`auction.rs`);
+//!   3. the assigned pairs are made tight and every row is priced against its list;
+//!      rows whose pair is not tight are freed;
+//!   4. exact Dijkstra from each free row over the sorted lists, exact on the full
+//!      matrix (`augment.rs`); rounds of repricing repeat until no row is violated (a
+//!      bounded number, then a full dense finish) — at that point the full
+//!      certificate holds.
 //!
 //! Warm start ([`Solver::solve_warm`]) keeps the assignment, the row duals and the
 //! column prices of the previous frame, carries each price over by the change of its
 //! assigned cost (so kept pairs start tight), prices every row against the new costs
-//! (step 1), keeps the pairs that are still tight, runs a short auction (its first ε
-//! sized by how far the broken pairs are off) if more than nine tenths of the rows lost
-//! their pair, otherwise a budgeted augmenting row reduction (Jonker–Volgenant 1987:
-//! a free row takes its cheapest listed column at the price that leaves it tight,
-//! bumping the previous row; prices only fall, every pair stays tight), and
-//! re-augments the rows still free (step 4).
-//!
-//! Costs come from a [`CostSource`]: a [`CostMatrix`], or [`PointCosts`] — the
-//! geometric fast path for costs that come from positions (squared or plain
-//! Euclidean distance). These compute entries on demand and find each row's candidate
-//! list (its `k` smallest reduced costs, the `k` nearest goals when the prices are
-//! equal) by a ring search over a bucket grid of the goals, stopped by a lower bound
-//! that accounts for the largest price; the lists are exactly those of step 1, so the
-//! sparse solve, its rounds and its dual certificate are unchanged (tested to give the
-//! same assignment and work counters as the matrix), without the `rows × cols` matrix.
+//! (step 1), keeps the pairs that are still tight, runs a short auction if more than
+//! nine tenths of the rows lost their pair, otherwise a budgeted augmenting row
+//! reduction (`auction.rs`), and re-augments the rows still free (step 4).
 //!
 //! Rectangular problems (rows < cols) are exact: every column price starts at 0 and is
 //! only lowered, except that a column left free with a lowered price is raised back to
@@ -87,7 +56,10 @@
 // NaN-aware comparisons (`!(a > b)` is true for NaN) are deliberate throughout.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use crate::geom::Vec2;
+use super::candidates::{key, key_col, key_floor, select_k};
+use super::costs::{CostMatrix, CostSource};
+use super::error::AssignError;
+use super::heaps::{ColHeap, Mark, PendHeap, Pending, BEYOND};
 
 /// Relative tolerance of the tightness and dual-feasibility tests.
 ///
@@ -100,7 +72,7 @@ pub const EPS_REL: f64 = 1e-12;
 /// Rounding tolerance of a comparison between reduced costs `c - v` built from the
 /// given magnitudes ([`EPS_REL`]).
 #[inline]
-fn tol(a: f64, b: f64, c: f64, d: f64) -> f64 {
+pub(super) fn tol(a: f64, b: f64, c: f64, d: f64) -> f64 {
     EPS_REL * (a.abs() + b.abs() + c.abs() + d.abs())
 }
 
@@ -114,11 +86,26 @@ const AUTO_CANDIDATES_MAX: usize = 64;
 
 /// Warm solves build the candidate lists with `k * WARM_LIST_NUM / WARM_LIST_DEN`
 /// entries (at least 1): the old prices are near optimal, so the searches rarely go
-/// deep into a row, and shorter lists make the one full pass over the matrix cheaper
-/// (at 1000 × 1000, 16 instead of 25 entries: 15 % fewer instructions per warm solve).
+/// deep into a row, and shorter lists make the one full pass over the matrix cheaper.
 const WARM_LIST_NUM: usize = 2;
 /// See [`WARM_LIST_NUM`].
 const WARM_LIST_DEN: usize = 3;
+
+/// A warm start runs the auction first only when more than `WARM_AUCTION_FREE_NUM /
+/// WARM_AUCTION_FREE_DEN` of the rows lost their pair (the old prices are then of
+/// little use). Below that the exact searches from the old prices are cheaper.
+const WARM_AUCTION_FREE_NUM: usize = 9;
+/// See [`WARM_AUCTION_FREE_NUM`].
+const WARM_AUCTION_FREE_DEN: usize = 10;
+
+/// Pricing rounds of the sparse strategy before it finishes densely.
+pub(super) const MAX_ROUNDS: u32 = 16;
+
+/// [`Strategy::Auto`] solves densely up to this many columns.
+const AUTO_DENSE_MAX_COLS: usize = 128;
+
+/// "No row / no column" in the matching arrays.
+pub(super) const NONE: usize = usize::MAX;
 
 /// Candidate slots over which the local cost spread is measured for the auction.
 const AUCTION_SPREAD_SLOTS: usize = 8;
@@ -136,14 +123,6 @@ const AUCTION_FACTOR: f64 = 0.1;
 const AUCTION_END: f64 = 1e-4;
 /// Largest auction bid, in units of the first ε (rows with one finite entry).
 const AUCTION_CAP: f64 = 1e6;
-/// A warm start runs the auction first only when more than `WARM_AUCTION_FREE_NUM /
-/// WARM_AUCTION_FREE_DEN` of the rows lost their pair (the old prices are then of
-/// little use). Below that the exact searches from the old prices are cheaper: with
-/// every goal of 1000 moved by up to 2 % of the extent, 65 % of the pairs break and the
-/// searches alone take about 20 % fewer instructions than auction plus searches.
-const WARM_AUCTION_FREE_NUM: usize = 9;
-/// See [`WARM_AUCTION_FREE_NUM`].
-const WARM_AUCTION_FREE_DEN: usize = 10;
 
 /// Auction bid budget per row and phase (beyond it the exact finish takes over).
 const AUCTION_BIDS_PER_ROW: usize = 200;
@@ -153,605 +132,12 @@ const AUCTION_REBUILDS_PER_ROW: u64 = 64;
 /// Whether auction bids use the exact second-best value (else a lower bound).
 const AUCTION_EXACT_SECOND: bool = true;
 
-/// Candidate list slots relaxed at once when a scanned row's list is advanced.
-const RELAX_BATCH: usize = 8;
-
 /// Bid budget of the augmenting row reduction of a warm start, per free row
 /// ([`Solver::reduce_rows`]).
 const ROW_REDUCTION_BIDS_PER_FREE: usize = 4;
 
-/// Pricing rounds of the sparse strategy before it finishes densely.
-const MAX_ROUNDS: u32 = 16;
-
-/// [`Strategy::Auto`] solves densely up to this many columns.
-const AUTO_DENSE_MAX_COLS: usize = 128;
-
-/// Width of the blocks the streaming row scans test at once.
-const LANES: usize = 8;
-// `block_min` reduces exactly eight lanes.
-const _: () = assert!(LANES == 8);
-
-/// "No row / no column" in the matching arrays.
-const NONE: usize = usize::MAX;
-/// "Not in the heap".
-const ABSENT: u32 = u32::MAX;
-
-// ---------------------------------------------------------------------------------
-// Cost matrix and providers
-// ---------------------------------------------------------------------------------
-
-/// Dense row-major cost matrix: rows are agents, columns are goals, `rows <= cols`.
-///
-/// Entries are costs in the caller's unit (m² for [`SquaredDistance`], m for
-/// [`Distance`]). `+inf` marks an unreachable goal; NaN and `-inf` are rejected by the
-/// solver.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct CostMatrix {
-    rows: usize,
-    cols: usize,
-    data: Vec<f64>,
-}
-
-impl CostMatrix {
-    /// A zero-filled `rows × cols` matrix.
-    ///
-    /// # Panics
-    /// If `rows * cols` overflows `usize` or cannot be allocated.
-    pub fn new(rows: usize, cols: usize) -> CostMatrix {
-        CostMatrix {
-            rows,
-            cols,
-            data: vec![0.0; rows.checked_mul(cols).expect("cost matrix size overflow")],
-        }
-    }
-
-    /// A `rows × cols` matrix with entry `(r, c)` set to `f(r, c)`.
-    ///
-    /// # Panics
-    /// As [`CostMatrix::new`].
-    pub fn from_fn(rows: usize, cols: usize, mut f: impl FnMut(usize, usize) -> f64) -> CostMatrix {
-        let mut m = CostMatrix::new(rows, cols);
-        for r in 0..rows {
-            for (c, e) in m.row_mut(r).iter_mut().enumerate() {
-                *e = f(r, c);
-            }
-        }
-        m
-    }
-
-    /// Changes the dimensions, keeping the allocation when it is large enough.
-    /// The contents afterwards are unspecified (callers refill every entry).
-    ///
-    /// # Panics
-    /// As [`CostMatrix::new`].
-    pub fn resize(&mut self, rows: usize, cols: usize) {
-        let n = rows.checked_mul(cols).expect("cost matrix size overflow");
-        self.data.resize(n, 0.0);
-        self.rows = rows;
-        self.cols = cols;
-    }
-
-    /// Number of rows (agents).
-    pub fn rows(&self) -> usize {
-        self.rows
-    }
-
-    /// Number of columns (goals).
-    pub fn cols(&self) -> usize {
-        self.cols
-    }
-
-    /// Entry `(r, c)`.
-    ///
-    /// # Panics
-    /// If `r >= rows()` or `c >= cols()`.
-    pub fn get(&self, r: usize, c: usize) -> f64 {
-        assert!(c < self.cols, "column {c} out of range");
-        self.data[r * self.cols + c]
-    }
-
-    /// Sets entry `(r, c)`.
-    ///
-    /// # Panics
-    /// If `r >= rows()` or `c >= cols()`.
-    pub fn set(&mut self, r: usize, c: usize, v: f64) {
-        assert!(c < self.cols, "column {c} out of range");
-        self.data[r * self.cols + c] = v;
-    }
-
-    /// Row `r` as a slice of `cols()` entries.
-    ///
-    /// # Panics
-    /// If `r >= rows()`.
-    pub fn row(&self, r: usize) -> &[f64] {
-        &self.data[r * self.cols..(r + 1) * self.cols]
-    }
-
-    /// Row `r` as a mutable slice of `cols()` entries.
-    ///
-    /// # Panics
-    /// If `r >= rows()`.
-    pub fn row_mut(&mut self, r: usize) -> &mut [f64] {
-        &mut self.data[r * self.cols..(r + 1) * self.cols]
-    }
-
-    /// All entries, row-major.
-    pub fn as_slice(&self) -> &[f64] {
-        &self.data
-    }
-}
-
-/// Fills a cost matrix from agent and goal positions.
-///
-/// Implementations resize `out` to `agents.len() × goals.len()` and write every entry;
-/// they must not produce NaN or `-inf` (use `+inf` for unreachable goals).
-pub trait CostProvider {
-    /// Writes `out[i][j]` = cost of sending agent `i` to goal `j`.
-    fn fill(&self, agents: &[Vec2], goals: &[Vec2], out: &mut CostMatrix);
-}
-
-/// Squared Euclidean distance cost, `|a - g|²` in m².
-///
-/// # Formula
-/// `c_ij = (a_i - g_j)·(a_i - g_j)` (mesh-formation-control section 6.1 with the
-/// Euclidean metric of its reference \[7\]; squaring favours even travel lengths).
-///
-/// # Complexity
-/// `O(agents * goals)`, no allocation when `out` is already large enough.
-#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
-pub struct SquaredDistance;
-
-/// Euclidean distance cost, `|a - g|` in metres.
-///
-/// # Formula
-/// `c_ij = |a_i - g_j|` (mesh-formation-control section 6.1, Euclidean metric).
-///
-/// # Complexity
-/// `O(agents * goals)`, no allocation when `out` is already large enough.
-#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
-pub struct Distance;
-
-impl CostProvider for SquaredDistance {
-    fn fill(&self, agents: &[Vec2], goals: &[Vec2], out: &mut CostMatrix) {
-        out.resize(agents.len(), goals.len());
-        for (r, a) in agents.iter().enumerate() {
-            for (e, g) in out.row_mut(r).iter_mut().zip(goals) {
-                let (dx, dy) = (a.x - g.x, a.y - g.y);
-                *e = dx * dx + dy * dy;
-            }
-        }
-    }
-}
-
-impl CostProvider for Distance {
-    fn fill(&self, agents: &[Vec2], goals: &[Vec2], out: &mut CostMatrix) {
-        out.resize(agents.len(), goals.len());
-        for (r, a) in agents.iter().enumerate() {
-            for (e, g) in out.row_mut(r).iter_mut().zip(goals) {
-                let (dx, dy) = (a.x - g.x, a.y - g.y);
-                *e = (dx * dx + dy * dy).sqrt();
-            }
-        }
-    }
-}
-
-// ---------------------------------------------------------------------------------
-// Cost sources
-// ---------------------------------------------------------------------------------
-
-/// Where the solver reads its costs: a [`CostMatrix`], or [`PointCosts`] that
-/// compute each entry from positions when it is needed (no `rows × cols` matrix in
-/// memory, and a full row costs a pass over the goals, which stay in cache, instead
-/// of a pass over a matrix that does not).
-///
-/// Entries must not be NaN or `-inf` (a solve reports them as
-/// [`AssignError::NotFinite`]); `+inf` is an unreachable pair.
-pub trait CostSource {
-    /// Number of rows (agents).
-    fn rows(&self) -> usize;
-    /// Number of columns (goals).
-    fn cols(&self) -> usize;
-    /// Entry `(i, j)`.
-    fn get(&self, i: usize, j: usize) -> f64;
-    /// Row `i`: borrowed from the source, or computed into `buf` (resized to
-    /// [`CostSource::cols`]; no allocation when its capacity suffices).
-    fn row<'a>(&'a self, i: usize, buf: &'a mut Vec<f64>) -> &'a [f64];
-    /// The positions behind the costs, when the source has them: the solver then
-    /// finds each row's cheapest columns through their spatial index instead of a
-    /// pass over the row.
-    fn points(&self) -> Option<&PointCosts> {
-        None
-    }
-    /// Checks the source before a solve (a matrix is checked during the first pass).
-    ///
-    /// # Errors
-    /// [`AssignError::NotFinite`].
-    fn validate(&self) -> Result<(), AssignError> {
-        Ok(())
-    }
-}
-
-impl CostSource for CostMatrix {
-    fn rows(&self) -> usize {
-        self.rows
-    }
-    fn cols(&self) -> usize {
-        self.cols
-    }
-    #[inline]
-    fn get(&self, i: usize, j: usize) -> f64 {
-        self.data[i * self.cols + j]
-    }
-    #[inline]
-    fn row<'a>(&'a self, i: usize, _buf: &'a mut Vec<f64>) -> &'a [f64] {
-        &self.data[i * self.cols..(i + 1) * self.cols]
-    }
-}
-
-/// The metric of [`PointCosts`].
-#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
-pub enum PointMetric {
-    /// `|a - g|²` in m², as [`SquaredDistance`].
-    #[default]
-    Squared,
-    /// `|a - g|` in metres, as [`Distance`].
-    Euclidean,
-}
-
-/// Costs computed from agent and goal positions on demand: entry `(i, j)` is
-/// [`SquaredDistance`]'s or [`Distance`]'s, bit for bit, without the matrix.
-///
-/// This is the solver's geometric fast path: the goals are bucketed on a uniform
-/// grid (about [`GOALS_PER_BUCKET`] per bucket), and a row's cheapest reduced costs
-/// `c_ij - v_j` are found by visiting buckets in rings around the agent until the
-/// ring's distance bound, less the largest column price, exceeds the k-th best found:
-/// no column further away can enter (see `PointCosts::select_near`). The lists
-/// are therefore exactly those a pass over the full row would give, so the answer,
-/// its dual certificate and the warm start are the same as on the matrix.
-///
-/// # Complexity
-/// [`PointCosts::set`] copies the positions into per-axis arrays and buckets the
-/// goals (a counting sort; reused, no allocation once grown): `O(agents + goals)`.
-/// An entry is `O(1)`; a candidate list visits the buckets within its radius.
-///
-/// # Example
-/// ```
-/// use crowdtouch::crowd::assign::{PointCosts, PointMetric, Solver};
-/// use crowdtouch::geom::Vec2;
-/// let agents = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0)];
-/// let goals = [Vec2::new(1.1, 0.0), Vec2::new(-0.1, 0.0)];
-/// let mut costs = PointCosts::new(PointMetric::Squared);
-/// costs.set(&agents, &goals);
-/// let mut solver = Solver::new();
-/// assert_eq!(solver.solve_with(&costs).unwrap(), &[1, 0]);
-/// assert!(solver.verify_optimal(&costs, 1e-12));
-/// ```
-#[derive(Clone, Debug, Default)]
-pub struct PointCosts {
-    metric: PointMetric,
-    ax: Vec<f64>,
-    ay: Vec<f64>,
-    gx: Vec<f64>,
-    gy: Vec<f64>,
-    /// Bucket side (world units) and the corner of bucket (0, 0).
-    cell: f64,
-    origin: (f64, f64),
-    /// Buckets along x and y.
-    nb: (usize, usize),
-    /// Start of each bucket in `order` (`nb.0 * nb.1 + 1` entries).
-    start: Vec<u32>,
-    /// Goal indices grouped by bucket, and their coordinates in that order.
-    order: Vec<u32>,
-    bx: Vec<f64>,
-    by: Vec<f64>,
-    /// Whether every position is finite (else the index is not built).
-    finite: bool,
-}
-
-/// Goals per bucket of the [`PointCosts`] index, on average over the goals' bounding
-/// box.
-pub const GOALS_PER_BUCKET: f64 = 2.0;
-
-/// Largest number of buckets per axis of the [`PointCosts`] index.
-const MAX_BUCKETS_PER_AXIS: usize = 1024;
-
-impl PointCosts {
-    /// Empty costs with the given metric.
-    pub fn new(metric: PointMetric) -> PointCosts {
-        PointCosts {
-            metric,
-            ..PointCosts::default()
-        }
-    }
-
-    /// The metric.
-    pub fn metric(&self) -> PointMetric {
-        self.metric
-    }
-
-    /// Takes new positions (agents are the rows, goals the columns).
-    pub fn set(&mut self, agents: &[Vec2], goals: &[Vec2]) {
-        fn axes(xs: &mut Vec<f64>, ys: &mut Vec<f64>, p: &[Vec2]) {
-            xs.clear();
-            ys.clear();
-            xs.extend(p.iter().map(|q| q.x));
-            ys.extend(p.iter().map(|q| q.y));
-        }
-        axes(&mut self.ax, &mut self.ay, agents);
-        axes(&mut self.gx, &mut self.gy, goals);
-        let fin = |v: &[f64]| v.iter().all(|c| c.is_finite());
-        self.finite = fin(&self.ax) && fin(&self.ay) && fin(&self.gx) && fin(&self.gy);
-        self.build_index();
-    }
-
-    /// Buckets the goals (counting sort) on a grid of square buckets over their
-    /// bounding box.
-    fn build_index(&mut self) {
-        let n = self.gx.len();
-        self.start.clear();
-        self.order.clear();
-        self.bx.clear();
-        self.by.clear();
-        if !self.finite || n == 0 {
-            self.nb = (0, 0);
-            return;
-        }
-        let (mut x0, mut x1, mut y0, mut y1) = (self.gx[0], self.gx[0], self.gy[0], self.gy[0]);
-        for (&x, &y) in self.gx.iter().zip(&self.gy) {
-            x0 = x0.min(x);
-            x1 = x1.max(x);
-            y0 = y0.min(y);
-            y1 = y1.max(y);
-        }
-        let (w, h) = (x1 - x0, y1 - y0);
-        let buckets = (n as f64 / GOALS_PER_BUCKET).max(1.0);
-        let mut cell = ((w.max(h * 1e-9) * h.max(w * 1e-9)) / buckets).sqrt();
-        if !(cell > 0.0 && cell.is_finite()) {
-            cell = 1.0; // every goal at one point
-        }
-        let axis = |len: f64| ((len / cell).floor() as usize + 1).min(MAX_BUCKETS_PER_AXIS);
-        let (nx, ny) = (axis(w), axis(h));
-        // With the per-axis cap the buckets may have to grow to cover the box.
-        let cell = cell.max(w / (nx as f64 - 0.5)).max(h / (ny as f64 - 0.5));
-        self.cell = cell;
-        self.origin = (x0, y0);
-        self.nb = (nx, ny);
-        let bucket = |x: f64, y: f64| {
-            let cx = (((x - x0) / cell) as usize).min(nx - 1);
-            let cy = (((y - y0) / cell) as usize).min(ny - 1);
-            cy * nx + cx
-        };
-        self.start.resize(nx * ny + 1, 0);
-        for (&x, &y) in self.gx.iter().zip(&self.gy) {
-            self.start[bucket(x, y) + 1] += 1;
-        }
-        for b in 1..self.start.len() {
-            self.start[b] += self.start[b - 1];
-        }
-        self.order.resize(n, 0);
-        self.bx.resize(n, 0.0);
-        self.by.resize(n, 0.0);
-        // Fill each bucket from its end down, using `start[b + 1]` as a cursor; the
-        // cursors end at the bucket starts.
-        for j in (0..n).rev() {
-            let b = bucket(self.gx[j], self.gy[j]);
-            self.start[b + 1] -= 1;
-            let at = self.start[b + 1] as usize;
-            self.order[at] = j as u32;
-            self.bx[at] = self.gx[j];
-            self.by[at] = self.gy[j];
-        }
-        // Now start[b + 1] is the start of bucket b; shift back by one.
-        self.start.rotate_left(1);
-        let last = self.start.len() - 1;
-        self.start[last] = n as u32;
-    }
-
-    /// The `k` smallest [`key`]s `key(c_ij - v_j, j ^ salt)` of row `i` that are at
-    /// least `lo`, sorted in `buf[..n]` (returns `n`): the same keys as [`select_k`]
-    /// over the full row, found through the bucket index. `v_hi` is an upper bound
-    /// of every price `v_j`; `thr0` as in [`select_k`]. Positions must be finite.
-    ///
-    /// # Proof of exactness
-    /// Buckets are visited in Chebyshev rings `r = 0, 1, ...` around the agent's
-    /// (clamped) bucket; every goal in ring `r ≥ 1` is at least `(r − 1)·s + m` away
-    /// (`s` the bucket side, `m` the agent's distance to its bucket's nearest side,
-    /// 0 outside the grid), so its reduced cost is at least `B = f((r − 1)·s + m) −
-    /// v_hi` with `f` the metric. Once at least `k` keys are held, all at or below
-    /// the admission threshold, and `key(B)` exceeds that threshold, no unvisited
-    /// goal can displace them. `B` is shrunk by a relative `1e-9` against rounding.
-    #[allow(clippy::too_many_arguments)]
-    fn select_near(
-        &self,
-        i: usize,
-        v: &[f64],
-        v_hi: f64,
-        k: usize,
-        mask: u64,
-        lo: u64,
-        thr0: f64,
-        salt: u32,
-        buf: &mut [u64],
-    ) -> usize {
-        let cap = buf.len();
-        debug_assert!(k >= 1 && cap >= 2 * k);
-        let (nx, ny) = self.nb;
-        let mut n = 0usize;
-        // As in `select_k`: keys above `thr_key` are rejected, and so are reduced
-        // costs above `thr` (never above `thr0`): the k smallest keys of the entries
-        // with `w <= thr0`, whatever the visiting order, so both give the same keys.
-        let (mut thr_key, mut thr) = if thr0 < f64::INFINITY {
-            (ord_bits(thr0) | mask, thr0)
-        } else {
-            (u64::MAX, f64::INFINITY)
-        };
-        let (x, y) = (self.ax[i], self.ay[i]);
-        let s = self.cell;
-        let (fx, fy) = ((x - self.origin.0) / s, (y - self.origin.1) / s);
-        let clampi = |f: f64, len: usize| (f.max(0.0) as usize).min(len - 1);
-        let (ci, cj) = (clampi(fx, nx), clampi(fy, ny));
-        // Distance from the agent to the nearest side of its (clamped) bucket.
-        let side = |f: f64, c: usize| {
-            let off = (f - c as f64).clamp(0.0, 1.0);
-            off.min(1.0 - off) * s
-        };
-        let m = side(fx, ci).min(side(fy, cj));
-        let rmax = ci.max(nx - 1 - ci).max(cj).max(ny - 1 - cj);
-        let squared = self.metric == PointMetric::Squared;
-        let visit = |b: usize, buf: &mut [u64], n: &mut usize, thr_key: &mut u64, thr: &mut f64| {
-            for t in self.start[b] as usize..self.start[b + 1] as usize {
-                let (dx, dy) = (x - self.bx[t], y - self.by[t]);
-                let d2 = dx * dx + dy * dy;
-                let c = if squared { d2 } else { d2.sqrt() };
-                let j = self.order[t];
-                let w = c - v[j as usize];
-                if w < f64::INFINITY && !(w > *thr) {
-                    let kk = key(w, j ^ salt, mask);
-                    if kk >= lo && kk <= *thr_key {
-                        buf[*n] = kk;
-                        *n += 1;
-                        if *n == cap {
-                            let (_, kth, _) = buf.select_nth_unstable(k - 1);
-                            *thr_key = *kth;
-                            *thr = from_ord_bits(*kth | mask).min(thr0);
-                            *n = k;
-                        }
-                    }
-                }
-            }
-        };
-        for r in 0..=rmax {
-            if r >= 1 && n >= k {
-                if n > k || thr_key == u64::MAX {
-                    let (_, kth, _) = buf[..n].select_nth_unstable(k - 1);
-                    if *kth < thr_key {
-                        thr_key = *kth;
-                        thr = from_ord_bits(*kth | mask).min(thr0);
-                    }
-                    n = k;
-                }
-                let d = ((r - 1) as f64 * s + m) * (1.0 - 1e-9);
-                let f = if squared { d * d } else { d };
-                let b = f - v_hi;
-                let b = b - 1e-9 * b.abs();
-                if (ord_bits(b) & !mask) > (thr_key | mask) {
-                    break;
-                }
-            }
-            let (x0, x1) = (ci.saturating_sub(r), (ci + r).min(nx - 1));
-            for yy in cj.saturating_sub(r)..=(cj + r).min(ny - 1) {
-                let row = yy * nx;
-                if yy + r == cj || yy == cj + r {
-                    for xx in x0..=x1 {
-                        visit(row + xx, buf, &mut n, &mut thr_key, &mut thr);
-                    }
-                } else {
-                    if ci >= r {
-                        visit(row + ci - r, buf, &mut n, &mut thr_key, &mut thr);
-                    }
-                    if r > 0 && ci + r < nx {
-                        visit(row + ci + r, buf, &mut n, &mut thr_key, &mut thr);
-                    }
-                }
-            }
-        }
-        if n > k {
-            buf[..n].select_nth_unstable(k - 1);
-            n = k;
-        }
-        buf[..n].sort_unstable();
-        n
-    }
-}
-
-impl CostSource for PointCosts {
-    fn rows(&self) -> usize {
-        self.ax.len()
-    }
-    fn cols(&self) -> usize {
-        self.gx.len()
-    }
-    #[inline]
-    fn get(&self, i: usize, j: usize) -> f64 {
-        let (dx, dy) = (self.ax[i] - self.gx[j], self.ay[i] - self.gy[j]);
-        let d2 = dx * dx + dy * dy;
-        match self.metric {
-            PointMetric::Squared => d2,
-            PointMetric::Euclidean => d2.sqrt(),
-        }
-    }
-    fn points(&self) -> Option<&PointCosts> {
-        Some(self)
-    }
-    fn validate(&self) -> Result<(), AssignError> {
-        if self.finite {
-            return Ok(());
-        }
-        let bad =
-            |x: &[f64], y: &[f64]| (0..x.len()).find(|&k| !(x[k].is_finite() && y[k].is_finite()));
-        if let Some(row) = bad(&self.ax, &self.ay) {
-            return Err(AssignError::NotFinite { row, col: 0 });
-        }
-        let col = bad(&self.gx, &self.gy).unwrap_or(0);
-        Err(AssignError::NotFinite { row: 0, col })
-    }
-    fn row<'a>(&'a self, i: usize, buf: &'a mut Vec<f64>) -> &'a [f64] {
-        let (ax, ay) = (self.ax[i], self.ay[i]);
-        buf.resize(self.gx.len(), 0.0);
-        let it = buf.iter_mut().zip(self.gx.iter().zip(&self.gy));
-        match self.metric {
-            PointMetric::Squared => {
-                for (o, (&gx, &gy)) in it {
-                    let (dx, dy) = (ax - gx, ay - gy);
-                    *o = dx * dx + dy * dy;
-                }
-            }
-            PointMetric::Euclidean => {
-                for (o, (&gx, &gy)) in it {
-                    let (dx, dy) = (ax - gx, ay - gy);
-                    *o = (dx * dx + dy * dy).sqrt();
-                }
-            }
-        }
-        buf
-    }
-}
-
-// ---------------------------------------------------------------------------------
-// Errors, options, statistics
-// ---------------------------------------------------------------------------------
-
-/// Why an assignment could not be computed.
-#[derive(Copy, Clone, Debug, PartialEq, thiserror::Error)]
-pub enum AssignError {
-    /// The matrix has no rows.
-    #[error("assignment problem has no rows")]
-    Empty,
-    /// More agents than goals: a one-to-one assignment of every row is impossible.
-    #[error("assignment problem has more rows ({rows}) than columns ({cols})")]
-    MoreRowsThanCols {
-        /// Number of rows (agents).
-        rows: usize,
-        /// Number of columns (goals).
-        cols: usize,
-    },
-    /// An entry is NaN or `-inf` (the first one in row-major order).
-    #[error("cost ({row}, {col}) is NaN or -inf")]
-    NotFinite {
-        /// Row of the entry.
-        row: usize,
-        /// Column of the entry.
-        col: usize,
-    },
-    /// No complete assignment with finite cost exists. `row` is the first row found
-    /// that cannot be served: the lowest-index all-`+inf` row if there is one,
-    /// otherwise the row whose augmenting path search failed.
-    #[error("no assignment with finite cost exists: row {row} cannot be served")]
-    Infeasible {
-        /// The row that cannot be served.
-        row: usize,
-    },
-}
+/// Candidate list slots relaxed at once when a scanned row's list is advanced.
+const RELAX_BATCH: usize = 8;
 
 /// How [`Solver`] searches for augmenting paths. All strategies return an optimal
 /// assignment; they differ only in speed.
@@ -794,386 +180,6 @@ pub struct SolveStats {
     pub dense_finish: bool,
 }
 
-// ---------------------------------------------------------------------------------
-// Indexed binary min-heap over columns
-// ---------------------------------------------------------------------------------
-
-/// Binary min-heap of columns keyed by tentative distance, with decrease-key.
-/// Capacity is reserved for every column, so it never allocates after sizing.
-#[derive(Clone, Debug, Default)]
-struct ColHeap {
-    key: Vec<f64>,
-    col: Vec<u32>,
-    pos: Vec<u32>,
-}
-
-impl ColHeap {
-    fn size_for(&mut self, cols: usize) {
-        self.key = Vec::with_capacity(cols);
-        self.col = Vec::with_capacity(cols);
-        self.pos.clear();
-        self.pos.resize(cols, ABSENT);
-    }
-
-    fn clear(&mut self) {
-        for &c in &self.col {
-            self.pos[c as usize] = ABSENT;
-        }
-        self.key.clear();
-        self.col.clear();
-    }
-
-    #[inline]
-    fn push_or_decrease(&mut self, c: u32, k: f64) {
-        let p = self.pos[c as usize];
-        let at = if p == ABSENT {
-            self.key.push(k);
-            self.col.push(c);
-            self.key.len() - 1
-        } else {
-            p as usize
-        };
-        self.sift_up(at, c, k);
-    }
-
-    #[inline]
-    fn sift_up(&mut self, mut at: usize, c: u32, k: f64) {
-        while at > 0 {
-            let parent = (at - 1) / 2;
-            let pk = self.key[parent];
-            if pk <= k {
-                break;
-            }
-            let pc = self.col[parent];
-            self.key[at] = pk;
-            self.col[at] = pc;
-            self.pos[pc as usize] = at as u32;
-            at = parent;
-        }
-        self.key[at] = k;
-        self.col[at] = c;
-        self.pos[c as usize] = at as u32;
-    }
-
-    #[inline]
-    fn pop(&mut self) -> Option<(f64, u32)> {
-        let top_k = *self.key.first()?;
-        let top_c = self.col[0];
-        self.pos[top_c as usize] = ABSENT;
-        let (lk, lc) = match (self.key.pop(), self.col.pop()) {
-            (Some(k), Some(c)) => (k, c),
-            _ => return Some((top_k, top_c)),
-        };
-        if !self.key.is_empty() {
-            let n = self.key.len();
-            let mut at = 0;
-            loop {
-                let l = 2 * at + 1;
-                if l >= n {
-                    break;
-                }
-                let r = l + 1;
-                let m = if r < n && self.key[r] < self.key[l] {
-                    r
-                } else {
-                    l
-                };
-                let mk = self.key[m];
-                if mk >= lk {
-                    break;
-                }
-                let mc = self.col[m];
-                self.key[at] = mk;
-                self.col[at] = mc;
-                self.pos[mc as usize] = at as u32;
-                at = m;
-            }
-            self.key[at] = lk;
-            self.col[at] = lc;
-            self.pos[lc as usize] = at as u32;
-        }
-        Some((top_k, top_c))
-    }
-}
-
-/// Pending work of a scanned row in a sparse search: the columns of the row not
-/// relaxed yet cannot get a distance below `bound`. `slot < len` means the row's
-/// candidate list from `slot` on; [`BEYOND`] means the columns off the list, whose
-/// [`key`]s are all at least `lo`.
-#[derive(Copy, Clone, Debug)]
-struct Pending {
-    bound: f64,
-    off: f64,
-    lo: u64,
-    row: u32,
-    slot: u32,
-}
-
-/// Search state of a column in a sparse search: tentative distance, and the epochs
-/// in which it was reached (`seen`) and settled (`done`).
-#[derive(Copy, Clone, Debug, Default)]
-struct Mark {
-    dist: f64,
-    seen: u32,
-    done: u32,
-}
-
-/// [`Pending::slot`] of the columns off the candidate list.
-const BEYOND: u32 = u32::MAX;
-
-/// Binary min-heap of [`Pending`] by `bound` (never NaN). Capacity is reserved for
-/// two entries per row, more than a search can hold (one per scanned row plus the
-/// free row), so it never allocates after sizing.
-#[derive(Clone, Debug, Default)]
-struct PendHeap {
-    items: Vec<Pending>,
-}
-
-impl PendHeap {
-    fn size_for(&mut self, rows: usize) {
-        self.items = Vec::with_capacity(2 * rows + 2);
-    }
-
-    fn clear(&mut self) {
-        self.items.clear();
-    }
-
-    #[inline]
-    fn min_bound(&self) -> f64 {
-        self.items.first().map_or(f64::INFINITY, |p| p.bound)
-    }
-
-    #[inline]
-    fn push(&mut self, p: Pending) {
-        self.items.push(p);
-        let mut at = self.items.len() - 1;
-        while at > 0 {
-            let parent = (at - 1) / 2;
-            if self.items[parent].bound <= p.bound {
-                break;
-            }
-            self.items[at] = self.items[parent];
-            at = parent;
-        }
-        self.items[at] = p;
-    }
-
-    #[inline]
-    fn pop(&mut self) -> Option<Pending> {
-        let top = *self.items.first()?;
-        let last = self.items.pop()?;
-        let n = self.items.len();
-        if n > 0 {
-            let mut at = 0;
-            loop {
-                let l = 2 * at + 1;
-                if l >= n {
-                    break;
-                }
-                let r = l + 1;
-                let m = if r < n && self.items[r].bound < self.items[l].bound {
-                    r
-                } else {
-                    l
-                };
-                if self.items[m].bound >= last.bound {
-                    break;
-                }
-                self.items[at] = self.items[m];
-                at = m;
-            }
-            self.items[at] = last;
-        }
-        Some(top)
-    }
-}
-
-// ---------------------------------------------------------------------------------
-// Row kernels
-// ---------------------------------------------------------------------------------
-
-/// Order-preserving map of a finite or infinite `f64` (not NaN) to `u64`; `-0.0`
-/// is folded into `0.0` so that the order agrees with `==`.
-#[inline]
-fn ord_bits(w: f64) -> u64 {
-    let b = (w + 0.0).to_bits();
-    if b >> 63 == 0 {
-        b | 1 << 63
-    } else {
-        !b
-    }
-}
-
-/// Inverse of [`ord_bits`].
-#[inline]
-fn from_ord_bits(o: u64) -> f64 {
-    f64::from_bits(if o >> 63 == 1 { o & !(1 << 63) } else { !o })
-}
-
-/// Sort key of the pair `(w, col)`: the order bits of `w` with the low mantissa bits
-/// (`mask`) replaced by the column. Keys are totally ordered, and a key bounds its
-/// `w` from below: `w >= key_floor(key)`. Low-bit truncation costs about `mask / 2^52`
-/// relative precision in the bounds only, never in the costs.
-#[inline]
-fn key(w: f64, col: u32, mask: u64) -> u64 {
-    (ord_bits(w) & !mask) | u64::from(col)
-}
-
-/// The largest `f64` not above any `w` whose [`key`] is at least `k`.
-#[inline]
-fn key_floor(k: u64, mask: u64) -> f64 {
-    if k & !mask == 0 {
-        f64::NEG_INFINITY
-    } else {
-        from_ord_bits(k & !mask)
-    }
-}
-
-/// The column of a [`key`].
-#[inline]
-fn key_col(k: u64, mask: u64) -> u32 {
-    (k & mask) as u32
-}
-
-/// Streaming selection of the `k` smallest [`key`]s `key(w, col)`, `w = row[col] -
-/// v[col]` finite, that are at least `lo`. `thr0` is an inclusive upper bound on the
-/// `k`-th smallest `w` when one is known (`+inf` otherwise). Columns enter the keys
-/// XOR-ed with `salt` (ties between equal `w` break in a per-row order). The keys are left sorted
-/// in `buf[..n]`; `buf.len() >= 2k` is the scratch. With `check` and `lo == 0`, also
-/// returns the first column whose `w` is NaN or `-inf`. `BELOW` says whether `lo`
-/// bounds anything (`false` requires `lo == 0`).
-///
-/// # Complexity
-/// One pass over the row; blocks of [`LANES`] entries are tested against the current
-/// threshold at once, admitted entries are appended to `buf`, and `buf` is cut back to
-/// the best `k` (linear-time selection) when full, so the work beyond the streaming
-/// compare is `O(admitted + k log k)`.
-#[allow(clippy::too_many_arguments)]
-fn select_k<const BELOW: bool>(
-    row: &[f64],
-    v: &[f64],
-    k: usize,
-    mask: u64,
-    lo: u64,
-    thr0: f64,
-    check: bool,
-    salt: u32,
-    buf: &mut [u64],
-) -> (usize, Option<usize>) {
-    let cap = buf.len();
-    debug_assert!(k >= 1 && cap >= 2 * k);
-    let lo_w = key_floor(lo, mask);
-    let mut n = 0usize;
-    // Keys above `thr_key` are rejected; `thr` is a float upper bound of the `w` of
-    // any key up to `thr_key` (for the block prefilter).
-    let (mut thr_key, mut thr) = if thr0 < f64::INFINITY {
-        (ord_bits(thr0) | mask, thr0)
-    } else {
-        (u64::MAX, f64::INFINITY)
-    };
-    let mut bad = None;
-    let mut admit = |w: f64, col: u32, n: &mut usize, thr_key: &mut u64, thr: &mut f64| {
-        if !(w > f64::NEG_INFINITY) {
-            // NaN or -inf (only reachable here when `lo` admits everything).
-            if check && bad.is_none() {
-                bad = Some(col as usize);
-            }
-        } else if w < f64::INFINITY && !(w > *thr) {
-            // (`thr` here too, not only in the block filter: the row's tail skips it.)
-            let kk = key(w, col ^ salt, mask);
-            if kk >= lo && kk <= *thr_key {
-                buf[*n] = kk;
-                *n += 1;
-                if *n == cap {
-                    let (_, kth, _) = buf.select_nth_unstable(k - 1);
-                    *thr_key = *kth;
-                    *thr = from_ord_bits(*kth | mask).min(thr0);
-                    *n = k;
-                }
-            }
-        }
-    };
-    let mut sums = [0.0f64; LANES];
-    let rch = row.chunks_exact(LANES);
-    let vch = v.chunks_exact(LANES);
-    let (rt, vt) = (rch.remainder(), vch.remainder());
-    let mut base = 0u32;
-    for (r, vv) in rch.zip(vch) {
-        let mut hits = 0u32;
-        if BELOW {
-            for (l, (a, b)) in r.iter().zip(vv).enumerate() {
-                let w = a - b;
-                // Candidates, and also NaN (every comparison false).
-                hits |= u32::from(!((w > thr) | (w < lo_w))) << l;
-            }
-        } else if let (Ok(r8), Ok(v8)) =
-            (<&[f64; LANES]>::try_from(r), <&[f64; LANES]>::try_from(vv))
-        {
-            let w: [f64; LANES] = std::array::from_fn(|l| r8[l] - v8[l]);
-            if check {
-                for (s, x) in sums.iter_mut().zip(&w) {
-                    *s += x;
-                }
-            }
-            if block_min(&w) > thr {
-                base += LANES as u32;
-                continue;
-            }
-            for (l, x) in w.iter().enumerate() {
-                hits |= u32::from(!(*x > thr)) << l;
-            }
-        }
-        while hits != 0 {
-            let l = hits.trailing_zeros() as usize;
-            hits &= hits - 1;
-            admit(
-                r[l] - vv[l],
-                base + l as u32,
-                &mut n,
-                &mut thr_key,
-                &mut thr,
-            );
-        }
-        base += LANES as u32;
-    }
-    for (l, (a, b)) in rt.iter().zip(vt).enumerate() {
-        admit(a - b, base + l as u32, &mut n, &mut thr_key, &mut thr);
-    }
-    // The block filter of the unbounded selection may skip NaN lanes: a NaN or `-inf`
-    // cost makes the sum of the row's `c - v` NaN or `-inf` (prices are never NaN,
-    // and a `-inf` price only comes with a `-inf` cost in its column).
-    if !BELOW && check && bad.is_none() && !(sums.iter().sum::<f64>() > f64::NEG_INFINITY) {
-        bad = row.iter().position(|&c| !(c > f64::NEG_INFINITY));
-    }
-    if n > k {
-        buf[..n].select_nth_unstable(k - 1);
-        n = k;
-    }
-    buf[..n].sort_unstable();
-    (n, bad)
-}
-
-/// Smallest entry of a block of [`LANES`] reduced costs, as a branch-free reduction
-/// tree (NaN lanes may be skipped: callers detect NaN separately).
-#[inline(always)]
-fn block_min(w: &[f64; LANES]) -> f64 {
-    #[inline(always)]
-    fn mn(a: f64, b: f64) -> f64 {
-        if a < b {
-            a
-        } else {
-            b
-        }
-    }
-    let a: [f64; 4] = std::array::from_fn(|l| mn(w[l], w[l + 4]));
-    let b = [mn(a[0], a[2]), mn(a[1], a[3])];
-    mn(b[0], b[1])
-}
-
-// ---------------------------------------------------------------------------------
-// Solver
-// ---------------------------------------------------------------------------------
-
 /// Exact assignment solver with reusable workspaces, dual prices and warm start.
 ///
 /// Workspaces are sized on the first solve and whenever the dimensions change; solving
@@ -1181,70 +187,74 @@ fn block_min(w: &[f64; LANES]) -> f64 {
 /// (`k <= 64` candidates per row, 20 bytes each) besides the caller's matrix.
 #[derive(Clone, Debug, Default)]
 pub struct Solver {
-    strategy: Strategy,
+    pub(super) strategy: Strategy,
     /// Requested candidates per row (0 = automatic).
-    k_opt: usize,
+    pub(super) k_opt: usize,
     /// Sparse rounds before the dense finish if not [`MAX_ROUNDS`] (tests lower it).
-    max_rounds: Option<u32>,
+    pub(super) max_rounds: Option<u32>,
     /// Candidate slots per row (sparse strategy) for the current dimensions.
-    k: usize,
+    pub(super) k: usize,
     /// Candidates the lists are built with in the current solve (`<= k`): `k` cold,
     /// fewer warm ([`WARM_LIST_NUM`]).
-    k_eff: usize,
-    rows: usize,
-    cols: usize,
+    pub(super) k_eff: usize,
+    pub(super) rows: usize,
+    pub(super) cols: usize,
     /// Whether `x`, `u`, `v` hold a complete optimal solution of the last problem.
-    solved: bool,
-    u: Vec<f64>,
-    v: Vec<f64>,
+    pub(super) solved: bool,
+    pub(super) u: Vec<f64>,
+    pub(super) v: Vec<f64>,
     /// Row -> column.
-    x: Vec<usize>,
+    pub(super) x: Vec<usize>,
     /// Column -> row.
-    y: Vec<usize>,
+    pub(super) y: Vec<usize>,
     // Candidate lists, `k` slots per row, sorted by `wb` (= c - v when built).
-    cand_col: Vec<u32>,
-    cand_cost: Vec<f64>,
-    cand_wb: Vec<f64>,
-    cand_len: Vec<u32>,
+    pub(super) cand_col: Vec<u32>,
+    pub(super) cand_cost: Vec<f64>,
+    pub(super) cand_wb: Vec<f64>,
+    pub(super) cand_len: Vec<u32>,
     /// Per row: every column off the list has `key(c - v, col) >= theta_key` and so
     /// `c - v >= theta` (`theta = +inf` when the list holds every finite entry).
     /// Stays valid while prices only decrease.
-    theta: Vec<f64>,
-    theta_key: Vec<u64>,
+    pub(super) theta: Vec<f64>,
+    pub(super) theta_key: Vec<u64>,
     /// Low key bits holding the column ([`key`]).
-    mask: u64,
+    ///
+    /// [`key`]: super::candidates::key
+    pub(super) mask: u64,
     /// Selection scratch, `4k` entries.
-    buf: Vec<u64>,
+    pub(super) buf: Vec<u64>,
     /// Sum of the slacks of the pairs freed by pricing passes (sizes the warm auction).
-    freed_slack: f64,
+    pub(super) freed_slack: f64,
     /// Lower bound of every tentative distance of the current sparse search.
-    cur_min: f64,
+    pub(super) cur_min: f64,
     /// A free column reached at distance `cur_min` in the current search, or NONE.
-    early: usize,
+    pub(super) early: usize,
     // Search workspaces (per column).
-    dist: Vec<f64>,
-    pred: Vec<u32>,
+    pub(super) dist: Vec<f64>,
+    pub(super) pred: Vec<u32>,
     /// Per column: search state of the current sparse search ([`Mark`]).
-    mark: Vec<Mark>,
-    epoch: u32,
-    heap: ColHeap,
-    pending: PendHeap,
-    scanned: Vec<u32>,
-    dd: Vec<f64>,
-    vm: Vec<f64>,
+    pub(super) mark: Vec<Mark>,
+    pub(super) epoch: u32,
+    pub(super) heap: ColHeap,
+    pub(super) pending: PendHeap,
+    pub(super) scanned: Vec<u32>,
+    pub(super) dd: Vec<f64>,
+    pub(super) vm: Vec<f64>,
     // Row sets.
-    free_rows: Vec<u32>,
-    dirty: Vec<bool>,
-    dirty_rows: Vec<u32>,
-    raise: Vec<u32>,
+    pub(super) free_rows: Vec<u32>,
+    pub(super) dirty: Vec<bool>,
+    pub(super) dirty_rows: Vec<u32>,
+    pub(super) raise: Vec<u32>,
     /// Free rows left to the exact searches by [`Solver::reduce_rows`].
-    deferred: Vec<u32>,
+    pub(super) deferred: Vec<u32>,
     /// A row computed by a [`CostSource`] that has no matrix (`cols` entries).
-    rowbuf: Vec<f64>,
+    pub(super) rowbuf: Vec<f64>,
     /// Upper bound of every column price during a solve (set when it starts, raised
     /// with any price; the spatial lists of [`PointCosts`] rely on it).
-    v_hi: f64,
-    stats: SolveStats,
+    ///
+    /// [`PointCosts`]: super::PointCosts
+    pub(super) v_hi: f64,
+    pub(super) stats: SolveStats,
 }
 
 impl Solver {
@@ -1313,6 +323,8 @@ impl Solver {
     ///
     /// # Errors
     /// As [`Solver::solve`].
+    ///
+    /// [`PointCosts`]: super::PointCosts
     pub fn solve_with<S: CostSource>(&mut self, costs: &S) -> Result<&[usize], AssignError> {
         self.check_dims(costs)?;
         self.size_for(costs.rows(), costs.cols());
@@ -1549,7 +561,7 @@ impl Solver {
         self.rowbuf = Vec::with_capacity(cols);
     }
 
-    fn use_sparse(&self) -> bool {
+    pub(super) fn use_sparse(&self) -> bool {
         match self.strategy {
             Strategy::Dense => false,
             Strategy::Sparse => true,
@@ -1644,6 +656,46 @@ impl Solver {
         self.dense_all(costs)
     }
 
+    /// Identity of every internal buffer (pointer, capacity), to check that repeated
+    /// same-size solves do not reallocate.
+    #[cfg(test)]
+    pub(super) fn buffer_fingerprint(&self) -> Vec<(usize, usize)> {
+        fn f<T>(v: &Vec<T>) -> (usize, usize) {
+            (v.as_ptr() as usize, v.capacity())
+        }
+        vec![
+            f(&self.u),
+            f(&self.v),
+            f(&self.x),
+            f(&self.y),
+            f(&self.cand_col),
+            f(&self.cand_cost),
+            f(&self.cand_wb),
+            f(&self.cand_len),
+            f(&self.theta),
+            f(&self.theta_key),
+            f(&self.buf),
+            f(&self.dist),
+            f(&self.pred),
+            f(&self.mark),
+            f(&self.heap.key),
+            f(&self.heap.col),
+            f(&self.heap.pos),
+            f(&self.rowbuf),
+            f(&self.pending.items),
+            f(&self.scanned),
+            f(&self.dd),
+            f(&self.vm),
+            f(&self.free_rows),
+            f(&self.dirty),
+            f(&self.dirty_rows),
+            f(&self.raise),
+            f(&self.deferred),
+        ]
+    }
+}
+
+impl Solver {
     /// Pricing pass over every row: frees rows that are not tight, greedily assigns
     /// free rows whose cheapest column is free, collects the free rows, and (when
     /// `build`) rebuilds every candidate list. With `check` (the first pass of a
@@ -1653,7 +705,7 @@ impl Solver {
     /// With `check`: [`AssignError::NotFinite`] for the first NaN / `-inf` in
     /// row-major order, else [`AssignError::Infeasible`] for the first row without a
     /// finite entry.
-    fn price_all<S: CostSource>(
+    pub(super) fn price_all<S: CostSource>(
         &mut self,
         costs: &S,
         build: bool,
@@ -1676,7 +728,7 @@ impl Solver {
 
     /// End of a sparse round: reprices the rows whose dual rose above their
     /// candidate threshold (the only rows that can have become violated).
-    fn price_dirty<S: CostSource>(&mut self, costs: &S) {
+    pub(super) fn price_dirty<S: CostSource>(&mut self, costs: &S) {
         self.free_rows.clear();
         for idx in 0..self.dirty_rows.len() {
             let i = self.dirty_rows[idx] as usize;
@@ -1796,7 +848,7 @@ impl Solver {
     /// Rebuilds the candidate list of row `i` (its `k` smallest `(c - v, col)`) and
     /// its threshold. Returns the row's minimum `c - v`, its column, and (with
     /// `check`) the first column holding NaN or `-inf`.
-    fn build_row<S: CostSource>(
+    pub(super) fn build_row<S: CostSource>(
         &mut self,
         costs: &S,
         i: usize,
@@ -1853,7 +905,7 @@ impl Solver {
     /// second smallest, from the candidate list and the threshold (the list is
     /// rebuilt when stale). The scan stops as soon as the sorted list bounds prove
     /// the minimum; with `exact_second` it goes on until the second is exact too.
-    fn best2<S: CostSource>(
+    pub(super) fn best2<S: CostSource>(
         &mut self,
         costs: &S,
         i: usize,
@@ -1895,10 +947,76 @@ impl Solver {
         }
     }
 
+    /// Pricing pass over every row using the candidate lists (a row is scanned in
+    /// full only when its list is stale): as [`Solver::price_all`] otherwise.
+    pub(super) fn price_all_lists<S: CostSource>(&mut self, costs: &S) {
+        self.free_rows.clear();
+        for i in 0..self.rows {
+            self.stats.rows_priced += 1;
+            let (min_w, arg, _) = self.best2(costs, i, false);
+            self.settle_row(costs, i, min_w, arg);
+        }
+        self.raise_free_columns(costs);
+    }
+
+    /// Rectangular problems only: raises the price of every freed column back to the
+    /// maximum (0), frees the assigned rows this makes non-tight (transitively), and
+    /// keeps every row's candidate threshold a valid lower bound.
+    fn raise_free_columns<S: CostSource>(&mut self, costs: &S) {
+        let sparse = self.use_sparse();
+        while let Some(j) = self.raise.pop() {
+            let j = j as usize;
+            if self.y[j] != NONE || self.v[j] >= 0.0 {
+                continue;
+            }
+            self.v[j] = 0.0;
+            self.v_hi = self.v_hi.max(0.0);
+            for r in 0..self.rows {
+                let c = costs.get(r, j);
+                if !(c < f64::INFINITY) {
+                    continue;
+                }
+                if sparse && c < self.theta[r] {
+                    // Column j got cheaper for row r: weaken the threshold, and clamp
+                    // the list bounds (j may be on the list; clamping keeps it sorted).
+                    let kk = key(c, 0, self.mask);
+                    let th = key_floor(kk, self.mask);
+                    self.theta[r] = th;
+                    self.theta_key[r] = kk;
+                    let base = r * self.k;
+                    let len = self.cand_len[r] as usize;
+                    for wb in &mut self.cand_wb[base..base + len] {
+                        if *wb > th {
+                            *wb = th;
+                        }
+                    }
+                }
+                let xr = self.x[r];
+                if xr != NONE && {
+                    let (cx, vx) = (costs.get(r, xr), self.v[xr]);
+                    c < cx - vx - tol(c, cx, vx, 0.0)
+                } {
+                    self.x[r] = NONE;
+                    self.y[xr] = NONE;
+                    self.raise.push(xr as u32);
+                    self.free_rows.push(r as u32);
+                }
+            }
+        }
+    }
+
+    /// Per-row tie-breaking salt of the candidate keys.
+    #[inline]
+    pub(super) fn salt(&self, i: usize) -> u32 {
+        ((i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as u32 & self.mask as u32
+    }
+}
+
+impl Solver {
     /// Forward auction with ε-scaling over the candidate lists (Bertsekas; prices
     /// only fall, so every list threshold stays valid). It only brings the prices
     /// close to optimal; exactness comes from the finish that follows.
-    fn auction<S: CostSource>(&mut self, costs: &S) {
+    pub(super) fn auction<S: CostSource>(&mut self, costs: &S) {
         let k = self.k;
         let (mut spread, mut count) = (0.0, 0usize);
         for i in 0..self.rows {
@@ -1980,7 +1098,7 @@ impl Solver {
     /// list bound stays valid) and every assigned pair stays tight, so the exact
     /// searches can follow directly. A row tied between a taken cheapest column and
     /// another, and every row beyond the bid budget, is left to the searches.
-    fn reduce_rows<S: CostSource>(&mut self, costs: &S) {
+    pub(super) fn reduce_rows<S: CostSource>(&mut self, costs: &S) {
         let budget = ROW_REDUCTION_BIDS_PER_FREE * self.free_rows.len();
         let mut bids = 0usize;
         self.deferred.clear();
@@ -2019,7 +1137,7 @@ impl Solver {
     /// After the auction: raises each assigned column's price by its row's slack so
     /// that the pair becomes tight (the pricing pass that follows frees the few rows
     /// this makes violated, and rebuilds every list).
-    fn tighten<S: CostSource>(&mut self, costs: &S) {
+    pub(super) fn tighten<S: CostSource>(&mut self, costs: &S) {
         let rect = self.rows < self.cols;
         let mut max_raise = 0.0f64;
         for i in 0..self.rows {
@@ -2055,71 +1173,9 @@ impl Solver {
             }
         }
     }
+}
 
-    /// Pricing pass over every row using the candidate lists (a row is scanned in
-    /// full only when its list is stale): as [`Solver::price_all`] otherwise.
-    fn price_all_lists<S: CostSource>(&mut self, costs: &S) {
-        self.free_rows.clear();
-        for i in 0..self.rows {
-            self.stats.rows_priced += 1;
-            let (min_w, arg, _) = self.best2(costs, i, false);
-            self.settle_row(costs, i, min_w, arg);
-        }
-        self.raise_free_columns(costs);
-    }
-
-    /// Rectangular problems only: raises the price of every freed column back to the
-    /// maximum (0), frees the assigned rows this makes non-tight (transitively), and
-    /// keeps every row's candidate threshold a valid lower bound.
-    fn raise_free_columns<S: CostSource>(&mut self, costs: &S) {
-        let sparse = self.use_sparse();
-        while let Some(j) = self.raise.pop() {
-            let j = j as usize;
-            if self.y[j] != NONE || self.v[j] >= 0.0 {
-                continue;
-            }
-            self.v[j] = 0.0;
-            self.v_hi = self.v_hi.max(0.0);
-            for r in 0..self.rows {
-                let c = costs.get(r, j);
-                if !(c < f64::INFINITY) {
-                    continue;
-                }
-                if sparse && c < self.theta[r] {
-                    // Column j got cheaper for row r: weaken the threshold, and clamp
-                    // the list bounds (j may be on the list; clamping keeps it sorted).
-                    let kk = key(c, 0, self.mask);
-                    let th = key_floor(kk, self.mask);
-                    self.theta[r] = th;
-                    self.theta_key[r] = kk;
-                    let base = r * self.k;
-                    let len = self.cand_len[r] as usize;
-                    for wb in &mut self.cand_wb[base..base + len] {
-                        if *wb > th {
-                            *wb = th;
-                        }
-                    }
-                }
-                let xr = self.x[r];
-                if xr != NONE && {
-                    let (cx, vx) = (costs.get(r, xr), self.v[xr]);
-                    c < cx - vx - tol(c, cx, vx, 0.0)
-                } {
-                    self.x[r] = NONE;
-                    self.y[xr] = NONE;
-                    self.raise.push(xr as u32);
-                    self.free_rows.push(r as u32);
-                }
-            }
-        }
-    }
-
-    /// Per-row tie-breaking salt of the candidate keys.
-    #[inline]
-    fn salt(&self, i: usize) -> u32 {
-        ((i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as u32 & self.mask as u32
-    }
-
+impl Solver {
     fn next_epoch(&mut self) -> u32 {
         if self.epoch == u32::MAX {
             self.mark.fill(Mark::default());
@@ -2150,7 +1206,7 @@ impl Solver {
     ///
     /// On success updates the prices of the settled columns and flips the path.
     /// Returns false only if no augmenting path exists in the whole matrix.
-    fn sparse_augment<S: CostSource>(&mut self, costs: &S, i0: usize) -> bool {
+    pub(super) fn sparse_augment<S: CostSource>(&mut self, costs: &S, i0: usize) -> bool {
         let ep = self.next_epoch();
         self.stats.augmentations += 1;
         self.heap.clear();
@@ -2324,7 +1380,7 @@ impl Solver {
     }
 
     /// Flips the alternating path ending at free column `sink` back to row `i0`.
-    fn flip_path(&mut self, sink: usize, i0: usize) {
+    pub(super) fn flip_path(&mut self, sink: usize, i0: usize) {
         let mut j = sink;
         loop {
             let i = self.pred[j] as usize;
@@ -2337,9 +1393,11 @@ impl Solver {
             j = prev;
         }
     }
+}
 
+impl Solver {
     /// Dense augmentation of every free row, in index order.
-    fn dense_all<S: CostSource>(&mut self, costs: &S) -> Result<(), AssignError> {
+    pub(super) fn dense_all<S: CostSource>(&mut self, costs: &S) -> Result<(), AssignError> {
         self.free_rows.sort_unstable();
         for idx in 0..self.free_rows.len() {
             let i = self.free_rows[idx] as usize;
@@ -2413,50 +1471,15 @@ impl Solver {
         self.flip_path(sink, i0);
         true
     }
-
-    /// Identity of every internal buffer (pointer, capacity), to check that repeated
-    /// same-size solves do not reallocate.
-    #[cfg(test)]
-    fn buffer_fingerprint(&self) -> Vec<(usize, usize)> {
-        fn f<T>(v: &Vec<T>) -> (usize, usize) {
-            (v.as_ptr() as usize, v.capacity())
-        }
-        vec![
-            f(&self.u),
-            f(&self.v),
-            f(&self.x),
-            f(&self.y),
-            f(&self.cand_col),
-            f(&self.cand_cost),
-            f(&self.cand_wb),
-            f(&self.cand_len),
-            f(&self.theta),
-            f(&self.theta_key),
-            f(&self.buf),
-            f(&self.dist),
-            f(&self.pred),
-            f(&self.mark),
-            f(&self.heap.key),
-            f(&self.heap.col),
-            f(&self.heap.pos),
-            f(&self.rowbuf),
-            f(&self.pending.items),
-            f(&self.scanned),
-            f(&self.dd),
-            f(&self.vm),
-            f(&self.free_rows),
-            f(&self.dirty),
-            f(&self.dirty_rows),
-            f(&self.raise),
-            f(&self.deferred),
-        ]
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::Strategy as Algo;
     use super::*;
+    use crate::crowd::assign::costs::{CostProvider, Distance, SquaredDistance};
+    use crate::crowd::assign::points::{PointCosts, PointMetric};
+    use crate::geom::Vec2;
     use crate::rng::SplitMix64;
     use proptest::prelude::{prop_assert, prop_oneof, proptest, Just, TestCaseError};
     use proptest::strategy::Strategy as _;
