@@ -27,12 +27,16 @@
 //! * `least_effort`, `assigner` — [`LeastEffort`] and [`Assigner`].
 
 mod assigner;
+mod auction;
+mod augment;
 mod candidates;
 mod costs;
+mod dense;
 mod error;
 mod heaps;
 mod least_effort;
 mod points;
+mod pricing;
 mod solver;
 
 pub use assigner::Assigner;
