@@ -38,6 +38,8 @@ mod least_effort;
 mod points;
 mod pricing;
 mod solver;
+#[cfg(test)]
+mod tests;
 
 pub use assigner::Assigner;
 pub use costs::{CostMatrix, CostProvider, CostSource, Distance, SquaredDistance};
