@@ -2,14 +2,48 @@
 //! eq. 2): the cost sources (a matrix, or costs computed from positions), the solver,
 //! the least-effort cost of formation-transform section 3.2, and the [`Assigner`] the
 //! controllers and the assignment worker reuse from call to call.
+//!
+//! The problem is the transportation problem of section 6.1 with unit supply and
+//! demand weights, i.e. the linear assignment problem
+//!
+//! ```text
+//!   minimise   sum_i c[i][sigma(i)]     over injections sigma: rows -> cols (rows <= cols)
+//! ```
+//!
+//! which [`Solver`] solves exactly (shortest augmenting paths with dual prices; the
+//! method is described in `solver.rs`). One file per job:
+//!
+//! * `costs` — where the costs come from: [`CostSource`], a [`CostMatrix`] filled by a
+//!   [`CostProvider`], or [`PointCosts`];
+//! * `points` — [`PointCosts`], the geometric fast path (bucket grid, ring search);
+//! * `candidates` — sort keys and the streaming selection of a row's cheapest columns;
+//! * `solver` — [`Solver`]: options, workspaces, cold and warm solves, the certificate;
+//! * `pricing` — rows priced against the column prices, candidate lists and thresholds;
+//! * `auction` — the auction and the row reduction that initialise the prices;
+//! * `augment` — exact Dijkstra over the candidate lists (sparse strategy);
+//! * `dense` — Dijkstra over full rows (dense strategy, and the safety net);
+//! * `heaps` — the searches' priority queues;
+//! * `error` — [`AssignError`];
+//! * `least_effort`, `assigner` — [`LeastEffort`] and [`Assigner`].
 
 mod assigner;
+mod auction;
+mod augment;
+mod candidates;
+mod costs;
+mod dense;
+mod error;
+mod heaps;
 mod least_effort;
+mod points;
+mod pricing;
 mod solver;
+#[cfg(test)]
+mod tests;
 
 pub use assigner::Assigner;
+pub use costs::{CostMatrix, CostProvider, CostSource, Distance, SquaredDistance};
+pub use error::AssignError;
 pub use least_effort::{mean_edge_lengths, LeastEffort};
-pub use solver::{
-    AssignError, CostMatrix, CostProvider, CostSource, Distance, PointCosts, PointMetric,
-    SolveStats, Solver, SquaredDistance, Strategy, EPS_REL, GOALS_PER_BUCKET,
-};
+pub use points::{PointCosts, PointMetric, GOALS_PER_BUCKET};
+pub use solver::{SolveStats, Solver, Strategy, EPS_REL};

@@ -1,0 +1,9 @@
+//! Tests of the assignment solver, end to end: its answers against brute force, the
+//! dense strategy and the `pathfinding` crate's Kuhn–Munkres (`optimality`), the
+//! geometric fast path against the matrix (`points`), and what it does with every kind
+//! of input (`inputs`).
+
+mod inputs;
+mod optimality;
+mod points;
+mod support;
