@@ -21,7 +21,9 @@
 //! [`read_hid_recorder`] decodes the reports of the first touch collection with
 //! [`HidDecoder`] into a [`Recording`], as the other recording formats are.
 
-use super::{OnBadFrame, Recording, RecordingError, RecordingIssue, END_CANCEL_US, MAX_WARNINGS};
+use super::error::{OnBadFrame, RecordingError};
+use super::recording_type::{Recording, END_CANCEL_US};
+use super::warnings::{RecordingIssue, MAX_WARNINGS};
 use crate::input::hid::{
     parse_hex_bytes, parse_r_line, touch_collections, HidCounters, HidDecoder,
 };
