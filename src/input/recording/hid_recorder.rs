@@ -21,7 +21,9 @@
 //! [`read_hid_recorder`] decodes the reports of the first touch collection with
 //! [`HidDecoder`] into a [`Recording`], as the other recording formats are.
 
-use super::{OnBadFrame, Recording, RecordingError, RecordingIssue, END_CANCEL_US, MAX_WARNINGS};
+use super::error::{OnBadFrame, RecordingError};
+use super::recording_type::{Recording, END_CANCEL_US};
+use super::warnings::{RecordingIssue, Warnings};
 use crate::input::hid::{
     parse_hex_bytes, parse_r_line, touch_collections, HidCounters, HidDecoder,
 };
@@ -80,33 +82,6 @@ impl HidRecorderLog {
     }
 }
 
-/// Issues capped at [`MAX_WARNINGS`].
-#[derive(Default)]
-struct Issues {
-    list: Vec<RecordingIssue>,
-    dropped: usize,
-}
-
-impl Issues {
-    fn push(&mut self, line: usize, message: String) {
-        if self.list.len() < MAX_WARNINGS {
-            self.list.push(RecordingIssue { line, message });
-        } else {
-            self.dropped += 1;
-        }
-    }
-
-    fn finish(mut self) -> Vec<RecordingIssue> {
-        if self.dropped > 0 {
-            self.list.push(RecordingIssue {
-                line: 0,
-                message: format!("{} more issues not listed", self.dropped),
-            });
-        }
-        self.list
-    }
-}
-
 /// `sec.usec` → µs.
 fn parse_time(s: &str) -> Result<u64, String> {
     let bad = || format!("`{s}` is not a timestamp (sec.usec)");
@@ -160,7 +135,7 @@ pub fn parse_hid_recorder(
         message,
     };
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut issues = Issues::default();
+    let mut issues = Warnings::default();
     let mut log = HidRecorderLog {
         name: None,
         bus: None,
@@ -316,7 +291,7 @@ pub fn decode_hid_recording(
         |s| s.to_string_lossy().into_owned(),
     );
     let surface = tc.surface(log.name.as_deref().unwrap_or(&default_name));
-    let mut issues = Issues::default();
+    let mut issues = Warnings::default();
     for w in &log.warnings {
         issues.push(w.line, w.message.clone());
     }

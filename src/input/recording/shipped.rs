@@ -2,7 +2,9 @@
 //! and the embedded default config work from any directory and on a machine with no
 //! touchscreen.
 
-use super::{parse_recording, read_recording, OnBadFrame, Recording, RecordingError};
+use super::error::{OnBadFrame, RecordingError};
+use super::read::{parse_recording, read_recording};
+use super::recording_type::Recording;
 use std::path::Path;
 
 /// The shipped recordings (`config/recordings/`), by file name.

@@ -1,0 +1,53 @@
+//! The problems a reader notes without stopping: located issues, capped at
+//! [`MAX_WARNINGS`], one collector for every reader.
+
+use std::fmt;
+
+/// Most issues a recording keeps; later ones are only counted in a last issue.
+pub const MAX_WARNINGS: usize = 1_000;
+
+/// A problem found in a recording.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RecordingIssue {
+    /// 1-based line in the file; 0 when the issue is about the whole file.
+    pub line: usize,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl fmt::Display for RecordingIssue {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.line == 0 {
+            write!(f, "{}", self.message)
+        } else {
+            write!(f, "line {}: {}", self.line, self.message)
+        }
+    }
+}
+
+/// The issues of a recording, capped at [`MAX_WARNINGS`].
+#[derive(Debug, Default)]
+pub(super) struct Warnings {
+    list: Vec<RecordingIssue>,
+    dropped: usize,
+}
+
+impl Warnings {
+    pub(super) fn push(&mut self, line: usize, message: String) {
+        if self.list.len() < MAX_WARNINGS {
+            self.list.push(RecordingIssue { line, message });
+        } else {
+            self.dropped += 1;
+        }
+    }
+
+    pub(super) fn finish(mut self) -> Vec<RecordingIssue> {
+        if self.dropped > 0 {
+            self.list.push(RecordingIssue {
+                line: 0,
+                message: format!("{} more issues not listed", self.dropped),
+            });
+        }
+        self.list
+    }
+}
