@@ -10,11 +10,11 @@ mod scene;
 
 pub use planner::{
     steer_target, PlanError, Planner, PlannerParams, DEFAULT_DENSITY_REFRESH_S,
-    DEFAULT_PLAN_CELL_M, MAX_ROUTE_STEPS, MESH_FIELD_RANGE_M, MESH_FIELD_STEP_M,
+    DEFAULT_PLAN_CELL_M, MAX_ROUTE_STEPS,
 };
 pub use potential::{
     displace_vertices, field_at, magnitude, part_field, FieldError, FieldGrid, FieldParams,
-    CENTRE_EPSILON_M,
+    CENTRE_EPSILON_M, MESH_FIELD_RANGE_M, MESH_FIELD_STEP_M,
 };
 pub use scene::{
     load_scene, BoundaryPoint, Checkpoint, CheckpointDef, Circle, ConvexPolygon, Dynamic,
