@@ -76,6 +76,7 @@ mod load;
 mod model;
 mod problem;
 mod query;
+mod sanity;
 mod shape;
 mod shipped;
 #[cfg(test)]
