@@ -10,21 +10,19 @@ mod scene;
 
 pub use planner::{
     steer_target, PlanError, Planner, PlannerParams, DEFAULT_DENSITY_REFRESH_S,
-    DEFAULT_PLAN_CELL_M, MAX_ROUTE_STEPS, MESH_FIELD_RANGE_M, MESH_FIELD_STEP_M,
+    DEFAULT_PLAN_CELL_M, MAX_ROUTE_STEPS,
 };
 pub use potential::{
     displace_vertices, field_at, magnitude, part_field, FieldError, FieldGrid, FieldParams,
-    CENTRE_EPSILON_M,
+    CENTRE_EPSILON_M, MESH_FIELD_RANGE_M, MESH_FIELD_STEP_M,
 };
-pub use scene::grid::MAX_GRID_CELLS;
-pub use scene::shape::TOUCH_TOLERANCE_M;
 pub use scene::{
     load_scene, BoundaryPoint, Checkpoint, CheckpointDef, Circle, ConvexPolygon, Dynamic,
     DynamicDef, DynamicKind, DynamicKindDef, GridError, MotionPath, Obstacle, ObstacleDef,
     ObstacleHit, ObstacleId, Part, PartDef, Patch, PatchDef, PathDef, PathMode, Placement, PointM,
     Pose, Problem, Scene, SceneError, SceneFile, SceneGrid, SceneIssue, Terrain,
-    DEFAULT_AGENT_RADIUS_M, LENGTH_TOLERANCE_M, MAX_PARTS, MAX_POLYGON_VERTICES,
+    DEFAULT_AGENT_RADIUS_M, LENGTH_TOLERANCE_M, MAX_GRID_CELLS, MAX_PARTS, MAX_POLYGON_VERTICES,
     MAX_PROJECT_ROUNDS, MAX_SCENE_BYTES, MAX_SCENE_ITEMS, MAX_SPEED_FACTOR, MAX_WAYPOINTS,
     MIN_PATH_LENGTH_M, MIN_POLYGON_AREA_M2, MIN_RING_STEP_M, PROJECT_TOLERANCE_M, SCENES,
-    SCENE_VERSION,
+    SCENE_VERSION, TOUCH_TOLERANCE_M,
 };

@@ -41,11 +41,6 @@ pub const DEFAULT_PLAN_CELL_M: f64 = 0.16;
 pub const DEFAULT_DENSITY_REFRESH_S: f64 = 0.5;
 /// Most descent steps (one cell each) when tracing an agent's route.
 pub const MAX_ROUTE_STEPS: usize = 2048;
-/// Reach of the potential field pushing mesh vertices off obstacles (m; `r` of
-/// mesh-formation-control eq. 1).
-pub const MESH_FIELD_RANGE_M: f64 = 1.0;
-/// Mesh vertex displacement per unit of field (m).
-pub const MESH_FIELD_STEP_M: f64 = 0.3;
 
 /// Tunables of the planner.
 #[derive(Copy, Clone, Debug, PartialEq)]

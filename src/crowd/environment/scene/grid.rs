@@ -13,7 +13,8 @@
 //!  origin            origin + (cols·cell_m, 0)
 //! ```
 
-use super::{DynamicKind, Placement, Scene, Terrain};
+use super::model::{DynamicKind, Scene, Terrain};
+use super::shape::Placement;
 use crate::geom::{Rect, Vec2};
 use crate::vocab::MotionType;
 

@@ -1,7 +1,8 @@
 //! The shipped scenes (`config/scenes/`), compiled into the binary so a config can
 //! name them from any directory.
 
-use super::{Scene, SceneError};
+use super::model::Scene;
+use super::problem::SceneError;
 use std::path::Path;
 
 /// The shipped scenes (`config/scenes/`), by file name.

@@ -1,6 +1,9 @@
 //! Scene loading, validation and geometry queries.
 
 use super::*;
+use crate::geom::{Rect, Vec2};
+use crate::vocab::MotionType;
+use std::path::Path;
 
 fn scene(text: &str) -> Scene {
     match Scene::from_str(text, Path::new("t.ron"), DEFAULT_AGENT_RADIUS_M) {
