@@ -86,7 +86,6 @@ const IMPURE_PATHS: &[&str] = &[
 ];
 
 #[test]
-#[ignore = "src/ is being moved into the layout these rules describe"]
 fn src_follows_the_layering_rules() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = BTreeMap::new();
