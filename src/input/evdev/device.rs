@@ -25,11 +25,12 @@
 //! [`MtSlotState`].
 
 use super::capabilities::{AbsAxisInfo, DecoderSetup, EvdevCapabilities};
-use super::mt::{
-    MtDecoder, MtProtocol, MtSlotState, RawEvent, ABS_MT_POSITION_X, ABS_MT_POSITION_Y,
-    ABS_MT_PRESSURE, ABS_MT_SLOT, ABS_MT_TOOL_TYPE, ABS_MT_TOUCH_MAJOR, ABS_MT_TOUCH_MINOR,
-    ABS_MT_TRACKING_ID, ABS_PRESSURE, ABS_X, ABS_Y, BTN_TOUCH, EV_ABS, MAX_SLOTS,
+use super::codes::{
+    ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_PRESSURE, ABS_MT_SLOT, ABS_MT_TOOL_TYPE,
+    ABS_MT_TOUCH_MAJOR, ABS_MT_TOUCH_MINOR, ABS_MT_TRACKING_ID, ABS_PRESSURE, ABS_X, ABS_Y,
+    BTN_TOUCH, EV_ABS,
 };
+use super::mt::{MtDecoder, MtProtocol, MtSlotState, RawEvent, MAX_SLOTS};
 use crate::input::{DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink};
 use crate::rt::monotonic_now;
 use crate::sys;
@@ -146,25 +147,25 @@ pub fn capabilities(dev: &RawDevice) -> io::Result<EvdevCapabilities> {
         }
     };
     if let Some(s) = dev.supported_keys() {
-        set(super::mt::EV_KEY, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_KEY, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_relative_axes() {
-        set(super::mt::EV_REL, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_REL, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.misc_properties() {
-        set(super::mt::EV_MSC, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_MSC, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_switches() {
-        set(super::capabilities::EV_SW, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_SW, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_leds() {
-        set(super::capabilities::EV_LED, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_LED, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_sounds() {
-        set(super::capabilities::EV_SND, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_SND, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_ff() {
-        set(super::capabilities::EV_FF, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_FF, &mut s.iter().map(|k| k.0));
     }
     for (code, a) in dev.get_absinfo()? {
         c.set_abs(
