@@ -5,7 +5,7 @@ use super::classify::TouchClass;
 use super::sysfs::{evdev_facts, hidraw_facts, non_empty, scan, Scanned, SysfsFacts};
 use crate::input::calibrate::CalibrationError;
 use crate::input::udev::{self, UdevDb};
-use crate::input::{AxisRange, DeviceInfo, DeviceKind, Error, SurfaceInfo};
+use crate::input::{AxisRange, DeviceIdentity, DeviceInfo, DeviceKind, Error, SurfaceInfo};
 use std::path::{Path, PathBuf};
 
 /// Opens a device to learn what sysfs does not say (axis ranges, contact count).
@@ -49,15 +49,17 @@ fn info_from_facts(kind: DeviceKind, node: &Path, facts: Option<&SysfsFacts>) ->
         max: 0.0,
         resolution: 0.0,
     };
-    let name = facts.map(|f| f.name.clone()).unwrap_or_default();
+    let name = facts.map(|f| f.identity.name.clone()).unwrap_or_default();
     DeviceInfo {
-        kind,
-        node: node.to_path_buf(),
-        name: name.clone(),
-        bus: facts.map_or(0, |f| f.bus),
-        vendor: facts.map_or(0, |f| f.vendor),
-        product: facts.map_or(0, |f| f.product),
-        serial: facts.and_then(|f| f.serial.clone()),
+        identity: DeviceIdentity {
+            kind,
+            node: node.to_path_buf(),
+            name: name.clone(),
+            bus: facts.map_or(0, |f| f.identity.bus),
+            vendor: facts.map_or(0, |f| f.identity.vendor),
+            product: facts.map_or(0, |f| f.identity.product),
+            serial: facts.and_then(|f| f.identity.serial.clone()),
+        },
         id_path: None,
         stable_id: String::new(),
         surface: SurfaceInfo {
@@ -89,20 +91,22 @@ pub fn examine(
     };
     let (mut info, probe_error) = match prober.probe(scanned.kind, &scanned.node) {
         Ok(mut info) => {
-            info.kind = scanned.kind;
-            info.node = scanned.node.clone();
+            let id = &mut info.identity;
+            id.kind = scanned.kind;
+            id.node = scanned.node.clone();
             if let Some(f) = facts {
-                if info.name.is_empty() {
-                    info.name = f.name.clone();
+                let sysfs = &f.identity;
+                if id.name.is_empty() {
+                    id.name = sysfs.name.clone();
                 }
-                if info.vendor == 0 && info.product == 0 {
-                    (info.bus, info.vendor, info.product) = (f.bus, f.vendor, f.product);
+                if id.vendor == 0 && id.product == 0 {
+                    (id.bus, id.vendor, id.product) = (sysfs.bus, sysfs.vendor, sysfs.product);
                 }
-                if info.serial.is_none() {
-                    info.serial = f.serial.clone();
+                if id.serial.is_none() {
+                    id.serial = sysfs.serial.clone();
                 }
             }
-            info.serial = non_empty(info.serial.take());
+            id.serial = non_empty(id.serial.take());
             (info, None)
         }
         // Without sysfs the prober is the only judge of what the node is.
@@ -144,9 +148,9 @@ pub fn examine(
     }
     info.stable_id = DeviceInfo::make_stable_id(
         info.id_path.as_deref(),
-        info.vendor,
-        info.product,
-        info.serial.as_deref(),
+        info.identity.vendor,
+        info.identity.product,
+        info.identity.serial.as_deref(),
     );
     Some(Found {
         info,
@@ -172,12 +176,15 @@ pub fn discover(root: &Path, prober: &dyn Prober) -> Vec<Found> {
         .filter_map(|s| examine(root, &udev, s, prober))
         .collect();
     for i in 0..found.len() {
-        if found[i].info.kind != DeviceKind::Hidraw || found[i].info.calibration.is_some() {
+        if found[i].info.identity.kind != DeviceKind::Hidraw || found[i].info.calibration.is_some()
+        {
             continue;
         }
         let inherited = found
             .iter()
-            .find(|e| e.info.kind == DeviceKind::Evdev && same_physical_device(e, &found[i]))
+            .find(|e| {
+                e.info.identity.kind == DeviceKind::Evdev && same_physical_device(e, &found[i])
+            })
             .and_then(|e| e.info.calibration);
         found[i].info.calibration = inherited;
     }
@@ -209,9 +216,9 @@ pub fn discover_node(root: &Path, node: &Path, prober: &dyn Prober) -> Option<Fo
 /// Whether `a` and `b` are the evdev and hidraw interfaces of one physical device:
 /// same vendor:product, and the same stable id or the same sysfs parent.
 pub fn same_physical_device(a: &Found, b: &Found) -> bool {
-    a.info.kind != b.info.kind
-        && a.info.vendor == b.info.vendor
-        && a.info.product == b.info.product
+    a.info.identity.kind != b.info.identity.kind
+        && a.info.identity.vendor == b.info.identity.vendor
+        && a.info.identity.product == b.info.identity.product
         && (a.info.stable_id == b.info.stable_id
             || matches!((&a.parent, &b.parent), (Some(pa), Some(pb)) if pa == pb))
 }

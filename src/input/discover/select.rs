@@ -31,11 +31,11 @@ pub struct Summary {
 impl From<&Found> for Summary {
     fn from(f: &Found) -> Summary {
         Summary {
-            node: f.info.node.clone(),
-            kind: f.info.kind,
-            name: f.info.name.clone(),
-            vendor: f.info.vendor,
-            product: f.info.product,
+            node: f.info.identity.node.clone(),
+            kind: f.info.identity.kind,
+            name: f.info.identity.name.clone(),
+            vendor: f.info.identity.vendor,
+            product: f.info.identity.product,
             stable_id: f.info.stable_id.clone(),
             problem: f.probe_error.clone(),
         }
@@ -121,8 +121,8 @@ fn rank(a: &Found, b: &Found) -> Ordering {
                 .cmp(&a.info.surface.max_contacts)
         })
         .then_with(|| area_mm2(b).total_cmp(&area_mm2(a)))
-        .then_with(|| (a.info.kind as u8).cmp(&(b.info.kind as u8)))
-        .then_with(|| node_order(&a.info.node, &b.info.node))
+        .then_with(|| (a.info.identity.kind as u8).cmp(&(b.info.identity.kind as u8)))
+        .then_with(|| node_order(&a.info.identity.node, &b.info.identity.node))
 }
 
 /// Picks one device.
@@ -162,7 +162,7 @@ pub fn select<'a>(
     if found.is_empty() {
         return Err(SelectError::NoDevices);
     }
-    let admits = |f: &Found| matches!(sel, Selector::Path(_)) || pref.admits(f.info.kind);
+    let admits = |f: &Found| matches!(sel, Selector::Path(_)) || pref.admits(f.info.identity.kind);
     let matching: Vec<&Found> = found
         .iter()
         .filter(|f| admits(f) && matches(&f.info, sel))
@@ -183,10 +183,10 @@ pub fn select<'a>(
     }
     let mut best: Option<&Found> = None;
     for &f in &usable {
-        let shadowed = f.info.kind == DeviceKind::Hidraw
+        let shadowed = f.info.identity.kind == DeviceKind::Hidraw
             && usable
                 .iter()
-                .any(|g| g.info.kind == DeviceKind::Evdev && same_physical_device(f, g));
+                .any(|g| g.info.identity.kind == DeviceKind::Evdev && same_physical_device(f, g));
         if shadowed {
             continue;
         }

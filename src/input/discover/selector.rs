@@ -122,11 +122,11 @@ fn same_path(node: &Path, wanted: &Path) -> bool {
 pub fn matches(info: &DeviceInfo, sel: &Selector) -> bool {
     match sel {
         Selector::Auto => true,
-        Selector::Name(pattern) => name_matches(&info.name, pattern),
+        Selector::Name(pattern) => name_matches(&info.identity.name, pattern),
         Selector::VendorProduct(vp) => {
-            parse_vendor_product(vp) == Some((info.vendor, info.product))
+            parse_vendor_product(vp) == Some((info.identity.vendor, info.identity.product))
         }
-        Selector::Path(p) => same_path(&info.node, p),
+        Selector::Path(p) => same_path(&info.identity.node, p),
         Selector::Id(id) => info.stable_id == *id || info.id_path.as_deref() == Some(id.as_str()),
     }
 }
@@ -134,7 +134,7 @@ pub fn matches(info: &DeviceInfo, sel: &Selector) -> bool {
 /// Whether `candidate` is the device `previous` was (same interface, same stable id),
 /// whatever its node is now.
 pub fn recognise(previous: &DeviceInfo, candidate: &DeviceInfo) -> bool {
-    previous.kind == candidate.kind && previous.stable_id == candidate.stable_id
+    previous.identity.kind == candidate.identity.kind && previous.stable_id == candidate.stable_id
 }
 
 /// The selector that finds `chosen` again after a re-plug: its stable id.

@@ -4,7 +4,7 @@
 use super::bitmap::Bitmap;
 use super::classify::{classify_evdev, classify_report_descriptor, DescriptorError, TouchClass};
 use crate::input::udev;
-use crate::input::DeviceKind;
+use crate::input::{DeviceIdentity, DeviceKind};
 use std::cmp::Ordering;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -45,20 +45,8 @@ pub enum SysfsError {
 /// What sysfs says about one node.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SysfsFacts {
-    /// Interface.
-    pub kind: DeviceKind,
-    /// Device node.
-    pub node: PathBuf,
-    /// Name the device reports.
-    pub name: String,
-    /// Bus type.
-    pub bus: u16,
-    /// Vendor id.
-    pub vendor: u16,
-    /// Product id.
-    pub product: u16,
-    /// `uniq` / `HID_UNIQ`, when not empty.
-    pub serial: Option<String>,
+    /// Interface, node, name, ids, and `uniq` / `HID_UNIQ` as serial when not empty.
+    pub identity: DeviceIdentity,
     /// `(major, minor)` from the class directory's `dev` file.
     pub devnum: Option<(u32, u32)>,
     /// Pre-filter verdict.
@@ -164,13 +152,15 @@ pub fn evdev_facts(root: &Path, node: &Path) -> Result<SysfsFacts, SysfsError> {
     };
     let abs = read_bitmap(&dev.join("capabilities/abs"))?;
     Ok(SysfsFacts {
-        kind: DeviceKind::Evdev,
-        node: node.to_path_buf(),
-        name,
-        bus,
-        vendor,
-        product,
-        serial,
+        identity: DeviceIdentity {
+            kind: DeviceKind::Evdev,
+            node: node.to_path_buf(),
+            name,
+            bus,
+            vendor,
+            product,
+            serial,
+        },
         devnum: read_devnum(&class.join("dev"))?,
         touch: classify_evdev(&properties, &abs),
         // eventN/device is the inputN directory; its `device` link is the physical device.
@@ -216,13 +206,15 @@ pub fn hidraw_facts(root: &Path, node: &Path) -> Result<SysfsFacts, SysfsError> 
         source,
     })?;
     Ok(SysfsFacts {
-        kind: DeviceKind::Hidraw,
-        node: node.to_path_buf(),
-        name: uevent.get("HID_NAME").cloned().unwrap_or_default(),
-        bus,
-        vendor,
-        product,
-        serial: non_empty(uevent.get("HID_UNIQ").cloned()),
+        identity: DeviceIdentity {
+            kind: DeviceKind::Hidraw,
+            node: node.to_path_buf(),
+            name: uevent.get("HID_NAME").cloned().unwrap_or_default(),
+            bus,
+            vendor,
+            product,
+            serial: non_empty(uevent.get("HID_UNIQ").cloned()),
+        },
         devnum: read_devnum(&class.join("dev"))?,
         touch,
         parent: std::fs::canonicalize(&dev).ok(),

@@ -31,7 +31,7 @@ use super::codes::{
     BTN_TOUCH, EV_ABS,
 };
 use super::mt::{MtDecoder, MtProtocol, MtSlotState, RawEvent, MAX_SLOTS};
-use crate::input::{DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink};
+use crate::input::{DeviceIdentity, DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink};
 use crate::rt::monotonic_now;
 use crate::sys;
 use crate::vocab::Micros;
@@ -198,13 +198,15 @@ pub fn device_info(
         .filter(|s| !s.is_empty())
         .map(str::to_string);
     DeviceInfo {
-        kind: DeviceKind::Evdev,
-        node: node.to_path_buf(),
-        name: caps.name.clone(),
-        bus: caps.bus,
-        vendor: caps.vendor,
-        product: caps.product,
-        serial: serial.clone(),
+        identity: DeviceIdentity {
+            kind: DeviceKind::Evdev,
+            node: node.to_path_buf(),
+            name: caps.name.clone(),
+            bus: caps.bus,
+            vendor: caps.vendor,
+            product: caps.product,
+            serial: serial.clone(),
+        },
         id_path: None,
         stable_id: DeviceInfo::make_stable_id(None, caps.vendor, caps.product, serial.as_deref()),
         surface: caps.surface(setup),
@@ -400,9 +402,9 @@ impl EvdevReader {
         if self.grab_pending && self.decoder.active_contacts() == 0 {
             self.dev
                 .grab()
-                .map_err(|e| Error::from_io(&self.info.node, "EVIOCGRAB", e))?;
+                .map_err(|e| Error::from_io(&self.info.identity.node, "EVIOCGRAB", e))?;
             self.grab_pending = false;
-            log::debug!("{}: grabbed (exclusive)", self.info.node.display());
+            log::debug!("{}: grabbed (exclusive)", self.info.identity.node.display());
         }
         Ok(())
     }
@@ -475,7 +477,7 @@ impl EvdevReader {
             "{}: the kernel dropped input events (SYN_DROPPED, {n} time(s) since open): this \
              reader fell behind (system overloaded, or the daemon was stopped); touches \
              resynchronised from the device's slot state",
-            self.info.node.display()
+            self.info.identity.node.display()
         );
     }
 
@@ -490,7 +492,7 @@ impl EvdevReader {
         match self.query_state() {
             Ok(()) => Ok(self.decoder.resync(t, &self.state, &mut self.frame)),
             Err(e) if e.raw_os_error() == Some(libc::ENODEV) => Err(Error::Unplugged {
-                node: self.info.node.clone(),
+                node: self.info.identity.node.clone(),
             }),
             Err(_) => {
                 self.resync_failures += 1;
@@ -510,7 +512,7 @@ impl DeviceReader for EvdevReader {
             self.initial = false;
             sink.push(&self.frame);
         }
-        let node: PathBuf = self.info.node.clone();
+        let node: PathBuf = self.info.identity.node.clone();
         while !stop.load(Ordering::Relaxed) {
             let timeout_ms = crate::input::reader_timeout_ms(sink);
             let n = wait_read(&self.dev, &node, &mut self.buf, timeout_ms)?;
