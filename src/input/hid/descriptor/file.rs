@@ -85,7 +85,7 @@ pub fn read_descriptor_file(path: &Path) -> Result<Vec<u8>, DescriptorFileError>
     for (i, l) in text.lines().enumerate() {
         let l = l.trim();
         if let Some(rest) = l.strip_prefix("R:") {
-            return crate::input::hid::parse_r_line(rest).map_err(|m| perr(i + 1, m));
+            return crate::input::hid::hex::parse_r_line(rest).map_err(|m| perr(i + 1, m));
         }
     }
     // A hex dump: only hex byte tokens, commas, `0x` prefixes, comments.
