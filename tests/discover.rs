@@ -10,7 +10,7 @@ use crowdtouch::input::discover::{
     self, classify_report_descriptor, discover, matches, recognise, scan, select, sticky_selector,
     Bitmap, Found, InterfacePreference, Prober, SelectError, Selector, TouchClass,
 };
-use crowdtouch::input::{AxisRange, DeviceInfo, DeviceKind, Error, SurfaceInfo};
+use crowdtouch::input::{AxisRange, DeviceIdentity, DeviceInfo, DeviceKind, Error, SurfaceInfo};
 use std::cell::RefCell;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
@@ -179,13 +179,15 @@ fn evdev_info(node: &Path, d: &Desc) -> DeviceInfo {
         }
     };
     DeviceInfo {
-        kind: DeviceKind::Evdev,
-        node: node.to_path_buf(),
-        name: d.name.clone(),
-        bus: d.bus,
-        vendor: d.vendor,
-        product: d.product,
-        serial: None,
+        identity: DeviceIdentity {
+            kind: DeviceKind::Evdev,
+            node: node.to_path_buf(),
+            name: d.name.clone(),
+            bus: d.bus,
+            vendor: d.vendor,
+            product: d.product,
+            serial: None,
+        },
         id_path: None,
         stable_id: String::new(),
         surface: SurfaceInfo {
@@ -209,13 +211,15 @@ fn dell_hidraw_info(node: &Path) -> DeviceInfo {
         resolution: 32767.0 / mm,
     };
     DeviceInfo {
-        kind: DeviceKind::Hidraw,
-        node: node.to_path_buf(),
-        name: "Advanced Silicon S.A. CoolTouch® System".into(),
-        bus: 3,
-        vendor: 0x2575,
-        product: 0x0204,
-        serial: None,
+        identity: DeviceIdentity {
+            kind: DeviceKind::Hidraw,
+            node: node.to_path_buf(),
+            name: "Advanced Silicon S.A. CoolTouch® System".into(),
+            bus: 3,
+            vendor: 0x2575,
+            product: 0x0204,
+            serial: None,
+        },
         id_path: None,
         stable_id: String::new(),
         surface: SurfaceInfo {
@@ -245,7 +249,7 @@ struct FakeProber {
 impl FakeProber {
     fn ok(&mut self, info: DeviceInfo) {
         self.answers
-            .insert(info.node.clone(), Outcome::Ok(Box::new(info)));
+            .insert(info.identity.node.clone(), Outcome::Ok(Box::new(info)));
     }
     fn denied(&mut self, node: &Path) {
         self.answers.insert(node.to_path_buf(), Outcome::Denied);
@@ -476,7 +480,7 @@ fn standard_tree(with_udev: bool) -> (Tree, FakeProber, Nodes) {
 }
 
 fn nodes_of(found: &[Found]) -> Vec<PathBuf> {
-    found.iter().map(|f| f.info.node.clone()).collect()
+    found.iter().map(|f| f.info.identity.node.clone()).collect()
 }
 
 #[test]
@@ -525,10 +529,20 @@ fn prefilter_classifies_real_devices_from_sysfs_facts() {
     assert!(!class[&n.keyboard_hidraw].is_touch());
 
     let dell = scanned[1].facts.as_ref().unwrap();
-    assert_eq!(dell.name, "Advanced Silicon S.A. CoolTouch® System");
-    assert_eq!((dell.bus, dell.vendor, dell.product), (3, 0x2575, 0x0204));
+    assert_eq!(
+        dell.identity.name,
+        "Advanced Silicon S.A. CoolTouch® System"
+    );
+    assert_eq!(
+        (
+            dell.identity.bus,
+            dell.identity.vendor,
+            dell.identity.product
+        ),
+        (3, 0x2575, 0x0204)
+    );
     assert_eq!(dell.devnum, Some((13, 69)));
-    assert_eq!(dell.serial, None);
+    assert_eq!(dell.identity.serial, None);
     // Both interfaces of the Dell Canvas hang off the same HID device.
     let hidraw = scanned[4].facts.as_ref().unwrap();
     assert!(dell.parent.is_some());
@@ -564,7 +578,7 @@ fn discovery_lists_touch_devices_with_udev_facts() {
 
     let dell = &found[0];
     assert!(dell.usable() && dell.processed);
-    assert_eq!(dell.info.kind, DeviceKind::Evdev);
+    assert_eq!(dell.info.identity.kind, DeviceKind::Evdev);
     assert_eq!(dell.info.id_path.as_deref(), Some(DELL_ID_PATH));
     assert_eq!(dell.info.stable_id, DELL_ID_PATH);
     assert_eq!(dell.info.calibration, Some([0.0, -1.0, 1.0, 1.0, 0.0, 0.0]));
@@ -591,11 +605,11 @@ fn discovery_lists_touch_devices_with_udev_facts() {
     let err = ite_raw.probe_error.as_deref().unwrap();
     assert!(err.contains("permission denied"), "{err}");
     assert_eq!(
-        ite_raw.info.name,
+        ite_raw.info.identity.name,
         "ITE Tech. Inc. ITE Device(8595) Touchpad"
     );
     assert_eq!(
-        (ite_raw.info.vendor, ite_raw.info.product),
+        (ite_raw.info.identity.vendor, ite_raw.info.identity.product),
         (0x06cb, 0x2968)
     );
     assert_eq!(ite_raw.info.stable_id, "06cb:2968");
@@ -605,7 +619,8 @@ fn discovery_lists_touch_devices_with_udev_facts() {
 fn auto_picks_the_dell_canvas_through_evdev() {
     let (t, p, n) = standard_tree(true);
     let found = discover(t.root(), &p);
-    let pick = |sel: &Selector, pref| select(&found, sel, pref).map(|f| f.info.node.clone());
+    let pick =
+        |sel: &Selector, pref| select(&found, sel, pref).map(|f| f.info.identity.node.clone());
     // The hidraw interface declares more contacts (10 vs 5) but is the same device.
     assert_eq!(
         pick(&Selector::Auto, InterfacePreference::Any),
@@ -626,7 +641,8 @@ fn selection_by_name_ids_path_and_stable_id() {
     let (t, p, n) = standard_tree(true);
     let found = discover(t.root(), &p);
     let any = InterfacePreference::Any;
-    let pick = |sel: Selector, pref| select(&found, &sel, pref).map(|f| f.info.node.clone());
+    let pick =
+        |sel: Selector, pref| select(&found, &sel, pref).map(|f| f.info.identity.node.clone());
 
     assert_eq!(
         pick(Selector::Name("cooltouch".into()), any),
@@ -731,7 +747,7 @@ fn device_is_recognised_after_coming_back_as_another_node() {
         .unwrap()
         .info
         .clone();
-    assert_eq!(chosen.node, n.dell_evdev);
+    assert_eq!(chosen.identity.node, n.dell_evdev);
 
     // Unplug: event5 goes; plug back in: it comes back as event9 (minor 73) under a
     // new input number, with the same ID_PATH.
@@ -751,13 +767,13 @@ fn device_is_recognised_after_coming_back_as_another_node() {
     let after = discover(t.root(), &p);
     let back = after
         .iter()
-        .find(|f| f.info.kind == DeviceKind::Evdev && f.info.vendor == 0x2575)
+        .find(|f| f.info.identity.kind == DeviceKind::Evdev && f.info.identity.vendor == 0x2575)
         .unwrap();
-    assert_eq!(back.info.node, t.root().join("dev/input/event9"));
+    assert_eq!(back.info.identity.node, t.root().join("dev/input/event9"));
     assert!(recognise(&chosen, &back.info));
     assert!(matches(&back.info, &sticky_selector(&chosen)));
     // The hotplug path examines just the new node, with the same result.
-    let one = discover::discover_node(t.root(), &back.info.node, &p).unwrap();
+    let one = discover::discover_node(t.root(), &back.info.identity.node, &p).unwrap();
     assert_eq!(&one, back);
     assert!(discover::discover_node(t.root(), &n.keyboard, &p).is_none());
     assert!(discover::discover_node(t.root(), &t.root().join("dev/input/mouse0"), &p).is_none());
@@ -768,16 +784,22 @@ fn device_is_recognised_after_coming_back_as_another_node() {
         &Selector::VendorProduct("2575:0204".into())
     ));
     // Never by node number.
-    assert!(!matches(&back.info, &Selector::Path(chosen.node.clone())));
+    assert!(!matches(
+        &back.info,
+        &Selector::Path(chosen.identity.node.clone())
+    ));
     // The same physical device through hidraw is not "the same interface".
     let raw = after
         .iter()
-        .find(|f| f.info.kind == DeviceKind::Hidraw)
+        .find(|f| f.info.identity.kind == DeviceKind::Hidraw)
         .unwrap();
     assert!(!recognise(&chosen, &raw.info));
     assert!(discover::same_physical_device(back, raw));
     // And the other devices are not mistaken for it.
-    let ite = after.iter().find(|f| f.info.vendor == 0x06cb).unwrap();
+    let ite = after
+        .iter()
+        .find(|f| f.info.identity.vendor == 0x06cb)
+        .unwrap();
     assert!(!matches(&ite.info, &sticky_selector(&chosen)));
 }
 
@@ -794,7 +816,11 @@ fn without_udev_everything_is_processed_and_ids_come_from_usb_ids() {
     assert_eq!(found[2].info.stable_id, "2575:0204");
     // Still one physical device, still evdev.
     assert_eq!(
-        select(&found, &Selector::Auto, InterfacePreference::Any).map(|f| f.info.node.clone()),
+        select(&found, &Selector::Auto, InterfacePreference::Any).map(|f| f
+            .info
+            .identity
+            .node
+            .clone()),
         Ok(n.dell_evdev)
     );
 }

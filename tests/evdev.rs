@@ -693,8 +693,18 @@ fn device_info_from_capabilities() {
     assert_eq!((setup.protocol, setup.axes.slots), (MtProtocol::B, 5));
     let node = Path::new("/dev/input/event7");
     let info = device_info(node, &dell, &setup, None);
-    assert_eq!(info.name, "Advanced Silicon S.A. CoolTouch® System");
-    assert_eq!((info.bus, info.vendor, info.product), (3, 0x2575, 0x0204));
+    assert_eq!(
+        info.identity.name,
+        "Advanced Silicon S.A. CoolTouch® System"
+    );
+    assert_eq!(
+        (
+            info.identity.bus,
+            info.identity.vendor,
+            info.identity.product
+        ),
+        (3, 0x2575, 0x0204)
+    );
     assert_eq!(info.stable_id, "2575:0204");
     assert!(info.direct && info.id_path.is_none() && info.calibration.is_none());
     assert_eq!(info.surface.max_contacts, 5);
@@ -702,7 +712,7 @@ fn device_info_from_capabilities() {
     assert!((w - 32767.0 / 55.0).abs() < 1e-9 && (h - 32767.0 / 98.0).abs() < 1e-9);
     let info = device_info(node, &dell, &setup, Some(" SN-42 "));
     assert_eq!(
-        (info.serial.as_deref(), info.stable_id.as_str()),
+        (info.identity.serial.as_deref(), info.stable_id.as_str()),
         (Some("SN-42"), "2575:0204:SN-42")
     );
     // Resync queries tracking id and position only (no optional axes).
@@ -723,7 +733,10 @@ fn device_info_from_capabilities() {
         !info.direct,
         "old N-Trig descriptions carry no properties (P: 00)"
     );
-    assert_eq!((info.vendor, info.product), (0x1b96, 0x0001));
+    assert_eq!(
+        (info.identity.vendor, info.identity.product),
+        (0x1b96, 0x0001)
+    );
 
     let (atmel, _) = raw(None, "atmel-maxtouch.desc");
     let s = atmel.decoder_setup().unwrap();

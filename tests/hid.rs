@@ -411,8 +411,15 @@ fn device_info_from_sysfs_facts() {
         .unwrap();
     let node = Path::new("/dev/hidraw4");
     let (info, tc) = device_info(node, &u, &rdesc("actionstar_2101_1011")).unwrap();
-    assert_eq!(info.kind, DeviceKind::Hidraw);
-    assert_eq!((info.bus, info.vendor, info.product), (3, 0x2101, 0x1011));
+    assert_eq!(info.identity.kind, DeviceKind::Hidraw);
+    assert_eq!(
+        (
+            info.identity.bus,
+            info.identity.vendor,
+            info.identity.product
+        ),
+        (3, 0x2101, 0x1011)
+    );
     assert_eq!(info.stable_id, "2101:1011");
     assert!(info.direct);
     assert_eq!(info.surface.name, "ActionStar");

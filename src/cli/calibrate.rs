@@ -221,8 +221,8 @@ pub fn calibrate(
     let mut reader = env.open(&info)?;
     println!(
         "Calibrating {} ({}) for inputs[{index}].",
-        info.name,
-        info.node.display()
+        info.identity.name,
+        info.identity.node.display()
     );
     println!(
         "Touch each target on the table with one finger, hold it still for a moment, then lift.\n"

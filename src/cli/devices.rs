@@ -40,10 +40,14 @@ pub fn devices(cfg: &Config, json: bool, root: &Path) -> Result<()> {
                 v["probe_error"] = serde_json::json!(f.probe_error);
                 v["picked_by_inputs"] = serde_json::json!(picks
                     .iter()
-                    .filter(|(_, p)| p.as_ref().is_ok_and(|p| p.info.node == f.info.node))
+                    .filter(|(_, p)| p
+                        .as_ref()
+                        .is_ok_and(|p| p.info.identity.node == f.info.identity.node))
                     .map(|(i, _)| *i)
                     .collect::<Vec<_>>());
-                v["auto"] = serde_json::json!(auto.is_some_and(|a| a.info.node == f.info.node));
+                v["auto"] = serde_json::json!(
+                    auto.is_some_and(|a| a.info.identity.node == f.info.identity.node)
+                );
                 v
             })
             .collect();
@@ -59,18 +63,18 @@ pub fn devices(cfg: &Config, json: bool, root: &Path) -> Result<()> {
     }
     for f in &found {
         let i = &f.info;
-        let mark = if auto.is_some_and(|a| a.info.node == i.node) {
+        let mark = if auto.is_some_and(|a| a.info.identity.node == i.identity.node) {
             "*"
         } else {
             " "
         };
         println!(
             "{mark} {:<20} {:<6} {:04x}:{:04x}  {}",
-            i.node.display(),
-            i.kind.as_str(),
-            i.vendor,
-            i.product,
-            i.name
+            i.identity.node.display(),
+            i.identity.kind.as_str(),
+            i.identity.vendor,
+            i.identity.product,
+            i.identity.name
         );
         println!(
             "      id {}{}",
@@ -110,15 +114,18 @@ pub fn devices(cfg: &Config, json: bool, root: &Path) -> Result<()> {
     }
     println!();
     match auto {
-        Some(a) => println!("* = what select: Auto picks: {}", a.info.node.display()),
+        Some(a) => println!(
+            "* = what select: Auto picks: {}",
+            a.info.identity.node.display()
+        ),
         None => println!("select: Auto picks nothing here"),
     }
     for (i, p) in &picks {
         match p {
             Ok(f) => println!(
                 "inputs[{i}] of the config reads {} ({})",
-                f.info.node.display(),
-                f.info.name
+                f.info.identity.node.display(),
+                f.info.identity.name
             ),
             Err(e) => println!("inputs[{i}] of the config finds nothing: {e}"),
         }

@@ -196,9 +196,12 @@ pub fn record(a: RecordArgs) -> Result<()> {
                 .context("choosing the device to record (see `crowdtouch devices`)")?;
             let i = &f.info;
             (
-                i.node.clone(),
-                i.kind,
-                format!(" ({}, {:04x}:{:04x})", i.name, i.vendor, i.product),
+                i.identity.node.clone(),
+                i.identity.kind,
+                format!(
+                    " ({}, {:04x}:{:04x})",
+                    i.identity.name, i.identity.vendor, i.identity.product
+                ),
             )
         }
     };

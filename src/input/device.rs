@@ -27,9 +27,12 @@ impl DeviceKind {
     }
 }
 
-/// What discovery knows about a touch device.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct DeviceInfo {
+/// Who a device is: the interface and node it is read through, and what it says
+/// about itself. Sysfs tells it before a device is opened
+/// ([`SysfsFacts`](crate::input::discover::SysfsFacts)); a probe tells it again with the
+/// rest of [`DeviceInfo`].
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DeviceIdentity {
     /// Interface.
     pub kind: DeviceKind,
     /// Device node.
@@ -42,8 +45,18 @@ pub struct DeviceInfo {
     pub vendor: u16,
     /// USB/HID product id.
     pub product: u16,
-    /// Serial number or unique name, when the device has one.
+    /// Serial number or unique name (`uniq` / `HID_UNIQ`), when the device has one.
     pub serial: Option<String>,
+}
+
+/// What discovery knows about a touch device.
+///
+/// Serialised flat: the identity's fields come first, as if they were this struct's.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DeviceInfo {
+    /// Interface, node, name, ids and serial.
+    #[serde(flatten)]
+    pub identity: DeviceIdentity,
     /// udev `ID_PATH`, when udev has processed the device.
     pub id_path: Option<String>,
     /// Identity that survives re-plugging and renumbering: `ID_PATH`, else

@@ -19,6 +19,6 @@ mod device;
 mod sink;
 mod surface;
 
-pub use device::{DeviceInfo, DeviceKind, DeviceReader, Error};
+pub use device::{DeviceIdentity, DeviceInfo, DeviceKind, DeviceReader, Error};
 pub use sink::{reader_timeout_ms, FrameSink, FLUSH_RETRY_US, STOP_CHECK_US};
 pub use surface::{AxisRange, SurfaceInfo};

@@ -497,9 +497,9 @@ impl Start {
                         let ev = Event::Device {
                             input,
                             state: n.state,
-                            name: info.map(|i| i.name.clone()).unwrap_or_default(),
+                            name: info.map(|i| i.identity.name.clone()).unwrap_or_default(),
                             node: info
-                                .map(|i| i.node.display().to_string())
+                                .map(|i| i.identity.node.display().to_string())
                                 .unwrap_or_default(),
                             stable_id: info.map(|i| i.stable_id.clone()).unwrap_or_default(),
                             message: n.message,

@@ -177,7 +177,10 @@ pub fn build_transform(
         Ok(t) => t,
         Err(e) => {
             // The config was validated; a bad udev matrix is the likely cause.
-            log::error!("{}: calibration not applied: {e}", info.node.display());
+            log::error!(
+                "{}: calibration not applied: {e}",
+                info.identity.node.display()
+            );
             DeviceTransform::identity()
         }
     }
@@ -250,11 +253,11 @@ pub fn supervise(
                             last_failure = None;
                             log::info!(
                                 "reading {} ({} {}, {:04x}:{:04x}, id {})",
-                                info.name,
-                                info.kind.as_str(),
-                                info.node.display(),
-                                info.vendor,
-                                info.product,
+                                info.identity.name,
+                                info.identity.kind.as_str(),
+                                info.identity.node.display(),
+                                info.identity.vendor,
+                                info.identity.product,
                                 info.stable_id
                             );
                             notify(DeviceNotice {
@@ -394,23 +397,24 @@ impl DeviceEnv for SystemEnv {
             return Err(e.clone());
         }
         if let Some(w) = &mut self.watcher {
-            w.wait_ready(&f.info.node, &self.udev, READY_TIMEOUT)
+            w.wait_ready(&f.info.identity.node, &self.udev, READY_TIMEOUT)
                 .map_err(|e| e.to_string())?;
         }
         Ok(f.info.clone())
     }
 
     fn open(&mut self, info: &DeviceInfo) -> Result<Box<dyn DeviceReader>, crate::input::Error> {
-        match info.kind {
+        match info.identity.kind {
             crate::input::DeviceKind::Evdev => crate::input::evdev::EvdevReader::open(
-                &info.node,
+                &info.identity.node,
                 &crate::input::evdev::EvdevOptions { grab: self.grab },
             )
             .map(|r| Box::new(r) as Box<dyn DeviceReader>),
-            crate::input::DeviceKind::Hidraw => {
-                crate::input::hid::HidReader::open(&info.node, &crate::input::hid::HidOptions {})
-                    .map(|r| Box::new(r) as Box<dyn DeviceReader>)
-            }
+            crate::input::DeviceKind::Hidraw => crate::input::hid::HidReader::open(
+                &info.identity.node,
+                &crate::input::hid::HidOptions {},
+            )
+            .map(|r| Box::new(r) as Box<dyn DeviceReader>),
         }
     }
 
@@ -440,7 +444,7 @@ impl DeviceEnv for SystemEnv {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::input::{AxisRange, DeviceKind, SurfaceInfo};
+    use crate::input::{AxisRange, DeviceIdentity, DeviceKind, SurfaceInfo};
     use crate::vocab::{Contact, ContactFlags, ContactId};
     use std::collections::VecDeque;
     use std::path::PathBuf;
@@ -448,13 +452,15 @@ mod tests {
 
     fn info(node: &str) -> DeviceInfo {
         DeviceInfo {
-            kind: DeviceKind::Evdev,
-            node: PathBuf::from(node),
-            name: "Test Table".into(),
-            bus: 3,
-            vendor: 0x2575,
-            product: 0x0204,
-            serial: None,
+            identity: DeviceIdentity {
+                kind: DeviceKind::Evdev,
+                node: PathBuf::from(node),
+                name: "Test Table".into(),
+                bus: 3,
+                vendor: 0x2575,
+                product: 0x0204,
+                serial: None,
+            },
             id_path: Some("pci-0000:00:14.0-usb-0:2:1.0".into()),
             stable_id: "pci-0000:00:14.0-usb-0:2:1.0".into(),
             surface: SurfaceInfo {
@@ -656,7 +662,7 @@ mod tests {
             ]
         );
         assert_eq!(
-            notices[3].info.as_ref().unwrap().node,
+            notices[3].info.as_ref().unwrap().identity.node,
             PathBuf::from("/dev/input/event7")
         );
         // After the first attach, the search is for the same physical device.

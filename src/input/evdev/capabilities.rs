@@ -1,38 +1,21 @@
 //! What an evdev device declares: name, input id, property bits, a code bitmask per
 //! event type, and the absinfo of each absolute axis. It comes from a device
-//! ([`capabilities`](super::capabilities)) or from a parsed evemu file
+//! ([`capabilities`](super::capabilities())) or from a parsed evemu file
 //! ([`read_evemu_raw`](crate::input::recording::read_evemu_raw)), and it decides how
 //! the device is decoded ([`EvdevCapabilities::decoder_setup`]).
 
-#[cfg(test)]
-use super::mt::EV_MSC;
-use super::mt::{
-    MtAxes, MtProtocol, ABS_MAX, ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_PRESSURE,
-    ABS_MT_SLOT, ABS_MT_TOUCH_MAJOR, ABS_MT_TOUCH_MINOR, ABS_PRESSURE, ABS_X, ABS_Y, BTN_TOUCH,
-    EV_ABS, EV_KEY, EV_SYN,
+use super::codes::{
+    ABS_CNT, ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_PRESSURE, ABS_MT_SLOT,
+    ABS_MT_TOUCH_MAJOR, ABS_MT_TOUCH_MINOR, ABS_PRESSURE, ABS_X, ABS_Y, BTN_TOUCH, EV_ABS, EV_CNT,
+    EV_KEY, EV_SYN, INPUT_PROP_DIRECT,
 };
+#[cfg(test)]
+use super::codes::{EV_FF, EV_MSC};
+use super::mt::{MtAxes, MtProtocol};
 use crate::input::{AxisRange, SurfaceInfo};
 use crate::vocab::MAX_CONTACTS;
 use std::fmt;
 
-/// Event type: switches.
-pub const EV_SW: u16 = 0x05;
-/// Event type: LEDs.
-pub const EV_LED: u16 = 0x11;
-/// Event type: sounds.
-pub const EV_SND: u16 = 0x12;
-/// Event type: key repeat.
-pub const EV_REP: u16 = 0x14;
-/// Event type: force feedback.
-pub const EV_FF: u16 = 0x15;
-/// Number of event types (`EV_CNT`).
-pub const EV_CNT: usize = 0x20;
-/// Number of absolute axis codes (`ABS_CNT`).
-pub const ABS_CNT: usize = ABS_MAX as usize + 1;
-/// Property bit: the device moves a pointer (touchpads).
-pub const INPUT_PROP_POINTER: u16 = 0x00;
-/// Property bit: the device is mapped onto a screen (touchscreens).
-pub const INPUT_PROP_DIRECT: u16 = 0x01;
 /// Bytes of the property bitmask kept (64 properties; the kernel defines 32).
 pub const PROP_BYTES: usize = 8;
 /// Bytes of each event type's code bitmask kept (`KEY_CNT / 8`, the largest).

@@ -25,12 +25,13 @@
 //! [`MtSlotState`].
 
 use super::capabilities::{AbsAxisInfo, DecoderSetup, EvdevCapabilities};
-use super::mt::{
-    MtDecoder, MtProtocol, MtSlotState, RawEvent, ABS_MT_POSITION_X, ABS_MT_POSITION_Y,
-    ABS_MT_PRESSURE, ABS_MT_SLOT, ABS_MT_TOOL_TYPE, ABS_MT_TOUCH_MAJOR, ABS_MT_TOUCH_MINOR,
-    ABS_MT_TRACKING_ID, ABS_PRESSURE, ABS_X, ABS_Y, BTN_TOUCH, EV_ABS, MAX_SLOTS,
+use super::codes::{
+    ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_PRESSURE, ABS_MT_SLOT, ABS_MT_TOOL_TYPE,
+    ABS_MT_TOUCH_MAJOR, ABS_MT_TOUCH_MINOR, ABS_MT_TRACKING_ID, ABS_PRESSURE, ABS_X, ABS_Y,
+    BTN_TOUCH, EV_ABS,
 };
-use crate::input::{DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink};
+use super::mt::{MtDecoder, MtProtocol, MtSlotState, RawEvent, MAX_SLOTS};
+use crate::input::{DeviceIdentity, DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink};
 use crate::rt::monotonic_now;
 use crate::sys;
 use crate::vocab::Micros;
@@ -146,25 +147,25 @@ pub fn capabilities(dev: &RawDevice) -> io::Result<EvdevCapabilities> {
         }
     };
     if let Some(s) = dev.supported_keys() {
-        set(super::mt::EV_KEY, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_KEY, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_relative_axes() {
-        set(super::mt::EV_REL, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_REL, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.misc_properties() {
-        set(super::mt::EV_MSC, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_MSC, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_switches() {
-        set(super::capabilities::EV_SW, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_SW, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_leds() {
-        set(super::capabilities::EV_LED, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_LED, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_sounds() {
-        set(super::capabilities::EV_SND, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_SND, &mut s.iter().map(|k| k.0));
     }
     if let Some(s) = dev.supported_ff() {
-        set(super::capabilities::EV_FF, &mut s.iter().map(|k| k.0));
+        set(super::codes::EV_FF, &mut s.iter().map(|k| k.0));
     }
     for (code, a) in dev.get_absinfo()? {
         c.set_abs(
@@ -197,13 +198,15 @@ pub fn device_info(
         .filter(|s| !s.is_empty())
         .map(str::to_string);
     DeviceInfo {
-        kind: DeviceKind::Evdev,
-        node: node.to_path_buf(),
-        name: caps.name.clone(),
-        bus: caps.bus,
-        vendor: caps.vendor,
-        product: caps.product,
-        serial: serial.clone(),
+        identity: DeviceIdentity {
+            kind: DeviceKind::Evdev,
+            node: node.to_path_buf(),
+            name: caps.name.clone(),
+            bus: caps.bus,
+            vendor: caps.vendor,
+            product: caps.product,
+            serial: serial.clone(),
+        },
         id_path: None,
         stable_id: DeviceInfo::make_stable_id(None, caps.vendor, caps.product, serial.as_deref()),
         surface: caps.surface(setup),
@@ -399,9 +402,9 @@ impl EvdevReader {
         if self.grab_pending && self.decoder.active_contacts() == 0 {
             self.dev
                 .grab()
-                .map_err(|e| Error::from_io(&self.info.node, "EVIOCGRAB", e))?;
+                .map_err(|e| Error::from_io(&self.info.identity.node, "EVIOCGRAB", e))?;
             self.grab_pending = false;
-            log::debug!("{}: grabbed (exclusive)", self.info.node.display());
+            log::debug!("{}: grabbed (exclusive)", self.info.identity.node.display());
         }
         Ok(())
     }
@@ -474,7 +477,7 @@ impl EvdevReader {
             "{}: the kernel dropped input events (SYN_DROPPED, {n} time(s) since open): this \
              reader fell behind (system overloaded, or the daemon was stopped); touches \
              resynchronised from the device's slot state",
-            self.info.node.display()
+            self.info.identity.node.display()
         );
     }
 
@@ -489,7 +492,7 @@ impl EvdevReader {
         match self.query_state() {
             Ok(()) => Ok(self.decoder.resync(t, &self.state, &mut self.frame)),
             Err(e) if e.raw_os_error() == Some(libc::ENODEV) => Err(Error::Unplugged {
-                node: self.info.node.clone(),
+                node: self.info.identity.node.clone(),
             }),
             Err(_) => {
                 self.resync_failures += 1;
@@ -509,7 +512,7 @@ impl DeviceReader for EvdevReader {
             self.initial = false;
             sink.push(&self.frame);
         }
-        let node: PathBuf = self.info.node.clone();
+        let node: PathBuf = self.info.identity.node.clone();
         while !stop.load(Ordering::Relaxed) {
             let timeout_ms = crate::input::reader_timeout_ms(sink);
             let n = wait_read(&self.dev, &node, &mut self.buf, timeout_ms)?;

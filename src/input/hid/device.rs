@@ -30,7 +30,9 @@
 
 use super::descriptor::{touch_collections, Application, FeatureSetting, TouchCollection};
 use super::report::HidDecoder;
-use crate::input::{DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink, STOP_CHECK_US};
+use crate::input::{
+    DeviceIdentity, DeviceInfo, DeviceKind, DeviceReader, Error, FrameSink, STOP_CHECK_US,
+};
 use crate::rt::monotonic_now;
 use crate::vocab::Micros;
 use crate::vocab::TouchFrame;
@@ -123,15 +125,17 @@ pub fn device_info(
     } else {
         uevent.name.clone()
     };
+    let surface = tc.surface(&name);
     let info = DeviceInfo {
-        kind: DeviceKind::Hidraw,
-        node: node.to_path_buf(),
-        surface: tc.surface(&name),
-        name,
-        bus: uevent.bus,
-        vendor: uevent.vendor,
-        product: uevent.product,
-        serial: uevent.uniq.clone(),
+        identity: DeviceIdentity {
+            kind: DeviceKind::Hidraw,
+            node: node.to_path_buf(),
+            name,
+            bus: uevent.bus,
+            vendor: uevent.vendor,
+            product: uevent.product,
+            serial: uevent.uniq.clone(),
+        },
         id_path: None,
         stable_id: DeviceInfo::make_stable_id(
             None,
@@ -139,6 +143,7 @@ pub fn device_info(
             uevent.product,
             uevent.uniq.as_deref(),
         ),
+        surface,
         direct: tc.application == Application::TouchScreen,
         calibration: None,
     };
@@ -198,26 +203,26 @@ pub fn enumerate() -> Vec<DeviceInfo> {
             continue;
         };
         let node = PathBuf::from(path);
-        if out.iter().any(|i| i.node == node) {
+        if out.iter().any(|i| i.identity.node == node) {
             continue;
         }
         match probe(&node) {
             Ok(mut info) => {
                 // hidapi's strings where sysfs had none.
-                if info.serial.is_none() {
-                    info.serial = d
+                if info.identity.serial.is_none() {
+                    info.identity.serial = d
                         .serial_number()
                         .filter(|s| !s.is_empty())
                         .map(str::to_string);
                     info.stable_id = DeviceInfo::make_stable_id(
                         None,
-                        info.vendor,
-                        info.product,
-                        info.serial.as_deref(),
+                        info.identity.vendor,
+                        info.identity.product,
+                        info.identity.serial.as_deref(),
                     );
                 }
-                if info.bus == 0 {
-                    info.bus = bus_number(d.bus_type());
+                if info.identity.bus == 0 {
+                    info.identity.bus = bus_number(d.bus_type());
                 }
                 out.push(info);
             }
@@ -345,11 +350,11 @@ impl HidReader {
             .map_err(|e| hid_error(node, "read report descriptor", e))?;
         rdesc.truncate(n);
         let uevent = HidUevent {
-            bus: info.bus,
-            vendor: info.vendor,
-            product: info.product,
-            name: info.name.clone(),
-            uniq: info.serial.clone(),
+            bus: info.identity.bus,
+            vendor: info.identity.vendor,
+            product: info.identity.product,
+            name: info.identity.name.clone(),
+            uniq: info.identity.serial.clone(),
         };
         let (fresh, tc) = device_info(node, &uevent, &rdesc)?;
         info.surface = fresh.surface;
@@ -394,7 +399,7 @@ impl DeviceReader for HidReader {
             let n = self
                 .device
                 .read_timeout(&mut self.buf, timeout_ms)
-                .map_err(|e| hid_error(&self.info.node, "read", e))?;
+                .map_err(|e| hid_error(&self.info.identity.node, "read", e))?;
             if n == 0 {
                 continue;
             }

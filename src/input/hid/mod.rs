@@ -1,7 +1,7 @@
 //! Raw HID digitizers: report descriptors, input reports, hidraw devices.
 //!
 //! A HID touch device describes its reports in a *report descriptor*; this module
-//! turns that description into a layout of bit fields (`descriptor.rs`:
+//! turns that description into a layout of bit fields (`descriptor/`:
 //! [`touch_collections`]), decodes input reports with it into
 //! [`TouchFrame`](crate::vocab::TouchFrame)s (`report.rs`: [`HidDecoder`]) and opens
 //! hidraw nodes through hidapi (`device.rs`: [`HidReader`]). Everything but
@@ -30,8 +30,8 @@
 //! # Where `hidreport` falls short
 //!
 //! Descriptors are parsed by the `hidreport` 0.6 crate. Three things in it need
-//! help, done in `descriptor.rs` before the bytes reach it (with `hidreport`'s own
-//! item tokenizer, not a second parser):
+//! help, done in `descriptor/prescan.rs` before the bytes reach it (with
+//! `hidreport`'s own item tokenizer, not a second parser):
 //!
 //! * it panics on some malformed input (a Usage with no Usage Page in effect:
 //!   `compile_usages` calls `expect`; `Unit::system` on a unit system nibble above 4)
@@ -46,7 +46,7 @@
 //! * `CollectionId` has no accessor for the collection's byte offset; it is read
 //!   from its `Debug` form, for messages only.
 //!
-//! Units are decoded here from the raw 32-bit value ([`descriptor::unit_name`]), never
+//! Units are decoded here from the raw 32-bit value ([`unit_name`]), never
 //! through `hidreport::Unit`.
 
 mod descriptor;
