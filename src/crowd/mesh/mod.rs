@@ -4,15 +4,16 @@
 //! mean value coordinates for area controls ([`mean_value_coordinates`]).
 
 mod arap;
+mod goals;
 mod mvc;
 mod trimesh;
 
 pub use arap::{Arap, ArapBuffer, ArapError, Constraint, ANCHOR_WEIGHT, MAX_CONSTRAINT_WEIGHT};
+pub use goals::{
+    goal_positions, sample_goals, GoalSample, GOAL_CANDIDATES_PER_SAMPLE, GOAL_LLOYD_ITERATIONS,
+};
 pub use mvc::{
     convex_hull, mean_value_coordinates, point_in_convex_polygon, MvcError, MVC_EDGE_EPS,
     MVC_VERTEX_EPS,
 };
-pub use trimesh::{
-    distance_to_mesh, goal_positions, nearest_vertex, sample_goals, GoalSample, MeshError, TriMesh,
-    GOAL_CANDIDATES_PER_SAMPLE, GOAL_LLOYD_ITERATIONS,
-};
+pub use trimesh::{distance_to_mesh, nearest_vertex, MeshError, TriMesh};
