@@ -90,8 +90,9 @@ impl Ord for HeapEntry {
 ///
 /// # Complexity
 /// About O(K n (log(K n) + L)) time for `L` Lloyd sweeps and O(K n) memory, with bucket
-/// grids for the nearest-sample queries and a lazy max-heap for the selection (about
-/// 30–45 ms for n = 1000 in release on a loaded 2-core machine). Not for the per-frame path.
+/// grids for the nearest-sample queries and a lazy max-heap for the selection (timed
+/// inside `formation_switch/prepare` of `benches/control_tick.rs`). Not for the
+/// per-frame path.
 ///
 /// # Errors
 /// None. Deterministic for given inputs. A mesh with no triangles gives an empty vector;
