@@ -24,9 +24,11 @@
 //! * `dense` — Dijkstra over full rows (dense strategy, and the safety net);
 //! * `heaps` — the searches' priority queues;
 //! * `error` — [`AssignError`];
-//! * `least_effort`, `assigner` — [`LeastEffort`] and [`Assigner`].
+//! * `least_effort` — [`LeastEffort`], the cost of formation-transform eq. 3;
+//! * `agents_to_goals` — [`Assigner`]: agents to goal points from their positions,
+//!   warm-started from call to call (what the controllers and the worker run).
 
-mod assigner;
+mod agents_to_goals;
 mod auction;
 mod augment;
 mod candidates;
@@ -41,7 +43,7 @@ mod solver;
 #[cfg(test)]
 mod tests;
 
-pub use assigner::Assigner;
+pub use agents_to_goals::Assigner;
 pub use costs::{CostMatrix, CostProvider, CostSource, Distance, SquaredDistance};
 pub use error::AssignError;
 pub use least_effort::{mean_edge_lengths, LeastEffort};
