@@ -138,7 +138,9 @@ struct OutputQueue {
 }
 
 /// The sending side of every output's queue. Cloned into every thread that publishes
-/// (control, supervisor, device threads); sending never blocks and never allocates.
+/// (control, supervisor, device threads). Sending never blocks; snapshots, meshes,
+/// events and stats are `Arc`s, so handing one to several outputs allocates nothing
+/// (a command reply is copied per output).
 #[derive(Clone)]
 pub struct Outputs {
     queues: Arc<[OutputQueue]>,
