@@ -1,7 +1,7 @@
 //! What goes wrong reading a recording, and what a reader does about a bad frame.
 
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// What a reader does with a bad frame.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Default)]
@@ -99,4 +99,15 @@ pub enum RecordingError {
         /// File.
         path: PathBuf,
     },
+}
+
+impl RecordingError {
+    /// A [`RecordingError::Parse`] at `line` of `path`: what every reader reports.
+    pub fn parse(path: &Path, line: usize, message: impl Into<String>) -> RecordingError {
+        RecordingError::Parse {
+            path: path.to_path_buf(),
+            line,
+            message: message.into(),
+        }
+    }
 }

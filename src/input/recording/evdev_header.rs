@@ -50,11 +50,7 @@ pub(super) struct HeaderCtx<'a> {
 
 impl HeaderCtx<'_> {
     pub(super) fn err(&self, line: usize, message: impl fmt::Display) -> RecordingError {
-        RecordingError::Parse {
-            path: self.path.to_path_buf(),
-            line,
-            message: format!("{}{message}", self.prefix),
-        }
+        RecordingError::parse(self.path, line, format!("{}{message}", self.prefix))
     }
 }
 

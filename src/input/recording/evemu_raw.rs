@@ -38,11 +38,7 @@ pub fn read_evemu_raw(
         if l.is_empty() || l.starts_with('#') {
             continue;
         }
-        let perr = |message: String| RecordingError::Parse {
-            path: name.to_path_buf(),
-            line,
-            message,
-        };
+        let perr = |message: String| RecordingError::parse(name, line, message);
         if let Some(rest) = l.strip_prefix("E:") {
             let (time, ev_type, code, value) = parse_evemu_event(rest).map_err(perr)?;
             events.push(RawEvent {

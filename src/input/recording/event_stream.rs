@@ -75,11 +75,7 @@ impl<'a> EventStream<'a> {
         closes_frame: bool,
     ) -> Result<(), RecordingError> {
         match self.on_bad {
-            OnBadFrame::Stop => Err(RecordingError::Parse {
-                path: self.path.to_path_buf(),
-                line,
-                message,
-            }),
+            OnBadFrame::Stop => Err(RecordingError::parse(self.path, line, message)),
             OnBadFrame::Skip => {
                 self.warnings
                     .push(line, format!("{message}; frame skipped"));

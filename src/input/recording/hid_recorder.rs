@@ -129,11 +129,7 @@ pub fn parse_hid_recorder(
     path: &Path,
     on_bad: OnBadFrame,
 ) -> Result<HidRecorderLog, RecordingError> {
-    let perr = |line: usize, message: String| RecordingError::Parse {
-        path: path.to_path_buf(),
-        line,
-        message,
-    };
+    let perr = |line: usize, message: String| RecordingError::parse(path, line, message);
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut issues = Warnings::default();
     let mut log = HidRecorderLog {
@@ -270,11 +266,7 @@ pub fn decode_hid_recording(
     path: &Path,
     on_bad: OnBadFrame,
 ) -> Result<Recording, RecordingError> {
-    let perr = |line: usize, message: String| RecordingError::Parse {
-        path: path.to_path_buf(),
-        line,
-        message,
-    };
+    let perr = |line: usize, message: String| RecordingError::parse(path, line, message);
     let collections = touch_collections(&log.descriptor).map_err(|e| {
         perr(
             log.descriptor_line,

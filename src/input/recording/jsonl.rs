@@ -278,11 +278,7 @@ pub(super) fn parse_jsonl(
     path: &Path,
     on_bad: OnBadFrame,
 ) -> Result<Recording, RecordingError> {
-    let perr = |line: usize, message: String| RecordingError::Parse {
-        path: path.to_path_buf(),
-        line,
-        message,
-    };
+    let perr = |line: usize, message: String| RecordingError::parse(path, line, message);
     let mut lines = text
         .lines()
         .enumerate()

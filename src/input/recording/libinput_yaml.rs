@@ -142,11 +142,7 @@ pub(super) fn parse_libinput_yaml(
     path: &Path,
     on_bad: OnBadFrame,
 ) -> Result<Recording, RecordingError> {
-    let perr = |line: usize, message: String| RecordingError::Parse {
-        path: path.to_path_buf(),
-        line,
-        message,
-    };
+    let perr = |line: usize, message: String| RecordingError::parse(path, line, message);
     check_yaml_depth(text).map_err(|(l, m)| perr(l, m))?;
     let mut tree = TreeBuilder::default();
     // yaml-rust2 is third-party code: a panic on some odd input must not
@@ -176,10 +172,8 @@ pub(super) fn parse_libinput_yaml(
         what: &str,
         path: &Path,
     ) -> Result<&'n Node, RecordingError> {
-        parent.get(key).ok_or_else(|| RecordingError::Parse {
-            path: path.to_path_buf(),
-            line: parent.line(),
-            message: format!("missing field `{what}`"),
+        parent.get(key).ok_or_else(|| {
+            RecordingError::parse(path, parent.line(), format!("missing field `{what}`"))
         })
     }
     let version = field(&root, "version", "version", path)?;

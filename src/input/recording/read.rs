@@ -55,11 +55,8 @@ fn read_capped(path: &Path) -> Result<String, RecordingError> {
     }
     String::from_utf8(bytes).map_err(|e| {
         let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-        RecordingError::Parse {
-            path: path.to_path_buf(),
-            line: 1 + good.iter().filter(|&&b| b == b'\n').count(),
-            message: "the file is not UTF-8 text".to_string(),
-        }
+        let line = 1 + good.iter().filter(|&&b| b == b'\n').count();
+        RecordingError::parse(path, line, "the file is not UTF-8 text")
     })
 }
 
