@@ -5,7 +5,7 @@ use crate::vocab::TouchFrame;
 /// Where a source puts its frames: the bounded queue to the control thread.
 ///
 /// `push` never blocks and never allocates; the implementation decides what
-/// happens when the queue is full (see `pipeline::FrameQueue`).
+/// happens when the queue is full (see `pipeline::FrameQueue`, `src/pipeline/queue.rs`).
 pub trait FrameSink {
     /// Hands one frame on.
     fn push(&mut self, frame: &TouchFrame);

@@ -20,17 +20,17 @@ use super::Outgoing;
 use crate::vocab::CommandRequest;
 use crossbeam_channel::{bounded, Receiver, Sender, TrySendError};
 use hdrhistogram::Histogram;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 /// What happens to a message that finds an output's queue full.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub enum Overflow {
-    /// The new message is dropped and counted. For outputs that keep their own
+    /// The new message is dropped ([`Outputs::send`] says so). For outputs that keep their own
     /// per-client queues and drop policy behind a large queue (the socket): the queue
     /// only fills when the output's thread itself has stalled.
     DropNewest,
-    /// The oldest queued message is dropped (and counted) to make room. For outputs
+    /// The oldest queued message is dropped to make room ([`Outputs::send`] says so). For outputs
     /// that only care about the newest state (a UDP stream of frames).
     DropOldest,
 }
@@ -113,10 +113,8 @@ impl OutputSet {
             // thread blocks on its own end. A full queue drops by policy.overflow.
             let (tx, rx) = bounded::<Outgoing>(policy.capacity.max(1));
             queues.push(OutputQueue {
-                name: o.name(),
                 tx,
                 oldest: (policy.overflow == Overflow::DropOldest).then(|| rx.clone()),
-                dropped: AtomicU64::new(0),
             });
             running.push((o, rx));
         }
@@ -130,11 +128,9 @@ impl OutputSet {
 }
 
 struct OutputQueue {
-    name: &'static str,
     tx: Sender<Outgoing>,
     /// With [`Overflow::DropOldest`]: a receiving end to take the oldest message off.
     oldest: Option<Receiver<Outgoing>>,
-    dropped: AtomicU64,
 }
 
 /// The sending side of every output's queue. Cloned into every thread that publishes
@@ -161,18 +157,6 @@ impl Outputs {
         dropped += usize::from(!last.push(m));
         dropped
     }
-
-    /// Messages each output's queue dropped since start, by output name.
-    pub fn dropped(&self) -> impl Iterator<Item = (&'static str, u64)> + '_ {
-        self.queues
-            .iter()
-            .map(|q| (q.name, q.dropped.load(Ordering::Relaxed)))
-    }
-
-    /// Whether no output is registered.
-    pub fn is_empty(&self) -> bool {
-        self.queues.is_empty()
-    }
 }
 
 impl OutputQueue {
@@ -182,14 +166,11 @@ impl OutputQueue {
             Ok(()) => true,
             Err(TrySendError::Disconnected(_)) => true,
             Err(TrySendError::Full(m)) => {
-                self.dropped.fetch_add(1, Ordering::Relaxed);
                 if let Some(rx) = &self.oldest {
                     // Make room: the oldest goes, the newest is queued (another sender
                     // may take the room first; then this one is dropped too).
                     let _ = rx.try_recv();
-                    if self.tx.try_send(m).is_err() {
-                        self.dropped.fetch_add(1, Ordering::Relaxed);
-                    }
+                    let _ = self.tx.try_send(m);
                 }
                 false
             }
@@ -308,8 +289,6 @@ mod tests {
             "drop-oldest keeps the last"
         );
         assert_eq!(seqs(&running[2].1), vec![1, 2, 3, 4, 5]);
-        let counts: Vec<_> = out.dropped().collect();
-        assert_eq!(counts, vec![("newest", 3), ("oldest", 3), ("roomy", 0)]);
     }
 
     #[test]
