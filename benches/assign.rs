@@ -10,10 +10,14 @@
 //! `assign_cold_points/*` and `assign_warm_points/alternating/1000` solve the same
 //! instances from the positions (`PointCosts`: costs computed on demand, candidate
 //! lists from the spatial index, no matrix); the answers are identical.
+//!
+//! `assign_layout_cold/<layout>/1000` and `assign_layout_warm/<layout>/1000` run the
+//! controllers' `Assigner` on the hard layouts of `crowd::assign::Layout` (a crowd
+//! pinched, stretched, in a corner, dragged off its formation).
 
 use criterion::{black_box, criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion};
 use crowdtouch::crowd::assign::{
-    CostMatrix, CostProvider, PointCosts, PointMetric, Solver, SquaredDistance,
+    Assigner, CostMatrix, CostProvider, Layout, PointCosts, PointMetric, Solver, SquaredDistance,
 };
 use crowdtouch::geom::Vec2;
 use crowdtouch::rng::SplitMix64;
@@ -143,6 +147,59 @@ fn assign_warm(cr: &mut Criterion) {
     g.finish();
 }
 
+/// What the controllers run (`Assigner`: the positions mapped to alike spreads, then
+/// the geometric fast path) on every layout at N = 1,000: cold solves of one
+/// instance, and warm solves alternating between it and a copy whose goals moved by
+/// up to 2 % of their width and height.
+fn assign_layouts(cr: &mut Criterion) {
+    let n = 1000;
+    let mut cold = cr.benchmark_group("assign_layout_cold");
+    cold.sample_size(10);
+    for layout in Layout::ALL {
+        let (agents, goals) = layout.instance(&mut SplitMix64::new(0xC0FFEE ^ n as u64), n);
+        let mut a = Assigner::new(PointMetric::Squared);
+        let mut goal_of = Vec::with_capacity(n);
+        cold.bench_function(BenchmarkId::new(layout.name(), n), |b| {
+            b.iter(|| {
+                a.forget();
+                a.solve(black_box(&agents), black_box(&goals), &mut goal_of)
+                    .expect("feasible");
+                black_box(goal_of.len())
+            })
+        });
+    }
+    cold.finish();
+    let mut warm = cr.benchmark_group("assign_layout_warm");
+    warm.sample_size(20);
+    for layout in Layout::ALL {
+        let (agents, g0) = layout.instance(&mut SplitMix64::new(0xC0FFEE ^ n as u64), n);
+        let step = 0.04 * layout.goal_extent();
+        let mut rng = SplitMix64::new(0xBEEF);
+        let g1: Vec<Vec2> = g0
+            .iter()
+            .map(|p| {
+                let dx = step.x * (rng.unit() - 0.5);
+                let dy = step.y * (rng.unit() - 0.5);
+                Vec2::new(p.x + dx, p.y + dy)
+            })
+            .collect();
+        let mut a = Assigner::new(PointMetric::Squared);
+        let mut goal_of = Vec::with_capacity(n);
+        a.solve(&agents, &g0, &mut goal_of).expect("feasible");
+        let mut flip = false;
+        warm.bench_function(BenchmarkId::new(layout.name(), n), |b| {
+            b.iter(|| {
+                flip = !flip;
+                let goals = if flip { &g1 } else { &g0 };
+                a.solve(black_box(&agents), black_box(goals), &mut goal_of)
+                    .expect("feasible");
+                black_box(goal_of.len())
+            })
+        });
+    }
+    warm.finish();
+}
+
 fn pathfinding_kuhn_munkres(cr: &mut Criterion) {
     let mut g = cr.benchmark_group("pathfinding_kuhn_munkres");
     g.sample_size(10);
@@ -171,6 +228,7 @@ criterion_group!(
     assign_warm,
     assign_cold_points,
     assign_warm_points,
+    assign_layouts,
     pathfinding_kuhn_munkres
 );
 criterion_main!(benches);

@@ -16,6 +16,9 @@ Usage:
     python3 benches/scipy_lsa.py 1000 2000 5000      # generate and time (best of --repeats)
     python3 benches/scipy_lsa.py --dump FILE          # time the frames written by
                                                       # `crowdtouch bench assign --dump FILE`
+                                                      # and check crowdtouch's answers
+                                                      # against scipy's optimum (exit 1 if
+                                                      # any total differs by > 1e-9)
 
 Needs numpy and scipy (not needed by CI or the Rust build).
 """
@@ -87,14 +90,24 @@ def main():
     if args.dump:
         with open(args.dump) as f:
             inst = json.load(f)
-        times = []
+        times, worst, checked = [], 0.0, 0
         for fr in inst["frames"]:
             c = cost_matrix(np, fr["agents"], fr["goals"])
-            t, _ = time_lsa(lsa, c, 1)
+            t, total = time_lsa(lsa, c, 1)
             times.append(t * 1e3)
+            if "goal_of" in fr:
+                # crowdtouch's answer, costed here: must equal scipy's optimum.
+                ours = c[np.arange(len(fr["goal_of"])), fr["goal_of"]].sum()
+                worst = max(worst, abs(ours - total) / max(total, 1e-300))
+                checked += 1
         times.sort()
-        print(f"scipy linear_sum_assignment n={inst['n']} frames={len(times)}: "
-              f"p50 {times[len(times) // 2]:.3f} ms max {times[-1]:.3f} ms (cold solves)")
+        print(f"scipy linear_sum_assignment n={inst['n']} layout={inst.get('layout', 'uniform')} "
+              f"frames={len(times)}: p50 {times[len(times) // 2]:.3f} ms max {times[-1]:.3f} ms (cold solves)")
+        if checked:
+            print(f"crowdtouch's assignments on {checked} frames: largest relative difference "
+                  f"from scipy's optimal total cost {worst:.3e}")
+            if worst > 1e-9:
+                return 1
         return 0
     for n in args.sizes or [1000, 2000, 5000]:
         agents, goals = instance(n)

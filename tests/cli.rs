@@ -667,9 +667,9 @@ fn bench_assign_reports_quantiles_and_certificates() {
         let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         let row = &rows[0];
         let want = if warm {
-            "assign_warm n=40"
+            "assign_warm uniform n=40"
         } else {
-            "assign_cold n=40"
+            "assign_cold uniform n=40"
         };
         assert_eq!(row["workload"], want);
         assert_eq!(row["samples"], 5);
@@ -715,11 +715,61 @@ fn bench_assign_from_positions_and_bench_fmm_report_checked_rows() {
         .unwrap();
     assert_success(&out);
     let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(rows[0]["workload"], "assign_warm_points n=150");
+    assert_eq!(rows[0]["workload"], "assign_warm_points uniform n=150");
     assert!(
         rows[0]["note"].as_str().unwrap().contains("held on 3/3"),
         "{}",
         rows[0]
+    );
+    // Every layout, one row each, every answer certified.
+    let out = bin()
+        .args([
+            "bench",
+            "assign",
+            "--n",
+            "150",
+            "--repeats",
+            "2",
+            "--points",
+            "--layout",
+            "all",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert_success(&out);
+    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let names: Vec<&str> = rows
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["workload"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "uniform",
+            "clustered",
+            "pinched",
+            "line",
+            "to-line",
+            "corner",
+            "shifted"
+        ]
+        .map(|l| format!("assign_cold_points {l} n=150"))
+    );
+    for r in rows.as_array().unwrap() {
+        assert!(r["note"].as_str().unwrap().contains("held on 2/2"), "{r}");
+    }
+    let out = bin()
+        .args(["bench", "assign", "--layout", "round"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("unknown layout `round`") && err.contains("to-line"),
+        "{err}"
     );
     for obstacles in [false, true] {
         let mut cmd = bin();

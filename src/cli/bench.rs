@@ -8,7 +8,6 @@ use crowdtouch::crowd::mesh::{Arap, Constraint};
 use crowdtouch::engine::Engine;
 use crowdtouch::geom::{Rect, Vec2};
 use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
-use crowdtouch::rng::SplitMix64;
 use crowdtouch::rt::monotonic_now;
 use crowdtouch::vocab::Micros;
 use crowdtouch::vocab::StageStats;
@@ -16,6 +15,8 @@ use crowdtouch::vocab::{Contact, ContactFlags, ContactId, TouchFrame};
 use serde::Serialize;
 use std::io::BufRead;
 use std::time::{Duration, Instant};
+
+mod assign;
 
 /// Which workload to run.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
@@ -28,8 +29,8 @@ pub enum Workload {
     Arap,
     /// One control tick (segment + deform + step), without the assignment worker.
     Tick,
-    /// Exact assignment of `--n` agents to `--n` goals (uniform random points in the
-    /// unit square, squared-Euclidean cost), cold or `--warm`. Not part of `all`.
+    /// Exact assignment of `--n` agents to `--n` goals (squared-Euclidean cost) in
+    /// the `--layout`s, cold or `--warm`. Not part of `all`.
     Assign,
     /// One fast-marching field (second order, one point source) on a `--grid`²
     /// grid of 4 cm cells, uniform cost or `--obstacles`. Not part of `all`.
@@ -55,11 +56,19 @@ pub struct BenchArgs {
     /// moves by up to 2 % of the extent (else cold solves of fresh instances).
     #[arg(long)]
     warm: bool,
-    /// Assignment workload: solve from the positions (costs computed on demand,
-    /// candidate lists from a spatial index, no matrix: what the controllers run)
-    /// instead of from a filled cost matrix.
+    /// Assignment workload: solve from the positions as the controllers do
+    /// (`Assigner`: the positions mapped to alike spreads, costs computed on demand,
+    /// candidate lists from a spatial index, no matrix) instead of from a filled cost
+    /// matrix.
     #[arg(long)]
     points: bool,
+    /// Assignment workload: where the agents and goals are, `all` or a comma-separated
+    /// list of: uniform (the unit square), clustered (agents in a 0.3 m disk, goals in
+    /// a 4 × 3 m formation), pinched (the reverse), line (agents on an 8 m × 5 cm
+    /// line), to-line (the reverse), corner (agents in a 2 × 2 m corner), shifted
+    /// (goals in the formation moved 3 m east).
+    #[arg(long, default_value = "uniform")]
+    layout: String,
     /// Assignment workload: timed solves.
     #[arg(long, default_value_t = 50)]
     repeats: usize,
@@ -91,7 +100,7 @@ pub struct BenchArgs {
 }
 
 #[derive(Serialize, Debug)]
-struct Row {
+pub(crate) struct Row {
     workload: String,
     samples: u64,
     p50_us: f64,
@@ -109,7 +118,7 @@ fn quantiles(mut v: Vec<f64>) -> (f64, f64, f64) {
     (q(0.5), q(0.99), v[v.len() - 1])
 }
 
-fn row_from_samples(name: &str, samples: Vec<f64>, note: String) -> Row {
+pub(crate) fn row_from_samples(name: &str, samples: Vec<f64>, note: String) -> Row {
     let n = samples.len() as u64;
     let (p50, p99, max) = quantiles(samples);
     Row {
@@ -144,7 +153,21 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         rows.push(control_tick(a.agents));
     }
     if a.workload == Workload::Assign {
-        rows.push(assign(a.n, a.warm, a.points, a.repeats, a.dump.as_deref())?);
+        let layouts = assign::parse_layouts(&a.layout)?;
+        anyhow::ensure!(
+            a.dump.is_none() || layouts.len() == 1,
+            "--dump writes one layout's instances: name one --layout"
+        );
+        for layout in layouts {
+            rows.push(assign::assign(&assign::AssignRun {
+                layout,
+                n: a.n,
+                warm: a.warm,
+                points: a.points,
+                repeats: a.repeats,
+                dump: a.dump.as_deref(),
+            })?);
+        }
     }
     if a.workload == Workload::Fmm {
         rows.push(fmm(a.grid, a.obstacles, a.first_order, a.repeats)?);
@@ -172,125 +195,6 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// `n` points uniform in the unit square: the assignment instances (the same in
-/// `benches/assign.rs` and `benches/scipy_lsa.py`, so all three see the same points).
-fn unit_points(rng: &mut SplitMix64, n: usize) -> Vec<Vec2> {
-    (0..n).map(|_| Vec2::new(rng.unit(), rng.unit())).collect()
-}
-
-/// Seed of instance `k` of size `n` (`k = 0` is the instance of `benches/assign.rs`).
-fn assign_seed(n: usize, k: usize) -> u64 {
-    (0xC0FFEE ^ n as u64).wrapping_add(k as u64)
-}
-
-/// Seed of the goal moves of the warm chain.
-const ASSIGN_MOVE_SEED: u64 = 0xBEEF;
-/// Largest goal move per frame of the warm chain, per axis, as a fraction of the
-/// extent (the unit square): moves are uniform in `[-0.02, 0.02)`.
-const ASSIGN_MOVE_FRACTION: f64 = 0.02;
-
-/// The assignment workload: `repeats` timed solves; every result is checked against
-/// its dual certificate outside the timing.
-fn assign(
-    n: usize,
-    warm: bool,
-    points: bool,
-    repeats: usize,
-    dump: Option<&std::path::Path>,
-) -> Result<Row> {
-    use crowdtouch::crowd::assign::{
-        CostMatrix, CostProvider, PointCosts, PointMetric, Solver, SquaredDistance,
-    };
-    anyhow::ensure!(n >= 1, "--n must be at least 1");
-    let name = format!(
-        "assign_{}{} n={n}",
-        if warm { "warm" } else { "cold" },
-        if points { "_points" } else { "" }
-    );
-    let mut samples = Vec::with_capacity(repeats);
-    let mut c = CostMatrix::new(n, n);
-    let mut pc = PointCosts::new(PointMetric::Squared);
-    let mut solver = Solver::new();
-    let mut certified = 0usize;
-    let mut frames: Vec<(Vec<Vec2>, Vec<Vec2>)> = Vec::new();
-    // The matrix is filled in every case (outside the timing) for the certificate.
-    let mut time_solve =
-        |solver: &mut Solver, c: &CostMatrix, pc: &PointCosts, warm: bool| -> Result<()> {
-            let t0 = Instant::now();
-            let r = match (points, warm) {
-                (false, true) => solver.solve_warm(c),
-                (false, false) => solver.solve(c),
-                (true, true) => solver.solve_warm_with(pc),
-                (true, false) => solver.solve_with(pc),
-            };
-            let dt = t0.elapsed().as_secs_f64() * 1e6;
-            r.map_err(|e| anyhow::anyhow!("assignment failed: {e}"))?;
-            samples.push(dt);
-            if solver.verify_optimal(c, 1e-9) {
-                certified += 1;
-            }
-            Ok(())
-        };
-    if warm {
-        let mut rng = SplitMix64::new(assign_seed(n, 0));
-        let agents = unit_points(&mut rng, n);
-        let mut goals = unit_points(&mut rng, n);
-        SquaredDistance.fill(&agents, &goals, &mut c);
-        pc.set(&agents, &goals);
-        solver
-            .solve(&c)
-            .map_err(|e| anyhow::anyhow!("assignment failed: {e}"))?;
-        if dump.is_some() {
-            frames.push((agents.clone(), goals.clone()));
-        }
-        let mut moves = SplitMix64::new(ASSIGN_MOVE_SEED);
-        for _ in 0..repeats {
-            for p in &mut goals {
-                p.x += 2.0 * ASSIGN_MOVE_FRACTION * (moves.unit() - 0.5);
-                p.y += 2.0 * ASSIGN_MOVE_FRACTION * (moves.unit() - 0.5);
-            }
-            SquaredDistance.fill(&agents, &goals, &mut c);
-            pc.set(&agents, &goals);
-            time_solve(&mut solver, &c, &pc, true)?;
-            if dump.is_some() {
-                frames.push((agents.clone(), goals.clone()));
-            }
-        }
-    } else {
-        for k in 0..repeats {
-            let mut rng = SplitMix64::new(assign_seed(n, k));
-            let agents = unit_points(&mut rng, n);
-            let goals = unit_points(&mut rng, n);
-            SquaredDistance.fill(&agents, &goals, &mut c);
-            pc.set(&agents, &goals);
-            time_solve(&mut solver, &c, &pc, false)?;
-            if dump.is_some() {
-                frames.push((agents, goals));
-            }
-        }
-    }
-    if let Some(path) = dump {
-        let xy = |v: &[Vec2]| v.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>();
-        let json = serde_json::json!({
-            "n": n,
-            "warm": warm,
-            "cost": "squared_euclidean",
-            "frames": frames.iter().map(|(a, g)| serde_json::json!({"agents": xy(a), "goals": xy(g)})).collect::<Vec<_>>(),
-        });
-        std::fs::write(path, serde_json::to_vec(&json)?)
-            .with_context(|| format!("writing {}", path.display()))?;
-    }
-    let timed = samples.len();
-    Ok(row_from_samples(
-        &name,
-        samples,
-        format!(
-            "uniform random points, squared-Euclidean cost, one thread; dual certificate held on {certified}/{timed}{}",
-            if warm { "; every goal moves by up to 2 % of the extent per frame" } else { "; a fresh instance per solve" }
-        ),
-    ))
 }
 
 /// The fast-marching workload: `repeats` timed solves of one field from a point

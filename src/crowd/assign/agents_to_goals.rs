@@ -8,7 +8,8 @@
 //! at every time step." Weights of 1 on every source and target make the
 //! transportation problem an exact one-to-one assignment.
 
-use crate::crowd::assign::{AssignError, PointCosts, PointMetric, Solver};
+use super::normalise::AffineMap;
+use crate::crowd::assign::{AssignError, PointCosts, PointMetric, SolveStats, Solver};
 use crate::geom::Vec2;
 
 /// A reusable assignment: solver workspace and the positions behind the costs.
@@ -17,10 +18,19 @@ use crate::geom::Vec2;
 /// solver's geometric fast path): no `agents × goals` matrix is filled each frame,
 /// and each agent's cheapest goals come from a spatial index. The answer is the
 /// exact optimum, the same as on the full matrix.
+///
+/// With the squared distance and as many agents as goals, the positions are first
+/// mapped by [`AffineMap::equalising`] (centred, and stretched to the same spread):
+/// the optimum is the same permutation, and a crowd dragged off its formation,
+/// pinched or stretched becomes an instance the fast path solves as quickly as a
+/// uniform one.
 pub struct Assigner {
     solver: Solver,
     costs: PointCosts,
     warm: bool,
+    /// The mapped positions (reused).
+    mapped_agents: Vec<Vec2>,
+    mapped_goals: Vec<Vec2>,
 }
 
 impl Assigner {
@@ -30,6 +40,8 @@ impl Assigner {
             solver: Solver::new(),
             costs: PointCosts::new(metric),
             warm: false,
+            mapped_agents: Vec::new(),
+            mapped_goals: Vec::new(),
         }
     }
 
@@ -50,7 +62,21 @@ impl Assigner {
         goals: &[Vec2],
         goal_of: &mut Vec<u32>,
     ) -> Result<(), AssignError> {
-        self.costs.set(agents, goals);
+        let map = match self.costs.metric() {
+            PointMetric::Squared => AffineMap::equalising(agents, goals),
+            PointMetric::Euclidean => None,
+        };
+        match map {
+            Some(map) => {
+                self.mapped_agents.clear();
+                self.mapped_agents
+                    .extend(agents.iter().map(|&p| map.agent(p)));
+                self.mapped_goals.clear();
+                self.mapped_goals.extend(goals.iter().map(|&p| map.goal(p)));
+                self.costs.set(&self.mapped_agents, &self.mapped_goals);
+            }
+            None => self.costs.set(agents, goals),
+        }
         let result = if self.warm {
             self.solver.solve_warm_with(&self.costs)
         } else {
@@ -69,8 +95,16 @@ impl Assigner {
         Ok(())
     }
 
-    /// Total cost of the last solution.
-    pub fn total_cost(&self) -> f64 {
-        self.solver.total_cost(&self.costs)
+    /// Checks the dual certificate of the last solution (`Solver::verify_optimal`) on
+    /// the instance solved, i.e. after the mapping: optimal there is optimal for the
+    /// given positions (see [`AffineMap`]). `O(agents · goals)`; for tests and
+    /// benchmarks.
+    pub fn verify_optimal(&self, tol: f64) -> bool {
+        self.solver.verify_optimal(&self.costs, tol)
+    }
+
+    /// The solver's work counters of the last solve.
+    pub fn stats(&self) -> SolveStats {
+        self.solver.stats()
     }
 }

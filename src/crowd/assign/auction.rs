@@ -53,19 +53,9 @@ impl Solver {
     /// only fall, so every list threshold stays valid). It only brings the prices
     /// close to optimal; exactness comes from the finish that follows.
     pub(super) fn auction<S: CostSource>(&mut self, costs: &S) {
-        let k = self.k;
-        let (mut spread, mut count) = (0.0, 0usize);
-        for i in 0..self.rows {
-            let len = (self.cand_len[i] as usize).min(AUCTION_SPREAD_SLOTS);
-            if len >= 2 {
-                spread += self.cand_wb[i * k + len - 1] - self.cand_wb[i * k];
-                count += 1;
-            }
-        }
-        if count == 0 {
+        let Some(spread) = self.local_spread() else {
             return;
-        }
-        let spread = spread / count as f64;
+        };
         let eps0 = if self.stats.warm {
             // Sized by how far the prices are off: the mean slack of the broken pairs.
             let freed = self.free_rows.len().max(1) as f64;
@@ -125,6 +115,22 @@ impl Solver {
             }
             eps = (eps * AUCTION_FACTOR).max(eps_end);
         }
+    }
+
+    /// The mean spread of the rows' cheapest few reduced costs (over the first
+    /// `AUCTION_SPREAD_SLOTS` list entries): the local scale of the costs. `None`
+    /// when no list holds two entries.
+    pub(super) fn local_spread(&self) -> Option<f64> {
+        let k = self.k;
+        let (mut spread, mut count) = (0.0, 0usize);
+        for i in 0..self.rows {
+            let len = (self.cand_len[i] as usize).min(AUCTION_SPREAD_SLOTS);
+            if len >= 2 {
+                spread += self.cand_wb[i * k + len - 1] - self.cand_wb[i * k];
+                count += 1;
+            }
+        }
+        (count > 0).then(|| spread / count as f64)
     }
 
     /// Augmenting row reduction (Jonker–Volgenant 1987) over the candidate lists: a

@@ -24,7 +24,10 @@
 //! * `dense` — Dijkstra over full rows (dense strategy, and the safety net);
 //! * `heaps` — the searches' priority queues;
 //! * `error` — [`AssignError`];
+//! * `layouts` — [`Layout`]: the instances benchmarks and tests solve;
 //! * `least_effort` — [`LeastEffort`], the cost of formation-transform eq. 3;
+//! * `normalise` — [`AffineMap`]: centring and equalising the spread of a square
+//!   squared-distance instance, which keeps its optimum and makes it fast;
 //! * `agents_to_goals` — [`Assigner`]: agents to goal points from their positions,
 //!   warm-started from call to call (what the controllers and the worker run).
 
@@ -36,7 +39,9 @@ mod costs;
 mod dense;
 mod error;
 mod heaps;
+mod layouts;
 mod least_effort;
+mod normalise;
 mod points;
 mod pricing;
 mod solver;
@@ -46,6 +51,8 @@ mod tests;
 pub use agents_to_goals::Assigner;
 pub use costs::{CostMatrix, CostProvider, CostSource, Distance, SquaredDistance};
 pub use error::AssignError;
+pub use layouts::Layout;
 pub use least_effort::{mean_edge_lengths, LeastEffort};
+pub use normalise::{AffineMap, SPREAD_FLOOR};
 pub use points::{PointCosts, PointMetric, GOALS_PER_BUCKET};
 pub use solver::{SolveStats, Solver, Strategy, EPS_REL};
