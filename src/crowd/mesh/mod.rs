@@ -4,11 +4,14 @@
 //! mean value coordinates for area controls ([`mean_value_coordinates`]).
 
 mod arap;
+mod envelope;
 mod goals;
 mod mvc;
 mod trimesh;
 
-pub use arap::{Arap, ArapBuffer, ArapError, Constraint, ANCHOR_WEIGHT, MAX_CONSTRAINT_WEIGHT};
+pub use arap::{
+    Arap, ArapBuffer, ArapError, Constraint, PointConstraint, ANCHOR_WEIGHT, MAX_CONSTRAINT_WEIGHT,
+};
 pub use goals::{
     goal_positions, sample_goals, GoalSample, GOAL_CANDIDATES_PER_SAMPLE, GOAL_LLOYD_ITERATIONS,
 };
