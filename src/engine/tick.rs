@@ -105,6 +105,18 @@ impl Engine {
         let lag = self
             .agents
             .mean_goal_distance(self.direct.goals(), &self.goal_of);
+        // A cancelled control (a palm, a device gone) does not go on through its
+        // remaining check points as a lifted one does.
+        for s in &self.seg_out {
+            if let Segment::ControlEnd {
+                id,
+                cancelled: true,
+                ..
+            } = *s
+            {
+                self.direct.cancel(id);
+            }
+        }
         if let Err(e) = self.direct.update(self.segmenter.controls(), dt, lag) {
             self.counters.deform_errors += 1;
             if self.counters.deform_errors.is_power_of_two() {
