@@ -160,6 +160,52 @@ fn dragged_onto_a_block_no_goal_ends_inside() {
     assert_outside(&s, &e);
 }
 
+/// `mesh.field_step_m` sets how far the environment's field pushes the mesh: a
+/// crowd standing just west of the block is pushed west by more with a larger
+/// step, not at all with 0 (nothing penetrates, so nothing is projected), and a
+/// reload applies the new step.
+#[test]
+fn the_configured_field_step_sets_how_far_the_field_pushes_the_mesh() {
+    // 3 x 3 vertices over (9.5,3.5)..(11,5.5): within the field's 1 m of the west face.
+    let mut c = cfg("single_block", 9, rect(9.5, 3.5, 11.0, 5.5), 3);
+    let west_push = |step: f64, c: &mut Config| {
+        c.mesh.field_step_m = step;
+        let e = Engine::new(c, None, true);
+        let rest = crowdtouch::crowd::mesh::TriMesh::grid(c.crowd.formation, 3, 3);
+        rest.rest()
+            .iter()
+            .zip(&e.mesh_view().vertices)
+            .map(|(r, v)| r.x - v.x)
+            .fold(0.0, f64::max)
+    };
+    let (none, default, double) = (
+        west_push(0.0, &mut c),
+        west_push(0.3, &mut c),
+        west_push(0.6, &mut c),
+    );
+    eprintln!("field step: pushed west {none:.3} / {default:.3} / {double:.3} m at 0 / 0.3 / 0.6");
+    assert_eq!(none, 0.0);
+    assert!(default > 0.05, "{default}");
+    assert!(
+        (double - 2.0 * default).abs() < 1e-9,
+        "{double} vs 2 x {default}"
+    );
+    // A reload with another step moves the mesh from the next tick.
+    c.mesh.field_step_m = 0.3;
+    let mut e = Engine::new(&c, None, true);
+    let before = e.mesh_view().vertices.clone();
+    let mut c2 = c.clone();
+    c2.mesh.field_step_m = 0.6;
+    e.reconfigure(&c2);
+    e.tick(Micros(1_000_000));
+    let moved = before
+        .iter()
+        .zip(&e.mesh_view().vertices)
+        .map(|(a, b)| (a - b).norm())
+        .fold(0.0, f64::max);
+    assert!((moved - default).abs() < 1e-9, "moved {moved} on reload");
+}
+
 /// Total travel cost of an assignment under the planner's Eikonal costs.
 fn travel(p: &Planner, agents: &[Vec2], goals: &[Vec2], goal_of: &[u32]) -> f64 {
     let mut m = CostMatrix::new(0, 0);
