@@ -418,6 +418,57 @@ fn agents_in_a_patch_move_at_its_speed_and_report_its_motion() {
     );
 }
 
+/// Section 6.2.3: agents walking from open ground into a slow patch move at the
+/// patch's speed from the tick they are in it, never at their open-ground speed.
+#[test]
+fn agents_entering_a_patch_slow_down_the_tick_they_enter() {
+    // Open ground west of the stream (x < 11.5), dragged east into it.
+    let c = cfg("multiple_paths", 4, rect(10.0, 0.6, 10.4, 1.0), 2);
+    let mut e = Engine::new(&c, None, true);
+    let limit = 0.46 * c.crowd.max_speed_m_s;
+    let (mut fastest_on_ground, mut fastest_swimming, mut entered) = (0.0f64, 0.0f64, 0);
+    let mut was_swimming = vec![false; 4];
+    let _ = drag(
+        &mut e,
+        Vec2::new(10.2, 0.8),
+        Vec2::new(13.0, 0.8),
+        1.0,
+        2.0,
+        |e| {
+            let t = e.scene_time_s();
+            let sc = e.scene().unwrap();
+            for (i, (p, v)) in e
+                .agent_positions()
+                .iter()
+                .zip(e.agent_velocities())
+                .enumerate()
+            {
+                let swimming = sc.terrain_at(*p, t).motion == MotionType::Swim;
+                if swimming {
+                    fastest_swimming = fastest_swimming.max(v.norm());
+                    entered += usize::from(!was_swimming[i]);
+                } else {
+                    fastest_on_ground = fastest_on_ground.max(v.norm());
+                }
+                was_swimming[i] = swimming;
+            }
+        },
+    );
+    eprintln!(
+        "patch entry: {entered} entries, fastest on open ground {fastest_on_ground:.3} m/s, \
+         in the stream {fastest_swimming:.3} m/s (limit {limit:.3})"
+    );
+    assert!(entered >= 4, "every agent entered the stream");
+    assert!(
+        fastest_on_ground > 1.5 * limit,
+        "they came in fast: {fastest_on_ground}"
+    );
+    assert!(
+        fastest_swimming <= limit + 1e-9,
+        "{fastest_swimming} m/s in the stream, limit {limit}"
+    );
+}
+
 /// A config reload with another scene swaps it in between two ticks: the crowd
 /// keeps moving (no reset), from the next tick no agent is inside the new obstacle
 /// and no goal either, agents in the new patch report its motion; a reload without

@@ -248,7 +248,6 @@ impl Engine {
         let t = self.scene_t_s;
         let goals = self.direct.goals();
         self.targets.clear();
-        self.speed_factor.clear();
         for (i, &p) in self.agents.positions().iter().enumerate() {
             let g = goals[self.goal_of[i] as usize];
             let w = self
@@ -257,10 +256,10 @@ impl Engine {
                 .copied()
                 .unwrap_or(Vec2::repeat(f64::NAN));
             self.targets.push(steer_target(scene, p, g, w, t));
-            self.speed_factor.push(scene.terrain_at(p, t).speed_factor);
         }
+        let speed = |x: Vec2| scene.terrain_at(x, t).speed_factor;
         self.agents
-            .step_towards(&self.targets, &self.speed_factor, dt, &self.agent_params);
+            .step_towards(&self.targets, speed, dt, &self.agent_params);
         let r = self.agent_params.radius_m;
         for i in 0..self.agents.len() {
             let p = self.agents.positions()[i];
