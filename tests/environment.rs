@@ -327,8 +327,10 @@ fn fig10_square_crowd_passes_around_a_block_and_remerges() {
     );
 }
 
-/// Fig. 8b: with the central path crowded, some agents are routed along a slower
-/// side path (the density discomfort of eq. 3 in the cost).
+/// Fig. 8b: with the central path crowded, agents behind the crowd are routed
+/// along a slower side path (the density discomfort of eq. 3 in the cost). The
+/// control is the same plan with the density term off (the congestion-blind cost
+/// of Fig. 8a): the difference is what congestion does.
 #[test]
 fn fig8b_congestion_sends_some_agents_down_a_slower_side_path() {
     let s = scene("multiple_paths");
@@ -349,26 +351,36 @@ fn fig8b_congestion_sends_some_agents_down_a_slower_side_path() {
     let goals: Vec<Vec2> = (0..60)
         .map(|k| Vec2::new(15.35 + (k % 3) as f64 * 0.2, 0.3 + (k / 3) as f64 * 0.42))
         .collect();
-    let mut params = PlannerParams::new(1.5);
-    params.discomfort.density_m2 = 2.0;
-    let mut p = Planner::new(Arc::clone(&s), params).unwrap();
-    let (mut goal_of, mut wp) = (Vec::new(), Vec::new());
-    p.plan(&agents, &goals, 0.0, &mut goal_of, &mut wp).unwrap();
-    let mut side = 0;
-    let mut route = Vec::new();
-    for i in 40..60 {
-        p.route(agents[i], goals[goal_of[i] as usize], 0.0, &mut route);
-        if route
-            .iter()
-            .any(|q| q.x > 11.5 && q.x < 14.5 && (q.y < 1.8 || q.y > 7.2))
-        {
-            side += 1;
-        }
-    }
-    // Without the crowd in the way, nobody behind takes a side path to goals level
-    // with the central path.
-    eprintln!("fig8b: {side} of 20 agents behind the crowd routed through a side path");
-    assert!(side > 0, "nobody took a side path");
+    // How many of the 20 agents behind the crowd are routed through a side path.
+    let side_paths = |density_m2: f64| {
+        let mut params = PlannerParams::new(1.5);
+        params.discomfort.density_m2 = density_m2;
+        let mut p = Planner::new(Arc::clone(&s), params).unwrap();
+        let (mut goal_of, mut wp) = (Vec::new(), Vec::new());
+        p.plan(&agents, &goals, 0.0, &mut goal_of, &mut wp).unwrap();
+        let mut route = Vec::new();
+        (40..60)
+            .filter(|&i| {
+                p.route(agents[i], goals[goal_of[i] as usize], 0.0, &mut route);
+                route
+                    .iter()
+                    .any(|q| q.x > 11.5 && q.x < 14.5 && (q.y < 1.8 || q.y > 7.2))
+            })
+            .count()
+    };
+    // The density weight raised 8x over the default (0.25 m²), so that 40 agents
+    // in the mouth outweigh the side paths' length and slowness. Measured: 3 of
+    // the 20 take a side path with it, none without (and none up to 4x the
+    // default); the margin asked is those 3.
+    let (crowded, blind) = (side_paths(2.0), side_paths(0.0));
+    eprintln!(
+        "fig8b: of 20 agents behind the crowd, {crowded} routed through a side path \
+         with congestion in the cost, {blind} without"
+    );
+    assert!(
+        crowded >= blind + 3,
+        "congestion sent {crowded} down a side path, the congestion-blind cost {blind}"
+    );
 }
 
 /// Section 6.2.3: an agent in a patch moves at the patch's travel speed and reports
