@@ -439,7 +439,7 @@ fn agents_entering_a_patch_slow_down_the_tick_they_enter() {
     let mut e = Engine::new(&c, None, true);
     let limit = 0.46 * c.crowd.max_speed_m_s;
     let (mut fastest_on_ground, mut fastest_swimming, mut entered) = (0.0f64, 0.0f64, 0);
-    let mut was_swimming = vec![false; 4];
+    let mut was_swimming = [false; 4];
     let _ = drag(
         &mut e,
         Vec2::new(10.2, 0.8),

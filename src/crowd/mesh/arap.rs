@@ -628,9 +628,10 @@ impl Arap {
             }
         }
         for (index, p) in points.iter().enumerate() {
-            if !(p.weight > 0.0 && p.weight <= MAX_CONSTRAINT_WEIGHT)
-                || !p.bary.iter().all(|b| b.is_finite())
-            {
+            let usable = p.weight > 0.0
+                && p.weight <= MAX_CONSTRAINT_WEIGHT
+                && p.bary.iter().all(|b| b.is_finite());
+            if !usable {
                 return Err(ArapError::BadPoint { index });
             }
             if !self.couples(p.corners) {
