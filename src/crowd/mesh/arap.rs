@@ -2,7 +2,10 @@
 //!
 //! The two-step method of Igarashi, Moscovich and Hughes 2005, "As-Rigid-As-Possible
 //! Shape Manipulation" (cited as mesh-formation-control reference \[28\], section 4.1),
-//! with soft constraints:
+//! with soft constraints — on vertices ([`Constraint`]) and on points inside
+//! triangles, held through the triangle's corners by their barycentric coordinates
+//! ([`PointConstraint`], the supplementary points an area control samples,
+//! mesh-formation-control section 4.2):
 //!
 //! 1. **Similarity step.** Each triangle edge `(i, j)` expresses the opposite vertex `k`
 //!    in the edge's local frame, `v_k = v_i + x (v_j - v_i) + y R90 (v_j - v_i)`, with
@@ -16,15 +19,18 @@
 //!    plus the constraint and anchor terms gives one `n × n` SPD matrix (a weighted graph
 //!    Laplacian) shared by the x and y coordinates.
 //!
-//! Both matrices depend only on the mesh and on the constraint *set* (vertices and
-//! weights), not on the targets, so they are factorised once per constraint set by
-//! [`Arap::set_constraints`]. [`Arap::solve`] then costs two right-hand-side
-//! assemblies and three pairs of triangular solves, with no allocation.
+//! Both matrices depend only on the mesh and on the constraint *set* (vertices, points
+//! and weights), not on the targets, so they are factorised once per constraint set
+//! by [`Arap::set_constraints`] or [`Arap::set_constraints_and_points`].
+//! [`Arap::solve`] then costs two right-hand-side assemblies and three pairs of
+//! triangular solves, with no allocation.
 //!
 //! The sparse factorisation is a reverse Cuthill–McKee ordering of the vertices followed
-//! by an envelope (skyline, profile) Cholesky factorisation, which suits the banded
-//! matrices of grid-like meshes: for a `c × r` grid the envelope has about
-//! `2n · 2 min(c, r)` entries in step 1 and `n · min(c, r)` in step 2.
+//! by an envelope (skyline, profile) Cholesky factorisation (`envelope.rs`), which
+//! suits the banded matrices of grid-like meshes: for a `c × r` grid the envelope has
+//! about `2n · 2 min(c, r)` entries in step 1 and `n · min(c, r)` in step 2. A point
+//! constraint couples only the corners of its triangle, which the envelope already
+//! holds.
 
 use super::envelope::Envelope;
 use crate::crowd::mesh::TriMesh;
@@ -790,9 +796,9 @@ impl Arap {
         Ok(())
     }
 
-    /// The rigid motion that best carries the constrained vertices' anchor positions to
-    /// their targets (weighted least squares; [`RigidMotion::IDENTITY`] without
-    /// constraints, a translation with one constrained position).
+    /// The rigid motion that best carries the constrained vertices' and points' anchor
+    /// positions to their targets (weighted least squares; [`RigidMotion::IDENTITY`]
+    /// without constraints, a translation with one constrained position).
     fn anchor_motion(&self, targets: &[Vec2], anchor: &[Vec2]) -> RigidMotion {
         let mut wsum = 0.0;
         let (mut abar, mut qbar) = (Vec2::zeros(), Vec2::zeros());

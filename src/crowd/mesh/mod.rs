@@ -1,7 +1,8 @@
 //! The crowd's deformable triangle mesh (mesh-formation-control section 4.1) and the
 //! operations on it, one file each: the mesh and its queries ([`TriMesh`]), goal
-//! points on it ([`sample_goals`]), as-rigid-as-possible deformation ([`Arap`]) and
-//! mean value coordinates for area controls ([`mean_value_coordinates`]).
+//! points on it ([`sample_goals`]), as-rigid-as-possible deformation ([`Arap`], with
+//! its envelope Cholesky factorisation in `envelope.rs`) and mean value coordinates
+//! for area controls ([`mean_value_coordinates`]).
 
 mod arap;
 mod envelope;
