@@ -197,6 +197,48 @@ fn a_steady_control_tick_does_not_allocate() {
     assert_eq!(n, 0, "480 control ticks allocated {n} times");
 }
 
+/// After a fast one-finger drag lifts, the crowd goes on through the rest of the
+/// drag's check points: those ticks allocate nothing either.
+#[test]
+fn a_tick_of_a_lifted_drag_going_on_does_not_allocate() {
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = 200;
+    let mut engine = Engine::new(&cfg, None, false);
+    // 6.4 cm a tick (7.7 m/s): faster than the handle may follow (3 m/s).
+    let frame_at = |k: u64, flags: ContactFlags| {
+        let mut f = TouchFrame::new(Micros(k * 8_333));
+        let c = Contact {
+            id: ContactId(1),
+            x: 0.5 + k as f32 * 0.004,
+            y: 0.5,
+            flags,
+            ..Contact::default()
+        };
+        f.push(c).unwrap();
+        f
+    };
+    for k in 0..=40 {
+        let flags = match k {
+            0 => ContactFlags::DOWN,
+            40 => ContactFlags::UP,
+            _ => ContactFlags::NONE,
+        };
+        engine.push_frame(&frame_at(k, flags));
+        drop(engine.tick(Micros(k * 8_333)));
+        engine.clear_events();
+    }
+    let at_lift = engine.mesh_view().vertices.clone();
+    let n = allocations(|| {
+        for k in 41..101 {
+            drop(engine.tick(Micros(k * 8_333)));
+            engine.clear_events();
+        }
+    });
+    let moved = engine.mesh_view().vertices[0].x - at_lift[0].x;
+    assert!(moved > 0.5, "the drag went on after the lift: {moved} m");
+    assert_eq!(n, 0, "60 ticks of a lifted drag allocated {n} times");
+}
+
 /// Warm-up ticks of the scene tests (1 s at 120 Hz): the drag into the scene.
 const SCENE_WARM_UP: u64 = 120;
 /// Ticks counted in the scene tests.

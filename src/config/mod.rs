@@ -27,6 +27,6 @@ pub use load::{search_path, DEFAULT_CONFIG_RON, MAX_CONFIG_BYTES};
 pub use model::{
     AssignmentConfig, AssignmentCost, BudgetsConfig, Config, ControlsConfig, CrowdConfig,
     FormationsConfig, LogLevel, MeshConfig, PipelineConfig, RealtimeConfig, SocketConfig,
-    SurfaceConfig, CONFIG_VERSION,
+    SurfaceConfig, CONFIG_VERSION, DEFAULT_FIELD_STEP_M,
 };
 pub use validate::MAX_AGENTS;

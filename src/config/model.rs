@@ -87,6 +87,20 @@ pub struct MeshConfig {
     pub handle_weight: f64,
     /// Weight of supplementary line/area points (soft constraints).
     pub soft_weight: f64,
+    /// How far a vertex of the crowd's mesh moves per unit of the environment's
+    /// potential field (m): the final mesh is `v + field_step_m × F(v)`, then out
+    /// of obstacles (mesh-formation-control sections 5 and 6.1, which leave the
+    /// amount open: this is crowdtouch's choice). 0 only projects vertices out of
+    /// obstacles. Absent: [`DEFAULT_FIELD_STEP_M`].
+    #[serde(default = "default_field_step_m")]
+    pub field_step_m: f64,
+}
+
+/// The default of [`MeshConfig::field_step_m`] (m).
+pub const DEFAULT_FIELD_STEP_M: f64 = 0.3;
+
+fn default_field_step_m() -> f64 {
+    DEFAULT_FIELD_STEP_M
 }
 
 /// Grouping touches into controls and gestures.

@@ -2,6 +2,7 @@
 
 use super::inputs::{DeviceSelect, InputConfig};
 use super::model::{Config, CONFIG_VERSION};
+use crate::crowd::environment::MESH_FIELD_RANGE_M;
 use crate::geom::Rect;
 use crate::vocab::parse_vendor_product;
 
@@ -112,6 +113,15 @@ impl Config {
             m.soft_weight > 0.0 && m.soft_weight.is_finite(),
             "mesh.soft_weight",
             format!("soft weight must be positive, got {}", m.soft_weight),
+        );
+        check(
+            (0.0..=MESH_FIELD_RANGE_M).contains(&m.field_step_m),
+            "mesh.field_step_m",
+            format!(
+                "field step must be in [0, {MESH_FIELD_RANGE_M}] m (the field's range: a \
+                 larger step throws vertices past it), got {}",
+                m.field_step_m
+            ),
         );
         let k = &self.controls;
         check(
@@ -391,5 +401,39 @@ mod tests {
         let without = format!("{}{}", &DEFAULT_CONFIG_RON[..a], &DEFAULT_CONFIG_RON[b..]);
         let c = Config::from_str(&without, Path::new("t.ron")).unwrap();
         assert_eq!(c.pipeline.realtime, RealtimeConfig::default());
+    }
+
+    #[test]
+    fn field_step_is_range_checked_and_defaults_when_absent() {
+        let line = "        field_step_m: 0.3,\n";
+        assert!(DEFAULT_CONFIG_RON.contains(line));
+        let c = Config::from_str(DEFAULT_CONFIG_RON, Path::new("t.ron")).unwrap();
+        assert_eq!(c.mesh.field_step_m, crate::config::DEFAULT_FIELD_STEP_M);
+        for bad in ["-0.1", "1.5", "NaN", "inf"] {
+            let text =
+                DEFAULT_CONFIG_RON.replacen(line, &format!("        field_step_m: {bad},\n"), 1);
+            let is = issues(&text);
+            assert_eq!(is.len(), 1, "{bad}: {is:?}");
+            assert_eq!(is[0].field, "mesh.field_step_m");
+            let expect_line = text
+                .lines()
+                .position(|l| l.contains("field_step_m:"))
+                .unwrap()
+                + 1;
+            assert_eq!(is[0].line, expect_line);
+            assert!(is[0].message.contains("[0, 1] m"), "{}", is[0].message);
+        }
+        let zero = DEFAULT_CONFIG_RON.replacen(line, "        field_step_m: 0.0,\n", 1);
+        assert_eq!(
+            Config::from_str(&zero, Path::new("t.ron"))
+                .unwrap()
+                .mesh
+                .field_step_m,
+            0.0
+        );
+        // Left out (a config written before the field existed): the default.
+        let without = DEFAULT_CONFIG_RON.replacen(line, "", 1);
+        let c = Config::from_str(&without, Path::new("t.ron")).unwrap();
+        assert_eq!(c.mesh.field_step_m, 0.3);
     }
 }

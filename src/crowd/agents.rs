@@ -117,20 +117,26 @@ impl Agents {
     }
 
     /// Advances the agents by `dt_s` towards per-agent `targets` (a goal or a
-    /// waypoint on the way to it), agent `i`'s speed limit scaled by
-    /// `speed_factor[i]` (the travel speed of the terrain under it,
-    /// mesh-formation-control section 6.2.3: "the average travel speed determines
+    /// waypoint on the way to it), each agent's speed limit scaled by
+    /// `speed_factor(x)`, the travel speed of the terrain at `x`
+    /// (mesh-formation-control section 6.2.3: "the average travel speed determines
     /// the speed of the agent as it passes through the patch").
     ///
+    /// The terrain is read in every substep, where the agent is and where the
+    /// substep takes it: an agent entering a slower patch moves at the patch's
+    /// speed from the substep it enters, not from the next tick.
+    ///
     /// # Formula
-    /// As [`step`](Self::step) with `|v| ≤ speed_factor_i · max_speed`.
+    /// As [`step`](Self::step) with `|v| ≤ speed_factor(x) · max_speed` at the
+    /// substep's start `x`; if the end `x + v h` is slower still, `v` is scaled to
+    /// its limit (and the end moved back accordingly).
     ///
     /// # Panics
-    /// If `targets` or `speed_factor` has fewer entries than there are agents.
+    /// If `targets` has fewer entries than there are agents.
     pub fn step_towards(
         &mut self,
         targets: &[Vec2],
-        speed_factor: &[f64],
+        speed_factor: impl Fn(Vec2) -> f64,
         dt_s: f64,
         p: &AgentParams,
     ) {
@@ -140,7 +146,7 @@ impl Agents {
         let substeps = (dt_s / MAX_SUBSTEP_S).ceil().clamp(1.0, 64.0) as usize;
         let h = dt_s / substeps as f64;
         for _ in 0..substeps {
-            self.substep(|i| targets[i], |i| speed_factor[i], h, p);
+            self.substep(|i| targets[i], &speed_factor, h, p);
         }
     }
 
@@ -162,7 +168,7 @@ impl Agents {
     fn substep(
         &mut self,
         target: impl Fn(usize) -> Vec2,
-        speed: impl Fn(usize) -> f64,
+        speed: impl Fn(Vec2) -> f64,
         h: f64,
         p: &AgentParams,
     ) {
@@ -184,19 +190,26 @@ impl Agents {
         }
         let amax = p.max_accel_m_s2;
         for i in 0..n {
-            let vmax = p.max_speed_m_s * speed(i);
+            let x = self.pos[i];
+            let vmax = p.max_speed_m_s * speed(x);
             let mut a = self.acc[i];
             let an = a.norm();
             if an > amax {
                 a *= amax / an;
             }
             let mut v = self.vel[i] + a * h;
-            let vn = v.norm();
+            let mut vn = v.norm();
             if vn > vmax {
                 v *= vmax / vn;
+                vn = vmax;
+            }
+            // Entering a slower patch in this substep: its limit holds from here.
+            let vmax_there = p.max_speed_m_s * speed(x + v * h);
+            if vn > vmax_there {
+                v *= vmax_there / vn;
             }
             self.vel[i] = v;
-            self.pos[i] += v * h;
+            self.pos[i] = x + v * h;
         }
     }
 }
@@ -381,6 +394,34 @@ mod tests {
             b.step(&goals, &[0], 1.0 / 120.0, &params());
         }
         assert!((b.positions()[0] - goals[0]).norm() > 0.4);
+    }
+
+    #[test]
+    fn an_agent_entering_a_slow_patch_slows_the_tick_it_enters() {
+        // Open ground west of x = 1, a patch at 0.3 of the speed east of it.
+        let speed = |x: Vec2| if x.x > 1.0 { 0.3 } else { 1.0 };
+        let mut a = Agents::new(&[Vec2::new(0.0, 0.0)]);
+        let target = [Vec2::new(10.0, 0.0)];
+        let dt = 1.0 / 60.0;
+        let (mut ticks_in, mut before) = (0, 0.0f64);
+        for _ in 0..240 {
+            a.step_towards(&target, speed, dt, &params());
+            let (x, v) = (a.positions()[0], a.velocities()[0].norm());
+            if x.x > 1.0 {
+                assert!(
+                    v <= 0.3 * 1.5 + 1e-9,
+                    "at {x} in the patch at {v} m/s, tick {ticks_in} in"
+                );
+                ticks_in += 1;
+            } else {
+                before = before.max(v);
+            }
+        }
+        assert!(
+            before > 1.4,
+            "reached full speed before the patch: {before}"
+        );
+        assert!(ticks_in > 100, "went into the patch");
     }
 
     #[test]

@@ -5,7 +5,7 @@ use crate::config::{AssignmentCost, Config};
 use crate::crowd::agents::AgentParams;
 use crate::crowd::assign::PointMetric;
 use crate::crowd::control::DirectParams;
-use crate::crowd::environment::{Planner, PlannerParams, Scene};
+use crate::crowd::environment::{FieldParams, Planner, PlannerParams, Scene, MESH_FIELD_RANGE_M};
 use crate::gesture::segment::SegmentParams;
 use crate::vocab::Micros;
 use std::sync::Arc;
@@ -75,4 +75,13 @@ pub(super) fn direct_params(cfg: &Config) -> DirectParams {
         max_constraint_speed_m_s: cfg.controls.max_constraint_speed_m_s,
         opposing_gain_per_s: cfg.controls.opposing_gain_per_s,
     }
+}
+
+/// How the environment's potential field moves the crowd's mesh
+/// (mesh-formation-control sections 5 and 6.1): the field's range, the configured
+/// step `mesh.field_step_m` (m per unit of field), and `margin_m` (the agent radius)
+/// kept between projected vertices and obstacles. `None` for values the config
+/// validation refuses.
+pub(super) fn mesh_field_params(step_m: f64, margin_m: f64) -> Option<FieldParams> {
+    FieldParams::new(MESH_FIELD_RANGE_M, step_m, margin_m).ok()
 }

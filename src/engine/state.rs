@@ -2,17 +2,15 @@
 //! reconfigured, and what it reports.
 
 use super::params::{
-    agent_params, direct_params, inline_planner, planner_for, planner_params, point_metric,
-    same_scene, segment_params,
+    agent_params, direct_params, inline_planner, mesh_field_params, planner_for, planner_params,
+    point_metric, same_scene, segment_params,
 };
 use super::pool::ArcPool;
 use crate::config::Config;
 use crate::crowd::agents::{AgentParams, Agents};
 use crate::crowd::assign::Assigner;
 use crate::crowd::control::{DirectController, SwitchRequest};
-use crate::crowd::environment::{
-    FieldParams, Planner, PlannerParams, Scene, MESH_FIELD_RANGE_M, MESH_FIELD_STEP_M,
-};
+use crate::crowd::environment::{Planner, PlannerParams, Scene};
 use crate::crowd::formation::{FormationLibrary, START};
 use crate::crowd::mesh::{GoalSample, TriMesh};
 use crate::geom::{Rect, Vec2};
@@ -51,6 +49,8 @@ pub struct Engine {
     pub(super) world: Rect,
     pub(super) glass_mm: Vec2,
     pub(super) grab_radius_m: f64,
+    /// `mesh.field_step_m` (m).
+    pub(super) field_step_m: f64,
     pub(super) formation: Rect,
     pub(super) agent_params: AgentParams,
     pub(super) configured_radius_m: f64,
@@ -68,7 +68,6 @@ pub struct Engine {
     pub(super) scene_t_s: f64,
     pub(super) waypoints: Vec<Vec2>,
     pub(super) targets: Vec<Vec2>,
-    pub(super) speed_factor: Vec<f64>,
     pub(super) motions: Vec<MotionType>,
     pub(super) seq: u64,
     pub(super) last_t: Option<Micros>,
@@ -132,6 +131,7 @@ impl Engine {
             world: cfg.surface.world,
             glass_mm: Vec2::new(gw, gh),
             grab_radius_m: cfg.controls.grab_radius_m,
+            field_step_m: cfg.mesh.field_step_m,
             formation: cfg.crowd.formation,
             agent_params: agent_params(cfg),
             configured_radius_m: cfg.crowd.agent_radius_m,
@@ -149,7 +149,6 @@ impl Engine {
             scene_t_s: 0.0,
             waypoints: vec![Vec2::repeat(f64::NAN); agents_n],
             targets: Vec::with_capacity(agents_n),
-            speed_factor: Vec::with_capacity(agents_n),
             motions: Vec::with_capacity(agents_n),
             seq: 0,
             last_t: None,
@@ -188,13 +187,8 @@ impl Engine {
     /// The mesh's environment field at the current agent radius.
     pub(super) fn set_mesh_environment(&mut self) {
         let env = self.scene.as_ref().and_then(|s| {
-            FieldParams::new(
-                MESH_FIELD_RANGE_M,
-                MESH_FIELD_STEP_M,
-                self.agent_params.radius_m,
-            )
-            .ok()
-            .map(|p| (Arc::clone(s), p))
+            mesh_field_params(self.field_step_m, self.agent_params.radius_m)
+                .map(|p| (Arc::clone(s), p))
         });
         self.direct.set_environment(env);
     }
@@ -267,6 +261,7 @@ impl Engine {
             ignored.push("mesh.cols/rows");
         }
         self.grab_radius_m = cfg.controls.grab_radius_m;
+        self.field_step_m = cfg.mesh.field_step_m;
         self.configured_radius_m = cfg.crowd.agent_radius_m;
         self.formations = Arc::clone(cfg.formation_library());
         self.formation_lambda = cfg.formations.lambda;

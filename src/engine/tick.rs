@@ -105,6 +105,18 @@ impl Engine {
         let lag = self
             .agents
             .mean_goal_distance(self.direct.goals(), &self.goal_of);
+        // A cancelled control (a palm, a device gone) does not go on through its
+        // remaining check points as a lifted one does.
+        for s in &self.seg_out {
+            if let Segment::ControlEnd {
+                id,
+                cancelled: true,
+                ..
+            } = *s
+            {
+                self.direct.cancel(id);
+            }
+        }
         if let Err(e) = self.direct.update(self.segmenter.controls(), dt, lag) {
             self.counters.deform_errors += 1;
             if self.counters.deform_errors.is_power_of_two() {
@@ -236,7 +248,6 @@ impl Engine {
         let t = self.scene_t_s;
         let goals = self.direct.goals();
         self.targets.clear();
-        self.speed_factor.clear();
         for (i, &p) in self.agents.positions().iter().enumerate() {
             let g = goals[self.goal_of[i] as usize];
             let w = self
@@ -245,10 +256,10 @@ impl Engine {
                 .copied()
                 .unwrap_or(Vec2::repeat(f64::NAN));
             self.targets.push(steer_target(scene, p, g, w, t));
-            self.speed_factor.push(scene.terrain_at(p, t).speed_factor);
         }
+        let speed = |x: Vec2| scene.terrain_at(x, t).speed_factor;
         self.agents
-            .step_towards(&self.targets, &self.speed_factor, dt, &self.agent_params);
+            .step_towards(&self.targets, speed, dt, &self.agent_params);
         let r = self.agent_params.radius_m;
         for i in 0..self.agents.len() {
             let p = self.agents.positions()[i];

@@ -14,7 +14,7 @@ pub use planner::{
 };
 pub use potential::{
     displace_vertices, field_at, magnitude, part_field, FieldError, FieldGrid, FieldParams,
-    CENTRE_EPSILON_M, MESH_FIELD_RANGE_M, MESH_FIELD_STEP_M,
+    CENTRE_EPSILON_M, MESH_FIELD_RANGE_M,
 };
 pub use scene::{
     load_scene, BoundaryPoint, Checkpoint, CheckpointDef, Circle, ConvexPolygon, Dynamic,

@@ -24,8 +24,6 @@ pub const CENTRE_EPSILON_M: f64 = 1e-12;
 /// Reach of the potential field pushing mesh vertices off obstacles (m; `r` of
 /// mesh-formation-control eq. 1).
 pub const MESH_FIELD_RANGE_M: f64 = 1.0;
-/// Mesh vertex displacement per unit of field (m).
-pub const MESH_FIELD_STEP_M: f64 = 0.3;
 
 /// Why field parameters were refused.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, thiserror::Error)]

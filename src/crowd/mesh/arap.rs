@@ -2,7 +2,10 @@
 //!
 //! The two-step method of Igarashi, Moscovich and Hughes 2005, "As-Rigid-As-Possible
 //! Shape Manipulation" (cited as mesh-formation-control reference \[28\], section 4.1),
-//! with soft constraints:
+//! with soft constraints — on vertices ([`Constraint`]) and on points inside
+//! triangles, held through the triangle's corners by their barycentric coordinates
+//! ([`PointConstraint`], the supplementary points an area control samples,
+//! mesh-formation-control section 4.2):
 //!
 //! 1. **Similarity step.** Each triangle edge `(i, j)` expresses the opposite vertex `k`
 //!    in the edge's local frame, `v_k = v_i + x (v_j - v_i) + y R90 (v_j - v_i)`, with
@@ -16,16 +19,20 @@
 //!    plus the constraint and anchor terms gives one `n × n` SPD matrix (a weighted graph
 //!    Laplacian) shared by the x and y coordinates.
 //!
-//! Both matrices depend only on the mesh and on the constraint *set* (vertices and
-//! weights), not on the targets, so they are factorised once per constraint set by
-//! [`Arap::set_constraints`]. [`Arap::solve`] then costs two right-hand-side
-//! assemblies and three pairs of triangular solves, with no allocation.
+//! Both matrices depend only on the mesh and on the constraint *set* (vertices, points
+//! and weights), not on the targets, so they are factorised once per constraint set
+//! by [`Arap::set_constraints`] or [`Arap::set_constraints_and_points`].
+//! [`Arap::solve`] then costs two right-hand-side assemblies and three pairs of
+//! triangular solves, with no allocation.
 //!
 //! The sparse factorisation is a reverse Cuthill–McKee ordering of the vertices followed
-//! by an envelope (skyline, profile) Cholesky factorisation, which suits the banded
-//! matrices of grid-like meshes: for a `c × r` grid the envelope has about
-//! `2n · 2 min(c, r)` entries in step 1 and `n · min(c, r)` in step 2.
+//! by an envelope (skyline, profile) Cholesky factorisation (`envelope.rs`), which
+//! suits the banded matrices of grid-like meshes: for a `c × r` grid the envelope has
+//! about `2n · 2 min(c, r)` entries in step 1 and `n · min(c, r)` in step 2. A point
+//! constraint couples only the corners of its triangle, which the envelope already
+//! holds.
 
+use super::envelope::Envelope;
 use crate::crowd::mesh::TriMesh;
 use crate::geom::Vec2;
 
@@ -53,6 +60,31 @@ pub struct Constraint {
     /// Weight of `‖v - target‖²` relative to a rigidity term (dimensionless, finite,
     /// in `(0, MAX_CONSTRAINT_WEIGHT]`).
     pub weight: f64,
+}
+
+/// A soft constraint on a point of the mesh that need not be a vertex: the point
+/// `Σ_k bary[k] · v[corners[k]]` inside one triangle is pulled towards its target
+/// (mesh-formation-control section 4.2: the supplementary control points an area
+/// control samples inside its hull).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct PointConstraint {
+    /// The corners of the triangle holding the point (vertex indices).
+    pub corners: [u32; 3],
+    /// The point's barycentric coordinates in that triangle (sum 1).
+    pub bary: [f64; 3],
+    /// Weight of `‖Σ_k bary_k v_k - target‖²` relative to a rigidity term
+    /// (dimensionless, finite, in `(0, MAX_CONSTRAINT_WEIGHT]`).
+    pub weight: f64,
+}
+
+impl PointConstraint {
+    /// Where the point is on the mesh pose `verts`.
+    pub fn position(&self, verts: &[Vec2]) -> Vec2 {
+        self.corners
+            .iter()
+            .zip(&self.bary)
+            .fold(Vec2::zeros(), |acc, (&c, &b)| acc + verts[c as usize] * b)
+    }
 }
 
 /// Which caller buffer an [`ArapError`] is about.
@@ -117,196 +149,21 @@ pub enum ArapError {
     /// extreme weights); [`Arap::solve`] refuses until a set factorises.
     #[error("ARAP system is not positive definite (degenerate mesh or weights)")]
     Degenerate,
+    /// A point constraint's corners are out of range, or not corners of one mesh
+    /// triangle (the solver couples only vertices that share a triangle).
+    #[error("point constraint {index} is not inside a mesh triangle")]
+    PointNotInTriangle {
+        /// Index of the point constraint.
+        index: usize,
+    },
+    /// A point constraint's weight or barycentric coordinates are unusable (weight
+    /// not finite or outside `(0, MAX_CONSTRAINT_WEIGHT]`, a coordinate not finite).
+    #[error("point constraint {index} has an unusable weight or coordinates")]
+    BadPoint {
+        /// Index of the point constraint.
+        index: usize,
+    },
 }
-
-/// Envelope (skyline) storage of the lower triangle of a symmetric matrix, factorised in
-/// place into its Cholesky factor `L` (`A = L Lᵀ`).
-mod envelope {
-    /// Dot product with four accumulators (lets the compiler vectorise).
-    #[inline]
-    pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
-        let n = a.len().min(b.len());
-        let (a, b) = (&a[..n], &b[..n]);
-        let mut acc = [0.0; 4];
-        let mut ca = a.chunks_exact(4);
-        let mut cb = b.chunks_exact(4);
-        for (x, y) in (&mut ca).zip(&mut cb) {
-            acc[0] += x[0] * y[0];
-            acc[1] += x[1] * y[1];
-            acc[2] += x[2] * y[2];
-            acc[3] += x[3] * y[3];
-        }
-        let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
-        for (x, y) in ca.remainder().iter().zip(cb.remainder()) {
-            s += x * y;
-        }
-        s
-    }
-
-    /// Row `i` stores columns `first[i]..=i` contiguously at `vals[start[i]..start[i+1]]`.
-    #[derive(Clone, Debug)]
-    pub(super) struct Envelope {
-        first: Vec<usize>,
-        start: Vec<usize>,
-        pub(super) vals: Vec<f64>,
-        /// `1 / L[i][i]` after a successful [`Envelope::factor`].
-        inv_diag: Vec<f64>,
-    }
-
-    impl Envelope {
-        /// Zero matrix with the given first stored column per row (`first[i] <= i`).
-        pub(super) fn new(first: Vec<usize>) -> Envelope {
-            let n = first.len();
-            let first: Vec<usize> = first.iter().enumerate().map(|(i, &f)| f.min(i)).collect();
-            let mut start = Vec::with_capacity(n + 1);
-            start.push(0);
-            for (i, &f) in first.iter().enumerate() {
-                start.push(start[i] + (i - f + 1));
-            }
-            let vals = vec![0.0; start[n]];
-            Envelope {
-                first,
-                start,
-                vals,
-                inv_diag: vec![0.0; n],
-            }
-        }
-
-        /// Matrix order.
-        pub(super) fn dim(&self) -> usize {
-            self.first.len()
-        }
-
-        /// Number of stored entries (the profile, diagonal included).
-        pub(super) fn stored(&self) -> usize {
-            self.vals.len()
-        }
-
-        /// Adds `v` to entry `(i, j)` and its mirror; `false` if outside the envelope.
-        pub(super) fn add(&mut self, i: usize, j: usize, v: f64) -> bool {
-            let (i, j) = if i >= j { (i, j) } else { (j, i) };
-            if i >= self.dim() || j < self.first[i] {
-                return false;
-            }
-            self.vals[self.start[i] + j - self.first[i]] += v;
-            true
-        }
-
-        /// Entry `(i, j)` of the stored lower triangle (0 outside the envelope).
-        #[cfg(test)]
-        pub(super) fn get(&self, i: usize, j: usize) -> f64 {
-            let (i, j) = if i >= j { (i, j) } else { (j, i) };
-            if i >= self.dim() || j < self.first[i] {
-                return 0.0;
-            }
-            self.vals[self.start[i] + j - self.first[i]]
-        }
-
-        /// In-place Cholesky factorisation (row-oriented envelope algorithm; the fill
-        /// stays inside the envelope). `Err(row)` at the first non-positive or
-        /// non-finite pivot.
-        pub(super) fn factor(&mut self) -> Result<(), usize> {
-            for i in 0..self.dim() {
-                let fi = self.first[i];
-                let (done, rest) = self.vals.split_at_mut(self.start[i]);
-                let row_i = &mut rest[..i - fi + 1];
-                for j in fi..i {
-                    let fj = self.first[j];
-                    let k0 = fi.max(fj);
-                    let row_j = &done[self.start[j]..self.start[j + 1]];
-                    let s = row_i[j - fi] - dot(&row_i[k0 - fi..j - fi], &row_j[k0 - fj..j - fj]);
-                    row_i[j - fi] = s / row_j[j - fj];
-                }
-                let off = &row_i[..i - fi];
-                let d = row_i[i - fi] - dot(off, off);
-                if !(d > 0.0 && d.is_finite()) {
-                    return Err(i);
-                }
-                row_i[i - fi] = d.sqrt();
-                self.inv_diag[i] = 1.0 / row_i[i - fi];
-            }
-            Ok(())
-        }
-
-        /// Solves `L Lᵀ x = b` in place (after [`Envelope::factor`]).
-        ///
-        /// The forward pass adds the entry next to the diagonal last and both passes
-        /// multiply by the stored reciprocal pivots, which keeps the row-to-row
-        /// dependency chain short (it bounds the speed of a triangular solve).
-        pub(super) fn solve(&self, b: &mut [f64]) {
-            let n = self.dim().min(b.len());
-            for i in 0..n {
-                let fi = self.first[i];
-                let m = i - fi;
-                let row = &self.vals[self.start[i]..self.start[i + 1]];
-                let s = if m > 0 {
-                    let head = dot(&row[..m - 1], &b[fi..i - 1]);
-                    (b[i] - head) - row[m - 1] * b[i - 1]
-                } else {
-                    b[i]
-                };
-                b[i] = s * self.inv_diag[i];
-            }
-            for i in (0..n).rev() {
-                let fi = self.first[i];
-                let row = &self.vals[self.start[i]..self.start[i + 1]];
-                let xi = b[i] * self.inv_diag[i];
-                b[i] = xi;
-                for (bk, l) in b[fi..i].iter_mut().zip(&row[..i - fi]) {
-                    *bk -= l * xi;
-                }
-            }
-        }
-
-        /// Solves `L Lᵀ X = B` in place for two right-hand sides stored as pairs.
-        pub(super) fn solve2(&self, b: &mut [[f64; 2]]) {
-            let n = self.dim().min(b.len());
-            for i in 0..n {
-                let fi = self.first[i];
-                let m = i - fi;
-                let row = &self.vals[self.start[i]..self.start[i + 1]];
-                let (done, rest) = b.split_at_mut(i);
-                let mut s = rest[0];
-                if m > 0 {
-                    // Two accumulator pairs: four independent dependency chains.
-                    let mut acc = [0.0; 4];
-                    let mut rows = row[..m - 1].chunks_exact(2);
-                    let mut xs = done[fi..i - 1].chunks_exact(2);
-                    for (l, x) in (&mut rows).zip(&mut xs) {
-                        acc[0] += l[0] * x[0][0];
-                        acc[1] += l[0] * x[0][1];
-                        acc[2] += l[1] * x[1][0];
-                        acc[3] += l[1] * x[1][1];
-                    }
-                    for (l, x) in rows.remainder().iter().zip(xs.remainder()) {
-                        acc[0] += l * x[0];
-                        acc[1] += l * x[1];
-                    }
-                    let (l, x) = (row[m - 1], done[i - 1]);
-                    s = [
-                        (s[0] - (acc[0] + acc[2])) - l * x[0],
-                        (s[1] - (acc[1] + acc[3])) - l * x[1],
-                    ];
-                }
-                let r = self.inv_diag[i];
-                rest[0] = [s[0] * r, s[1] * r];
-            }
-            for i in (0..n).rev() {
-                let fi = self.first[i];
-                let row = &self.vals[self.start[i]..self.start[i + 1]];
-                let r = self.inv_diag[i];
-                let x = [b[i][0] * r, b[i][1] * r];
-                b[i] = x;
-                for (bk, l) in b[fi..i].iter_mut().zip(&row[..i - fi]) {
-                    bk[0] -= l * x[0];
-                    bk[1] -= l * x[1];
-                }
-            }
-        }
-    }
-}
-
-use envelope::Envelope;
 
 /// Reverse Cuthill–McKee ordering of a graph in CSR form (`adj_start`, `adj`): returns
 /// `perm` with `perm[new] = old`. Each connected component starts from a
@@ -520,6 +377,8 @@ pub struct Arap {
     base2: Vec<f64>,
     fac2: Envelope,
     constraints: Vec<Constraint>,
+    /// Point constraints of the current factorisation.
+    points: Vec<PointConstraint>,
     /// Sum of constraint weights per permuted vertex in the current factorisation.
     diag_weight: Vec<f64>,
     scratch_weight: Vec<f64>,
@@ -629,6 +488,7 @@ impl Arap {
             base2: fac2.vals.clone(),
             fac2,
             constraints: Vec::new(),
+            points: Vec::new(),
             diag_weight: vec![0.0; n],
             scratch_weight: vec![0.0; n],
             factored: false,
@@ -649,6 +509,12 @@ impl Arap {
     /// The current constraint set (as last given to [`Arap::set_constraints`]).
     pub fn constraints(&self) -> &[Constraint] {
         &self.constraints
+    }
+
+    /// The current point constraints (as last given to
+    /// [`Arap::set_constraints_and_points`]).
+    pub fn points(&self) -> &[PointConstraint] {
+        &self.points
     }
 
     /// How many numeric factorisations have run (one in [`Arap::new`], one per effective
@@ -730,6 +596,29 @@ impl Arap {
     /// unchanged), or [`ArapError::Degenerate`] if the factorisation fails (the set is
     /// stored, and [`Arap::solve`] fails until a set factorises).
     pub fn set_constraints(&mut self, constraints: &[Constraint]) -> Result<(), ArapError> {
+        self.set_constraints_and_points(constraints, &[])
+    }
+
+    /// Sets vertex constraints and point constraints ([`PointConstraint`]: a point
+    /// inside a triangle, held through its corners), and refactors both systems when
+    /// the matrices change. As [`Arap::set_constraints`], which is this with no points;
+    /// in [`Arap::solve`] the targets of `points` follow those of `constraints`.
+    ///
+    /// A point constraint adds `w · b bᵀ` on its triangle's corners to both systems;
+    /// the corners share a triangle, so the entries lie inside the factor's envelope
+    /// and nothing is reallocated.
+    ///
+    /// # Complexity
+    /// As [`Arap::set_constraints`], plus O(points).
+    ///
+    /// # Errors
+    /// As [`Arap::set_constraints`]; [`ArapError::PointNotInTriangle`] or
+    /// [`ArapError::BadPoint`] for a bad point (the state is then unchanged).
+    pub fn set_constraints_and_points(
+        &mut self,
+        constraints: &[Constraint],
+        points: &[PointConstraint],
+    ) -> Result<(), ArapError> {
         for c in constraints {
             if c.vertex as usize >= self.n {
                 return Err(ArapError::VertexOutOfRange {
@@ -744,7 +633,19 @@ impl Arap {
                 });
             }
         }
-        if self.factored && constraints == self.constraints.as_slice() {
+        for (index, p) in points.iter().enumerate() {
+            let usable = p.weight > 0.0
+                && p.weight <= MAX_CONSTRAINT_WEIGHT
+                && p.bary.iter().all(|b| b.is_finite());
+            if !usable {
+                return Err(ArapError::BadPoint { index });
+            }
+            if !self.couples(p.corners) {
+                return Err(ArapError::PointNotInTriangle { index });
+            }
+        }
+        let same_points = points == self.points.as_slice();
+        if self.factored && same_points && constraints == self.constraints.as_slice() {
             return Ok(());
         }
         self.scratch_weight.fill(0.0);
@@ -753,11 +654,23 @@ impl Arap {
         }
         self.constraints.clear();
         self.constraints.extend_from_slice(constraints);
-        if self.factored && self.scratch_weight == self.diag_weight {
+        if self.factored && same_points && self.scratch_weight == self.diag_weight {
             return Ok(());
         }
+        self.points.clear();
+        self.points.extend_from_slice(points);
         std::mem::swap(&mut self.diag_weight, &mut self.scratch_weight);
         self.refactor()
+    }
+
+    /// Whether the three vertices are in range and pairwise inside the envelope
+    /// (corners of one triangle always are).
+    fn couples(&self, corners: [u32; 3]) -> bool {
+        if corners.iter().any(|&c| c as usize >= self.n) {
+            return false;
+        }
+        let p = corners.map(|c| self.inv[c as usize] as usize);
+        (0..3).all(|a| (a + 1..3).all(|b| self.fac2.contains(p[a], p[b])))
     }
 
     /// Rebuilds both factorisations from the base matrices and `diag_weight`.
@@ -772,6 +685,22 @@ impl Arap {
                 self.fac2.add(p, p, w);
             }
         }
+        for pc in &self.points {
+            let p = pc.corners.map(|c| self.inv[c as usize] as usize);
+            for a in 0..3 {
+                for b in a..3 {
+                    // The stored entry (i, j) stands for (j, i) too: each unordered
+                    // pair once, twice when two corners are one vertex.
+                    let mut v = pc.weight * pc.bary[a] * pc.bary[b];
+                    if a != b && p[a] == p[b] {
+                        v *= 2.0;
+                    }
+                    self.fac1.add(2 * p[a], 2 * p[b], v);
+                    self.fac1.add(2 * p[a] + 1, 2 * p[b] + 1, v);
+                    self.fac2.add(p[a], p[b], v);
+                }
+            }
+        }
         self.factored = self.fac1.factor().is_ok() && self.fac2.factor().is_ok();
         if self.factored {
             Ok(())
@@ -782,7 +711,8 @@ impl Arap {
 
     /// Two-step ARAP deformation.
     ///
-    /// `targets[k]` is the target of `constraints()[k]`; `anchor` (one per vertex) is the
+    /// `targets[k]` is the target of `constraints()[k]`, then
+    /// `targets[constraints().len() + j]` that of `points()[j]`; `anchor` (one per vertex) is the
     /// pose the anchor term pulls towards (the mesh pose when the constraint set last
     /// changed); the result is written to `out` (one per vertex). Rest shape = the
     /// mesh's rest pose.
@@ -800,7 +730,8 @@ impl Arap {
     /// reference \[28\]), with soft constraints:
     /// step 1 minimises
     /// `Σ_t Σ_(i,j,k) ‖v_k - v_i - x_ij (v_j - v_i) - y_ij R90 (v_j - v_i)‖²`
-    /// `+ Σ_c w_c ‖v_c - q_c‖² + ANCHOR_WEIGHT Σ_v ‖v - T(a_v)‖²`;
+    /// `+ Σ_c w_c ‖v_c - q_c‖² + Σ_p w_p ‖Σ_k b_pk v_pk - q_p‖²`
+    /// `+ ANCHOR_WEIGHT Σ_v ‖v - T(a_v)‖²`;
     /// step 2 minimises `Σ_t Σ_(i,j) ‖(v_j - v_i) - R_t (r_j - r_i)‖²` plus the same
     /// constraint and anchor terms, with `R_t` the rotation of the similarity that best
     /// maps the rest triangle onto its step-1 image.
@@ -832,7 +763,11 @@ impl Arap {
                 })
             }
         };
-        check_len(ArapBuffer::Targets, self.constraints.len(), targets.len())?;
+        check_len(
+            ArapBuffer::Targets,
+            self.constraints.len() + self.points.len(),
+            targets.len(),
+        )?;
         check_len(ArapBuffer::Anchor, self.n, anchor.len())?;
         check_len(ArapBuffer::Out, self.n, out.len())?;
         let finite = |p: &Vec2| p.x.is_finite() && p.y.is_finite();
@@ -861,16 +796,22 @@ impl Arap {
         Ok(())
     }
 
-    /// The rigid motion that best carries the constrained vertices' anchor positions to
-    /// their targets (weighted least squares; [`RigidMotion::IDENTITY`] without
-    /// constraints, a translation with one constrained position).
+    /// The rigid motion that best carries the constrained vertices' and points' anchor
+    /// positions to their targets (weighted least squares; [`RigidMotion::IDENTITY`]
+    /// without constraints, a translation with one constrained position).
     fn anchor_motion(&self, targets: &[Vec2], anchor: &[Vec2]) -> RigidMotion {
         let mut wsum = 0.0;
         let (mut abar, mut qbar) = (Vec2::zeros(), Vec2::zeros());
-        for (c, q) in self.constraints.iter().zip(targets) {
-            wsum += c.weight;
-            abar += anchor[c.vertex as usize] * c.weight;
-            qbar += q * c.weight;
+        let (vt, pt) = targets.split_at(self.constraints.len());
+        let anchored = self
+            .constraints
+            .iter()
+            .map(|c| (c.weight, anchor[c.vertex as usize]))
+            .chain(self.points.iter().map(|p| (p.weight, p.position(anchor))));
+        for ((w, a), q) in anchored.clone().zip(vt.iter().chain(pt)) {
+            wsum += w;
+            abar += a * w;
+            qbar += q * w;
         }
         if wsum.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return RigidMotion::IDENTITY;
@@ -878,13 +819,13 @@ impl Arap {
         abar /= wsum;
         qbar /= wsum;
         let (mut dot, mut crs, mut aa, mut qq) = (0.0, 0.0, 0.0, 0.0);
-        for (c, q) in self.constraints.iter().zip(targets) {
-            let a = anchor[c.vertex as usize] - abar;
+        for ((w, a), q) in anchored.zip(vt.iter().chain(pt)) {
+            let a = a - abar;
             let q = q - qbar;
-            dot += c.weight * a.dot(&q);
-            crs += c.weight * (a.x * q.y - a.y * q.x);
-            aa += c.weight * a.norm_squared();
-            qq += c.weight * q.norm_squared();
+            dot += w * a.dot(&q);
+            crs += w * (a.x * q.y - a.y * q.x);
+            aa += w * a.norm_squared();
+            qq += w * q.norm_squared();
         }
         let norm = dot.hypot(crs);
         let (cos, sin) = if norm > ROTATION_FIT_EPS * (aa * qq).sqrt() && norm.is_finite() {
@@ -913,6 +854,13 @@ impl Arap {
             self.rhs1[p] += c.weight * q.x;
             self.rhs1[p + 1] += c.weight * q.y;
         }
+        for (pc, q) in self.points.iter().zip(&targets[self.constraints.len()..]) {
+            for (&c, &b) in pc.corners.iter().zip(&pc.bary) {
+                let p = 2 * self.inv[c as usize] as usize;
+                self.rhs1[p] += pc.weight * b * q.x;
+                self.rhs1[p + 1] += pc.weight * b * q.y;
+            }
+        }
         self.fac1.solve(&mut self.rhs1);
     }
 
@@ -927,6 +875,13 @@ impl Arap {
             let b = &mut self.rhs2[self.inv[c.vertex as usize] as usize];
             b[0] += c.weight * q.x;
             b[1] += c.weight * q.y;
+        }
+        for (pc, q) in self.points.iter().zip(&targets[self.constraints.len()..]) {
+            for (&c, &bc) in pc.corners.iter().zip(&pc.bary) {
+                let b = &mut self.rhs2[self.inv[c as usize] as usize];
+                b[0] += pc.weight * bc * q.x;
+                b[1] += pc.weight * bc * q.y;
+            }
         }
         // Σ over the triangle's edges of ±R (r_j - r_i) lands on corner c as
         // R (e_{c-1} - e_c) = R (2 r_c - r_{c-1} - r_{c+1}) = 3 R (r_c - r̄).
@@ -1052,48 +1007,6 @@ mod tests {
             .zip(b)
             .map(|(p, q)| (p - q).norm())
             .fold(0.0, f64::max)
-    }
-
-    #[test]
-    fn envelope_cholesky_matches_dense() {
-        let n = 9;
-        let first: Vec<usize> = (0..n).map(|i: usize| i.saturating_sub(1 + i % 3)).collect();
-        let mut env = Envelope::new(first.clone());
-        let mut dense = DMatrix::<f64>::zeros(n, n);
-        let mut rng = SplitMix64::new(7);
-        for i in 0..n {
-            for j in first[i]..i {
-                let v = rng.unit() - 0.5;
-                assert!(env.add(i, j, v));
-                dense[(i, j)] += v;
-                dense[(j, i)] += v;
-            }
-            env.add(i, i, 4.0);
-            dense[(i, i)] += 4.0;
-        }
-        assert!(!env.add(n - 1, 0, 1.0), "outside the envelope");
-        assert_eq!(env.get(3, 1), dense[(3, 1)]);
-        let b: Vec<f64> = (0..n).map(|_| rng.unit()).collect();
-        let expect = dense
-            .clone()
-            .cholesky()
-            .expect("spd")
-            .solve(&DVector::from_vec(b.clone()));
-        env.factor().expect("spd");
-        let mut x = b.clone();
-        env.solve(&mut x);
-        let mut x2: Vec<[f64; 2]> = b.iter().map(|&v| [v, -2.0 * v]).collect();
-        env.solve2(&mut x2);
-        for i in 0..n {
-            assert!((x[i] - expect[i]).abs() < 1e-12);
-            assert!((x2[i][0] - expect[i]).abs() < 1e-12);
-            assert!((x2[i][1] + 2.0 * expect[i]).abs() < 1e-12);
-        }
-        let mut bad = Envelope::new(vec![0, 0]);
-        bad.add(0, 0, 1.0);
-        bad.add(1, 0, 2.0);
-        bad.add(1, 1, 1.0);
-        assert_eq!(bad.factor(), Err(1));
     }
 
     #[test]
@@ -1469,6 +1382,135 @@ mod tests {
             dense_check.fac1.get(2 * p1, 2 * p0) != 0.0,
             "edge 0-1 couples x0 and x1"
         );
+    }
+
+    /// Point constraints at the centroids of a few triangles.
+    fn centroid_points(m: &TriMesh, tris: &[usize], weight: f64) -> Vec<PointConstraint> {
+        tris.iter()
+            .map(|&t| PointConstraint {
+                corners: m.triangles()[t],
+                bary: [1.0 / 3.0; 3],
+                weight,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn point_constraints_inside_triangles_move_the_mesh_rigidly() {
+        // No vertex is constrained: only three points inside triangles far apart.
+        let m = grid(10, 8);
+        let last = m.triangles().len() - 1;
+        let pts = centroid_points(&m, &[0, last / 2, last], 100.0);
+        let mut arap = Arap::new(&m);
+        arap.set_constraints_and_points(&[], &pts).expect("valid");
+        let (rot, t) = (Rotation2::new(0.9), Vec2::new(-2.0, 1.5));
+        let moved: Vec<Vec2> = m.rest().iter().map(|p| rot * p + t).collect();
+        let targets: Vec<Vec2> = pts.iter().map(|p| p.position(&moved)).collect();
+        let out = solve(&mut arap, &targets, m.rest());
+        let e = max_err(&out, &moved) / mesh_size(&m);
+        assert!(e <= 1e-3, "relative error {e}");
+        for (p, q) in pts.iter().zip(&targets) {
+            assert!((p.position(&out) - q).norm() < 1e-3);
+        }
+    }
+
+    #[test]
+    fn a_point_constraint_on_a_corner_acts_as_a_vertex_constraint() {
+        let m = grid(6, 5);
+        let t = m.triangles()[7];
+        let (v, target) = (t[1], Vec2::new(9.0, 4.0));
+        let mut by_vertex = Arap::new(&m);
+        by_vertex
+            .set_constraints(&[Constraint {
+                vertex: v,
+                weight: 50.0,
+            }])
+            .expect("valid");
+        let a = solve(&mut by_vertex, &[target], m.rest());
+        let mut by_point = Arap::new(&m);
+        let corner = PointConstraint {
+            corners: t,
+            bary: [0.0, 1.0, 0.0],
+            weight: 50.0,
+        };
+        by_point
+            .set_constraints_and_points(&[], &[corner])
+            .expect("valid");
+        let b = solve(&mut by_point, &[target], m.rest());
+        assert!(max_err(&a, &b) < 1e-9, "{}", max_err(&a, &b));
+        // Mixed: the vertex targets come first, then the points'.
+        let mut both = Arap::new(&m);
+        let far = Constraint {
+            vertex: 0,
+            weight: 50.0,
+        };
+        both.set_constraints_and_points(&[far], &[corner])
+            .expect("valid");
+        let c = solve(&mut both, &[m.rest()[0], target], m.rest());
+        let mut two = Arap::new(&m);
+        let mut at_v = far;
+        at_v.vertex = v;
+        two.set_constraints(&[far, at_v]).expect("valid");
+        let d = solve(&mut two, &[m.rest()[0], target], m.rest());
+        assert!(max_err(&c, &d) < 1e-9, "{}", max_err(&c, &d));
+        assert!(matches!(
+            solve_err(&mut both, &[target], m.rest()),
+            ArapError::LengthMismatch { expected: 2, .. }
+        ));
+    }
+
+    fn solve_err(arap: &mut Arap, targets: &[Vec2], anchor: &[Vec2]) -> ArapError {
+        let mut out = vec![Vec2::zeros(); arap.vertex_count()];
+        arap.solve(targets, anchor, &mut out).unwrap_err()
+    }
+
+    #[test]
+    fn bad_point_constraints_are_refused_and_same_points_do_not_refactor() {
+        let m = grid(5, 4);
+        let mut arap = Arap::new(&m);
+        let pts = centroid_points(&m, &[0, 5], 100.0);
+        arap.set_constraints_and_points(&[], &pts).expect("valid");
+        assert_eq!(arap.factorizations(), 2);
+        arap.set_constraints_and_points(&[], &pts).expect("valid");
+        assert_eq!(arap.factorizations(), 2, "same points");
+        // Opposite corners of the grid share no triangle.
+        let apart = PointConstraint {
+            corners: [0, 19, 1],
+            bary: [0.2, 0.3, 0.5],
+            weight: 1.0,
+        };
+        assert_eq!(
+            arap.set_constraints_and_points(&[], &[pts[0], apart]),
+            Err(ArapError::PointNotInTriangle { index: 1 })
+        );
+        let outside = PointConstraint {
+            corners: [0, 1, 99],
+            ..apart
+        };
+        assert_eq!(
+            arap.set_constraints_and_points(&[], &[outside]),
+            Err(ArapError::PointNotInTriangle { index: 0 })
+        );
+        for bad in [
+            PointConstraint {
+                weight: 0.0,
+                ..pts[0]
+            },
+            PointConstraint {
+                bary: [f64::NAN, 0.5, 0.5],
+                ..pts[0]
+            },
+        ] {
+            assert_eq!(
+                arap.set_constraints_and_points(&[], &[bad]),
+                Err(ArapError::BadPoint { index: 0 })
+            );
+        }
+        assert_eq!(arap.points(), pts.as_slice(), "state unchanged");
+        assert_eq!(arap.factorizations(), 2);
+        arap.set_constraints(&[]).expect("valid");
+        assert!(arap.points().is_empty());
+        assert_eq!(arap.factorizations(), 3);
     }
 
     #[test]

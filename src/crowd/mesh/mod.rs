@@ -1,14 +1,18 @@
 //! The crowd's deformable triangle mesh (mesh-formation-control section 4.1) and the
 //! operations on it, one file each: the mesh and its queries ([`TriMesh`]), goal
-//! points on it ([`sample_goals`]), as-rigid-as-possible deformation ([`Arap`]) and
-//! mean value coordinates for area controls ([`mean_value_coordinates`]).
+//! points on it ([`sample_goals`]), as-rigid-as-possible deformation ([`Arap`], with
+//! its envelope Cholesky factorisation in `envelope.rs`) and mean value coordinates
+//! for area controls ([`mean_value_coordinates`]).
 
 mod arap;
+mod envelope;
 mod goals;
 mod mvc;
 mod trimesh;
 
-pub use arap::{Arap, ArapBuffer, ArapError, Constraint, ANCHOR_WEIGHT, MAX_CONSTRAINT_WEIGHT};
+pub use arap::{
+    Arap, ArapBuffer, ArapError, Constraint, PointConstraint, ANCHOR_WEIGHT, MAX_CONSTRAINT_WEIGHT,
+};
 pub use goals::{
     goal_positions, sample_goals, GoalSample, GOAL_CANDIDATES_PER_SAMPLE, GOAL_LLOYD_ITERATIONS,
 };

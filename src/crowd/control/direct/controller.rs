@@ -1,32 +1,14 @@
-//! Direct manipulation: fingers on the crowd deform its mesh
-//! (mesh-formation-control sections 4.1–4.2).
-//!
-//! Each control from the segmenter becomes a *rig*: one handle per finger (the
-//! nearest mesh vertex when the finger landed, kept at its offset from the finger)
-//! plus supplementary soft constraints — for a line control the vertices between its
-//! two handles, moved by linear interpolation of the handles; for an area control
-//! the vertices on and inside the convex hull of its handles, moved by their mean
-//! value coordinates in that hull. All rigs' constraints go to one ARAP solve, so
-//! several controls (two hands, two people) act on the mesh together.
-//!
-//! The mesh is as rigid as possible relative to its pose when the constraint set
-//! last changed (a finger landed or lifted): a deformation persists until another
-//! control changes it, and `reset` returns to the formation.
-//!
-//! Handles follow their finger through check points spaced along its trajectory
-//! (section 4.1: "We represent each trajectory as a set of two-dimensional check
-//! points by dividing the trajectory into segments of a pre-defined length"), at the
-//! constraint speed less the opposing force proportional to the agents' lag.
+//! The direct-manipulation controller: the mesh, its rigs and the goals.
 
+use super::handle::{turn, Handle};
+use super::rig::{hand_similarity, MeshPose, Rig, Scratch};
 use crate::crowd::environment::Scene;
 use crate::crowd::environment::{displace_vertices, FieldParams};
-use crate::crowd::mesh::{convex_hull, mean_value_coordinates, point_in_convex_polygon};
 use crate::crowd::mesh::{goal_positions, nearest_vertex, GoalSample, TriMesh};
-use crate::crowd::mesh::{Arap, ArapError, Constraint};
+use crate::crowd::mesh::{Arap, ArapError, Constraint, PointConstraint};
 use crate::geom::Vec2;
 use crate::gesture::segment::Control;
 use crate::vocab::ContactId;
-use crate::vocab::ControlKind;
 use std::sync::Arc;
 
 /// Tunables of direct manipulation.
@@ -44,141 +26,8 @@ pub struct DirectParams {
     pub opposing_gain_per_s: f64,
 }
 
-/// Check points a handle keeps ahead of it; older ones are merged when full.
-const PATH_CAPACITY: usize = 128;
-
-/// Check points along a finger's trajectory, oldest first (fixed capacity).
-#[derive(Clone, Debug)]
-struct Path {
-    pts: [Vec2; PATH_CAPACITY],
-    head: usize,
-    len: usize,
-}
-
-impl Path {
-    fn new() -> Path {
-        Path {
-            pts: [Vec2::zeros(); PATH_CAPACITY],
-            head: 0,
-            len: 0,
-        }
-    }
-    fn get(&self, i: usize) -> Vec2 {
-        self.pts[(self.head + i) % PATH_CAPACITY]
-    }
-    fn last(&self) -> Option<Vec2> {
-        (self.len > 0).then(|| self.get(self.len - 1))
-    }
-    fn push(&mut self, p: Vec2) {
-        if self.len == PATH_CAPACITY {
-            // Drop the oldest check point: the handle shortcuts a little.
-            self.pop_front();
-        }
-        self.pts[(self.head + self.len) % PATH_CAPACITY] = p;
-        self.len += 1;
-    }
-    fn pop_front(&mut self) {
-        if self.len > 0 {
-            self.head = (self.head + 1) % PATH_CAPACITY;
-            self.len -= 1;
-        }
-    }
-    fn front(&self) -> Option<Vec2> {
-        (self.len > 0).then(|| self.get(0))
-    }
-    /// Moves every check point by `d`.
-    fn shift(&mut self, d: Vec2) {
-        for i in 0..self.len {
-            let k = (self.head + i) % PATH_CAPACITY;
-            self.pts[k] += d;
-        }
-    }
-}
-
-#[derive(Clone, Debug)]
-struct Handle {
-    finger: ContactId,
-    vertex: u32,
-    /// Vertex position minus finger position when the finger landed (m).
-    offset: Vec2,
-    /// Current constraint target (m).
-    pos: Vec2,
-    /// Where the finger wants the handle: latest finger position + offset (m).
-    goal: Vec2,
-    path: Path,
-}
-
-impl Handle {
-    fn remaining(&self) -> f64 {
-        let mut d = 0.0;
-        let mut prev = self.pos;
-        for i in 0..self.path.len {
-            let p = self.path.get(i);
-            d += (p - prev).norm();
-            prev = p;
-        }
-        d + (self.goal - prev).norm()
-    }
-
-    /// Adds check points up to the finger's latest target.
-    fn record(&mut self, goal: Vec2, spacing: f64) {
-        self.goal = goal;
-        let mut last = self.path.last().unwrap_or(self.pos);
-        let mut d = goal - last;
-        let mut n = d.norm();
-        while n >= spacing {
-            last += d * (spacing / n);
-            self.path.push(last);
-            d = goal - last;
-            n = d.norm();
-        }
-    }
-
-    /// Moves along the check points by `dist` metres.
-    fn advance(&mut self, mut dist: f64) {
-        while dist > 0.0 {
-            let next = self.path.front().unwrap_or(self.goal);
-            let d = next - self.pos;
-            let n = d.norm();
-            if n <= dist {
-                self.pos = next;
-                dist -= n;
-                if self.path.len == 0 {
-                    return;
-                }
-                self.path.pop_front();
-            } else {
-                self.pos += d * (dist / n);
-                return;
-            }
-        }
-    }
-}
-
-#[derive(Clone, Debug)]
-enum Support {
-    /// Line control: position `t` along handle a→b and `d` across it, both relative
-    /// to the handle distance.
-    Line { t: f64, d: f64 },
-    /// Area control: mean value coordinates over the hull handles.
-    Area { weights: Vec<f64> },
-}
-
-#[derive(Clone, Debug)]
-struct Supplementary {
-    vertex: u32,
-    support: Support,
-}
-
-#[derive(Clone, Debug)]
-struct Rig {
-    id: u32,
-    kind: ControlKind,
-    handles: Vec<Handle>,
-    /// Handle indices forming the hull (area) or the two ends (line).
-    frame: Vec<usize>,
-    supp: Vec<Supplementary>,
-}
+/// Retired rigs kept for their buffers.
+const SPARE_RIGS: usize = 8;
 
 /// Why the controller could not update.
 #[derive(Copy, Clone, Debug, PartialEq, thiserror::Error)]
@@ -202,7 +51,12 @@ pub struct DirectController {
     anchor: Vec<Vec2>,
     solved: Vec<Vec2>,
     rigs: Vec<Rig>,
+    /// Retired rigs, reused by the next controls.
+    spare: Vec<Rig>,
+    scratch: Scratch,
     constraints: Vec<Constraint>,
+    points: Vec<PointConstraint>,
+    /// Targets of `constraints`, then of `points`.
     targets: Vec<Vec2>,
     best_weight: Vec<f64>,
     best_target: Vec<Vec2>,
@@ -235,7 +89,10 @@ impl DirectController {
             t_s: 0.0,
             verts,
             rigs: Vec::new(),
+            spare: Vec::new(),
+            scratch: Scratch::default(),
             constraints: Vec::with_capacity(n),
+            points: Vec::new(),
             targets: Vec::with_capacity(n),
             best_weight: vec![0.0; n],
             best_target: vec![Vec2::zeros(); n],
@@ -319,14 +176,19 @@ impl DirectController {
         std::mem::replace(&mut self.changed, false)
     }
 
-    /// Whether a world point is on the crowd (within `radius_m` of the mesh).
+    /// Whether a world point is on the crowd (within `radius_m` of the final mesh,
+    /// the one the user sees; a finger that lands there holds the final mesh's
+    /// nearest vertex).
     pub fn hits(&self, p: Vec2, radius_m: f64) -> bool {
         crate::crowd::mesh::distance_to_mesh(&self.mesh, &self.final_verts, p) <= radius_m
     }
 
-    /// Back to the rest pose; rigs are dropped.
+    /// Back to the rest pose; rigs, and drags still following their check points
+    /// after a lift, are dropped.
     pub fn reset(&mut self) {
-        self.rigs.clear();
+        while let Some(rig) = self.rigs.pop() {
+            self.retire(rig);
+        }
         self.verts.clear();
         self.verts.extend_from_slice(self.mesh.rest());
         self.anchor.clone_from(&self.verts);
@@ -336,13 +198,25 @@ impl DirectController {
         self.finalize();
     }
 
+    /// Ends control `id` at once: its rig does not go on through its remaining
+    /// check points (a cancelled touch: a palm, a device gone). The shape it made
+    /// stays.
+    pub fn cancel(&mut self, id: u32) {
+        if let Some(i) = self.rigs.iter().position(|r| r.id == id) {
+            let rig = self.rigs.remove(i);
+            self.retire(rig);
+        }
+    }
+
     /// Replaces the mesh: a formation switch (mesh-formation-control section 7.3).
     ///
     /// The new mesh at its rest pose becomes the user mesh and the rest shape ARAP
     /// keeps rigid to; the goals come from `samples`. Live
     /// rigs keep their fingers: each handle moves to the new mesh's vertex nearest
-    /// to it, and its finger offset takes up the difference, so a drag goes on
-    /// without a jump; line and area supports are rebuilt on the new vertices.
+    /// to it, and its finger offset takes up the difference (turned back by the
+    /// hand's rotation and scale, in which the offset is kept), so a drag — even
+    /// under a twisted or pinched hand — goes on without a jump; line and area
+    /// supports are rebuilt on the new vertices.
     ///
     /// `samples` are the goal samples drawn on `mesh`, one per agent
     /// ([`crate::crowd::mesh::sample_goals`]: the slow part, which the daemon does off the
@@ -366,12 +240,7 @@ impl DirectController {
         for rig in &mut rigs {
             for h in &mut rig.handles {
                 let (v, _) = nearest_vertex(&self.verts, h.pos);
-                let d = self.verts[v] - h.pos;
-                h.vertex = v as u32;
-                h.offset += d;
-                h.pos += d;
-                h.goal += d;
-                h.path.shift(d);
+                h.rebase(v as u32, self.verts[v] - h.pos, rig.hand);
             }
             self.build_support(rig);
         }
@@ -396,6 +265,12 @@ impl DirectController {
     }
 
     /// One tick: follow the segmenter's controls, deform, update goals.
+    ///
+    /// A control whose fingers all lifted goes on: its handles keep following the
+    /// check points still ahead of them (section 4.1: the trajectory is "where the
+    /// control points must pass in the future frames"), at the constraint speed
+    /// less the opposing force, until they reach the last one, a new control lands
+    /// on the crowd, or [`reset`](Self::reset).
     ///
     /// `lag_m` is the agents' mean distance to their goals (section 4.1 opposing
     /// force); `dt_s` the time since the last update.
@@ -423,23 +298,76 @@ impl DirectController {
         }
         self.move_handles(controls, dt_s, lag_m);
         self.build_constraints();
-        let same_set = self.constraints.as_slice() == self.arap.constraints();
+        let same_set = self.constraints.as_slice() == self.arap.constraints()
+            && self.points.as_slice() == self.arap.points();
         if !same_set {
             // The pose at this moment becomes the shape to stay rigid to: what one
             // control shaped stays shaped when it ends while others go on.
             self.anchor.clone_from(&self.verts);
             self.arap.set_rest(&self.verts)?;
-            self.arap.set_constraints(&self.constraints)?;
+            self.arap
+                .set_constraints_and_points(&self.constraints, &self.points)?;
         }
-        self.arap
-            .solve(&self.targets, &self.anchor, &mut self.solved)?;
+        let solved = self
+            .arap
+            .solve(&self.targets, &self.anchor, &mut self.solved);
+        // A lifted drag that reached its last check point ends here, whether or
+        // not the solve succeeded.
+        let mut i = 0;
+        while i < self.rigs.len() {
+            if self.rigs[i].lifted && self.rigs[i].arrived() {
+                let rig = self.rigs.remove(i);
+                self.retire(rig);
+            } else {
+                i += 1;
+            }
+        }
+        solved?;
         std::mem::swap(&mut self.verts, &mut self.solved);
         self.finalize();
         Ok(())
     }
 
+    /// Keeps a retired rig's buffers for the next control.
+    fn retire(&mut self, rig: Rig) {
+        if self.spare.len() < SPARE_RIGS {
+            self.spare.push(rig);
+        }
+    }
+
+    /// Builds a rig's supplementary points on the current user mesh.
+    fn build_support(&mut self, rig: &mut Rig) {
+        let pose = MeshPose {
+            triangles: self.mesh.triangles(),
+            verts: &self.verts,
+            spacing_m: self.spacing_m,
+        };
+        rig.build_support(&pose, &mut self.scratch);
+    }
+
     fn sync_rigs(&mut self, controls: &[Control]) {
-        self.rigs.retain(|r| controls.iter().any(|c| c.id == r.id));
+        // A control gone from the segmenter had its last finger lifted: its rig
+        // goes on through its check points.
+        for rig in &mut self.rigs {
+            if !controls.iter().any(|c| c.id == rig.id) {
+                rig.lifted = true;
+            }
+        }
+        // A new control on the crowd takes over from drags still going on.
+        if controls
+            .iter()
+            .any(|c| !self.rigs.iter().any(|r| r.id == c.id))
+        {
+            let mut i = 0;
+            while i < self.rigs.len() {
+                if self.rigs[i].lifted {
+                    let rig = self.rigs.remove(i);
+                    self.retire(rig);
+                } else {
+                    i += 1;
+                }
+            }
+        }
         for c in controls {
             let pos = self.rigs.iter().position(|r| r.id == c.id);
             match pos {
@@ -453,17 +381,12 @@ impl DirectController {
                     self.rigs.push(rig);
                 }
                 None => {
-                    let mut rig = Rig {
-                        id: c.id,
-                        kind: c.kind(),
-                        handles: c
-                            .fingers
-                            .iter()
-                            .map(|f| self.new_handle(f.id, f.world_down))
-                            .collect(),
-                        frame: Vec::new(),
-                        supp: Vec::new(),
-                    };
+                    let mut rig = self.spare.pop().unwrap_or_else(Rig::new);
+                    rig.reuse(c.id);
+                    for f in &c.fingers {
+                        let h = self.new_handle(f.id, f.world_down);
+                        rig.handles.push(h);
+                    }
                     self.build_support(&mut rig);
                     self.rigs.push(rig);
                 }
@@ -471,120 +394,29 @@ impl DirectController {
         }
     }
 
+    /// A handle for a finger landed at `at`: the vertex nearest to it on the final
+    /// mesh (the one the user sees and [`hits`](Self::hits) tests), held on the
+    /// user mesh at the same offset from the finger.
     fn new_handle(&self, finger: ContactId, at: Vec2) -> Handle {
-        let (v, _) = nearest_vertex(&self.verts, at);
-        let p = self.verts[v];
-        Handle {
-            finger,
-            vertex: v as u32,
-            offset: p - at,
-            pos: p,
-            goal: p,
-            path: Path::new(),
-        }
-    }
-
-    /// Supplementary points of section 4.2 for a rig whose handles are in place.
-    fn build_support(&self, rig: &mut Rig) {
-        rig.kind = crate::gesture::segment::control_kind(rig.handles.len());
-        rig.supp.clear();
-        rig.frame.clear();
-        let handle_vertex = |v: u32| rig.handles.iter().any(|h| h.vertex == v);
-        match rig.kind {
-            ControlKind::Point => {}
-            ControlKind::Line => {
-                let (a, b) = (rig.handles[0].pos, rig.handles[1].pos);
-                let ab = b - a;
-                let l2 = ab.norm_squared();
-                rig.frame.extend([0, 1]);
-                if l2 < 1e-12 {
-                    return;
-                }
-                // Vertices within half a mesh spacing of the segment, strictly between its ends.
-                let tol = 0.5 * self.spacing_m;
-                for (v, p) in self.verts.iter().enumerate() {
-                    if handle_vertex(v as u32) {
-                        continue;
-                    }
-                    let t = (p - a).dot(&ab) / l2;
-                    if !(0.0..=1.0).contains(&t) {
-                        continue;
-                    }
-                    let across = perp(ab).dot(&(p - a)) / l2;
-                    if (across * l2.sqrt()).abs() <= tol {
-                        rig.supp.push(Supplementary {
-                            vertex: v as u32,
-                            support: Support::Line { t, d: across },
-                        });
-                    }
-                }
-            }
-            ControlKind::Area => {
-                let pts: Vec<Vec2> = rig.handles.iter().map(|h| h.pos).collect();
-                let hull = convex_hull(&pts);
-                if hull.len() < 3 {
-                    // Collinear fingers: behave as a line between the extreme two.
-                    let (i, j) = farthest_pair(&pts);
-                    let (a, b) = (pts[i], pts[j]);
-                    let ab = b - a;
-                    let l2 = ab.norm_squared().max(1e-12);
-                    rig.frame.extend([i, j]);
-                    let tol = 0.5 * self.spacing_m;
-                    for (v, p) in self.verts.iter().enumerate() {
-                        let t = (p - a).dot(&ab) / l2;
-                        let across = perp(ab).dot(&(p - a)) / l2;
-                        if !handle_vertex(v as u32)
-                            && (0.0..=1.0).contains(&t)
-                            && (across * l2.sqrt()).abs() <= tol
-                        {
-                            rig.supp.push(Supplementary {
-                                vertex: v as u32,
-                                support: Support::Line { t, d: across },
-                            });
-                        }
-                    }
-                    return;
-                }
-                let poly: Vec<Vec2> = hull.iter().map(|&i| pts[i]).collect();
-                rig.frame.extend_from_slice(&hull);
-                for (v, p) in self.verts.iter().enumerate() {
-                    if handle_vertex(v as u32) {
-                        continue;
-                    }
-                    if point_in_convex_polygon(&poly, *p) || distance_to_polygon(&poly, *p) <= 1e-9
-                    {
-                        let mut w = vec![0.0; poly.len()];
-                        if mean_value_coordinates(&poly, *p, &mut w).is_ok() {
-                            rig.supp.push(Supplementary {
-                                vertex: v as u32,
-                                support: Support::Area { weights: w },
-                            });
-                        }
-                    }
-                }
-            }
-        }
+        let (v, _) = nearest_vertex(&self.final_verts, at);
+        Handle::new(finger, v as u32, self.verts[v], self.final_verts[v], at)
     }
 
     fn move_handles(&mut self, controls: &[Control], dt_s: f64, lag_m: f64) {
         let p = self.params;
         for rig in &mut self.rigs {
-            let Some(c) = controls.iter().find(|c| c.id == rig.id) else {
-                continue;
-            };
-            // The fingers' similarity since they landed turns each handle's offset
-            // with the hand, so a twisted or pinched hand twists or pinches its
-            // vertices exactly (a single finger only translates).
-            let z = hand_similarity(c);
+            if let Some(c) = controls.iter().find(|c| c.id == rig.id) {
+                // The fingers' similarity since they landed turns each handle's
+                // offset with the hand, so a twisted or pinched hand twists or
+                // pinches its vertices exactly (a single finger only translates).
+                rig.hand = hand_similarity(c);
+                for h in &mut rig.handles {
+                    if let Some(f) = c.fingers.iter().find(|f| f.id == h.finger) {
+                        h.record(f.world + turn(rig.hand, h.offset), p.checkpoint_spacing_m);
+                    }
+                }
+            }
             for h in &mut rig.handles {
-                let Some(f) = c.fingers.iter().find(|f| f.id == h.finger) else {
-                    continue;
-                };
-                let offset = Vec2::new(
-                    z.x * h.offset.x - z.y * h.offset.y,
-                    z.y * h.offset.x + z.x * h.offset.y,
-                );
-                h.record(f.world + offset, p.checkpoint_spacing_m);
                 // Constraint velocity: catch up this tick, within the speed limit.
                 let remaining = h.remaining();
                 let v_c = if dt_s > 0.0 {
@@ -600,7 +432,8 @@ impl DirectController {
     }
 
     /// One constraint per vertex, in vertex order: a handle beats a supplementary
-    /// point; among equals the later rig wins. No allocation.
+    /// point; among equals the later rig wins. Then the area samples, each a point
+    /// constraint. No allocation once the buffers have grown.
     fn build_constraints(&mut self) {
         self.best_weight.iter_mut().for_each(|w| *w = 0.0);
         let (hw, sw) = (self.params.handle_weight, self.params.soft_weight);
@@ -614,22 +447,7 @@ impl DirectController {
         };
         for rig in &self.rigs {
             for s in &rig.supp {
-                let target = match &s.support {
-                    Support::Line { t, d } => {
-                        let a = rig.handles[rig.frame[0]].pos;
-                        let b = rig.handles[rig.frame[1]].pos;
-                        let ab = b - a;
-                        a + ab * *t + perp(ab) * *d
-                    }
-                    Support::Area { weights } => rig
-                        .frame
-                        .iter()
-                        .zip(weights)
-                        .fold(Vec2::zeros(), |acc, (&hi, &w)| {
-                            acc + rig.handles[hi].pos * w
-                        }),
-                };
-                put(s.vertex, sw, target);
+                put(s.vertex, sw, rig.target(&s.support));
             }
         }
         for rig in &self.rigs {
@@ -646,6 +464,17 @@ impl DirectController {
                     weight: w,
                 });
                 self.targets.push(t);
+            }
+        }
+        self.points.clear();
+        for rig in &self.rigs {
+            for s in &rig.samples {
+                self.points.push(PointConstraint {
+                    corners: s.corners,
+                    bary: s.bary,
+                    weight: sw,
+                });
+                self.targets.push(rig.target(&s.support));
             }
         }
     }
@@ -674,6 +503,15 @@ impl DirectController {
             .unwrap_or_default()
     }
 
+    /// How many points a control samples inside its area (section 4.2), held
+    /// through the triangles they lie in.
+    pub fn control_samples(&self, control: u32) -> usize {
+        self.rigs
+            .iter()
+            .find(|r| r.id == control)
+            .map_or(0, |r| r.samples.len())
+    }
+
     /// Handle vertices of a control, in finger order.
     pub fn handle_vertices(&self, control: u32) -> Vec<u32> {
         self.rigs
@@ -682,59 +520,12 @@ impl DirectController {
             .map(|r| r.handles.iter().map(|h| h.vertex).collect())
             .unwrap_or_default()
     }
-}
 
-/// The least-squares similarity (rotation × scale, as a complex number `x + iy`)
-/// carrying the fingers' landing positions to their current ones; `(1, 0)` for one
-/// finger or when the fingers landed on one point.
-fn hand_similarity(c: &Control) -> Vec2 {
-    let n = c.fingers.len();
-    if n < 2 {
-        return Vec2::new(1.0, 0.0);
+    /// Whether a control's rig is live: its fingers down, or lifted and its
+    /// handles still following their check points.
+    pub fn has_control(&self, control: u32) -> bool {
+        self.rigs.iter().any(|r| r.id == control)
     }
-    let a0 = c.fingers.iter().map(|f| f.world_down).sum::<Vec2>() / n as f64;
-    let b0 = c.fingers.iter().map(|f| f.world).sum::<Vec2>() / n as f64;
-    let (mut re, mut im, mut norm) = (0.0, 0.0, 0.0);
-    for f in &c.fingers {
-        let (a, b) = (f.world_down - a0, f.world - b0);
-        // conj(a) * b
-        re += a.x * b.x + a.y * b.y;
-        im += a.x * b.y - a.y * b.x;
-        norm += a.norm_squared();
-    }
-    if norm < 1e-12 {
-        return Vec2::new(1.0, 0.0);
-    }
-    Vec2::new(re / norm, im / norm)
-}
-
-/// `v` rotated by +90°.
-fn perp(v: Vec2) -> Vec2 {
-    Vec2::new(-v.y, v.x)
-}
-
-fn farthest_pair(p: &[Vec2]) -> (usize, usize) {
-    let mut best = (0, 0, -1.0);
-    for i in 0..p.len() {
-        for j in i + 1..p.len() {
-            let d = (p[i] - p[j]).norm_squared();
-            if d > best.2 {
-                best = (i, j, d);
-            }
-        }
-    }
-    (best.0, best.1)
-}
-
-fn distance_to_polygon(poly: &[Vec2], p: Vec2) -> f64 {
-    let mut best = f64::INFINITY;
-    for i in 0..poly.len() {
-        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-        let ab = b - a;
-        let t = ((p - a).dot(&ab) / ab.norm_squared().max(1e-300)).clamp(0.0, 1.0);
-        best = best.min((a + ab * t - p).norm());
-    }
-    best
 }
 
 fn mean_edge_length(mesh: &TriMesh) -> f64 {
@@ -934,5 +725,238 @@ mod tests {
             .iter()
             .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
         assert!(lo < -0.9 && hi > 4.9, "stretched to [{lo}, {hi}]");
+    }
+
+    fn centroid(p: &[Vec2]) -> Vec2 {
+        p.iter().sum::<Vec2>() / p.len() as f64
+    }
+
+    /// A one-finger flick from the middle of the mesh: 3 m east in 0.1 s, far
+    /// faster than the 3 m/s the handle may follow, then the finger lifts.
+    /// Returns the finger's last position.
+    fn flick(dc: &mut DirectController, id: u32) -> Vec2 {
+        let start = Vec2::new(2.0, 1.5);
+        let end = start + Vec2::new(3.0, 0.0);
+        let dt = 1.0 / 120.0;
+        for k in 0..=12 {
+            let p = start + (end - start) * (k as f64 / 12.0);
+            dc.update(&[ctl(id, &[(1, start, p)])], dt, 0.0).unwrap();
+        }
+        end
+    }
+
+    #[test]
+    fn a_lifted_drag_follows_its_remaining_check_points_to_the_end() {
+        let mut dc = controller();
+        let rest = centroid(dc.vertices());
+        let end = flick(&mut dc, 1);
+        let at_lift = dc.handle_positions(1)[0];
+        assert!(
+            at_lift.x < end.x - 2.0,
+            "the handle lags the flick: {at_lift}"
+        );
+        // Fingers up: no control any more; the crowd goes on along the path,
+        // slowed while the agents lag (0.5 m) but never stopped short.
+        let dt = 1.0 / 120.0;
+        let mut ticks = 0;
+        while dc.has_control(1) {
+            dc.update(&[], dt, 0.5).unwrap();
+            ticks += 1;
+            assert!(ticks < 2400, "the drag never arrived");
+        }
+        let moved = centroid(dc.vertices()) - rest;
+        assert!(
+            (moved - Vec2::new(3.0, 0.0)).norm() < 0.02,
+            "the mesh moved by {moved}, the finger by 3 m"
+        );
+        // Arrived: it stays where the drag ended.
+        let there = dc.vertices().to_vec();
+        for _ in 0..60 {
+            dc.update(&[], dt, 0.0).unwrap();
+        }
+        assert_eq!(dc.vertices(), there.as_slice());
+    }
+
+    #[test]
+    fn a_new_touch_or_a_reset_ends_a_lifted_drag() {
+        let dt = 1.0 / 120.0;
+        // A new touch on the crowd, held still: the lifted drag stops there.
+        let mut dc = controller();
+        let rest = centroid(dc.vertices());
+        flick(&mut dc, 1);
+        for _ in 0..6 {
+            dc.update(&[], dt, 0.0).unwrap();
+        }
+        assert!(dc.has_control(1), "still following its check points");
+        let p = dc.vertices()[0];
+        let hold = vec![ctl(2, &[(2, p, p)])];
+        dc.update(&hold, dt, 0.0).unwrap();
+        assert!(!dc.has_control(1), "the new control took over");
+        let stopped = centroid(dc.vertices());
+        for _ in 0..240 {
+            dc.update(&hold, dt, 0.0).unwrap();
+        }
+        let after = centroid(dc.vertices());
+        assert!((after - stopped).norm() < 0.02, "{stopped} then {after}");
+        assert!(after.x - rest.x < 1.5, "the drag went on to {after}");
+
+        // A reset: back to the rest pose, and nothing moves afterwards.
+        let mut dc = controller();
+        flick(&mut dc, 1);
+        dc.update(&[], dt, 0.0).unwrap();
+        dc.reset();
+        assert!(!dc.has_control(1));
+        for _ in 0..120 {
+            dc.update(&[], dt, 0.0).unwrap();
+        }
+        assert_eq!(dc.vertices(), dc.mesh().rest());
+
+        // A cancelled control: ends where it is.
+        let mut dc = controller();
+        flick(&mut dc, 1);
+        dc.cancel(1);
+        let here = centroid(dc.vertices());
+        for _ in 0..120 {
+            dc.update(&[], dt, 0.0).unwrap();
+        }
+        assert_eq!(centroid(dc.vertices()), here);
+    }
+
+    /// Where the mesh point that was at `p` on the rest pose is now: `p`'s
+    /// barycentric coordinates in its rest triangle applied to the current pose.
+    fn follow(dc: &DirectController, p: Vec2) -> Vec2 {
+        let tris = dc.mesh().triangles();
+        let all: Vec<u32> = (0..tris.len() as u32).collect();
+        let (t, b) = super::super::area::locate(tris, &all, dc.mesh().rest(), p).unwrap();
+        (0..3).fold(Vec2::zeros(), |acc, k| {
+            acc + dc.vertices()[t[k] as usize] * b[k]
+        })
+    }
+
+    #[test]
+    fn an_area_control_holding_no_vertex_still_moves_its_region_rigidly() {
+        // Three fingers 15 cm apart in one cell of a 0.5 m mesh: their hull holds
+        // no vertex and every finger's nearest vertex is the same, (1, 1).
+        let mut dc = controller();
+        let fingers = [
+            Vec2::new(1.05, 1.05),
+            Vec2::new(1.2, 1.05),
+            Vec2::new(1.1, 1.2),
+        ];
+        let c = centroid(&fingers);
+        let (theta, shift) = (0.8f64, Vec2::new(1.0, 0.5));
+        let moved = |p: Vec2, s: f64| {
+            let (sin, cos) = (theta * s).sin_cos();
+            let d = p - c;
+            c + shift * s + Vec2::new(cos * d.x - sin * d.y, sin * d.x + cos * d.y)
+        };
+        let under_hand: Vec<Vec2> = [c, (fingers[0] + fingers[1]) * 0.5, fingers[2]].to_vec();
+        let far = [Vec2::new(3.5, 2.5), Vec2::new(0.25, 2.75)];
+        run(
+            &mut dc,
+            |s| {
+                let fs: Vec<(u32, Vec2, Vec2)> = fingers
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &f)| (i as u32 + 1, f, moved(f, s)))
+                    .collect();
+                vec![ctl(1, &fs)]
+            },
+            1.0,
+        );
+        let hv = dc.handle_vertices(1);
+        assert!(hv.iter().all(|&v| v == hv[0]), "{hv:?}");
+        assert_eq!(dc.control_vertices(1).len(), 3, "no vertex inside the hull");
+        assert!(dc.control_samples(1) >= 10, "{}", dc.control_samples(1));
+        // The mesh under the hand turned and moved with it, and so (as rigidly as
+        // possible) did the rest of the crowd.
+        for &p in &under_hand {
+            let (got, want) = (follow(&dc, p), moved(p, 1.0));
+            assert!(
+                (got - want).norm() < 0.02,
+                "under the hand {p}: {got} vs {want}"
+            );
+        }
+        for &p in &far {
+            let (got, want) = (follow(&dc, p), moved(p, 1.0));
+            assert!((got - want).norm() < 0.1, "far {p}: {got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn a_formation_switch_under_a_twisted_pinched_hand_does_not_jump() {
+        for n_fingers in [2usize, 4] {
+            let mut dc = controller();
+            let c = Vec2::new(2.0, 1.5);
+            let fingers: Vec<Vec2> = (0..n_fingers)
+                .map(|k| {
+                    let a = k as f64 * std::f64::consts::TAU / n_fingers as f64 + 0.3;
+                    c + Vec2::new(a.cos(), a.sin()) * 1.0
+                })
+                .collect();
+            // Turned by 1.2 rad and pinched to 0.6 of the span.
+            let hand = |p: Vec2| {
+                let d = (p - c) * 0.6;
+                let (sin, cos) = 1.2f64.sin_cos();
+                c + Vec2::new(cos * d.x - sin * d.y, sin * d.x + cos * d.y)
+            };
+            let held: Vec<(u32, Vec2, Vec2)> = fingers
+                .iter()
+                .enumerate()
+                .map(|(i, &f)| (i as u32 + 1, f, hand(f)))
+                .collect();
+            let controls = vec![ctl(1, &held)];
+            run(&mut dc, |_| controls.clone(), 0.5);
+            // A coarser formation: every handle lands on another vertex.
+            let mesh = TriMesh::grid(
+                Rect {
+                    min: [0.3, 0.2],
+                    max: [3.7, 2.9],
+                },
+                6,
+                5,
+            );
+            let samples = crate::crowd::mesh::sample_goals(&mesh, 30);
+            dc.set_mesh_sampled(mesh, samples);
+            let at_switch = dc.handle_positions(1);
+            for _ in 0..120 {
+                dc.update(&controls, 1.0 / 120.0, 0.0).unwrap();
+            }
+            for (a, b) in at_switch.iter().zip(dc.handle_positions(1)) {
+                assert!(
+                    (a - b).norm() < 1e-9,
+                    "{n_fingers} fingers: handle jumped from {a} to {b}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_finger_grabs_the_vertex_it_sees_on_the_final_mesh() {
+        use crate::crowd::environment::FieldParams;
+        // A block in the middle of the crowd pushes the final mesh off it.
+        let text = "(version: 1, bounds_m: (min: (-2.0, -2.0), max: (8.0, 6.0)), \
+            obstacles: [(parts: [Polygon(vertices_m: [(1.6, 1.1), (2.4, 1.1), (2.4, 1.9), (1.6, 1.9)])])])";
+        let scene = Arc::new(Scene::from_str(text, std::path::Path::new("s"), 0.15).unwrap());
+        let mut dc = controller();
+        dc.set_environment(Some((scene, FieldParams::new(1.0, 0.3, 0.15).unwrap())));
+        // A final-mesh vertex whose nearest user-mesh vertex is another one.
+        let (user, seen) = (dc.user_vertices().to_vec(), dc.vertices().to_vec());
+        let v = (0..seen.len())
+            .find(|&v| nearest_vertex(&user, seen[v]).0 != v)
+            .expect("the field moved some vertex past half a spacing");
+        let p = seen[v];
+        let hold = vec![ctl(1, &[(1, p, p)])];
+        dc.update(&hold, 1.0 / 120.0, 0.0).unwrap();
+        assert_eq!(dc.handle_vertices(1), vec![v as u32]);
+        // Held still, the vertex stays under the finger.
+        for _ in 0..60 {
+            dc.update(&hold, 1.0 / 120.0, 0.0).unwrap();
+        }
+        assert!(
+            (dc.vertices()[v] - p).norm() < 0.01,
+            "{} vs {p}",
+            dc.vertices()[v]
+        );
     }
 }
