@@ -489,7 +489,16 @@ fn fig9_checkpoints_switch_the_formation_through_the_corridor() {
     eprintln!("fig9: crowd centre x {cx:.2}, {west} agents west of the corridor");
     assert!(cx > 14.0, "crowd centre x {cx}");
     assert_eq!(west, 0, "{west} agents did not enter the corridor");
-    let worst = worst_goal_distance(&e);
+    // A goal the square pushed into a corridor wall is stood at as near as the wall
+    // lets an agent (its point one agent radius out of the wall).
+    let t = e.scene_time_s();
+    let radius = c.crowd.agent_radius_m;
+    let worst = e
+        .agent_positions()
+        .iter()
+        .zip(e.goal_of())
+        .map(|(p, &g)| (p - s.project_out(e.goals()[g as usize], radius, t)).norm())
+        .fold(0.0, f64::max);
     assert!(worst < 0.25, "an agent is {worst:.2} m from its goal");
     assert_eq!(e.counters().formation_switches, 2);
     // A reset brings back the start formation.
