@@ -14,10 +14,12 @@
 //! * The **planner** ([`Planner`]) runs with the assignment, on the worker thread
 //!   (or inline in replays): it rasterises the scene on a grid of
 //!   [`DEFAULT_PLAN_CELL_M`] cells (the cell the Eikonal module recommends for
-//!   assignment costs), fills the cost matrix with [`EikonalCosts`], solves, then for
-//!   every agent whose goal is hidden behind an obstacle descends its goal's field
-//!   (reused from the cost provider's cache) and keeps the farthest point of that
-//!   path the agent can see as its **waypoint**.
+//!   assignment costs), computes the travel costs from one field per cluster of
+//!   goals ([`ClusterCosts`], with [`PlannerParams::cluster_m`]; one field per goal
+//!   with [`EikonalCosts`] when it is 0), solves, then for every agent whose goal is
+//!   hidden behind an obstacle descends the field its cost came from (kept in the
+//!   cost provider's cache, which holds every cluster's field) and keeps the
+//!   farthest point of that path the agent can see as its **waypoint**.
 //! * The **control thread** only does O(obstacle parts) work per agent per tick: it
 //!   steers an agent straight at its goal when the goal is visible (or the agent has
 //!   no waypoint), else at its waypoint; scales its speed limit by the travel speed

@@ -13,7 +13,10 @@
 //! offset — and the assignment it gives costs 0.05 % more than the 256² optimum
 //! (0.008 % at 128²). Routing (descent) keeps the fine grid. A discomfort term that
 //! follows the crowd density changes the cost grid every frame and defeats the
-//! cache; refresh it at a lower rate than the assignment.
+//! cache; refresh it at a lower rate than the assignment. For hundreds of goals or
+//! more, one field per goal is still too slow (0.9 s for 1,000): the planner marches
+//! one field per cluster of goals instead ([`ClusterCosts`](super::ClusterCosts)),
+//! reading them through [`EikonalCosts::fields`].
 //!
 //! **Not used.** Fields from the smaller side ([`FieldSources::Auto`]) are
 //! implemented but gain nothing at 100 × 100 (the assignment always has at least as
