@@ -13,7 +13,10 @@
 //! offset — and the assignment it gives costs 0.05 % more than the 256² optimum
 //! (0.008 % at 128²). Routing (descent) keeps the fine grid. A discomfort term that
 //! follows the crowd density changes the cost grid every frame and defeats the
-//! cache; refresh it at a lower rate than the assignment.
+//! cache; refresh it at a lower rate than the assignment. For hundreds of goals or
+//! more, one field per goal is still too slow (0.9 s for 1,000): the planner marches
+//! one field per cluster of goals instead ([`ClusterCosts`](super::ClusterCosts)),
+//! reading them through [`EikonalCosts::fields`].
 //!
 //! **Not used.** Fields from the smaller side ([`FieldSources::Auto`]) are
 //! implemented but gain nothing at 100 × 100 (the assignment always has at least as
@@ -264,7 +267,52 @@ impl EikonalCosts {
         out: &mut CostMatrix,
     ) -> Result<(), EikonalError> {
         out.resize(agents.len(), goals.len());
-        for (point, &p) in agents.iter().chain(goals).enumerate() {
+        self.validate_points(agents, goals)?;
+        let from_goals = self.from_goals(agents.len(), goals.len());
+        let (sources, readers) = if from_goals {
+            (goals, agents)
+        } else {
+            (agents, goals)
+        };
+        self.with_fields(sources, readers, |k, phi| {
+            for (m, &p) in readers.iter().enumerate() {
+                let v = sample(&self.grid, phi, p);
+                if from_goals {
+                    out.set(m, k, v);
+                } else {
+                    out.row_mut(k)[m] = v;
+                }
+            }
+        });
+        Ok(())
+    }
+
+    /// Calls `f(k, Φ_k)` for each source `k` with its field (one `f64` per cell,
+    /// `+inf` where not reached), marched far enough to be final on the bilinear
+    /// stencils of every point of `readers` and on every cell whose `Φ` is below
+    /// theirs (from the cache when it already covers them). The fields of one call
+    /// stay cached (up to [`EikonalOptions::cache_fields`]) for [`Self::descent`].
+    ///
+    /// # Errors
+    /// As [`Self::try_fill`], with `readers` numbered first, then `sources`.
+    pub fn fields(
+        &self,
+        sources: &[Vec2],
+        readers: &[Vec2],
+        f: impl FnMut(usize, &[f64]),
+    ) -> Result<(), EikonalError> {
+        self.validate_points(readers, sources)?;
+        self.with_fields(sources, readers, f);
+        Ok(())
+    }
+
+    /// Checks that every point is finite, inside the grid and in (or near) a free
+    /// cell, numbered `first` then `second`.
+    ///
+    /// # Errors
+    /// As [`Self::try_fill`].
+    pub fn validate_points(&self, first: &[Vec2], second: &[Vec2]) -> Result<(), EikonalError> {
+        for (point, &p) in first.iter().chain(second).enumerate() {
             if !(p.x.is_finite() && p.y.is_finite()) {
                 return Err(EikonalError::PointNotFinite { point });
             }
@@ -276,12 +324,11 @@ impl EikonalCosts {
                 return Err(EikonalError::SourceBlocked { index: point });
             }
         }
-        let from_goals = self.from_goals(agents.len(), goals.len());
-        let (sources, readers) = if from_goals {
-            (goals, agents)
-        } else {
-            (agents, goals)
-        };
+        Ok(())
+    }
+
+    /// The loop of [`Self::fields`] over validated points.
+    fn with_fields(&self, sources: &[Vec2], readers: &[Vec2], mut f: impl FnMut(usize, &[f64])) {
         let mut inner = self.inner.borrow_mut();
         let inner = &mut *inner;
         inner.stats.fills += 1;
@@ -304,19 +351,20 @@ impl EikonalCosts {
             }
         }
         for (k, &s) in sources.iter().enumerate() {
-            let cell = self.grid.cell_of(s).expect("validated above");
-            let cell = self.source_cell(cell, s).expect("validated above");
-            let field = self.field(inner, cell);
-            for (m, &p) in readers.iter().enumerate() {
-                let v = sample(&self.grid, &field.phi, p);
-                if from_goals {
-                    out.set(m, k, v);
-                } else {
-                    out.row_mut(k)[m] = v;
-                }
-            }
+            let cell = self.grid.cell_of(s).expect("validated");
+            let cell = self.source_cell(cell, s).expect("validated");
+            let field = self.field_in(inner, cell);
+            f(k, &field.phi);
         }
-        Ok(())
+    }
+
+    /// The cell a source at `p` marches from (see [`Self::try_fill`] on snapping):
+    /// `None` outside the grid or with no free cell within [`SNAP_RADIUS_CELLS`].
+    pub fn source_cell_of(&self, p: Vec2) -> Option<usize> {
+        if !(p.x.is_finite() && p.y.is_finite()) {
+            return None;
+        }
+        self.source_cell(self.grid.cell_of(p)?, p)
     }
 
     /// The descent direction at `at` on the cached field of the source at `source`
@@ -365,7 +413,7 @@ impl EikonalCosts {
 
     /// The field from the centre of `cell`, covering the marked targets: from the
     /// cache, or marched (into a cache slot or the scratch field).
-    fn field<'a>(&self, inner: &'a mut Inner, cell: usize) -> &'a Field {
+    fn field_in<'a>(&self, inner: &'a mut Inner, cell: usize) -> &'a Field {
         let clock = inner.clock;
         let covers = |f: &Field, targets: &[u32]| {
             f.complete || targets.iter().all(|&t| f.phi[t as usize].is_finite())

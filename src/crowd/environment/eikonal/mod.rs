@@ -28,9 +28,11 @@
 //! `heap` (its queue), `segment` (cost along a straight line), `reads` ([`sample`],
 //! [`descent_direction`]), `sanity` ([`sanity_check`]), `cost_field` (eq. 7 and
 //! [`coarsen`]), `discomfort`, `costs` (the assignment provider, [`EikonalCosts`]),
+//! `clusters` (goal clusters sharing a field, [`ClusterCosts`], for large crowds),
 //! `bench` (the benchmark instance), `error`.
 
 mod bench;
+mod clusters;
 mod cost_field;
 mod costs;
 mod discomfort;
@@ -45,6 +47,9 @@ mod segment;
 mod tests;
 
 pub use bench::{bench_instance, BENCH_CELL_M};
+pub use clusters::{
+    ClusterCosts, ClusterStats, CLUSTER_COST_TOLERANCE, DEFAULT_CLUSTER_M, MAX_CLUSTERS,
+};
 pub use cost_field::{
     coarsen, cost_field_into, CostInputs, CostWeights, DEFAULT_ALPHA_PER_M, DEFAULT_BETA_PER_S,
     DEFAULT_GAMMA_PER_S,

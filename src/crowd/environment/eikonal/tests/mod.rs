@@ -4,6 +4,7 @@
 use super::{sanity_check, Fmm, Grid, Order, Sources};
 use crate::geom::Vec2;
 
+mod clusters;
 mod costs;
 mod march;
 mod reads;
