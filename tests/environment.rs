@@ -352,9 +352,12 @@ fn fig8b_congestion_sends_some_agents_down_a_slower_side_path() {
         .map(|k| Vec2::new(15.35 + (k % 3) as f64 * 0.2, 0.3 + (k / 3) as f64 * 0.42))
         .collect();
     // How many of the 20 agents behind the crowd are routed through a side path.
+    // The paper's cost: one exact field per goal (`cluster_m = 0`), not the daemon's
+    // goal clusters, whose shared fields can tip near-ties between paths.
     let side_paths = |density_m2: f64| {
         let mut params = PlannerParams::new(1.5);
         params.discomfort.density_m2 = density_m2;
+        params.cluster_m = 0.0;
         let mut p = Planner::new(Arc::clone(&s), params).unwrap();
         let (mut goal_of, mut wp) = (Vec::new(), Vec::new());
         p.plan(&agents, &goals, 0.0, &mut goal_of, &mut wp).unwrap();

@@ -7,7 +7,7 @@
 //! price initialiser; exactness comes from the exact searches. After it each assigned
 //! column's price is raised by its row's slack (at most the last ε) so the pairs become
 //! tight, and the list bounds are lowered by as much. A warm start runs the auction
-//! (its first ε sized by how far the broken pairs are off) only if more than nine tenths
+//! (its first ε sized by how far the broken pairs are off) only if more than three quarters
 //! of the rows lost their pair; otherwise the row reduction: a free row takes its
 //! cheapest listed column at the price that leaves it tight, bumping the previous row;
 //! prices only fall, every pair stays tight.

@@ -121,7 +121,12 @@ fn run_chain(rows: usize, cols: usize, seed: u64, strategy: Algo) {
         }
         SquaredDistance.fill(&agents, &goals, &mut c);
         s.solve_warm(&c).unwrap();
-        assert!(s.stats().warm);
+        // Warm, or restarted cold because the old prices were far off.
+        assert!(
+            s.stats().warm || s.stats().restarted_cold,
+            "{:?}",
+            s.stats()
+        );
         assert!(
             s.verify_optimal(&c, 1e-9),
             "warm frame {frame} {rows}x{cols} {strategy:?}"
