@@ -139,6 +139,8 @@ struct Row {
     threads: Threads,
     /// Threads whose counter did not move this period.
     stalled_threads: Vec<&'static str>,
+    /// Most clients the daemon counted in one stats report of the period.
+    daemon_clients_max: u32,
     /// Config reloads handed to the daemon by the SIGHUP path.
     reloads: u64,
     /// Crowd resizes acknowledged (and refused or unanswered ones).
@@ -201,7 +203,9 @@ fn config_text(agents: u32, realtime: bool, generation: u64) -> Result<String> {
         edit("priority: Some(20),", "priority: None,")?;
         edit("lock_memory: true,", "lock_memory: false,")?;
     }
-    text.push_str(&format!("\n// bench soak: written for reload {generation}\n"));
+    text.push_str(&format!(
+        "\n// bench soak: written for reload {generation}\n"
+    ));
     Ok(text)
 }
 
@@ -258,11 +262,7 @@ pub fn soak(a: SoakArgs) -> Result<()> {
         bail!(
             "soak: {} check(s) failed: {}",
             failed.len(),
-            failed
-                .iter()
-                .map(|c| c.name)
-                .collect::<Vec<_>>()
-                .join(", ")
+            failed.iter().map(|c| c.name).collect::<Vec<_>>().join(", ")
         );
     }
     Ok(())
@@ -314,6 +314,7 @@ fn run(a: &SoakArgs, cfg_path: &Path, sock: &Path) -> Result<Report> {
         if let Some(r) = daemon.next_report(Duration::from_millis(200)) {
             ticks = r.ticks;
             agents = r.agents;
+            row.clients_max = row.clients_max.max(r.clients);
             for s in &r.stages {
                 match s.stage.as_str() {
                     "assignment" => row.solves += s.count,
@@ -326,7 +327,11 @@ fn run(a: &SoakArgs, cfg_path: &Path, sock: &Path) -> Result<Report> {
         // Resizes at 1/6, 3/6 and 5/6 of a period: --agents, half, --agents, …
         if next_resize <= 5 && into >= f64::from(next_resize) / 6.0 {
             next_resize += 2;
-            let count = if row.resize_to_half { a.agents / 2 } else { a.agents };
+            let count = if row.resize_to_half {
+                a.agents / 2
+            } else {
+                a.agents
+            };
             row.resize_to_half = !row.resize_to_half;
             command_id += 1;
             let body = format!("\"name\":\"set_agent_count\",\"count\":{count}");
@@ -344,8 +349,7 @@ fn run(a: &SoakArgs, cfg_path: &Path, sock: &Path) -> Result<Report> {
             reloaded_this_period = true;
             generation += 1;
             write_config(generation)?;
-            signal_hook::low_level::raise(signal_hook::consts::SIGHUP)
-                .context("raising SIGHUP")?;
+            signal_hook::low_level::raise(signal_hook::consts::SIGHUP).context("raising SIGHUP")?;
         }
         if sig.reload.swap(false, Ordering::Relaxed)
             && super::reload_on_sighup(&mut daemon, Some(cfg_path))
@@ -398,6 +402,7 @@ fn whole_periods(seconds: f64, period_s: f64) -> (Duration, Duration) {
 struct PeriodEvents {
     solves: u64,
     e2e_p99_worst: u64,
+    clients_max: u32,
     reloads: u64,
     resizes: u64,
     resize_failures: u64,
@@ -451,6 +456,7 @@ fn make_row(
         frames_coalesced: now.coalesced - before.coalesced,
         stalled_threads: threads.stalled(),
         threads,
+        daemon_clients_max: ev.clients_max,
         reloads: ev.reloads,
         resizes: ev.resizes,
         resize_failures: ev.resize_failures,
@@ -462,7 +468,11 @@ fn make_row(
 fn finish(a: &SoakArgs, periods: Vec<Row>, sighups: u64, interrupted: bool) -> Report {
     let rss_first = periods.first().map_or(0.0, |r| r.rss_mb);
     let rss_last = periods.last().map_or(0.0, |r| r.rss_mb);
-    let rss_max = periods.iter().skip(1).map(|r| r.rss_mb).fold(rss_first, f64::max);
+    let rss_max = periods
+        .iter()
+        .skip(1)
+        .map(|r| r.rss_mb)
+        .fold(rss_first, f64::max);
     let limit = rss_first * (1.0 + RSS_GROWTH_LIMIT);
     let mut p99s: Vec<u64> = periods.iter().map(|r| r.latency_p99_us).collect();
     p99s.sort_unstable();
@@ -485,11 +495,18 @@ fn finish(a: &SoakArgs, periods: Vec<Row>, sighups: u64, interrupted: bool) -> R
             .map(|r| r.readers.iter().map(f).sum::<u64>() + f(&r.reconnecting))
             .sum()
     };
-    let (missed, silent, reordered) = (sum(&|r| r.missed), sum(&|r| r.silent), sum(&|r| r.reordered));
-    let lost_conn: u64 = periods
+    let (missed, silent, reordered) = (
+        sum(&|r| r.missed),
+        sum(&|r| r.silent),
+        sum(&|r| r.reordered),
+    );
+    let lost_conn = sum(&|r| r.lost_connection);
+    let clients_limit = a.clients + 2;
+    let crowded: Vec<String> = periods
         .iter()
-        .map(|r| r.readers.iter().map(|x| x.lost_connection).sum::<u64>())
-        .sum();
+        .filter(|r| r.daemon_clients_max > clients_limit)
+        .map(|r| format!("period {}: {}", r.period, r.daemon_clients_max))
+        .collect();
     let idle: Vec<String> = periods
         .iter()
         .flat_map(|r| {
@@ -501,7 +518,10 @@ fn finish(a: &SoakArgs, periods: Vec<Row>, sighups: u64, interrupted: bool) -> R
                 .map(|(i, _)| format!("period {}: reader {i} read nothing", r.period))
                 .collect();
             if r.reconnecting.read == 0 {
-                v.push(format!("period {}: the reconnecting client read nothing", r.period));
+                v.push(format!(
+                    "period {}: the reconnecting client read nothing",
+                    r.period
+                ));
             }
             v
         })
@@ -534,6 +554,17 @@ fn finish(a: &SoakArgs, periods: Vec<Row>, sighups: u64, interrupted: bool) -> R
                 "{missed} snapshots missed by live readers ({silent} of them not announced by `dropped`), {reordered} out of order, {lost_conn} connections lost{}{}",
                 if idle.is_empty() { "" } else { "; " },
                 idle.join("; ")
+            ),
+        },
+        Check {
+            name: "clients_reaped",
+            ok: crowded.is_empty(),
+            detail: format!(
+                "the daemon counted at most {} clients (limit {clients_limit}: the soak's {}, its command connection and one reconnect not yet reaped){}{}",
+                periods.iter().map(|r| r.daemon_clients_max).max().unwrap_or(0),
+                a.clients,
+                if crowded.is_empty() { "" } else { "; over: " },
+                crowded.join(", ")
             ),
         },
         Check {
@@ -596,8 +627,7 @@ fn print_table(r: &Report) {
     );
     for p in &r.periods {
         let reads: Vec<String> = p.readers.iter().map(|x| x.read.to_string()).collect();
-        let missed: u64 =
-            p.readers.iter().map(|x| x.missed).sum::<u64>() + p.reconnecting.missed;
+        let missed: u64 = p.readers.iter().map(|x| x.missed).sum::<u64>() + p.reconnecting.missed;
         println!(
             "{:>4} {:>7.1} {:>8.2} {:>8.2} {:>8.2} {:>8} {:>6} {:>13} {:>7} {:>11} {:>11} {:>5} {:>7} {:>4} {:>4}",
             p.period,
@@ -624,7 +654,12 @@ fn print_table(r: &Report) {
         r.p99_median_us as f64 / 1e3
     );
     for c in &r.checks {
-        println!("{} {}: {}", if c.ok { "ok  " } else { "FAIL" }, c.name, c.detail);
+        println!(
+            "{} {}: {}",
+            if c.ok { "ok  " } else { "FAIL" },
+            c.name,
+            c.detail
+        );
     }
 }
 

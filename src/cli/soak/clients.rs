@@ -117,9 +117,14 @@ impl Clients {
             })?);
             c.readers.push(tally);
         }
-        let (path, t, s) = (socket.to_path_buf(), c.reconnecting.clone(), Arc::clone(&stop));
-        c.threads
-            .push(spawn("soak-reconnect", move || reconnecting(&path, &t, &s))?);
+        let (path, t, s) = (
+            socket.to_path_buf(),
+            c.reconnecting.clone(),
+            Arc::clone(&stop),
+        );
+        c.threads.push(spawn("soak-reconnect", move || {
+            reconnecting(&path, &t, &s)
+        })?);
         let (path, t, s) = (socket.to_path_buf(), c.stalled.clone(), Arc::clone(&stop));
         c.threads
             .push(spawn("soak-stalled", move || stalled(&path, &t, &s))?);
@@ -153,10 +158,7 @@ fn spawn(name: &str, f: impl FnOnce() + Send + 'static) -> Result<JoinHandle<()>
 fn number_after(line: &[u8], key: &[u8]) -> Option<u64> {
     let head = &line[..line.len().min(256)];
     let at = head.windows(key.len()).position(|w| w == key)? + key.len();
-    let digits = head[at..]
-        .iter()
-        .take_while(|b| b.is_ascii_digit())
-        .count();
+    let digits = head[at..].iter().take_while(|b| b.is_ascii_digit()).count();
     std::str::from_utf8(&head[at..at + digits])
         .ok()?
         .parse()
