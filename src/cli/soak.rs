@@ -622,19 +622,20 @@ fn print_table(r: &Report) {
         if r.realtime { "on" } else { "off" }
     );
     println!(
-        "{:>4} {:>7} {:>8} {:>8} {:>8} {:>8} {:>6} {:>13} {:>7} {:>11} {:>11} {:>5} {:>7} {:>4} {:>4}",
-        "per", "RSS MB", "p50 ms", "p99 ms", "max ms", "publ", "miss", "read/reader", "recon", "stall drop", "drops all", "lost", "threads", "hup", "rsz"
+        "{:>4} {:>7} {:>8} {:>8} {:>8} {:>9} {:>8} {:>6} {:>13} {:>10} {:>11} {:>9} {:>5} {:>7} {:>4} {:>4}",
+        "per", "RSS MB", "p50 ms", "p99 ms", "max ms", "dmn p99", "publ", "miss", "read/reader", "recon", "stall drop", "drops all", "lost", "threads", "hup", "rsz"
     );
     for p in &r.periods {
         let reads: Vec<String> = p.readers.iter().map(|x| x.read.to_string()).collect();
         let missed: u64 = p.readers.iter().map(|x| x.missed).sum::<u64>() + p.reconnecting.missed;
         println!(
-            "{:>4} {:>7.1} {:>8.2} {:>8.2} {:>8.2} {:>8} {:>6} {:>13} {:>7} {:>11} {:>11} {:>5} {:>7} {:>4} {:>4}",
+            "{:>4} {:>7.1} {:>8.2} {:>8.2} {:>8.2} {:>9.2} {:>8} {:>6} {:>13} {:>10} {:>11} {:>9} {:>5} {:>7} {:>4} {:>4}",
             p.period,
             p.rss_mb,
             p.latency_p50_us as f64 / 1e3,
             p.latency_p99_us as f64 / 1e3,
             p.latency_max_us as f64 / 1e3,
+            p.daemon_e2e_p99_worst_us as f64 / 1e3,
             p.published,
             missed,
             reads.join("/"),
@@ -652,6 +653,9 @@ fn print_table(r: &Report) {
         r.rss_first_mb,
         r.rss_last_mb,
         r.p99_median_us as f64 / 1e3
+    );
+    println!(
+        "latency: input → read by a live reader (p50/p99/max); dmn p99: the worst per-second p99 the daemon measured (input → bytes written); recon: connections/snapshots; stall drop: snapshots dropped for the stalled client / times the daemon disconnected it"
     );
     for c in &r.checks {
         println!(
