@@ -26,6 +26,7 @@ mod hid;
 mod record;
 mod scene;
 mod scene_render;
+mod soak;
 mod svg;
 mod watch;
 
@@ -320,22 +321,7 @@ fn supervise(
             break;
         }
         if sig.reload.swap(false, Ordering::Relaxed) {
-            match &config_path {
-                Some(p) => match Config::load(p) {
-                    Ok(c) => {
-                        log::info!("SIGHUP: reloading {}", p.display());
-                        daemon.reload(c);
-                    }
-                    Err(e) => {
-                        log::error!(
-                            "SIGHUP: new config rejected, the old config and scene keep running:\n{e}"
-                        )
-                    }
-                },
-                None => {
-                    log::warn!("SIGHUP: running on the embedded default config; nothing to reload")
-                }
-            }
+            reload_on_sighup(&mut daemon, config_path.as_deref());
         }
         if let Some(r) = daemon.next_report(Duration::from_millis(200)) {
             on_report(&r);
@@ -357,6 +343,31 @@ fn supervise(
     log::info!("stopping");
     daemon.shutdown();
     Ok(())
+}
+
+/// What a SIGHUP does: reads the config file again and hands it to the daemon; a
+/// config that does not load is reported and the running one stays. Returns whether
+/// a new config was handed over (`bench soak` counts them).
+fn reload_on_sighup(daemon: &mut Daemon, config_path: Option<&Path>) -> bool {
+    match config_path {
+        Some(p) => match Config::load(p) {
+            Ok(c) => {
+                log::info!("SIGHUP: reloading {}", p.display());
+                daemon.reload(c);
+                true
+            }
+            Err(e) => {
+                log::error!(
+                    "SIGHUP: new config rejected, the old config and scene keep running:\n{e}"
+                );
+                false
+            }
+        },
+        None => {
+            log::warn!("SIGHUP: running on the embedded default config; nothing to reload");
+            false
+        }
+    }
 }
 
 /// Applies `--agents`, checked like the config field.

@@ -693,6 +693,8 @@ fn a_client_whose_event_backlog_passes_the_cap_is_disconnected() {
                 assert_eq!(v["id"], id, "{v}");
                 progress.store(id + 1, Ordering::Relaxed);
             }
+            // Handed back open: a closed client is dropped too.
+            good
         })
     };
     for id in 0..n {
@@ -705,7 +707,7 @@ fn a_client_whose_event_backlog_passes_the_cap_is_disconnected() {
             t: Micros(1),
         })));
     }
-    good_reader.join().unwrap();
+    let _good = good_reader.join().unwrap();
     // Events are never dropped: the stuck client gets an in-order prefix, then the error.
     let mut next = 0;
     let e = loop {
@@ -861,6 +863,39 @@ fn a_dead_client_is_dropped_and_nobody_else_notices() {
         d.snapshot(seq, 10);
         assert_eq!(good.json()["seq"], seq);
     }
+}
+
+#[test]
+fn a_command_client_that_subscribes_to_nothing_is_dropped_when_it_closes() {
+    // A client sent nothing (no subscription, its replies all read) gives its writer
+    // no write to find it gone: the reader must see the hang-up. Without that, every
+    // such client kept a slot until `socket.max_clients` refused everyone.
+    let d = Daemon::start(socket_config(4));
+    for round in 0..3u64 {
+        let mut c = Client::ready(&d.path);
+        c.hello(json!({"type":"hello","protocol":1,"subscribe":[]}));
+        c.send(&format!(
+            r#"{{"type":"command","id":{round},"name":"pause"}}"#
+        ));
+        assert_eq!(c.next_not_snapshot(), json!({"type":"ack","id":round}));
+        assert_eq!(d.stats.clients(), 1);
+        drop(c);
+        wait_until("the closed client to be dropped", || d.stats.clients() == 0);
+    }
+}
+
+#[test]
+fn a_half_closed_client_keeps_getting_snapshots() {
+    let d = Daemon::start(socket_config(64));
+    let mut c = Client::ready(&d.path);
+    c.w.shutdown(std::net::Shutdown::Write).unwrap();
+    // Give the reader time to see the end of the client's stream.
+    std::thread::sleep(Duration::from_millis(50));
+    for seq in 1..=5 {
+        d.snapshot(seq, 10);
+        assert_eq!(c.json()["seq"], seq);
+    }
+    assert_eq!(d.stats.clients(), 1);
 }
 
 #[test]

@@ -32,6 +32,11 @@ pub enum Workload {
     /// Exact assignment of `--n` agents to `--n` goals (squared-Euclidean cost) in
     /// the `--layout`s, cold or `--warm`. Not part of `all`.
     Assign,
+    /// A long unattended run of the real daemon (`--minutes`, `--agents`,
+    /// `--clients`): SIGHUP reloads, crowd resizes, a stalled and a reconnecting
+    /// client; one report row per minute, non-zero exit when a check fails. Not
+    /// part of `all`.
+    Soak,
     /// One fast-marching field (second order, one point source) on a `--grid`²
     /// grid of 4 cm cells, uniform cost or `--obstacles`. Not part of `all`.
     Fmm,
@@ -49,6 +54,17 @@ pub struct BenchArgs {
     /// Duration of the end-to-end run (s).
     #[arg(long, default_value_t = 10.0)]
     seconds: f64,
+    /// Duration of the soak (minutes; fractions allowed, e.g. 0.25).
+    #[arg(long, default_value_t = 60.0)]
+    minutes: f64,
+    /// Soak: socket clients (at least 3): one stalled, one reconnecting every
+    /// second, the rest reading continuously.
+    #[arg(long, default_value_t = 4)]
+    clients: u32,
+    /// Soak: length of one report row (s); the SIGHUP reload and the three resizes
+    /// happen once per row.
+    #[arg(long, default_value_t = 60.0)]
+    period_seconds: f64,
     /// Agents and goals of the assignment workload.
     #[arg(long, default_value_t = 1000)]
     n: usize,
@@ -145,6 +161,16 @@ fn row_from_stage(name: &str, s: Option<&StageStats>, note: String) -> Row {
 
 /// Runs the chosen workloads and prints a table (or JSON).
 pub fn bench(a: BenchArgs) -> Result<()> {
+    if a.workload == Workload::Soak {
+        return super::soak::soak(super::soak::SoakArgs {
+            minutes: a.minutes,
+            agents: a.agents,
+            clients: a.clients,
+            period_s: a.period_seconds,
+            realtime: !a.no_realtime,
+            json: a.json,
+        });
+    }
     let mut rows = Vec::new();
     if matches!(a.workload, Workload::All | Workload::Arap) {
         rows.push(arap_step());

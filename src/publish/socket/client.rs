@@ -477,13 +477,20 @@ fn read_line_capped<R: Read>(
 /// Reader thread body: parses client lines until EOF, a read error or a fatal error.
 ///
 /// EOF alone does not end the session: a client may half-close (`shutdown(SHUT_WR)`)
-/// and keep reading; a client that is really gone is found by the writer's next write.
+/// and keep reading. After EOF the reader waits for the hang-up instead
+/// ([`wait_for_hang_up`]): a client that is sent nothing (it subscribed to nothing)
+/// gives the writer no write that would find it gone.
 pub(crate) fn reader_loop(shared: Arc<ClientShared>, stream: UnixStream, hub: Arc<Hub>) {
     let mut r = BufReader::with_capacity(8 * 1024, stream);
     let mut line = Vec::with_capacity(1024);
     loop {
         let fatal = match read_line_capped(&mut r, &mut line, protocol::MAX_LINE_BYTES) {
-            Ok(Line::Eof) => return,
+            Ok(Line::Eof) => {
+                wait_for_hang_up(r.get_ref());
+                log::debug!("client {}: hung up", shared.id);
+                shared.kill();
+                return;
+            }
             Err(e) => {
                 log::debug!("client {}: read failed: {e}", shared.id);
                 return;
@@ -520,6 +527,23 @@ pub(crate) fn reader_loop(shared: Arc<ClientShared>, stream: UnixStream, hub: Ar
         shared.lock().fail(&fatal.to_string());
         shared.notify();
         return;
+    }
+}
+
+/// Blocks until the socket is hung up: the peer closed it (a half-close is not a
+/// hang-up), or the daemon shut it down (when the writer ends, at reap and at
+/// shutdown), whichever comes first. `poll` with no requested events reports only
+/// `POLLHUP`, `POLLERR` and `POLLNVAL`.
+fn wait_for_hang_up(stream: &UnixStream) {
+    use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
+    use std::os::fd::AsFd;
+    loop {
+        let mut fds = [PollFd::new(stream.as_fd(), PollFlags::empty())];
+        match poll(&mut fds, PollTimeout::NONE) {
+            Ok(_) if fds[0].revents().is_some_and(|r| !r.is_empty()) => return,
+            Ok(_) | Err(nix::errno::Errno::EINTR) => {}
+            Err(_) => return,
+        }
     }
 }
 
