@@ -14,7 +14,8 @@
 #                                           between runs), seeded from fuzz/corpus/TARGET;
 #                                           crashes in fuzz/target/coverage/artifacts/.
 #   fuzz/campaign.sh merge TARGET           minimise seeds + grown corpus into a fresh
-#                                           set (`-merge=1`) that replaces fuzz/corpus/TARGET
+#                                           set (`-merge=1`) that replaces the hashed
+#                                           inputs of fuzz/corpus/TARGET (named seeds stay)
 #   fuzz/campaign.sh repro TARGET FILE      run one input (a crash, a timeout)
 #
 # One process at a time, `nice -n 19`: the campaign shares the machine. libFuzzer
@@ -79,8 +80,8 @@ run)
     nice -n 19 "$bin_dir/$target" "$limit_arg" "${lib_args[@]}" \
         -artifact_prefix="$out/artifacts/$target/" \
         "$out/corpus/$target" "corpus/$target" "$@" >"$log" 2>&1 || status=$?
-    grep -E '^(INFO: Loaded|#[0-9]+ +DONE|Done|stat::|==[0-9]+== ERROR|SUMMARY)' "$log" || true
-    tail -n 3 "$log"
+    grep -E '^(INFO: Loaded 1 modules|#[0-9]+[[:space:]]+DONE|stat::|==[0-9]+== ERROR|SUMMARY)' "$log" || true
+    grep -E '^artifact_prefix|Test unit written' "$log" || true
     exit "$status"
     ;;
 merge)
@@ -90,8 +91,8 @@ merge)
     trap 'rm -rf "$fresh"' EXIT
     nice -n 19 "$bin_dir/$target" -merge=1 "${lib_args[@]}" \
         "$fresh" "corpus/$target" "$out/corpus/$target" 2>&1 | grep -E 'MERGE-OUTER: [0-9]+ new'
-    rm -rf "corpus/$target"
-    mkdir -p "corpus/$target"
+    # Hand-named seeds stay; inputs named by their SHA-1 (libFuzzer's) are replaced.
+    find "corpus/$target" -type f -regextype egrep -regex '.*/[0-9a-f]{40}' -delete
     cp "$fresh"/* "corpus/$target/"
     echo "corpus/$target: $(ls "corpus/$target" | wc -l) files, $(du -sh "corpus/$target" | cut -f1)"
     ;;
