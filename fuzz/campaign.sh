@@ -16,12 +16,15 @@
 #   fuzz/campaign.sh merge TARGET           minimise seeds + grown corpus into a fresh
 #                                           set (`-merge=1`) that replaces the hashed
 #                                           inputs of fuzz/corpus/TARGET (named seeds stay)
-#   fuzz/campaign.sh repro TARGET FILE      run one input (a crash, a timeout)
+#   fuzz/campaign.sh repro TARGET FILE [ARGS]  run one input (a crash, a timeout);
+#                                           with `-minimize_crash=1 -runs=100000`
+#                                           libFuzzer shrinks a crash
 #
 # One process at a time, `nice -n 19`: the campaign shares the machine. libFuzzer
 # prints `INFO: Loaded 1 modules (N inline 8-bit counters)` and growing `cov:`/`ft:`
 # when the build is instrumented; `run` refuses a build without counters.
 set -euo pipefail
+caller_dir="$PWD"
 cd "$(dirname "$0")"
 fuzz_dir="$PWD"
 out="$fuzz_dir/target/coverage"
@@ -98,10 +101,11 @@ merge)
     ;;
 repro)
     need_bin "$2"
-    "$bin_dir/$2" "${lib_args[@]}" "$3"
+    input="$(cd "$caller_dir" && realpath "$3")"
+    "$bin_dir/$2" "${lib_args[@]}" "${@:4}" "$input"
     ;;
 *)
-    sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'
+    sed -n '2,/^set -euo/p' "$fuzz_dir/$(basename "$0")" | sed '$d; s/^# \{0,1\}//'
     exit 2
     ;;
 esac
