@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Builds every fuzz target on the stable toolchain (libFuzzer's driver, no coverage
-# instrumentation) and runs each over a copy of its seed corpus plus RUNS random
-# mutations. Not a fuzzing campaign (that needs `cargo +nightly fuzz run`): a check that
-# the targets build and that the parsers survive the corpus and its mutations.
+# instrumentation) and runs each over a copy of its corpus plus RUNS random
+# mutations. Not a fuzzing campaign (that is fuzz/campaign.sh): a check that the
+# targets build and that the parsers survive the corpus and its mutations.
 # Usage: fuzz/smoke.sh [RUNS]   (default 20000)
 set -euo pipefail
 cd "$(dirname "$0")"
