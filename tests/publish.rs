@@ -779,6 +779,15 @@ fn garbage_gets_a_fatal_error_and_a_disconnect_while_others_continue() {
     );
     old.expect_eof();
 
+    // Nesting as deep as a line can hold: refused by the parser's depth limit on the
+    // client's reader thread (a small stack of its own), not a stack overflow.
+    let mut deep = Client::ready(&d.path);
+    deep.send(&"[".repeat(protocol::MAX_LINE_BYTES - 1));
+    let e = deep.next_not_snapshot();
+    assert_eq!(e["fatal"], true, "{e}");
+    assert!(e["message"].as_str().unwrap().contains("recursion"), "{e}");
+    deep.expect_eof();
+
     for seq in 1..=5 {
         d.snapshot(seq, 10);
     }

@@ -33,6 +33,13 @@ pub const CLIENT_SNDBUF_BYTES: usize = 1 << 20;
 pub const WRITE_STALL_TIMEOUT: Duration = Duration::from_secs(10);
 /// Messages the control thread may have in flight to the publisher thread.
 pub const QUEUE_CAPACITY: usize = 1024;
+/// Stack of each client's reader and writer thread (bytes). Under `mlockall` a
+/// thread's whole stack is resident, and glibc keeps finished threads' stacks cached,
+/// so each extra pair of client threads ever alive at once adds two stacks to the
+/// daemon's resident memory (a 4 MiB step with the default 2 MiB, seen in the soak).
+/// A deepest-nesting client line, parsed on the reader thread, needs between 256 and
+/// 512 KiB in a debug build (`tests/publish.rs` sends one); this leaves twice that.
+pub const CLIENT_THREAD_STACK_BYTES: usize = 1024 * 1024;
 
 /// How the socket is set up and whom it serves: the config's `socket` section.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -378,6 +385,7 @@ impl Publisher<'_> {
             let realtime = self.server.realtime;
             std::thread::Builder::new()
                 .name(format!("ct-client{id}-w"))
+                .stack_size(CLIENT_THREAD_STACK_BYTES)
                 .spawn(move || {
                     if let Some(p) = realtime {
                         crate::rt::make_realtime(p, "client writer");
@@ -397,6 +405,7 @@ impl Publisher<'_> {
             let (shared, hub) = (Arc::clone(&shared), Arc::clone(&self.hub));
             std::thread::Builder::new()
                 .name(format!("ct-client{id}-r"))
+                .stack_size(CLIENT_THREAD_STACK_BYTES)
                 .spawn(move || client::reader_loop(shared, rstream, hub))
         };
         let reader = match r {
