@@ -210,11 +210,7 @@ fn the_configured_field_step_sets_how_far_the_field_pushes_the_mesh() {
 fn travel(p: &Planner, agents: &[Vec2], goals: &[Vec2], goal_of: &[u32]) -> f64 {
     let mut m = CostMatrix::new(0, 0);
     p.costs().try_fill(agents, goals, &mut m).unwrap();
-    goal_of
-        .iter()
-        .enumerate()
-        .map(|(i, &g)| m.get(i, g as usize))
-        .sum()
+    total(&m, goal_of)
 }
 
 /// Fig. 5: with an obstacle between the crowd and its target formation, assigning by

@@ -479,20 +479,21 @@ impl DirectController {
         }
     }
 
+    /// The rig of a control, if it is live.
+    fn rig(&self, control: u32) -> Option<&Rig> {
+        self.rigs.iter().find(|r| r.id == control)
+    }
+
     /// Handle positions of a control (m), for tests and the watch view.
     pub fn handle_positions(&self, control: u32) -> Vec<Vec2> {
-        self.rigs
-            .iter()
-            .find(|r| r.id == control)
+        self.rig(control)
             .map(|r| r.handles.iter().map(|h| h.pos).collect())
             .unwrap_or_default()
     }
 
     /// Vertices a control drives: its handles then its supplementary points.
     pub fn control_vertices(&self, control: u32) -> Vec<u32> {
-        self.rigs
-            .iter()
-            .find(|r| r.id == control)
+        self.rig(control)
             .map(|r| {
                 r.handles
                     .iter()
@@ -506,17 +507,12 @@ impl DirectController {
     /// How many points a control samples inside its area (section 4.2), held
     /// through the triangles they lie in.
     pub fn control_samples(&self, control: u32) -> usize {
-        self.rigs
-            .iter()
-            .find(|r| r.id == control)
-            .map_or(0, |r| r.samples.len())
+        self.rig(control).map_or(0, |r| r.samples.len())
     }
 
     /// Handle vertices of a control, in finger order.
     pub fn handle_vertices(&self, control: u32) -> Vec<u32> {
-        self.rigs
-            .iter()
-            .find(|r| r.id == control)
+        self.rig(control)
             .map(|r| r.handles.iter().map(|h| h.vertex).collect())
             .unwrap_or_default()
     }
