@@ -1,24 +1,10 @@
 //! Goal clusters sharing a field against one exact field per goal.
 
-use super::scene;
+use super::{free_points, scene};
 use crate::crowd::assign::{CostMatrix, CostSource};
 use crate::crowd::environment::eikonal::{ClusterCosts, EikonalCosts, EikonalOptions, Grid};
 use crate::geom::Vec2;
 use crate::rng::SplitMix64;
-
-/// `n` points in free cells with `x` in `[x0, x1]`.
-fn free(rng: &mut SplitMix64, grid: &Grid, cost: &[f64], n: usize, x0: f64, x1: f64) -> Vec<Vec2> {
-    let o = grid.origin();
-    let hgt = grid.rows() as f64 * grid.cell_m();
-    let mut v = Vec::new();
-    while v.len() < n {
-        let p = Vec2::new(x0 + (x1 - x0) * rng.unit(), o.y + hgt * rng.unit());
-        if cost[grid.cell_of(p).unwrap()].is_finite() {
-            v.push(p);
-        }
-    }
-    v
-}
 
 fn provider(grid: Grid, cost: &[f64]) -> EikonalCosts {
     let options = EikonalOptions {
@@ -34,8 +20,8 @@ fn provider(grid: Grid, cost: &[f64]) -> EikonalCosts {
 fn rows_and_entries_agree_bit_for_bit() {
     let (grid, cost) = scene();
     let mut rng = SplitMix64::new(3);
-    let agents = free(&mut rng, &grid, &cost, 40, -0.8, 2.8);
-    let goals = free(&mut rng, &grid, &cost, 60, 3.6, 10.8);
+    let agents = free_points(&mut rng, &grid, &cost, 40, -0.8, 2.8);
+    let goals = free_points(&mut rng, &grid, &cost, 60, 3.6, 10.8);
     let costs = provider(grid, &cost);
     let mut c = ClusterCosts::new(1.0).unwrap();
     c.fill(&costs, &agents, &goals).unwrap();
@@ -59,8 +45,8 @@ fn rows_and_entries_agree_bit_for_bit() {
 fn clustered_entries_follow_the_per_goal_fields() {
     let (grid, cost) = scene();
     let mut rng = SplitMix64::new(5);
-    let agents = free(&mut rng, &grid, &cost, 60, -0.8, 2.8);
-    let goals = free(&mut rng, &grid, &cost, 80, 6.6, 10.8);
+    let agents = free_points(&mut rng, &grid, &cost, 60, -0.8, 2.8);
+    let goals = free_points(&mut rng, &grid, &cost, 80, 6.6, 10.8);
     let costs = provider(grid, &cost);
     let mut exact = CostMatrix::new(0, 0);
     costs.try_fill(&agents, &goals, &mut exact).unwrap();
@@ -85,8 +71,8 @@ fn clustered_entries_follow_the_per_goal_fields() {
 fn one_goal_per_cluster_is_the_per_goal_field() {
     let (grid, cost) = scene();
     let mut rng = SplitMix64::new(9);
-    let agents = free(&mut rng, &grid, &cost, 30, -0.8, 2.8);
-    let goals: Vec<Vec2> = free(&mut rng, &grid, &cost, 20, 3.6, 10.8)
+    let agents = free_points(&mut rng, &grid, &cost, 30, -0.8, 2.8);
+    let goals: Vec<Vec2> = free_points(&mut rng, &grid, &cost, 20, 3.6, 10.8)
         .iter()
         .map(|&g| grid.center(grid.cell_of(g).unwrap()))
         .collect();

@@ -1,6 +1,6 @@
 //! The cost provider against brute force: one full field per source cell.
 
-use super::{block_rect, scene, scene_at};
+use super::{block_rect, free_points, scene, scene_at};
 use crate::crowd::assign::{CostMatrix, CostProvider};
 use crate::crowd::environment::eikonal::{
     sample, EikonalCosts, EikonalError, EikonalOptions, FieldSources, Fmm, Grid, Order, Sources,
@@ -39,26 +39,6 @@ fn brute(
         }
     }
     m
-}
-
-fn free_points(
-    rng: &mut SplitMix64,
-    grid: &Grid,
-    cost: &[f64],
-    n: usize,
-    x0: f64,
-    x1: f64,
-) -> Vec<Vec2> {
-    let o = grid.origin();
-    let hgt = grid.rows() as f64 * grid.cell_m();
-    let mut v = Vec::new();
-    while v.len() < n {
-        let p = Vec2::new(x0 + (x1 - x0) * rng.unit(), o.y + hgt * rng.unit());
-        if cost[grid.cell_of(p).unwrap()].is_finite() {
-            v.push(p);
-        }
-    }
-    v
 }
 
 #[test]

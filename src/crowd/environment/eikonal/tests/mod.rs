@@ -3,6 +3,7 @@
 
 use super::{sanity_check, Fmm, Grid, Order, Sources};
 use crate::geom::Vec2;
+use crate::rng::SplitMix64;
 
 mod clusters;
 mod costs;
@@ -47,4 +48,25 @@ fn scene_at(h: f64) -> (Grid, Vec<f64>) {
         }
     }
     (grid, cost)
+}
+
+/// `n` points in free cells of `cost` with `x` in `[x0, x1]`.
+fn free_points(
+    rng: &mut SplitMix64,
+    grid: &Grid,
+    cost: &[f64],
+    n: usize,
+    x0: f64,
+    x1: f64,
+) -> Vec<Vec2> {
+    let o = grid.origin();
+    let hgt = grid.rows() as f64 * grid.cell_m();
+    let mut v = Vec::new();
+    while v.len() < n {
+        let p = Vec2::new(x0 + (x1 - x0) * rng.unit(), o.y + hgt * rng.unit());
+        if cost[grid.cell_of(p).unwrap()].is_finite() {
+            v.push(p);
+        }
+    }
+    v
 }
