@@ -330,23 +330,34 @@ impl Solver {
         self.k_eff = self.k;
     }
 
-    /// A warm start whose prices are far off ([`WARM_COLD_SLACK`]) continues as a cold
-    /// solve; the counters keep what the warm pricing pass did.
-    fn restart_cold<S: CostSource>(&mut self, costs: &S) {
+    /// Empties the row sets a solve works through (dirty, free, columns to raise).
+    fn clear_row_sets(&mut self) {
         for &i in &self.dirty_rows {
             self.dirty[i as usize] = false;
         }
         self.dirty_rows.clear();
         self.free_rows.clear();
         self.raise.clear();
-        self.cold_start(costs);
-        self.stats.warm = false;
-        self.stats.restarted_cold = true;
+    }
+
+    /// Sets `v_hi` to the largest column price (at least 0 for a rectangular
+    /// problem, whose free columns sit at 0).
+    fn set_price_bound(&mut self) {
         let rect = self.rows < self.cols;
         self.v_hi = self
             .v
             .iter()
             .fold(if rect { 0.0 } else { f64::NEG_INFINITY }, |a, &b| a.max(b));
+    }
+
+    /// A warm start whose prices are far off ([`WARM_COLD_SLACK`]) continues as a cold
+    /// solve; the counters keep what the warm pricing pass did.
+    fn restart_cold<S: CostSource>(&mut self, costs: &S) {
+        self.clear_row_sets();
+        self.cold_start(costs);
+        self.stats.warm = false;
+        self.stats.restarted_cold = true;
+        self.set_price_bound();
     }
 
     /// Warm solve: when the dimensions equal those of the last successful solve, starts
@@ -596,12 +607,7 @@ impl Solver {
                 // Leave a consistent (cold) state behind.
                 self.x.fill(NONE);
                 self.y.fill(NONE);
-                for &i in &self.dirty_rows {
-                    self.dirty[i as usize] = false;
-                }
-                self.dirty_rows.clear();
-                self.free_rows.clear();
-                self.raise.clear();
+                self.clear_row_sets();
                 Err(e)
             }
         }
@@ -610,11 +616,7 @@ impl Solver {
     fn run<S: CostSource>(&mut self, costs: &S) -> Result<(), AssignError> {
         costs.validate()?;
         let sparse = self.use_sparse();
-        let rect = self.rows < self.cols;
-        self.v_hi = self
-            .v
-            .iter()
-            .fold(if rect { 0.0 } else { f64::NEG_INFINITY }, |a, &b| a.max(b));
+        self.set_price_bound();
         self.price_all(costs, sparse, true)?;
         if self.stats.warm {
             self.stats.kept_rows = self.x.iter().filter(|&&j| j != NONE).count();
