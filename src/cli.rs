@@ -237,14 +237,25 @@ pub fn main() -> i32 {
     }
 }
 
+/// Logs to stderr at `level`; `RUST_LOG` overrides it. Without `RUST_LOG` the
+/// logger passes everything and the level is `log`'s maximum, which a config
+/// reload changes (`Daemon::reload`).
 fn init_logging(level: config::LogLevel) {
     let mut b = env_logger::Builder::new();
-    b.filter_level(level.filter());
-    if let Ok(spec) = std::env::var("RUST_LOG") {
-        b.parse_filters(&spec);
+    let spec = std::env::var("RUST_LOG").ok();
+    match &spec {
+        Some(spec) => {
+            b.filter_level(level.filter());
+            b.parse_filters(spec);
+        }
+        None => {
+            b.filter_level(log::LevelFilter::Trace);
+        }
     }
     b.format_target(false);
-    let _ = b.try_init();
+    if b.try_init().is_ok() && spec.is_none() {
+        log::set_max_level(level.filter());
+    }
 }
 
 fn find_config(explicit: Option<&Path>) -> Result<(Config, Option<PathBuf>)> {

@@ -10,10 +10,15 @@
 //! 2. `$XDG_CONFIG_HOME/crowdtouch/crowdtouch.ron` (or `~/.config/crowdtouch/crowdtouch.ron`)
 //! 3. `/etc/crowdtouch/crowdtouch.ron`
 //! 4. the embedded default.
+//!
+//! # Reloading
+//! `live.rs` classifies every field: applied by a reload (SIGHUP) or kept until a
+//! restart ([`FIELDS`], [`plan_reload`]).
 
 mod edit;
 mod error;
 mod inputs;
+mod live;
 mod load;
 mod model;
 mod validate;
@@ -22,6 +27,10 @@ pub use edit::set_calibration_matrix;
 pub use error::{ConfigIssue, EditError, Error};
 pub use inputs::{
     CalibrationConfig, DeviceInterface, DeviceSelect, InputConfig, DEFAULT_PALM_MAX_MM,
+};
+pub use live::{
+    field_class, plan_reload, show_value, unclassified_fields, FieldChange, FieldClass,
+    ReloadClass, ReloadPlan, FIELDS,
 };
 pub use load::{search_path, DEFAULT_CONFIG_RON, MAX_CONFIG_BYTES};
 pub use model::{

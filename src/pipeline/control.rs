@@ -9,7 +9,7 @@ use crate::crowd::environment::Planner;
 use crate::engine::Engine;
 use crate::publish::{Outgoing, Outputs};
 use crate::rt::monotonic_now;
-use crate::vocab::{CommandRequest, Event, Micros, TouchFrame};
+use crate::vocab::{Command, CommandRequest, Event, Micros, TouchFrame};
 use crossbeam_channel::{never, select, Receiver, Sender, TryRecvError, TrySendError};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
@@ -49,6 +49,9 @@ pub(super) struct Reload {
     pub(super) cfg: Config,
     /// With inline assignment and a changed scene: the new scene's planner.
     pub(super) planner: Option<Planner>,
+    /// `crowd.agents` when the reload changed it: the crowd is resized as the
+    /// `set_agent_count` command does.
+    pub(super) agents: Option<u32>,
 }
 
 pub(super) struct ControlChannels {
@@ -173,7 +176,11 @@ impl ControlLoop {
 
     fn command(&mut self, req: CommandRequest) {
         let result = self.engine.command(&req.command, monotonic_now());
-        if req.client != INTERNAL_CLIENT {
+        if req.client == INTERNAL_CLIENT {
+            if let Err(e) = result {
+                log::warn!("{:?} refused: {e}", req.command);
+            }
+        } else {
             self.send(Outgoing::Reply {
                 client: req.client,
                 id: req.id,
@@ -183,23 +190,37 @@ impl ControlLoop {
         }
     }
 
+    /// Applies a reload's config (the daemon kept its restart fields at their
+    /// running values, so the engine ignores none) and logs nothing: the
+    /// supervisor's line says what the reload did.
     fn reconfigure(&mut self, reload: Reload) {
-        let Reload { cfg, planner } = reload;
+        let Reload {
+            cfg,
+            planner,
+            agents,
+        } = reload;
         let cfg = &cfg;
         let ignored = self.engine.reconfigure_with(cfg, planner);
+        if !ignored.is_empty() {
+            log::error!(
+                "internal bug: a reload reached the engine with restart fields changed: {}",
+                ignored.join(", ")
+            );
+        }
         let b = &cfg.pipeline.budgets;
         self.t_input.set_budget(b.input_us);
         self.t_queue.set_budget(b.queue_us);
         self.t_control.set_budget(b.control_us);
         self.t_assign.set_budget(b.assignment_us);
         self.period = Micros((1e6 / cfg.pipeline.tick_hz) as u64);
-        if ignored.is_empty() {
-            log::info!("config reloaded");
-        } else {
-            log::warn!(
-                "config reloaded; these changes need a restart: {}",
-                ignored.join(", ")
-            );
+        self.stats_interval = Micros(cfg.pipeline.stats_interval_ms * 1000);
+        if let Some(count) = agents {
+            // The path a client's `set_agent_count` takes.
+            self.command(CommandRequest {
+                client: INTERNAL_CLIENT,
+                id: serde_json::Value::Null,
+                command: Command::SetAgentCount { count },
+            });
         }
     }
 

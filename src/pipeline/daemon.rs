@@ -6,6 +6,7 @@ use super::device;
 use super::error::Error;
 use super::outputs::{register_outputs, Registered};
 use super::queue::{FrameQueue, InputCounters};
+use super::reload;
 use super::sources::SourceSpec;
 use super::timing::StageTimer;
 use super::workers::{assignment_worker, formation_worker, AssignJob};
@@ -15,10 +16,12 @@ use crate::crowd::environment::{PlannerParams, Scene};
 use crate::engine::Engine;
 use crate::input::replay::{Pacing, ReplaySource};
 use crate::input::FrameSink;
-use crate::publish::PublisherStats;
+use crate::publish::{ClientLimit, PublisherStats};
 use crate::publish::{HelloInfo, Outgoing, OutputContext, OutputSet, OutputStats, Outputs};
 use crate::rt::monotonic_now;
-use crate::vocab::{Command, CommandRequest, Event, Micros, StageStats, StatsReport, TouchFrame};
+use crate::vocab::{
+    Command, CommandRequest, Event, Micros, RestartPending, StageStats, StatsReport, TouchFrame,
+};
 use crossbeam_channel::{bounded, Receiver, Sender};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -49,6 +52,13 @@ pub struct Daemon {
     control_stats: Receiver<ControlStats>,
     out: Outputs,
     reload: Sender<Box<Reload>>,
+    /// The config in effect: the last one loaded, with restart fields at the values
+    /// the daemon started with. A reload is compared with it.
+    config: Config,
+    /// Restart fields whose file value differs from the running one (`stats`).
+    restart_pending: Vec<RestartPending>,
+    /// Every output's client limit (`socket.max_clients`).
+    client_limits: Vec<ClientLimit>,
     scene: Option<Arc<Scene>>,
     planner_params: PlannerParams,
     inline_assignment: bool,
@@ -128,6 +138,7 @@ impl Daemon {
             publisher,
         } = register_outputs(&cfg, &opts.socket_path, hello)?;
         let output_stats = outputs.stats();
+        let client_limits = outputs.client_limits();
         let rt = &cfg.pipeline.realtime;
 
         let mut start = Start {
@@ -203,6 +214,11 @@ impl Daemon {
         let scene = cfg.loaded_scene().cloned();
         let planner_params = crate::engine::planner_params(&cfg);
         let inline_assignment = !cfg.assignment.worker;
+        let (e2e, encode) = (
+            StageTimer::new("end_to_end", b.end_to_end_us),
+            StageTimer::new("publish", b.publish_us),
+        );
+        let interval_us = cfg.pipeline.stats_interval_ms * 1000;
         Ok(Daemon {
             stop: start.stop,
             input_stop: start.input_stop,
@@ -215,13 +231,16 @@ impl Daemon {
             control_stats: cstats_rx,
             out,
             reload: reload_tx,
+            config: cfg,
+            restart_pending: Vec::new(),
+            client_limits,
             scene,
             planner_params,
             inline_assignment,
-            e2e: StageTimer::new("end_to_end", b.end_to_end_us),
-            encode: StageTimer::new("publish", b.publish_us),
+            e2e,
+            encode,
             totals: Vec::new(),
-            interval_us: cfg.pipeline.stats_interval_ms * 1000,
+            interval_us,
             last_report: monotonic_now(),
         })
     }
@@ -246,9 +265,18 @@ impl Daemon {
         monotonic_now().saturating_since(Micros(self.heartbeat_us.load(Ordering::Relaxed)))
     }
 
-    /// Hands a new config to the control thread (already validated, its scene
-    /// loaded: [`Config::load`] reads and checks the scene file, so a broken scene
-    /// never gets here and the running one stays).
+    /// Applies a newly loaded config (already validated, its scene loaded:
+    /// [`Config::load`] reads and checks the scene file, so a broken scene never
+    /// gets here and the running one stays) and logs one line saying what it did.
+    ///
+    /// The new config is compared with the one in effect
+    /// ([`crate::config::plan_reload`]): live fields are applied — on the control
+    /// thread (tunables, budgets, tick rate, the scene, `crowd.agents` as
+    /// `set_agent_count` does), on the outputs (`socket.max_clients`) and here (the
+    /// socket file's mode and group, the log level, the stats interval); restart
+    /// fields keep their running values, are named in the log line with old → new,
+    /// and are published in `stats` as `restart_pending` until the daemon restarts
+    /// or the file goes back.
     ///
     /// Everything heavy about a new scene happens here, on the caller's thread,
     /// not on the control thread: comparing it with the running one (an unchanged
@@ -257,14 +285,14 @@ impl Daemon {
     /// workspaces). The assignment worker builds its own planner when its first
     /// job in the new scene arrives. The control thread only swaps the prepared
     /// parts in, between two ticks.
-    pub fn reload(&mut self, mut cfg: Config) {
-        self.e2e.set_budget(cfg.pipeline.budgets.end_to_end_us);
-        self.encode.set_budget(cfg.pipeline.budgets.publish_us);
-        let same = crate::engine::same_scene(cfg.loaded_scene(), self.scene.as_ref());
+    pub fn reload(&mut self, cfg: Config) {
+        let mut plan = crate::config::plan_reload(&self.config, cfg);
+        let same = crate::engine::same_scene(plan.in_effect.loaded_scene(), self.scene.as_ref());
         if same {
-            cfg.set_loaded_scene(self.scene.clone());
+            plan.in_effect.set_loaded_scene(self.scene.clone());
         }
-        let params = crate::engine::planner_params(&cfg);
+        let cfg = &plan.in_effect;
+        let params = crate::engine::planner_params(cfg);
         let planner = if self.inline_assignment && (!same || params != self.planner_params) {
             cfg.loaded_scene()
                 .and_then(|s| crate::engine::planner_for(s, params))
@@ -272,19 +300,47 @@ impl Daemon {
             None
         };
         let scene = cfg.loaded_scene().cloned();
-        let change = (!same).then(|| describe_scene_change(&cfg, self.scene.as_deref()));
-        match self.reload.try_send(Box::new(Reload { cfg, planner })) {
-            Ok(()) => {
-                if let Some(c) = change {
-                    log::info!("{c}");
-                }
-                self.scene = scene;
-                self.planner_params = params;
-            }
-            Err(_) => {
-                log::warn!("config reload skipped: the previous reload is still being applied")
-            }
+        let change = (!same).then(|| describe_scene_change(cfg, self.scene.as_deref()));
+        let agents = plan.applies("crowd.agents").then_some(cfg.crowd.agents);
+        let reload = Reload {
+            cfg: cfg.clone(),
+            planner,
+            agents,
+        };
+        if self.reload.try_send(Box::new(reload)).is_err() {
+            log::warn!("config reload skipped: the previous reload is still being applied");
+            return;
         }
+        if let Some(c) = change {
+            log::info!("{c}");
+        }
+        self.scene = scene;
+        self.planner_params = params;
+        let failed = reload::apply_socket_access(
+            &self.socket_path,
+            &self.config.socket,
+            &mut plan.in_effect.socket,
+        );
+        let cfg = &plan.in_effect;
+        for limit in &self.client_limits {
+            limit.set(cfg.socket.max_clients);
+        }
+        reload::apply_log_level(cfg.log_level);
+        self.e2e.set_budget(cfg.pipeline.budgets.end_to_end_us);
+        self.encode.set_budget(cfg.pipeline.budgets.publish_us);
+        self.interval_us = cfg.pipeline.stats_interval_ms * 1000;
+        let path_changed = plan.changes.iter().any(|c| c.path == "scene");
+        let (level, line) =
+            reload::summary(&plan, &failed, !same && !path_changed, &self.socket_path);
+        log::log!(level, "{line}");
+        self.restart_pending = reload::pending(&plan, &self.socket_path);
+        self.config = plan.in_effect;
+    }
+
+    /// Config fields changed in the file that wait for a restart (what `stats`
+    /// publishes as `restart_pending`).
+    pub fn restart_pending(&self) -> &[RestartPending] {
+        &self.restart_pending
     }
 
     /// Waits up to `timeout` for the control thread's interval figures, merges them
@@ -342,6 +398,7 @@ impl Daemon {
             last_gesture: cs.last_gesture,
             formation: cs.formation,
             formation_switches: cs.formation_switches,
+            restart_pending: self.restart_pending.clone(),
         });
         self.out.send(Outgoing::Stats(Arc::clone(&report)));
         Some(report)

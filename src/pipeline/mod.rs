@@ -20,6 +20,7 @@ pub mod device;
 mod error;
 mod outputs;
 mod queue;
+mod reload;
 mod sources;
 pub mod timing;
 mod workers;

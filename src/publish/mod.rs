@@ -12,6 +12,8 @@ pub mod protocol;
 pub mod socket;
 
 pub use outgoing::Outgoing;
-pub use output::{Output, OutputContext, OutputSet, OutputStats, Outputs, Overflow, QueuePolicy};
+pub use output::{
+    ClientLimit, Output, OutputContext, OutputSet, OutputStats, Outputs, Overflow, QueuePolicy,
+};
 pub use protocol::HelloInfo;
 pub use socket::{Error, PublisherStats, Server, SocketOptions};

@@ -20,7 +20,7 @@ use super::Outgoing;
 use crate::vocab::CommandRequest;
 use crossbeam_channel::{bounded, Receiver, Sender, TrySendError};
 use hdrhistogram::Histogram;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::Arc;
 
 /// What happens to a message that finds an output's queue full.
@@ -57,6 +57,29 @@ pub trait OutputStats: Send + Sync {
     fn take_encode(&self) -> Histogram<u64>;
 }
 
+/// Most clients an output admits at once, changeable while it runs: the output
+/// reads it at each new connection, the daemon sets it on a config reload. Lowering
+/// it refuses new clients until fewer are connected; none is disconnected.
+#[derive(Clone, Debug)]
+pub struct ClientLimit(Arc<AtomicU32>);
+
+impl ClientLimit {
+    /// A limit of `max` clients.
+    pub fn new(max: u32) -> ClientLimit {
+        ClientLimit(Arc::new(AtomicU32::new(max)))
+    }
+
+    /// The limit now.
+    pub fn get(&self) -> u32 {
+        self.0.load(Ordering::Relaxed)
+    }
+
+    /// Changes the limit for the connections that come next.
+    pub fn set(&self, max: u32) {
+        self.0.store(max, Ordering::Relaxed)
+    }
+}
+
 /// What an output's thread is given.
 pub struct OutputContext {
     /// The output's queue.
@@ -76,6 +99,11 @@ pub trait Output: Send {
     fn queue(&self) -> QueuePolicy;
     /// Its counters, shared with the stats reporter.
     fn stats(&self) -> Arc<dyn OutputStats>;
+    /// Its client limit, shared with the daemon so a reload can change it
+    /// (`socket.max_clients`); `None` for an output without clients.
+    fn client_limit(&self) -> Option<ClientLimit> {
+        None
+    }
     /// The output's thread body: consumes `ctx.messages` until `ctx.stop` is set or
     /// the queue disconnects. Never blocks the control thread.
     fn run(self: Box<Self>, ctx: OutputContext);
@@ -99,6 +127,14 @@ impl OutputSet {
     /// Every registered output's counters.
     pub fn stats(&self) -> Vec<Arc<dyn OutputStats>> {
         self.outputs.iter().map(|o| o.stats()).collect()
+    }
+
+    /// Every registered output's client limit (outputs with clients only).
+    pub fn client_limits(&self) -> Vec<ClientLimit> {
+        self.outputs
+            .iter()
+            .filter_map(|o| o.client_limit())
+            .collect()
     }
 
     /// Makes every output's queue: the control side ([`Outputs`]) and each output

@@ -20,6 +20,6 @@ pub use device::parse_vendor_product;
 pub use event::{ControlKind, DeviceState, Event};
 pub use motion::MotionType;
 pub use snapshot::{AgentView, MeshView, Snapshot, TouchView};
-pub use stats::{StageStats, StatsReport};
+pub use stats::{RestartPending, StageStats, StatsReport};
 pub use time::Micros;
 pub use touch::{Contact, ContactFlags, ContactId, FrameFull, TouchFrame, MAX_CONTACTS};

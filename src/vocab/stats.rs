@@ -62,4 +62,19 @@ pub struct StatsReport {
     /// Formation switches at scene checkpoints since start.
     #[serde(default)]
     pub formation_switches: u64,
+    /// Config fields changed in the file by a reload that the daemon keeps at their
+    /// running values until it restarts (empty when the file and the daemon agree).
+    #[serde(default)]
+    pub restart_pending: Vec<RestartPending>,
+}
+
+/// A config field whose new value needs a restart: what runs, and what the file says.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RestartPending {
+    /// Dotted path of the field (`socket.path`).
+    pub field: String,
+    /// The value in use, as JSON (`null` for none).
+    pub running: serde_json::Value,
+    /// The value in the config file, used after a restart.
+    pub configured: serde_json::Value,
 }

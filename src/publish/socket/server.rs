@@ -3,7 +3,9 @@
 use super::client::{self, ClientShared, EncodedSnapshot, Hub, CLOSE_GRACE};
 use super::error::Error;
 use super::stats::{lock, PublisherStats};
-use crate::publish::output::{Output, OutputContext, OutputStats, Overflow, QueuePolicy};
+use crate::publish::output::{
+    ClientLimit, Output, OutputContext, OutputStats, Overflow, QueuePolicy,
+};
 use crate::publish::protocol::{self, FieldSet, Format, HelloInfo};
 use crate::publish::Outgoing;
 use crate::rt::monotonic_now;
@@ -62,7 +64,8 @@ pub struct Server {
     /// (device, inode) of the socket file we created, so drop removes only ours.
     ident: Option<(u64, u64)>,
     client_queue: u32,
-    max_clients: u32,
+    /// `socket.max_clients`, changeable while running ([`Output::client_limit`]).
+    max_clients: ClientLimit,
     hello: HelloInfo,
     stats: Arc<PublisherStats>,
     /// SCHED_FIFO priority for client writer threads (`None`: normal scheduling).
@@ -178,7 +181,7 @@ impl Server {
             path,
             ident,
             client_queue: opts.client_queue,
-            max_clients: opts.max_clients,
+            max_clients: ClientLimit::new(opts.max_clients),
             realtime: None,
             hello,
             stats: Arc::new(PublisherStats::default()),
@@ -267,6 +270,10 @@ impl Output for Server {
         Arc::clone(&self.stats) as Arc<dyn OutputStats>
     }
 
+    fn client_limit(&self) -> Option<ClientLimit> {
+        Some(self.max_clients.clone())
+    }
+
     fn run(self: Box<Self>, ctx: OutputContext) {
         (*self).run(ctx.messages, ctx.commands, ctx.stop)
     }
@@ -329,7 +336,7 @@ impl Publisher<'_> {
 
     fn admit(&mut self, stream: UnixStream) {
         let stats = &self.hub.stats;
-        if self.clients.len() >= self.server.max_clients as usize {
+        if self.clients.len() >= self.server.max_clients.get() as usize {
             stats.clients_refused.fetch_add(1, Ordering::Relaxed);
             log::warn!(
                 "refusing a client: {} clients connected (config socket.max_clients)",

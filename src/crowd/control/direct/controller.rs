@@ -517,6 +517,12 @@ impl DirectController {
             .unwrap_or_default()
     }
 
+    /// Whether the user mesh is at its rest pose with no rig live: a
+    /// [`reset`](Self::reset) would change nothing.
+    pub fn is_at_rest(&self) -> bool {
+        self.rigs.is_empty() && self.verts.as_slice() == self.mesh.rest()
+    }
+
     /// Whether a control's rig is live: its fingers down, or lifted and its
     /// handles still following their check points.
     pub fn has_control(&self, control: u32) -> bool {
