@@ -9,9 +9,10 @@
 //!   with the state the tick ends in — none when it ends where it began.
 //! * `reset` is sent at most once per tick: a later reset or resize in the same
 //!   tick updates the queued event (the crowd size after the last, `hard` if any
-//!   was). A soft reset of a crowd already at rest (start formation, mesh at its
-//!   rest pose, no control, gesture or switch under way) changes nothing and sends
-//!   nothing.
+//!   was). A reset that changes nothing sends nothing: a soft one of a crowd
+//!   already at rest (start formation, mesh at its rest pose, no control, gesture
+//!   or switch under way), a hard one of a crowd at rest whose agents also stand
+//!   still on their start goals (as the last hard reset left them).
 //!
 //! Every command is still answered to its sender; only the broadcast is folded.
 
@@ -92,6 +93,19 @@ impl Engine {
         });
     }
 
+    /// Whether every agent stands still on its own start goal with no waypoint, as
+    /// a hard reset leaves it (and a crowd at rest keeps it). O(agents).
+    fn agents_on_their_goals(&self) -> bool {
+        let goals = self.direct.goals();
+        self.goal_of
+            .iter()
+            .enumerate()
+            .all(|(i, &g)| g as usize == i)
+            && self.agents.positions() == goals
+            && self.agents.velocities().iter().all(|v| *v == Vec2::zeros())
+            && self.waypoints.iter().all(|w| w.x.is_nan())
+    }
+
     /// Whether a soft reset would change nothing: the start formation at its rest
     /// pose, no control, gesture or formation switch under way.
     fn at_rest(&self) -> bool {
@@ -107,7 +121,7 @@ impl Engine {
     /// Mesh back to rest in the start formation; controls end. `hard` teleports
     /// agents to their goals.
     pub fn reset(&mut self, hard: bool, now: Micros) {
-        if !hard && self.at_rest() {
+        if self.at_rest() && (!hard || self.agents_on_their_goals()) {
             return;
         }
         self.segmenter.cancel_all(now, &mut self.seg_out);
@@ -295,12 +309,31 @@ mod tests {
         e.command(&Command::Reset { hard: false }, Micros(20_001))
             .unwrap();
         assert!(resets(&next_tick(&mut e, 30_000)).is_empty());
-        // A hard reset moves the agents onto their goals: it is announced.
+        // Agents that stand on their goals (a resize places them there) are not
+        // moved by a hard reset either.
+        assert!(e.agents_on_their_goals());
         e.command(&Command::Reset { hard: true }, Micros(30_001))
             .unwrap();
-        e.command(&Command::Reset { hard: true }, Micros(30_002))
+        assert!(resets(&next_tick(&mut e, 40_000)).is_empty());
+        // Agents walking back from another formation are: it is announced, once.
+        e.set_formation("arrow", Micros(40_001)).unwrap();
+        for k in 1..=10 {
+            let _ = next_tick(&mut e, 40_000 + k * 10_000);
+        }
+        e.command(&Command::Reset { hard: false }, Micros(150_000))
             .unwrap();
-        assert_eq!(resets(&next_tick(&mut e, 40_000)), vec![(30, true)]);
+        assert_eq!(resets(&next_tick(&mut e, 160_000)), vec![(30, false)]);
+        assert!(e.at_rest() && !e.agents_on_their_goals());
+        e.command(&Command::Reset { hard: true }, Micros(160_001))
+            .unwrap();
+        e.command(&Command::Reset { hard: true }, Micros(160_002))
+            .unwrap();
+        assert_eq!(resets(&next_tick(&mut e, 170_000)), vec![(30, true)]);
+        // Now they stand on their goals again: nothing to announce.
+        assert!(e.agents_on_their_goals());
+        e.command(&Command::Reset { hard: true }, Micros(170_001))
+            .unwrap();
+        assert!(resets(&next_tick(&mut e, 180_000)).is_empty());
     }
 
     #[test]
