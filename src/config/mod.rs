@@ -23,7 +23,7 @@ pub use error::{ConfigIssue, EditError, Error};
 pub use inputs::{
     CalibrationConfig, DeviceInterface, DeviceSelect, InputConfig, DEFAULT_PALM_MAX_MM,
 };
-pub use load::{search_path, DEFAULT_CONFIG_RON, MAX_CONFIG_BYTES};
+pub use load::{locate_issues, search_path, DEFAULT_CONFIG_RON, MAX_CONFIG_BYTES};
 pub use model::{
     AssignmentConfig, AssignmentCost, BudgetsConfig, Config, ControlsConfig, CrowdConfig,
     FormationsConfig, LogLevel, MeshConfig, PipelineConfig, RealtimeConfig, SocketConfig,

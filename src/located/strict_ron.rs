@@ -34,12 +34,9 @@ pub fn parse_strict<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, Iss
 fn duplicate_field(text: &str, pos: ron::error::Position, name: &str) -> Issue {
     let fields = field_positions(text);
     // The last occurrence of the field that starts before the error position.
-    let second = fields
-        .iter()
-        .filter(|(p, l, c)| {
-            (p == name || p.ends_with(&format!(".{name}"))) && (*l, *c) < (pos.line, pos.col)
-        })
-        .last();
+    let second = fields.iter().rev().find(|(p, l, c)| {
+        (p == name || p.ends_with(&format!(".{name}"))) && (*l, *c) < (pos.line, pos.col)
+    });
     match second {
         Some((path, line, column)) => {
             let first = fields
