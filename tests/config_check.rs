@@ -319,3 +319,36 @@ fn run_writes_an_os_error_once() {
         )
     );
 }
+
+#[test]
+fn a_daemon_on_the_socket_is_a_warning_for_check_config_and_refused_by_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let c = config(dir.path(), "agents: 100,", "agents: 100,");
+    let sock = dir.path().join("ct.sock");
+    let _live = std::os::unix::net::UnixListener::bind(&sock).unwrap();
+    let line = format!(
+        "{}: field `socket.path`: {}: another process is already listening on this socket (is crowdtouch already running?); `run` refuses to start while it listens",
+        place(&c, "path: Some"),
+        sock.display()
+    );
+    // Checking a config while its daemon runs (before a reload) is normal.
+    let out = check(&c);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert_eq!(
+        stderr(&out),
+        line.replacen("`socket.path`: ", "`socket.path`: warning: ", 1) + "\n"
+    );
+    let run = bin()
+        .args(["run", "--config"])
+        .arg(&c)
+        .stdout(Stdio::null())
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(1));
+    assert!(
+        stderr(&run).contains(&format!("the config cannot be run:\n{line}\n")),
+        "{}",
+        stderr(&run)
+    );
+    assert!(sock.exists(), "the live socket was left alone");
+}
