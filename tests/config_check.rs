@@ -352,3 +352,38 @@ fn a_daemon_on_the_socket_is_a_warning_for_check_config_and_refused_by_run() {
     );
     assert!(sock.exists(), "the live socket was left alone");
 }
+
+#[test]
+fn a_systemd_runtime_directory_not_created_yet_is_a_warning_for_check_config() {
+    let dir = tempfile::tempdir().unwrap();
+    let c = dir.path().join("c.ron");
+    std::fs::write(&c, DEFAULT).unwrap();
+    let rundir = dir.path().join("run/crowdtouch");
+    let sock = rundir.join("crowdtouch.sock");
+    let line = format!(
+        "{}: field `socket.path`: {}: the socket's directory {} does not exist (`path: None` resolves to this path here); systemd creates $RUNTIME_DIRECTORY when it starts the service",
+        place(&c, "path: None"),
+        sock.display(),
+        rundir.display()
+    );
+    let out = bin()
+        .arg("check-config")
+        .arg(&c)
+        .env("RUNTIME_DIRECTORY", &rundir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert_eq!(
+        stderr(&out),
+        line.replacen("`socket.path`: ", "`socket.path`: warning: ", 1) + "\n"
+    );
+    // `run` in that environment cannot bind there.
+    let run = bin()
+        .args(["run", "--config"])
+        .arg(&c)
+        .env("RUNTIME_DIRECTORY", &rundir)
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(1));
+    assert!(stderr(&run).contains(&line), "{}", stderr(&run));
+}

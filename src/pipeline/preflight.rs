@@ -7,8 +7,9 @@
 //! path and group as [`Server::bind`](crate::publish::Server::bind) checks them
 //! ([`crate::publish::socket::preflight`]), the recordings read as
 //! [`sources_from_config`](super::sources_from_config) reads them. A few things
-//! depend on who asks and when: a daemon listening on the socket now, and whether
-//! this user may create the socket or give it to its group. `check-config` is often
+//! depend on who asks and when: a daemon listening on the socket now, whether this
+//! user may create the socket or give it to its group, and a `$RUNTIME_DIRECTORY`
+//! that systemd creates only when it starts the service. `check-config` is often
 //! run by someone else than the service, or while the daemon runs, so for it those
 //! are warnings; for `run` ([`Preflight::starting`]) they are errors.
 //!
@@ -94,6 +95,19 @@ pub fn preflight(cfg: &Config, what: &Preflight<'_>) -> Vec<Finding> {
                         ),
                     ));
                 }
+            }
+            // systemd creates the service's runtime directory when it starts it.
+            Err(e @ SocketError::NoDirectory { .. })
+                if cfg.socket.path.is_none()
+                    && std::env::var_os("RUNTIME_DIRECTORY").is_some() =>
+            {
+                out.push(finding(
+                    "socket.path",
+                    user_dependent,
+                    format!(
+                        "{e}{resolved}; systemd creates $RUNTIME_DIRECTORY when it starts the service"
+                    ),
+                ))
             }
             Err(e @ SocketError::InUse { .. }) => out.push(finding(
                 "socket.path",
