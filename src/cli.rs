@@ -5,13 +5,17 @@ use clap::{Args, Parser, Subcommand};
 use crowdtouch::config::{self, Config};
 use crowdtouch::engine::{replay_virtual, Engine};
 use crowdtouch::input::recording::OnBadFrame;
-use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
+use crowdtouch::pipeline::{
+    preflight, sources_from_config, Daemon, DaemonOptions, Preflight, Severity,
+};
 use crowdtouch::publish::protocol::{
     encode_event, encode_mesh_json, encode_snapshot_json, FieldSet,
 };
 use crowdtouch::rt::monotonic_now;
 use crowdtouch::vocab::Micros;
 use crowdtouch::vocab::StatsReport;
+use output::{errln, outln};
+use running::Running;
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -20,10 +24,13 @@ use std::time::Duration;
 
 mod bench;
 mod calibrate;
+mod check;
 mod devices;
 mod formations;
 mod hid;
+mod output;
 mod record;
+mod running;
 mod scene;
 mod scene_render;
 mod soak;
@@ -66,7 +73,11 @@ enum Cmd {
     Replay(ReplayArgs),
     /// Draw the crowd live in the terminal from the daemon's socket.
     Watch(WatchArgs),
-    /// Validate a config file; every error is reported with file:line:column and field.
+    /// Validate a config file, and everything `run` would refuse at start-up with it
+    /// (the socket path, its directory and group, the recordings); every error is
+    /// reported with file:line:column and field. Exit code 0 when `run` would
+    /// start (warnings, such as input CPUs this machine lacks, do not change it), 1
+    /// when not.
     CheckConfig {
         /// Config file.
         file: PathBuf,
@@ -194,45 +205,56 @@ struct WatchArgs {
     seconds: Option<f64>,
 }
 
-/// Entry point; returns the process exit code.
+/// Entry point; returns the process exit code (see `output` for what a write
+/// that fails does to it).
 pub fn main() -> i32 {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => return clap_exit(&e),
+    };
+    let done = |r: Result<()>| r.map(|()| 0);
     let result = match cli.command {
-        Cmd::Run(a) => run(a),
-        Cmd::Demo(a) => demo(a),
-        Cmd::Replay(a) => replay(a),
-        Cmd::Watch(a) => watch::watch(a.socket, a.fps, a.seconds),
-        Cmd::CheckConfig { file } => return check_config(&file),
-        Cmd::Bench(a) => bench::bench(a),
-        Cmd::SynthRecordings { out } => synth(&out),
+        Cmd::Run(a) => done(run(a)),
+        Cmd::Demo(a) => done(demo(a)),
+        Cmd::Replay(a) => done(replay(a)),
+        Cmd::Watch(a) => done(watch::watch(a.socket, a.fps, a.seconds)),
+        Cmd::CheckConfig { file } => check::check_config(&file),
+        Cmd::Bench(a) => done(bench::bench(a)),
+        Cmd::SynthRecordings { out } => done(synth(&out)),
         Cmd::Calibrate {
             config,
             input,
             write,
-        } => find_config(config.as_deref())
-            .and_then(|(cfg, path)| calibrate::calibrate(&cfg, path.as_deref(), input, write)),
-        Cmd::Record(a) => record::record(a),
-        Cmd::Hid(c) => hid::hid(c),
-        Cmd::Scene(c) => return scene::scene(c),
-        Cmd::Formations { config, output } => find_config(config.as_deref())
-            .and_then(|(cfg, _)| formations::formations(&cfg, output.as_deref())),
-        Cmd::Devices { config, json } => find_config(config.as_deref())
-            .and_then(|(cfg, _)| devices::devices(&cfg, json, Path::new("/"))),
+        } => done(
+            find_config(config.as_deref())
+                .and_then(|(cfg, path)| calibrate::calibrate(&cfg, path.as_deref(), input, write)),
+        ),
+        Cmd::Record(a) => done(record::record(a)),
+        Cmd::Hid(c) => done(hid::hid(c)),
+        Cmd::Scene(c) => scene::scene(c),
+        Cmd::Formations { config, output } => done(
+            find_config(config.as_deref())
+                .and_then(|(cfg, _)| formations::formations(&cfg, output.as_deref())),
+        ),
+        Cmd::Devices { config, json } => done(
+            find_config(config.as_deref())
+                .and_then(|(cfg, _)| devices::devices(&cfg, json, Path::new("/"))),
+        ),
     };
-    match result {
-        Ok(()) => 0,
-        // `crowdtouch replay --frames x | head`: the reader went away; not an error.
-        Err(e)
-            if e.chain().any(|c| {
-                c.downcast_ref::<std::io::Error>()
-                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
-            }) =>
-        {
-            0
-        }
-        Err(e) => {
-            eprintln!("crowdtouch: error: {e:#}");
-            1
+    output::exit_status(result)
+}
+
+/// Writes clap's help, version or usage error and returns its exit code; a write
+/// that fails is handled as every command's (`output`).
+fn clap_exit(e: &clap::Error) -> i32 {
+    let code = e.exit_code();
+    match e.print() {
+        Ok(()) => code,
+        Err(io) if io.kind() == std::io::ErrorKind::BrokenPipe => code,
+        Err(io) => {
+            let stream = if e.use_stderr() { "stderr" } else { "stdout" };
+            let _ = errln!("crowdtouch: error: cannot write to {stream}: {io}");
+            code.max(1)
         }
     }
 }
@@ -259,39 +281,27 @@ fn init_logging(level: config::LogLevel) {
 }
 
 fn find_config(explicit: Option<&Path>) -> Result<(Config, Option<PathBuf>)> {
+    find_config_with_text(explicit).map(|(cfg, path, _)| (cfg, path))
+}
+
+/// [`find_config`], with the text the config was read from (the embedded
+/// default's for none).
+fn find_config_with_text(explicit: Option<&Path>) -> Result<(Config, Option<PathBuf>, String)> {
     if let Some(p) = explicit {
-        return Ok((Config::load(p)?, Some(p.to_path_buf())));
+        let (cfg, text) = Config::load_with_text(p)?;
+        return Ok((cfg, Some(p.to_path_buf()), text));
     }
     for p in config::search_path() {
         if p.exists() {
-            return Ok((Config::load(&p)?, Some(p)));
+            let (cfg, text) = Config::load_with_text(&p)?;
+            return Ok((cfg, Some(p), text));
         }
     }
-    Ok((Config::embedded_default(), None))
-}
-
-fn check_config(file: &Path) -> i32 {
-    match Config::load(file) {
-        Ok(c) => {
-            let scene = match c.loaded_scene() {
-                Some(s) => format!(", scene \"{}\"", s.name()),
-                None => String::new(),
-            };
-            println!(
-                "{}: ok ({} agents, {} input{}, socket {}{scene})",
-                file.display(),
-                c.crowd.agents,
-                c.inputs.len(),
-                if c.inputs.len() == 1 { "" } else { "s" },
-                c.socket.resolved_path().display()
-            );
-            0
-        }
-        Err(e) => {
-            eprintln!("{e}");
-            1
-        }
-    }
+    Ok((
+        Config::embedded_default(),
+        None,
+        config::DEFAULT_CONFIG_RON.to_string(),
+    ))
 }
 
 /// Signal flags of a running daemon.
@@ -315,18 +325,21 @@ fn signals() -> Result<Signals> {
     Ok(s)
 }
 
-/// The supervisor loop shared by `run` and `demo`.
+/// The supervisor loop shared by `run` and `demo`: until SIGTERM/SIGINT, `until`,
+/// or `on_report` fails (a status line that cannot be written); then stops the
+/// daemon and returns that failure.
 fn supervise(
     sig: Signals,
-    mut daemon: Daemon,
+    mut daemon: Running,
     config_path: Option<PathBuf>,
     until: Option<Micros>,
-    mut on_report: impl FnMut(&StatsReport),
+    mut on_report: impl FnMut(&StatsReport) -> Result<()>,
 ) -> Result<()> {
     let mut watchdog_us = 0u64;
     let watchdog = sd_notify::watchdog_enabled(false, &mut watchdog_us);
     let _ = sd_notify::notify(false, &[sd_notify::NotifyState::Ready]);
     let mut last_ping = monotonic_now();
+    let mut outcome = Ok(());
     loop {
         if sig.stop.load(Ordering::Relaxed) || until.is_some_and(|u| monotonic_now() >= u) {
             break;
@@ -335,7 +348,10 @@ fn supervise(
             reload_on_sighup(&mut daemon, config_path.as_deref());
         }
         if let Some(r) = daemon.next_report(Duration::from_millis(200)) {
-            on_report(&r);
+            if let Err(e) = on_report(&r) {
+                outcome = Err(e);
+                break;
+            }
         }
         // Feed the watchdog only while the control thread is ticking.
         if watchdog && monotonic_now().saturating_since(last_ping).0 * 2 >= watchdog_us {
@@ -353,7 +369,7 @@ fn supervise(
     let _ = sd_notify::notify(false, &[sd_notify::NotifyState::Stopping]);
     log::info!("stopping");
     daemon.shutdown();
-    Ok(())
+    outcome
 }
 
 /// What a SIGHUP does: reads the config file again and hands it to the daemon; a
@@ -393,16 +409,20 @@ fn set_agents(cfg: &mut Config, agents: Option<u32>) -> Result<()> {
 }
 
 /// Reads the config's inputs and starts the daemon on `socket` (or the config's).
-fn start_daemon(cfg: Config, socket: Option<PathBuf>) -> Result<Daemon> {
+fn start_daemon(cfg: Config, socket: Option<PathBuf>) -> Result<Running> {
     let socket_path = socket.unwrap_or_else(|| cfg.socket.resolved_path());
     let sources = sources_from_config(&cfg)?;
-    Ok(Daemon::start(cfg, sources, DaemonOptions { socket_path })?)
+    Ok(Running(Some(Daemon::start(
+        cfg,
+        sources,
+        DaemonOptions { socket_path },
+    )?)))
 }
 
 fn run(a: RunArgs) -> Result<()> {
     // Handlers first: a SIGHUP or SIGTERM during start-up must not kill the process.
     let sig = signals()?;
-    let (cfg, path) = find_config(a.config.as_deref())?;
+    let (cfg, path, text) = find_config_with_text(a.config.as_deref())?;
     init_logging(cfg.log_level);
     match &path {
         Some(p) => log::info!("config {}", p.display()),
@@ -415,10 +435,32 @@ fn run(a: RunArgs) -> Result<()> {
                 .join(", ")
         ),
     }
+    // What check-config reports, at the config's fields. The socket is checked here
+    // only when it is the config's (`--socket` is checked when it is bound), and the
+    // recordings when they are read next.
+    let config_socket = cfg.socket.resolved_path();
+    let findings = preflight(
+        &cfg,
+        &Preflight {
+            socket: a.socket.is_none().then_some(config_socket.as_path()),
+            recordings: false,
+            starting: true,
+        },
+    );
+    let shown = path.clone().unwrap_or_else(|| PathBuf::from("<embedded>"));
+    let warnings = check::located_findings(&shown, &text, &findings, Severity::Warning);
+    for w in warnings.lines() {
+        log::warn!("{w}");
+    }
+    let errors = check::located_findings(&shown, &text, &findings, Severity::Error);
+    if !errors.is_empty() {
+        bail!("the config cannot be run:\n{errors}");
+    }
     let daemon = start_daemon(cfg, a.socket)?;
     log::info!("listening on {}", daemon.socket_path().display());
     supervise(sig, daemon, path, None, |r| {
         log::debug!("{}", status_line(r));
+        Ok(())
     })
 }
 
@@ -428,17 +470,19 @@ fn demo(a: DemoArgs) -> Result<()> {
     init_logging(cfg.log_level);
     set_agents(&mut cfg, a.agents)?;
     let daemon = start_daemon(cfg, a.socket)?;
+    // From here on, every way out (a line that cannot be written included) stops
+    // the daemon and removes its socket.
     let path = daemon.socket_path().display().to_string();
-    println!("crowdtouch demo: serving the crowd on {path}");
-    println!("  watch it:   crowdtouch watch --socket {path}   (or: cargo run --release -- watch --socket {path})");
-    println!("  raw stream: socat - UNIX-CONNECT:{path}");
-    println!("  Ctrl-C stops.");
+    outln!("crowdtouch demo: serving the crowd on {path}")?;
+    outln!("  watch it:   crowdtouch watch --socket {path}   (or: cargo run --release -- watch --socket {path})")?;
+    outln!("  raw stream: socat - UNIX-CONNECT:{path}")?;
+    outln!("  Ctrl-C stops.")?;
     let until = a
         .seconds
         .map(|s| monotonic_now() + Micros::from_secs_f64(s));
     supervise(sig, daemon, None, until, |r| {
-        println!("{}", status_line(r));
-        let _ = std::io::stdout().flush();
+        outln!("{}", status_line(r))?;
+        Ok(())
     })
 }
 
@@ -490,7 +534,7 @@ fn replay(a: ReplayArgs) -> Result<()> {
     };
     let rec = crowdtouch::input::recording::load_recording(&a.file, on_bad)?;
     for w in &rec.warnings {
-        eprintln!("{}:{}: skipped: {}", a.file.display(), w.line, w.message);
+        errln!("{}:{}: skipped: {}", a.file.display(), w.line, w.message)?;
     }
     if a.frames {
         let mut out: Box<dyn Write> = match &a.out {
@@ -613,7 +657,7 @@ fn synth(out: &Path) -> Result<()> {
     let files = crowdtouch::input::synth::write_shipped(out)
         .with_context(|| format!("writing into {}", out.display()))?;
     for f in files {
-        println!("{}", f.display());
+        outln!("{}", f.display())?;
     }
     Ok(())
 }

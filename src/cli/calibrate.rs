@@ -6,6 +6,7 @@
 //! unit-square coordinates so that, after the configured rotation and flips, the
 //! touches land on the targets (libinput's LIBINPUT_CALIBRATION_MATRIX convention).
 
+use super::output::outln;
 use anyhow::{anyhow, bail, Context, Result};
 use crowdtouch::config::{CalibrationConfig, Config, InputConfig};
 use crowdtouch::input::calibrate::{apply_matrix, solve_matrix, Calibration, Matrix};
@@ -219,14 +220,14 @@ pub fn calibrate(
         .find(&select, interface, None)
         .map_err(|e| anyhow!("no touch device: {e}"))?;
     let mut reader = env.open(&info)?;
-    println!(
+    outln!(
         "Calibrating {} ({}) for inputs[{index}].",
         info.identity.name,
         info.identity.node.display()
-    );
-    println!(
+    )?;
+    outln!(
         "Touch each target on the table with one finger, hold it still for a moment, then lift.\n"
-    );
+    )?;
     let stop = Arc::new(AtomicBool::new(false));
     let (tx, rx) = crossbeam_channel::bounded::<TouchFrame>(1024);
     let reader_stop = Arc::clone(&stop);
@@ -235,14 +236,14 @@ pub fn calibrate(
     let names = ["top-left", "top-right", "bottom-right", "bottom-left"];
     let result = (|| -> Result<()> {
         for (i, &(x, y)) in TARGETS.iter().enumerate() {
-            println!("{}", target_map(i));
-            println!(
+            outln!("{}", target_map(i))?;
+            outln!(
                 "Target {} of 4 ({}): {:.0} % from the left edge, {:.0} % from the top.",
                 i + 1,
                 names[i],
                 x * 100.0,
                 y * 100.0
-            );
+            )?;
             let deadline = Instant::now() + TARGET_TIMEOUT;
             loop {
                 let left = deadline.saturating_duration_since(Instant::now());
@@ -254,7 +255,7 @@ pub fn calibrate(
                     )
                 })?;
                 if let Progress::Captured(_, at) = session.frame(&f) {
-                    println!("  captured at raw ({:.4}, {:.4})\n", at.0, at.1);
+                    outln!("  captured at raw ({:.4}, {:.4})\n", at.0, at.1)?;
                     break;
                 }
             }
@@ -269,10 +270,10 @@ pub fn calibrate(
         "matrix: Some(({:.6}, {:.6}, {:.6}, {:.6}, {:.6}, {:.6}))",
         m[0], m[1], m[2], m[3], m[4], m[5]
     );
-    println!(
+    outln!(
         "Calibration matrix (libinput convention): {}",
         m.map(|v| format!("{v:.6}")).join(" ")
-    );
+    )?;
     match (write, path) {
         (true, Some(p)) => {
             let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
@@ -280,11 +281,11 @@ pub fn calibrate(
             let backup = PathBuf::from(format!("{}.bak", p.display()));
             std::fs::write(&backup, &text).with_context(|| format!("writing {}", backup.display()))?;
             std::fs::write(p, edited).with_context(|| format!("writing {}", p.display()))?;
-            println!("Written into {} (previous version in {}).", p.display(), backup.display());
-            println!("Reload the daemon to use it: systemctl reload crowdtouch (or send SIGHUP).");
+            outln!("Written into {} (previous version in {}).", p.display(), backup.display())?;
+            outln!("Reload the daemon to use it: systemctl reload crowdtouch (or send SIGHUP).")?;
         }
         (true, None) => bail!("no config file to write into (give --config FILE); put this in inputs[{index}].calibration:\n  {ron}"),
-        (false, _) => println!("Put this in inputs[{index}].calibration of the config (or run with --write):\n  {ron}"),
+        (false, _) => outln!("Put this in inputs[{index}].calibration of the config (or run with --write):\n  {ron}")?,
     }
     Ok(())
 }

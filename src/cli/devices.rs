@@ -1,5 +1,6 @@
 //! `crowdtouch devices`: the touch devices on this machine, and which one `run` picks.
 
+use super::output::outln;
 use anyhow::Result;
 use crowdtouch::config::{Config, InputConfig};
 use crowdtouch::input::discover::{discover, select, Found};
@@ -51,15 +52,15 @@ pub fn devices(cfg: &Config, json: bool, root: &Path) -> Result<()> {
                 v
             })
             .collect();
-        println!("{}", serde_json::to_string_pretty(&list)?);
+        outln!("{}", serde_json::to_string_pretty(&list)?)?;
         return Ok(());
     }
     if found.is_empty() {
-        println!(
+        outln!(
             "no touch devices found (looked at {} and {})",
             root.join("dev/input/event*").display(),
             root.join("dev/hidraw*").display()
-        );
+        )?;
     }
     for f in &found {
         let i = &f.info;
@@ -68,15 +69,15 @@ pub fn devices(cfg: &Config, json: bool, root: &Path) -> Result<()> {
         } else {
             " "
         };
-        println!(
+        outln!(
             "{mark} {:<20} {:<6} {:04x}:{:04x}  {}",
             i.identity.node.display(),
             i.identity.kind.as_str(),
             i.identity.vendor,
             i.identity.product,
             i.identity.name
-        );
-        println!(
+        )?;
+        outln!(
             "      id {}{}",
             i.stable_id,
             if f.processed {
@@ -84,16 +85,16 @@ pub fn devices(cfg: &Config, json: bool, root: &Path) -> Result<()> {
             } else {
                 " (udev has not processed it yet)"
             }
-        );
+        )?;
         match &f.probe_error {
-            Some(e) => println!("      cannot open: {e}"),
+            Some(e) => outln!("      cannot open: {e}")?,
             None => {
                 let s = &i.surface;
                 let size = s
                     .size_mm()
                     .map(|(w, h)| format!(", {w:.0} × {h:.0} mm"))
                     .unwrap_or_default();
-                println!(
+                outln!(
                     "      {} contacts, x {}..{} y {}..{} (resolution {}/{} units/mm{size}), {}{}",
                     s.max_contacts,
                     s.x.min,
@@ -108,26 +109,26 @@ pub fn devices(cfg: &Config, json: bool, root: &Path) -> Result<()> {
                     } else {
                         ""
                     }
-                );
+                )?;
             }
         }
     }
-    println!();
+    outln!()?;
     match auto {
-        Some(a) => println!(
+        Some(a) => outln!(
             "* = what select: Auto picks: {}",
             a.info.identity.node.display()
-        ),
-        None => println!("select: Auto picks nothing here"),
+        )?,
+        None => outln!("select: Auto picks nothing here")?,
     }
     for (i, p) in &picks {
         match p {
-            Ok(f) => println!(
+            Ok(f) => outln!(
                 "inputs[{i}] of the config reads {} ({})",
                 f.info.identity.node.display(),
                 f.info.identity.name
-            ),
-            Err(e) => println!("inputs[{i}] of the config finds nothing: {e}"),
+            )?,
+            Err(e) => outln!("inputs[{i}] of the config finds nothing: {e}")?,
         }
     }
     Ok(())

@@ -1,6 +1,7 @@
 //! `crowdtouch formations`: the formation shapes a config defines, as a list or a
 //! picture.
 
+use super::output::outln;
 use anyhow::{Context, Result};
 use crowdtouch::config::Config;
 use crowdtouch::crowd::formation::{Placement, START};
@@ -44,26 +45,26 @@ pub fn formations(cfg: &Config, svg: Option<&Path>) -> Result<()> {
             .with_context(|| format!("formation `{name}` cannot be meshed"))?;
         panels.push((name.to_string(), m, f.placed_outline(&place)));
     }
-    println!(
+    outln!(
         "{:<12} {:>8} {:>9} {:>10}   (meshed at {area:.1} m², {vertices} vertices asked, {agents} agents)",
         "formation", "outline", "vertices", "triangles"
-    );
+    )?;
     for (name, m, outline) in &panels {
         let outline = if name == START {
             "grid".to_string()
         } else {
             outline.len().to_string()
         };
-        println!(
+        outln!(
             "{name:<12} {outline:>8} {:>9} {:>10}",
             m.vertex_count(),
             m.triangles().len()
-        );
+        )?;
     }
     if let Some(path) = svg {
         let text = draw(&panels, agents);
         std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?;
-        println!("wrote {}", path.display());
+        outln!("wrote {}", path.display())?;
     }
     Ok(())
 }

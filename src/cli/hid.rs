@@ -1,5 +1,6 @@
 //! `crowdtouch hid …`: tools for raw HID digitizers.
 
+use super::output::outln;
 use anyhow::Result;
 use crowdtouch::input::hid::{describe, read_descriptor_file};
 use std::path::PathBuf;
@@ -26,7 +27,7 @@ pub fn hid(cmd: HidCmd) -> Result<()> {
     match cmd {
         HidCmd::Describe { file } => {
             let bytes = read_descriptor_file(&file)?;
-            println!("{}", serde_json::to_string_pretty(&describe(&bytes))?);
+            outln!("{}", serde_json::to_string_pretty(&describe(&bytes))?)?;
             Ok(())
         }
     }

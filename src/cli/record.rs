@@ -6,6 +6,7 @@
 //! `crowdtouch replay --frames FILE` shows how crowdtouch decodes either;
 //! `record --frames` writes that decoding directly, as our JSON Lines.
 
+use super::output::errln;
 use anyhow::{bail, Context, Result};
 use crowdtouch::config::{Config, DeviceInterface, DeviceSelect, InputConfig};
 use crowdtouch::input::discover::{discover, select};
@@ -231,14 +232,14 @@ pub fn record(a: RecordArgs) -> Result<()> {
         (DeviceKind::Evdev, false) => ("evemu", "events"),
         (DeviceKind::Hidraw, false) => ("hid-recorder", "reports"),
     };
-    eprintln!(
+    errln!(
         "recording {}{label} as {format}{}; Ctrl-C stops",
         node.display(),
         a.out
             .as_ref()
             .map(|p| format!(" into {}", p.display()))
             .unwrap_or_default(),
-    );
+    )?;
     let n = if a.frames {
         record_frames(&node, kind, out, &stop)
     } else {
@@ -249,7 +250,7 @@ pub fn record(a: RecordArgs) -> Result<()> {
         .map_err(anyhow::Error::from)
     }
     .with_context(|| format!("recording {}", node.display()))?;
-    eprintln!("{n} {what} recorded");
+    errln!("{n} {what} recorded")?;
     Ok(())
 }
 

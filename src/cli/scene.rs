@@ -1,5 +1,7 @@
 //! `crowdtouch scene …`: tools for scene files.
 
+use super::output::{self, outln};
+use anyhow::Result;
 use crowdtouch::config::Config;
 use crowdtouch::crowd::environment::{DynamicKind, Scene};
 use std::path::{Path, PathBuf};
@@ -35,8 +37,9 @@ pub enum SceneCmd {
     Render(super::scene_render::RenderArgs),
 }
 
-/// Runs a `scene` subcommand; returns the exit code.
-pub fn scene(cmd: SceneCmd) -> i32 {
+/// Runs a `scene` subcommand; returns the exit code, or why its output could not
+/// be written.
+pub fn scene(cmd: SceneCmd) -> Result<i32> {
     match cmd {
         SceneCmd::Check {
             file,
@@ -47,23 +50,22 @@ pub fn scene(cmd: SceneCmd) -> i32 {
     }
 }
 
-fn check(file: &Path, agent_radius_m: Option<f64>, config: Option<&Path>) -> i32 {
+fn check(file: &Path, agent_radius_m: Option<f64>, config: Option<&Path>) -> Result<i32> {
     let cfg = match config {
         Some(p) => match Config::load(p) {
             Ok(c) => c,
-            Err(e) => {
-                eprintln!("{e}");
-                return 1;
-            }
+            Err(e) => return Ok(output::fail_with(1, format_args!("{e}"))),
         },
         None => Config::embedded_default(),
     };
     let radius = agent_radius_m.unwrap_or(cfg.crowd.agent_radius_m);
     if !(radius.is_finite() && radius > 0.0) {
-        eprintln!(
-            "crowdtouch: error: --agent-radius-m must be a positive number of metres, got {radius}"
-        );
-        return 2;
+        return Ok(output::fail_with(
+            2,
+            format_args!(
+                "crowdtouch: error: --agent-radius-m must be a positive number of metres, got {radius}"
+            ),
+        ));
     }
     match Scene::load(file, radius).and_then(|s| {
         s.check_formations(file, &cfg.formation_library().known_names())
@@ -77,7 +79,7 @@ fn check(file: &Path, agent_radius_m: Option<f64>, config: Option<&Path>) -> i32
                 .filter(|d| d.kind == DynamicKind::Obstacle)
                 .count();
             let parts: usize = s.obstacles().iter().map(|o| o.parts.len()).sum();
-            println!(
+            outln!(
                 "{}: ok: {:?} {} x {} m from ({}, {}); {} obstacle{} ({} convex part{}), {} patch{}, {} dynamic ({} obstacle{}, {} patch{}), {} checkpoint{}; gaps checked for agent radius {} m",
                 file.display(),
                 s.name(),
@@ -99,13 +101,10 @@ fn check(file: &Path, agent_radius_m: Option<f64>, config: Option<&Path>) -> i32
                 s.checkpoints().len(),
                 plural(s.checkpoints().len(), "", "s"),
                 radius,
-            );
-            0
+            )?;
+            Ok(0)
         }
-        Err(e) => {
-            eprintln!("{e}");
-            1
-        }
+        Err(e) => Ok(output::fail_with(1, format_args!("{e}"))),
     }
 }
 

@@ -3,7 +3,8 @@
 //! Draws agents as braille dots in a box scaled to the world, the mesh outline, and
 //! touches (their control id, or `g` for a gesture), with a latency line underneath.
 
-use anyhow::Result;
+use super::output::{out, outln};
+use anyhow::{Context, Result};
 use crowdtouch::rt::monotonic_now;
 use crowdtouch::vocab::Micros;
 use serde_json::Value;
@@ -243,7 +244,7 @@ pub fn watch(socket: Option<PathBuf>, fps: f64, seconds: Option<f64>) -> Result<
     let frame = Micros::from_secs_f64(1.0 / fps.clamp(1.0, 120.0));
     let until = seconds.map(|s| monotonic_now() + Micros::from_secs_f64(s));
     let stdout = std::io::stdout();
-    print!("\x1b[2J\x1b[?25l");
+    out!("\x1b[2J\x1b[?25l")?;
     let mut ended = false;
     while !stop.load(Ordering::Relaxed) && until.is_none_or(|u| monotonic_now() < u) {
         let deadline = monotonic_now() + frame;
@@ -263,15 +264,16 @@ pub fn watch(socket: Option<PathBuf>, fps: f64, seconds: Option<f64>) -> Result<
         }
         view.draw(&mut canvas, &mut out, 1.0 / frame.as_secs_f64());
         let mut lock = stdout.lock();
-        let _ = lock.write_all(out.as_bytes());
-        let _ = lock.flush();
+        lock.write_all(out.as_bytes())
+            .and_then(|()| lock.flush())
+            .context("drawing on stdout")?;
         if ended {
             break;
         }
     }
-    print!("\x1b[?25h\r\n");
+    out!("\x1b[?25h\r\n")?;
     if ended {
-        println!("the daemon closed the connection");
+        outln!("the daemon closed the connection")?;
     }
     Ok(())
 }

@@ -31,9 +31,18 @@ impl Config {
     /// # Errors
     /// [`Error::Io`], [`Error::TooLarge`] or [`Error::Invalid`] with every problem.
     pub fn load(path: &Path) -> Result<Config, Error> {
+        Config::load_with_text(path).map(|(cfg, _)| cfg)
+    }
+
+    /// [`Config::load`], also returning the text read, to place later findings
+    /// about the config ([`locate_issues`]) in the same text.
+    ///
+    /// # Errors
+    /// As [`Config::load`].
+    pub fn load_with_text(path: &Path) -> Result<(Config, String), Error> {
         let text = read_capped(path, MAX_CONFIG_BYTES).map_err(Error::from)?;
         let base = path.parent().unwrap_or(Path::new("."));
-        Config::from_str_at(&text, path, base)
+        Config::from_str_at(&text, path, base).map(|cfg| (cfg, text))
     }
 
     /// Parses and validates config text; `path` is used in messages only. Relative
@@ -79,22 +88,9 @@ impl Config {
         if problems.is_empty() {
             Ok(cfg)
         } else {
-            let mut issues: Vec<ConfigIssue> = problems
-                .into_iter()
-                .map(|(field, message)| {
-                    let (line, column) = locate_field(text, &field).unwrap_or((0, 0));
-                    ConfigIssue {
-                        field,
-                        line,
-                        column,
-                        message,
-                    }
-                })
-                .collect();
-            issues.sort_by_key(|i| (i.line, i.column));
             Err(Error::Invalid {
                 path: path.to_path_buf(),
-                issues,
+                issues: locate_issues(text, problems),
             })
         }
     }
@@ -118,6 +114,26 @@ impl Config {
             }
         }
     }
+}
+
+/// Places `(field path, message)` problems in the config `text` they are about:
+/// each at its field's line and column (or its nearest enclosing field's), in text
+/// order.
+pub fn locate_issues(text: &str, problems: Vec<(String, String)>) -> Vec<ConfigIssue> {
+    let mut issues: Vec<ConfigIssue> = problems
+        .into_iter()
+        .map(|(field, message)| {
+            let (line, column) = locate_field(text, &field).unwrap_or((0, 0));
+            ConfigIssue {
+                field,
+                line,
+                column,
+                message,
+            }
+        })
+        .collect();
+    issues.sort_by_key(|i| (i.line, i.column));
+    issues
 }
 
 /// Where `run` looks for its config when `--config` is not given, in order.

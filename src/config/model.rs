@@ -202,7 +202,10 @@ pub struct RealtimeConfig {
     /// Lock all memory into RAM (mlockall), so the latency path never page-faults.
     #[serde(default)]
     pub lock_memory: bool,
-    /// CPUs the input threads may run on (`None`: any).
+    /// CPUs the input threads may run on (`None`: any). Numbers below 1024; CPUs
+    /// not online on the machine are left out when pinning (a warning from
+    /// `check-config` and at start-up, not an error: one config may serve machines
+    /// of several sizes), and none online leaves the threads unpinned.
     #[serde(default)]
     pub input_cpus: Option<Vec<usize>>,
 }

@@ -323,15 +323,20 @@ impl Config {
             }
         }
         if let Some(cpus) = &pl.realtime.input_cpus {
-            let n = std::thread::available_parallelism()
-                .map(|n| n.get())
-                .unwrap_or(1024)
-                .max(1024);
+            // Whether each CPU is online is a property of the machine, not of the
+            // config: `check-config` and `run` warn about it (pipeline preflight).
             check(
-                !cpus.is_empty() && cpus.iter().all(|&c| c < n),
+                !cpus.is_empty(),
                 "pipeline.realtime.input_cpus",
-                format!("CPU list must be non-empty CPU numbers, got {cpus:?}"),
+                "the CPU list is empty (None leaves the input thread unpinned)".to_string(),
             );
+            for (k, &c) in cpus.iter().enumerate() {
+                check(
+                    c < MAX_CPUS,
+                    &format!("pipeline.realtime.input_cpus[{k}]"),
+                    format!("CPU {c} is not a CPU number: Linux numbers CPUs 0..{MAX_CPUS}"),
+                );
+            }
         }
         let l = self.formations.lambda;
         check(
@@ -343,6 +348,9 @@ impl Config {
         p
     }
 }
+
+/// CPU numbers a CPU affinity set holds (`CPU_SETSIZE`).
+const MAX_CPUS: usize = 1024;
 
 fn finite_rect(r: &Rect) -> bool {
     r.min.iter().chain(r.max.iter()).all(|v| v.is_finite())

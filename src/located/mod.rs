@@ -6,6 +6,7 @@
 mod issue;
 mod json;
 mod read;
+mod ron_words;
 mod strict_ron;
 
 pub use issue::{format_issues, Issue, Located};

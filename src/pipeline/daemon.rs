@@ -90,6 +90,22 @@ struct Start {
     input_cpus: Option<Vec<usize>>,
 }
 
+impl Drop for Start {
+    /// A start that failed after some threads were started: stops and joins them,
+    /// so nothing runs on and the socket (dropped with the publisher thread's
+    /// `Server`) is removed. A start that succeeded has handed its threads on.
+    fn drop(&mut self) {
+        if self.threads.is_empty() {
+            return;
+        }
+        self.input_stop.store(true, Ordering::SeqCst);
+        self.stop.store(true, Ordering::SeqCst);
+        for (_, h) in self.threads.drain(..) {
+            let _ = h.join();
+        }
+    }
+}
+
 impl Start {
     fn spawn(
         &mut self,
@@ -220,9 +236,9 @@ impl Daemon {
         );
         let interval_us = cfg.pipeline.stats_interval_ms * 1000;
         Ok(Daemon {
-            stop: start.stop,
-            input_stop: start.input_stop,
-            threads: start.threads,
+            stop: Arc::clone(&start.stop),
+            input_stop: Arc::clone(&start.input_stop),
+            threads: std::mem::take(&mut start.threads),
             socket_path,
             publisher,
             outputs: output_stats,
@@ -581,5 +597,37 @@ impl Start {
                 drain_backlog(&mut queue, &stop);
             }),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_start_that_fails_after_binding_stops_its_threads_and_removes_the_socket() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.sock");
+        let cfg = Config::embedded_default();
+        let hello = HelloInfo {
+            world: cfg.surface.world,
+            agents: 1,
+            agent_radius_m: cfg.crowd.agent_radius_m,
+        };
+        let Registered { outputs, .. } = register_outputs(&cfg, &path, hello).unwrap();
+        let mut start = Start {
+            threads: Vec::new(),
+            stop: Arc::new(AtomicBool::new(false)),
+            input_stop: Arc::new(AtomicBool::new(false)),
+            priority: None,
+            input_cpus: None,
+        };
+        let (cmd_tx, _cmd_rx) = bounded::<CommandRequest>(1);
+        let out = start.spawn_outputs(outputs, &cmd_tx).unwrap();
+        assert!(path.exists());
+        // What `?` does when a later thread cannot be started.
+        drop(out);
+        drop(start);
+        assert!(!path.exists(), "the socket file outlived a failed start");
     }
 }

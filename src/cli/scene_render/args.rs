@@ -2,6 +2,7 @@
 
 use super::error::RenderError;
 use super::picture::{Options, Picture};
+use crate::cli::output::{self, outln};
 use crowdtouch::config::Config;
 use crowdtouch::crowd::environment::Scene;
 use crowdtouch::geom::Vec2;
@@ -53,21 +54,18 @@ fn parse_point(s: &str) -> Result<[f64; 2], String> {
     Ok([x, y])
 }
 
-/// Runs `scene render`; returns the exit code.
-pub fn render(a: RenderArgs) -> i32 {
+/// Runs `scene render`; returns the exit code, or why the summary line could not
+/// be written.
+pub fn render(a: RenderArgs) -> anyhow::Result<i32> {
     match run(&a) {
         Ok(summary) => {
-            println!("{summary}");
-            0
+            outln!("{summary}")?;
+            Ok(0)
         }
         Err(RenderError::Usage(m)) => {
-            eprintln!("crowdtouch: error: {m}");
-            2
+            Ok(output::fail_with(2, format_args!("crowdtouch: error: {m}")))
         }
-        Err(RenderError::Failed(m)) => {
-            eprintln!("{m}");
-            1
-        }
+        Err(RenderError::Failed(m)) => Ok(output::fail_with(1, format_args!("{m}"))),
     }
 }
 

@@ -3,6 +3,9 @@
 use std::path::PathBuf;
 
 /// Why the socket could not be set up.
+///
+/// Each message names the path and says everything, its cause included; the cause
+/// is also the error's `source`, and the command line writes it once.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Another process (probably another crowdtouch) is listening on the path.
@@ -12,10 +15,35 @@ pub enum Error {
         path: PathBuf,
     },
     /// Something other than a socket is at the path; it is left alone.
-    #[error("{path}: exists and is not a socket; refusing to replace it")]
+    #[error("{path}: is {kind}, not a socket; refusing to replace it")]
     NotASocket {
         /// The path.
         path: PathBuf,
+        /// What is there (`a directory`, `a regular file`, `a symbolic link`, ...).
+        kind: &'static str,
+    },
+    /// The path does not fit a Unix socket address.
+    #[error(
+        "{path}: socket path is {bytes} bytes, more than the {max} a Unix socket address holds"
+    )]
+    PathTooLong {
+        /// The path.
+        path: PathBuf,
+        /// Its length.
+        bytes: usize,
+        /// The most a socket address holds.
+        max: usize,
+    },
+    /// The directory the socket is to be created in is missing or is not a
+    /// directory.
+    #[error("{path}: the socket's directory {} {problem}", dir.display())]
+    NoDirectory {
+        /// Socket path.
+        path: PathBuf,
+        /// Its directory.
+        dir: PathBuf,
+        /// `does not exist` or `is not a directory`.
+        problem: &'static str,
     },
     /// `bind` failed.
     #[error("{path}: cannot bind the socket: {source}")]
@@ -42,6 +70,15 @@ pub enum Error {
     UnknownGroup {
         /// Group name.
         group: String,
+    },
+    /// The group database could not be read.
+    #[error("socket group `{group}` cannot be looked up: {source}")]
+    GroupLookup {
+        /// Group name.
+        group: String,
+        /// Cause.
+        #[source]
+        source: nix::errno::Errno,
     },
     /// The socket could not be given to the configured group.
     #[error("{path}: cannot give the socket to group `{group}`: {source}")]

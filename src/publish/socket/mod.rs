@@ -47,6 +47,7 @@
 
 mod client;
 mod error;
+pub mod preflight;
 mod server;
 mod stats;
 

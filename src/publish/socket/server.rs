@@ -2,6 +2,7 @@
 
 use super::client::{self, ClientShared, EncodedSnapshot, Hub, CLOSE_GRACE};
 use super::error::Error;
+use super::preflight::{self, PathState};
 use super::stats::{lock, PublisherStats};
 use crate::publish::output::{
     ClientLimit, Output, OutputContext, OutputStats, Overflow, QueuePolicy,
@@ -13,7 +14,7 @@ use crate::vocab::{ClientId, CommandRequest, Event, MeshView, Snapshot};
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender};
 use std::io::ErrorKind;
 use std::net::Shutdown;
-use std::os::unix::fs::{FileTypeExt, MetadataExt, PermissionsExt};
+use std::os::unix::fs::{MetadataExt, PermissionsExt};
 use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
@@ -75,47 +76,27 @@ pub struct Server {
 impl Server {
     /// Binds the socket at `path`.
     ///
-    /// If something exists there: a socket that accepts a connection belongs to a
-    /// live daemon (`Err(InUse)`); a socket that refuses is stale and is replaced;
-    /// anything that is not a socket is left alone (`Err(NotASocket)`). Then applies
-    /// `opts.mode` and `opts.group`. The socket file is removed on drop (only if
+    /// First the checks `check-config` also makes ([`preflight`]): the path fits a
+    /// socket address and its directory exists; if something exists there, a socket
+    /// that accepts a connection belongs to a live daemon (`Err(InUse)`), a socket
+    /// that refuses is stale and is replaced, anything that is not a socket is left
+    /// alone (`Err(NotASocket)`). Then applies `opts.mode` and `opts.group`. The socket file is removed on drop (only if
     /// it is still the one this server created).
     ///
     /// # Errors
-    /// [`Error::InUse`], [`Error::NotASocket`], [`Error::Bind`], [`Error::Permissions`],
-    /// [`Error::UnknownGroup`], [`Error::Group`], [`Error::Io`].
+    /// [`Error::PathTooLong`], [`Error::NoDirectory`], [`Error::InUse`],
+    /// [`Error::NotASocket`], [`Error::Bind`], [`Error::Permissions`],
+    /// [`Error::UnknownGroup`], [`Error::GroupLookup`], [`Error::Group`],
+    /// [`Error::Io`].
     pub fn bind(opts: &SocketOptions, path: &Path, hello: HelloInfo) -> Result<Server, Error> {
         let path = path.to_path_buf();
-        match std::fs::symlink_metadata(&path) {
-            Ok(meta) if !meta.file_type().is_socket() => {
-                return Err(Error::NotASocket { path });
-            }
-            Ok(_) => match UnixStream::connect(&path) {
-                Ok(_) => return Err(Error::InUse { path }),
-                Err(e) if e.kind() == ErrorKind::ConnectionRefused => {
-                    log::info!("{}: removing stale socket", path.display());
-                    std::fs::remove_file(&path).map_err(|source| Error::Io {
-                        path: path.clone(),
-                        op: "remove the stale socket",
-                        source,
-                    })?;
-                }
-                Err(source) => {
-                    return Err(Error::Io {
-                        path,
-                        op: "check whether the existing socket is live",
-                        source,
-                    })
-                }
-            },
-            Err(e) if e.kind() == ErrorKind::NotFound => {}
-            Err(source) => {
-                return Err(Error::Io {
-                    path,
-                    op: "inspect the socket path",
-                    source,
-                })
-            }
+        if preflight::inspect_socket_path(&path)? == PathState::Stale {
+            log::info!("{}: removing stale socket", path.display());
+            std::fs::remove_file(&path).map_err(|source| Error::Io {
+                path: path.clone(),
+                op: "remove the stale socket",
+                source,
+            })?;
         }
         let listener = UnixListener::bind(&path).map_err(|source| {
             if source.kind() == ErrorKind::AddrInUse {
@@ -143,21 +124,7 @@ impl Server {
             },
         )?;
         if let Some(group) = &opts.group {
-            let gid = match nix::unistd::Group::from_name(group) {
-                Ok(Some(g)) => g.gid,
-                Ok(None) => {
-                    return Err(cleanup(Error::UnknownGroup {
-                        group: group.clone(),
-                    }))
-                }
-                Err(source) => {
-                    return Err(cleanup(Error::Group {
-                        path: path.clone(),
-                        group: group.clone(),
-                        source,
-                    }))
-                }
-            };
+            let gid = preflight::lookup_group(group).map_err(cleanup)?;
             nix::unistd::chown(&path, None, Some(gid)).map_err(|source| {
                 cleanup(Error::Group {
                     path: path.clone(),
