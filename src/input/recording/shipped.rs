@@ -3,8 +3,8 @@
 //! touchscreen.
 
 use super::error::{OnBadFrame, RecordingError};
-use super::read::{parse_recording, read_recording};
 use super::recording_type::Recording;
+use super::stream::RecordingStream;
 use std::path::Path;
 
 /// The shipped recordings (`config/recordings/`), by file name.
@@ -39,18 +39,15 @@ pub const RECORDINGS: [(&str, &str); 7] = [
     ),
 ];
 
-/// Reads a recording from disk, or — when no such file exists and its name is one of
-/// the shipped recordings — from the copy compiled into the binary.
+/// Reads a whole recording from disk, or — when no such file exists and its name
+/// is one of the shipped recordings — from the copy compiled into the binary
+/// ([`RecordingStream::load`] reads it a frame at a time).
 ///
 /// # Errors
 /// The reader's error for the file (or the embedded copy).
 pub fn load_recording(path: &Path, on_bad: OnBadFrame) -> Result<Recording, RecordingError> {
-    if !path.exists() {
-        if let Some(name) = path.file_name().and_then(|n| n.to_str()) {
-            if let Some((_, text)) = RECORDINGS.iter().find(|(n, _)| *n == name) {
-                return parse_recording(text, path, on_bad);
-            }
-        }
+    if path.exists() {
+        return super::read_recording(path, on_bad);
     }
-    read_recording(path, on_bad)
+    RecordingStream::load(path, on_bad)?.collect(None)
 }
