@@ -75,6 +75,9 @@ mod stream;
 mod warnings;
 mod yaml_events;
 
+#[cfg(test)]
+mod tests;
+
 pub use error::{OnBadFrame, RecordingError, UnsupportedReason};
 pub use evemu_raw::read_evemu_raw;
 pub use evemu_writer::{write_evemu_header, EvemuTime, EvemuWriter, EVEMU_VERSION};
@@ -82,8 +85,10 @@ pub use hid_recorder::{parse_hid_recorder, HidEvent, HidRecorderLog, HidRecorder
 pub use jsonl::{JSONL_FORMAT, JSONL_VERSION};
 pub use jsonl_writer::{write_jsonl, JsonlWriter};
 pub use lines::MAX_LINE_BYTES;
-pub use read::{parse_recording, read_evemu_with_desc, read_recording, MAX_RECORDING_BYTES};
+pub use read::{
+    load_recording, parse_recording, read_evemu_with_desc, read_recording, MAX_RECORDING_BYTES,
+};
 pub use recording_type::{Recording, END_CANCEL_US};
-pub use shipped::{load_recording, RECORDINGS};
+pub use shipped::RECORDINGS;
 pub use stream::{RecordingStream, JUMP_REPLAYED_US, MAX_TIME_JUMP_US};
 pub use warnings::{RecordingIssue, MAX_WARNINGS};

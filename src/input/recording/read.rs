@@ -64,3 +64,16 @@ pub fn read_evemu_with_desc(
 ) -> Result<Recording, RecordingError> {
     RecordingStream::evemu_with_desc(desc, events.as_bytes().to_vec(), name, on_bad)?.collect(None)
 }
+
+/// Reads a whole recording from disk, or — when no such file exists and its name
+/// is one of the shipped recordings — from the copy compiled into the binary
+/// ([`RecordingStream::load`] reads it a frame at a time).
+///
+/// # Errors
+/// The reader's error for the file (or the embedded copy).
+pub fn load_recording(path: &Path, on_bad: OnBadFrame) -> Result<Recording, RecordingError> {
+    if path.exists() {
+        return read_recording(path, on_bad);
+    }
+    RecordingStream::load(path, on_bad)?.collect(None)
+}

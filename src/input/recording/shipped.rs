@@ -2,11 +2,6 @@
 //! and the embedded default config work from any directory and on a machine with no
 //! touchscreen.
 
-use super::error::{OnBadFrame, RecordingError};
-use super::recording_type::Recording;
-use super::stream::RecordingStream;
-use std::path::Path;
-
 /// The shipped recordings (`config/recordings/`), by file name.
 pub const RECORDINGS: [(&str, &str); 7] = [
     (
@@ -38,16 +33,3 @@ pub const RECORDINGS: [(&str, &str); 7] = [
         include_str!("../../../config/recordings/07-open-space-swipe.jsonl"),
     ),
 ];
-
-/// Reads a whole recording from disk, or — when no such file exists and its name
-/// is one of the shipped recordings — from the copy compiled into the binary
-/// ([`RecordingStream::load`] reads it a frame at a time).
-///
-/// # Errors
-/// The reader's error for the file (or the embedded copy).
-pub fn load_recording(path: &Path, on_bad: OnBadFrame) -> Result<Recording, RecordingError> {
-    if path.exists() {
-        return super::read_recording(path, on_bad);
-    }
-    RecordingStream::load(path, on_bad)?.collect(None)
-}
