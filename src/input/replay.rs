@@ -448,6 +448,7 @@ fn sleep_until(deadline: Micros, stop: &AtomicBool, sink: &mut dyn FrameSink) ->
 mod tests {
     use super::*;
     use std::collections::HashSet;
+    use std::path::Path;
 
     fn frame(t: u64, contacts: &[(u32, ContactFlags)]) -> TouchFrame {
         let mut f = TouchFrame::new(Micros(t));
@@ -635,5 +636,173 @@ mod tests {
         assert!(took < 1_000_000, "took {took} us");
         assert_eq!(out.len(), 2);
         assert_eq!(out[1].contacts()[0].flags, ContactFlags::CANCELLED);
+    }
+
+    #[test]
+    fn a_long_gap_is_shortened_and_empty_frames_are_not_emitted() {
+        let gapped = ReplayItem::new(
+            "gapped",
+            vec![
+                frame(0, &[]),
+                frame(300_000, &[(1, ContactFlags::DOWN)]),
+                frame(310_000, &[(1, ContactFlags::NONE)]),
+                frame(1_000_000_000_000, &[(1, ContactFlags::UP)]),
+                frame(1_000_000_008_000, &[]),
+                frame(u64::MAX, &[]),
+                frame(u64::MAX, &[(2, ContactFlags::DOWN | ContactFlags::UP)]),
+            ],
+        );
+        let mut src = ReplaySource::new(vec![gapped], false, Micros(0), Pacing::Virtual);
+        let mut out: Vec<TouchFrame> = Vec::new();
+        src.run(&mut out, &AtomicBool::new(false), &mut |_| {});
+        let ts: Vec<u64> = out.iter().map(|f| f.t.0).collect();
+        // The lead-in before the first touch is kept; the gaps are shortened.
+        assert_eq!(
+            ts,
+            vec![
+                300_000,
+                310_000,
+                310_000 + MAX_GAP_US,
+                310_000 + 2 * MAX_GAP_US
+            ]
+        );
+        assert_eq!(ids(&out), vec![vec![1], vec![1], vec![1], vec![2]]);
+    }
+
+    #[test]
+    fn real_time_plays_a_huge_gap_in_bounded_time_and_stays_stoppable() {
+        let long = || {
+            ReplayItem::new(
+                "long",
+                vec![
+                    frame(0, &[(1, ContactFlags::DOWN)]),
+                    frame(u64::MAX, &[(1, ContactFlags::UP)]),
+                ],
+            )
+        };
+        let mut src = ReplaySource::new(vec![long()], false, Micros(0), Pacing::RealTime);
+        let mut out: Vec<TouchFrame> = Vec::new();
+        let t0 = monotonic_now();
+        src.run(&mut out, &AtomicBool::new(false), &mut |_| {});
+        let took = monotonic_now().saturating_since(t0).0;
+        assert_eq!(out.len(), 2);
+        // The gap is waited out (never less), and does not hang: 2 s, not ages.
+        assert!((MAX_GAP_US..10_000_000).contains(&took), "took {took} us");
+        // Stop during the gap: the thread does not sleep it out.
+        let mut src = ReplaySource::new(vec![long()], true, Micros(0), Pacing::RealTime);
+        let stop = std::sync::Arc::new(AtomicBool::new(false));
+        let s2 = stop.clone();
+        let h = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(100));
+            s2.store(true, Ordering::Relaxed);
+        });
+        let mut out: Vec<TouchFrame> = Vec::new();
+        let t0 = monotonic_now();
+        src.run(&mut out, &stop, &mut |_| {});
+        let took = monotonic_now().saturating_since(t0).0;
+        h.join().unwrap();
+        assert!(took < MAX_GAP_US, "took {took} us");
+        assert_eq!(
+            out.last().unwrap().contacts()[0].flags,
+            ContactFlags::CANCELLED
+        );
+    }
+
+    #[test]
+    fn a_streamed_file_loops_by_rewinding() {
+        let text = concat!(
+            r#"{"format":"crowdtouch-touch","version":1,"device":{"name":"d","x":{"min":0,"max":100},"y":{"min":0,"max":100},"max_contacts":2}}"#,
+            "\n",
+            r#"{"t_us":0,"contacts":[{"id":4,"x":10,"y":10}]}"#,
+            "\n",
+            r#"{"t_us":9000,"contacts":[{"id":4,"x":20,"y":10},{"id":5,"x":1,"y":1}]}"#,
+            "\n",
+            r#"{"t_us":18000,"contacts":[{"id":5,"x":2,"y":2}]}"#,
+            "\n",
+        );
+        let stream = RecordingStream::from_bytes(
+            text.as_bytes().to_vec(),
+            Path::new("loop.jsonl"),
+            OnBadFrame::Stop,
+        )
+        .unwrap();
+        let stop = AtomicBool::new(false);
+        // Three loops of 4 frames (the last one cancels id 5).
+        let mut sink = StopAfter {
+            frames: Vec::new(),
+            n: 12,
+            stop: &stop,
+        };
+        let mut src = ReplaySource::new(
+            vec![ReplayItem::stream("loop", stream)],
+            true,
+            Micros(1_000),
+            Pacing::Virtual,
+        );
+        let mut started = 0;
+        src.run(&mut sink, &stop, &mut |_| started += 1);
+        let frames = sink.frames;
+        assert_eq!(frames.len(), 12);
+        for k in 0..3 {
+            let base = 2 * k as u32;
+            let loop_ids = &ids(&frames[4 * k..4 * k + 4]);
+            assert_eq!(
+                loop_ids,
+                &vec![
+                    vec![base + 1],
+                    vec![base + 1, base + 2],
+                    vec![base + 1, base + 2],
+                    vec![base + 2]
+                ]
+            );
+            // 18 ms of frames, the reader's cancel 1 ms later, then the 1 ms gap.
+            assert_eq!(frames[4 * k].t, Micros(k as u64 * 20_000));
+        }
+        assert_eq!(frames[3].contacts()[0].flags, ContactFlags::CANCELLED);
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig { cases: 64, rng_seed: proptest::test_runner::RngSeed::Fixed(0x9a95), failure_persistence: None, ..proptest::prelude::ProptestConfig::default() })]
+
+        /// Any timestamps up to `u64::MAX`: a virtual replay ends, stamps never
+        /// go back, no gap between emitted frames is longer than [`MAX_GAP_US`]
+        /// (plus the pause between files, where a file's lead-in follows it).
+        #[test]
+        fn any_timestamps_play_with_bounded_gaps(
+            steps in proptest::collection::vec((proptest::prop_oneof![0u64..100_000, proptest::prelude::any::<u64>()], 0u8..3), 1..16),
+            looped_gap in 0u64..3_000_000,
+        ) {
+            let mut t = 0u64;
+            let mut frames = Vec::new();
+            let mut down = false;
+            for (dt, what) in steps {
+                t = t.saturating_add(dt);
+                let f = match (down, what) {
+                    (false, 0) => frame(t, &[]),
+                    (false, _) => {
+                        down = true;
+                        frame(t, &[(1, ContactFlags::DOWN)])
+                    }
+                    (true, 0) => frame(t, &[(1, ContactFlags::NONE)]),
+                    (true, _) => {
+                        down = false;
+                        frame(t, &[(1, ContactFlags::UP)])
+                    }
+                };
+                frames.push(f);
+            }
+            let mut src = ReplaySource::new(
+                vec![ReplayItem::new("a", frames.clone()), ReplayItem::new("b", frames)],
+                false,
+                Micros(looped_gap),
+                Pacing::Virtual,
+            );
+            let mut out: Vec<TouchFrame> = Vec::new();
+            src.run(&mut out, &AtomicBool::new(false), &mut |_| {});
+            for w in out.windows(2) {
+                proptest::prop_assert!(w[0].t <= w[1].t);
+                proptest::prop_assert!(w[1].t.0 - w[0].t.0 <= MAX_GAP_US + looped_gap);
+            }
+        }
     }
 }

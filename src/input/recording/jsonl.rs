@@ -190,7 +190,7 @@ fn json_header(l: &str) -> Result<SurfaceInfo, String> {
     };
     let x = json_axis(dev.x.as_ref(), "x")?;
     let y = json_axis(dev.y.as_ref(), "y")?;
-    let max_contacts = want_u32(dev.max_contacts, "device.max_contacts")?;
+    let max_contacts = want_u32(dev.max_contacts, &"device.max_contacts")?;
     if max_contacts == 0 {
         return Err("field `device.max_contacts`: must be at least 1".to_string());
     }

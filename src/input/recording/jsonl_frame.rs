@@ -3,7 +3,7 @@
 //! `max_contacts`, at most [`MAX_CONTACTS`]) before anything is allocated, and
 //! the values of unknown keys are skipped unread.
 
-use super::jsonl_values::{want_f64, want_u32, want_u64, KeyIn, Scalar};
+use super::jsonl_values::{want_f64, want_u32, want_u64, Element, KeyIn, Scalar};
 use crate::input::AxisRange;
 use crate::vocab::{Contact, ContactFlags, ContactId, MAX_CONTACTS};
 use serde::de::{self, DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
@@ -179,7 +179,7 @@ impl<'de> Visitor<'de> for FrameSeed<'_, '_> {
                 }
             }
         }
-        let t = check(ctx, want_u64(t_us, "t_us"))?;
+        let t = check(ctx, want_u64(t_us, &"t_us"))?;
         if !has_contacts {
             return Err(ctx.fail("missing field `contacts`".to_string()));
         }
@@ -274,7 +274,11 @@ impl<'de> Visitor<'de> for ContactSeed<'_, '_> {
     }
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<FileContact, A::Error> {
         let (ctx, i) = (self.ctx, self.i);
-        let f = |k: &str| format!("contacts[{i}].{k}");
+        let f = |key: &'static str| Element {
+            list: "contacts",
+            index: i,
+            key,
+        };
         let mut v: [Option<Scalar>; 7] = [None; 7];
         while let Some(key) = map.next_key_seed(KeyIn(CONTACT_KEYS))? {
             match key {
@@ -394,7 +398,12 @@ impl<'de> Visitor<'de> for CancelledSeed<'_, '_> {
                 let m = format!("field `cancelled`: more than {MAX_CONTACTS} ids");
                 return Err(ctx.fail(m));
             }
-            ctx.out.cancelled[i] = check(ctx, want_u32(Some(v), &format!("cancelled[{i}]")))?;
+            let field = Element {
+                list: "cancelled",
+                index: i,
+                key: "",
+            };
+            ctx.out.cancelled[i] = check(ctx, want_u32(Some(v), &field))?;
             ctx.out.cancelled_len += 1;
         }
     }

@@ -191,8 +191,28 @@ impl<'de, T: FromMap> Deserialize<'de> for MapOr<T> {
     }
 }
 
+/// The name of a field of a list element, `contacts[2].x`, written only when a
+/// message needs it.
+#[derive(Copy, Clone, Debug)]
+pub(super) struct Element {
+    pub(super) list: &'static str,
+    pub(super) index: usize,
+    /// Empty for the element itself.
+    pub(super) key: &'static str,
+}
+
+impl fmt::Display for Element {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}[{}]", self.list, self.index)?;
+        if !self.key.is_empty() {
+            write!(f, ".{}", self.key)?;
+        }
+        Ok(())
+    }
+}
+
 /// A number that must be finite.
-pub(super) fn want_f64(v: Option<Scalar>, field: &str) -> Result<f64, String> {
+pub(super) fn want_f64(v: Option<Scalar>, field: &dyn fmt::Display) -> Result<f64, String> {
     match v {
         Some(Scalar::U64(n)) => Ok(n as f64),
         Some(Scalar::I64(n)) => Ok(n as f64),
@@ -207,7 +227,7 @@ pub(super) fn want_f64(v: Option<Scalar>, field: &str) -> Result<f64, String> {
 }
 
 /// A non-negative integer.
-pub(super) fn want_u64(v: Option<Scalar>, field: &str) -> Result<u64, String> {
+pub(super) fn want_u64(v: Option<Scalar>, field: &dyn fmt::Display) -> Result<u64, String> {
     match v {
         Some(Scalar::U64(n)) => Ok(n),
         Some(n @ (Scalar::I64(_) | Scalar::F64(_))) => Err(format!(
@@ -222,7 +242,7 @@ pub(super) fn want_u64(v: Option<Scalar>, field: &str) -> Result<u64, String> {
 }
 
 /// A non-negative integer of 32 bits.
-pub(super) fn want_u32(v: Option<Scalar>, field: &str) -> Result<u32, String> {
+pub(super) fn want_u32(v: Option<Scalar>, field: &dyn fmt::Display) -> Result<u32, String> {
     let n = want_u64(v, field)?;
     u32::try_from(n).map_err(|_| format!("field `{field}`: {n} does not fit 32 bits"))
 }
@@ -266,16 +286,22 @@ mod tests {
         assert_eq!(scalar("null").kind(), "null");
         assert_eq!(Scalar::F64(1.5).to_string(), "1.5");
         assert_eq!(
-            want_u64(Some(scalar("1.5")), "t_us").unwrap_err(),
+            want_u64(Some(scalar("1.5")), &"t_us").unwrap_err(),
             "field `t_us`: 1.5 is not a non-negative integer"
         );
         assert_eq!(
-            want_f64(Some(Scalar::String), "x").unwrap_err(),
+            want_f64(Some(Scalar::String), &"x").unwrap_err(),
             "field `x`: expected a number, found a string"
         );
         assert_eq!(
-            want_u32(Some(Scalar::U64(1 << 40)), "n").unwrap_err(),
+            want_u32(Some(Scalar::U64(1 << 40)), &"n").unwrap_err(),
             "field `n`: 1099511627776 does not fit 32 bits"
         );
+        let e = Element {
+            list: "contacts",
+            index: 2,
+            key: "x",
+        };
+        assert_eq!(e.to_string(), "contacts[2].x");
     }
 }
