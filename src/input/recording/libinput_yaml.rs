@@ -26,7 +26,10 @@ use yaml_rust2::parser::Event;
 #[derive(Copy, Clone, Debug)]
 struct Found {
     line: usize,
+    /// As messages say it.
     kind: &'static str,
+    map: bool,
+    list: bool,
     /// A null scalar (empty, `~`, `null`).
     null: bool,
 }
@@ -36,6 +39,8 @@ impl Found {
         Found {
             line,
             kind: kind(ev),
+            map: matches!(ev, Event::MappingStart(..)),
+            list: matches!(ev, Event::SequenceStart(..)),
             null: matches!(ev, Event::Scalar(s, ..) if s.is_empty() || s == "~" || s == "null"),
         }
     }
@@ -298,7 +303,7 @@ impl HeaderScan {
                 ),
             ));
         };
-        if dev.kind != "a mapping" {
+        if !dev.map {
             return Err(perr(
                 dev.line,
                 format!("field `devices[0]`: expected a mapping, found {}", dev.kind),
@@ -311,7 +316,7 @@ impl HeaderScan {
         let absinfo = self
             .absinfo
             .ok_or_else(|| missing(evdev.line, "devices[0].evdev.absinfo"))?;
-        if absinfo.kind != "a mapping" {
+        if !absinfo.map {
             return Err(perr(
                 absinfo.line,
                 format!(
@@ -328,7 +333,7 @@ impl HeaderScan {
             .hdr
             .mt_axes(&ctx, absinfo.line, &default_name(path), w)?;
         match self.events {
-            Some(e) if e.kind == "a list" => Ok((self.hdr, axes, surface)),
+            Some(e) if e.list => Ok((self.hdr, axes, surface)),
             Some(e) if !e.null => Err(perr(
                 e.line,
                 format!(
