@@ -3,8 +3,8 @@
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
 use crowdtouch::config::{self, Config};
-use crowdtouch::engine::{replay_virtual, Engine};
-use crowdtouch::input::recording::OnBadFrame;
+use crowdtouch::engine::{replay_virtual, Engine, VirtualClock};
+use crowdtouch::input::recording::{OnBadFrame, RecordingStream};
 use crowdtouch::pipeline::{
     preflight, sources_from_config, Daemon, DaemonOptions, Preflight, Severity,
 };
@@ -532,10 +532,18 @@ fn replay(a: ReplayArgs) -> Result<()> {
     } else {
         OnBadFrame::Stop
     };
-    let rec = crowdtouch::input::recording::load_recording(&a.file, on_bad)?;
-    for w in &rec.warnings {
-        errln!("{}:{}: skipped: {}", a.file.display(), w.line, w.message)?;
-    }
+    // Read a frame at a time: a recording of any length replays in the same memory.
+    let mut stream = RecordingStream::load(&a.file, on_bad)?;
+    let file = a.file.display().to_string();
+    let warn = |stream: &mut RecordingStream| -> Result<(), output::OutputError> {
+        for w in stream.take_warnings() {
+            match w.line {
+                0 => errln!("{file}: warning: {}", w.message)?,
+                l => errln!("{file}:{l}: warning: {}", w.message)?,
+            }
+        }
+        Ok(())
+    };
     if a.frames {
         let mut out: Box<dyn Write> = match &a.out {
             Some(p) => Box::new(std::io::BufWriter::new(
@@ -543,9 +551,20 @@ fn replay(a: ReplayArgs) -> Result<()> {
             )),
             None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
         };
-        for f in &rec.frames {
-            writeln!(out, "{}", frame_json(f)).context("writing frames")?;
+        loop {
+            let next = stream.next_frame();
+            let f = match next {
+                Ok(Some(f)) => frame_json(f),
+                Ok(None) => break,
+                Err(e) => {
+                    warn(&mut stream)?;
+                    return Err(e.into());
+                }
+            };
+            warn(&mut stream)?;
+            writeln!(out, "{f}").context("writing frames")?;
         }
+        warn(&mut stream)?;
         out.flush().context("writing frames")?;
         return Ok(());
     }
@@ -555,47 +574,52 @@ fn replay(a: ReplayArgs) -> Result<()> {
         )),
         None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
     };
-    let mut engine = Engine::new(&cfg, rec.surface.size_mm(), true);
-    let period = Micros((1e6 / cfg.pipeline.tick_hz) as u64);
-    let settle = Micros::from_secs_f64(a.settle.max(0.0));
+    let mut engine = Engine::new(&cfg, stream.surface().size_mm(), true);
+    let clock = VirtualClock {
+        period: Micros((1e6 / cfg.pipeline.tick_hz) as u64),
+        settle: Micros::from_secs_f64(a.settle.max(0.0)),
+        max_gap: Micros(crowdtouch::input::replay::MAX_GAP_US),
+    };
     let mut buf = Vec::with_capacity(1 << 16);
     let start_wall = monotonic_now();
-    let t0 = rec.frames.first().map_or(Micros::ZERO, |f| f.t);
     let realtime = a.realtime;
     let mut sent_topology = 0;
-    let pace = |t: Micros| {
+    let pace = |played: Micros| {
         if realtime {
-            let due = start_wall + t.saturating_since(t0);
+            let due = start_wall + played;
             let now = monotonic_now();
             if due > now {
                 std::thread::sleep(Duration::from_micros((due - now).0));
             }
         }
     };
+    let frames = std::iter::from_fn(|| {
+        let next = match stream.next_frame() {
+            Ok(f) => f.map(|f| Ok(*f)),
+            Err(e) => Some(Err(anyhow::Error::from(e))),
+        };
+        if let Err(e) = warn(&mut stream) {
+            return Some(Err(e.into()));
+        }
+        next
+    });
     let mut trace = a.svg.as_ref().map(|_| svg::Trace::default());
-    replay_virtual(
-        &mut engine,
-        &rec.frames,
-        period,
-        settle,
-        pace,
-        |o| -> Result<()> {
-            if let Some(t) = &mut trace {
-                t.tick(&o.snapshot, o.mesh.as_deref());
-            }
-            buf.clear();
-            for e in o.events {
-                encode_event(e, &mut buf);
-            }
-            if let Some(m) = &o.mesh {
-                encode_mesh_json(m, m.topology != sent_topology, &mut buf);
-                sent_topology = m.topology;
-            }
-            encode_snapshot_json(&o.snapshot, None, 0, &FieldSet::ALL, &mut buf);
-            out.write_all(&buf).context("writing snapshots")?;
-            Ok(())
-        },
-    )?;
+    replay_virtual(&mut engine, frames, clock, pace, |o| -> Result<()> {
+        if let Some(t) = &mut trace {
+            t.tick(&o.snapshot, o.mesh.as_deref());
+        }
+        buf.clear();
+        for e in o.events {
+            encode_event(e, &mut buf);
+        }
+        if let Some(m) = &o.mesh {
+            encode_mesh_json(m, m.topology != sent_topology, &mut buf);
+            sent_topology = m.topology;
+        }
+        encode_snapshot_json(&o.snapshot, None, 0, &FieldSet::ALL, &mut buf);
+        out.write_all(&buf).context("writing snapshots")?;
+        Ok(())
+    })?;
     out.flush().context("writing snapshots")?;
     if let (Some(path), Some(t)) = (&a.svg, &mut trace) {
         let title = a

@@ -31,10 +31,7 @@ fn source(names: &[&str], looped: bool) -> SourceSpec {
                 f.t = f.t + Micros(500_000);
                 f
             }));
-            ReplayItem {
-                name: n.to_string(),
-                frames,
-            }
+            ReplayItem::new(n.to_string(), frames)
         })
         .collect();
     SourceSpec::Replay {

@@ -896,13 +896,17 @@ proptest! {
 fn replay_of_shipped_and_real_recordings_keeps_life_cycle() {
     use crowdtouch::input::replay::{Pacing, ReplayItem, ReplaySource};
     use std::sync::atomic::AtomicBool;
+    let mut total = 0;
     let mut items: Vec<ReplayItem> = synth::shipped()
         .into_iter()
-        .map(|(n, _, f)| ReplayItem::new(n, f))
+        .map(|(n, _, f)| {
+            total += f.len();
+            ReplayItem::new(n, f)
+        })
         .collect();
     let dell = read_recording(&fixture("dell-canvas-27-touch.evemu"), OnBadFrame::Stop).unwrap();
+    total += dell.frames.len();
     items.push(ReplayItem::new("dell", dell.frames.clone()));
-    let total: usize = items.iter().map(|i| i.frames.len()).sum();
     let mut src = ReplaySource::new(items, false, Micros(500_000), Pacing::Virtual);
     let mut out: Vec<TouchFrame> = Vec::new();
     let mut started = Vec::new();

@@ -2,8 +2,8 @@
 //! `read_evemu_raw` on arbitrary text; what it accepts must survive
 //! `EvemuWriter` and read back to the same capabilities and events.
 use crowdtouch::input::evdev::AbsAxisInfo;
-use crowdtouch::input::recording::{EvemuTime, EvemuWriter};
 use crowdtouch::input::recording::read_evemu_raw;
+use crowdtouch::input::recording::{EvemuTime, EvemuWriter};
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 

@@ -2,9 +2,9 @@
 //! Arbitrary `formations.shapes` lists: parsing and validation answer with a library
 //! or located problems, never a panic; every accepted shape meshes at any placement
 //! into a mesh that passes its own `sanity_check` (or a clear mesh error).
-use crowdtouch::located::parse_strict;
 use crowdtouch::crowd::formation::{FormationDef, FormationLibrary, Placement};
 use crowdtouch::geom::Vec2;
+use crowdtouch::located::parse_strict;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
@@ -18,7 +18,9 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     for d in &defs {
-        let f = lib.get(&d.name).expect("an accepted shape is in the library");
+        let f = lib
+            .get(&d.name)
+            .expect("an accepted shape is in the library");
         let place = Placement {
             centre_m: Vec2::new(8.0, 4.5),
             heading: Vec2::new(0.3, -1.0),

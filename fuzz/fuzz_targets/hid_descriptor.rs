@@ -3,8 +3,8 @@
 //! nor allocate without bound; every layout found decodes arbitrary reports (taken
 //! from the same bytes) with the frame invariants intact.
 use crowdtouch::input::hid::{describe, touch_collections, HidDecoder};
-use crowdtouch::vocab::{ContactFlags, TouchFrame};
 use crowdtouch::vocab::Micros;
+use crowdtouch::vocab::{ContactFlags, TouchFrame};
 use libfuzzer_sys::fuzz_target;
 use std::collections::HashSet;
 

@@ -1,8 +1,8 @@
 #![no_main]
-//! hid-recorder text through `parse_recording` (an `R:` line with the ActionStar
-//! descriptor is prepended when the input has none) and `parse_hid_recorder`.
+//! hid-recorder text through `parse_recording` and the stream it is built on (an
+//! `R:` line with the ActionStar descriptor is prepended when the input has
+//! none), and `parse_hid_recorder`.
 use crowdtouch::input::recording::parse_hid_recorder;
-use crowdtouch::input::recording::parse_recording;
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 
@@ -18,8 +18,8 @@ fuzz_target!(|data: &[u8]| {
     } else {
         format!("{R_LINE}{text}")
     };
+    common::check_all(&text, "fuzz.hid");
     for mode in common::MODES {
-        common::check(parse_recording(&text, Path::new("fuzz.hid"), mode));
         let _ = parse_hid_recorder(&text, Path::new("fuzz.hid"), mode);
     }
 });

@@ -3,8 +3,8 @@
 //! the rest is a sequence of `len: u8, bytes[len]` reports (a report ID byte is
 //! forced when byte 1's low bit is set, so most reports reach the decoder).
 use crowdtouch::input::hid::{touch_collections, HidDecoder};
-use crowdtouch::vocab::{ContactFlags, TouchFrame, MAX_CONTACTS};
 use crowdtouch::vocab::Micros;
+use crowdtouch::vocab::{ContactFlags, TouchFrame, MAX_CONTACTS};
 use libfuzzer_sys::fuzz_target;
 use std::collections::HashSet;
 

@@ -6,8 +6,8 @@
 //! derived from `code` and `value`.
 use crowdtouch::input::evdev::{MtAxes, MtDecoder, MtProtocol, MtSlotState};
 use crowdtouch::input::AxisRange;
-use crowdtouch::vocab::{ContactFlags, TouchFrame, MAX_CONTACTS};
 use crowdtouch::vocab::Micros;
+use crowdtouch::vocab::{ContactFlags, TouchFrame, MAX_CONTACTS};
 use libfuzzer_sys::fuzz_target;
 use std::collections::HashMap;
 

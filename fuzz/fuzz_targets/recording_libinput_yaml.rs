@@ -1,7 +1,5 @@
 #![no_main]
-use crowdtouch::input::recording::parse_recording;
 use libfuzzer_sys::fuzz_target;
-use std::path::Path;
 
 #[path = "common.rs"]
 mod common;
@@ -13,7 +11,5 @@ fuzz_target!(|data: &[u8]| {
     } else {
         format!("version: 1\ndevices:\n{text}")
     };
-    for mode in common::MODES {
-        common::check(parse_recording(&text, Path::new("fuzz.yml"), mode));
-    }
+    common::check_all(&text, "fuzz.yml");
 });

@@ -14,7 +14,9 @@ fuzz_target!(|data: &[u8]| {
     let Ok(scene) = Scene::from_str(text, Path::new("fuzz.ron"), 0.15) else {
         return;
     };
-    scene.sanity_check().expect("an accepted scene is consistent");
+    scene
+        .sanity_check()
+        .expect("an accepted scene is consistent");
     for k in 0..16 {
         let p = Vec2::new(f64::from(k) * 1.1 - 2.0, f64::from(k % 5) * 2.3 - 1.0);
         let q = scene.project_out(p, 0.15, 0.0);

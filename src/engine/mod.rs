@@ -29,6 +29,6 @@ mod tests;
 
 pub use error::{CommandError, SwitchError};
 pub use params::{inline_planner, planner_for, planner_params, point_metric, same_scene};
-pub use replay::replay_virtual;
+pub use replay::{replay_virtual, VirtualClock};
 pub use state::{Engine, EngineCounters, MAX_TICK_S, RADIUS_FIT};
 pub use tick::TickOutput;

@@ -18,7 +18,7 @@
 //! listed CPUs that exist (and leaves it unpinned when none does).
 
 use crate::config::{Config, InputConfig};
-use crate::input::recording::{load_recording, OnBadFrame};
+use crate::input::recording::{OnBadFrame, RecordingError, RecordingStream};
 use crate::publish::socket::preflight as socket;
 use crate::publish::Error as SocketError;
 use std::path::Path;
@@ -137,7 +137,7 @@ pub fn preflight(cfg: &Config, what: &Preflight<'_>) -> Vec<Finding> {
         for (i, input) in cfg.inputs.iter().enumerate() {
             if let InputConfig::Replay { files, .. } = input {
                 for (j, f) in files.iter().enumerate() {
-                    if let Err(e) = load_recording(f, OnBadFrame::Stop) {
+                    if let Err(e) = read_through(f) {
                         out.push(finding(
                             &format!("inputs[{i}].files[{j}]"),
                             Severity::Error,
@@ -234,6 +234,16 @@ fn cpu_list(cpus: &[usize]) -> String {
         i = j + 1;
     }
     parts.join(",")
+}
+
+/// Reads a recording through, a frame at a time, as `run` does before it starts
+/// (memory does not grow with the recording's length).
+fn read_through(path: &Path) -> Result<(), RecordingError> {
+    let mut stream = RecordingStream::load(path, OnBadFrame::Stop)?;
+    while stream.next_frame()?.is_some() {
+        drop(stream.take_warnings());
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -1,4 +1,5 @@
-//! The inputs a config names, made ready to run: recordings read, devices described.
+//! The inputs a config names, made ready to run: recordings opened and read through
+//! once (so a bad frame refuses the start, at its line), devices described.
 
 use super::device;
 use super::error::Error;
@@ -7,13 +8,12 @@ use crate::input::recording::OnBadFrame;
 use crate::input::replay::ReplayItem;
 use crate::vocab::{Micros, TouchFrame};
 use crossbeam_channel::Receiver;
-use std::path::Path;
 
 /// An input source the daemon runs.
 pub enum SourceSpec {
     /// Recordings replayed in real time.
     Replay {
-        /// The files, parsed.
+        /// The files, opened (read a frame at a time as they play).
         items: Vec<ReplayItem>,
         /// Play forever.
         looped: bool,
@@ -49,7 +49,8 @@ pub enum SourceSpec {
     },
 }
 
-/// Reads the recordings a config names.
+/// Opens the recordings a config names and reads each through once; their
+/// warnings are logged.
 ///
 /// # Errors
 /// [`Error::Recording`] naming the file and line; [`Error::NoInputs`].
@@ -69,14 +70,14 @@ pub fn sources_from_config(cfg: &Config) -> Result<Vec<SourceSpec>, Error> {
                 let mut items = Vec::new();
                 let mut glass = None;
                 for f in files {
-                    let rec = crate::input::recording::load_recording(f, OnBadFrame::Stop)?;
-                    if glass.is_none() {
-                        glass = rec.surface.size_mm();
+                    let (item, surface, warnings) = ReplayItem::open(f, OnBadFrame::Stop)?;
+                    for w in &warnings {
+                        log::warn!("{}: {w}", f.display());
                     }
-                    items.push(ReplayItem {
-                        name: display_name(f),
-                        frames: rec.frames,
-                    });
+                    if glass.is_none() {
+                        glass = surface.size_mm();
+                    }
+                    items.push(item);
                 }
                 out.push(SourceSpec::Replay {
                     items,
@@ -111,10 +112,4 @@ pub fn sources_from_config(cfg: &Config) -> Result<Vec<SourceSpec>, Error> {
         }
     }
     Ok(out)
-}
-
-fn display_name(p: &Path) -> String {
-    p.file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| p.display().to_string())
 }

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use crowdtouch::config::Config;
-use crowdtouch::engine::{replay_virtual, Engine};
+use crowdtouch::engine::{replay_virtual, Engine, VirtualClock};
 use crowdtouch::geom::Vec2;
 use crowdtouch::input::recording::{OnBadFrame, Recording};
 use crowdtouch::vocab::Micros;
@@ -57,12 +57,15 @@ pub fn replay(name: &str, cfg: &Config, settle_s: f64) -> Run {
         events: vec![],
         meshes: vec![],
     };
-    let period = Micros((1e6 / cfg.pipeline.tick_hz) as u64);
+    let clock = VirtualClock {
+        period: Micros((1e6 / cfg.pipeline.tick_hz) as u64),
+        settle: Micros::from_secs_f64(settle_s),
+        max_gap: Micros(crowdtouch::input::replay::MAX_GAP_US),
+    };
     replay_virtual(
         &mut engine,
-        &rec.frames,
-        period,
-        Micros::from_secs_f64(settle_s),
+        rec.frames.iter().map(|f| Ok(*f)),
+        clock,
         |_| {},
         |o| {
             run.snapshots.push(Arc::new((*o.snapshot).clone()));

@@ -10,9 +10,11 @@
 use super::error::{OnBadFrame, RecordingError};
 use super::evdev_header::{default_name, AbsInfo, DeviceHeader, HeaderCtx};
 use super::event_stream::EventStream;
-use super::recording_type::Recording;
+use super::lines::{too_long_message, LineFault, LineReader};
 use super::warnings::Warnings;
 use crate::input::evdev::ABS_MAX;
+use crate::input::SurfaceInfo;
+use crate::vocab::TouchFrame;
 use std::path::Path;
 
 /// Whether `line` (trimmed) is an evemu header or event line.
@@ -22,23 +24,44 @@ pub(super) fn is_evemu_line(line: &str) -> bool {
         .any(|p| line.starts_with(p))
 }
 
-/// Decodes an evemu event stream whose device header is in a separate description.
-///
-/// `desc` is the `.desc`/`.prop` text (`N:`/`I:`/`P:`/`B:`/`A:` lines); `events`
-/// the `E:` lines. Header lines inside `events` are ignored, the description is
-/// authoritative. Line numbers in errors refer to `events`, or to `desc` when the
-/// message says "in the device description".
+/// The device header of a `.desc`/`.prop` text (`N:`/`I:`/`P:`/`B:`/`A:` lines),
+/// for an events file that has none.
 ///
 /// # Errors
-/// As [`parse_recording`](super::parse_recording).
-pub fn read_evemu_with_desc(
+/// [`RecordingError::Parse`] at a malformed line, "in the device description".
+pub(super) fn parse_evemu_desc(
     desc: &str,
-    events: &str,
-    name: &Path,
-    on_bad: OnBadFrame,
-) -> Result<Recording, RecordingError> {
-    parse_evemu(Some(desc), events, name, on_bad)
+    path: &Path,
+    w: &mut Warnings,
+) -> Result<DeviceHeader, RecordingError> {
+    let ctx = HeaderCtx {
+        path,
+        prefix: DESC_PREFIX,
+    };
+    let mut hdr = DeviceHeader::default();
+    let desc = desc.strip_prefix('\u{feff}').unwrap_or(desc);
+    for (i, raw) in desc.lines().enumerate() {
+        let l = raw.trim();
+        if l.is_empty() || l.starts_with('#') {
+            continue;
+        }
+        if l.starts_with("E:") {
+            w.push(
+                0,
+                "the device description holds events; they are ignored".into(),
+            );
+            break;
+        }
+        if !is_evemu_line(l) {
+            return Err(ctx.err(i + 1, "unrecognised line (expected N:, I:, P:, B: or A:)"));
+        }
+        evemu_header_line(&mut hdr, i + 1, l).map_err(|m| ctx.err(i + 1, m))?;
+    }
+    Ok(hdr)
 }
+
+/// How errors about a separate description begin.
+const DESC_PREFIX: &str = "in the device description: ";
 
 /// Parses `sec.usec` into microseconds.
 fn parse_evemu_time(s: &str) -> Result<u64, String> {
@@ -137,97 +160,145 @@ fn evemu_header_line(hdr: &mut DeviceHeader, line: usize, l: &str) -> Result<(),
     }
 }
 
-/// Parses evemu text, with the header in `desc` or at the top of `text`.
-pub(super) fn parse_evemu(
-    desc: Option<&str>,
-    text: &str,
-    path: &Path,
-    on_bad: OnBadFrame,
-) -> Result<Recording, RecordingError> {
-    let mut hdr = DeviceHeader::default();
-    let mut warnings = Warnings::default();
-    if let Some(desc) = desc {
-        let ctx = HeaderCtx {
+/// An evemu event: `(time_us, type, code, value)`, or what is wrong with its line.
+type EventLine = Result<(u64, u16, u16, i32), String>;
+
+/// Reads evemu text a frame at a time.
+pub(super) struct EvemuReader {
+    lines: LineReader,
+    stream: EventStream,
+    /// The header came from a separate description: header lines in the text
+    /// are ignored.
+    has_desc: bool,
+    /// The first event line, read while looking for the end of the header.
+    first: Option<(usize, EventLine)>,
+}
+
+impl EvemuReader {
+    /// Reads the header, from `desc` (a description's, see [`parse_evemu_desc`])
+    /// or from the top of the text, up to the first event.
+    ///
+    /// # Errors
+    /// [`RecordingError::Parse`] for a bad header line, no axis, an empty axis
+    /// range; [`RecordingError::Unsupported`] for a device without multi-touch
+    /// axes; [`RecordingError::Empty`] when there is no event.
+    pub(super) fn open(
+        mut lines: LineReader,
+        desc: Option<&DeviceHeader>,
+        path: &Path,
+        on_bad: OnBadFrame,
+        w: &mut Warnings,
+    ) -> Result<(EvemuReader, SurfaceInfo), RecordingError> {
+        let mut hdr = desc.cloned().unwrap_or_default();
+        let ctx = HeaderCtx { path, prefix: "" };
+        // Header problems point into the description when there is one.
+        let hctx = HeaderCtx {
             path,
-            prefix: "in the device description: ",
+            prefix: if desc.is_some() { DESC_PREFIX } else { "" },
         };
-        let desc = desc.strip_prefix('\u{feff}').unwrap_or(desc);
-        for (i, raw) in desc.lines().enumerate() {
-            let l = raw.trim();
+        let dflt = default_name(path);
+        let first = loop {
+            let (line, l) = match lines.next_line() {
+                Ok(Some((n, l))) => (n, l.trim()),
+                Ok(None) => {
+                    // A header with no events: say what is wrong with the device first.
+                    hdr.mt_axes(&hctx, 1, &dflt, w)?;
+                    return Err(RecordingError::Empty {
+                        path: path.to_path_buf(),
+                    });
+                }
+                Err(f) => return Err(f.at(path, lines.line())),
+            };
             if l.is_empty() || l.starts_with('#') {
                 continue;
             }
-            if l.starts_with("E:") {
-                warnings.push(
-                    0,
-                    "the device description holds events; they are ignored".into(),
-                );
-                break;
+            if let Some(rest) = l.strip_prefix("E:") {
+                break (line, parse_evemu_event(rest));
             }
             if !is_evemu_line(l) {
-                return Err(ctx.err(i + 1, "unrecognised line (expected N:, I:, P:, B: or A:)"));
+                let m = "unrecognised line (expected N:, I:, P:, B:, A: or E:)";
+                return Err(ctx.err(line, m));
             }
-            evemu_header_line(&mut hdr, i + 1, l).map_err(|m| ctx.err(i + 1, m))?;
-        }
+            if desc.is_none() {
+                evemu_header_line(&mut hdr, line, l).map_err(|m| ctx.err(line, m))?;
+            }
+        };
+        let at = if desc.is_some() { 1 } else { first.0 };
+        let (axes, surface) = hdr.mt_axes(&hctx, at, &dflt, w)?;
+        let reader = EvemuReader {
+            lines,
+            stream: EventStream::new(on_bad, axes, &hdr),
+            has_desc: desc.is_some(),
+            first: Some(first),
+        };
+        Ok((reader, surface))
     }
-    let ctx = HeaderCtx { path, prefix: "" };
-    // Header problems point into the description when there is one.
-    let hctx = HeaderCtx {
-        path,
-        prefix: if desc.is_some() {
-            "in the device description: "
-        } else {
-            ""
-        },
-    };
-    let dflt = default_name(path);
-    let mut stream: Option<EventStream<'_>> = None;
-    let mut warnings = Some(warnings);
-    for (i, raw) in text.lines().enumerate() {
-        let line = i + 1;
-        let l = raw.trim();
-        if l.is_empty() || l.starts_with('#') {
-            continue;
-        }
-        if let Some(rest) = l.strip_prefix("E:") {
-            if stream.is_none() {
-                let mut w = warnings.take().unwrap_or_default();
-                let at = if desc.is_some() { 1 } else { line };
-                let (axes, surface) = hdr.mt_axes(&hctx, at, &dflt, &mut w)?;
-                stream = Some(EventStream::new(path, on_bad, axes, surface, &hdr, w));
-            }
-            let Some(s) = stream.as_mut() else { continue };
-            match parse_evemu_event(rest) {
-                Ok((time, ty, code, value)) => s.event(line, time, ty, code, value)?,
-                Err(m) => s.bad(line, m)?,
-            }
-        } else if is_evemu_line(l) {
-            match (&mut stream, desc.is_some()) {
-                // The description is authoritative; a header repeated in the
-                // events file is ignored.
-                (_, true) => {}
-                (None, false) => {
-                    evemu_header_line(&mut hdr, line, l).map_err(|m| ctx.err(line, m))?
+
+    /// The source, for reading again from the start.
+    pub(super) fn into_lines(self) -> LineReader {
+        self.lines
+    }
+
+    /// Bytes read so far.
+    pub(super) fn consumed(&self) -> u64 {
+        self.lines.consumed()
+    }
+
+    /// The next frame into `out`, and the line that closed it; `None` after the last.
+    ///
+    /// # Errors
+    /// [`RecordingError::Parse`] for a bad event with [`OnBadFrame::Stop`];
+    /// [`RecordingError::Empty`] at the end when no frame was decoded.
+    pub(super) fn next(
+        &mut self,
+        path: &Path,
+        out: &mut TouchFrame,
+        w: &mut Warnings,
+    ) -> Result<Option<usize>, RecordingError> {
+        loop {
+            let (line, event) = match self.first.take() {
+                Some(first) => first,
+                None => match self.lines.next_line() {
+                    Ok(Some((line, l))) => {
+                        let l = l.trim();
+                        if l.is_empty() || l.starts_with('#') {
+                            continue;
+                        }
+                        match l.strip_prefix("E:") {
+                            Some(rest) => (line, parse_evemu_event(rest)),
+                            // The description is authoritative; a header
+                            // repeated in the events file is ignored.
+                            None if self.has_desc && is_evemu_line(l) => continue,
+                            None if is_evemu_line(l) => {
+                                (line, Err("header line after the first event".into()))
+                            }
+                            None => (
+                                line,
+                                Err("unrecognised line (expected N:, I:, P:, B:, A: or E:)".into()),
+                            ),
+                        }
+                    }
+                    Ok(None) => {
+                        let line = self.lines.line();
+                        return Ok(self.stream.finish(path, out, w)?.then_some(line));
+                    }
+                    Err(LineFault::TooLong) => {
+                        self.lines
+                            .skip_rest()
+                            .map_err(|e| LineFault::Io(e).at(path, self.lines.line()))?;
+                        (self.lines.line(), Err(too_long_message()))
+                    }
+                    Err(f) => return Err(f.at(path, self.lines.line())),
+                },
+            };
+            match event {
+                Ok(ev) => {
+                    if self.stream.event(path, line, ev, out, w)? {
+                        return Ok(Some(line));
+                    }
                 }
-                (Some(s), false) => s.bad(line, "header line after the first event".into())?,
+                Err(m) => self.stream.bad(path, line, m, w)?,
             }
-        } else {
-            let m = "unrecognised line (expected N:, I:, P:, B:, A: or E:)".to_string();
-            match &mut stream {
-                Some(s) => s.bad(line, m)?,
-                None => return Err(ctx.err(line, m)),
-            }
-        }
-    }
-    match stream {
-        Some(s) => s.finish(),
-        None => {
-            // A header with no events: say what is wrong with the device first.
-            let mut w = warnings.take().unwrap_or_default();
-            hdr.mt_axes(&hctx, 1, &dflt, &mut w)?;
-            Err(RecordingError::Empty {
-                path: path.to_path_buf(),
-            })
         }
     }
 }

@@ -1,5 +1,6 @@
 //! The evdev event stream shared by the evemu and libinput record readers: events
-//! checked against the device header, fed to [`MtDecoder`], frames collected.
+//! checked against the device header and fed to [`MtDecoder`], one frame handed
+//! out at a time.
 //!
 //! A bad event fails the reading with [`OnBadFrame::Stop`]; with
 //! [`OnBadFrame::Skip`] every event up to and including the next `SYN_REPORT` is
@@ -7,78 +8,78 @@
 
 use super::error::{OnBadFrame, RecordingError};
 use super::evdev_header::DeviceHeader;
-use super::recording_type::{Recording, END_CANCEL_US};
+use super::recording_type::END_CANCEL_US;
 use super::warnings::Warnings;
 use crate::input::evdev::{self as mt, MtAxes, MtDecoder, ABS_MAX};
-use crate::input::SurfaceInfo;
 use crate::vocab::{Micros, TouchFrame};
 use std::path::Path;
 
-/// Feeds evdev events into an [`MtDecoder`] and collects the frames.
-pub(super) struct EventStream<'a> {
-    path: &'a Path,
+/// Feeds evdev events into an [`MtDecoder`], a frame at a time.
+pub(super) struct EventStream {
     on_bad: OnBadFrame,
     decoder: MtDecoder,
-    surface: SurfaceInfo,
     declared: [bool; ABS_MAX as usize + 1],
-    frames: Vec<TouchFrame>,
     frame: TouchFrame,
+    /// Frames handed out.
+    frames: u64,
     /// Absolute time of the first event, µs.
     first_us: Option<u64>,
     /// Absolute time of the last accepted event, µs.
     last_us: u64,
+    /// Relative time of the last frame.
+    last_frame_t: Option<Micros>,
     /// Events fed since the last frame closed.
     pending_events: usize,
-    warnings: Warnings,
+    /// The end was reached.
+    ended: bool,
 }
 
-impl<'a> EventStream<'a> {
-    pub(super) fn new(
-        path: &'a Path,
-        on_bad: OnBadFrame,
-        axes: MtAxes,
-        surface: SurfaceInfo,
-        header: &DeviceHeader,
-        warnings: Warnings,
-    ) -> Self {
+impl EventStream {
+    pub(super) fn new(on_bad: OnBadFrame, axes: MtAxes, header: &DeviceHeader) -> Self {
         let mut declared = [false; ABS_MAX as usize + 1];
         for (d, a) in declared.iter_mut().zip(header.abs.iter()) {
             *d = a.is_some();
         }
         EventStream {
-            path,
             on_bad,
             decoder: MtDecoder::new(axes, 1),
-            surface,
             declared,
-            frames: Vec::new(),
             frame: TouchFrame::default(),
+            frames: 0,
             first_us: None,
             last_us: 0,
+            last_frame_t: None,
             pending_events: 0,
-            warnings,
+            ended: false,
         }
     }
 
     /// Reports a bad event: fails, or skips its frame (up to and including the
     /// next `SYN_REPORT`).
-    pub(super) fn bad(&mut self, line: usize, message: String) -> Result<(), RecordingError> {
-        self.bad_at(line, message, false)
+    pub(super) fn bad(
+        &mut self,
+        path: &Path,
+        line: usize,
+        message: String,
+        w: &mut Warnings,
+    ) -> Result<(), RecordingError> {
+        self.bad_at(path, line, message, false, w)
     }
 
     /// As [`EventStream::bad`]; `closes_frame` when the bad event is itself the
     /// frame's `SYN_REPORT`, so the next frame is kept.
     fn bad_at(
         &mut self,
+        path: &Path,
         line: usize,
         message: String,
         closes_frame: bool,
+        w: &mut Warnings,
     ) -> Result<(), RecordingError> {
         match self.on_bad {
-            OnBadFrame::Stop => Err(RecordingError::parse(self.path, line, message)),
+            OnBadFrame::Stop => Err(RecordingError::parse(path, line, message)),
             OnBadFrame::Skip => {
-                self.warnings
-                    .push(line, format!("{message}; frame skipped"));
+                w.push(line, format!("{message}; frame skipped"));
                 if closes_frame {
                     self.decoder.discard_staged();
                 } else {
@@ -90,40 +91,35 @@ impl<'a> EventStream<'a> {
         }
     }
 
-    /// One event at absolute time `time_us`.
+    /// One event at absolute time `time_us`; `true` when it closed a frame, which
+    /// is then in `out`.
     pub(super) fn event(
         &mut self,
+        path: &Path,
         line: usize,
-        time_us: u64,
-        ev_type: u16,
-        code: u16,
-        value: i32,
-    ) -> Result<(), RecordingError> {
+        (time_us, ev_type, code, value): (u64, u16, u16, i32),
+        out: &mut TouchFrame,
+        w: &mut Warnings,
+    ) -> Result<bool, RecordingError> {
         if time_us < self.last_us {
-            return self.bad_at(
-                line,
-                format!(
-                    "timestamp {} goes back before the previous event's {}",
-                    fmt_time(time_us),
-                    fmt_time(self.last_us)
-                ),
-                ev_type == mt::EV_SYN && code == mt::SYN_REPORT,
+            let m = format!(
+                "timestamp {} goes back before the previous event's {}",
+                fmt_time(time_us),
+                fmt_time(self.last_us)
             );
+            let closes = ev_type == mt::EV_SYN && code == mt::SYN_REPORT;
+            return self.bad_at(path, line, m, closes, w).map(|()| false);
         }
         if ev_type == mt::EV_ABS {
             if code > ABS_MAX {
-                return self.bad(
-                    line,
-                    format!("unknown axis code 0x{code:x} (the highest is 0x{ABS_MAX:x})"),
-                );
+                let m = format!("unknown axis code 0x{code:x} (the highest is 0x{ABS_MAX:x})");
+                return self.bad(path, line, m, w).map(|()| false);
             }
             if !self.declared[code as usize] {
-                return self.bad(
-                    line,
-                    format!(
-                        "event for axis 0x{code:02x}, which the device header does not declare"
-                    ),
+                let m = format!(
+                    "event for axis 0x{code:02x}, which the device header does not declare"
                 );
+                return self.bad(path, line, m, w).map(|()| false);
             }
         }
         let first = *self.first_us.get_or_insert(time_us);
@@ -131,15 +127,33 @@ impl<'a> EventStream<'a> {
         let t = Micros(time_us - first);
         self.pending_events += 1;
         if self.decoder.event(t, ev_type, code, value, &mut self.frame) {
-            self.frames.push(self.frame);
+            *out = self.frame;
+            self.frames += 1;
+            self.last_frame_t = Some(self.frame.t);
             self.pending_events = 0;
+            return Ok(true);
         }
-        Ok(())
+        Ok(false)
     }
 
-    pub(super) fn finish(mut self) -> Result<Recording, RecordingError> {
+    /// The end of the events: the frame cancelling contacts still down (into
+    /// `out`, `true`), and the decoder's counters as warnings. Later calls
+    /// return `false`.
+    ///
+    /// # Errors
+    /// [`RecordingError::Empty`] when no frame was decoded.
+    pub(super) fn finish(
+        &mut self,
+        path: &Path,
+        out: &mut TouchFrame,
+        w: &mut Warnings,
+    ) -> Result<bool, RecordingError> {
+        if self.ended {
+            return Ok(false);
+        }
+        self.ended = true;
         if self.pending_events > 0 {
-            self.warnings.push(
+            w.push(
                 0,
                 format!(
                     "{} events after the last SYN_REPORT were ignored",
@@ -147,14 +161,12 @@ impl<'a> EventStream<'a> {
                 ),
             );
         }
-        if let Some(last) = self.frames.last().map(|f| f.t) {
-            if self
+        let cancelled = match self.last_frame_t {
+            Some(last) => self
                 .decoder
-                .cancel_all(last + Micros(END_CANCEL_US), &mut self.frame)
-            {
-                self.frames.push(self.frame);
-            }
-        }
+                .cancel_all(last + Micros(END_CANCEL_US), &mut self.frame),
+            None => false,
+        };
         let c = self.decoder.counters();
         let type_b = self.decoder.protocol() == mt::MtProtocol::B;
         let notes = [
@@ -194,19 +206,18 @@ impl<'a> EventStream<'a> {
         ];
         for (n, what) in notes {
             if n > 0 {
-                self.warnings.push(0, format!("{n} {what}"));
+                w.push(0, format!("{n} {what}"));
             }
         }
-        if self.frames.is_empty() {
+        if self.frames == 0 {
             return Err(RecordingError::Empty {
-                path: self.path.to_path_buf(),
+                path: path.to_path_buf(),
             });
         }
-        Ok(Recording {
-            surface: self.surface,
-            frames: self.frames,
-            warnings: self.warnings.finish(),
-        })
+        if cancelled {
+            *out = self.frame;
+        }
+        Ok(cancelled)
     }
 }
 

@@ -18,17 +18,14 @@
 //! first report; they may all be equal (the ActionStar fixture's placeholders are
 //! all zero), but must not go back.
 //!
-//! [`read_hid_recorder`] decodes the reports of the first touch collection with
-//! [`HidDecoder`] into a [`Recording`], as the other recording formats are.
+//! [`parse_hid_recorder`] reads a whole log without decoding it (for tools);
+//! replays read it a report at a time (`hid_stream.rs`), decoding the first touch
+//! collection with [`HidDecoder`](crate::input::hid::HidDecoder) as the other
+//! recording formats are.
 
 use super::error::{OnBadFrame, RecordingError};
-use super::recording_type::{Recording, END_CANCEL_US};
 use super::warnings::{RecordingIssue, Warnings};
-use crate::input::hid::{
-    parse_hex_bytes, parse_r_line, touch_collections, HidCounters, HidDecoder,
-};
-use crate::vocab::Micros;
-use crate::vocab::TouchFrame;
+use crate::input::hid::{parse_hex_bytes, parse_r_line};
 use std::path::Path;
 
 /// One `E:` line.
@@ -132,19 +129,9 @@ pub fn parse_hid_recorder(
     let perr = |line: usize, message: String| RecordingError::parse(path, line, message);
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut issues = Warnings::default();
-    let mut log = HidRecorderLog {
-        name: None,
-        bus: None,
-        vendor: None,
-        product: None,
-        descriptor: Vec::new(),
-        descriptor_line: 0,
-        warnings: Vec::new(),
-        events: Vec::new(),
-        data: Vec::new(),
-    };
-    let mut device: u32 = 0;
-    let mut ours: Option<u32> = None;
+    let mut header = HidHeader::default();
+    let mut events = Vec::new();
+    let mut data = Vec::new();
     let mut other_events = 0usize;
     let mut last_line = 0;
     for (i, raw) in text.lines().enumerate() {
@@ -154,52 +141,20 @@ pub fn parse_hid_recorder(
         if l.is_empty() || l.starts_with('#') {
             continue;
         }
-        let Some((tag, rest)) = l.split_once(':') else {
-            return Err(perr(line, format!("unknown line `{}`", prefix(l))));
-        };
-        let mine = ours.is_none_or(|d| d == device);
-        match tag {
-            "D" => {
-                device = rest
-                    .trim()
-                    .parse()
-                    .map_err(|_| perr(line, "D: needs a device number".into()))?;
-            }
-            "R" if ours.is_none() => {
-                log.descriptor = parse_r_line(rest).map_err(|m| perr(line, m))?;
-                log.descriptor_line = line;
-                ours = Some(device);
-            }
-            "R" if mine => {
-                return Err(perr(
-                    line,
-                    "a second R: line for the same device".to_string(),
-                ))
-            }
-            "N" if mine => log.name = Some(rest.trim().to_string()),
-            "I" if mine => {
-                let (b, v, p) = parse_id(rest).map_err(|m| perr(line, m))?;
-                (log.bus, log.vendor, log.product) = (Some(b), Some(v), Some(p));
-            }
-            "R" | "N" | "I" | "P" => {}
-            "E" if ours.is_none() => {
-                return Err(perr(
-                    line,
-                    "input report (E:) before the report descriptor (R:)".to_string(),
-                ))
-            }
-            "E" if !mine => other_events += 1,
-            "E" => {
-                let start = log.data.len();
-                match parse_event(rest, &mut log.data) {
-                    Ok((time_us, len)) => log.events.push(HidEvent {
+        match header.take(line, l).map_err(|m| perr(line, m))? {
+            HidLine::Header => {}
+            HidLine::OtherEvent => other_events += 1,
+            HidLine::Event(rest) => {
+                let start = data.len();
+                match parse_event(rest, &mut data) {
+                    Ok((time_us, len)) => events.push(HidEvent {
                         line,
                         time_us,
                         start,
                         len,
                     }),
                     Err(m) => {
-                        log.data.truncate(start);
+                        data.truncate(start);
                         match on_bad {
                             OnBadFrame::Stop => return Err(perr(line, m)),
                             OnBadFrame::Skip => issues.push(line, format!("{m}; report skipped")),
@@ -207,23 +162,113 @@ pub fn parse_hid_recorder(
                     }
                 }
             }
-            _ => return Err(perr(line, format!("unknown line `{}`", prefix(l)))),
         }
     }
-    if ours.is_none() {
-        return Err(perr(
-            last_line.max(1),
-            "no report descriptor (R: line) in the hid-recorder log".into(),
-        ));
+    if !header.has_descriptor() {
+        return Err(no_descriptor(path, last_line));
     }
     if other_events > 0 {
-        issues.push(
-            0,
-            format!("{other_events} input reports of other devices in the log were skipped"),
-        );
+        issues.push(0, other_devices_note(other_events));
     }
-    log.warnings = issues.finish();
-    Ok(log)
+    Ok(HidRecorderLog {
+        name: header.name,
+        bus: header.bus,
+        vendor: header.vendor,
+        product: header.product,
+        descriptor: header.descriptor,
+        descriptor_line: header.descriptor_line,
+        warnings: issues.finish(),
+        events,
+        data,
+    })
+}
+
+/// The error for a log without an `R:` line, at its last line.
+pub(super) fn no_descriptor(path: &Path, last_line: usize) -> RecordingError {
+    RecordingError::parse(
+        path,
+        last_line.max(1),
+        "no report descriptor (R: line) in the hid-recorder log",
+    )
+}
+
+/// The warning for `E:` lines of devices other than the one read.
+pub(super) fn other_devices_note(n: usize) -> String {
+    format!("{n} input reports of other devices in the log were skipped")
+}
+
+/// What a line of a hid-recorder log is, once the header lines are taken in.
+#[derive(Debug, PartialEq, Eq)]
+pub(super) enum HidLine<'a> {
+    /// A header line (`D:`, `R:`, `N:`, `I:`, `P:`), applied.
+    Header,
+    /// An input report of the device read: what follows `E:`.
+    Event(&'a str),
+    /// An input report of another device.
+    OtherEvent,
+}
+
+/// The header lines of a log: the first device's descriptor and identity, and
+/// which device the lines now belong to.
+#[derive(Debug, Default)]
+pub(super) struct HidHeader {
+    pub(super) name: Option<String>,
+    pub(super) bus: Option<u16>,
+    pub(super) vendor: Option<u16>,
+    pub(super) product: Option<u16>,
+    pub(super) descriptor: Vec<u8>,
+    pub(super) descriptor_line: usize,
+    /// The device of the lines (`D:`).
+    device: u32,
+    /// The device read: the one whose `R:` comes first.
+    ours: Option<u32>,
+}
+
+impl HidHeader {
+    /// Whether an `R:` line was read.
+    pub(super) fn has_descriptor(&self) -> bool {
+        self.ours.is_some()
+    }
+
+    /// Takes in one trimmed line that is neither blank nor a comment, the
+    /// `line`-th of the log.
+    ///
+    /// # Errors
+    /// A malformed `R:`/`I:`/`D:` line, an `E:` before the `R:`, a second `R:`
+    /// for the same device, an unknown line.
+    pub(super) fn take<'a>(&mut self, line: usize, l: &'a str) -> Result<HidLine<'a>, String> {
+        let Some((tag, rest)) = l.split_once(':') else {
+            return Err(format!("unknown line `{}`", prefix(l)));
+        };
+        let mine = self.ours.is_none_or(|d| d == self.device);
+        match tag {
+            "D" => {
+                self.device = rest
+                    .trim()
+                    .parse()
+                    .map_err(|_| "D: needs a device number".to_string())?;
+            }
+            "R" if self.ours.is_none() => {
+                self.descriptor = parse_r_line(rest)?;
+                self.descriptor_line = line;
+                self.ours = Some(self.device);
+            }
+            "R" if mine => return Err("a second R: line for the same device".to_string()),
+            "N" if mine => self.name = Some(rest.trim().to_string()),
+            "I" if mine => {
+                let (b, v, p) = parse_id(rest)?;
+                (self.bus, self.vendor, self.product) = (Some(b), Some(v), Some(p));
+            }
+            "R" | "N" | "I" | "P" => {}
+            "E" if self.ours.is_none() => {
+                return Err("input report (E:) before the report descriptor (R:)".to_string())
+            }
+            "E" if !mine => return Ok(HidLine::OtherEvent),
+            "E" => return Ok(HidLine::Event(rest)),
+            _ => return Err(format!("unknown line `{}`", prefix(l))),
+        }
+        Ok(HidLine::Header)
+    }
 }
 
 /// The first characters of a line, for messages.
@@ -232,7 +277,7 @@ fn prefix(l: &str) -> String {
 }
 
 /// Parses what follows `E:`: `sec.usec len bytes…`, appending the bytes.
-fn parse_event(rest: &str, data: &mut Vec<u8>) -> Result<(u64, usize), String> {
+pub(super) fn parse_event(rest: &str, data: &mut Vec<u8>) -> Result<(u64, usize), String> {
     let mut it = rest.split_whitespace();
     let time = parse_time(it.next().ok_or("empty E: line")?)?;
     let len: usize = it
@@ -245,145 +290,6 @@ fn parse_event(rest: &str, data: &mut Vec<u8>) -> Result<(u64, usize), String> {
         return Err(format!("E: announces {len} bytes but holds {n}"));
     }
     Ok((time, n))
-}
-
-/// Decodes a parsed log's first touch collection into a [`Recording`].
-///
-/// Frames are timed relative to the first report. Contacts still down after the
-/// last report get a `CANCELLED` frame [`END_CANCEL_US`] later. Reports the
-/// decoder refuses (undeclared report ID, too short, Contact Count above the
-/// maximum) fail the reading with [`OnBadFrame::Stop`] and are skipped with a
-/// warning with [`OnBadFrame::Skip`]; reports of other collections are ignored and
-/// counted in a warning.
-///
-/// # Errors
-/// [`RecordingError::Parse`] at the `R:` line when the descriptor has no usable
-/// touch collection (the reason is in the message), at an `E:` line for a bad
-/// report or a timestamp going back; [`RecordingError::Empty`] when no frame
-/// results (a log with pen reports only).
-pub fn decode_hid_recording(
-    log: &HidRecorderLog,
-    path: &Path,
-    on_bad: OnBadFrame,
-) -> Result<Recording, RecordingError> {
-    let perr = |line: usize, message: String| RecordingError::parse(path, line, message);
-    let collections = touch_collections(&log.descriptor).map_err(|e| {
-        perr(
-            log.descriptor_line,
-            format!("the report descriptor has no multi-touch collection crowdtouch can read: {e}"),
-        )
-    })?;
-    let Some(tc) = collections.first() else {
-        return Err(RecordingError::Empty {
-            path: path.to_path_buf(),
-        });
-    };
-    let default_name = path.file_stem().map_or_else(
-        || "hid-recorder".to_string(),
-        |s| s.to_string_lossy().into_owned(),
-    );
-    let surface = tc.surface(log.name.as_deref().unwrap_or(&default_name));
-    let mut issues = Warnings::default();
-    for w in &log.warnings {
-        issues.push(w.line, w.message.clone());
-    }
-    let mut dec = HidDecoder::new(tc);
-    let mut frame = TouchFrame::default();
-    let mut frames = Vec::new();
-    let mut first: Option<u64> = None;
-    let mut last_us = 0u64;
-    for (e, bytes) in log.events() {
-        if e.time_us < last_us {
-            let m = format!(
-                "timestamp {}.{:06} goes back before the previous report's {}.{:06}",
-                e.time_us / 1_000_000,
-                e.time_us % 1_000_000,
-                last_us / 1_000_000,
-                last_us % 1_000_000
-            );
-            match on_bad {
-                OnBadFrame::Stop => return Err(perr(e.line, m)),
-                OnBadFrame::Skip => {
-                    issues.push(e.line, format!("{m}; report skipped"));
-                    continue;
-                }
-            }
-        }
-        let t0 = *first.get_or_insert(e.time_us);
-        last_us = e.time_us;
-        match dec.decode(Micros(e.time_us - t0), bytes, &mut frame) {
-            Ok(true) => frames.push(frame),
-            Ok(false) => {}
-            Err(err) => match on_bad {
-                OnBadFrame::Stop => return Err(perr(e.line, err.to_string())),
-                OnBadFrame::Skip => issues.push(e.line, format!("{err}; report skipped")),
-            },
-        }
-    }
-    if dec.frame_pending() {
-        issues.push(
-            0,
-            "the last frame was incomplete (its Contact Count announced more contacts \
-             than followed); its changes are not delivered"
-                .into(),
-        );
-    }
-    if let Some(last) = frames.last().map(|f| f.t) {
-        if dec.cancel_all(last + Micros(END_CANCEL_US), &mut frame) {
-            frames.push(frame);
-        }
-    }
-    for (count, what) in counter_notes(&dec.counters()) {
-        if count > 0 {
-            issues.push(0, format!("{count} {what}"));
-        }
-    }
-    if frames.is_empty() {
-        return Err(RecordingError::Empty {
-            path: path.to_path_buf(),
-        });
-    }
-    Ok(Recording {
-        surface,
-        frames,
-        warnings: issues.finish(),
-    })
-}
-
-/// Counters worth a warning.
-fn counter_notes(c: &HidCounters) -> [(u64, &'static str); 5] {
-    [
-        (
-            c.other_reports,
-            "reports of other collections (pen, vendor) were ignored",
-        ),
-        (
-            c.incomplete_frames,
-            "frames started before the previous one completed (a report is missing)",
-        ),
-        (
-            c.duplicate_contacts,
-            "repeated Contact Identifiers within a frame were ignored",
-        ),
-        (
-            c.contacts_over_capacity,
-            "contacts above the device's maximum were ignored",
-        ),
-        (c.frame_overflow, "contacts did not fit a frame"),
-    ]
-}
-
-/// Parses and decodes a hid-recorder log (what `read_recording` does with one).
-///
-/// # Errors
-/// As [`parse_hid_recorder`] and [`decode_hid_recording`].
-pub fn read_hid_recorder(
-    text: &str,
-    path: &Path,
-    on_bad: OnBadFrame,
-) -> Result<Recording, RecordingError> {
-    let log = parse_hid_recorder(text, path, on_bad)?;
-    decode_hid_recording(&log, path, on_bad)
 }
 
 /// Writes a hid-recorder log: the header (`R:`, `N:`, `I:`) and then one `E:`

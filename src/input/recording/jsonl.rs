@@ -23,13 +23,15 @@
 //! after a lift is a new contact.
 
 use super::error::{OnBadFrame, RecordingError};
-use super::recording_type::{Recording, END_CANCEL_US};
+use super::jsonl_frame::{parse_frame, FrameLine, FrameRules};
+use super::jsonl_values::{want_f64, want_u32, FromMap, KeyIn, MapOr, Scalar, Text};
+use super::lines::{too_long_message, LineFault, LineReader};
+use super::recording_type::END_CANCEL_US;
 use super::warnings::Warnings;
 use crate::input::{AxisRange, SurfaceInfo};
-use crate::located::json_kind;
 use crate::vocab::Micros;
-use crate::vocab::{Contact, ContactFlags, ContactId, TouchFrame, MAX_CONTACTS};
-use serde_json::{Map, Value};
+use crate::vocab::{ContactFlags, ContactId, TouchFrame, MAX_CONTACTS};
+use serde::de::{Deserialize, IgnoredAny, MapAccess};
 use std::path::Path;
 
 /// The `format` value of a crowdtouch JSON Lines header.
@@ -37,67 +39,104 @@ pub const JSONL_FORMAT: &str = "crowdtouch-touch";
 /// The JSON Lines format version this module reads and writes.
 pub const JSONL_VERSION: u64 = 1;
 
-fn want_obj<'v>(v: Option<&'v Value>, field: &str) -> Result<&'v Map<String, Value>, String> {
+/// An axis of the header, as read.
+#[derive(Default)]
+struct AxisRaw {
+    min: Option<Scalar>,
+    max: Option<Scalar>,
+    resolution: Option<Scalar>,
+}
+
+impl FromMap for AxisRaw {
+    fn from_map<'de, A: MapAccess<'de>>(mut map: A) -> Result<Self, A::Error> {
+        let mut a = AxisRaw::default();
+        while let Some(k) = map.next_key_seed(KeyIn(&["min", "max", "resolution"]))? {
+            let v = match k {
+                Some(0) => &mut a.min,
+                Some(1) => &mut a.max,
+                Some(_) => &mut a.resolution,
+                None => {
+                    map.next_value::<IgnoredAny>()?;
+                    continue;
+                }
+            };
+            *v = Some(map.next_value::<Scalar>()?);
+        }
+        Ok(a)
+    }
+}
+
+/// The header's `device`, as read.
+#[derive(Default)]
+struct DeviceRaw {
+    name: Option<Text>,
+    x: Option<MapOr<AxisRaw>>,
+    y: Option<MapOr<AxisRaw>>,
+    max_contacts: Option<Scalar>,
+}
+
+impl FromMap for DeviceRaw {
+    fn from_map<'de, A: MapAccess<'de>>(mut map: A) -> Result<Self, A::Error> {
+        let mut d = DeviceRaw::default();
+        while let Some(k) = map.next_key_seed(KeyIn(&["name", "x", "y", "max_contacts"]))? {
+            match k {
+                Some(0) => d.name = Some(map.next_value()?),
+                Some(1) => d.x = Some(map.next_value()?),
+                Some(2) => d.y = Some(map.next_value()?),
+                Some(_) => d.max_contacts = Some(map.next_value()?),
+                None => {
+                    map.next_value::<IgnoredAny>()?;
+                }
+            }
+        }
+        Ok(d)
+    }
+}
+
+/// The header line, as read; unknown keys are skipped unread.
+#[derive(Default)]
+struct HeaderRaw {
+    format: Option<Text>,
+    device: Option<MapOr<DeviceRaw>>,
+}
+
+impl FromMap for HeaderRaw {
+    fn from_map<'de, A: MapAccess<'de>>(mut map: A) -> Result<Self, A::Error> {
+        let mut h = HeaderRaw::default();
+        while let Some(k) = map.next_key_seed(KeyIn(&["format", "device"]))? {
+            match k {
+                Some(0) => h.format = Some(map.next_value()?),
+                Some(_) => h.device = Some(map.next_value()?),
+                None => {
+                    map.next_value::<IgnoredAny>()?;
+                }
+            }
+        }
+        Ok(h)
+    }
+}
+
+fn want_obj<'v, T>(v: Option<&'v MapOr<T>>, field: &str) -> Result<&'v T, String> {
     match v {
-        Some(Value::Object(m)) => Ok(m),
-        Some(o) => Err(format!(
+        Some(MapOr::Map(m)) => Ok(m),
+        Some(MapOr::Other(o)) => Err(format!(
             "field `{field}`: expected an object, found {}",
-            json_kind(o)
+            o.kind()
         )),
         None => Err(format!("missing field `{field}`")),
     }
 }
 
-fn want_f64(v: Option<&Value>, field: &str) -> Result<f64, String> {
-    match v {
-        Some(Value::Number(n)) => n
-            .as_f64()
-            .filter(|x| x.is_finite())
-            .ok_or_else(|| format!("field `{field}`: {n} is not a finite number")),
-        Some(o) => Err(format!(
-            "field `{field}`: expected a number, found {}",
-            json_kind(o)
-        )),
-        None => Err(format!("missing field `{field}`")),
-    }
-}
-
-fn want_u64(v: Option<&Value>, field: &str) -> Result<u64, String> {
-    match v {
-        Some(Value::Number(n)) => n
-            .as_u64()
-            .ok_or_else(|| format!("field `{field}`: {n} is not a non-negative integer")),
-        Some(o) => Err(format!(
-            "field `{field}`: expected a non-negative integer, found {}",
-            json_kind(o)
-        )),
-        None => Err(format!("missing field `{field}`")),
-    }
-}
-
-fn want_u32(v: Option<&Value>, field: &str) -> Result<u32, String> {
-    let n = want_u64(v, field)?;
-    u32::try_from(n).map_err(|_| format!("field `{field}`: {n} does not fit 32 bits"))
-}
-
-fn parse_json_line(l: &str) -> Result<Map<String, Value>, String> {
-    match serde_json::from_str::<Value>(l) {
-        Ok(Value::Object(m)) => Ok(m),
-        Ok(o) => Err(format!("expected a JSON object, found {}", json_kind(&o))),
-        Err(e) => Err(format!("invalid JSON at column {}: {e}", e.column())),
-    }
-}
-
-fn json_axis(dev: &Map<String, Value>, key: &str) -> Result<AxisRange, String> {
+fn json_axis(a: Option<&MapOr<AxisRaw>>, key: &str) -> Result<AxisRange, String> {
     let f = format!("device.{key}");
-    let a = want_obj(dev.get(key), &f)?;
-    let min = want_f64(a.get("min"), &format!("{f}.min"))?;
-    let max = want_f64(a.get("max"), &format!("{f}.max"))?;
+    let a = want_obj(a, &f)?;
+    let min = want_f64(a.min, &format!("{f}.min"))?;
+    let max = want_f64(a.max, &format!("{f}.max"))?;
     if max <= min {
         return Err(format!("field `{f}`: empty range (min {min}, max {max})"));
     }
-    let resolution = match a.get("resolution") {
-        None | Some(Value::Null) => 0.0,
+    let resolution = match a.resolution {
+        None | Some(Scalar::Null) => 0.0,
         r => want_f64(r, &format!("{f}.resolution"))?,
     };
     if resolution < 0.0 {
@@ -111,31 +150,47 @@ fn json_axis(dev: &Map<String, Value>, key: &str) -> Result<AxisRange, String> {
 }
 
 fn json_header(l: &str) -> Result<SurfaceInfo, String> {
-    let m = parse_json_line(l)?;
-    let Some(format) = m.get("format") else {
+    let m = match MapOr::<HeaderRaw>::deserialize(&mut serde_json::Deserializer::from_str(l)) {
+        Ok(MapOr::Map(m)) => m,
+        Ok(MapOr::Other(o)) => {
+            return Err(format!("expected a JSON object, found {}", o.kind()));
+        }
+        Err(e) => return Err(format!("invalid JSON at column {}: {e}", e.column())),
+    };
+    let Some(format) = m.format else {
         return Err(format!(
             "missing header: the first line must be {{\"format\":\"{JSONL_FORMAT}\",\"version\":1,\"device\":{{…}}}}"
         ));
     };
-    if format.as_str() != Some(JSONL_FORMAT) {
-        return Err(format!(
-            "field `format`: expected \"{JSONL_FORMAT}\", found {format}"
-        ));
+    match format {
+        Text::Str(s) if s == JSONL_FORMAT => {}
+        Text::Str(s) => {
+            let shown: String = s.chars().take(40).collect();
+            let shown = serde_json::to_string(&shown).unwrap_or_default();
+            return Err(format!(
+                "field `format`: expected \"{JSONL_FORMAT}\", found {shown}"
+            ));
+        }
+        Text::Other(o) => {
+            return Err(format!(
+                "field `format`: expected \"{JSONL_FORMAT}\", found {o}"
+            ))
+        }
     }
-    let dev = want_obj(m.get("device"), "device")?;
-    let name = match dev.get("name") {
-        Some(Value::String(s)) => s.clone(),
-        Some(o) => {
+    let dev = want_obj(m.device.as_ref(), "device")?;
+    let name = match &dev.name {
+        Some(Text::Str(s)) => s.clone(),
+        Some(Text::Other(o)) => {
             return Err(format!(
                 "field `device.name`: expected a string, found {}",
-                json_kind(o)
+                o.kind()
             ))
         }
         None => return Err("missing field `device.name`".to_string()),
     };
-    let x = json_axis(dev, "x")?;
-    let y = json_axis(dev, "y")?;
-    let max_contacts = want_u32(dev.get("max_contacts"), "device.max_contacts")?;
+    let x = json_axis(dev.x.as_ref(), "x")?;
+    let y = json_axis(dev.y.as_ref(), "y")?;
+    let max_contacts = want_u32(dev.max_contacts, &"device.max_contacts")?;
     if max_contacts == 0 {
         return Err("field `device.max_contacts`: must be at least 1".to_string());
     }
@@ -147,183 +202,143 @@ fn json_header(l: &str) -> Result<SurfaceInfo, String> {
     })
 }
 
-/// One contact of a JSON Lines frame, still in file terms.
-#[derive(Copy, Clone, Debug)]
-struct FileContact {
-    file_id: u32,
-    contact: Contact,
-}
-
-/// Parses a frame line into `(t_us, contacts, cancelled ids)`, normalising positions.
-fn json_frame(
-    l: &str,
-    s: &SurfaceInfo,
-    contacts: &mut Vec<FileContact>,
-    cancelled: &mut Vec<u32>,
-    size_dropped: &mut bool,
-) -> Result<u64, String> {
-    contacts.clear();
-    cancelled.clear();
-    let m = parse_json_line(l)?;
-    if m.contains_key("format") {
-        return Err("a second header line".to_string());
-    }
-    let t_us = want_u64(m.get("t_us"), "t_us")?;
-    let list = match m.get("contacts") {
-        Some(Value::Array(a)) => a,
-        Some(o) => {
-            return Err(format!(
-                "field `contacts`: expected an array, found {}",
-                json_kind(o)
-            ))
-        }
-        None => return Err("missing field `contacts`".to_string()),
-    };
-    if list.len() > MAX_CONTACTS {
-        return Err(format!(
-            "field `contacts`: {} contacts, more than the {MAX_CONTACTS} a frame holds",
-            list.len()
-        ));
-    }
-    for (i, c) in list.iter().enumerate() {
-        let f = |k: &str| format!("contacts[{i}].{k}");
-        let o = want_obj(Some(c), &format!("contacts[{i}]"))?;
-        let file_id = want_u32(o.get("id"), &f("id"))?;
-        if contacts.iter().any(|c| c.file_id == file_id) {
-            return Err(format!(
-                "field `{}`: id {file_id} appears twice in the frame",
-                f("id")
-            ));
-        }
-        let x = want_f64(o.get("x"), &f("x"))?;
-        let y = want_f64(o.get("y"), &f("y"))?;
-        let opt = |k: &str| -> Result<Option<f64>, String> {
-            match o.get(k) {
-                None | Some(Value::Null) => Ok(None),
-                v => {
-                    let x = want_f64(v, &f(k))?;
-                    if x < 0.0 {
-                        return Err(format!("field `{}`: {x} is negative", f(k)));
-                    }
-                    Ok(Some(x))
-                }
-            }
-        };
-        let pressure = opt("pressure")?;
-        if let Some(p) = pressure {
-            if p > 1.0 {
-                return Err(format!("field `{}`: {p} is outside 0..=1", f("pressure")));
-            }
-        }
-        let to_mm = |v: Option<f64>, dropped: &mut bool| {
-            let v = v?;
-            if s.x.resolution > 0.0 {
-                Some((v / s.x.resolution) as f32)
-            } else {
-                *dropped = true;
-                None
-            }
-        };
-        let major_mm = to_mm(opt("major")?, size_dropped);
-        let minor_mm = to_mm(opt("minor")?, size_dropped);
-        let palm = match o.get("palm") {
-            None | Some(Value::Null) => false,
-            Some(Value::Bool(b)) => *b,
-            Some(v) => {
-                return Err(format!(
-                    "field `{}`: expected a boolean, found {}",
-                    f("palm"),
-                    json_kind(v)
-                ))
-            }
-        };
-        let flags = if palm {
-            ContactFlags::PALM
-        } else {
-            ContactFlags::NONE
-        };
-        contacts.push(FileContact {
-            file_id,
-            contact: Contact {
-                id: ContactId(0),
-                x: s.x.normalise(x),
-                y: s.y.normalise(y),
-                pressure: pressure.map(|p| p as f32),
-                major_mm,
-                minor_mm,
-                flags,
-            },
-        });
-    }
-    match m.get("cancelled") {
-        None | Some(Value::Null) => {}
-        Some(Value::Array(a)) => {
-            for (i, v) in a.iter().enumerate() {
-                cancelled.push(want_u32(Some(v), &format!("cancelled[{i}]"))?);
-            }
-        }
-        Some(o) => {
-            return Err(format!(
-                "field `cancelled`: expected an array, found {}",
-                json_kind(o)
-            ))
-        }
-    }
-    Ok(t_us)
-}
-
-/// Reads a crowdtouch JSON Lines text.
-pub(super) fn parse_jsonl(
-    text: &str,
-    path: &Path,
+/// Reads a crowdtouch JSON Lines text a frame at a time.
+pub(super) struct JsonlReader {
+    lines: LineReader,
     on_bad: OnBadFrame,
-) -> Result<Recording, RecordingError> {
-    let perr = |line: usize, message: String| RecordingError::parse(path, line, message);
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-    let Some((hline, header)) = lines.next() else {
-        return Err(RecordingError::Empty {
-            path: path.to_path_buf(),
-        });
-    };
-    let surface = json_header(header).map_err(|m| perr(hline, m))?;
-    let mut warnings = Warnings::default();
-    let mut frames: Vec<TouchFrame> = Vec::new();
-    // Contacts down after the previous frame: (file id, contact).
-    let mut down: Vec<FileContact> = Vec::new();
-    let mut cur: Vec<FileContact> = Vec::new();
-    let mut cancelled: Vec<u32> = Vec::new();
-    let mut next_id: u32 = 1;
-    let mut last_t: Option<u64> = None;
-    let mut size_dropped = false;
-    for (line, l) in lines {
-        let parsed =
-            json_frame(l, &surface, &mut cur, &mut cancelled, &mut size_dropped).and_then(|t| {
-                match last_t {
-                    Some(prev) if t < prev => Err(format!(
-                        "field `t_us`: {t} is earlier than the previous frame's {prev}"
-                    )),
-                    _ => Ok(t),
+    rules: FrameRules,
+    /// The line being read.
+    cur: FrameLine,
+    /// Contacts down after the previous frame, with their ids.
+    down: FrameLine,
+    next_id: u32,
+    last_t: Option<u64>,
+    size_dropped: bool,
+    /// The end was reached (and the last frame handed out).
+    ended: bool,
+}
+
+impl JsonlReader {
+    /// Reads the header (the first line that is not blank or a `#` comment).
+    ///
+    /// # Errors
+    /// [`RecordingError::Parse`] for a bad header, [`RecordingError::Empty`]
+    /// when there is none.
+    pub(super) fn open(
+        mut lines: LineReader,
+        path: &Path,
+        on_bad: OnBadFrame,
+    ) -> Result<(JsonlReader, SurfaceInfo), RecordingError> {
+        let surface = loop {
+            let (line, l) = match lines.next_line() {
+                Ok(Some((n, l))) => (n, l.trim()),
+                Ok(None) => {
+                    return Err(RecordingError::Empty {
+                        path: path.to_path_buf(),
+                    })
                 }
-            });
-        let t = match parsed {
-            Ok(t) => t,
-            Err(m) => match on_bad {
-                OnBadFrame::Stop => return Err(perr(line, m)),
-                OnBadFrame::Skip => {
-                    warnings.push(line, format!("{m}; frame skipped"));
-                    continue;
-                }
-            },
+                Err(f) => return Err(f.at(path, lines.line())),
+            };
+            if l.is_empty() || l.starts_with('#') {
+                continue;
+            }
+            break json_header(l).map_err(|m| RecordingError::parse(path, line, m))?;
         };
-        last_t = Some(t);
-        let mut frame = TouchFrame::new(Micros(t));
+        let header_cap = surface.max_contacts as usize;
+        let rules = FrameRules {
+            x: surface.x,
+            y: surface.y,
+            cap: header_cap.min(MAX_CONTACTS),
+            cap_is_header: header_cap <= MAX_CONTACTS,
+        };
+        let reader = JsonlReader {
+            lines,
+            on_bad,
+            rules,
+            cur: FrameLine::default(),
+            down: FrameLine::default(),
+            next_id: 1,
+            last_t: None,
+            size_dropped: false,
+            ended: false,
+        };
+        Ok((reader, surface))
+    }
+
+    /// The source, for reading again from the start.
+    pub(super) fn into_lines(self) -> LineReader {
+        self.lines
+    }
+
+    /// Bytes read so far.
+    pub(super) fn consumed(&self) -> u64 {
+        self.lines.consumed()
+    }
+
+    /// The next frame into `out`, and the line it is on; `None` after the last.
+    ///
+    /// # Errors
+    /// [`RecordingError::Parse`] for a bad frame with [`OnBadFrame::Stop`] (with
+    /// [`OnBadFrame::Skip`] it is skipped and noted in `w`),
+    /// [`RecordingError::Empty`] at the end when no frame was read.
+    pub(super) fn next(
+        &mut self,
+        path: &Path,
+        out: &mut TouchFrame,
+        w: &mut Warnings,
+    ) -> Result<Option<usize>, RecordingError> {
+        loop {
+            if self.ended {
+                return Ok(None);
+            }
+            let parsed = match self.lines.next_line() {
+                Ok(Some((_, l))) => {
+                    let l = l.trim();
+                    if l.is_empty() || l.starts_with('#') {
+                        continue;
+                    }
+                    parse_frame(l, &self.rules, &mut self.cur, &mut self.size_dropped)
+                }
+                Ok(None) => return self.end(path, out, w),
+                Err(LineFault::TooLong) => {
+                    self.lines
+                        .skip_rest()
+                        .map_err(|e| LineFault::Io(e).at(path, self.lines.line()))?;
+                    Err(too_long_message())
+                }
+                Err(f) => return Err(f.at(path, self.lines.line())),
+            };
+            let line = self.lines.line();
+            let t = match parsed.and_then(|t| match self.last_t {
+                Some(prev) if t < prev => Err(format!(
+                    "field `t_us`: {t} is earlier than the previous frame's {prev}"
+                )),
+                _ => Ok(t),
+            }) {
+                Ok(t) => t,
+                Err(m) => match self.on_bad {
+                    OnBadFrame::Stop => return Err(RecordingError::parse(path, line, m)),
+                    OnBadFrame::Skip => {
+                        w.push(line, format!("{m}; frame skipped"));
+                        continue;
+                    }
+                },
+            };
+            self.last_t = Some(t);
+            self.frame(t, out);
+            return Ok(Some(line));
+        }
+    }
+
+    /// Builds the frame of the line just read into `out`.
+    fn frame(&mut self, t: u64, out: &mut TouchFrame) {
+        out.clear();
+        out.t = Micros(t);
+        out.t_queued = Micros::ZERO;
+        let cancelled = self.cur.cancelled();
         // Ended first, in the previous frame's order, at their last position.
-        for d in &down {
-            if !cur.iter().any(|c| c.file_id == d.file_id) {
+        for d in self.down.contacts() {
+            if !self.cur.contacts().iter().any(|c| c.file_id == d.file_id) {
                 let mut c = d.contact;
                 c.flags = ContactFlags(c.flags.0 & ContactFlags::PALM.0);
                 c.flags.insert(if cancelled.contains(&d.file_id) {
@@ -332,88 +347,55 @@ pub(super) fn parse_jsonl(
                     ContactFlags::UP
                 });
                 // At most 2 × MAX_CONTACTS; overflow keeps the first that fit.
-                let _ = frame.push(c);
+                let _ = out.push(c);
             }
         }
-        for c in cur.iter_mut() {
-            match down.iter().find(|d| d.file_id == c.file_id) {
+        for c in self.cur.contacts_mut() {
+            match self.down.contacts().iter().find(|d| d.file_id == c.file_id) {
                 Some(d) => c.contact.id = d.contact.id,
                 None => {
-                    c.contact.id = ContactId(next_id);
-                    next_id = next_id.wrapping_add(1);
+                    c.contact.id = ContactId(self.next_id);
+                    self.next_id = self.next_id.wrapping_add(1);
                     c.contact.flags.insert(ContactFlags::DOWN);
                 }
             }
-            let _ = frame.push(c.contact);
+            let _ = out.push(c.contact);
             c.contact.flags = ContactFlags(c.contact.flags.0 & ContactFlags::PALM.0);
         }
-        std::mem::swap(&mut down, &mut cur);
-        frames.push(frame);
+        std::mem::swap(&mut self.down, &mut self.cur);
     }
-    if size_dropped {
-        warnings.push(
-            0,
-            "contact sizes (major/minor) ignored: the X axis resolution is unknown".into(),
-        );
-    }
-    let Some(last) = frames.last().map(|f| f.t) else {
-        return Err(RecordingError::Empty {
-            path: path.to_path_buf(),
-        });
-    };
-    if !down.is_empty() {
-        let mut frame = TouchFrame::new(last + Micros(END_CANCEL_US));
-        for d in &down {
+
+    /// The end of the text: the frame cancelling contacts still down, if any.
+    fn end(
+        &mut self,
+        path: &Path,
+        out: &mut TouchFrame,
+        w: &mut Warnings,
+    ) -> Result<Option<usize>, RecordingError> {
+        self.ended = true;
+        if self.size_dropped {
+            w.push(
+                0,
+                "contact sizes (major/minor) ignored: the X axis resolution is unknown".into(),
+            );
+        }
+        let Some(last) = self.last_t else {
+            return Err(RecordingError::Empty {
+                path: path.to_path_buf(),
+            });
+        };
+        if self.down.contacts().is_empty() {
+            return Ok(None);
+        }
+        out.clear();
+        out.t = Micros(last) + Micros(END_CANCEL_US);
+        out.t_queued = Micros::ZERO;
+        for d in self.down.contacts() {
             let mut c = d.contact;
             c.flags.insert(ContactFlags::CANCELLED);
-            let _ = frame.push(c);
+            let _ = out.push(c);
         }
-        frames.push(frame);
-    }
-    Ok(Recording {
-        surface,
-        frames,
-        warnings: warnings.finish(),
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn p() -> &'static Path {
-        Path::new("t.jsonl")
-    }
-
-    const HEADER: &str = r#"{"format":"crowdtouch-touch","version":1,"device":{"name":"d","x":{"min":0,"max":1000,"resolution":10},"y":{"min":0,"max":500},"max_contacts":4}}"#;
-
-    #[test]
-    fn jsonl_derives_flags() {
-        let text = format!(
-            "{HEADER}\n# comment\n\n{}\n{}\n{}\n",
-            r#"{"t_us":0,"contacts":[{"id":7,"x":100,"y":250}]}"#,
-            r#"{"t_us":8333,"contacts":[{"id":7,"x":200,"y":250},{"id":9,"x":0,"y":0,"pressure":0.5}]}"#,
-            r#"{"t_us":16666,"contacts":[{"id":9,"x":0,"y":0}]}"#,
-        );
-        let rec = parse_jsonl(&text, p(), OnBadFrame::Stop).unwrap();
-        let fl: Vec<Vec<(u32, ContactFlags)>> = rec
-            .frames
-            .iter()
-            .map(|f| f.contacts().iter().map(|c| (c.id.0, c.flags)).collect())
-            .collect();
-        assert_eq!(
-            fl,
-            vec![
-                vec![(1, ContactFlags::DOWN)],
-                vec![(1, ContactFlags::NONE), (2, ContactFlags::DOWN)],
-                vec![(1, ContactFlags::UP), (2, ContactFlags::NONE)],
-                vec![(2, ContactFlags::CANCELLED)],
-            ]
-        );
-        assert_eq!(rec.frames[3].t, Micros(16_666 + END_CANCEL_US));
-        // The lift is reported at the last position.
-        assert!((rec.frames[2].contacts()[0].x - 0.2).abs() < 1e-6);
-        assert_eq!(rec.frames[1].contacts()[1].pressure, Some(0.5));
-        assert!((rec.frames[0].contacts()[0].y - 0.5).abs() < 1e-6);
+        self.down.len = 0;
+        Ok(Some(self.lines.line()))
     }
 }

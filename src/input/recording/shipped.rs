@@ -2,11 +2,6 @@
 //! and the embedded default config work from any directory and on a machine with no
 //! touchscreen.
 
-use super::error::{OnBadFrame, RecordingError};
-use super::read::{parse_recording, read_recording};
-use super::recording_type::Recording;
-use std::path::Path;
-
 /// The shipped recordings (`config/recordings/`), by file name.
 pub const RECORDINGS: [(&str, &str); 7] = [
     (
@@ -38,19 +33,3 @@ pub const RECORDINGS: [(&str, &str); 7] = [
         include_str!("../../../config/recordings/07-open-space-swipe.jsonl"),
     ),
 ];
-
-/// Reads a recording from disk, or — when no such file exists and its name is one of
-/// the shipped recordings — from the copy compiled into the binary.
-///
-/// # Errors
-/// The reader's error for the file (or the embedded copy).
-pub fn load_recording(path: &Path, on_bad: OnBadFrame) -> Result<Recording, RecordingError> {
-    if !path.exists() {
-        if let Some(name) = path.file_name().and_then(|n| n.to_str()) {
-            if let Some((_, text)) = RECORDINGS.iter().find(|(n, _)| *n == name) {
-                return parse_recording(text, path, on_bad);
-            }
-        }
-    }
-    read_recording(path, on_bad)
-}

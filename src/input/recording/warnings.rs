@@ -1,5 +1,6 @@
 //! The problems a reader notes without stopping: located issues, capped at
-//! [`MAX_WARNINGS`], one collector for every reader.
+//! [`MAX_WARNINGS`] per reading, one collector for every reader. A stream hands
+//! them out as it goes ([`Warnings::take`]), so none is held longer than needed.
 
 use std::fmt;
 
@@ -29,25 +30,39 @@ impl fmt::Display for RecordingIssue {
 #[derive(Debug, Default)]
 pub(super) struct Warnings {
     list: Vec<RecordingIssue>,
+    /// Issues listed so far, including those already taken.
+    listed: usize,
     dropped: usize,
 }
 
 impl Warnings {
     pub(super) fn push(&mut self, line: usize, message: String) {
-        if self.list.len() < MAX_WARNINGS {
+        if self.listed < MAX_WARNINGS {
             self.list.push(RecordingIssue { line, message });
+            self.listed += 1;
         } else {
             self.dropped += 1;
         }
     }
 
-    pub(super) fn finish(mut self) -> Vec<RecordingIssue> {
+    /// The issues listed since the last call (no allocation when there is none).
+    pub(super) fn take(&mut self) -> Vec<RecordingIssue> {
+        std::mem::take(&mut self.list)
+    }
+
+    /// Lists how many issues went unlisted, once, at the end of a reading.
+    pub(super) fn close(&mut self) {
         if self.dropped > 0 {
             self.list.push(RecordingIssue {
                 line: 0,
                 message: format!("{} more issues not listed", self.dropped),
             });
+            self.dropped = 0;
         }
+    }
+
+    pub(super) fn finish(mut self) -> Vec<RecordingIssue> {
+        self.close();
         self.list
     }
 }
