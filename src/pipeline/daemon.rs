@@ -8,9 +8,10 @@ use super::outputs::{register_outputs, Registered};
 use super::queue::{FrameQueue, InputCounters};
 use super::sources::SourceSpec;
 use super::timing::StageTimer;
-use super::workers::{assignment_worker, formation_worker, AssignJob};
+use super::workers::{
+    assignment_worker, formation_worker, AssignJob, FormationDone, FormationJob, Freshness,
+};
 use crate::config::Config;
-use crate::crowd::control::{PreparedSwitch, SwitchRequest};
 use crate::crowd::environment::{PlannerParams, Scene};
 use crate::engine::Engine;
 use crate::input::replay::{Pacing, ReplaySource};
@@ -29,6 +30,12 @@ use std::time::Duration;
 /// Commands in flight from clients to the control thread.
 pub const COMMAND_CAPACITY: usize = 64;
 
+/// Longest [`Daemon::shutdown`] waits for its threads (ms). Every thread of the
+/// daemon stops well within it (workers give up their job at once, inputs check
+/// their stop flag at least every 100 ms); one that has not is named in the log and
+/// left to the process exit, so a SIGTERM is answered within a second in any state.
+pub const SHUTDOWN_BUDGET_MS: u64 = 700;
+
 /// Options of a daemon run.
 pub struct DaemonOptions {
     /// Socket path (already resolved).
@@ -39,6 +46,8 @@ pub struct DaemonOptions {
 pub struct Daemon {
     stop: Arc<AtomicBool>,
     input_stop: Arc<AtomicBool>,
+    /// What the workers poll to give up their job (stale or stopping).
+    fresh: Arc<Freshness>,
     threads: Vec<(&'static str, JoinHandle<()>)>,
     socket_path: PathBuf,
     publisher: Arc<PublisherStats>,
@@ -150,10 +159,16 @@ impl Daemon {
         // side blocks on the other (control try_sends / try_recvs).
         let (job_tx, job_rx) = bounded::<Box<AssignJob>>(1);
         let (res_tx, res_rx) = bounded::<Box<AssignJob>>(1);
-        // Control ⇄ formation thread: switch requests and results; the control side
-        // only try_sends / try_recvs, the formation thread blocks on its own side.
-        let (switch_tx, switch_job_rx) = bounded::<Box<SwitchRequest>>(2);
-        let (switch_res_tx, switch_rx) = bounded::<Box<PreparedSwitch>>(2);
+        // Control ⇄ formation thread: switch and resize requests, and what was made
+        // of them, bounded(2) each way; the control side only try_sends (a request
+        // that finds no room waits in the control loop, the newest of each kind
+        // replacing an older one) and try_recvs; the formation thread blocks on its
+        // own side.
+        let (formation_tx, formation_rx) = bounded::<FormationJob>(2);
+        let (prepared_tx, prepared_rx) = bounded::<FormationDone>(2);
+        // Control → workers (and the shutdown → workers): what is current, polled
+        // by the workers to give up stale jobs; atomics, nobody waits.
+        let fresh = Arc::new(Freshness::default());
         // Control → supervisor: bounded(4) stats once per interval, try_send.
         let (cstats_tx, cstats_rx) = bounded::<ControlStats>(4);
         // Supervisor → control: bounded(1) config reloads, try_send.
@@ -167,10 +182,12 @@ impl Daemon {
         let out = start.spawn_outputs(outputs, &cmd_tx)?;
         if cfg.assignment.worker {
             let cost = crate::engine::point_metric(cfg.assignment.cost);
-            start.spawn("assign", move || assignment_worker(cost, job_rx, res_tx))?;
+            let f = Arc::clone(&fresh);
+            start.spawn("assign", move || assignment_worker(cost, job_rx, res_tx, f))?;
         }
+        let f = Arc::clone(&fresh);
         start.spawn("formation", move || {
-            formation_worker(switch_job_rx, switch_res_tx)
+            formation_worker(formation_rx, prepared_tx, f)
         })?;
         let ctl = ControlLoop::new(
             &cfg,
@@ -183,11 +200,12 @@ impl Daemon {
                 stats: cstats_tx,
                 jobs: job_tx,
                 results: res_rx,
-                switches: switch_tx,
-                switched: switch_rx,
+                formation: formation_tx,
+                prepared: prepared_rx,
             },
             Arc::clone(&start.stop),
             Arc::clone(&heartbeat_us),
+            Arc::clone(&fresh),
         );
         let priority = start.priority;
         start.spawn("control", move || {
@@ -206,6 +224,7 @@ impl Daemon {
         Ok(Daemon {
             stop: start.stop,
             input_stop: start.input_stop,
+            fresh,
             threads: start.threads,
             socket_path,
             publisher,
@@ -347,24 +366,25 @@ impl Daemon {
         Some(report)
     }
 
-    /// Stops every thread: inputs first (their touches are cancelled), then the
-    /// control thread publishes a final snapshot, then the publisher says `bye`.
+    /// Stops every thread: the workers give up their job at once, then the inputs
+    /// stop (their touches are cancelled), the control thread publishes a final
+    /// snapshot, and the publisher says `bye`. Waits at most
+    /// [`SHUTDOWN_BUDGET_MS`] in all; a thread still running then is named in the
+    /// log and left behind (the process exit ends it).
     pub fn shutdown(mut self) {
+        let deadline = monotonic_now() + Micros(SHUTDOWN_BUDGET_MS * 1000);
+        self.fresh.stop();
         self.input_stop.store(true, Ordering::SeqCst);
         let (inputs, rest): (Vec<_>, Vec<_>) =
             self.threads.drain(..).partition(|(n, _)| *n == "input");
-        for (_, h) in inputs {
-            let _ = h.join();
-        }
+        join_by(inputs, deadline);
         // Let the control thread take the final frames before it stops.
-        std::thread::sleep(Duration::from_millis(20));
+        std::thread::sleep(Duration::from_micros(
+            deadline.saturating_since(monotonic_now()).0.min(20_000),
+        ));
         self.stop.store(true, Ordering::SeqCst);
         drop(self.out);
-        for (name, h) in rest {
-            if h.join().is_err() {
-                log::error!("internal bug: the {name} thread panicked");
-            }
-        }
+        join_by(rest, deadline);
     }
 
     /// Every stage's figures since start (p50/p99/max over the whole run).
@@ -395,6 +415,33 @@ fn describe_scene_change(cfg: &Config, old: Option<&Scene>) -> String {
             new.dynamic().len(),
         ),
         (None, _) => format!("no scene in the new config: open ground replaces {old} from the next tick"),
+    }
+}
+
+/// Joins `threads` as they finish, until `deadline`; those still running then are
+/// logged by name and detached.
+fn join_by(mut threads: Vec<(&'static str, JoinHandle<()>)>, deadline: Micros) {
+    loop {
+        let (done, running): (Vec<_>, Vec<_>) =
+            threads.into_iter().partition(|(_, h)| h.is_finished());
+        for (name, h) in done {
+            if h.join().is_err() {
+                log::error!("internal bug: the {name} thread panicked");
+            }
+        }
+        if running.is_empty() {
+            return;
+        }
+        if monotonic_now() >= deadline {
+            for (name, _) in &running {
+                log::error!(
+                    "shutdown: the {name} thread did not stop within {SHUTDOWN_BUDGET_MS} ms; leaving it to the process exit"
+                );
+            }
+            return;
+        }
+        threads = running;
+        std::thread::sleep(Duration::from_millis(1));
     }
 }
 

@@ -56,7 +56,7 @@ pub use cancel::{Cancel, POLL_WORK};
 pub use costs::{CostMatrix, CostProvider, CostSource, Distance, SquaredDistance};
 pub use error::AssignError;
 pub use layouts::Layout;
-pub use least_effort::{mean_edge_lengths, LeastEffort};
+pub use least_effort::{mean_edge_lengths, LeastEffort, LeastEffortCosts};
 pub use normalise::{AffineMap, SPREAD_FLOOR};
 pub use points::{PointCosts, PointMetric, GOALS_PER_BUCKET};
 pub use solver::{SolveStats, Solver, Strategy, EPS_REL};
