@@ -332,6 +332,9 @@ impl ControlLoop {
             self.send(Outgoing::Mesh(m));
         }
         self.send(Outgoing::Snapshot(snapshot));
+        // What is current goes out before any job does: a worker that takes a job
+        // sees it as current unless something superseded it since.
+        self.publish_freshness();
         // A formation switch or resize asked for by this tick or a command before
         // it (a newer one replaces one still waiting here).
         if let Some(r) = self.engine.take_switch_request() {

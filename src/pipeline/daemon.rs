@@ -434,7 +434,7 @@ fn join_by(mut threads: Vec<(&'static str, JoinHandle<()>)>, deadline: Micros) {
         }
         if monotonic_now() >= deadline {
             for (name, _) in &running {
-                log::error!(
+                log::warn!(
                     "shutdown: the {name} thread did not stop within {SHUTDOWN_BUDGET_MS} ms; leaving it to the process exit"
                 );
             }

@@ -120,8 +120,8 @@ pub fn sample_goals(mesh: &TriMesh, n: usize) -> Vec<GoalSample> {
 }
 
 /// [`sample_goals`] that gives up (`None`) when `cancelled` returns `true`: it is
-/// called once the candidates are laid out, every [`VISITS_PER_CHECK`]
-/// candidates visited by the farthest-point picks and every
+/// called every [`VISITS_PER_CHECK`] candidates laid out or visited by the
+/// farthest-point picks, once the candidates are laid out, and every
 /// [`LLOYD_CANDIDATES_PER_CHECK`] candidates of a Lloyd sweep (well under a
 /// millisecond of work apart), and not again once it said so. A check that never
 /// fires gives exactly [`sample_goals`]' samples.
@@ -171,10 +171,7 @@ pub fn sample_goals_cancellable(
     }
     let mut delta = (2.0 * area / (3f64.sqrt() * GOAL_CANDIDATES_PER_SAMPLE * n as f64)).sqrt();
     loop {
-        let candidates = goal_candidates(mesh, &incident, delta);
-        if cancelled() {
-            return None;
-        }
+        let candidates = goal_candidates(mesh, &incident, delta, cancelled)?;
         // Vertices come first among the candidates: start at the first outline vertex.
         let first = mesh.outline().first().map_or(0, |&v| v as usize);
         if let Some(chosen) = farthest_point_sampling(&candidates, n, first, cancelled)? {
@@ -187,11 +184,14 @@ pub fn sample_goals_cancellable(
 
 /// Candidate set for [`sample_goals`]: the vertices, the outline subdivided at about
 /// `delta`, and a hexagonal lattice of spacing `delta` clipped to each triangle.
+/// `None` when `cancelled` said so (checked every [`VISITS_PER_CHECK`] lattice
+/// points tried, and at the end).
 fn goal_candidates(
     mesh: &TriMesh,
     incident: &[Option<(u32, usize)>],
     delta: f64,
-) -> Vec<Candidate> {
+    cancelled: &dyn Fn() -> bool,
+) -> Option<Vec<Candidate>> {
     let rest = mesh.rest();
     let mut out = Vec::new();
     for (v, inc) in incident.iter().enumerate() {
@@ -239,7 +239,14 @@ fn goal_candidates(
     }
     let dy = delta * 3f64.sqrt() * 0.5;
     let origin = lo + Vec2::new(0.25 * delta, 0.5 * dy);
+    let mut tried = 0usize;
     for (ti, t) in mesh.triangles().iter().enumerate() {
+        if tried >= VISITS_PER_CHECK {
+            tried = 0;
+            if cancelled() {
+                return None;
+            }
+        }
         let [a, b, c] = t.map(|v| rest[v as usize]);
         let det = cross(b - a, c - a);
         if det <= 0.0 {
@@ -258,6 +265,7 @@ fn goal_candidates(
             };
             let i0 = ((tlo.x - origin.x - shift) / delta).ceil() as i64;
             let i1 = ((thi.x - origin.x - shift) / delta).floor() as i64;
+            tried += (i1 - i0 + 1).max(0) as usize;
             for i in i0..=i1 {
                 let p = Vec2::new(origin.x + shift + i as f64 * delta, y);
                 // λ_a = area(p, b, c) / area(a, b, c), and cyclically.
@@ -280,7 +288,7 @@ fn goal_candidates(
             }
         }
     }
-    out
+    (!cancelled()).then_some(out)
 }
 
 /// A uniform bucket grid over a point set (counting-sorted indices per cell).
