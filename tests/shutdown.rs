@@ -219,7 +219,8 @@ fn stage<'a>(r: &'a StatsReport, name: &str) -> Option<&'a crowdtouch::vocab::St
 #[test]
 fn a_stale_solve_is_abandoned_and_fresh_results_flow_after_shrinking_back() {
     let dir = tempfile::tempdir().unwrap();
-    let side = 80;
+    // The largest square crowd allowed (70 × 70 at 5,000).
+    let side = (MAX_AGENTS as f64).sqrt().floor() as u32;
     let big = side * side;
     let (mut daemon, _tx) = quiet_daemon(dir.path(), side);
     let (mut r, mut w) = client(&daemon, &["events"], None);

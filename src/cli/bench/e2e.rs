@@ -148,9 +148,10 @@ fn read_stream(stream: UnixStream, format: WireFormat) -> ClientRead {
 pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
     let agents = run.agents;
     let mut cfg = Config::embedded_default();
+    // Counts above the daemon's limit run too: they show why the limit is there.
     cfg.crowd.agents = agents;
-    if let Some((field, msg)) = cfg.validate().into_iter().next() {
-        bail!("--agents: {field}: {msg}");
+    if agents == 0 {
+        bail!("--agents must be at least 1");
     }
     if let Some(path) = run.scene {
         let path = if path.extension().is_none() && !path.exists() {
@@ -211,6 +212,14 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
             FieldChoice::Positions => "positions",
         }
     );
+    let beyond = if agents > crowdtouch::config::MAX_AGENTS {
+        format!(
+            " (beyond the daemon's limit of {})",
+            crowdtouch::config::MAX_AGENTS
+        )
+    } else {
+        String::new()
+    };
     let abandon = find("abandon")
         .map(|s| format!(", {} stale jobs given up", s.count))
         .unwrap_or_default();
@@ -219,7 +228,7 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
             &format!("end_to_end {agents} agents"),
             find("end_to_end"),
             format!(
-                "input timestamp -> bytes written ({wire}); SCHED_FIFO {}; {} snapshots read ({:.1}/s, {:.1} MB/s), {dropped} dropped, touch transitions lost {lost}, motion frames coalesced {coalesced}, RSS {:.1} MB",
+                "input timestamp -> bytes written ({wire}){beyond}; SCHED_FIFO {}; {} snapshots read ({:.1}/s, {:.1} MB/s), {dropped} dropped, touch transitions lost {lost}, motion frames coalesced {coalesced}, RSS {:.1} MB",
                 if crowdtouch::rt::realtime_granted() { "on" } else { "off" },
                 read.snapshots,
                 read.snapshots as f64 / elapsed,
