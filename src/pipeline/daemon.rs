@@ -372,19 +372,25 @@ impl Daemon {
     /// [`SHUTDOWN_BUDGET_MS`] in all; a thread still running then is named in the
     /// log and left behind (the process exit ends it).
     pub fn shutdown(mut self) {
-        let deadline = monotonic_now() + Micros(SHUTDOWN_BUDGET_MS * 1000);
+        let t0 = monotonic_now();
+        let deadline = t0 + Micros(SHUTDOWN_BUDGET_MS * 1000);
         self.fresh.stop();
         self.input_stop.store(true, Ordering::SeqCst);
         let (inputs, rest): (Vec<_>, Vec<_>) =
             self.threads.drain(..).partition(|(n, _)| *n == "input");
-        join_by(inputs, deadline);
+        let inputs_joined = join_by(inputs, deadline);
         // Let the control thread take the final frames before it stops.
         std::thread::sleep(Duration::from_micros(
             deadline.saturating_since(monotonic_now()).0.min(20_000),
         ));
         self.stop.store(true, Ordering::SeqCst);
         drop(self.out);
-        join_by(rest, deadline);
+        if join_by(rest, deadline) && inputs_joined {
+            log::info!(
+                "shutdown: every thread stopped in {:.1} ms",
+                monotonic_now().saturating_since(t0).0 as f64 / 1000.0
+            );
+        }
     }
 
     /// Every stage's figures since start (p50/p99/max over the whole run).
@@ -419,8 +425,8 @@ fn describe_scene_change(cfg: &Config, old: Option<&Scene>) -> String {
 }
 
 /// Joins `threads` as they finish, until `deadline`; those still running then are
-/// logged by name and detached.
-fn join_by(mut threads: Vec<(&'static str, JoinHandle<()>)>, deadline: Micros) {
+/// logged by name and detached. Returns whether every one was joined.
+fn join_by(mut threads: Vec<(&'static str, JoinHandle<()>)>, deadline: Micros) -> bool {
     loop {
         let (done, running): (Vec<_>, Vec<_>) =
             threads.into_iter().partition(|(_, h)| h.is_finished());
@@ -430,7 +436,7 @@ fn join_by(mut threads: Vec<(&'static str, JoinHandle<()>)>, deadline: Micros) {
             }
         }
         if running.is_empty() {
-            return;
+            return true;
         }
         if monotonic_now() >= deadline {
             for (name, _) in &running {
@@ -438,7 +444,7 @@ fn join_by(mut threads: Vec<(&'static str, JoinHandle<()>)>, deadline: Micros) {
                     "shutdown: the {name} thread did not stop within {SHUTDOWN_BUDGET_MS} ms; leaving it to the process exit"
                 );
             }
-            return;
+            return false;
         }
         threads = running;
         std::thread::sleep(Duration::from_millis(1));
@@ -458,6 +464,7 @@ fn blame(stage: &str) -> &'static str {
         "queue" => " — control thread busy (internal: crowd too large for the budget?)",
         "control" => " — control tick (internal: crowd or mesh too large for the budget?)",
         "assignment" => " — assignment solver (internal: refresh rate drops, results stay exact)",
+        "abandon" => " — a worker slow to give up a stale job (internal: system load, or a solve phase that does not poll)",
         "publish" => " — snapshot encoding (internal)",
         "end_to_end" => " — whole path (system load or a slow client)",
         _ => "",

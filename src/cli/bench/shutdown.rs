@@ -3,7 +3,9 @@
 //!
 //! Every run starts a fresh `demo` (this executable) on a socket of its own, with
 //! one client subscribed to events and stats, brings it into the state, sends
-//! SIGTERM and times the exit (`waitpid` polled every millisecond).
+//! SIGTERM and times the exit (`waitpid` polled every millisecond). The demo's log
+//! gives the part `Daemon::shutdown` took (the rest is the supervisor noticing
+//! the signal, up to its 200 ms wait for stats, and the process exit).
 
 use super::{row_from_samples, Row};
 use anyhow::{bail, Context, Result};
@@ -52,7 +54,7 @@ impl Demo {
             .arg(&sock)
             .stdin(Stdio::null())
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
+            .stderr(Stdio::piped())
             .spawn()
             .context("starting crowdtouch demo")?;
         let t0 = Instant::now();
@@ -117,8 +119,9 @@ impl Demo {
         Ok(())
     }
 
-    /// SIGTERM, then the time until the process has exited.
-    fn terminate(mut self) -> Result<Duration> {
+    /// SIGTERM, then the time until the process has exited, and the time its
+    /// `Daemon::shutdown` took by its log (µs).
+    fn terminate(mut self) -> Result<(Duration, Option<f64>)> {
         let pid = nix::unistd::Pid::from_raw(self.child.id() as i32);
         let t0 = Instant::now();
         nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGTERM)?;
@@ -126,10 +129,14 @@ impl Demo {
             if let Some(status) = self.child.try_wait()? {
                 let took = t0.elapsed();
                 let _ = std::fs::remove_file(&self.sock);
-                if !status.success() {
-                    bail!("demo exited with {status} after SIGTERM");
+                let mut log = String::new();
+                if let Some(mut e) = self.child.stderr.take() {
+                    let _ = std::io::Read::read_to_string(&mut e, &mut log);
                 }
-                return Ok(took);
+                if !status.success() {
+                    bail!("demo exited with {status} after SIGTERM:\n{log}");
+                }
+                return Ok((took, shutdown_ms(&log).map(|ms| ms * 1e3)));
             }
             if t0.elapsed() > STEP_TIMEOUT {
                 let _ = self.child.kill();
@@ -140,8 +147,18 @@ impl Demo {
     }
 }
 
+/// The figure of the daemon's "shutdown: every thread stopped in X ms" line.
+fn shutdown_ms(log: &str) -> Option<f64> {
+    let line = log
+        .lines()
+        .rev()
+        .find(|l| l.contains("every thread stopped in"))?;
+    let at = line.find("stopped in ")? + "stopped in ".len();
+    line[at..].split_whitespace().next()?.parse().ok()
+}
+
 /// One SIGTERM run in `state` (`big` agents for the states that need a big crowd).
-fn sigterm_in(state: State, big: u32, run: usize) -> Result<Duration> {
+fn sigterm_in(state: State, big: u32, run: usize) -> Result<(Duration, Option<f64>)> {
     let start_agents = match state {
         State::Idle | State::Resizing => 100,
         State::Solving | State::Switching => big,
@@ -208,15 +225,23 @@ pub fn shutdown(big: u32, repeats: usize) -> Result<Vec<Row>> {
             format!("{big} agents, formation switch being prepared"),
         ),
     ] {
-        let mut samples = Vec::with_capacity(repeats);
+        let (mut samples, mut inner) = (Vec::with_capacity(repeats), Vec::new());
         for _ in 0..repeats {
             run += 1;
-            samples.push(sigterm_in(state, big, run)?.as_secs_f64() * 1e6);
+            let (took, shutdown) = sigterm_in(state, big, run)?;
+            samples.push(took.as_secs_f64() * 1e6);
+            inner.extend(shutdown);
         }
+        let name = format!("{state:?}").to_lowercase();
         rows.push(row_from_samples(
-            &format!("sigterm {state:?}").to_lowercase(),
+            &format!("sigterm {name}"),
             samples,
             format!("SIGTERM -> process exited (status 0): {what}"),
+        ));
+        rows.push(row_from_samples(
+            &format!("  of which shutdown {name}"),
+            inner,
+            "Daemon::shutdown: workers told to give up -> every thread joined (by its log)".into(),
         ));
     }
     let (mut abandon, mut acks) = (Vec::new(), Vec::new());
