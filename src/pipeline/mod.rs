@@ -25,7 +25,7 @@ pub mod timing;
 mod workers;
 
 pub use control::{ControlStats, INTERNAL_CLIENT};
-pub use daemon::{Daemon, DaemonOptions, COMMAND_CAPACITY};
+pub use daemon::{Daemon, DaemonOptions, COMMAND_CAPACITY, SHUTDOWN_BUDGET_MS};
 pub use error::Error;
 pub use outputs::socket_options;
 pub use queue::{FrameQueue, InputCounters, BACKLOG_FRAMES};

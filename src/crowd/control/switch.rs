@@ -145,7 +145,8 @@ impl SwitchRequest {
 pub struct ResizeRequest {
     /// The new crowd size.
     pub count: u32,
-    /// The engine's resize ticket when asked ([`Engine::resize_ticket`]).
+    /// The requester's resize ticket when asked (the engine's `resize_ticket`): a
+    /// later resize makes this one stale.
     pub ticket: u64,
     /// The mesh topology the samples are drawn on.
     pub topology: u64,

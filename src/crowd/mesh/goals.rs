@@ -120,10 +120,10 @@ pub fn sample_goals(mesh: &TriMesh, n: usize) -> Vec<GoalSample> {
 }
 
 /// [`sample_goals`] that gives up (`None`) when `cancelled` returns `true`: it is
-/// called every [`VISITS_PER_CHECK`] candidates laid out or visited by the
-/// farthest-point picks, once the candidates are laid out, and every
-/// [`LLOYD_CANDIDATES_PER_CHECK`] candidates of a Lloyd sweep (well under a
-/// millisecond of work apart), and not again once it said so. A check that never
+/// called every 65,536 candidates laid out or visited by the farthest-point picks,
+/// once the candidates are laid out, and every 4,096 candidates of a Lloyd sweep
+/// (well under a millisecond of work apart in a release build), and not again once
+/// it said so. A check that never
 /// fires gives exactly [`sample_goals`]' samples.
 ///
 /// ```
