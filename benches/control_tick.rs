@@ -1,10 +1,15 @@
 //! One control tick (segment + ARAP + goals + agent step + snapshot), without the
 //! assignment worker, for crowds of 100 to 10,000 agents with a three-finger area
 //! control moving. `crowdtouch bench tick` measures the same workload's distribution.
-//! Also one formation switch (`formation_switch/{prepare,apply}/N`).
+//! Also one formation switch (`formation_switch/{prepare,apply}/N`) and one resize
+//! (`resize/{prepare,apply}/N`), each in its two halves.
+//!
+//! Cancellation polls (`crowd::assign::Cancel`) are on in every solve: the
+//! figures include them (`Cancel::NEVER` is polled the same way).
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use crowdtouch::config::Config;
+use crowdtouch::crowd::assign::Cancel;
 use crowdtouch::engine::Engine;
 use crowdtouch::vocab::Micros;
 use crowdtouch::vocab::{Contact, ContactFlags, ContactId, TouchFrame};
@@ -63,9 +68,9 @@ fn control_tick(c: &mut Criterion) {
 /// `set_formation` command makes it, in its two parts: `prepare` is what the
 /// daemon's formation thread does (the arrow meshed at the crowd's area with the
 /// default mesh's 80 vertices, one goal sample per agent, and the least-effort
-/// pairing of formation-transform eq. 3: an agents × agents cost matrix and its
-/// exact solve); `apply` is what the control thread does with the result (the new
-/// ARAP system, goals, topology, pairing), inside one tick.
+/// pairing of formation-transform eq. 3: the exact solve on agents × agents costs
+/// computed as it reads them); `apply` is what the control thread does with the
+/// result (the new ARAP system, goals, topology, pairing), inside one tick.
 fn formation_switch(c: &mut Criterion) {
     let mut g = c.benchmark_group("formation_switch");
     g.sample_size(10);
@@ -104,5 +109,47 @@ fn formation_switch(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, control_tick, formation_switch);
+/// A resize (`set_agent_count`) from 100 agents, in its two halves: `prepare` is
+/// what the daemon's formation thread does (one goal sample per agent on the
+/// mesh), `apply` what the control thread does with it between two ticks (the
+/// agents on their new goals, a new generation).
+fn resize(c: &mut Criterion) {
+    let mut g = c.benchmark_group("resize");
+    g.sample_size(10);
+    for agents in [1000u32, 5000] {
+        let mut cfg = Config::embedded_default();
+        cfg.crowd.agents = 100;
+        let request = || {
+            let mut e = Engine::new(&cfg, None, false);
+            e.set_switch_worker(true);
+            e.set_agent_count(agents, Micros(0)).unwrap();
+            let r = e.take_resize_request().unwrap();
+            (e, r)
+        };
+        g.bench_with_input(BenchmarkId::new("prepare", agents), &agents, |b, _| {
+            b.iter_batched(
+                request,
+                |(e, r)| (e, r.prepare(Cancel::NEVER)),
+                criterion::BatchSize::LargeInput,
+            )
+        });
+        g.bench_with_input(BenchmarkId::new("apply", agents), &agents, |b, _| {
+            b.iter_batched(
+                || {
+                    let (e, r) = request();
+                    (e, r.prepare(Cancel::NEVER).unwrap())
+                },
+                |(mut e, p)| {
+                    assert!(e.apply_resize(p, Micros(1)));
+                    black_box(e.goals().len());
+                    e
+                },
+                criterion::BatchSize::LargeInput,
+            )
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, control_tick, formation_switch, resize);
 criterion_main!(benches);

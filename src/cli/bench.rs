@@ -1,22 +1,21 @@
 //! `crowdtouch bench`: the standard workloads, measured on this machine.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::{Args, ValueEnum};
 use crowdtouch::config::Config;
 use crowdtouch::crowd::mesh::TriMesh;
 use crowdtouch::crowd::mesh::{Arap, Constraint};
 use crowdtouch::engine::Engine;
 use crowdtouch::geom::{Rect, Vec2};
-use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
-use crowdtouch::rt::monotonic_now;
 use crowdtouch::vocab::Micros;
 use crowdtouch::vocab::StageStats;
 use crowdtouch::vocab::{Contact, ContactFlags, ContactId, TouchFrame};
 use serde::Serialize;
-use std::io::BufRead;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 mod assign;
+mod e2e;
+mod shutdown;
 
 /// Which workload to run.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
@@ -40,6 +39,11 @@ pub enum Workload {
     /// One fast-marching field (second order, one point source) on a `--grid`²
     /// grid of 4 cm cells, uniform cost or `--obstacles`. Not part of `all`.
     Fmm,
+    /// SIGTERM to exit of `crowdtouch demo` in each state (idle; a resize to
+    /// `--agents` being prepared; `--agents` being solved; a formation switch of
+    /// `--agents` being prepared), `--repeats` runs each, and how soon a stale
+    /// solve is given up when the crowd shrinks back to 100. Not part of `all`.
+    Shutdown,
 }
 
 /// Arguments of `bench`.
@@ -113,6 +117,12 @@ pub struct BenchArgs {
     /// `obstacle_course` (`config/scenes/<name>.ron`, embedded in the binary).
     #[arg(long)]
     scene: Option<std::path::PathBuf>,
+    /// End-to-end workload: the snapshot format the client reads.
+    #[arg(long, value_enum, default_value_t = e2e::WireFormat::Json)]
+    format: e2e::WireFormat,
+    /// End-to-end workload: the arrays the client asks for.
+    #[arg(long, value_enum, default_value_t = e2e::FieldChoice::All)]
+    fields: e2e::FieldChoice,
 }
 
 #[derive(Serialize, Debug)]
@@ -198,13 +208,18 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     if a.workload == Workload::Fmm {
         rows.push(fmm(a.grid, a.obstacles, a.first_order, a.repeats)?);
     }
+    if a.workload == Workload::Shutdown {
+        rows.extend(shutdown::shutdown(a.agents, a.repeats)?);
+    }
     if matches!(a.workload, Workload::All | Workload::E2e) {
-        rows.extend(end_to_end(
-            a.agents,
-            a.seconds,
-            !a.no_realtime,
-            a.scene.as_deref(),
-        )?);
+        rows.extend(e2e::end_to_end(&e2e::E2eRun {
+            agents: a.agents,
+            seconds: a.seconds,
+            realtime: !a.no_realtime,
+            scene: a.scene.as_deref(),
+            format: a.format,
+            fields: a.fields,
+        })?);
     }
     if a.json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
@@ -370,95 +385,4 @@ fn control_tick(agents: u32) -> Row {
         samples,
         "segment + ARAP + goals + agent step + snapshot".into(),
     )
-}
-
-/// The full daemon replaying the shipped recordings at 120 Hz to one socket client.
-fn end_to_end(
-    agents: u32,
-    seconds: f64,
-    realtime: bool,
-    scene: Option<&std::path::Path>,
-) -> Result<Vec<Row>> {
-    let mut cfg = Config::embedded_default();
-    cfg.crowd.agents = agents;
-    if let Some(path) = scene {
-        let path = if path.extension().is_none() && !path.exists() {
-            std::path::PathBuf::from(format!("config/scenes/{}.ron", path.display()))
-        } else {
-            path.to_path_buf()
-        };
-        let loaded = crowdtouch::crowd::environment::load_scene(&path, cfg.crowd.agent_radius_m)
-            .with_context(|| format!("bench scene {}", path.display()))?;
-        cfg.set_loaded_scene(Some(std::sync::Arc::new(loaded)));
-    }
-    if !realtime {
-        cfg.pipeline.realtime = Default::default();
-    }
-    cfg.log_level = crowdtouch::config::LogLevel::Error;
-    let sock = std::env::temp_dir().join(format!("crowdtouch-bench-{}.sock", std::process::id()));
-    let sources = sources_from_config(&cfg)?;
-    let mut daemon = Daemon::start(
-        cfg,
-        sources,
-        DaemonOptions {
-            socket_path: sock.clone(),
-        },
-    )?;
-    let stream =
-        std::os::unix::net::UnixStream::connect(&sock).context("connecting the bench client")?;
-    let reader = std::thread::spawn(move || {
-        let mut r = std::io::BufReader::new(stream);
-        let mut line = String::new();
-        let mut snapshots = 0u64;
-        while r.read_line(&mut line).map(|n| n > 0).unwrap_or(false) {
-            if line.starts_with("{\"type\":\"snapshot\"") {
-                snapshots += 1;
-            }
-            line.clear();
-        }
-        snapshots
-    });
-    let start = monotonic_now();
-    let until = start + Micros::from_secs_f64(seconds);
-    while monotonic_now() < until {
-        let _ = daemon.next_report(Duration::from_millis(200));
-    }
-    let elapsed = monotonic_now().saturating_since(start).as_secs_f64();
-    let totals = daemon.totals();
-    let input = daemon.input_counters();
-    let lost = input
-        .transitions_lost
-        .load(std::sync::atomic::Ordering::Relaxed);
-    let coalesced = input.coalesced.load(std::sync::atomic::Ordering::Relaxed);
-    let dropped = daemon.publisher_stats().snapshots_dropped();
-    let rss = crowdtouch::pipeline::timing::rss_bytes().unwrap_or(0);
-    daemon.shutdown();
-    let snapshots = reader.join().unwrap_or(0);
-    let find = |n: &str| totals.iter().find(|s| s.stage == n);
-    let assign = find("assignment");
-    let refresh = assign.map(|s| s.count).unwrap_or(0) as f64 / elapsed;
-    Ok(vec![
-        row_from_stage(
-            &format!("end_to_end {agents} agents"),
-            find("end_to_end"),
-            format!(
-                "input timestamp -> bytes written; SCHED_FIFO {}; {snapshots} snapshots read, {dropped} dropped, touch transitions lost {lost}, motion frames coalesced {coalesced}, RSS {:.1} MB",
-                if crowdtouch::rt::realtime_granted() { "on" } else { "off" },
-                rss as f64 / 1e6
-            ),
-        ),
-        row_from_stage(&format!("control {agents} agents"), find("control"), "control thread tick, in the daemon".into()),
-        row_from_stage(
-            &format!("assignment {agents} agents"),
-            assign,
-            format!("worker solve; refreshed {refresh:.1} times/s"),
-        ),
-        row_from_stage("publish (encode)", find("publish"), "snapshot serialisation".into()),
-        row_from_stage(
-            "input thread",
-            find("input"),
-            "input timestamp -> frame on the queue (replay source: the added latency of the input thread)".into(),
-        ),
-        row_from_stage("queue", find("queue"), "frame on the queue -> control thread takes it".into()),
-    ])
 }

@@ -6,8 +6,12 @@ use crate::crowd::environment::MESH_FIELD_RANGE_M;
 use crate::geom::Rect;
 use crate::vocab::parse_vendor_product;
 
-/// Most agents the daemon accepts.
-pub const MAX_AGENTS: u32 = 20_000;
+/// Most agents the daemon accepts: the largest crowd it serves within its default
+/// budgets on the reference machine (control tick ≤ 1 ms and input → bytes written
+/// ≤ 4 ms at p99, in every format and field set; `crowdtouch bench e2e --agents N
+/// --format F --fields S`, figures in docs/benchmarks.md#large-crowds). At 10,000
+/// agents the control tick alone takes about 1 ms at p50 and 1.2–1.9 ms at p99.
+pub const MAX_AGENTS: u32 = 5_000;
 
 impl Config {
     /// Range checks; returns `(field path, message)` for every problem.

@@ -1,5 +1,5 @@
-//! What clients may ask of the engine: reset, resize, pause and resume, and
-//! formation switches (`switch.rs`).
+//! What clients may ask of the engine: reset, resize (`resize.rs`), pause and resume,
+//! and formation switches (`switch.rs`).
 //!
 //! # The events commands cause
 //! Events wait in the engine until the next tick publishes them, so a burst of
@@ -18,8 +18,6 @@
 
 use super::error::CommandError;
 use super::state::Engine;
-use crate::config::MAX_AGENTS;
-use crate::crowd::agents::Agents;
 use crate::crowd::formation::START;
 use crate::geom::Vec2;
 use crate::vocab::{Command, Event, Micros};
@@ -145,44 +143,6 @@ impl Engine {
             }
         }
         self.queue_reset_event(hard, now);
-    }
-
-    /// New crowd size: agents are placed on the new goals of the current mesh.
-    ///
-    /// # Errors
-    /// [`CommandError::AgentCount`] when out of range.
-    pub fn set_agent_count(&mut self, count: u32, now: Micros) -> Result<(), CommandError> {
-        if count == 0 || count > MAX_AGENTS {
-            return Err(CommandError::AgentCount {
-                count,
-                max: MAX_AGENTS,
-            });
-        }
-        self.direct.set_agent_count(count as usize);
-        self.agents = Agents::new(self.direct.goals());
-        self.prev_centroid = None;
-        self.forget_switches();
-        self.start_samples = if self.formation_name == START {
-            self.direct.samples().to_vec()
-        } else {
-            crate::crowd::mesh::sample_goals(&self.start_mesh, count as usize)
-        };
-        self.goal_of.clear();
-        self.goal_of.extend(0..count);
-        self.waypoints.clear();
-        self.waypoints
-            .resize(count as usize, Vec2::repeat(f64::NAN));
-        self.generation += 1;
-        if let Some(a) = &mut self.inline {
-            a.forget();
-        }
-        if let Some(p) = &mut self.planner {
-            p.forget();
-        }
-        self.fit_radius();
-        self.set_mesh_environment();
-        self.queue_reset_event(true, now);
-        Ok(())
     }
 }
 

@@ -10,6 +10,7 @@
 //! | `state.rs` | the [`Engine`]: what it owns, built from the config, reconfigured, what it reports |
 //! | `tick.rs` | one tick ([`Engine::tick`]) and touch frames in ([`Engine::push_frame`]) |
 //! | `commands.rs` | client commands ([`Engine::command`]) |
+//! | `resize.rs` | a new crowd size: goal sampling prepared off the tick ([`ResizeRequest`](crate::crowd::control::ResizeRequest)), installed between ticks |
 //! | `switch.rs` | formation switches at checkpoints and on request |
 //! | `params.rs` | the config turned into the crowd's and gesture's parameter structs |
 //! | `replay.rs` | replays on a virtual clock |
@@ -20,6 +21,7 @@ mod error;
 mod params;
 mod pool;
 mod replay;
+mod resize;
 mod state;
 mod switch;
 mod tick;

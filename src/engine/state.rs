@@ -9,7 +9,7 @@ use super::pool::ArcPool;
 use crate::config::Config;
 use crate::crowd::agents::{AgentParams, Agents};
 use crate::crowd::assign::Assigner;
-use crate::crowd::control::{DirectController, SwitchRequest};
+use crate::crowd::control::{DirectController, ResizeRequest, SwitchRequest};
 use crate::crowd::environment::{Planner, PlannerParams, Scene};
 use crate::crowd::formation::{FormationLibrary, START};
 use crate::crowd::mesh::{GoalSample, TriMesh};
@@ -42,6 +42,18 @@ pub struct EngineCounters {
     pub formation_switches: u64,
     /// Checkpoint formations that could not be built (the crowd kept its formation).
     pub formation_errors: u64,
+}
+
+/// The engine's resize bookkeeping.
+#[derive(Debug, Default)]
+pub(super) struct ResizeState {
+    /// Bumped by every resize asked for: a request or result with another ticket
+    /// is stale.
+    pub(super) ticket: u64,
+    /// The crowd size being prepared (`None`: no resize out).
+    pub(super) pending: Option<u32>,
+    /// A request for the formation thread, until the pipeline takes it.
+    pub(super) outbox: Option<ResizeRequest>,
 }
 
 /// The control core.
@@ -105,6 +117,8 @@ pub struct Engine {
     pub(super) switch_queued: Option<(String, Option<String>, Vec2)>,
     /// A request for the formation thread, until the pipeline takes it.
     pub(super) switch_outbox: Option<SwitchRequest>,
+    /// The resize being prepared, if any (`resize.rs`).
+    pub(super) resize: ResizeState,
 }
 
 impl Engine {
@@ -174,6 +188,7 @@ impl Engine {
             switch_pending: None,
             switch_queued: None,
             switch_outbox: None,
+            resize: ResizeState::default(),
         };
         e.start_samples = e.direct.samples().to_vec();
         e.fit_radius();

@@ -2,14 +2,13 @@
 //! slow work to the workers and publishes every tick's snapshot to the outputs.
 
 use super::timing::StageTimer;
-use super::workers::AssignJob;
+use super::workers::{AssignJob, FormationDone, FormationJob, Freshness};
 use crate::config::Config;
-use crate::crowd::control::{PreparedSwitch, SwitchRequest};
 use crate::crowd::environment::Planner;
 use crate::engine::Engine;
 use crate::publish::{Outgoing, Outputs};
 use crate::rt::monotonic_now;
-use crate::vocab::{Command, CommandRequest, Event, Micros, TouchFrame};
+use crate::vocab::{ClientId, Command, CommandRequest, Event, Micros, TouchFrame};
 use crossbeam_channel::{never, select, Receiver, Sender, TryRecvError, TrySendError};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
@@ -17,6 +16,14 @@ use std::time::Duration;
 
 /// The "client" id of commands the daemon sends itself (replay resets).
 pub const INTERNAL_CLIENT: u64 = 0;
+
+/// Most `set_agent_count` commands waiting for their resize to be applied; a
+/// further one is refused as busy until the resize is in.
+pub const MAX_RESIZE_WAITERS: usize = 64;
+
+/// Budget of the abandonment of a stale job (µs): from the command that made it
+/// stale to the worker giving it up.
+pub const ABANDON_BUDGET_US: u64 = 50_000;
 
 /// The control thread's figures for one stats interval.
 #[derive(Clone, Debug, Default)]
@@ -62,8 +69,8 @@ pub(super) struct ControlChannels {
     pub(super) stats: Sender<ControlStats>,
     pub(super) jobs: Sender<Box<AssignJob>>,
     pub(super) results: Receiver<Box<AssignJob>>,
-    pub(super) switches: Sender<Box<SwitchRequest>>,
-    pub(super) switched: Receiver<Box<PreparedSwitch>>,
+    pub(super) formation: Sender<FormationJob>,
+    pub(super) prepared: Receiver<FormationDone>,
 }
 
 pub(super) struct ControlLoop {
@@ -76,11 +83,18 @@ pub(super) struct ControlLoop {
     worker: bool,
     idle_job: Option<Box<AssignJob>>,
     /// A formation switch request the formation thread had no room for yet.
-    switch_out: Option<Box<SwitchRequest>>,
+    switch_out: Option<FormationJob>,
+    /// A resize request the formation thread had no room for yet.
+    resize_out: Option<FormationJob>,
+    /// `set_agent_count` commands acknowledged once their resize is applied.
+    resize_waiters: Vec<(ClientId, serde_json::Value)>,
+    /// What the workers poll to give up stale jobs.
+    fresh: Arc<Freshness>,
     t_input: StageTimer,
     t_queue: StageTimer,
     t_control: StageTimer,
     t_assign: StageTimer,
+    t_abandon: StageTimer,
     last_stats: Micros,
     last_gesture: Option<String>,
     publish_overflow: u64,
@@ -93,6 +107,7 @@ impl ControlLoop {
         ch: ControlChannels,
         stop: Arc<AtomicBool>,
         heartbeat_us: Arc<AtomicU64>,
+        fresh: Arc<Freshness>,
     ) -> ControlLoop {
         let b = &cfg.pipeline.budgets;
         let n = engine.agent_count();
@@ -113,10 +128,14 @@ impl ControlLoop {
             worker: cfg.assignment.worker,
             idle_job: Some(Box::new(job)),
             switch_out: None,
+            resize_out: None,
+            resize_waiters: Vec::with_capacity(MAX_RESIZE_WAITERS),
+            fresh,
             t_input: StageTimer::new("input", b.input_us),
             t_queue: StageTimer::new("queue", b.queue_us),
             t_control: StageTimer::new("control", b.control_us),
             t_assign: StageTimer::new("assignment", b.assignment_us),
+            t_abandon: StageTimer::new("abandon", ABANDON_BUDGET_US),
             last_stats: monotonic_now(),
             last_gesture: None,
             publish_overflow: 0,
@@ -160,6 +179,7 @@ impl ControlLoop {
                 self.tick(now);
                 next_tick = now + self.period;
             }
+            self.publish_freshness();
         }
         // Shutdown: end every control and publish the final state.
         let now = monotonic_now();
@@ -174,20 +194,68 @@ impl ControlLoop {
         self.engine.push_frame(f);
     }
 
+    /// Tells the workers what is current, so they give up stale jobs.
+    fn publish_freshness(&self) {
+        self.fresh.update(
+            self.engine.generation(),
+            self.engine.switch_epoch(),
+            self.engine.resize_ticket(),
+        );
+    }
+
     fn command(&mut self, req: CommandRequest) {
+        let resize = matches!(req.command, Command::SetAgentCount { .. });
+        if resize && self.resize_waiters.len() >= MAX_RESIZE_WAITERS {
+            self.send(Outgoing::Reply {
+                client: req.client,
+                id: req.id,
+                result: Err(format!(
+                    "busy: {MAX_RESIZE_WAITERS} resizes are waiting to be applied; try again"
+                )),
+            });
+            return;
+        }
         let result = self.engine.command(&req.command, monotonic_now());
         if req.client == INTERNAL_CLIENT {
             if let Err(e) = result {
                 log::warn!("{:?} refused: {e}", req.command);
             }
-        } else {
+            return;
+        }
+        if resize && result.is_ok() && self.engine.resize_pending() {
+            // Resizes still waiting were superseded by this one: they will not be
+            // applied.
+            let count = match req.command {
+                Command::SetAgentCount { count } => count,
+                _ => 0,
+            };
+            self.answer_resize_waiters(Err(format!(
+                "superseded: a later set_agent_count ({count}) replaced it before it was applied"
+            )));
+            // Acknowledged when applied (`tick`), a few ticks from now.
+            self.resize_waiters.push((req.client, req.id));
+            return;
+        }
+        self.send(Outgoing::Reply {
+            client: req.client,
+            id: req.id,
+            // The client reads the refusal's message in its `error` reply.
+            result: result.map_err(|e| e.to_string()),
+        });
+    }
+
+    /// Answers every `set_agent_count` waiting for its resize (keeps the list's
+    /// capacity).
+    fn answer_resize_waiters(&mut self, result: Result<(), String>) {
+        let mut waiters = std::mem::take(&mut self.resize_waiters);
+        for (client, id) in waiters.drain(..) {
             self.send(Outgoing::Reply {
-                client: req.client,
-                id: req.id,
-                // The client reads the refusal's message in its `error` reply.
-                result: result.map_err(|e| e.to_string()),
+                client,
+                id,
+                result: result.clone(),
             });
         }
+        self.resize_waiters = waiters;
     }
 
     /// Applies a reload's config (the daemon kept its restart fields at their
@@ -240,12 +308,28 @@ impl ControlLoop {
                 self.engine
                     .apply_plan(job.generation, job.seq, &job.goal_of, &job.waypoints);
             }
-            self.t_assign.record(job.solve_us);
+            if job.abandoned {
+                self.t_abandon.record(job.abandon_us);
+            } else {
+                self.t_assign.record(job.solve_us);
+            }
             self.idle_job = Some(job);
         }
-        while let Ok(p) = self.ch.switched.try_recv() {
-            // A switch that could not be built is logged and counted by the engine.
-            let _ = self.engine.apply_switch(*p, now);
+        while let Ok(done) = self.ch.prepared.try_recv() {
+            match done {
+                // A switch that could not be built is logged and counted by the engine.
+                FormationDone::Switch(p) => {
+                    let _ = self.engine.apply_switch(*p, now);
+                }
+                FormationDone::Resize(p) => {
+                    if self.engine.apply_resize(*p, now) && !self.engine.resize_pending() {
+                        self.answer_resize_waiters(Ok(()));
+                    }
+                }
+                FormationDone::Abandoned(us) => {
+                    self.t_abandon.record(us);
+                }
+            }
         }
         let out = self.engine.tick(now);
         let snapshot = out.snapshot;
@@ -268,13 +352,22 @@ impl ControlLoop {
             self.send(Outgoing::Mesh(m));
         }
         self.send(Outgoing::Snapshot(snapshot));
-        // A formation switch asked for by this tick or a command before it.
+        // What is current goes out before any job does: a worker that takes a job
+        // sees it as current unless something superseded it since.
+        self.publish_freshness();
+        // A formation switch or resize asked for by this tick or a command before
+        // it (a newer one replaces one still waiting here).
         if let Some(r) = self.engine.take_switch_request() {
-            self.switch_out = Some(Box::new(r));
+            self.switch_out = Some(FormationJob::Switch(Box::new(r)));
         }
-        if let Some(r) = self.switch_out.take() {
-            if let Err(TrySendError::Full(r)) = self.ch.switches.try_send(r) {
-                self.switch_out = Some(r);
+        if let Some(r) = self.engine.take_resize_request() {
+            self.resize_out = Some(FormationJob::Resize(Box::new(r)));
+        }
+        for slot in [&mut self.switch_out, &mut self.resize_out] {
+            if let Some(job) = slot.take() {
+                if let Err(TrySendError::Full(job)) = self.ch.formation.try_send(job) {
+                    *slot = Some(job);
+                }
             }
         }
         if self.worker {
@@ -315,6 +408,7 @@ impl ControlLoop {
                     &mut self.t_queue,
                     &mut self.t_control,
                     &mut self.t_assign,
+                    &mut self.t_abandon,
                 ]
                 .into_iter()
                 .map(|t| {

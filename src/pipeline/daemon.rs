@@ -9,9 +9,10 @@ use super::queue::{FrameQueue, InputCounters};
 use super::reload;
 use super::sources::SourceSpec;
 use super::timing::StageTimer;
-use super::workers::{assignment_worker, formation_worker, AssignJob};
+use super::workers::{
+    assignment_worker, formation_worker, AssignJob, FormationDone, FormationJob, Freshness,
+};
 use crate::config::Config;
-use crate::crowd::control::{PreparedSwitch, SwitchRequest};
 use crate::crowd::environment::{PlannerParams, Scene};
 use crate::engine::Engine;
 use crate::input::replay::{Pacing, ReplaySource};
@@ -32,6 +33,12 @@ use std::time::Duration;
 /// Commands in flight from clients to the control thread.
 pub const COMMAND_CAPACITY: usize = 64;
 
+/// Longest [`Daemon::shutdown`] waits for its threads (ms). Every thread of the
+/// daemon stops well within it (workers give up their job at once, inputs check
+/// their stop flag at least every 100 ms); one that has not is named in the log and
+/// left to the process exit, so a SIGTERM is answered within a second in any state.
+pub const SHUTDOWN_BUDGET_MS: u64 = 700;
+
 /// Options of a daemon run.
 pub struct DaemonOptions {
     /// Socket path (already resolved).
@@ -42,6 +49,8 @@ pub struct DaemonOptions {
 pub struct Daemon {
     stop: Arc<AtomicBool>,
     input_stop: Arc<AtomicBool>,
+    /// What the workers poll to give up their job (stale or stopping).
+    fresh: Arc<Freshness>,
     threads: Vec<(&'static str, JoinHandle<()>)>,
     socket_path: PathBuf,
     publisher: Arc<PublisherStats>,
@@ -177,10 +186,16 @@ impl Daemon {
         // side blocks on the other (control try_sends / try_recvs).
         let (job_tx, job_rx) = bounded::<Box<AssignJob>>(1);
         let (res_tx, res_rx) = bounded::<Box<AssignJob>>(1);
-        // Control ⇄ formation thread: switch requests and results; the control side
-        // only try_sends / try_recvs, the formation thread blocks on its own side.
-        let (switch_tx, switch_job_rx) = bounded::<Box<SwitchRequest>>(2);
-        let (switch_res_tx, switch_rx) = bounded::<Box<PreparedSwitch>>(2);
+        // Control ⇄ formation thread: switch and resize requests, and what was made
+        // of them, bounded(2) each way; the control side only try_sends (a request
+        // that finds no room waits in the control loop, the newest of each kind
+        // replacing an older one) and try_recvs; the formation thread blocks on its
+        // own side.
+        let (formation_tx, formation_rx) = bounded::<FormationJob>(2);
+        let (prepared_tx, prepared_rx) = bounded::<FormationDone>(2);
+        // Control → workers (and the shutdown → workers): what is current, polled
+        // by the workers to give up stale jobs; atomics, nobody waits.
+        let fresh = Arc::new(Freshness::default());
         // Control → supervisor: bounded(4) stats once per interval, try_send.
         let (cstats_tx, cstats_rx) = bounded::<ControlStats>(4);
         // Supervisor → control: bounded(1) config reloads, try_send.
@@ -194,10 +209,12 @@ impl Daemon {
         let out = start.spawn_outputs(outputs, &cmd_tx)?;
         if cfg.assignment.worker {
             let cost = crate::engine::point_metric(cfg.assignment.cost);
-            start.spawn("assign", move || assignment_worker(cost, job_rx, res_tx))?;
+            let f = Arc::clone(&fresh);
+            start.spawn("assign", move || assignment_worker(cost, job_rx, res_tx, f))?;
         }
+        let f = Arc::clone(&fresh);
         start.spawn("formation", move || {
-            formation_worker(switch_job_rx, switch_res_tx)
+            formation_worker(formation_rx, prepared_tx, f)
         })?;
         let ctl = ControlLoop::new(
             &cfg,
@@ -210,11 +227,12 @@ impl Daemon {
                 stats: cstats_tx,
                 jobs: job_tx,
                 results: res_rx,
-                switches: switch_tx,
-                switched: switch_rx,
+                formation: formation_tx,
+                prepared: prepared_rx,
             },
             Arc::clone(&start.stop),
             Arc::clone(&heartbeat_us),
+            Arc::clone(&fresh),
         );
         let priority = start.priority;
         start.spawn("control", move || {
@@ -238,6 +256,7 @@ impl Daemon {
         Ok(Daemon {
             stop: Arc::clone(&start.stop),
             input_stop: Arc::clone(&start.input_stop),
+            fresh,
             threads: std::mem::take(&mut start.threads),
             socket_path,
             publisher,
@@ -420,23 +439,30 @@ impl Daemon {
         Some(report)
     }
 
-    /// Stops every thread: inputs first (their touches are cancelled), then the
-    /// control thread publishes a final snapshot, then the publisher says `bye`.
+    /// Stops every thread: the workers give up their job at once, then the inputs
+    /// stop (their touches are cancelled), the control thread publishes a final
+    /// snapshot, and the publisher says `bye`. Waits at most
+    /// [`SHUTDOWN_BUDGET_MS`] in all; a thread still running then is named in the
+    /// log and left behind (the process exit ends it).
     pub fn shutdown(mut self) {
+        let t0 = monotonic_now();
+        let deadline = t0 + Micros(SHUTDOWN_BUDGET_MS * 1000);
+        self.fresh.stop();
         self.input_stop.store(true, Ordering::SeqCst);
         let (inputs, rest): (Vec<_>, Vec<_>) =
             self.threads.drain(..).partition(|(n, _)| *n == "input");
-        for (_, h) in inputs {
-            let _ = h.join();
-        }
+        let inputs_joined = join_by(inputs, deadline);
         // Let the control thread take the final frames before it stops.
-        std::thread::sleep(Duration::from_millis(20));
+        std::thread::sleep(Duration::from_micros(
+            deadline.saturating_since(monotonic_now()).0.min(20_000),
+        ));
         self.stop.store(true, Ordering::SeqCst);
         drop(self.out);
-        for (name, h) in rest {
-            if h.join().is_err() {
-                log::error!("internal bug: the {name} thread panicked");
-            }
+        if join_by(rest, deadline) && inputs_joined {
+            log::info!(
+                "shutdown: every thread stopped in {:.1} ms",
+                monotonic_now().saturating_since(t0).0 as f64 / 1000.0
+            );
         }
     }
 
@@ -471,6 +497,33 @@ fn describe_scene_change(cfg: &Config, old: Option<&Scene>) -> String {
     }
 }
 
+/// Joins `threads` as they finish, until `deadline`; those still running then are
+/// logged by name and detached. Returns whether every one was joined.
+fn join_by(mut threads: Vec<(&'static str, JoinHandle<()>)>, deadline: Micros) -> bool {
+    loop {
+        let (done, running): (Vec<_>, Vec<_>) =
+            threads.into_iter().partition(|(_, h)| h.is_finished());
+        for (name, h) in done {
+            if h.join().is_err() {
+                log::error!("internal bug: the {name} thread panicked");
+            }
+        }
+        if running.is_empty() {
+            return true;
+        }
+        if monotonic_now() >= deadline {
+            for (name, _) in &running {
+                log::warn!(
+                    "shutdown: the {name} thread did not stop within {SHUTDOWN_BUDGET_MS} ms; leaving it to the process exit"
+                );
+            }
+            return false;
+        }
+        threads = running;
+        std::thread::sleep(Duration::from_millis(1));
+    }
+}
+
 /// Hands on whatever an input thread still holds back before its sink goes away.
 pub(super) fn drain_backlog(queue: &mut FrameQueue, stop: &AtomicBool) {
     while !queue.flush() && !stop.load(Ordering::Relaxed) {
@@ -484,6 +537,7 @@ fn blame(stage: &str) -> &'static str {
         "queue" => " — control thread busy (internal: crowd too large for the budget?)",
         "control" => " — control tick (internal: crowd or mesh too large for the budget?)",
         "assignment" => " — assignment solver (internal: refresh rate drops, results stay exact)",
+        "abandon" => " — a worker slow to give up a stale job (internal: system load, or a solve phase that does not poll)",
         "publish" => " — snapshot encoding (internal)",
         "end_to_end" => " — whole path (system load or a slow client)",
         _ => "",

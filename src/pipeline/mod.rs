@@ -27,7 +27,7 @@ pub mod timing;
 mod workers;
 
 pub use control::{ControlStats, INTERNAL_CLIENT};
-pub use daemon::{Daemon, DaemonOptions, COMMAND_CAPACITY};
+pub use daemon::{Daemon, DaemonOptions, COMMAND_CAPACITY, SHUTDOWN_BUDGET_MS};
 pub use error::Error;
 pub use outputs::socket_options;
 pub use preflight::{online_cpus, preflight, Finding, Preflight, Severity};

@@ -1,13 +1,66 @@
-//! The slow work the control thread hands off: assignment solves and formation
-//! switches, each on a worker thread of its own at nice 10.
+//! The slow work the control thread hands off: assignment solves, formation
+//! switches and crowd resizes, each on a worker thread of its own at nice 10.
+//!
+//! Every job can be given up: the control thread keeps [`Freshness`] up to date
+//! (the crowd generation, the switch epoch, the resize ticket, after every command
+//! and tick) and the shutdown raises its `stop`; a worker's solve polls it
+//! ([`Cancel`]) and abandons a job whose input is stale or when the daemon stops.
 
-use crate::crowd::assign::{Assigner, PointMetric};
-use crate::crowd::control::{PreparedSwitch, SwitchRequest};
+use crate::crowd::assign::{Assigner, Cancel, PointMetric};
+use crate::crowd::control::{PreparedResize, PreparedSwitch, ResizeRequest, SwitchRequest};
 use crate::crowd::environment::{Planner, PlannerParams, Scene};
 use crate::geom::Vec2;
 use crate::rt::monotonic_now;
+use crate::vocab::Micros;
 use crossbeam_channel::{Receiver, Sender};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
+
+/// What the workers poll to give up a job: what is current on the control thread,
+/// and whether the daemon is stopping. Written by the control thread (and `stop`
+/// by the shutdown), read by the workers; relaxed atomics, no lock.
+#[derive(Debug, Default)]
+pub(super) struct Freshness {
+    /// The engine's crowd generation: an assignment job of another is stale.
+    generation: AtomicU64,
+    /// The engine's switch epoch: a switch request of another is stale.
+    switch_epoch: AtomicU64,
+    /// The engine's resize ticket: a resize request of another is stale.
+    resize_ticket: AtomicU64,
+    /// When one of the three last changed (µs, CLOCK_MONOTONIC): the start of an
+    /// abandoned job's abandonment latency.
+    changed_us: AtomicU64,
+    /// The daemon is stopping: every job is abandoned.
+    stop: AtomicBool,
+}
+
+impl Freshness {
+    /// Stores what is current; notes the time when something changed.
+    pub(super) fn update(&self, generation: u64, switch_epoch: u64, resize_ticket: u64) {
+        let g = self.generation.swap(generation, Ordering::Relaxed);
+        let s = self.switch_epoch.swap(switch_epoch, Ordering::Relaxed);
+        let r = self.resize_ticket.swap(resize_ticket, Ordering::Relaxed);
+        if (g, s, r) != (generation, switch_epoch, resize_ticket) {
+            self.changed_us.store(monotonic_now().0, Ordering::Relaxed);
+        }
+    }
+
+    /// Every job is abandoned from now on.
+    pub(super) fn stop(&self) {
+        self.stop.store(true, Ordering::SeqCst);
+    }
+
+    fn stopping(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
+    }
+
+    /// Time since the input of an abandoned job went stale.
+    fn since_change(&self) -> u64 {
+        monotonic_now()
+            .saturating_since(Micros(self.changed_us.load(Ordering::Relaxed)))
+            .0
+    }
+}
 
 /// An assignment request and, once solved, its answer. Two of these circulate
 /// between the control thread and the worker, so nothing is allocated per solve.
@@ -33,19 +86,27 @@ pub struct AssignJob {
     pub waypoints: Vec<Vec2>,
     /// Whether the solve succeeded.
     pub ok: bool,
+    /// The solve was given up because the crowd changed meanwhile (or the daemon
+    /// is stopping): `abandon_us` after the change, not a failure.
+    pub abandoned: bool,
     /// Solve time (µs).
     pub solve_us: u64,
+    /// With `abandoned`: from the change that made the job stale to the solve
+    /// giving up (µs).
+    pub abandon_us: u64,
 }
 
 /// The assignment worker: Euclidean costs ([`Assigner`]) without a scene, travel
 /// costs and waypoints ([`Planner`]) with one. It plans over the scene each job
 /// names, building a new planner here (not on the control thread) when the scene or
 /// its parameters differ from the last job's, so a reloaded scene is planned for
-/// from the first job solved in it.
+/// from the first job solved in it. A solve whose crowd generation is no longer
+/// the current one, or that is running when the daemon stops, is abandoned.
 pub(super) fn assignment_worker(
     cost: PointMetric,
     jobs: Receiver<Box<AssignJob>>,
     results: Sender<Box<AssignJob>>,
+    fresh: Arc<Freshness>,
 ) {
     crate::rt::make_background("assignment worker");
     let mut assigner = Assigner::new(cost);
@@ -54,6 +115,9 @@ pub(super) fn assignment_worker(
     let mut generation = u64::MAX;
     let mut failures = 0u64;
     for mut job in jobs.iter() {
+        if fresh.stopping() {
+            break;
+        }
         let t0 = monotonic_now();
         let same = match (&job.environment, &environment) {
             (Some((a, pa)), Some((b, pb))) => Arc::ptr_eq(a, b) && pa == pb,
@@ -74,6 +138,9 @@ pub(super) fn assignment_worker(
             }
             generation = job.generation;
         }
+        let wanted = job.generation;
+        let stale = || fresh.stopping() || fresh.generation.load(Ordering::Relaxed) != wanted;
+        let cancel = Cancel::new(&stale);
         let AssignJob {
             agents,
             goals,
@@ -83,19 +150,30 @@ pub(super) fn assignment_worker(
             ..
         } = &mut *job;
         let solved = match &mut planner {
+            // Stale before it started: nothing to solve.
+            _ if stale() => Err((true, String::new())),
             Some(p) => p
-                .plan(agents, goals, *t_scene_s, goal_of, waypoints)
-                .map_err(|e| e.to_string()),
+                .plan_cancellable(agents, goals, *t_scene_s, goal_of, waypoints, cancel)
+                .map_err(|e| (e.is_cancelled(), e.to_string())),
             None => {
                 waypoints.clear();
                 assigner
-                    .solve(agents, goals, goal_of)
-                    .map_err(|e| e.to_string())
+                    .solve_cancellable(agents, goals, goal_of, cancel)
+                    .map_err(|e| {
+                        let cancelled = e == crate::crowd::assign::AssignError::Cancelled;
+                        (cancelled, e.to_string())
+                    })
             }
         };
+        job.abandoned = false;
         job.ok = match solved {
             Ok(()) => true,
-            Err(e) => {
+            Err((true, _)) => {
+                job.abandoned = true;
+                job.abandon_us = fresh.since_change();
+                false
+            }
+            Err((false, e)) => {
                 failures += 1;
                 if failures.is_power_of_two() {
                     log::warn!("internal: assignment failed ({failures} times): {e}");
@@ -104,23 +182,178 @@ pub(super) fn assignment_worker(
             }
         };
         job.solve_us = monotonic_now().saturating_since(t0).0;
-        if results.send(job).is_err() {
+        if fresh.stopping() || results.send(job).is_err() {
             break;
         }
     }
 }
 
+/// A job for the formation thread.
+#[derive(Debug)]
+pub(super) enum FormationJob {
+    /// A formation switch to prepare.
+    Switch(Box<SwitchRequest>),
+    /// A new crowd size to prepare.
+    Resize(Box<ResizeRequest>),
+}
+
+/// What the formation thread hands back.
+#[derive(Debug)]
+pub(super) enum FormationDone {
+    /// A prepared switch.
+    Switch(Box<PreparedSwitch>),
+    /// A prepared resize.
+    Resize(Box<PreparedResize>),
+    /// A job given up because a newer one superseded it: µs from the change to the
+    /// preparation giving up.
+    Abandoned(u64),
+}
+
 /// The formation thread: prepares formation switches (the new mesh, its goal
-/// samples, the least-effort pairing; [`SwitchRequest::prepare`]) so the control
-/// thread never does that slow work. At nice 10, like the assignment worker.
+/// samples, the least-effort pairing; [`SwitchRequest::prepare`]) and resizes
+/// (goal samples for the new count; [`ResizeRequest::prepare`]) so the control
+/// thread never does that slow work. At nice 10, like the assignment worker. A job
+/// superseded meanwhile (a reset or resize after a switch request, a newer resize)
+/// or running when the daemon stops is abandoned.
 pub(super) fn formation_worker(
-    requests: Receiver<Box<SwitchRequest>>,
-    done: Sender<Box<PreparedSwitch>>,
+    requests: Receiver<FormationJob>,
+    done: Sender<FormationDone>,
+    fresh: Arc<Freshness>,
 ) {
     crate::rt::make_background("formation");
-    for r in requests.iter() {
-        if done.send(Box::new(r.prepare())).is_err() {
+    for job in requests.iter() {
+        if fresh.stopping() {
             break;
         }
+        let out = match job {
+            FormationJob::Switch(r) => {
+                let epoch = r.epoch;
+                let stale =
+                    || fresh.stopping() || fresh.switch_epoch.load(Ordering::Relaxed) != epoch;
+                (!stale())
+                    .then(|| r.prepare_cancellable(Cancel::new(&stale)))
+                    .flatten()
+                    .map(|p| FormationDone::Switch(Box::new(p)))
+            }
+            FormationJob::Resize(r) => {
+                let ticket = r.ticket;
+                let stale =
+                    || fresh.stopping() || fresh.resize_ticket.load(Ordering::Relaxed) != ticket;
+                (!stale())
+                    .then(|| r.prepare(Cancel::new(&stale)))
+                    .flatten()
+                    .map(|p| FormationDone::Resize(Box::new(p)))
+            }
+        };
+        if fresh.stopping() {
+            break;
+        }
+        let out = out.unwrap_or_else(|| FormationDone::Abandoned(fresh.since_change()));
+        if done.send(out).is_err() {
+            break;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+    use crossbeam_channel::bounded;
+
+    fn job(n: usize, generation: u64) -> Box<AssignJob> {
+        let mut rng = SplitMix64::new(5);
+        let mut pts = |dx: f64| -> Vec<Vec2> {
+            (0..n)
+                .map(|_| Vec2::new(dx + 4.0 * rng.unit(), 3.0 * rng.unit()))
+                .collect()
+        };
+        Box::new(AssignJob {
+            generation,
+            agents: pts(0.0),
+            goals: pts(6.0),
+            ..AssignJob::default()
+        })
+    }
+
+    /// A job of the current generation is solved; one made stale before it was
+    /// picked up is given up and said so (not counted as a failure), with the time
+    /// since the change; after `stop` the worker ends.
+    #[test]
+    fn the_worker_gives_up_stale_jobs_and_ends_on_stop() {
+        let fresh = Arc::new(Freshness::default());
+        fresh.update(1, 0, 0);
+        let (job_tx, job_rx) = bounded(1);
+        let (res_tx, res_rx) = bounded(1);
+        let f = Arc::clone(&fresh);
+        let worker =
+            std::thread::spawn(move || assignment_worker(PointMetric::Squared, job_rx, res_tx, f));
+        job_tx.send(job(300, 1)).unwrap();
+        let done = res_rx.recv().unwrap();
+        assert!(done.ok && !done.abandoned);
+        assert_eq!(done.goal_of.len(), 300);
+        // The crowd changes before the next job is solved.
+        fresh.update(2, 0, 0);
+        job_tx.send(job(300, 1)).unwrap();
+        let done = res_rx.recv().unwrap();
+        assert!(
+            !done.ok && done.abandoned,
+            "ok {} abandoned {}",
+            done.ok,
+            done.abandoned
+        );
+        fresh.stop();
+        job_tx.send(job(300, 2)).unwrap();
+        assert!(res_rx.recv().is_err(), "the worker ended without answering");
+        worker.join().unwrap();
+    }
+
+    /// A resize superseded while its goals are being drawn is given up (drawing
+    /// 20,000 goal samples takes seconds, tens of seconds in a debug build); a
+    /// small one is prepared; after `stop` the thread ends.
+    #[test]
+    fn the_formation_thread_gives_up_a_superseded_resize() {
+        use crate::crowd::mesh::TriMesh;
+        use crate::geom::Rect;
+        use std::time::Duration;
+        let fresh = Arc::new(Freshness::default());
+        fresh.update(0, 0, 1);
+        let (tx, rx) = bounded(2);
+        let (done_tx, done_rx) = bounded(2);
+        let f = Arc::clone(&fresh);
+        let thread = std::thread::spawn(move || formation_worker(rx, done_tx, f));
+        let mesh = TriMesh::grid(
+            Rect {
+                min: [0.0, 0.0],
+                max: [8.0, 5.0],
+            },
+            12,
+            8,
+        );
+        let resize = |count: u32, ticket: u64| {
+            FormationJob::Resize(Box::new(ResizeRequest {
+                count,
+                ticket,
+                topology: 1,
+                mesh: mesh.clone(),
+                start_mesh: None,
+            }))
+        };
+        tx.send(resize(20_000, 1)).unwrap();
+        std::thread::sleep(Duration::from_millis(50));
+        fresh.update(0, 0, 2);
+        // Generous: a preparation that went on to the end would take far longer.
+        match done_rx.recv_timeout(Duration::from_secs(10)) {
+            Ok(FormationDone::Abandoned(_)) => {}
+            other => panic!("expected the resize to be abandoned, got {other:?}"),
+        }
+        tx.send(resize(40, 2)).unwrap();
+        match done_rx.recv_timeout(Duration::from_secs(10)) {
+            Ok(FormationDone::Resize(p)) => assert_eq!((p.count, p.samples.len()), (40, 40)),
+            other => panic!("expected the resize, got {other:?}"),
+        }
+        fresh.stop();
+        tx.send(resize(20_000, 2)).unwrap();
+        thread.join().unwrap();
     }
 }

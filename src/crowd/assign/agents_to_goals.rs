@@ -9,7 +9,7 @@
 //! transportation problem an exact one-to-one assignment.
 
 use super::normalise::AffineMap;
-use crate::crowd::assign::{AssignError, PointCosts, PointMetric, SolveStats, Solver};
+use crate::crowd::assign::{AssignError, Cancel, PointCosts, PointMetric, SolveStats, Solver};
 use crate::geom::Vec2;
 
 /// A reusable assignment: solver workspace and the positions behind the costs.
@@ -62,6 +62,22 @@ impl Assigner {
         goals: &[Vec2],
         goal_of: &mut Vec<u32>,
     ) -> Result<(), AssignError> {
+        self.solve_cancellable(agents, goals, goal_of, Cancel::NEVER)
+    }
+
+    /// [`Assigner::solve`] that gives up when `cancel` says so
+    /// ([`Solver::solve_with_cancel`]): [`AssignError::Cancelled`], `goal_of`
+    /// untouched, and the next solve is cold.
+    ///
+    /// # Errors
+    /// As [`Assigner::solve`], and [`AssignError::Cancelled`].
+    pub fn solve_cancellable(
+        &mut self,
+        agents: &[Vec2],
+        goals: &[Vec2],
+        goal_of: &mut Vec<u32>,
+        cancel: Cancel<'_>,
+    ) -> Result<(), AssignError> {
         let map = match self.costs.metric() {
             PointMetric::Squared => AffineMap::equalising(agents, goals),
             PointMetric::Euclidean => None,
@@ -78,9 +94,9 @@ impl Assigner {
             None => self.costs.set(agents, goals),
         }
         let result = if self.warm {
-            self.solver.solve_warm_with(&self.costs)
+            self.solver.solve_warm_with_cancel(&self.costs, cancel)
         } else {
-            self.solver.solve_with(&self.costs)
+            self.solver.solve_with_cancel(&self.costs, cancel)
         };
         let a = match result {
             Ok(a) => a,

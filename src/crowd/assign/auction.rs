@@ -15,6 +15,7 @@
 // NaN-aware comparisons (`!(a > b)` is true for NaN) are deliberate throughout.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::cancel::Cancel;
 use super::candidates::{key, key_floor};
 use super::costs::CostSource;
 use super::solver::{Solver, NONE};
@@ -52,7 +53,7 @@ impl Solver {
     /// Forward auction with ε-scaling over the candidate lists (Bertsekas; prices
     /// only fall, so every list threshold stays valid). It only brings the prices
     /// close to optimal; exactness comes from the finish that follows.
-    pub(super) fn auction<S: CostSource>(&mut self, costs: &S) {
+    pub(super) fn auction<S: CostSource>(&mut self, costs: &S, cancel: Cancel<'_>) {
         let Some(spread) = self.local_spread() else {
             return;
         };
@@ -78,6 +79,9 @@ impl Solver {
             self.stats.auction_phases += 1;
             self.free_rows.clear();
             for i in 0..self.rows {
+                if self.poll(cancel) {
+                    return;
+                }
                 let xi = self.x[i];
                 if xi != NONE {
                     let (w1, _, _) = self.best2(costs, i, false);
@@ -91,6 +95,10 @@ impl Solver {
             }
             let mut bids = 0;
             while let Some(i) = self.free_rows.pop() {
+                if self.poll(cancel) {
+                    self.stats.bids += bids as u64;
+                    return;
+                }
                 let i = i as usize;
                 bids += 1;
                 let (w1, j1, w2) = self.best2(costs, i, AUCTION_EXACT_SECOND);
@@ -140,11 +148,14 @@ impl Solver {
     /// list bound stays valid) and every assigned pair stays tight, so the exact
     /// searches can follow directly. A row tied between a taken cheapest column and
     /// another, and every row beyond the bid budget, is left to the searches.
-    pub(super) fn reduce_rows<S: CostSource>(&mut self, costs: &S) {
+    pub(super) fn reduce_rows<S: CostSource>(&mut self, costs: &S, cancel: Cancel<'_>) {
         let budget = ROW_REDUCTION_BIDS_PER_FREE * self.free_rows.len();
         let mut bids = 0usize;
         self.deferred.clear();
         while let Some(i) = self.free_rows.pop() {
+            if self.poll(cancel) {
+                break;
+            }
             let i = i as usize;
             if bids >= budget {
                 self.deferred.push(i as u32);
@@ -179,10 +190,13 @@ impl Solver {
     /// After the auction: raises each assigned column's price by its row's slack so
     /// that the pair becomes tight (the pricing pass that follows frees the few rows
     /// this makes violated, and rebuilds every list).
-    pub(super) fn tighten<S: CostSource>(&mut self, costs: &S) {
+    pub(super) fn tighten<S: CostSource>(&mut self, costs: &S, cancel: Cancel<'_>) {
         let rect = self.rows < self.cols;
         let mut max_raise = 0.0f64;
         for i in 0..self.rows {
+            if self.poll(cancel) {
+                return;
+            }
             let xi = self.x[i];
             if xi == NONE {
                 continue;

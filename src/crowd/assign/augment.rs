@@ -13,6 +13,7 @@
 // NaN-aware comparisons (`!(a > b)` is true for NaN) are deliberate throughout.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::cancel::Cancel;
 use super::candidates::{key_col, key_floor, select_k};
 use super::costs::CostSource;
 use super::heaps::{Mark, Pending, BEYOND};
@@ -51,8 +52,18 @@ impl Solver {
     ///   column ends the augmenting path (the row goes back on the free list).
     ///
     /// On success updates the prices of the settled columns and flips the path.
-    /// Returns false only if no augmenting path exists in the whole matrix.
-    pub(super) fn sparse_augment<S: CostSource>(&mut self, costs: &S, i0: usize) -> bool {
+    /// Returns false if no augmenting path exists in the whole matrix, or when a
+    /// poll of `cancel` found the solve cancelled (nothing changed then but the
+    /// prices of nothing: the search is dropped).
+    pub(super) fn sparse_augment<S: CostSource>(
+        &mut self,
+        costs: &S,
+        i0: usize,
+        cancel: Cancel<'_>,
+    ) -> bool {
+        if self.poll(cancel) {
+            return false;
+        }
         let ep = self.next_epoch();
         self.stats.augmentations += 1;
         self.heap.clear();
@@ -67,6 +78,10 @@ impl Solver {
         };
         self.advance_list(i0, 0.0, 0, ep);
         let (dstar, sink) = loop {
+            self.work += 1;
+            if self.poll(cancel) {
+                return false;
+            }
             if self.early != NONE {
                 let j = self.early;
                 self.mark[j].done = ep;
@@ -148,6 +163,7 @@ impl Solver {
         let base = i * self.k;
         let len = self.cand_len[i] as usize;
         let t1 = len.min(t0 + RELAX_BATCH);
+        self.work += (t1 - t0.min(t1)) as u64;
         for s in base + t0..base + t1 {
             let k = self.cand_col[s] as usize;
             let nd = off + (self.cand_cost[s] - self.v[k]);
@@ -180,6 +196,10 @@ impl Solver {
     fn expand_row<S: CostSource>(&mut self, costs: &S, p: Pending, ep: u32) {
         self.stats.expansions += 1;
         let k = self.k;
+        self.work += match costs.points() {
+            Some(_) => 4 * k as u64,
+            None => self.cols as u64,
+        };
         let mask = self.mask;
         let salt = self.salt(p.row as usize);
         let i = p.row as usize;

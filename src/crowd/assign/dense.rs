@@ -6,17 +6,23 @@
 //!
 //! [`Strategy::Dense`]: super::Strategy::Dense
 
+use super::cancel::Cancel;
 use super::costs::CostSource;
 use super::error::AssignError;
 use super::solver::{Solver, NONE};
 
 impl Solver {
     /// Dense augmentation of every free row, in index order.
-    pub(super) fn dense_all<S: CostSource>(&mut self, costs: &S) -> Result<(), AssignError> {
+    pub(super) fn dense_all<S: CostSource>(
+        &mut self,
+        costs: &S,
+        cancel: Cancel<'_>,
+    ) -> Result<(), AssignError> {
         self.free_rows.sort_unstable();
         for idx in 0..self.free_rows.len() {
             let i = self.free_rows[idx] as usize;
-            if !self.dense_augment(costs, i) {
+            if !self.dense_augment(costs, i, cancel) {
+                self.halted()?;
                 return Err(AssignError::Infeasible { row: i });
             }
         }
@@ -27,8 +33,14 @@ impl Solver {
     /// Dijkstra over full rows from free row `i0` (requires dual feasibility on the
     /// whole matrix). Settled columns get `d = +inf` and a masked price of `-inf`, so
     /// the relaxation loop runs branch-free over all columns and never touches them.
-    fn dense_augment<S: CostSource>(&mut self, costs: &S, i0: usize) -> bool {
+    /// Returns false when no augmenting path exists or a poll of `cancel` found the
+    /// solve cancelled (the search is dropped).
+    fn dense_augment<S: CostSource>(&mut self, costs: &S, i0: usize, cancel: Cancel<'_>) -> bool {
+        if self.poll(cancel) {
+            return false;
+        }
         self.stats.augmentations += 1;
+        self.work += self.cols as u64;
         self.scanned.clear();
         let row0 = costs.row(i0, &mut self.rowbuf);
         for (((d, vm), p), (&c, &vj)) in self
@@ -63,6 +75,10 @@ impl Solver {
                 break (best, bj);
             }
             self.stats.rows_scanned += 1;
+            self.work += 2 * self.cols as u64;
+            if self.poll(cancel) {
+                return false;
+            }
             let row = costs.row(i, &mut self.rowbuf);
             let off = best - (row[bj] - self.v[bj]);
             let iu = i as u32;

@@ -30,4 +30,8 @@ pub enum AssignError {
         /// The row that cannot be served.
         row: usize,
     },
+    /// The caller's [`Cancel`](super::Cancel) check said the solve is no longer
+    /// wanted; nothing was assigned, and the next warm solve starts cold.
+    #[error("assignment cancelled: its input is stale or the daemon is stopping")]
+    Cancelled,
 }

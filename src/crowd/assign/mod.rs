@@ -23,6 +23,8 @@
 //! * `augment` — exact Dijkstra over the candidate lists (sparse strategy);
 //! * `dense` — Dijkstra over full rows (dense strategy, and the safety net);
 //! * `heaps` — the searches' priority queues;
+//! * `cancel` — [`Cancel`]: the check a long solve polls to give up when its input
+//!   is stale or the daemon is stopping;
 //! * `error` — [`AssignError`];
 //! * `layouts` — [`Layout`]: the instances benchmarks and tests solve;
 //! * `least_effort` — [`LeastEffort`], the cost of formation-transform eq. 3;
@@ -34,6 +36,7 @@
 mod agents_to_goals;
 mod auction;
 mod augment;
+mod cancel;
 mod candidates;
 mod costs;
 mod dense;
@@ -49,10 +52,11 @@ mod solver;
 mod tests;
 
 pub use agents_to_goals::Assigner;
+pub use cancel::{Cancel, POLL_WORK};
 pub use costs::{CostMatrix, CostProvider, CostSource, Distance, SquaredDistance};
 pub use error::AssignError;
 pub use layouts::Layout;
-pub use least_effort::{mean_edge_lengths, LeastEffort};
+pub use least_effort::{mean_edge_lengths, LeastEffort, LeastEffortCosts};
 pub use normalise::{AffineMap, SPREAD_FLOOR};
 pub use points::{PointCosts, PointMetric, GOALS_PER_BUCKET};
 pub use solver::{SolveStats, Solver, Strategy, EPS_REL};

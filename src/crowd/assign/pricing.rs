@@ -13,6 +13,7 @@
 // NaN-aware comparisons (`!(a > b)` is true for NaN) are deliberate throughout.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::cancel::Cancel;
 use super::candidates::{key, key_col, key_floor, select_k};
 use super::costs::CostSource;
 use super::error::AssignError;
@@ -27,16 +28,20 @@ impl Solver {
     /// # Errors
     /// With `check`: [`AssignError::NotFinite`] for the first NaN / `-inf` in
     /// row-major order, else [`AssignError::Infeasible`] for the first row without a
-    /// finite entry.
+    /// finite entry. [`AssignError::Cancelled`] when a poll of `cancel` says so.
     pub(super) fn price_all<S: CostSource>(
         &mut self,
         costs: &S,
         build: bool,
         check: bool,
+        cancel: Cancel<'_>,
     ) -> Result<(), AssignError> {
         self.free_rows.clear();
         let mut unservable = None;
         for i in 0..self.rows {
+            if self.poll(cancel) {
+                return Err(AssignError::Cancelled);
+            }
             let finite = self.price_row(costs, i, build, check)?;
             if !finite && unservable.is_none() {
                 unservable = Some(i);
@@ -45,15 +50,18 @@ impl Solver {
         if let (true, Some(row)) = (check, unservable) {
             return Err(AssignError::Infeasible { row });
         }
-        self.raise_free_columns(costs);
-        Ok(())
+        self.raise_free_columns(costs, cancel);
+        self.halted()
     }
 
     /// End of a sparse round: reprices the rows whose dual rose above their
     /// candidate threshold (the only rows that can have become violated).
-    pub(super) fn price_dirty<S: CostSource>(&mut self, costs: &S) {
+    pub(super) fn price_dirty<S: CostSource>(&mut self, costs: &S, cancel: Cancel<'_>) {
         self.free_rows.clear();
         for idx in 0..self.dirty_rows.len() {
+            if self.poll(cancel) {
+                return;
+            }
             let i = self.dirty_rows[idx] as usize;
             self.dirty[i] = false;
             let xi = self.x[i];
@@ -67,7 +75,7 @@ impl Solver {
             let _ = self.price_row(costs, i, true, false);
         }
         self.dirty_rows.clear();
-        self.raise_free_columns(costs);
+        self.raise_free_columns(costs, cancel);
     }
 
     /// Prices row `i` against the full row: keeps it if its pair is tight, else frees
@@ -85,6 +93,7 @@ impl Solver {
         let (min_w, arg, bad) = if build {
             self.build_row(costs, i, check)
         } else {
+            self.work += self.cols as u64;
             let row = costs.row(i, &mut self.rowbuf);
             let mut best = f64::INFINITY;
             let mut arg = NONE;
@@ -190,6 +199,12 @@ impl Solver {
         } else {
             f64::INFINITY
         };
+        // A spatial selection reads a few buckets around the row's point; a row
+        // pass reads every column.
+        self.work += match costs.points() {
+            Some(_) => 4 * k as u64,
+            None => self.cols as u64,
+        };
         let (n, bad) = match costs.points() {
             Some(p) => {
                 let n = p.select_near(i, &self.v, self.v_hi, k, mask, 0, thr0, salt, &mut self.buf);
@@ -238,6 +253,7 @@ impl Solver {
         loop {
             let base = i * self.k;
             let len = self.cand_len[i] as usize;
+            self.work += len as u64;
             let (mut w1, mut j1, mut w2) = (f64::INFINITY, NONE, f64::INFINITY);
             let mut rest = f64::INFINITY;
             for ((&c, &cost), &wb) in self.cand_col[base..base + len]
@@ -272,26 +288,33 @@ impl Solver {
 
     /// Pricing pass over every row using the candidate lists (a row is scanned in
     /// full only when its list is stale): as [`Solver::price_all`] otherwise.
-    pub(super) fn price_all_lists<S: CostSource>(&mut self, costs: &S) {
+    pub(super) fn price_all_lists<S: CostSource>(&mut self, costs: &S, cancel: Cancel<'_>) {
         self.free_rows.clear();
         for i in 0..self.rows {
+            if self.poll(cancel) {
+                return;
+            }
             self.stats.rows_priced += 1;
             let (min_w, arg, _) = self.best2(costs, i, false);
             self.settle_row(costs, i, min_w, arg);
         }
-        self.raise_free_columns(costs);
+        self.raise_free_columns(costs, cancel);
     }
 
     /// Rectangular problems only: raises the price of every freed column back to the
     /// maximum (0), frees the assigned rows this makes non-tight (transitively), and
     /// keeps every row's candidate threshold a valid lower bound.
-    fn raise_free_columns<S: CostSource>(&mut self, costs: &S) {
+    fn raise_free_columns<S: CostSource>(&mut self, costs: &S, cancel: Cancel<'_>) {
         let sparse = self.use_sparse();
         while let Some(j) = self.raise.pop() {
+            if self.poll(cancel) {
+                return;
+            }
             let j = j as usize;
             if self.y[j] != NONE || self.v[j] >= 0.0 {
                 continue;
             }
+            self.work += self.rows as u64;
             self.v[j] = 0.0;
             self.v_hi = self.v_hi.max(0.0);
             for r in 0..self.rows {

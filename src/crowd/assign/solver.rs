@@ -57,6 +57,7 @@
 // NaN-aware comparisons (`!(a > b)` is true for NaN) are deliberate throughout.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::cancel::{Cancel, POLL_WORK};
 use super::costs::{CostMatrix, CostSource};
 use super::error::AssignError;
 use super::heaps::{ColHeap, Mark, PendHeap};
@@ -161,6 +162,8 @@ pub struct SolveStats {
     /// Whether a warm start broke so many pairs that the solve went on cold
     /// (`warm` is then false).
     pub restarted_cold: bool,
+    /// Polls of the [`Cancel`] check (one per [`POLL_WORK`] units of work).
+    pub polls: u64,
 }
 
 /// Exact assignment solver with reusable workspaces, dual prices and warm start.
@@ -236,6 +239,13 @@ pub struct Solver {
     /// [`PointCosts`]: super::PointCosts
     pub(super) v_hi: f64,
     pub(super) stats: SolveStats,
+    /// Work units of the current solve (about one cost entry read or one list slot
+    /// scanned each; [`POLL_WORK`]).
+    pub(super) work: u64,
+    /// `work` at which the next poll of the [`Cancel`] check is due.
+    pub(super) next_poll: u64,
+    /// Whether a poll of the current solve found it cancelled.
+    pub(super) cancelled: bool,
     /// Sum of the slacks of the pairs freed by pricing passes (sizes the warm auction).
     pub(super) freed_slack: f64,
 }
@@ -309,19 +319,65 @@ impl Solver {
     ///
     /// [`PointCosts`]: super::PointCosts
     pub fn solve_with<S: CostSource>(&mut self, costs: &S) -> Result<&[usize], AssignError> {
+        self.solve_with_cancel(costs, Cancel::NEVER)
+    }
+
+    /// [`Solver::solve_with`] that gives up when `cancel` says so: the check is
+    /// polled about every [`POLL_WORK`] units of work, in every phase, and a
+    /// cancelled solve returns [`AssignError::Cancelled`] at the first poll that
+    /// sees it. Not cancelled, the answer is the same as without the check.
+    ///
+    /// # Errors
+    /// As [`Solver::solve`], and [`AssignError::Cancelled`].
+    pub fn solve_with_cancel<S: CostSource>(
+        &mut self,
+        costs: &S,
+        cancel: Cancel<'_>,
+    ) -> Result<&[usize], AssignError> {
         self.check_dims(costs)?;
         self.size_for(costs.rows(), costs.cols());
         self.stats = SolveStats::default();
-        self.cold_start(costs);
-        self.finish(costs)
+        self.start_polls();
+        self.cold_start(costs, cancel);
+        self.finish(costs, cancel)
+    }
+
+    /// Restarts the work count and the cancellation state for a new solve.
+    fn start_polls(&mut self) {
+        self.work = 0;
+        self.next_poll = POLL_WORK;
+        self.cancelled = false;
+    }
+
+    /// Polls `cancel` when [`POLL_WORK`] units of work were done since the last
+    /// poll; returns whether the solve is cancelled (it stays so).
+    #[inline]
+    pub(super) fn poll(&mut self, cancel: Cancel<'_>) -> bool {
+        if self.work >= self.next_poll {
+            self.next_poll = self.work + POLL_WORK;
+            self.stats.polls += 1;
+            if !self.cancelled && cancel.cancelled() {
+                self.cancelled = true;
+            }
+        }
+        self.cancelled
+    }
+
+    /// `Err(Cancelled)` once a poll found the solve cancelled.
+    pub(super) fn halted(&self) -> Result<(), AssignError> {
+        if self.cancelled {
+            Err(AssignError::Cancelled)
+        } else {
+            Ok(())
+        }
     }
 
     /// The cold initial state: no pairs, prices from a column reduction (square) or
     /// all 0 (rectangular: free columns must keep the maximal price, so all start
     /// equal), full-length candidate lists.
-    fn cold_start<S: CostSource>(&mut self, costs: &S) {
+    fn cold_start<S: CostSource>(&mut self, costs: &S, cancel: Cancel<'_>) {
         if costs.rows() == costs.cols() {
-            self.column_reduction(costs);
+            self.column_reduction(costs, cancel);
         } else {
             self.v.fill(0.0);
         }
@@ -352,9 +408,9 @@ impl Solver {
 
     /// A warm start whose prices are far off ([`WARM_COLD_SLACK`]) continues as a cold
     /// solve; the counters keep what the warm pricing pass did.
-    fn restart_cold<S: CostSource>(&mut self, costs: &S) {
+    fn restart_cold<S: CostSource>(&mut self, costs: &S, cancel: Cancel<'_>) {
         self.clear_row_sets();
-        self.cold_start(costs);
+        self.cold_start(costs, cancel);
         self.stats.warm = false;
         self.stats.restarted_cold = true;
         self.set_price_bound();
@@ -380,10 +436,25 @@ impl Solver {
     /// # Errors
     /// As [`Solver::solve`].
     pub fn solve_warm_with<S: CostSource>(&mut self, costs: &S) -> Result<&[usize], AssignError> {
+        self.solve_warm_with_cancel(costs, Cancel::NEVER)
+    }
+
+    /// [`Solver::solve_warm_with`] that gives up when `cancel` says so (as
+    /// [`Solver::solve_with_cancel`]); a cancelled warm solve leaves the next one
+    /// cold.
+    ///
+    /// # Errors
+    /// As [`Solver::solve`], and [`AssignError::Cancelled`].
+    pub fn solve_warm_with_cancel<S: CostSource>(
+        &mut self,
+        costs: &S,
+        cancel: Cancel<'_>,
+    ) -> Result<&[usize], AssignError> {
         self.check_dims(costs)?;
         if !self.solved || costs.rows() != self.rows || costs.cols() != self.cols {
-            return self.solve_with(costs);
+            return self.solve_with_cancel(costs, cancel);
         }
+        self.start_polls();
         self.shift_prices(costs);
         // Keep the prices bounded over long runs: shift so that max v = 0 (reduced
         // costs are unchanged; free columns of a rectangular problem are already at
@@ -400,7 +471,7 @@ impl Solver {
         };
         self.freed_slack = 0.0;
         self.k_eff = (self.k * WARM_LIST_NUM / WARM_LIST_DEN).max(1);
-        self.finish(costs)
+        self.finish(costs, cancel)
     }
 
     /// Warm start: carries each column's price over by the change of its assigned
@@ -503,9 +574,13 @@ impl Solver {
     /// reduction), which removes any large per-goal cost component (e.g. a crowd far
     /// from its formation) before candidate lists are chosen. Columns without a finite
     /// entry get 0.
-    fn column_reduction<S: CostSource>(&mut self, costs: &S) {
+    fn column_reduction<S: CostSource>(&mut self, costs: &S, cancel: Cancel<'_>) {
         self.v.fill(f64::INFINITY);
         for i in 0..costs.rows() {
+            if self.poll(cancel) {
+                return;
+            }
+            self.work += self.cols as u64;
             for (vj, &c) in self.v.iter_mut().zip(costs.row(i, &mut self.rowbuf)) {
                 // `min` skips NaN; a `-inf` entry makes the price `-inf`, which the
                 // first pass then reports as NaN in that column (the solve stops).
@@ -589,9 +664,13 @@ impl Solver {
     }
 
     /// Common driver of cold and warm solves (state: prices `v`, partial matching).
-    fn finish<S: CostSource>(&mut self, costs: &S) -> Result<&[usize], AssignError> {
+    fn finish<S: CostSource>(
+        &mut self,
+        costs: &S,
+        cancel: Cancel<'_>,
+    ) -> Result<&[usize], AssignError> {
         self.solved = false;
-        match self.run(costs) {
+        match self.halted().and_then(|()| self.run(costs, cancel)) {
             Ok(()) => {
                 for (i, &j) in self.x.iter().enumerate() {
                     self.u[i] = costs.get(i, j) - self.v[j];
@@ -613,11 +692,13 @@ impl Solver {
         }
     }
 
-    fn run<S: CostSource>(&mut self, costs: &S) -> Result<(), AssignError> {
+    /// The phases of a solve; every phase polls `cancel` and the solve stops with
+    /// [`AssignError::Cancelled`] after the first one that saw it.
+    fn run<S: CostSource>(&mut self, costs: &S, cancel: Cancel<'_>) -> Result<(), AssignError> {
         costs.validate()?;
         let sparse = self.use_sparse();
         self.set_price_bound();
-        self.price_all(costs, sparse, true)?;
+        self.price_all(costs, sparse, true, cancel)?;
         if self.stats.warm {
             self.stats.kept_rows = self.x.iter().filter(|&&j| j != NONE).count();
             let freed = self.free_rows.len();
@@ -626,15 +707,18 @@ impl Solver {
                     self.freed_slack > WARM_COLD_SLACK * spread * freed as f64
                 });
             if sparse && far_off {
-                self.restart_cold(costs);
-                self.price_all(costs, sparse, true)?;
+                self.restart_cold(costs, cancel);
+                self.halted()?;
+                self.price_all(costs, sparse, true, cancel)?;
             }
         }
         let many_free =
             self.free_rows.len() * WARM_AUCTION_FREE_DEN > self.rows * WARM_AUCTION_FREE_NUM;
         if sparse && (!self.stats.warm || many_free) {
-            self.auction(costs);
-            self.tighten(costs);
+            self.auction(costs, cancel);
+            self.halted()?;
+            self.tighten(costs, cancel);
+            self.halted()?;
             if self.rows < self.cols {
                 for j in 0..self.cols {
                     if self.y[j] == NONE && self.v[j] < 0.0 {
@@ -642,10 +726,12 @@ impl Solver {
                     }
                 }
             }
-            self.price_all_lists(costs);
+            self.price_all_lists(costs, cancel);
+            self.halted()?;
         }
         if sparse && self.stats.warm {
-            self.reduce_rows(costs);
+            self.reduce_rows(costs, cancel);
+            self.halted()?;
         }
         if sparse {
             loop {
@@ -657,11 +743,13 @@ impl Solver {
                 }
                 self.stats.rounds += 1;
                 while let Some(i) = self.free_rows.pop() {
-                    if !self.sparse_augment(costs, i as usize) {
+                    if !self.sparse_augment(costs, i as usize, cancel) {
+                        self.halted()?;
                         return Err(AssignError::Infeasible { row: i as usize });
                     }
                 }
-                self.price_dirty(costs);
+                self.price_dirty(costs, cancel);
+                self.halted()?;
             }
             // Safety net (not reached in practice): make the duals feasible on the
             // whole matrix again, then augment the remaining free rows densely.
@@ -670,9 +758,9 @@ impl Solver {
                 self.dirty[i as usize] = false;
             }
             self.dirty_rows.clear();
-            self.price_all(costs, false, false)?;
+            self.price_all(costs, false, false, cancel)?;
         }
-        self.dense_all(costs)
+        self.dense_all(costs, cancel)
     }
 
     /// Identity of every internal buffer (pointer, capacity), to check that repeated

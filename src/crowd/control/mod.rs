@@ -6,4 +6,4 @@ mod direct;
 mod switch;
 
 pub use direct::{DirectController, DirectError, DirectParams};
-pub use switch::{BuiltSwitch, PreparedSwitch, SwitchRequest};
+pub use switch::{BuiltSwitch, PreparedResize, PreparedSwitch, ResizeRequest, SwitchRequest};

@@ -1,11 +1,15 @@
 //! Formation switches (mesh-formation-control section 7.3): the slow part of a
 //! switch — meshing the new shape where the crowd is, drawing a goal per agent and
 //! pairing agents with goals by the least-effort cost of formation-transform eq. 3 —
-//! as a request the daemon's formation thread prepares off the control thread.
+//! as a request the daemon's formation thread prepares off the control thread; and
+//! the slow part of a new crowd size (drawing a goal per agent), likewise. Both can
+//! be given up half-way ([`Cancel`]) when they are no longer wanted.
 
-use crate::crowd::assign::{CostMatrix, CostProvider, LeastEffort, Solver};
+use crate::crowd::assign::{AssignError, Cancel, LeastEffort, Solver};
 use crate::crowd::formation::{Formation, Placement};
-use crate::crowd::mesh::{goal_positions, sample_goals, GoalSample, MeshError, TriMesh};
+use crate::crowd::mesh::{
+    goal_positions, sample_goals_cancellable, GoalSample, MeshError, TriMesh,
+};
 use crate::geom::Vec2;
 use std::sync::Arc;
 
@@ -69,9 +73,19 @@ impl SwitchRequest {
     /// goals by the least-effort cost of formation-transform eq. 3 (exact solve).
     ///
     /// # Complexity
-    /// [`Formation::mesh`], then [`sample_goals`] (`O(K n log(K n))` for `n`
-    /// agents), then an `n × n` cost matrix and its exact assignment. Allocates.
+    /// [`Formation::mesh`], then [`sample_goals`](crate::crowd::mesh::sample_goals)
+    /// (`O(K n log(K n))` for `n` agents), then the exact assignment on `n × n`
+    /// costs computed as the solver reads them ([`LeastEffort::costs`]: no matrix
+    /// in memory). Allocates.
     pub fn prepare(self) -> PreparedSwitch {
+        self.prepare_cancellable(Cancel::NEVER)
+            .expect("a switch that is never cancelled is always prepared")
+    }
+
+    /// [`SwitchRequest::prepare`] that gives up (`None`) when `cancel` says so:
+    /// checked in the goal sampling and in the pairing's solve, well under a
+    /// millisecond of work apart.
+    pub fn prepare_cancellable(self, cancel: Cancel<'_>) -> Option<PreparedSwitch> {
         let SwitchRequest {
             name,
             checkpoint,
@@ -93,31 +107,91 @@ impl SwitchRequest {
             }
             Some((f, place)) => f.mesh(place, vertices),
         };
-        let built = mesh.map(|mesh| {
-            let samples = sample_goals(&mesh, agents.len());
-            let mut goals = Vec::with_capacity(samples.len());
-            goal_positions(&mesh, &samples, mesh.rest(), &mut goals);
-            let mut costs = CostMatrix::new(0, 0);
-            LeastEffort::new(lambda).fill(&agents, &goals, &mut costs);
-            let goal_of = match Solver::new().solve(&costs) {
-                Ok(cols) => cols.iter().map(|&j| j as u32).collect(),
-                Err(e) => {
-                    log::warn!("formation `{name}`: least-effort pairing failed: {e}");
-                    Vec::new()
-                }
-            };
-            BuiltSwitch {
-                mesh,
-                samples,
-                goal_of,
+        let built = match mesh {
+            Err(e) => Err(e),
+            Ok(mesh) => {
+                let samples = sample_goals_cancellable(&mesh, agents.len(), &cancel.as_fn())?;
+                let mut goals = Vec::with_capacity(samples.len());
+                goal_positions(&mesh, &samples, mesh.rest(), &mut goals);
+                let costs = LeastEffort::new(lambda).costs(&agents, &goals);
+                let goal_of = match Solver::new().solve_with_cancel(&costs, cancel) {
+                    Ok(cols) => cols.iter().map(|&j| j as u32).collect(),
+                    Err(AssignError::Cancelled) => return None,
+                    Err(e) => {
+                        log::warn!("formation `{name}`: least-effort pairing failed: {e}");
+                        Vec::new()
+                    }
+                };
+                Ok(BuiltSwitch {
+                    mesh,
+                    samples,
+                    goal_of,
+                })
             }
-        });
-        PreparedSwitch {
+        };
+        Some(PreparedSwitch {
             name,
             checkpoint,
             epoch,
             anchor_m,
             built,
-        }
+        })
+    }
+}
+
+/// The slow part of a resize: goal samples for `count` agents on the current mesh
+/// (and on the start mesh, for a reset, when the crowd is in another formation).
+#[derive(Clone, Debug)]
+pub struct ResizeRequest {
+    /// The new crowd size.
+    pub count: u32,
+    /// The requester's resize ticket when asked (the engine's `resize_ticket`): a
+    /// later resize makes this one stale.
+    pub ticket: u64,
+    /// The mesh topology the samples are drawn on.
+    pub topology: u64,
+    /// The crowd's mesh (its rest pose is what is sampled).
+    pub mesh: TriMesh,
+    /// The start mesh, when the crowd is in another formation (its samples are
+    /// what a reset brings back).
+    pub start_mesh: Option<Arc<TriMesh>>,
+}
+
+/// A [`ResizeRequest`] made ready.
+#[derive(Clone, Debug)]
+pub struct PreparedResize {
+    /// As requested.
+    pub count: u32,
+    /// As requested.
+    pub ticket: u64,
+    /// As requested.
+    pub topology: u64,
+    /// One goal sample per agent on the crowd's mesh.
+    pub samples: Vec<GoalSample>,
+    /// One goal sample per agent on the start mesh (when asked for).
+    pub start_samples: Option<Vec<GoalSample>>,
+}
+
+impl ResizeRequest {
+    /// Draws the goal samples ([`crate::crowd::mesh::sample_goals`]); `None` when
+    /// `cancel` said so (checked well under a millisecond of work apart).
+    ///
+    /// # Complexity
+    /// `O(K n log(K n))` for `n` agents (seconds at 20,000). Allocates.
+    pub fn prepare(self, cancel: Cancel<'_>) -> Option<PreparedResize> {
+        let check = cancel.as_fn();
+        let n = self.count as usize;
+        let samples = sample_goals_cancellable(&self.mesh, n, &check)?;
+        let start_samples = match &self.start_mesh {
+            Some(m) => Some(sample_goals_cancellable(m, n, &check)?),
+            None => None,
+        };
+        Some(PreparedResize {
+            count: self.count,
+            ticket: self.ticket,
+            topology: self.topology,
+            samples,
+            start_samples,
+        })
     }
 }

@@ -26,7 +26,7 @@
 //!   of the patch under it ([`Scene::terrain_at`]); and after the step projects it
 //!   out of obstacles by one agent radius ([`Scene::project_out`]).
 
-use crate::crowd::assign::{CostMatrix, PointCosts, PointMetric, Solver};
+use crate::crowd::assign::{AssignError, Cancel, CostMatrix, PointCosts, PointMetric, Solver};
 use crate::crowd::environment::eikonal::{
     cost_field_into, discomfort_into, ClusterCosts, CostInputs, CostWeights, DiscomfortParams,
     EikonalCosts, EikonalError, EikonalOptions, FieldSources, Grid, DEFAULT_CLUSTER_M,
@@ -44,6 +44,9 @@ pub const DEFAULT_PLAN_CELL_M: f64 = 0.16;
 pub const DEFAULT_DENSITY_REFRESH_S: f64 = 0.5;
 /// Most descent steps (one cell each) when tracing an agent's route.
 pub const MAX_ROUTE_STEPS: usize = 2048;
+/// Agents whose waypoints are traced between two polls of a plan's [`Cancel`]
+/// check (a waypoint is at most [`MAX_ROUTE_STEPS`] descent steps).
+const WAYPOINTS_PER_POLL: usize = 64;
 
 /// Tunables of the planner.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -86,10 +89,20 @@ pub enum PlanError {
     Eikonal(#[from] EikonalError),
     /// The assignment failed even with Euclidean costs.
     #[error("assignment: {0}")]
-    Assign(#[from] crate::crowd::assign::AssignError),
+    Assign(#[from] AssignError),
     /// The scene bounds do not make a planning grid.
     #[error("scene bounds do not make a planning grid")]
     Grid,
+    /// The caller's [`Cancel`] check said the plan is no longer wanted.
+    #[error("plan cancelled: its input is stale or the daemon is stopping")]
+    Cancelled,
+}
+
+impl PlanError {
+    /// Whether the plan was given up on request ([`Planner::plan_cancellable`]).
+    pub fn is_cancelled(&self) -> bool {
+        matches!(self, PlanError::Cancelled)
+    }
 }
 
 /// Environment-aware assignment and routing (see the module doc). Keeps every
@@ -235,6 +248,26 @@ impl Planner {
         goal_of: &mut Vec<u32>,
         waypoints: &mut Vec<Vec2>,
     ) -> Result<(), PlanError> {
+        self.plan_cancellable(agents, goals, t_s, goal_of, waypoints, Cancel::NEVER)
+    }
+
+    /// [`Planner::plan`] that gives up when `cancel` says so: checked before each
+    /// cluster's field, about every [`POLL_WORK`](crate::crowd::assign::POLL_WORK)
+    /// units of the solver's work, and every few agents' waypoints. A cancelled
+    /// plan does not fall back to Euclidean costs, and the next one is cold.
+    ///
+    /// # Errors
+    /// As [`Planner::plan`], and [`PlanError::Cancelled`] (the outputs are then
+    /// unspecified).
+    pub fn plan_cancellable(
+        &mut self,
+        agents: &[Vec2],
+        goals: &[Vec2],
+        t_s: f64,
+        goal_of: &mut Vec<u32>,
+        waypoints: &mut Vec<Vec2>,
+        cancel: Cancel<'_>,
+    ) -> Result<(), PlanError> {
         let moving = !self.scene.dynamic().is_empty();
         let density_due =
             t_s - self.density_t_s >= self.params.density_refresh_s || t_s < self.density_t_s;
@@ -251,20 +284,31 @@ impl Planner {
         self.agents.extend(agents.iter().map(|&p| clamp(p)));
         self.goals.clear();
         self.goals.extend(goals.iter().map(|&p| clamp(p)));
-        let eikonal_ok = match &mut self.clusters {
-            Some(c) => c.fill(&self.costs, &self.agents, &self.goals).is_ok(),
-            None => self
-                .costs
-                .try_fill(&self.agents, &self.goals, &mut self.matrix)
-                .is_ok(),
+        let filled = match &mut self.clusters {
+            Some(c) => c.fill_cancellable(&self.costs, &self.agents, &self.goals, cancel),
+            None => {
+                self.costs
+                    .try_fill_cancellable(&self.agents, &self.goals, &mut self.matrix, cancel)
+            }
         };
-        let mut solved = eikonal_ok && self.solve(false).is_ok();
+        let solved = match filled {
+            Err(EikonalError::Cancelled) => return Err(self.cancelled()),
+            Err(_) => false,
+            Ok(()) => match self.solve(false, cancel) {
+                Err(AssignError::Cancelled) => return Err(self.cancelled()),
+                r => r.is_ok(),
+            },
+        };
         if !solved {
             self.fallbacks += 1;
             self.euclidean.set(agents, goals);
             self.warm = false;
-            self.solve(true)?;
-            solved = false;
+            if let Err(e) = self.solve(true, cancel) {
+                return Err(match e {
+                    AssignError::Cancelled => self.cancelled(),
+                    e => e.into(),
+                });
+            }
         }
         let a = self.solver.assignment();
         goal_of.clear();
@@ -273,6 +317,9 @@ impl Planner {
         waypoints.resize(agents.len(), Vec2::repeat(f64::NAN));
         if solved {
             for (i, &g) in goal_of.iter().enumerate() {
+                if i % WAYPOINTS_PER_POLL == 0 && cancel.cancelled() {
+                    return Err(self.cancelled());
+                }
                 let g = g as usize;
                 let source = match &self.clusters {
                     Some(c) => c.source_of(g),
@@ -285,17 +332,24 @@ impl Planner {
     }
 
     /// Solves on the travel costs, or on Euclidean distances (`euclidean`).
-    fn solve(&mut self, euclidean: bool) -> Result<(), crate::crowd::assign::AssignError> {
+    fn solve(&mut self, euclidean: bool, cancel: Cancel<'_>) -> Result<(), AssignError> {
         let warm = self.warm;
+        let s = &mut self.solver;
         let r = match (&self.clusters, euclidean) {
-            (_, true) => self.solver.solve_with(&self.euclidean).map(|_| ()),
-            (Some(c), false) if warm => self.solver.solve_warm_with(c).map(|_| ()),
-            (Some(c), false) => self.solver.solve_with(c).map(|_| ()),
-            (None, false) if warm => self.solver.solve_warm(&self.matrix).map(|_| ()),
-            (None, false) => self.solver.solve(&self.matrix).map(|_| ()),
+            (_, true) => s.solve_with_cancel(&self.euclidean, cancel).map(|_| ()),
+            (Some(c), false) if warm => s.solve_warm_with_cancel(c, cancel).map(|_| ()),
+            (Some(c), false) => s.solve_with_cancel(c, cancel).map(|_| ()),
+            (None, false) if warm => s.solve_warm_with_cancel(&self.matrix, cancel).map(|_| ()),
+            (None, false) => s.solve_with_cancel(&self.matrix, cancel).map(|_| ()),
         };
         self.warm = r.is_ok() && !euclidean;
         r
+    }
+
+    /// A plan given up: the next one starts cold.
+    fn cancelled(&mut self) -> PlanError {
+        self.warm = false;
+        PlanError::Cancelled
     }
 
     fn rebuild_cost(&mut self, agents: &[Vec2]) -> Result<(), PlanError> {
@@ -412,5 +466,83 @@ pub fn steer_target(scene: &Scene, pos: Vec2, goal: Vec2, waypoint: Vec2, t_s: f
         goal
     } else {
         waypoint
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::crowd::environment::load_scene;
+    use std::cell::Cell;
+    use std::path::Path;
+
+    /// A 12 × 12 crowd west of the single block, its formation east of it.
+    fn instance() -> (Arc<Scene>, Vec<Vec2>, Vec<Vec2>) {
+        let scene = load_scene(Path::new("config/scenes/single_block.ron"), 0.15).unwrap();
+        let grid = |x0: f64, y0: f64, d: f64| -> Vec<Vec2> {
+            (0..144)
+                .map(|k| Vec2::new(x0 + (k % 12) as f64 * d, y0 + (k / 12) as f64 * d))
+                .collect()
+        };
+        (Arc::new(scene), grid(8.0, 3.0, 0.25), grid(14.0, 3.4, 0.15))
+    }
+
+    /// Every check site returns at once: a check that fires at its n-th call is
+    /// called exactly n times, in every phase of the plan (fields, solve,
+    /// waypoints), and the next plan is the one a fresh planner makes.
+    #[test]
+    fn a_cancelled_plan_stops_at_the_first_check_that_fires() {
+        let (scene, agents, goals) = instance();
+        let params = PlannerParams::new(1.5);
+        let (mut want_g, mut want_w) = (Vec::new(), Vec::new());
+        let mut reference = Planner::new(Arc::clone(&scene), params).unwrap();
+        let calls = Cell::new(0u64);
+        let counting = || {
+            calls.set(calls.get() + 1);
+            false
+        };
+        reference
+            .plan_cancellable(
+                &agents,
+                &goals,
+                0.0,
+                &mut want_g,
+                &mut want_w,
+                Cancel::new(&counting),
+            )
+            .unwrap();
+        let total = calls.get();
+        assert!(total > 10, "{total} checks in a whole plan");
+        assert!(
+            want_w.iter().any(|w| w.x.is_finite()),
+            "some agents route around the block"
+        );
+        let mut p = Planner::new(Arc::clone(&scene), params).unwrap();
+        let (mut g, mut w) = (Vec::new(), Vec::new());
+        for n in [1, 2, total / 4, total / 2, total - 1, total] {
+            calls.set(0);
+            let fires = || {
+                calls.set(calls.get() + 1);
+                calls.get() >= n
+            };
+            let r = p.plan_cancellable(&agents, &goals, 0.0, &mut g, &mut w, Cancel::new(&fires));
+            assert_eq!(
+                r,
+                Err(PlanError::Cancelled),
+                "fired at check {n} of {total}"
+            );
+            assert!(r.unwrap_err().is_cancelled());
+            assert_eq!(calls.get(), n);
+            assert_eq!(p.fallbacks(), 0, "a cancelled plan does not fall back");
+        }
+        p.plan(&agents, &goals, 0.0, &mut g, &mut w).unwrap();
+        assert_eq!(g, want_g);
+        assert_eq!(
+            w.iter().map(|v| v.map(f64::to_bits)).collect::<Vec<_>>(),
+            want_w
+                .iter()
+                .map(|v| v.map(f64::to_bits))
+                .collect::<Vec<_>>()
+        );
     }
 }

@@ -16,6 +16,14 @@ pub const GOAL_CANDIDATES_PER_SAMPLE: f64 = 16.0;
 /// Lloyd relaxation sweeps applied after farthest-point sampling in [`sample_goals`].
 pub const GOAL_LLOYD_ITERATIONS: usize = 6;
 
+/// Candidates visited by the farthest-point picks between two checks of the
+/// cancellation check of [`sample_goals_cancellable`].
+const VISITS_PER_CHECK: usize = 1 << 16;
+
+/// Candidates assigned to their nearest sample between two checks of the
+/// cancellation check in a Lloyd sweep of [`sample_goals_cancellable`].
+const LLOYD_CANDIDATES_PER_CHECK: usize = 4096;
+
 /// Tolerance on barycentric coordinates when deciding that a candidate point lies in a
 /// triangle (dimensionless; points on a shared edge may land in either triangle).
 const BARY_EPS: f64 = 1e-12;
@@ -108,8 +116,30 @@ impl Ord for HeapEntry {
 /// assert!(s.iter().all(|g| (g.bary.iter().sum::<f64>() - 1.0).abs() < 1e-12));
 /// ```
 pub fn sample_goals(mesh: &TriMesh, n: usize) -> Vec<GoalSample> {
+    sample_goals_cancellable(mesh, n, &|| false).unwrap_or_default()
+}
+
+/// [`sample_goals`] that gives up (`None`) when `cancelled` returns `true`: it is
+/// called every 65,536 candidates laid out or visited by the farthest-point picks,
+/// once the candidates are laid out, and every 4,096 candidates of a Lloyd sweep
+/// (well under a millisecond of work apart in a release build), and not again once
+/// it said so. A check that never
+/// fires gives exactly [`sample_goals`]' samples.
+///
+/// ```
+/// use crowdtouch::crowd::mesh::{sample_goals, sample_goals_cancellable, TriMesh};
+/// use crowdtouch::geom::Rect;
+/// let m = TriMesh::grid(Rect { min: [0.0, 0.0], max: [10.0, 10.0] }, 11, 11);
+/// assert_eq!(sample_goals_cancellable(&m, 500, &|| false), Some(sample_goals(&m, 500)));
+/// assert_eq!(sample_goals_cancellable(&m, 500, &|| true), None);
+/// ```
+pub fn sample_goals_cancellable(
+    mesh: &TriMesh,
+    n: usize,
+    cancelled: &dyn Fn() -> bool,
+) -> Option<Vec<GoalSample>> {
     if n == 0 || mesh.triangles().is_empty() {
-        return Vec::new();
+        return Some(Vec::new());
     }
     let incident = mesh.incident_corners();
     let vertex_sample = |v: usize| match incident.get(v).copied().flatten() {
@@ -124,26 +154,28 @@ pub fn sample_goals(mesh: &TriMesh, n: usize) -> Vec<GoalSample> {
         },
     };
     if n == mesh.vertex_count() {
-        return (0..n).map(vertex_sample).collect();
+        return Some((0..n).map(vertex_sample).collect());
     }
     let area = mesh.area();
     if !(area.is_finite() && area > 0.0) || mesh.sanity_check().is_err() {
         // Unusable geometry: stay in range and deterministic.
         let t = mesh.triangles().len();
-        return (0..n)
-            .map(|i| GoalSample {
-                tri: (i % t) as u32,
-                bary: [1.0 / 3.0; 3],
-            })
-            .collect();
+        return Some(
+            (0..n)
+                .map(|i| GoalSample {
+                    tri: (i % t) as u32,
+                    bary: [1.0 / 3.0; 3],
+                })
+                .collect(),
+        );
     }
     let mut delta = (2.0 * area / (3f64.sqrt() * GOAL_CANDIDATES_PER_SAMPLE * n as f64)).sqrt();
     loop {
-        let candidates = goal_candidates(mesh, &incident, delta);
+        let candidates = goal_candidates(mesh, &incident, delta, cancelled)?;
         // Vertices come first among the candidates: start at the first outline vertex.
         let first = mesh.outline().first().map_or(0, |&v| v as usize);
-        if let Some(chosen) = farthest_point_sampling(&candidates, n, first) {
-            return lloyd_relax(mesh, &candidates, &chosen, GOAL_LLOYD_ITERATIONS);
+        if let Some(chosen) = farthest_point_sampling(&candidates, n, first, cancelled)? {
+            return lloyd_relax(mesh, &candidates, &chosen, GOAL_LLOYD_ITERATIONS, cancelled);
         }
         // Too few distinct candidates (very thin mesh): refine the lattice.
         delta *= 0.5;
@@ -152,11 +184,14 @@ pub fn sample_goals(mesh: &TriMesh, n: usize) -> Vec<GoalSample> {
 
 /// Candidate set for [`sample_goals`]: the vertices, the outline subdivided at about
 /// `delta`, and a hexagonal lattice of spacing `delta` clipped to each triangle.
+/// `None` when `cancelled` said so (checked every [`VISITS_PER_CHECK`] lattice
+/// points tried, and at the end).
 fn goal_candidates(
     mesh: &TriMesh,
     incident: &[Option<(u32, usize)>],
     delta: f64,
-) -> Vec<Candidate> {
+    cancelled: &dyn Fn() -> bool,
+) -> Option<Vec<Candidate>> {
     let rest = mesh.rest();
     let mut out = Vec::new();
     for (v, inc) in incident.iter().enumerate() {
@@ -204,7 +239,14 @@ fn goal_candidates(
     }
     let dy = delta * 3f64.sqrt() * 0.5;
     let origin = lo + Vec2::new(0.25 * delta, 0.5 * dy);
+    let mut tried = 0usize;
     for (ti, t) in mesh.triangles().iter().enumerate() {
+        if tried >= VISITS_PER_CHECK {
+            tried = 0;
+            if cancelled() {
+                return None;
+            }
+        }
         let [a, b, c] = t.map(|v| rest[v as usize]);
         let det = cross(b - a, c - a);
         if det <= 0.0 {
@@ -223,6 +265,7 @@ fn goal_candidates(
             };
             let i0 = ((tlo.x - origin.x - shift) / delta).ceil() as i64;
             let i1 = ((thi.x - origin.x - shift) / delta).floor() as i64;
+            tried += (i1 - i0 + 1).max(0) as usize;
             for i in i0..=i1 {
                 let p = Vec2::new(origin.x + shift + i as f64 * delta, y);
                 // λ_a = area(p, b, c) / area(a, b, c), and cyclically.
@@ -245,7 +288,7 @@ fn goal_candidates(
             }
         }
     }
-    out
+    (!cancelled()).then_some(out)
 }
 
 /// A uniform bucket grid over a point set (counting-sorted indices per cell).
@@ -360,11 +403,17 @@ impl BucketGrid {
     }
 }
 
-/// Greedy farthest-point sampling of `n` candidates starting at `first`; `None` when
-/// fewer than `n` distinct candidates exist.
-fn farthest_point_sampling(cands: &[Candidate], n: usize, first: usize) -> Option<Vec<usize>> {
+/// Greedy farthest-point sampling of `n` candidates starting at `first`;
+/// `Some(None)` when fewer than `n` distinct candidates exist, `None` when
+/// `cancelled` said so.
+fn farthest_point_sampling(
+    cands: &[Candidate],
+    n: usize,
+    first: usize,
+    cancelled: &dyn Fn() -> bool,
+) -> Option<Option<Vec<usize>>> {
     if cands.len() < n || n == 0 {
-        return None;
+        return Some(None);
     }
     let grid = BucketGrid::new(cands.iter().map(|c| c.p), 4.0);
     let first = first.min(cands.len() - 1);
@@ -374,12 +423,19 @@ fn farthest_point_sampling(cands: &[Candidate], n: usize, first: usize) -> Optio
     let mut chosen = Vec::with_capacity(n);
     let mut next = first;
     let mut radius2 = f64::INFINITY;
+    let mut visits = 0usize;
     loop {
         chosen.push(next);
         taken[next] = true;
         d2[next] = 0.0;
         if chosen.len() == n {
-            return Some(chosen);
+            return Some(Some(chosen));
+        }
+        if visits >= VISITS_PER_CHECK {
+            visits = 0;
+            if cancelled() {
+                return None;
+            }
         }
         let q = cands[next].p;
         // Only candidates closer to q than their current distance change, and every
@@ -394,7 +450,9 @@ fn farthest_point_sampling(cands: &[Candidate], n: usize, first: usize) -> Optio
         };
         for cy in y0..=y1 {
             for cx in x0..=x1 {
-                for &ci in grid.cell(cx, cy) {
+                let cell = grid.cell(cx, cy);
+                visits += cell.len() + 1;
+                for &ci in cell {
                     let ci = ci as usize;
                     if taken[ci] {
                         continue;
@@ -412,11 +470,13 @@ fn farthest_point_sampling(cands: &[Candidate], n: usize, first: usize) -> Optio
         }
         // Pop the farthest live candidate (lazy deletion of stale entries).
         loop {
-            let top = heap.pop()?;
+            let Some(top) = heap.pop() else {
+                return Some(None);
+            };
             let i = top.idx as usize;
             if !taken[i] && top.d2 == d2[i] {
                 if top.d2 <= 0.0 {
-                    return None;
+                    return Some(None);
                 }
                 next = i;
                 radius2 = top.d2;
@@ -456,13 +516,15 @@ fn locate_in(mesh: &TriMesh, tri: u32, p: Vec2) -> Option<GoalSample> {
 /// density: each sample moves to the centroid of the candidates nearest to it
 /// (a centroidal Voronoi tessellation in the limit). Returns the final samples; a
 /// centroid outside the triangles of its own cell's candidates snaps to the cell's
-/// candidate nearest to it, so samples stay on the mesh and distinct.
+/// candidate nearest to it, so samples stay on the mesh and distinct. `None` when
+/// `cancelled` said so.
 fn lloyd_relax(
     mesh: &TriMesh,
     cands: &[Candidate],
     chosen: &[usize],
     iterations: usize,
-) -> Vec<GoalSample> {
+    cancelled: &dyn Fn() -> bool,
+) -> Option<Vec<GoalSample>> {
     let n = chosen.len();
     let mut sites: Vec<Vec2> = chosen.iter().map(|&c| cands[c].p).collect();
     let mut sum = vec![Vec2::zeros(); n];
@@ -473,6 +535,9 @@ fn lloyd_relax(
         sum.fill(Vec2::zeros());
         count.fill(0);
         for (ci, c) in cands.iter().enumerate() {
+            if ci % LLOYD_CANDIDATES_PER_CHECK == LLOYD_CANDIDATES_PER_CHECK - 1 && cancelled() {
+                return None;
+            }
             let Some(s) = grid.nearest(&sites, c.p) else {
                 continue;
             };
@@ -500,7 +565,7 @@ fn lloyd_relax(
         }
     }
     let mut tried: Vec<u32> = Vec::new();
-    (0..n)
+    let samples = (0..n)
         .map(|i| {
             let Some((_, nearest)) = best[i] else {
                 // Empty cell (cannot happen for distinct sites); keep the chosen point.
@@ -520,7 +585,8 @@ fn lloyd_relax(
             }
             cands[nearest].sample
         })
-        .collect()
+        .collect();
+    Some(samples)
 }
 
 /// Positions of `samples` on the mesh with vertices at `positions`.
@@ -665,6 +731,39 @@ mod tests {
                 (left / n as f64 - 0.5).abs() < 0.08,
                 "n = {n}: {left} on the left"
             );
+        }
+    }
+
+    /// The check is called at bounded intervals and the sampling stops at the first
+    /// call that fires, in the farthest-point picks and in every Lloyd sweep.
+    #[test]
+    fn a_cancelled_sampling_stops_at_the_first_check_that_fires() {
+        use std::cell::Cell;
+        let m = TriMesh::grid(rect(12.0, 8.0), 9, 7);
+        let n = 3000;
+        let calls = Cell::new(0usize);
+        let counting = || {
+            calls.set(calls.get() + 1);
+            false
+        };
+        let full = sample_goals_cancellable(&m, n, &counting).unwrap();
+        assert_eq!(full, sample_goals(&m, n));
+        let total = calls.get();
+        // Once laid out, then every 2^16 visits and every 4096 candidates of
+        // each of the 7 assignments.
+        assert!(total >= 8, "{total} checks");
+        for k in [1, 2, total / 3, total / 2, total - 1, total] {
+            calls.set(0);
+            let fires = || {
+                calls.set(calls.get() + 1);
+                calls.get() >= k
+            };
+            assert_eq!(
+                sample_goals_cancellable(&m, n, &fires),
+                None,
+                "fired at {k}"
+            );
+            assert_eq!(calls.get(), k);
         }
     }
 

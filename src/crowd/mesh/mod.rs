@@ -14,7 +14,8 @@ pub use arap::{
     Arap, ArapBuffer, ArapError, Constraint, PointConstraint, ANCHOR_WEIGHT, MAX_CONSTRAINT_WEIGHT,
 };
 pub use goals::{
-    goal_positions, sample_goals, GoalSample, GOAL_CANDIDATES_PER_SAMPLE, GOAL_LLOYD_ITERATIONS,
+    goal_positions, sample_goals, sample_goals_cancellable, GoalSample, GOAL_CANDIDATES_PER_SAMPLE,
+    GOAL_LLOYD_ITERATIONS,
 };
 pub use mvc::{
     convex_hull, mean_value_coordinates, point_in_convex_polygon, MvcError, MVC_EDGE_EPS,

@@ -255,7 +255,14 @@ impl DirectController {
 
     /// New goal samples for a different agent count.
     pub fn set_agent_count(&mut self, agents: usize) {
-        self.samples = crate::crowd::mesh::sample_goals(&self.mesh, agents);
+        self.set_samples(crate::crowd::mesh::sample_goals(&self.mesh, agents));
+    }
+
+    /// New goal samples drawn on this mesh, one per agent
+    /// ([`crate::crowd::mesh::sample_goals`]: the slow part of a resize, which the
+    /// daemon does off the control thread); the goals follow at once.
+    pub fn set_samples(&mut self, samples: Vec<GoalSample>) {
+        self.samples = samples;
         goal_positions(
             &self.mesh,
             &self.samples,

@@ -52,7 +52,7 @@ use super::error::EikonalError;
 use super::grid::Grid;
 use super::reads::sample;
 use super::segment::segment_cost;
-use crate::crowd::assign::CostSource;
+use crate::crowd::assign::{Cancel, CostSource};
 use crate::geom::Vec2;
 
 /// Default side of the cluster lattice (m), the project's choice: a 4 m × 3 m
@@ -195,6 +195,21 @@ impl ClusterCosts {
         agents: &[Vec2],
         goals: &[Vec2],
     ) -> Result<(), EikonalError> {
+        self.fill_cancellable(costs, agents, goals, Cancel::NEVER)
+    }
+
+    /// [`Self::fill`] that gives up when `cancel` says so, checked before each
+    /// cluster's field.
+    ///
+    /// # Errors
+    /// As [`Self::fill`], and [`EikonalError::Cancelled`].
+    pub fn fill_cancellable(
+        &mut self,
+        costs: &EikonalCosts,
+        agents: &[Vec2],
+        goals: &[Vec2],
+        cancel: Cancel<'_>,
+    ) -> Result<(), EikonalError> {
         self.stats.fills += 1;
         self.gx.clear();
         self.gy.clear();
@@ -231,11 +246,16 @@ impl ClusterCosts {
             self.stamp = 0;
         }
         let sources = std::mem::take(&mut self.sources);
-        costs.fields(&sources, agents, |c, phi| {
-            self.pairs(costs, &grid, phi, c, sources[c], agents);
-        })?;
+        let r = costs.fields_cancellable(
+            &sources,
+            agents,
+            |c, phi| {
+                self.pairs(costs, &grid, phi, c, sources[c], agents);
+            },
+            cancel,
+        );
         self.sources = sources;
-        Ok(())
+        r
     }
 
     /// Groups the goals into clusters on a lattice of side `side`.

@@ -33,7 +33,7 @@ use super::error::EikonalError;
 use super::grid::{validate_cost, Grid};
 use super::march::{Fmm, Order, Sources, Targets};
 use super::reads::{descent_direction, sample};
-use crate::crowd::assign::{CostMatrix, CostProvider};
+use crate::crowd::assign::{Cancel, CostMatrix, CostProvider};
 use crate::geom::Vec2;
 
 /// Which side of the assignment the fields are computed from.
@@ -266,6 +266,21 @@ impl EikonalCosts {
         goals: &[Vec2],
         out: &mut CostMatrix,
     ) -> Result<(), EikonalError> {
+        self.try_fill_cancellable(agents, goals, out, Cancel::NEVER)
+    }
+
+    /// [`Self::try_fill`] that gives up when `cancel` says so, checked before each
+    /// march.
+    ///
+    /// # Errors
+    /// As [`Self::try_fill`], and [`EikonalError::Cancelled`] (`out` unspecified).
+    pub fn try_fill_cancellable(
+        &self,
+        agents: &[Vec2],
+        goals: &[Vec2],
+        out: &mut CostMatrix,
+        cancel: Cancel<'_>,
+    ) -> Result<(), EikonalError> {
         out.resize(agents.len(), goals.len());
         self.validate_points(agents, goals)?;
         let from_goals = self.from_goals(agents.len(), goals.len());
@@ -274,17 +289,21 @@ impl EikonalCosts {
         } else {
             (agents, goals)
         };
-        self.with_fields(sources, readers, |k, phi| {
-            for (m, &p) in readers.iter().enumerate() {
-                let v = sample(&self.grid, phi, p);
-                if from_goals {
-                    out.set(m, k, v);
-                } else {
-                    out.row_mut(k)[m] = v;
+        self.with_fields(
+            sources,
+            readers,
+            |k, phi| {
+                for (m, &p) in readers.iter().enumerate() {
+                    let v = sample(&self.grid, phi, p);
+                    if from_goals {
+                        out.set(m, k, v);
+                    } else {
+                        out.row_mut(k)[m] = v;
+                    }
                 }
-            }
-        });
-        Ok(())
+            },
+            cancel,
+        )
     }
 
     /// Calls `f(k, Φ_k)` for each source `k` with its field (one `f64` per cell,
@@ -301,9 +320,24 @@ impl EikonalCosts {
         readers: &[Vec2],
         f: impl FnMut(usize, &[f64]),
     ) -> Result<(), EikonalError> {
+        self.fields_cancellable(sources, readers, f, Cancel::NEVER)
+    }
+
+    /// [`Self::fields`] that gives up when `cancel` says so, checked before each
+    /// source's field (one march at most between two checks).
+    ///
+    /// # Errors
+    /// As [`Self::fields`], and [`EikonalError::Cancelled`] (`f` was called for
+    /// the sources before then).
+    pub fn fields_cancellable(
+        &self,
+        sources: &[Vec2],
+        readers: &[Vec2],
+        f: impl FnMut(usize, &[f64]),
+        cancel: Cancel<'_>,
+    ) -> Result<(), EikonalError> {
         self.validate_points(readers, sources)?;
-        self.with_fields(sources, readers, f);
-        Ok(())
+        self.with_fields(sources, readers, f, cancel)
     }
 
     /// Checks that every point is finite, inside the grid and in (or near) a free
@@ -327,8 +361,15 @@ impl EikonalCosts {
         Ok(())
     }
 
-    /// The loop of [`Self::fields`] over validated points.
-    fn with_fields(&self, sources: &[Vec2], readers: &[Vec2], mut f: impl FnMut(usize, &[f64])) {
+    /// The loop of [`Self::fields`] over validated points; `Err(Cancelled)` when
+    /// `cancel` says so before a field.
+    fn with_fields(
+        &self,
+        sources: &[Vec2],
+        readers: &[Vec2],
+        mut f: impl FnMut(usize, &[f64]),
+        cancel: Cancel<'_>,
+    ) -> Result<(), EikonalError> {
         let mut inner = self.inner.borrow_mut();
         let inner = &mut *inner;
         inner.stats.fills += 1;
@@ -351,11 +392,15 @@ impl EikonalCosts {
             }
         }
         for (k, &s) in sources.iter().enumerate() {
+            if cancel.cancelled() {
+                return Err(EikonalError::Cancelled);
+            }
             let cell = self.grid.cell_of(s).expect("validated");
             let cell = self.source_cell(cell, s).expect("validated");
             let field = self.field_in(inner, cell);
             f(k, &field.phi);
         }
+        Ok(())
     }
 
     /// The cell a source at `p` marches from (see [`Self::try_fill`] on snapping):

@@ -69,4 +69,8 @@ pub enum EikonalError {
         /// Entry index for per-cell or per-agent inputs, 0 for scalars.
         index: usize,
     },
+    /// The caller's [`Cancel`](crate::crowd::assign::Cancel) check said the
+    /// fields are no longer wanted (checked before each march).
+    #[error("cancelled: the input is stale or the daemon is stopping")]
+    Cancelled,
 }

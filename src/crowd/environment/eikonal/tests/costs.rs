@@ -194,3 +194,44 @@ fn set_cost_invalidates_only_on_change() {
     bad[3] = f64::NAN;
     assert_eq!(prov.set_cost(&bad), Err(EikonalError::CostNan { cell: 3 }));
 }
+
+/// A fill checks its [`Cancel`](crate::crowd::assign::Cancel) before each march and
+/// stops at the first check that fires: exactly one march per check that said "go
+/// on"; the cache then serves the next fill as if nothing happened.
+#[test]
+fn a_cancelled_fill_stops_before_the_next_march() {
+    use crate::crowd::assign::Cancel;
+    use std::cell::Cell;
+    let (grid, cost) = scene_at(0.2);
+    let mut rng = SplitMix64::new(0xca7ce1);
+    let agents = free_points(&mut rng, &grid, &cost, 6, -0.9, 2.9);
+    let goals = free_points(&mut rng, &grid, &cost, 10, 6.5, 10.9);
+    let opts = EikonalOptions {
+        sources: FieldSources::Goals,
+        cache_fields: 0,
+        order: Order::Second,
+    };
+    let prov = EikonalCosts::new(grid, &cost, opts).unwrap();
+    let mut out = CostMatrix::new(0, 0);
+    for n in 1..=goals.len() as u64 {
+        let calls = Cell::new(0u64);
+        let fires = || {
+            calls.set(calls.get() + 1);
+            calls.get() >= n
+        };
+        let before = prov.stats().fields;
+        assert_eq!(
+            prov.try_fill_cancellable(&agents, &goals, &mut out, Cancel::new(&fires)),
+            Err(EikonalError::Cancelled)
+        );
+        assert_eq!(calls.get(), n);
+        assert_eq!(
+            prov.stats().fields - before,
+            n - 1,
+            "marches before the check fired"
+        );
+    }
+    let want = brute(&grid, &cost, &agents, &goals, true, Order::Second);
+    prov.try_fill(&agents, &goals, &mut out).unwrap();
+    assert_eq!(out.as_slice(), want.as_slice());
+}

@@ -1,0 +1,263 @@
+//! `crowdtouch bench e2e`: the full daemon replaying the shipped recordings at
+//! 120 Hz to one socket client reading in the format and field set asked for.
+
+use super::{row_from_samples, row_from_stage, Row};
+use anyhow::{bail, Context, Result};
+use clap::ValueEnum;
+use crowdtouch::config::Config;
+use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
+use crowdtouch::rt::monotonic_now;
+use crowdtouch::vocab::Micros;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::os::unix::net::UnixStream;
+use std::time::Duration;
+
+/// Snapshot format of the bench client.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum WireFormat {
+    /// One JSON line per snapshot.
+    Json,
+    /// Binary snapshot frames.
+    Binary,
+}
+
+/// Arrays the bench client asks for.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FieldChoice {
+    /// Positions, velocities, goals, assignment, touches (and motions in JSON).
+    All,
+    /// Positions only.
+    Positions,
+}
+
+/// What `bench e2e` is asked to do.
+pub struct E2eRun<'a> {
+    pub agents: u32,
+    pub seconds: f64,
+    pub realtime: bool,
+    pub scene: Option<&'a std::path::Path>,
+    pub format: WireFormat,
+    pub fields: FieldChoice,
+}
+
+/// What the client read.
+#[derive(Default)]
+struct ClientRead {
+    snapshots: u64,
+    bytes: u64,
+    /// Input event → the snapshot read here (µs): exact in JSON (`input_t_us`),
+    /// an upper bound in binary (`latency_us` plus read time − tick time).
+    latency_us: Vec<f64>,
+}
+
+fn hello(format: WireFormat, fields: FieldChoice) -> String {
+    let format = match format {
+        WireFormat::Json => "json",
+        WireFormat::Binary => "binary",
+    };
+    let fields = match fields {
+        FieldChoice::Positions => r#"["positions"]"#,
+        FieldChoice::All => {
+            r#"["positions","velocities","goals","assignment","touches","motions"]"#
+        }
+    };
+    format!(
+        r#"{{"type":"hello","protocol":1,"format":"{format}","subscribe":["snapshot"],"fields":{fields}}}"#
+    )
+}
+
+/// The number after `"key":` in the first bytes of a JSON snapshot line (the
+/// scalar fields come first), `None` when absent or `null`.
+fn scalar(line: &[u8], key: &str) -> Option<u64> {
+    let head = &line[..line.len().min(256)];
+    let pat = format!("\"{key}\":");
+    let at = head.windows(pat.len()).position(|w| w == pat.as_bytes())? + pat.len();
+    let digits: Vec<u8> = head[at..]
+        .iter()
+        .copied()
+        .take_while(u8::is_ascii_digit)
+        .collect();
+    std::str::from_utf8(&digits).ok()?.parse().ok()
+}
+
+/// Reads the daemon's stream until it closes: JSON lines, or (after the answer
+/// to the client's hello) binary frames.
+fn read_stream(stream: UnixStream, format: WireFormat) -> ClientRead {
+    let mut r = BufReader::with_capacity(1 << 20, stream);
+    let mut out = ClientRead::default();
+    let mut line = Vec::new();
+    // The connect hello, then the answer to ours (the last message in JSON).
+    let mut hellos = 0;
+    while hellos < 2 {
+        line.clear();
+        if r.read_until(b'\n', &mut line).map_or(true, |n| n == 0) {
+            return out;
+        }
+        if line.starts_with(b"{\"type\":\"hello\"") {
+            hellos += 1;
+        }
+    }
+    loop {
+        match format {
+            WireFormat::Json => {
+                line.clear();
+                if r.read_until(b'\n', &mut line).map_or(true, |n| n == 0) {
+                    return out;
+                }
+                if line.starts_with(b"{\"type\":\"snapshot\"") {
+                    out.snapshots += 1;
+                    out.bytes += line.len() as u64;
+                    if let Some(t) = scalar(&line, "input_t_us") {
+                        let now = monotonic_now().0;
+                        out.latency_us.push(now.saturating_sub(t) as f64);
+                    }
+                }
+            }
+            WireFormat::Binary => {
+                let mut len = [0u8; 4];
+                if r.read_exact(&mut len).is_err() {
+                    return out;
+                }
+                let n = u32::from_le_bytes(len) as usize;
+                line.resize(n, 0);
+                if r.read_exact(&mut line).is_err() {
+                    return out;
+                }
+                // Offsets count from the frame start, length field included.
+                if line.first() == Some(&2) && n >= 60 {
+                    let now = monotonic_now().0;
+                    out.snapshots += 1;
+                    out.bytes += 4 + n as u64;
+                    let u64_at = |o: usize| {
+                        u64::from_le_bytes(line[o - 4..o + 4].try_into().expect("8 bytes"))
+                    };
+                    let flags = u16::from_le_bytes([line[2], line[3]]);
+                    if flags & 0x40 != 0 {
+                        let (t, latency) = (u64_at(16), u64_at(24));
+                        out.latency_us
+                            .push((now.saturating_sub(t) + latency) as f64);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The full daemon replaying the shipped recordings at 120 Hz to one socket
+/// client reading `run.format` with `run.fields`.
+pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
+    let agents = run.agents;
+    let mut cfg = Config::embedded_default();
+    // Counts above the daemon's limit run too: they show why the limit is there.
+    cfg.crowd.agents = agents;
+    if agents == 0 {
+        bail!("--agents must be at least 1");
+    }
+    if let Some(path) = run.scene {
+        let path = if path.extension().is_none() && !path.exists() {
+            std::path::PathBuf::from(format!("config/scenes/{}.ron", path.display()))
+        } else {
+            path.to_path_buf()
+        };
+        let loaded = crowdtouch::crowd::environment::load_scene(&path, cfg.crowd.agent_radius_m)
+            .with_context(|| format!("bench scene {}", path.display()))?;
+        cfg.set_loaded_scene(Some(std::sync::Arc::new(loaded)));
+    }
+    if !run.realtime {
+        cfg.pipeline.realtime = Default::default();
+    }
+    cfg.log_level = crowdtouch::config::LogLevel::Error;
+    let sock = std::env::temp_dir().join(format!("crowdtouch-bench-{}.sock", std::process::id()));
+    let sources = sources_from_config(&cfg)?;
+    let mut daemon = Daemon::start(
+        cfg,
+        sources,
+        DaemonOptions {
+            socket_path: sock.clone(),
+        },
+    )?;
+    let mut stream = UnixStream::connect(&sock).context("connecting the bench client")?;
+    stream
+        .write_all(format!("{}\n", hello(run.format, run.fields)).as_bytes())
+        .context("sending the bench client's hello")?;
+    let format = run.format;
+    let reader = std::thread::spawn(move || read_stream(stream, format));
+    let start = monotonic_now();
+    let until = start + Micros::from_secs_f64(run.seconds);
+    while monotonic_now() < until {
+        let _ = daemon.next_report(Duration::from_millis(200));
+    }
+    let elapsed = monotonic_now().saturating_since(start).as_secs_f64();
+    let totals = daemon.totals();
+    let input = daemon.input_counters();
+    let lost = input
+        .transitions_lost
+        .load(std::sync::atomic::Ordering::Relaxed);
+    let coalesced = input.coalesced.load(std::sync::atomic::Ordering::Relaxed);
+    let dropped = daemon.publisher_stats().snapshots_dropped();
+    let rss = crowdtouch::pipeline::timing::rss_bytes().unwrap_or(0);
+    daemon.shutdown();
+    let read = reader.join().unwrap_or_default();
+    let find = |n: &str| totals.iter().find(|s| s.stage == n);
+    let assign = find("assignment");
+    let refresh = assign.map(|s| s.count).unwrap_or(0) as f64 / elapsed;
+    let wire = format!(
+        "{}, {}",
+        match run.format {
+            WireFormat::Json => "json",
+            WireFormat::Binary => "binary",
+        },
+        match run.fields {
+            FieldChoice::All => "all fields",
+            FieldChoice::Positions => "positions",
+        }
+    );
+    let beyond = if agents > crowdtouch::config::MAX_AGENTS {
+        format!(
+            " (beyond the daemon's limit of {})",
+            crowdtouch::config::MAX_AGENTS
+        )
+    } else {
+        String::new()
+    };
+    let abandon = find("abandon")
+        .map(|s| format!(", {} stale jobs given up", s.count))
+        .unwrap_or_default();
+    Ok(vec![
+        row_from_stage(
+            &format!("end_to_end {agents} agents"),
+            find("end_to_end"),
+            format!(
+                "input timestamp -> bytes written ({wire}){beyond}; SCHED_FIFO {}; {} snapshots read ({:.1}/s, {:.1} MB/s), {dropped} dropped, touch transitions lost {lost}, motion frames coalesced {coalesced}, RSS {:.1} MB",
+                if crowdtouch::rt::realtime_granted() { "on" } else { "off" },
+                read.snapshots,
+                read.snapshots as f64 / elapsed,
+                read.bytes as f64 / elapsed / 1e6,
+                rss as f64 / 1e6
+            ),
+        ),
+        row_from_samples(
+            &format!("client read {agents} agents"),
+            read.latency_us,
+            match run.format {
+                WireFormat::Json => format!("input timestamp -> snapshot read by the client ({wire})"),
+                WireFormat::Binary => format!(
+                    "input timestamp -> snapshot read by the client, upper bound: latency_us + (read time - t_us) ({wire})"
+                ),
+            },
+        ),
+        row_from_stage(&format!("control {agents} agents"), find("control"), "control thread tick, in the daemon".into()),
+        row_from_stage(
+            &format!("assignment {agents} agents"),
+            assign,
+            format!("worker solve; refreshed {refresh:.1} times/s{abandon}"),
+        ),
+        row_from_stage("publish (encode)", find("publish"), format!("snapshot serialisation ({wire})")),
+        row_from_stage(
+            "input thread",
+            find("input"),
+            "input timestamp -> frame on the queue (replay source: the added latency of the input thread)".into(),
+        ),
+        row_from_stage("queue", find("queue"), "frame on the queue -> control thread takes it".into()),
+    ])
+}
