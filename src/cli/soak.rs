@@ -191,10 +191,14 @@ fn quantiles(mut v: Vec<u64>) -> (u64, u64, u64) {
     (q(0.5), q(0.99), v[v.len() - 1])
 }
 
-/// The config file of the run: the embedded default with `agents`, quiet logging,
-/// real time off unless asked; `generation` goes into a comment so every reload
-/// reads a file that changed.
-fn config_text(agents: u32, realtime: bool, generation: u64) -> Result<String> {
+/// Connections the daemon must accept beyond the soak's `--clients`: the command
+/// connection, a reconnect and a churning connection not yet reaped, and spare.
+const SPARE_CLIENTS: u32 = 8;
+
+/// The config file of the run: the embedded default with `agents`, room for
+/// `clients` (`socket.max_clients`), quiet logging, real time off unless asked;
+/// `generation` goes into a comment so every reload reads a file that changed.
+fn config_text(agents: u32, clients: u32, realtime: bool, generation: u64) -> Result<String> {
     let mut text = DEFAULT_CONFIG_RON.to_string();
     let mut edit = |from: &str, to: &str| -> Result<()> {
         anyhow::ensure!(
@@ -206,6 +210,8 @@ fn config_text(agents: u32, realtime: bool, generation: u64) -> Result<String> {
     };
     edit("agents: 100,", &format!("agents: {agents},"))?;
     edit("log_level: info,", "log_level: error,")?;
+    let max_clients = clients.saturating_add(SPARE_CLIENTS).max(32);
+    edit("max_clients: 32,", &format!("max_clients: {max_clients},"))?;
     if !realtime {
         edit("priority: Some(20),", "priority: None,")?;
         edit("lock_memory: true,", "lock_memory: false,")?;
@@ -277,8 +283,11 @@ pub fn soak(a: SoakArgs) -> Result<()> {
 
 fn run(a: &SoakArgs, cfg_path: &Path, sock: &Path) -> Result<Report> {
     let write_config = |generation: u64| -> Result<()> {
-        std::fs::write(cfg_path, config_text(a.agents, a.realtime, generation)?)
-            .with_context(|| format!("writing {}", cfg_path.display()))
+        std::fs::write(
+            cfg_path,
+            config_text(a.agents, a.clients, a.realtime, generation)?,
+        )
+        .with_context(|| format!("writing {}", cfg_path.display()))
     };
     write_config(0)?;
     let sig = super::signals()?;
@@ -698,9 +707,10 @@ mod tests {
 
     #[test]
     fn the_run_config_loads_with_the_asked_crowd() {
-        let text = config_text(1000, false, 3).unwrap();
+        let text = config_text(1000, 40, false, 3).unwrap();
         let cfg = Config::from_str(&text, Path::new("soak.ron")).unwrap();
         assert_eq!(cfg.crowd.agents, 1000);
+        assert_eq!(cfg.socket.max_clients, 48);
         assert_eq!(cfg.pipeline.realtime.priority, None);
         assert!(!cfg.pipeline.realtime.lock_memory);
         assert!(text.ends_with("reload 3\n"));
