@@ -8,15 +8,17 @@
 //! buffer) while:
 //! * [`COMMAND_WINDOW`] of the client's replies are owed: commands the control
 //!   thread has not answered, and replies waiting behind them;
-//! * the client has used its budget of lines ([`LineRate`]);
+//! * the client has used its budget of lines ([`LINES_PER_SECOND`], [`LINE_BURST`]
+//!   at once);
 //! * it is a `hello` and a reply is owed: the hello changes the stream's format,
 //!   so it waits until every reply before it is out.
 //!
 //! So one client has at most [`COMMAND_WINDOW`] commands in the daemon's command
 //! queue, and cannot fill it for the others.
 
+use super::budget::{Budget, LINES_PER_SECOND, LINE_BURST};
 use super::hub::Hub;
-use super::lines::{LineBuf, LineRate, Next};
+use super::lines::{LineBuf, Next};
 use super::queue::ClientShared;
 use super::stats::PublisherStats;
 use super::wire::Frame;
@@ -64,7 +66,7 @@ pub(crate) struct Conn {
     pub stream: UnixStream,
     frame: Frame,
     lines: LineBuf,
-    rate: LineRate,
+    rate: Budget,
     /// A `hello` waiting for the replies before it to go out.
     held: Option<ClientSettings>,
     /// The client shut its side (half-close) or its input was refused: read no more.
@@ -87,7 +89,7 @@ impl Conn {
             stream,
             frame: Frame::default(),
             lines: LineBuf::default(),
-            rate: LineRate::new(now),
+            rate: Budget::new(LINES_PER_SECOND, LINE_BURST, now),
             held: None,
             input_done: false,
             paused: false,

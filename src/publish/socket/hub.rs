@@ -10,6 +10,13 @@ use nix::sys::eventfd::{EfdFlags, EventFd};
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
 
+/// The newest mesh, and its JSON line with triangles once a client needed it.
+#[derive(Debug, Default)]
+struct LatestMesh {
+    mesh: Option<Arc<MeshView>>,
+    json: Option<Arc<[u8]>>,
+}
+
 /// Shared by the publisher thread and the I/O thread.
 ///
 /// Lock order: `clients`, then a client's queue, then `latest_mesh`.
@@ -22,7 +29,7 @@ pub(crate) struct Hub {
     /// `socket.client_queue`.
     pub client_queue: u32,
     /// Newest mesh, sent to clients that connect or subscribe later.
-    pub latest_mesh: Mutex<Option<Arc<MeshView>>>,
+    latest_mesh: Mutex<LatestMesh>,
     /// Commands to the control thread (bounded; `try_send` only).
     pub commands: Sender<CommandRequest>,
     /// Counters, and the live client limit.
@@ -50,7 +57,7 @@ impl Hub {
             agents: AtomicU32::new(info.agents),
             info,
             client_queue,
-            latest_mesh: Mutex::new(None),
+            latest_mesh: Mutex::new(LatestMesh::default()),
             commands,
             stats,
             clients: Mutex::new(Vec::new()),
@@ -104,11 +111,24 @@ impl Hub {
         out.into()
     }
 
-    /// The newest mesh as a JSON line with triangles, if there is one.
+    /// Makes `mesh` the newest.
+    pub fn set_latest_mesh(&self, mesh: Arc<MeshView>) {
+        *lock(&self.latest_mesh) = LatestMesh {
+            mesh: Some(mesh),
+            json: None,
+        };
+    }
+
+    /// The newest mesh as a JSON line with triangles, if there is one (encoded once
+    /// per mesh, however many clients connect).
     pub fn latest_mesh_json(&self) -> Option<(Arc<[u8]>, u64)> {
-        let mesh = lock(&self.latest_mesh).clone()?;
-        let mut out = Vec::new();
-        protocol::encode_mesh_json(&mesh, true, &mut out);
-        Some((out.into(), mesh.topology))
+        let mut latest = lock(&self.latest_mesh);
+        let topology = latest.mesh.as_ref()?.topology;
+        if latest.json.is_none() {
+            let mut out = Vec::new();
+            protocol::encode_mesh_json(latest.mesh.as_ref()?, true, &mut out);
+            latest.json = Some(out.into());
+        }
+        Some((Arc::clone(latest.json.as_ref()?), topology))
     }
 }

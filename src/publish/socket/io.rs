@@ -6,6 +6,7 @@
 //! [`HOUSEKEEPING_INTERVAL`] it also looks for stalled, overdue and throttled
 //! clients. However many clients connect, this is one thread.
 
+use super::budget::{Budget, ACCEPTS_PER_SECOND, ACCEPT_BURST};
 use super::conn::{Conn, Fate, Write};
 use super::hub::Hub;
 use super::queue::ClientShared;
@@ -28,7 +29,7 @@ const HOUSEKEEPING_INTERVAL: Duration = Duration::from_millis(HOUSEKEEPING_MS as
 /// Least time between two log lines about a failing `accept`.
 const ACCEPT_LOG_INTERVAL: Duration = Duration::from_secs(10);
 /// Connections accepted per round, so a connect storm does not starve the clients.
-const ACCEPTS_PER_ROUND: usize = 64;
+const ACCEPTS_PER_ROUND: usize = 16;
 /// Send buffer requested for each client socket (bytes): room for several
 /// 1,000-agent snapshots, so a reader that is briefly late never fills it.
 pub const CLIENT_SNDBUF_BYTES: usize = 1 << 20;
@@ -58,6 +59,10 @@ pub(crate) struct IoLoop {
     last_accept_log: Option<Instant>,
     last_housekeeping: Instant,
     shutdown_since: Option<Instant>,
+    /// Connections per second ([`ACCEPTS_PER_SECOND`]); when spent, the listener
+    /// is not polled until the next housekeeping round.
+    accepts: Budget,
+    listener_polled: bool,
 }
 
 impl IoLoop {
@@ -88,6 +93,8 @@ impl IoLoop {
             last_accept_log: None,
             last_housekeeping: Instant::now(),
             shutdown_since: None,
+            accepts: Budget::new(ACCEPTS_PER_SECOND, ACCEPT_BURST, monotonic_now()),
+            listener_polled: true,
         })
     }
 
@@ -108,21 +115,26 @@ impl IoLoop {
                     0
                 }
             };
-            let mut woken = false;
+            let (mut woken, mut connecting) = (false, false);
             for ev in &events[..n] {
                 match ev.data() {
-                    LISTENER => self.accept_pending(),
+                    LISTENER => connecting = true,
                     WAKE => woken = true,
                     t => self.event(t, ev.events()),
                 }
             }
+            // The clients first: what is queued for them, then new connections.
             if woken {
                 self.hub.take_wake();
                 self.serve_all(false);
             }
+            if connecting {
+                self.accept_pending();
+            }
             if self.last_housekeeping.elapsed() >= HOUSEKEEPING_INTERVAL {
                 self.last_housekeeping = Instant::now();
                 self.serve_all(true);
+                self.poll_listener(true);
             }
             if self.hub.is_closing() && self.shut_down_step() {
                 return;
@@ -246,13 +258,38 @@ impl IoLoop {
         log::debug!("client {}: disconnected", c.id());
     }
 
+    /// Polls the listener for connections, or stops polling it.
+    fn poll_listener(&mut self, on: bool) {
+        if on == self.listener_polled || self.shutdown_since.is_some() {
+            return;
+        }
+        let flags = if on {
+            EpollFlags::EPOLLIN
+        } else {
+            EpollFlags::empty()
+        };
+        let mut ev = EpollEvent::new(flags, LISTENER);
+        match self.epoll.modify(&self.listener, &mut ev) {
+            Ok(()) => self.listener_polled = on,
+            Err(e) => log::warn!("{}: cannot poll the listener: {e}", self.path.display()),
+        }
+    }
+
     fn accept_pending(&mut self) {
         if self.shutdown_since.is_some() {
             return;
         }
         for _ in 0..ACCEPTS_PER_ROUND {
+            if !self.accepts.ready(monotonic_now()) {
+                // The rest wait in the listen backlog until the next round.
+                self.poll_listener(false);
+                return;
+            }
             match self.listener.accept() {
-                Ok((stream, _)) => self.admit(stream),
+                Ok((stream, _)) => {
+                    self.accepts.take(monotonic_now());
+                    self.admit(stream);
+                }
                 Err(e) if e.kind() == ErrorKind::WouldBlock => return,
                 Err(e) if e.kind() == ErrorKind::Interrupted => {}
                 Err(e) => {

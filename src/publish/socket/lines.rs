@@ -1,7 +1,6 @@
 //! What a client sends, read without blocking: lines assembled across reads under
-//! the line-length cap, and the per-client budget of lines per second.
+//! the line-length cap.
 
-use crate::vocab::Micros;
 use std::io::{ErrorKind, Read};
 use std::ops::Range;
 
@@ -96,44 +95,6 @@ impl LineBuf {
     }
 }
 
-/// Lines a client may send per second, sustained.
-pub const LINES_PER_SECOND: u64 = 200;
-/// Lines a client may send at once after a quiet spell.
-pub const LINE_BURST: u64 = 50;
-/// Credit one line costs (µs).
-const LINE_COST_US: u64 = 1_000_000 / LINES_PER_SECOND;
-
-/// A client's budget of lines: [`LINE_BURST`] at once, [`LINES_PER_SECOND`] sustained
-/// (a token bucket counted in microseconds of credit).
-#[derive(Debug)]
-pub(crate) struct LineRate {
-    credit_us: u64,
-    last: Micros,
-}
-
-impl LineRate {
-    /// A full budget at `now`.
-    pub fn new(now: Micros) -> LineRate {
-        LineRate {
-            credit_us: LINE_BURST * LINE_COST_US,
-            last: now,
-        }
-    }
-
-    /// Takes one line's credit at `now`; false when there is none.
-    pub fn take(&mut self, now: Micros) -> bool {
-        let earned = now.saturating_since(self.last).0;
-        self.last = self.last.max(now);
-        self.credit_us = (self.credit_us + earned).min(LINE_BURST * LINE_COST_US);
-        if self.credit_us >= LINE_COST_US {
-            self.credit_us -= LINE_COST_US;
-            true
-        } else {
-            false
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -196,29 +157,5 @@ mod tests {
         let data = vec![b'x'; 3 * READ_CHUNK];
         assert_eq!(lb.fill(&data[..], usize::MAX).unwrap(), READ_CHUNK);
         assert_eq!(lb.fill(&data[..], 10).unwrap(), 10);
-    }
-
-    #[test]
-    fn the_line_rate_allows_a_burst_then_the_sustained_rate() {
-        let t0 = Micros(1_000_000);
-        let mut r = LineRate::new(t0);
-        let burst = (0..1000).take_while(|_| r.take(t0)).count() as u64;
-        assert_eq!(burst, LINE_BURST);
-        // One second later: one second's worth, no more.
-        let t1 = Micros(t0.0 + 1_000_000);
-        let more = (0..1000).take_while(|_| r.take(t1)).count() as u64;
-        assert_eq!(more, LINES_PER_SECOND.min(LINE_BURST));
-        // Then one line per line's cost.
-        let steps = (1..=100u64)
-            .filter(|k| r.take(Micros(t1.0 + k * LINE_COST_US)))
-            .count();
-        assert_eq!(steps, 100);
-        assert!(!r.take(Micros(t1.0 + 100 * LINE_COST_US)));
-        // A long quiet spell refills only up to the burst.
-        let t2 = Micros(t1.0 + 3_600_000_000);
-        let after = (0..1000).take_while(|_| r.take(t2)).count() as u64;
-        assert_eq!(after, LINE_BURST);
-        // Time going backwards (it cannot, on CLOCK_MONOTONIC) earns nothing.
-        assert!(!r.take(t0));
     }
 }

@@ -52,6 +52,7 @@
 //! (CLOCK_MONOTONIC after the last byte of a snapshot is sent) − `input_t` into
 //! [`PublisherStats::take_end_to_end`]'s histogram.
 
+mod budget;
 mod conn;
 mod error;
 mod hub;
@@ -63,10 +64,10 @@ mod server;
 mod stats;
 mod wire;
 
+pub use budget::{ACCEPTS_PER_SECOND, ACCEPT_BURST, LINES_PER_SECOND, LINE_BURST};
 pub use conn::COMMAND_WINDOW;
 pub use error::Error;
 pub use io::{CLIENT_SNDBUF_BYTES, SHUTDOWN_GRACE, WRITE_STALL_TIMEOUT};
-pub use lines::{LINES_PER_SECOND, LINE_BURST};
 pub use queue::{CLOSE_GRACE, MAX_BACKLOG_BYTES, MAX_BACKLOG_MESSAGES, REPLY_TIMEOUT};
 pub use server::{Server, SocketOptions, IO_THREAD_STACK_BYTES, QUEUE_CAPACITY};
 pub use stats::PublisherStats;

@@ -136,7 +136,7 @@ impl Publisher {
         // Under the list's lock, so a client admitted meanwhile either is in the list
         // or has read this mesh as the latest (io.rs, `admit`).
         let clients = lock(&self.hub.clients);
-        *lock(&self.hub.latest_mesh) = Some(Arc::clone(&m));
+        self.hub.set_latest_mesh(Arc::clone(&m));
         let mut with: Option<Arc<[u8]>> = None;
         let mut without: Option<Arc<[u8]>> = None;
         for c in clients.iter() {
