@@ -69,5 +69,7 @@ pub use conn::COMMAND_WINDOW;
 pub use error::Error;
 pub use io::{CLIENT_SNDBUF_BYTES, SHUTDOWN_GRACE, WRITE_STALL_TIMEOUT};
 pub use queue::{CLOSE_GRACE, MAX_BACKLOG_BYTES, MAX_BACKLOG_MESSAGES, REPLY_TIMEOUT};
-pub use server::{Server, SocketOptions, IO_THREAD_STACK_BYTES, QUEUE_CAPACITY};
+pub use server::{
+    Server, SocketOptions, FINAL_MESSAGES_WAIT, IO_THREAD_STACK_BYTES, QUEUE_CAPACITY,
+};
 pub use stats::PublisherStats;

@@ -19,13 +19,15 @@ use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// How long the publisher waits for a message before looking at the stop flag again.
 const POLL_INTERVAL: Duration = Duration::from_millis(10);
-/// Messages the publisher queues before it wakes the I/O thread, at most: the
-/// events, mesh and snapshot of one tick arrive together and go out with one wake-up.
-const BATCH_MESSAGES: usize = 64;
+/// Once the daemon stops, how long the publisher still takes messages (the control
+/// thread's last tick publishes the final state) unless its queue closes first.
+pub const FINAL_MESSAGES_WAIT: Duration = Duration::from_millis(100);
+/// Messages the publisher takes in a row before it looks at the stop flag again.
+const DRAIN_MESSAGES: usize = 256;
 /// Messages the control thread may have in flight to the publisher thread.
 pub const QUEUE_CAPACITY: usize = 1024;
 /// Stack of the I/O thread (bytes). Under `mlockall` a thread's whole stack is
@@ -221,9 +223,10 @@ impl Server {
 
     /// Publisher thread body: starts the I/O thread (which accepts, writes and reads
     /// every client), then queues each message for the clients that want it, until
-    /// `stop` is set or `rx` disconnects; then the I/O thread sends every client a
-    /// final `{"type":"bye"}`, gives them [`SHUTDOWN_GRACE`](super::SHUTDOWN_GRACE)
-    /// to read it, and closes.
+    /// `rx` disconnects or [`FINAL_MESSAGES_WAIT`] after `stop` is set (messages sent
+    /// before the stop, such as the final state, still go out); then the I/O thread
+    /// sends every client a final `{"type":"bye"}`, gives them
+    /// [`SHUTDOWN_GRACE`](super::SHUTDOWN_GRACE) to read it, and closes.
     ///
     /// Commands from clients go to `commands` with `try_send` (full → the client gets
     /// an `error` "busy"); answers come back as [`Outgoing::Reply`].
@@ -282,14 +285,30 @@ impl Server {
         };
         log::info!("{}: listening", path.display());
         let mut publisher = Publisher::new(Arc::clone(&hub));
-        while !stop.load(Ordering::Relaxed) {
+        let mut stopping: Option<Instant> = None;
+        loop {
+            if stopping.is_none() && stop.load(Ordering::Relaxed) {
+                stopping = Some(Instant::now());
+            }
+            if stopping.is_some_and(|t| t.elapsed() >= FINAL_MESSAGES_WAIT) {
+                break;
+            }
             match rx.recv_timeout(POLL_INTERVAL) {
                 Ok(msg) => {
-                    publisher.dispatch(msg);
-                    for msg in rx.try_iter().take(BATCH_MESSAGES - 1) {
+                    // A tick's events and mesh go out with its snapshot (one wake-up);
+                    // a backlog of ticks is written as it is queued, not in one burst
+                    // that would overrun the clients' snapshot queues.
+                    let mut next = Some(msg);
+                    let mut left = DRAIN_MESSAGES;
+                    while let Some(msg) = next {
+                        let snapshot = matches!(msg, Outgoing::Snapshot(_));
                         publisher.dispatch(msg);
+                        left -= 1;
+                        next = if left > 0 { rx.try_recv().ok() } else { None };
+                        if snapshot || next.is_none() {
+                            hub.wake();
+                        }
                     }
-                    hub.wake();
                 }
                 Err(RecvTimeoutError::Timeout) => {}
                 Err(RecvTimeoutError::Disconnected) => break,
