@@ -780,7 +780,7 @@ fn garbage_gets_a_fatal_error_and_a_disconnect_while_others_continue() {
     old.expect_eof();
 
     // Nesting as deep as a line can hold: refused by the parser's depth limit on the
-    // client's reader thread (a small stack of its own), not a stack overflow.
+    // socket's I/O thread (a small stack of its own), not a stack overflow.
     let mut deep = Client::ready(&d.path);
     deep.send(&"[".repeat(protocol::MAX_LINE_BYTES - 1));
     let e = deep.next_not_snapshot();
@@ -838,11 +838,27 @@ fn commands_get_ack_or_error_with_their_id() {
 }
 
 #[test]
-fn a_full_command_queue_answers_busy() {
+fn a_full_command_queue_answers_busy_after_the_replies_before_it() {
     let d = Daemon::start_with(socket_config(64), false);
     let mut c = Client::ready(&d.path);
     c.send(r#"{"type":"command","id":1,"name":"pause"}"#); // fills the queue of one
     c.send(r#"{"type":"command","id":2,"name":"resume"}"#);
+    wait_until("the busy refusal", || d.stats.commands_busy() == 1);
+    // Replies come in the order of the requests: the refusal of 2 waits for the
+    // answer to 1, which the control thread gives now.
+    let req = d
+        ._stuck
+        .as_ref()
+        .unwrap()
+        .recv_timeout(READ_TIMEOUT)
+        .unwrap();
+    assert_eq!(req.id, json!(1));
+    d.send(Outgoing::Reply {
+        client: req.client,
+        id: req.id,
+        result: Ok(()),
+    });
+    assert_eq!(c.next_not_snapshot(), json!({"type":"ack","id":1}));
     let e = c.next_not_snapshot();
     assert_eq!(
         (e["type"].as_str(), e["id"].clone()),

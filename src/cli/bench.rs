@@ -65,6 +65,10 @@ pub struct BenchArgs {
     /// second, the rest reading continuously.
     #[arg(long, default_value_t = 4)]
     clients: u32,
+    /// Soak: one more client that connects, reads the server's `hello` and closes,
+    /// over and over (connect/close churn).
+    #[arg(long)]
+    churn: bool,
     /// Soak: length of one report row (s); the SIGHUP reload and the three resizes
     /// happen once per row.
     #[arg(long, default_value_t = 60.0)]
@@ -176,6 +180,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             minutes: a.minutes,
             agents: a.agents,
             clients: a.clients,
+            churn: a.churn,
             period_s: a.period_seconds,
             realtime: !a.no_realtime,
             json: a.json,

@@ -3,7 +3,8 @@
 //! The daemon runs in this process on a config file written for the run (the
 //! embedded default with `--agents`): the shipped recordings replay at 120 Hz,
 //! looped. Socket clients connect as renderers do (`clients.rs`): one handshakes and
-//! never reads, one reconnects every second, the rest read continuously. Once a
+//! never reads, one reconnects every second, the rest read continuously, and with
+//! `--churn` one more connects and closes as fast as the daemon answers. Once a
 //! period (a minute by default) the process raises SIGHUP on itself and the
 //! supervisor's reload path (`reload_on_sighup`, what `crowdtouch run` does on
 //! SIGHUP) reads the file again and hands it to the daemon; three times a period
@@ -15,7 +16,7 @@
 mod clients;
 
 use anyhow::{bail, Context, Result};
-use clients::{Clients, ReadTally, StallTally};
+use clients::{ChurnTally, Clients, ReadTally, StallTally};
 use crowdtouch::config::{Config, DEFAULT_CONFIG_RON};
 use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
 use serde::Serialize;
@@ -32,6 +33,8 @@ pub struct SoakArgs {
     pub agents: u32,
     /// Socket clients: one stalled, one reconnecting, the rest reading.
     pub clients: u32,
+    /// One more client that connects and closes over and over.
+    pub churn: bool,
     /// Length of one report row (s): 60 in a real soak.
     pub period_s: f64,
     /// Real-time scheduling and locked memory as configured (else off).
@@ -110,9 +113,9 @@ struct Row {
     t_s: f64,
     /// RSS of the process (daemon and the soak's clients) at the period's end (MB).
     rss_mb: f64,
-    /// Latency samples: snapshots with an input time read by the live readers.
+    /// Latency samples: snapshots with an input time read by the first reader.
     latency_samples: u64,
-    /// Input → read by a live reader (µs).
+    /// Input → read by the first reader (a thread of its own), µs.
     latency_p50_us: u64,
     latency_p99_us: u64,
     latency_max_us: u64,
@@ -124,6 +127,9 @@ struct Row {
     readers: Vec<ReaderRow>,
     /// The client that reconnects every second (gaps counted within a connection).
     reconnecting: ReaderRow,
+    /// Connect/close cycles of the churning client (`--churn`), and failed ones.
+    churn_cycles: u64,
+    churn_failed: u64,
     /// Connections of the stalled client, and how many the daemon closed.
     stalled_connections: u64,
     stalled_disconnected: u64,
@@ -163,6 +169,7 @@ struct Check {
 struct Report {
     agents: u32,
     clients: u32,
+    churn: bool,
     minutes: f64,
     period_s: f64,
     realtime: bool,
@@ -184,10 +191,14 @@ fn quantiles(mut v: Vec<u64>) -> (u64, u64, u64) {
     (q(0.5), q(0.99), v[v.len() - 1])
 }
 
-/// The config file of the run: the embedded default with `agents`, quiet logging,
-/// real time off unless asked; `generation` goes into a comment so every reload
-/// reads a file that changed.
-fn config_text(agents: u32, realtime: bool, generation: u64) -> Result<String> {
+/// Connections the daemon must accept beyond the soak's `--clients`: the command
+/// connection, a reconnect and a churning connection not yet reaped, and spare.
+const SPARE_CLIENTS: u32 = 8;
+
+/// The config file of the run: the embedded default with `agents`, room for
+/// `clients` (`socket.max_clients`), quiet logging, real time off unless asked;
+/// `generation` goes into a comment so every reload reads a file that changed.
+fn config_text(agents: u32, clients: u32, realtime: bool, generation: u64) -> Result<String> {
     let mut text = DEFAULT_CONFIG_RON.to_string();
     let mut edit = |from: &str, to: &str| -> Result<()> {
         anyhow::ensure!(
@@ -199,6 +210,8 @@ fn config_text(agents: u32, realtime: bool, generation: u64) -> Result<String> {
     };
     edit("agents: 100,", &format!("agents: {agents},"))?;
     edit("log_level: info,", "log_level: error,")?;
+    let max_clients = clients.saturating_add(SPARE_CLIENTS).max(32);
+    edit("max_clients: 32,", &format!("max_clients: {max_clients},"))?;
     if !realtime {
         edit("priority: Some(20),", "priority: None,")?;
         edit("lock_memory: true,", "lock_memory: false,")?;
@@ -270,8 +283,11 @@ pub fn soak(a: SoakArgs) -> Result<()> {
 
 fn run(a: &SoakArgs, cfg_path: &Path, sock: &Path) -> Result<Report> {
     let write_config = |generation: u64| -> Result<()> {
-        std::fs::write(cfg_path, config_text(a.agents, a.realtime, generation)?)
-            .with_context(|| format!("writing {}", cfg_path.display()))
+        std::fs::write(
+            cfg_path,
+            config_text(a.agents, a.clients, a.realtime, generation)?,
+        )
+        .with_context(|| format!("writing {}", cfg_path.display()))
     };
     write_config(0)?;
     let sig = super::signals()?;
@@ -285,7 +301,7 @@ fn run(a: &SoakArgs, cfg_path: &Path, sock: &Path) -> Result<Report> {
         },
     )?;
     let socket: PathBuf = daemon.socket_path().to_path_buf();
-    let clients = match Clients::start(&socket, a.clients) {
+    let clients = match Clients::start(&socket, a.clients, a.churn) {
         Ok(c) => c,
         Err(e) => {
             daemon.shutdown();
@@ -422,10 +438,13 @@ fn make_row(
     let readers: Vec<ReadTally> = clients.readers.iter().map(|r| r.take()).collect();
     let reconnecting = clients.reconnecting.take();
     let stalled: StallTally = clients.stalled.take();
+    let churn: ChurnTally = clients.churn.as_ref().map(|c| c.take()).unwrap_or_default();
+    // The first reader has a thread of its own; the others share one polling thread,
+    // whose turn-taking would be part of their figures.
     let latency: Vec<u64> = readers
-        .iter()
-        .flat_map(|r| r.latency_us.iter().copied())
-        .collect();
+        .first()
+        .map(|r| r.latency_us.clone())
+        .unwrap_or_default();
     let samples = latency.len() as u64;
     let (p50, p99, max) = quantiles(latency);
     let dropped_total = now.dropped - before.dropped;
@@ -448,6 +467,8 @@ fn make_row(
         published: now.ticks - before.ticks,
         readers: readers.iter().map(ReaderRow::from).collect(),
         reconnecting: ReaderRow::from(&reconnecting),
+        churn_cycles: churn.cycles,
+        churn_failed: churn.failed,
         stalled_connections: stalled.connections,
         stalled_disconnected: stalled.disconnected,
         stalled_dropped: dropped_total.saturating_sub(told),
@@ -501,7 +522,8 @@ fn finish(a: &SoakArgs, periods: Vec<Row>, sighups: u64, interrupted: bool) -> R
         sum(&|r| r.reordered),
     );
     let lost_conn = sum(&|r| r.lost_connection);
-    let clients_limit = a.clients + 2;
+    // A churning connection may also be counted before it is reaped.
+    let clients_limit = a.clients + 2 + u32::from(a.churn);
     let crowded: Vec<String> = periods
         .iter()
         .filter(|r| r.daemon_clients_max > clients_limit)
@@ -560,9 +582,10 @@ fn finish(a: &SoakArgs, periods: Vec<Row>, sighups: u64, interrupted: bool) -> R
             name: "clients_reaped",
             ok: crowded.is_empty(),
             detail: format!(
-                "the daemon counted at most {} clients (limit {clients_limit}: the soak's {}, its command connection and one reconnect not yet reaped){}{}",
+                "the daemon counted at most {} clients (limit {clients_limit}: the soak's {}, its command connection and one reconnect{} not yet reaped){}{}",
                 periods.iter().map(|r| r.daemon_clients_max).max().unwrap_or(0),
                 a.clients,
+                if a.churn { " and one churning connection" } else { "" },
                 if crowded.is_empty() { "" } else { "; over: " },
                 crowded.join(", ")
             ),
@@ -598,6 +621,7 @@ fn finish(a: &SoakArgs, periods: Vec<Row>, sighups: u64, interrupted: bool) -> R
     Report {
         agents: a.agents,
         clients: a.clients,
+        churn: a.churn,
         minutes: a.minutes,
         period_s: a.period_s,
         realtime: crowdtouch::rt::realtime_granted(),
@@ -613,23 +637,24 @@ fn finish(a: &SoakArgs, periods: Vec<Row>, sighups: u64, interrupted: bool) -> R
 
 fn print_table(r: &Report) {
     println!(
-        "bench soak: {} agents (resized to {} and back), {} clients, {} min, {} s periods, SCHED_FIFO {}",
+        "bench soak: {} agents (resized to {} and back), {} clients{}, {} min, {} s periods, SCHED_FIFO {}",
         r.agents,
         r.agents / 2,
         r.clients,
+        if r.churn { " and connect/close churn" } else { "" },
         r.minutes,
         r.period_s,
         if r.realtime { "on" } else { "off" }
     );
     println!(
-        "{:>4} {:>7} {:>8} {:>8} {:>8} {:>9} {:>8} {:>6} {:>13} {:>10} {:>11} {:>9} {:>5} {:>7} {:>4} {:>4}",
-        "per", "RSS MB", "p50 ms", "p99 ms", "max ms", "dmn p99", "publ", "miss", "read/reader", "recon", "stall drop", "drops all", "lost", "threads", "hup", "rsz"
+        "{:>4} {:>7} {:>8} {:>8} {:>8} {:>9} {:>8} {:>6} {:>13} {:>10} {:>11} {:>9} {:>5} {:>7} {:>4} {:>4} {:>7}",
+        "per", "RSS MB", "p50 ms", "p99 ms", "max ms", "dmn p99", "publ", "miss", "read/reader", "recon", "stall drop", "drops all", "lost", "threads", "hup", "rsz", "churn"
     );
     for p in &r.periods {
         let reads: Vec<String> = p.readers.iter().map(|x| x.read.to_string()).collect();
         let missed: u64 = p.readers.iter().map(|x| x.missed).sum::<u64>() + p.reconnecting.missed;
         println!(
-            "{:>4} {:>7.1} {:>8.2} {:>8.2} {:>8.2} {:>9.2} {:>8} {:>6} {:>13} {:>10} {:>11} {:>9} {:>5} {:>7} {:>4} {:>4}",
+            "{:>4} {:>7.1} {:>8.2} {:>8.2} {:>8.2} {:>9.2} {:>8} {:>6} {:>13} {:>10} {:>11} {:>9} {:>5} {:>7} {:>4} {:>4} {:>7}",
             p.period,
             p.rss_mb,
             p.latency_p50_us as f64 / 1e3,
@@ -646,6 +671,7 @@ fn print_table(r: &Report) {
             if p.stalled_threads.is_empty() { "ok" } else { "STALL" },
             p.reloads,
             p.resizes,
+            p.churn_cycles,
         );
     }
     println!(
@@ -655,7 +681,7 @@ fn print_table(r: &Report) {
         r.p99_median_us as f64 / 1e3
     );
     println!(
-        "latency: input → read by a live reader (p50/p99/max); dmn p99: the worst per-second p99 the daemon measured (input → bytes written); recon: connections/snapshots; stall drop: snapshots dropped for the stalled client / times the daemon disconnected it"
+        "latency: input → read by the first reader (p50/p99/max); dmn p99: the worst per-second p99 the daemon measured (input → bytes written); recon: connections/snapshots; stall drop: snapshots dropped for the stalled client / times the daemon disconnected it"
     );
     for c in &r.checks {
         println!(
@@ -681,9 +707,10 @@ mod tests {
 
     #[test]
     fn the_run_config_loads_with_the_asked_crowd() {
-        let text = config_text(1000, false, 3).unwrap();
+        let text = config_text(1000, 40, false, 3).unwrap();
         let cfg = Config::from_str(&text, Path::new("soak.ron")).unwrap();
         assert_eq!(cfg.crowd.agents, 1000);
+        assert_eq!(cfg.socket.max_clients, 48);
         assert_eq!(cfg.pipeline.realtime.priority, None);
         assert!(!cfg.pipeline.realtime.lock_memory);
         assert!(text.ends_with("reload 3\n"));

@@ -1,11 +1,18 @@
 //! The soak's socket clients: readers that keep reading, one that reconnects every
-//! second, one that handshakes and never reads, and the one-shot command client that
-//! resizes the crowd. Each runs on a thread of its own and adds what it saw to a
-//! shared tally the driver takes once per report period.
+//! second, one that handshakes and never reads, optionally one that connects and
+//! closes over and over (churn), and the one-shot command client that resizes the
+//! crowd. Each adds what it saw to a shared tally the driver takes once per report
+//! period.
+//!
+//! The soak's process holds the daemon too, so its clients are kept light: the first
+//! reader (the one whose latency the report gives) has a thread of its own; every
+//! other reader is served by one thread polling their sockets, which keeps only the
+//! first 256 bytes of each line (the fields it checks); client threads run on small
+//! stacks. Under `mlockall` every stack is resident in full.
 
 use anyhow::{bail, Context, Result};
 use crowdtouch::rt::monotonic_now;
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{BufRead, BufReader, ErrorKind, Read, Write};
 use std::os::fd::AsFd;
 use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
@@ -53,6 +60,20 @@ pub struct StallTally {
     pub lasted_s: Vec<f64>,
 }
 
+/// What the churning client saw since the driver last took its tally.
+#[derive(Clone, Debug, Default)]
+pub struct ChurnTally {
+    /// Connections that got the server's `hello` and were closed.
+    pub cycles: u64,
+    /// Connections that failed or were refused (no `hello`).
+    pub failed: u64,
+}
+
+/// Stack of each soak client thread (bytes): they hold a few small buffers.
+const CLIENT_STACK_BYTES: usize = 256 * 1024;
+/// Bytes of a line the polled readers keep: the fields they read come first.
+const HEAD_BYTES: usize = 256;
+
 /// A tally shared between a client thread and the driver.
 pub struct Shared<T>(Arc<Mutex<T>>);
 
@@ -79,23 +100,25 @@ impl<T> Clone for Shared<T> {
 
 /// The running clients.
 pub struct Clients {
-    /// One tally per continuously reading client.
+    /// One tally per continuously reading client; the first has a thread of its own.
     pub readers: Vec<Shared<ReadTally>>,
     /// The client that reconnects every second.
     pub reconnecting: Shared<ReadTally>,
     /// The client that never reads.
     pub stalled: Shared<StallTally>,
+    /// The client that connects and closes over and over (`--churn`).
+    pub churn: Option<Shared<ChurnTally>>,
     stop: Arc<AtomicBool>,
     threads: Vec<JoinHandle<()>>,
 }
 
 impl Clients {
     /// Starts `count` clients (at least 3): one stalled, one reconnecting, the rest
-    /// reading continuously.
+    /// reading continuously; with `churn` one more that connects and closes.
     ///
     /// # Errors
     /// Thread creation, or a reader that cannot connect.
-    pub fn start(socket: &Path, count: u32) -> Result<Clients> {
+    pub fn start(socket: &Path, count: u32, churn: bool) -> Result<Clients> {
         anyhow::ensure!(
             count >= 3,
             "--clients must be at least 3 (one stalled, one reconnecting, one reading)"
@@ -105,17 +128,28 @@ impl Clients {
             readers: Vec::new(),
             reconnecting: Shared::new(),
             stalled: Shared::new(),
+            churn: churn.then(Shared::new),
             stop: Arc::clone(&stop),
             threads: Vec::new(),
         };
+        let mut polled = Vec::new();
         for i in 0..count - 2 {
             let tally = Shared::new();
             let stream = UnixStream::connect(socket).context("connecting a soak reader")?;
-            let (t, s) = (tally.clone(), Arc::clone(&stop));
-            c.threads.push(spawn(&format!("soak-read{i}"), move || {
-                read_connection(stream, &t, &s, None)
-            })?);
+            if i == 0 {
+                let (t, s) = (tally.clone(), Arc::clone(&stop));
+                c.threads.push(spawn("soak-read0", move || {
+                    read_connection(stream, &t, &s, None)
+                })?);
+            } else {
+                polled.push((stream, tally.clone()));
+            }
             c.readers.push(tally);
+        }
+        if !polled.is_empty() {
+            let s = Arc::clone(&stop);
+            c.threads
+                .push(spawn("soak-readers", move || read_polled(polled, &s))?);
         }
         let (path, t, s) = (
             socket.to_path_buf(),
@@ -128,6 +162,11 @@ impl Clients {
         let (path, t, s) = (socket.to_path_buf(), c.stalled.clone(), Arc::clone(&stop));
         c.threads
             .push(spawn("soak-stalled", move || stalled(&path, &t, &s))?);
+        if let Some(tally) = &c.churn {
+            let (path, t, s) = (socket.to_path_buf(), tally.clone(), Arc::clone(&stop));
+            c.threads
+                .push(spawn("soak-churn", move || churning(&path, &t, &s))?);
+        }
         Ok(c)
     }
 
@@ -149,6 +188,7 @@ impl Clients {
 fn spawn(name: &str, f: impl FnOnce() + Send + 'static) -> Result<JoinHandle<()>> {
     std::thread::Builder::new()
         .name(name.into())
+        .stack_size(CLIENT_STACK_BYTES)
         .spawn(f)
         .with_context(|| format!("starting the {name} thread"))
 }
@@ -248,6 +288,133 @@ fn read_connection(
     }
     if !stop.load(Ordering::Relaxed) {
         tally.lock().lost_connection += 1;
+    }
+}
+
+/// One reader served by [`read_polled`]: the head of the line being read.
+struct Polled {
+    stream: UnixStream,
+    tally: Shared<ReadTally>,
+    s: Stream,
+    head: Vec<u8>,
+    open: bool,
+}
+
+impl Polled {
+    /// Accounts `bytes` read from the socket at `now_us`; false at `bye`.
+    fn take(&mut self, mut bytes: &[u8], now_us: u64) -> bool {
+        while !bytes.is_empty() {
+            let (part, end) = match bytes.iter().position(|&b| b == b'\n') {
+                Some(i) => (&bytes[..i], true),
+                None => (bytes, false),
+            };
+            let room = HEAD_BYTES.saturating_sub(self.head.len());
+            self.head.extend_from_slice(&part[..part.len().min(room)]);
+            bytes = &bytes[part.len() + usize::from(end)..];
+            if end {
+                if self.head.starts_with(b"{\"type\":\"snapshot\"") {
+                    self.s.snapshot(&self.head, now_us, &mut self.tally.lock());
+                } else if self.head.starts_with(b"{\"type\":\"bye\"") {
+                    return false;
+                }
+                self.head.clear();
+            }
+        }
+        true
+    }
+}
+
+/// Reads every reader of `conns` from one thread until `bye`, end of stream or
+/// `stop`; an end before `stop` is counted as a lost connection.
+fn read_polled(conns: Vec<(UnixStream, Shared<ReadTally>)>, stop: &AtomicBool) {
+    use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
+    let mut conns: Vec<Polled> = conns
+        .into_iter()
+        .filter_map(|(stream, tally)| {
+            stream.set_nonblocking(true).ok()?;
+            tally.lock().connections += 1;
+            Some(Polled {
+                stream,
+                tally,
+                s: Stream::default(),
+                head: Vec::with_capacity(HEAD_BYTES),
+                open: true,
+            })
+        })
+        .collect();
+    let mut buf = vec![0u8; 1 << 16];
+    while !stop.load(Ordering::Relaxed) && conns.iter().any(|c| c.open) {
+        let ready: Vec<bool> = {
+            let mut fds: Vec<PollFd> = conns
+                .iter()
+                .map(|c| {
+                    let events = if c.open {
+                        PollFlags::POLLIN
+                    } else {
+                        PollFlags::empty()
+                    };
+                    PollFd::new(c.stream.as_fd(), events)
+                })
+                .collect();
+            if poll(&mut fds, PollTimeout::from(100u8)).is_err() {
+                continue;
+            }
+            fds.iter()
+                .map(|f| f.revents().is_some_and(|r| !r.is_empty()))
+                .collect()
+        };
+        for (c, ready) in conns.iter_mut().zip(ready) {
+            if !ready || !c.open {
+                continue;
+            }
+            // A few reads per round, so one busy socket does not starve the others.
+            for _ in 0..4 {
+                match (&c.stream).read(&mut buf) {
+                    Ok(0) => {
+                        c.open = false;
+                        if !stop.load(Ordering::Relaxed) {
+                            c.tally.lock().lost_connection += 1;
+                        }
+                        break;
+                    }
+                    Ok(n) => {
+                        if !c.take(&buf[..n], monotonic_now().0) {
+                            c.open = false;
+                            break;
+                        }
+                    }
+                    Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                    Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+                    Err(_) => {
+                        c.open = false;
+                        if !stop.load(Ordering::Relaxed) {
+                            c.tally.lock().lost_connection += 1;
+                        }
+                        break;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Connects, reads the server's `hello` line, closes; again, as fast as the daemon
+/// answers.
+fn churning(path: &Path, tally: &Shared<ChurnTally>, stop: &AtomicBool) {
+    while !stop.load(Ordering::Relaxed) {
+        let hello = UnixStream::connect(path).and_then(|s| {
+            s.set_read_timeout(Some(Duration::from_secs(5)))?;
+            let mut line = Vec::new();
+            BufReader::with_capacity(1024, s).read_until(b'\n', &mut line)?;
+            Ok(line)
+        });
+        match hello {
+            Ok(line) if line.starts_with(b"{\"type\":\"hello\"") => tally.lock().cycles += 1,
+            _ => {
+                tally.lock().failed += 1;
+                std::thread::sleep(Duration::from_millis(10));
+            }
+        }
     }
 }
 

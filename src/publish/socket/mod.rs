@@ -8,26 +8,26 @@
 //! renderer authors, `docs/protocol.md`.
 //!
 //! # Threads
-//! * **Publisher thread** (`Server::run`): receives from its output queue with a
-//!   short timeout, accepts clients (non-blocking listener), encodes, and pushes onto
-//!   each client's queue. A push holds the client's queue mutex for well under a
-//!   microsecond; the first client of each encoding also holds it while the snapshot
-//!   is encoded (tens of µs; that only delays that client's own writer). Nobody holds
-//!   the mutex across I/O, so a stalled client can never stall the publisher.
-//! * **Per client, a writer thread and a reader thread.** Kiosks have a handful of
-//!   clients (`socket.max_clients`, default 32), so plain blocking I/O on two threads
-//!   per client is the simplest thing that keeps one client's socket from touching
-//!   another's: the writer blocks in `write` on its own socket only, the reader blocks
-//!   in `read`. A poll loop would save the threads but would need non-blocking partial
-//!   writes, per-client write cursors and a wake-up path from the crossbeam channel
-//!   (which cannot be polled); it buys nothing at this client count.
+//! Two, however many clients connect:
+//! * **Publisher thread** (`Server::run`, [`publisher`]): receives from its output
+//!   queue, encodes each snapshot once per encoding in use (outside every lock),
+//!   pushes onto each client's queue, routes each command's answer to the client that
+//!   asked, and wakes the I/O thread (an eventfd) once per batch of messages. It never
+//!   touches a socket, so a stalled client can never stall it.
+//! * **I/O thread** (`ct-socket-io`, [`io`]): one `epoll` over the listener, the
+//!   wake-up and every client socket, all non-blocking. It accepts, writes what is
+//!   queued (a message the socket takes only in part is resumed where it stopped
+//!   when the socket is writable again, without copying the shared encoding:
+//!   [`wire`]), reads client lines incrementally ([`lines`]) and acts on them
+//!   ([`conn`]). A client's queue mutex is held for a push or a pop only, never
+//!   across I/O.
 //!
 //! # Queues and what is dropped
 //! * Control → publisher: the output queue, [`QUEUE_CAPACITY`] messages, drop-newest
 //!   (it fills only when the publisher thread itself stalls).
-//! * Publisher → client: one queue per client (`VecDeque` under a mutex + condvar),
-//!   holding at most `socket.client_queue` snapshots. When a new snapshot finds it
-//!   full, the **oldest queued snapshot** is removed and counted; the client sees the
+//! * Publisher → client: one queue per client ([`queue`]), holding at most
+//!   `socket.client_queue` snapshots. When a new snapshot finds it full, the
+//!   **oldest queued snapshot** is removed and counted; the client sees the
 //!   cumulative count in every snapshot's `dropped` field and gets a `dropped` notice
 //!   before the next message written. Events, replies and `stats` are never dropped;
 //!   a `mesh` not yet written is replaced by a newer one (the newer supersedes it;
@@ -35,23 +35,42 @@
 //!   backlog passes [`MAX_BACKLOG_MESSAGES`] or [`MAX_BACKLOG_BYTES`] the client is
 //!   sent a fatal `error` and disconnected.
 //! * Client → control: commands go through the daemon's bounded command channel with
-//!   `try_send`; when it is full the client gets an immediate `error` "busy".
+//!   `try_send`; when it is full the client gets an immediate `error` "busy". One
+//!   client has at most [`COMMAND_WINDOW`] replies owed at once and a budget of
+//!   [`LINES_PER_SECOND`] lines ([`LINE_BURST`] at once); further lines wait in its
+//!   socket, so one client's flood slows only that client and cannot fill the
+//!   command channel for the others.
+//! * Replies reach only the client that asked, in the order of its requests
+//!   ([`queue`], "Replies in order").
 //! * A client whose socket accepts nothing for [`WRITE_STALL_TIMEOUT`] is
-//!   disconnected; a closing client (fatal error, shutdown) gets [`CLOSE_GRACE`] to
-//!   take its last messages before its socket is shut down.
+//!   disconnected; a closing client (fatal error) gets [`CLOSE_GRACE`] to take its
+//!   last messages before its socket is shut down, and at shutdown every client gets
+//!   [`SHUTDOWN_GRACE`] to take its `bye`.
 //!
 //! # Latency accounting
-//! `latency_us` in a snapshot is encode time − `input_t`. Each writer records
+//! `latency_us` in a snapshot is encode time − `input_t`. The I/O thread records
 //! (CLOCK_MONOTONIC after the last byte of a snapshot is sent) − `input_t` into
 //! [`PublisherStats::take_end_to_end`]'s histogram.
 
-mod client;
+mod budget;
+mod conn;
 mod error;
+mod hub;
+mod io;
+mod lines;
 pub mod preflight;
+mod publisher;
+mod queue;
 mod server;
 mod stats;
+mod wire;
 
-pub use client::{CLOSE_GRACE, MAX_BACKLOG_BYTES, MAX_BACKLOG_MESSAGES};
+pub use budget::{ACCEPTS_PER_SECOND, ACCEPT_BURST, LINES_PER_SECOND, LINE_BURST};
+pub use conn::COMMAND_WINDOW;
 pub use error::Error;
-pub use server::{Server, SocketOptions, CLIENT_SNDBUF_BYTES, QUEUE_CAPACITY, WRITE_STALL_TIMEOUT};
+pub use io::{CLIENT_SNDBUF_BYTES, SHUTDOWN_GRACE, WRITE_STALL_TIMEOUT};
+pub use queue::{CLOSE_GRACE, MAX_BACKLOG_BYTES, MAX_BACKLOG_MESSAGES, REPLY_TIMEOUT};
+pub use server::{
+    Server, SocketOptions, FINAL_MESSAGES_WAIT, IO_THREAD_STACK_BYTES, QUEUE_CAPACITY,
+};
 pub use stats::PublisherStats;

@@ -2,6 +2,7 @@
 
 use crate::rt::monotonic_now;
 use crate::vocab::Micros;
+use crate::publish::ClientLimit;
 use hdrhistogram::Histogram;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::{Mutex, MutexGuard, PoisonError};
@@ -18,14 +19,17 @@ fn new_histogram() -> Histogram<u64> {
         .expect("valid histogram bounds")
 }
 
-/// Counters shared with the rest of the daemon.
+/// Counters shared with the rest of the daemon, and the one setting that changes
+/// while the socket runs: the client limit.
 ///
 /// Counts are atomics (read often, by the stats reporter). The two histograms are a
-/// `Mutex<Histogram>` each: writers are client writer threads and the publisher, none
-/// of them real-time, and each holds the lock for one `record` (tens of ns); readers
-/// take a copy and reset ("interval" semantics).
+/// `Mutex<Histogram>` each: writers are the I/O thread and the publisher, and each
+/// holds the lock for one `record` (tens of ns); readers take a copy and reset
+/// ("interval" semantics).
 #[derive(Debug)]
 pub struct PublisherStats {
+    /// Shared with the daemon, which changes it on a reload ([`Output::client_limit`](crate::publish::Output::client_limit)).
+    pub(super) max_clients: ClientLimit,
     pub(super) clients: AtomicU32,
     pub(super) clients_accepted: AtomicU64,
     pub(super) clients_refused: AtomicU64,
@@ -43,6 +47,7 @@ pub struct PublisherStats {
 impl Default for PublisherStats {
     fn default() -> Self {
         PublisherStats {
+            max_clients: ClientLimit::new(0),
             clients: AtomicU32::new(0),
             clients_accepted: AtomicU64::new(0),
             clients_refused: AtomicU64::new(0),
@@ -60,6 +65,18 @@ impl Default for PublisherStats {
 }
 
 impl PublisherStats {
+    /// Most clients served at once (config `socket.max_clients`).
+    pub fn max_clients(&self) -> u32 {
+        self.max_clients.get()
+    }
+
+    /// Changes the client limit while the socket runs (a reload): the next
+    /// connection is admitted or refused by `n`. Clients already connected stay,
+    /// also when there are more of them than `n`.
+    pub fn set_max_clients(&self, n: u32) {
+        self.max_clients.set(n);
+    }
+
     /// Clients connected now.
     pub fn clients(&self) -> u32 {
         self.clients.load(Ordering::Relaxed)

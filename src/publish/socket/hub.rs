@@ -1,0 +1,134 @@
+//! What the publisher thread and the I/O thread share: the connected clients, the
+//! facts every hello carries, the newest mesh, the command channel and the wake-up.
+
+use super::queue::ClientShared;
+use super::stats::{lock, PublisherStats};
+use crate::publish::protocol::{self, ClientSettings, HelloInfo, ServerHello};
+use crate::vocab::{ClientId, CommandRequest, MeshView};
+use crossbeam_channel::Sender;
+use nix::sys::eventfd::{EfdFlags, EventFd};
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::{Arc, Mutex};
+
+/// The newest mesh, and its JSON line with triangles once a client needed it.
+#[derive(Debug, Default)]
+struct LatestMesh {
+    mesh: Option<Arc<MeshView>>,
+    json: Option<Arc<[u8]>>,
+}
+
+/// Shared by the publisher thread and the I/O thread.
+///
+/// Lock order: `clients`, then a client's queue, then `latest_mesh`.
+#[derive(Debug)]
+pub(crate) struct Hub {
+    /// Static hello facts.
+    pub info: HelloInfo,
+    /// Current agent count (from the newest snapshot).
+    pub agents: AtomicU32,
+    /// `socket.client_queue`.
+    pub client_queue: u32,
+    /// Newest mesh, sent to clients that connect or subscribe later.
+    latest_mesh: Mutex<LatestMesh>,
+    /// Commands to the control thread (bounded; `try_send` only).
+    pub commands: Sender<CommandRequest>,
+    /// Counters, and the live client limit.
+    pub stats: Arc<PublisherStats>,
+    /// Every connected client. The I/O thread adds and removes; the publisher fans
+    /// out to them.
+    pub clients: Mutex<Vec<Arc<ClientShared>>>,
+    /// Set by the publisher when the output stops: the I/O thread says `bye` to
+    /// every client, closes them and ends.
+    pub closing: AtomicBool,
+    /// Wakes the I/O thread (it polls this eventfd with the sockets).
+    wake: EventFd,
+}
+
+impl Hub {
+    /// A hub for a server with these facts.
+    pub fn new(
+        info: HelloInfo,
+        client_queue: u32,
+        commands: Sender<CommandRequest>,
+        stats: Arc<PublisherStats>,
+        wake: EventFd,
+    ) -> Hub {
+        Hub {
+            agents: AtomicU32::new(info.agents),
+            info,
+            client_queue,
+            latest_mesh: Mutex::new(LatestMesh::default()),
+            commands,
+            stats,
+            clients: Mutex::new(Vec::new()),
+            closing: AtomicBool::new(false),
+            wake,
+        }
+    }
+
+    /// A non-blocking eventfd for [`Hub::new`].
+    ///
+    /// # Errors
+    /// The system's (`EMFILE`, ...).
+    pub fn wake_fd() -> nix::Result<EventFd> {
+        EventFd::from_flags(EfdFlags::EFD_NONBLOCK | EfdFlags::EFD_CLOEXEC)
+    }
+
+    /// The eventfd the I/O thread polls.
+    pub fn wake_source(&self) -> &EventFd {
+        &self.wake
+    }
+
+    /// Wakes the I/O thread: something was queued for a client, or an answer came.
+    pub fn wake(&self) {
+        // Only fails when the counter is near u64::MAX (then it is readable anyway).
+        let _ = self.wake.write(1);
+    }
+
+    /// Clears the wake-up (the I/O thread, before it looks at every client).
+    pub fn take_wake(&self) {
+        let _ = self.wake.read();
+    }
+
+    /// Whether the output is stopping.
+    pub fn is_closing(&self) -> bool {
+        self.closing.load(Ordering::Acquire)
+    }
+
+    /// The server hello for a client with these settings.
+    pub fn hello(&self, client: ClientId, settings: &ClientSettings) -> Arc<[u8]> {
+        let mut out = Vec::with_capacity(512);
+        protocol::encode_server_hello(
+            &ServerHello {
+                info: &self.info,
+                client,
+                agents: self.agents.load(Ordering::Relaxed),
+                settings,
+                client_queue: self.client_queue,
+            },
+            &mut out,
+        );
+        out.into()
+    }
+
+    /// Makes `mesh` the newest.
+    pub fn set_latest_mesh(&self, mesh: Arc<MeshView>) {
+        *lock(&self.latest_mesh) = LatestMesh {
+            mesh: Some(mesh),
+            json: None,
+        };
+    }
+
+    /// The newest mesh as a JSON line with triangles, if there is one (encoded once
+    /// per mesh, however many clients connect).
+    pub fn latest_mesh_json(&self) -> Option<(Arc<[u8]>, u64)> {
+        let mut latest = lock(&self.latest_mesh);
+        let topology = latest.mesh.as_ref()?.topology;
+        if latest.json.is_none() {
+            let mut out = Vec::new();
+            protocol::encode_mesh_json(latest.mesh.as_ref()?, true, &mut out);
+            latest.json = Some(out.into());
+        }
+        Some((Arc::clone(latest.json.as_ref()?), topology))
+    }
+}
