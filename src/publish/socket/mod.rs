@@ -9,23 +9,24 @@
 //!
 //! # Threads
 //! Two, however many clients connect:
-//! * **Publisher thread** (`Server::run`, [`publisher`]): receives from its output
+//! * **Publisher thread** (`Server::run`, `publisher.rs`): receives from its output
 //!   queue, encodes each snapshot once per encoding in use (outside every lock),
 //!   pushes onto each client's queue, routes each command's answer to the client that
-//!   asked, and wakes the I/O thread (an eventfd) once per batch of messages. It never
+//!   asked, and wakes the I/O thread (an eventfd) after each snapshot (a tick's
+//!   events and mesh go with it) and after other messages. It never
 //!   touches a socket, so a stalled client can never stall it.
-//! * **I/O thread** (`ct-socket-io`, [`io`]): one `epoll` over the listener, the
+//! * **I/O thread** (`ct-socket-io`, `io.rs`): one `epoll` over the listener, the
 //!   wake-up and every client socket, all non-blocking. It accepts, writes what is
 //!   queued (a message the socket takes only in part is resumed where it stopped
 //!   when the socket is writable again, without copying the shared encoding:
-//!   [`wire`]), reads client lines incrementally ([`lines`]) and acts on them
-//!   ([`conn`]). A client's queue mutex is held for a push or a pop only, never
+//!   `wire.rs`), reads client lines incrementally (`lines.rs`) and acts on them
+//!   (`conn.rs`). A client's queue mutex is held for a push or a pop only, never
 //!   across I/O.
 //!
 //! # Queues and what is dropped
 //! * Control → publisher: the output queue, [`QUEUE_CAPACITY`] messages, drop-newest
 //!   (it fills only when the publisher thread itself stalls).
-//! * Publisher → client: one queue per client ([`queue`]), holding at most
+//! * Publisher → client: one queue per client (`queue.rs`), holding at most
 //!   `socket.client_queue` snapshots. When a new snapshot finds it full, the
 //!   **oldest queued snapshot** is removed and counted; the client sees the
 //!   cumulative count in every snapshot's `dropped` field and gets a `dropped` notice
@@ -41,7 +42,7 @@
 //!   socket, so one client's flood slows only that client and cannot fill the
 //!   command channel for the others.
 //! * Replies reach only the client that asked, in the order of its requests
-//!   ([`queue`], "Replies in order").
+//!   (`queue.rs`, "Replies in order").
 //! * A client whose socket accepts nothing for [`WRITE_STALL_TIMEOUT`] is
 //!   disconnected; a closing client (fatal error) gets [`CLOSE_GRACE`] to take its
 //!   last messages before its socket is shut down, and at shutdown every client gets
