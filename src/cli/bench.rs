@@ -1,5 +1,6 @@
 //! `crowdtouch bench`: the standard workloads, measured on this machine.
 
+use super::output::outln;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 use crowdtouch::config::Config;
@@ -227,17 +228,26 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         })?);
     }
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&rows)?);
+        outln!("{}", serde_json::to_string_pretty(&rows)?)?;
     } else {
-        println!(
+        outln!(
             "{:<28} {:>8} {:>10} {:>10} {:>10}  note",
-            "workload", "samples", "p50 µs", "p99 µs", "max µs"
-        );
+            "workload",
+            "samples",
+            "p50 µs",
+            "p99 µs",
+            "max µs"
+        )?;
         for r in &rows {
-            println!(
+            outln!(
                 "{:<28} {:>8} {:>10.1} {:>10.1} {:>10.1}  {}",
-                r.workload, r.samples, r.p50_us, r.p99_us, r.max_us, r.note
-            );
+                r.workload,
+                r.samples,
+                r.p50_us,
+                r.p99_us,
+                r.max_us,
+                r.note
+            )?;
         }
     }
     Ok(())

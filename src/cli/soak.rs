@@ -15,6 +15,7 @@
 
 mod clients;
 
+use super::output::outln;
 use anyhow::{bail, Context, Result};
 use clients::{ChurnTally, Clients, ReadTally, StallTally};
 use crowdtouch::config::{Config, DEFAULT_CONFIG_RON};
@@ -266,9 +267,9 @@ pub fn soak(a: SoakArgs) -> Result<()> {
     let _ = std::fs::remove_dir_all(&dir);
     let report = result?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
     } else {
-        print_table(&report);
+        print_table(&report)?;
     }
     let failed: Vec<_> = report.checks.iter().filter(|c| !c.ok).collect();
     if !failed.is_empty() {
@@ -635,8 +636,8 @@ fn finish(a: &SoakArgs, periods: Vec<Row>, sighups: u64, interrupted: bool) -> R
     }
 }
 
-fn print_table(r: &Report) {
-    println!(
+fn print_table(r: &Report) -> Result<()> {
+    outln!(
         "bench soak: {} agents (resized to {} and back), {} clients{}, {} min, {} s periods, SCHED_FIFO {}",
         r.agents,
         r.agents / 2,
@@ -645,15 +646,15 @@ fn print_table(r: &Report) {
         r.minutes,
         r.period_s,
         if r.realtime { "on" } else { "off" }
-    );
-    println!(
+    )?;
+    outln!(
         "{:>4} {:>7} {:>8} {:>8} {:>8} {:>9} {:>8} {:>6} {:>13} {:>10} {:>11} {:>9} {:>5} {:>7} {:>4} {:>4} {:>7}",
         "per", "RSS MB", "p50 ms", "p99 ms", "max ms", "dmn p99", "publ", "miss", "read/reader", "recon", "stall drop", "drops all", "lost", "threads", "hup", "rsz", "churn"
-    );
+    )?;
     for p in &r.periods {
         let reads: Vec<String> = p.readers.iter().map(|x| x.read.to_string()).collect();
         let missed: u64 = p.readers.iter().map(|x| x.missed).sum::<u64>() + p.reconnecting.missed;
-        println!(
+        outln!(
             "{:>4} {:>7.1} {:>8.2} {:>8.2} {:>8.2} {:>9.2} {:>8} {:>6} {:>13} {:>10} {:>11} {:>9} {:>5} {:>7} {:>4} {:>4} {:>7}",
             p.period,
             p.rss_mb,
@@ -672,25 +673,26 @@ fn print_table(r: &Report) {
             p.reloads,
             p.resizes,
             p.churn_cycles,
-        );
+        )?;
     }
-    println!(
+    outln!(
         "RSS {:.1} → {:.1} MB; p99 median {:.2} ms",
         r.rss_first_mb,
         r.rss_last_mb,
         r.p99_median_us as f64 / 1e3
-    );
-    println!(
+    )?;
+    outln!(
         "latency: input → read by the first reader (p50/p99/max); dmn p99: the worst per-second p99 the daemon measured (input → bytes written); recon: connections/snapshots; stall drop: snapshots dropped for the stalled client / times the daemon disconnected it"
-    );
+    )?;
     for c in &r.checks {
-        println!(
+        outln!(
             "{} {}: {}",
             if c.ok { "ok  " } else { "FAIL" },
             c.name,
             c.detail
-        );
+        )?;
     }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -463,6 +463,10 @@ impl Daemon {
                 "shutdown: every thread stopped in {:.1} ms",
                 monotonic_now().saturating_since(t0).0 as f64 / 1000.0
             );
+        } else {
+            // The publisher removes its socket file when it ends; one left running
+            // past the budget must not leave the file behind for the next start.
+            remove_socket_file(&self.socket_path);
         }
     }
 
@@ -494,6 +498,17 @@ fn describe_scene_change(cfg: &Config, old: Option<&Scene>) -> String {
             new.dynamic().len(),
         ),
         (None, _) => format!("no scene in the new config: open ground replaces {old} from the next tick"),
+    }
+}
+
+/// Removes the socket file at `path` if a socket is there (nothing else is touched).
+fn remove_socket_file(path: &Path) {
+    use std::os::unix::fs::FileTypeExt;
+    let is_socket = std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_socket());
+    if is_socket {
+        if let Err(e) = std::fs::remove_file(path) {
+            log::warn!("shutdown: could not remove {}: {e}", path.display());
+        }
     }
 }
 

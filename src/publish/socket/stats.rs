@@ -1,8 +1,8 @@
 //! The socket output's counters, shared with the rest of the daemon.
 
+use crate::publish::ClientLimit;
 use crate::rt::monotonic_now;
 use crate::vocab::Micros;
-use crate::publish::ClientLimit;
 use hdrhistogram::Histogram;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::{Mutex, MutexGuard, PoisonError};
