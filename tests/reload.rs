@@ -126,7 +126,9 @@ fn config_text(edits: &[(&str, &str)]) -> String {
 
 /// A client: reads its `hello` and returns it with the stream.
 fn connect(path: &Path) -> (Value, BufReader<UnixStream>) {
-    let mut r = BufReader::new(UnixStream::connect(path).unwrap());
+    let stream = UnixStream::connect(path)
+        .unwrap_or_else(|e| panic!("connecting to {}: {e}", path.display()));
+    let mut r = BufReader::new(stream);
     r.get_ref()
         .set_read_timeout(Some(Duration::from_millis(200)))
         .unwrap();
