@@ -194,7 +194,7 @@ impl FieldChange {
 const MAX_SHOWN_CHARS: usize = 60;
 
 /// A JSON value as a person reads it in a log line: `null` as `None`, anything
-/// longer than [`MAX_SHOWN_CHARS`] cut with `…`.
+/// longer than `MAX_SHOWN_CHARS` cut with `…`.
 pub fn show_value(v: &Value) -> String {
     let s = match v {
         Value::Null => "None".to_string(),
