@@ -248,7 +248,9 @@ fn wait_for(child: &mut Child, limit: Duration) -> std::process::ExitStatus {
 
 fn wait_for_socket(sock: &Path, child: &mut Child) {
     let t0 = Instant::now();
-    while !sock.exists() {
+    // The file appears at bind(), a moment before listen(): wait until a client
+    // can connect.
+    while std::os::unix::net::UnixStream::connect(sock).is_err() {
         if let Some(s) = child.try_wait().unwrap() {
             panic!("the daemon exited before making its socket: {s:?}");
         }

@@ -46,7 +46,9 @@ impl Running {
             }
         });
         let t0 = Instant::now();
-        while !expect.exists() && t0.elapsed() < WAIT {
+        // The file appears at bind(), a moment before listen(): wait until a
+        // client can connect.
+        while UnixStream::connect(expect).is_err() && t0.elapsed() < WAIT {
             std::thread::sleep(Duration::from_millis(20));
         }
         assert!(
