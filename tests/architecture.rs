@@ -39,12 +39,16 @@ const RULES: &[Rule] = &[
     Rule { module: "vocab", may_use: &["geom"] },
     Rule { module: "rt", may_use: &["vocab"] },
     // The pure cores: plain functions of their inputs and `now`.
-    Rule { module: "gesture", may_use: &["vocab", "geom", "rng"] },
+    Rule { module: "gesture", may_use: &["vocab", "geom", "rng", "located"] },
     Rule { module: "crowd", may_use: &["gesture", "vocab", "geom", "rng", "located"] },
     Rule { module: "crowd::mesh", may_use: &["geom", "rng"] },
     Rule { module: "crowd::assign", may_use: &["geom", "rng"] },
     Rule { module: "crowd::environment", may_use: &["crowd::assign", "vocab", "geom", "rng", "located"] },
     Rule { module: "crowd::formation", may_use: &["crowd::mesh", "crowd::assign", "geom", "rng"] },
+    Rule {
+        module: "crowd::motion",
+        may_use: &["crowd::mesh", "crowd::assign", "crowd::agents", "gesture", "vocab", "geom", "rng"],
+    },
     Rule {
         module: "crowd::control",
         may_use: &["crowd::mesh", "crowd::assign", "crowd::environment", "crowd::formation", "gesture", "vocab", "geom", "rng"],

@@ -12,6 +12,7 @@
 //! | [`environment`] | scenes, the potential field, fast marching, the travel-cost planner | mesh-formation-control 5, 6.2 |
 //! | [`formation`] | formation shapes the crowd switches between, meshed for a crowd | mesh-formation-control 7.3 |
 //! | [`control`] | the controllers: direct manipulation by touch, formation switches | mesh-formation-control 4, 7.3 |
+//! | [`motion`] | crowd motions from gestures: FPCA, Gaussian mixtures, blending, synthesis, following | gesture-driven 6, 7 |
 //! | [`agents`] | agents following their goals (PD control, overlap resolution) | mesh-formation-control 6.2.1 |
 
 pub mod agents;
@@ -20,3 +21,4 @@ pub mod control;
 pub mod environment;
 pub mod formation;
 pub mod mesh;
+pub mod motion;

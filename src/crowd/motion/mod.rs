@@ -1,0 +1,4 @@
+//! Crowd motions driven by gestures (gesture-driven-crowd-motion sections 6 and 7):
+//! a crowd motion's features (FPCA and a Gaussian mixture over eigenscores),
+//! blending the motions of a gesture's neighbours, synthesising trajectories for the
+//! crowd at hand, and the controller that walks agents along them.

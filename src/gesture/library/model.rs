@@ -1,0 +1,84 @@
+//! The library's data: gestures paired with crowd motions (gesture-driven section 4),
+//! each crowd motion kept as its features (section 6.2, eq. 17).
+//!
+//! Plain data, shared by the file format (`format.rs`), recognition (which indexes
+//! the gestures' features) and the crowd's synthesis (`crowd::motion`, which blends
+//! the motions' features).
+
+use super::class::MotionClass;
+use crate::geom::Vec2;
+
+/// Samples of a resampled gesture trajectory, `T_H` (gesture-driven section 5.1).
+pub const T_H: usize = 64;
+
+/// Samples of a resampled crowd trajectory, `S_H` (gesture-driven section 6.1).
+pub const S_H: usize = 64;
+
+/// Length of a serialised crowd trajectory: x and y of each sample (eq. 15).
+pub const TRAJ_DIM: usize = 2 * S_H;
+
+/// Most eigenvectors a motion keeps (section 6.2: "the first 15 principal components").
+pub const MAX_COMPONENTS: usize = 15;
+
+/// A gesture normalised (eq. 2: translated so its minimum x and y are 0, scaled by
+/// `1 / max(d_v, d_h)` of its extent in millimetres of glass) and resampled to
+/// [`T_H`] samples per finger (eq. 3).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Resampled {
+    /// One trajectory per finger, every point in `[0, 1]²`.
+    pub fingers: Vec<[Vec2; T_H]>,
+}
+
+/// One Gaussian of a mixture over eigenscores (section 6.2).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GmmComponent {
+    /// Mixing weight (the weights of a mixture sum to 1).
+    pub weight: f64,
+    /// Mean eigenscore, one value per kept eigenvector.
+    pub mean: Vec<f64>,
+    /// Covariance, `d × d` row-major (symmetric positive definite).
+    pub cov: Vec<f64>,
+}
+
+/// A crowd motion's features, `C = [c̄_s, E_V, φ(E_S)]` (gesture-driven eq. 17).
+///
+/// Trajectories are in *crowd units*: the motion is translated so that the crowd's
+/// starting centroid is at the origin and scaled so that the crowd's starting RMS
+/// radius is 1; synthesis scales them to the crowd it drives.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MotionFeatures {
+    /// The class the motion was generated for.
+    pub class: MotionClass,
+    /// How long the motion lasts (s), from its first to its last sample.
+    pub duration_s: f64,
+    /// The mean trajectory `c̄_s`, serialised as in eq. 15 (x, y per sample).
+    pub mean: Vec<f64>,
+    /// The eigenvectors `E_V` (at most [`MAX_COMPONENTS`]), each [`TRAJ_DIM`] long,
+    /// orthonormal.
+    pub basis: Vec<Vec<f64>>,
+    /// The distribution of the eigenscores `φ(E_S)`: a Gaussian mixture over
+    /// `basis.len()` dimensions.
+    pub gmm: Vec<GmmComponent>,
+}
+
+/// A gesture in the library and the crowd motion it asks for.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LibraryGesture {
+    /// The class of its crowd motion.
+    pub class: MotionClass,
+    /// Index of its crowd motion in [`Library::motions`].
+    pub motion: u32,
+    /// The gesture, normalised and resampled.
+    pub gesture: Resampled,
+    /// Where it came from (`generated seed 7`, `recording twist-1.jsonl`, …).
+    pub origin: String,
+}
+
+/// The gesture/crowd-motion library (gesture-driven section 4).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Library {
+    /// The crowd motions.
+    pub motions: Vec<MotionFeatures>,
+    /// The gestures, each naming its motion.
+    pub gestures: Vec<LibraryGesture>,
+}
