@@ -47,8 +47,15 @@ pub fn control_kind(fingers: usize) -> ControlKind {
     }
 }
 
-/// Most fingers one control or gesture holds; more fingers start a new one.
+/// Most fingers one control holds, and most fingers one gesture has down at once;
+/// an eleventh finger landing near starts a new control or gesture of its own.
 pub const MAX_FINGERS: usize = 10;
+
+/// Most contacts one gesture takes part in over its life (each landing is a contact,
+/// so a finger that bounces counts twice); a further landing starts a new gesture.
+/// The capture ([`GestureCapture`](super::capture::GestureCapture)) keeps a track
+/// for each of them.
+pub const MAX_GESTURE_CONTACTS: usize = 2 * MAX_FINGERS;
 
 /// Tunables of the segmenter.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -247,6 +254,8 @@ pub struct Segmenter {
     gestures: Vec<Gesture>,
     next_control: u32,
     next_gesture: u32,
+    /// Every touch is a gesture, whatever it lands on (a table with no direct control).
+    all_gestures: bool,
     /// Transitions a handler did not expect (internal bugs), counted.
     pub bad_transitions: u64,
 }
@@ -260,8 +269,21 @@ impl Segmenter {
             gestures: Vec::with_capacity(16),
             next_control: 1,
             next_gesture: 1,
+            all_gestures: false,
             bad_transitions: 0,
         }
+    }
+
+    /// With `on`, every touch that lands starts or joins a gesture, whatever
+    /// `on_crowd` says (config `gestures.all_touches_are_gestures`: a table with no
+    /// direct control). Touches already down keep what they are.
+    pub fn set_all_touches_are_gestures(&mut self, on: bool) {
+        self.all_gestures = on;
+    }
+
+    /// Whether every touch is a gesture ([`set_all_touches_are_gestures`](Self::set_all_touches_are_gestures)).
+    pub fn all_touches_are_gestures(&self) -> bool {
+        self.all_gestures
     }
 
     /// Replaces the tunables (config reload); live controls keep going.
@@ -293,6 +315,7 @@ impl Segmenter {
             return;
         }
         if t.flags.contains(ContactFlags::DOWN) {
+            let on_crowd = on_crowd && !self.all_gestures;
             self.finger_down(now, t, on_crowd, out);
         } else {
             self.finger_moved(t);
@@ -379,9 +402,12 @@ impl Segmenter {
                 }
             }
         } else {
+            // A finger landing near a gesture joins it, in `Active` (a finger joining
+            // mid-gesture) and in `Grace` (a bounce: the gesture goes on).
             let join = self.gestures.iter().position(|g| {
                 g.state != GestureState::Ended
-                    && g.fingers.len() < 4 * MAX_FINGERS
+                    && g.fingers.len() < MAX_GESTURE_CONTACTS
+                    && g.down_count() < MAX_FINGERS
                     && self.near(&g.fingers, t.glass_mm)
             });
             match join {
@@ -733,5 +759,81 @@ mod tests {
         assert!(out.is_empty());
         assert!(seg.controls().is_empty());
         assert_eq!(seg.bad_transitions, 0);
+    }
+
+    #[test]
+    fn a_finger_landing_after_the_grace_starts_a_new_gesture() {
+        let mut seg = Segmenter::new(params());
+        let off = |_: Vec2| false;
+        let mut out = run(
+            &mut seg,
+            &[
+                (0, 1, 100.0, 100.0, D),
+                (100, 1, 120.0, 100.0, U),
+                (400, 2, 125.0, 100.0, D),
+            ],
+            off,
+        );
+        assert_eq!(out[0], Segment::GestureBegin(1));
+        assert!(matches!(out[1], Segment::GestureEnd { id: 1, .. }));
+        assert_eq!(out[2], Segment::GestureBegin(2));
+        out.clear();
+        // A finger joining mid-gesture, far from the first but within a hand span.
+        out = run(&mut seg, &[(450, 3, 250.0, 180.0, D)], off);
+        assert!(out.is_empty(), "{out:?}");
+        assert_eq!(seg.gestures()[0].fingers.len(), 2);
+    }
+
+    #[test]
+    fn every_touch_is_a_gesture_when_switched_on() {
+        let mut seg = Segmenter::new(params());
+        seg.set_all_touches_are_gestures(true);
+        assert!(seg.all_touches_are_gestures());
+        let out = run(
+            &mut seg,
+            &[(0, 1, 100.0, 100.0, D), (20, 2, 140.0, 100.0, D)],
+            |_| true,
+        );
+        assert_eq!(out, vec![Segment::GestureBegin(1)]);
+        assert!(seg.controls().is_empty());
+        assert_eq!(seg.gestures()[0].fingers.len(), 2);
+        // Switched off again, the next touch on the crowd is a control.
+        seg.set_all_touches_are_gestures(false);
+        let out = run(&mut seg, &[(40, 3, 600.0, 600.0, D)], |_| true);
+        assert_eq!(out, vec![Segment::ControlBegin(1)]);
+    }
+
+    #[test]
+    fn an_eleventh_finger_down_starts_a_new_gesture() {
+        let mut seg = Segmenter::new(params());
+        let steps: Vec<_> = (0..11u32)
+            .map(|i| (i as u64 * 5, i + 1, 100.0 + 10.0 * i as f64, 100.0, D))
+            .collect();
+        let out = run(&mut seg, &steps, |_| false);
+        assert_eq!(
+            out,
+            vec![Segment::GestureBegin(1), Segment::GestureBegin(2)]
+        );
+        assert_eq!(seg.gestures()[0].fingers.len(), MAX_FINGERS);
+        assert_eq!(seg.gestures()[0].max_down, MAX_FINGERS as u32);
+        assert_eq!(seg.gestures()[1].fingers.len(), 1);
+    }
+
+    #[test]
+    fn a_gesture_takes_at_most_max_gesture_contacts_landings() {
+        let mut seg = Segmenter::new(params());
+        let mut steps = vec![(0, 100, 300.0, 100.0, D)];
+        // One finger stays down; another taps repeatedly beside it.
+        for k in 0..MAX_GESTURE_CONTACTS as u64 {
+            steps.push((10 + 20 * k, 1 + k as u32, 320.0, 100.0, D));
+            steps.push((20 + 20 * k, 1 + k as u32, 320.0, 100.0, U));
+        }
+        let out = run(&mut seg, &steps, |_| false);
+        let begins = out
+            .iter()
+            .filter(|s| matches!(s, Segment::GestureBegin(_)))
+            .count();
+        assert_eq!(begins, 2);
+        assert_eq!(seg.gestures()[0].fingers.len(), MAX_GESTURE_CONTACTS);
     }
 }
