@@ -119,6 +119,40 @@ pub const FIELDS: &[FieldClass] = &[
     ),
     live("formations.lambda", "from the next switch"),
     live("formations.shapes", "from the next switch"),
+    live(
+        "gestures.enabled",
+        "from the next gesture; a motion playing plays to its end",
+    ),
+    live(
+        "gestures.library",
+        "the library is read again and swapped in for the next gesture; one that does \
+         not load leaves the running library",
+    ),
+    live(
+        "gestures.all_touches_are_gestures",
+        "from the next touch; touches already down keep what they are",
+    ),
+    live("gestures.min_duration_ms", "from the next gesture's end"),
+    live("gestures.min_travel_mm", "from the next gesture's end"),
+    live("gestures.max_duration_s", "from the next gesture's end"),
+    live("gestures.k", "from the next recognition"),
+    live("gestures.weights", "from the next recognition"),
+    live("gestures.band", "from the next recognition"),
+    live(
+        "gestures.gmm_components",
+        "the library's motion mixtures are fitted again with the library's reload",
+    ),
+    live(
+        "gestures.auto_components_max",
+        "the library's motion mixtures are fitted again with the library's reload",
+    ),
+    live("gestures.seed", "from the next synthesis"),
+    live("gestures.approach_timeout_s", "from the next motion"),
+    live("gestures.motion_speed_m_s", "from the next motion"),
+    live(
+        "gestures.continuous",
+        "from the next gesture; a gesture under way keeps its recogniser",
+    ),
     live("pipeline.tick_hz", "from the next tick"),
     restart(
         "pipeline.queue_frames",
@@ -353,6 +387,13 @@ mod tests {
         c.pipeline.realtime.input_cpus = Some(vec![0]);
         c.socket.path = Some(PathBuf::from("/tmp/x.sock"));
         c.socket.group = Some("video".to_string());
+        c.gestures.library = Some(PathBuf::from("/nonexistent/mine.ctgl"));
+        c.gestures.band = Some(8);
+        c.gestures.auto_components_max = Some(4);
+        c.gestures.continuous = Some(crate::config::ContinuousConfig {
+            window_ms: 1000,
+            hold_ms: 300,
+        });
         c.inputs.push(InputConfig::Device {
             select: Default::default(),
             interface: Default::default(),

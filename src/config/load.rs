@@ -101,6 +101,11 @@ impl Config {
                 *s = base.join(&*s);
             }
         }
+        if let Some(l) = &mut self.gestures.library {
+            if l.is_relative() {
+                *l = base.join(&*l);
+            }
+        }
         for input in &mut self.inputs {
             match input {
                 InputConfig::Replay { files, .. } => {

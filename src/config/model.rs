@@ -1,6 +1,7 @@
 //! The config model: [`Config`] and its sections (the `inputs` sections are in
 //! a file of their own).
 
+use super::gestures::GesturesConfig;
 use super::inputs::InputConfig;
 use crate::crowd::environment::Scene;
 use crate::crowd::formation::{FormationDef, FormationLibrary, DEFAULT_LAMBDA};
@@ -312,6 +313,10 @@ pub struct Config {
     /// The shipped shapes and `formations.shapes`, validated with the config.
     #[serde(skip)]
     pub(super) library: Arc<FormationLibrary>,
+    /// Gesture commands: recognition and the crowd motions they play (may be left
+    /// out: the defaults).
+    #[serde(default)]
+    pub gestures: GesturesConfig,
     /// Threads, queues and budgets.
     pub pipeline: PipelineConfig,
     /// The Unix socket.

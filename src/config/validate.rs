@@ -348,6 +348,8 @@ impl Config {
             "formations.lambda",
             format!("least-effort weight must be in 0 ..= 1, got {l}"),
         );
+        self.gestures
+            .validate_into(self.crowd.max_speed_m_s, &mut p);
 
         p
     }
@@ -447,5 +449,141 @@ mod tests {
         let without = DEFAULT_CONFIG_RON.replacen(line, "", 1);
         let c = Config::from_str(&without, Path::new("t.ron")).unwrap();
         assert_eq!(c.mesh.field_step_m, 0.3);
+    }
+
+    /// The `gestures` section of `DEFAULT_CONFIG_RON`, from its header to its end.
+    fn gestures_section() -> (usize, usize) {
+        let a = DEFAULT_CONFIG_RON.find("    gestures: (\n").unwrap();
+        let b = a + DEFAULT_CONFIG_RON[a..].find("\n    ),\n").unwrap() + "\n    ),\n".len();
+        (a, b)
+    }
+
+    #[test]
+    fn the_shipped_configs_carry_the_gestures_section_at_its_defaults() {
+        let kiosk = include_str!("../../config/kiosk.ron");
+        for text in [DEFAULT_CONFIG_RON, kiosk] {
+            assert!(text.contains("\n    gestures: (\n"));
+            let c = Config::from_str(text, Path::new("t.ron")).unwrap();
+            assert_eq!(c.gestures, crate::config::GesturesConfig::default());
+        }
+        let (a, b) = gestures_section();
+        let s = &DEFAULT_CONFIG_RON[a..b];
+        for w in [
+            "alpha: 0.04",
+            "beta: 0.36",
+            "gamma: 0.36",
+            "delta: 0.24",
+            "k: 10",
+        ] {
+            assert!(s.contains(w), "{w}");
+        }
+    }
+
+    #[test]
+    fn a_config_without_the_gestures_section_loads_with_the_defaults() {
+        let (a, b) = gestures_section();
+        let without = format!("{}{}", &DEFAULT_CONFIG_RON[..a], &DEFAULT_CONFIG_RON[b..]);
+        let c = Config::from_str(&without, Path::new("t.ron")).unwrap();
+        assert_eq!(c.gestures, crate::config::GesturesConfig::default());
+        // A section with only some fields takes the defaults for the rest.
+        let partial = format!(
+            "{}    gestures: (k: 3, continuous: Some((window_ms: 800, hold_ms: 200))),\n{}",
+            &DEFAULT_CONFIG_RON[..a],
+            &DEFAULT_CONFIG_RON[b..]
+        );
+        let c = Config::from_str(&partial, Path::new("t.ron")).unwrap();
+        assert_eq!(c.gestures.k, 3);
+        assert_eq!(c.gestures.continuous.map(|c| c.hold_ms), Some(200));
+        assert_eq!(c.gestures.gmm_components, 2);
+    }
+
+    #[test]
+    fn gesture_values_out_of_range_name_their_field_and_line() {
+        let cases = [
+            ("k: 10,", "k: 0,", "gestures.k"),
+            (
+                "min_travel_mm: 10.0,",
+                "min_travel_mm: -1.0,",
+                "gestures.min_travel_mm",
+            ),
+            (
+                "max_duration_s: 60.0,",
+                "max_duration_s: 0.1,",
+                "gestures.max_duration_s",
+            ),
+            (
+                "max_duration_s: 60.0,",
+                "max_duration_s: inf,",
+                "gestures.max_duration_s",
+            ),
+            ("alpha: 0.04,", "alpha: -0.04,", "gestures.weights.alpha"),
+            ("delta: 0.24)", "delta: NaN)", "gestures.weights.delta"),
+            ("band: None,", "band: Some(65),", "gestures.band"),
+            (
+                "gmm_components: 2,",
+                "gmm_components: 0,",
+                "gestures.gmm_components",
+            ),
+            (
+                "auto_components_max: None,",
+                "auto_components_max: Some(1),",
+                "gestures.auto_components_max",
+            ),
+            (
+                "approach_timeout_s: 3.0,",
+                "approach_timeout_s: 0.0,",
+                "gestures.approach_timeout_s",
+            ),
+            (
+                "motion_speed_m_s: 1.0,",
+                "motion_speed_m_s: 2.0,",
+                "gestures.motion_speed_m_s",
+            ),
+            ("library: None,", "library: Some(\"\"),", "gestures.library"),
+            (
+                "continuous: None,",
+                "continuous: Some((window_ms: 50, hold_ms: 300)),",
+                "gestures.continuous.window_ms",
+            ),
+        ];
+        for (from, to, field) in cases {
+            let (a, b) = gestures_section();
+            let section = DEFAULT_CONFIG_RON[a..b].replacen(from, to, 1);
+            assert_ne!(section, DEFAULT_CONFIG_RON[a..b], "{from}");
+            let text = format!(
+                "{}{}{}",
+                &DEFAULT_CONFIG_RON[..a],
+                section,
+                &DEFAULT_CONFIG_RON[b..]
+            );
+            let is = issues(&text);
+            assert_eq!(is.len(), 1, "{to}: {is:?}");
+            assert_eq!(is[0].field, field, "{to}");
+            let key = field.rsplit('.').next().unwrap();
+            let line = text
+                .lines()
+                .enumerate()
+                .skip(text[..a].lines().count())
+                .find(|(_, l)| !l.trim_start().starts_with("//") && l.contains(&format!("{key}:")))
+                .map(|(n, _)| n + 1)
+                .unwrap();
+            assert_eq!(is[0].line, line, "{to}: {:?}", is[0]);
+        }
+        // Every weight zero: the sum is reported at the weights.
+        let text = DEFAULT_CONFIG_RON.replacen(
+            "weights: (alpha: 0.04, beta: 0.36, gamma: 0.36, delta: 0.24)",
+            "weights: (alpha: 0.0, beta: 0.0, gamma: 0.0, delta: 0.0)",
+            1,
+        );
+        let is = issues(&text);
+        assert_eq!(is.len(), 1, "{is:?}");
+        assert_eq!(is[0].field, "gestures.weights");
+        assert!(is[0].message.contains("sum to zero"), "{}", is[0].message);
+        // An unknown key in the section is refused, with its place.
+        let text = DEFAULT_CONFIG_RON.replacen("k: 10,", "kk: 10,", 1);
+        let e = Config::from_str(&text, Path::new("t.ron"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("kk"), "{e}");
     }
 }
