@@ -329,6 +329,8 @@ impl Engine {
                     contacts,
                     duration_us: duration.0,
                     cancelled,
+                    recognition: None,
+                    rejected: None,
                     t: now,
                 },
             };

@@ -1,6 +1,6 @@
 //! What the control thread hands to the outputs.
 
-use crate::vocab::{ClientId, Event, MeshView, Snapshot, StatsReport};
+use crate::vocab::{ClientId, Event, MeshView, PlanView, Snapshot, StatsReport};
 use std::sync::Arc;
 
 /// What the control thread sends to the publisher thread.
@@ -12,6 +12,9 @@ pub enum Outgoing {
     Mesh(Arc<MeshView>),
     /// Something happened.
     Event(Arc<Event>),
+    /// Every agent's planned trajectory (a gesture's motion, or a library motion
+    /// shown by `library collect`): to clients subscribed to `plan` only.
+    Plan(Arc<PlanView>),
     /// Periodic stats.
     Stats(Arc<StatsReport>),
     /// The answer to a command: `Ok` becomes `ack`, `Err` becomes `error`.

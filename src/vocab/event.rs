@@ -1,5 +1,6 @@
 //! Discrete things that happened, published as they happen.
 
+use super::plan::{MotionPhase, Recognition};
 use super::time::Micros;
 use serde::{Deserialize, Serialize};
 
@@ -85,7 +86,23 @@ pub enum Event {
         duration_us: u64,
         /// Whether a finger was cancelled rather than lifted.
         cancelled: bool,
+        /// What it was recognised as, when a motion was made of it.
+        recognition: Option<Recognition>,
+        /// Why no motion was made (`tap`, `too_long`, `not_captured`,
+        /// `not_recognised`, `no_library`, `disabled`); `None` with a recognition.
+        rejected: Option<String>,
         /// When it ended.
+        t: Micros,
+    },
+    /// A recognised gesture's crowd motion moved on in its life.
+    GestureMotion {
+        /// The gesture's id.
+        id: u32,
+        /// The motion class playing.
+        class: String,
+        /// Where the motion is now.
+        phase: MotionPhase,
+        /// When.
         t: Micros,
     },
     /// The crowd was reset or resized by a command.

@@ -2,7 +2,8 @@
 //!
 //! Time ([`Micros`] on CLOCK_MONOTONIC), touch frames as sources produce them, motion
 //! types, and what the control thread publishes (snapshots, meshes, events, stats) or
-//! takes from clients (commands). Nothing here does work: `input` fills touch frames,
+//! takes from clients (commands), and what a recognised gesture makes the crowd do
+//! (recognitions, planned trajectories). Nothing here does work: `input` fills touch frames,
 //! `gesture` and `crowd` read them, `engine` fills snapshots, `publish` encodes them.
 //! It depends on [`geom`](crate::geom) only, so every other module may use it.
 
@@ -10,6 +11,7 @@ mod command;
 mod device;
 mod event;
 mod motion;
+mod plan;
 mod snapshot;
 mod stats;
 mod time;
@@ -19,6 +21,7 @@ pub use command::{ClientId, Command, CommandRequest};
 pub use device::parse_vendor_product;
 pub use event::{ControlKind, DeviceState, Event};
 pub use motion::MotionType;
+pub use plan::{MotionPhase, NeighbourView, PlanOrigin, PlanView, Recognition};
 pub use snapshot::{AgentView, MeshView, Snapshot, TouchView};
 pub use stats::{RestartPending, StageStats, StatsReport};
 pub use time::Micros;

@@ -31,7 +31,8 @@ impl Format {
 }
 
 /// Which message streams a client receives. Replies (`hello`, `ack`, `error`,
-/// `dropped`, `bye`) are always sent.
+/// `dropped`, `bye`) are always sent. `plan` is off unless a client names it, so a
+/// client written before it existed gets none of its message types.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
 pub struct Subscriptions {
     /// `snapshot` messages.
@@ -42,15 +43,24 @@ pub struct Subscriptions {
     pub events: bool,
     /// `stats` messages.
     pub stats: bool,
+    /// `plan`, `demo_motion` and `gesture_motion` messages: the crowd's planned
+    /// trajectories and the life of the motion a gesture started.
+    pub plan: bool,
 }
 
 impl Subscriptions {
-    /// Every stream (the default).
+    /// Every stream.
     pub const ALL: Subscriptions = Subscriptions {
         snapshot: true,
         mesh: true,
         events: true,
         stats: true,
+        plan: true,
+    };
+    /// What a client that names no stream gets: every stream but `plan`.
+    pub const DEFAULT: Subscriptions = Subscriptions {
+        plan: false,
+        ..Subscriptions::ALL
     };
     /// No stream.
     pub const NONE: Subscriptions = Subscriptions {
@@ -58,13 +68,14 @@ impl Subscriptions {
         mesh: false,
         events: false,
         stats: false,
+        plan: false,
     };
     /// Wire names known to the parser, in wire order.
-    pub const NAMES: [&'static str; 4] = ["snapshot", "mesh", "events", "stats"];
+    pub const NAMES: [&'static str; 5] = ["snapshot", "mesh", "events", "stats", "plan"];
 
     /// The names of the streams switched on, in wire order.
     pub fn names(&self) -> Vec<&'static str> {
-        let on = [self.snapshot, self.mesh, self.events, self.stats];
+        let on = [self.snapshot, self.mesh, self.events, self.stats, self.plan];
         Self::NAMES
             .iter()
             .zip(on)
@@ -79,6 +90,7 @@ impl Subscriptions {
             "mesh" => self.mesh = true,
             "events" => self.events = true,
             "stats" => self.stats = true,
+            "plan" => self.plan = true,
             _ => return false,
         }
         true
@@ -87,7 +99,7 @@ impl Subscriptions {
 
 impl Default for Subscriptions {
     fn default() -> Self {
-        Subscriptions::ALL
+        Subscriptions::DEFAULT
     }
 }
 
@@ -215,7 +227,8 @@ impl Default for FieldSet {
 }
 
 /// What one client asked for. A client `hello` replaces all of it; omitted keys take
-/// the defaults ([`ClientSettings::default`]: JSON, every stream, full rate, every field).
+/// the defaults ([`ClientSettings::default`]: JSON, every stream but `plan`, full
+/// rate, every field).
 #[derive(Copy, Clone, Debug, PartialEq, Default)]
 pub struct ClientSettings {
     /// Wire format.

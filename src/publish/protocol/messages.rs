@@ -4,7 +4,7 @@
 
 use super::hello::{Format, ServerHello, MAX_LINE_BYTES, PROTOCOL_VERSION};
 use super::numbers::push_uint;
-use crate::vocab::{ClientId, Event, StatsReport};
+use crate::vocab::{ClientId, Event, Recognition, StatsReport};
 use serde_json::{Map, Value};
 
 /// Appends `value` as one JSON line. Serialising these plain types cannot fail; if it
@@ -48,6 +48,18 @@ enum Wire<'a> {
         duration_us: Option<u64>,
         #[serde(skip_serializing_if = "Option::is_none")]
         cancelled: Option<bool>,
+        /// On `end` only: the recognition, or `null`.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        recognition: Option<Option<RecognitionWire<'a>>>,
+        /// On `end` only: why no motion was made, or `null`.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        rejected: Option<Option<&'a str>>,
+        t_us: u64,
+    },
+    GestureMotion {
+        id: u32,
+        class: &'a str,
+        phase: crate::vocab::MotionPhase,
         t_us: u64,
     },
     Reset {
@@ -103,8 +115,56 @@ enum Wire<'a> {
     },
 }
 
-/// Appends one event JSON line (`control`, `gesture`, `reset`, `formation`, `paused`
-/// or `device`).
+/// A recognition in a `gesture` end event.
+#[derive(serde::Serialize)]
+struct RecognitionWire<'a> {
+    class: &'a str,
+    weight: f64,
+    neighbours: Vec<NeighbourWire<'a>>,
+    synth_us: u64,
+    agents: u32,
+}
+
+/// One neighbour of a recognition.
+#[derive(serde::Serialize)]
+struct NeighbourWire<'a> {
+    class: &'a str,
+    distance: f64,
+    weight: f64,
+    origin: &'a str,
+}
+
+/// A finite number, else `0` (JSON has no NaN or infinity; serde_json would write
+/// `null` where a client expects a number).
+fn finite(v: f64) -> f64 {
+    if v.is_finite() {
+        v
+    } else {
+        0.0
+    }
+}
+
+fn recognition_wire(r: &Recognition) -> RecognitionWire<'_> {
+    RecognitionWire {
+        class: &r.class,
+        weight: finite(r.weight),
+        neighbours: r
+            .neighbours
+            .iter()
+            .map(|n| NeighbourWire {
+                class: &n.class,
+                distance: finite(n.distance),
+                weight: finite(n.weight),
+                origin: &n.origin,
+            })
+            .collect(),
+        synth_us: r.synth_us,
+        agents: r.agents,
+    }
+}
+
+/// Appends one event JSON line (`control`, `gesture`, `gesture_motion`, `reset`,
+/// `formation`, `paused` or `device`).
 pub fn encode_event(e: &Event, out: &mut Vec<u8>) {
     let w = match e {
         Event::ControlBegin {
@@ -154,6 +214,8 @@ pub fn encode_event(e: &Event, out: &mut Vec<u8>) {
             contacts: None,
             duration_us: None,
             cancelled: None,
+            recognition: None,
+            rejected: None,
             t_us: t.0,
         },
         Event::GestureEnd {
@@ -162,6 +224,8 @@ pub fn encode_event(e: &Event, out: &mut Vec<u8>) {
             contacts,
             duration_us,
             cancelled,
+            recognition,
+            rejected,
             t,
         } => Wire::Gesture {
             phase: "end",
@@ -170,6 +234,19 @@ pub fn encode_event(e: &Event, out: &mut Vec<u8>) {
             contacts: Some(*contacts),
             duration_us: Some(*duration_us),
             cancelled: Some(*cancelled),
+            recognition: Some(recognition.as_ref().map(recognition_wire)),
+            rejected: Some(rejected.as_deref()),
+            t_us: t.0,
+        },
+        Event::GestureMotion {
+            id,
+            class,
+            phase,
+            t,
+        } => Wire::GestureMotion {
+            id: *id,
+            class,
+            phase: *phase,
             t_us: t.0,
         },
         Event::Reset { agents, hard, t } => Wire::Reset {

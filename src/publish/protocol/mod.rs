@@ -15,7 +15,8 @@
 //! Snapshots are encoded by hand ([`encode_snapshot_json`], [`encode_snapshot_binary`]):
 //! coordinates are written as fixed 3-decimal numbers (millimetre, mm/s precision) from
 //! scaled integers with `itoa`, never through float formatting. Everything else is
-//! rare (events, stats, replies) and goes through serde.
+//! rare (events, stats, replies) and goes through serde. Plans (`plan`,
+//! `demo_motion`) are rare but large, and are written by hand like snapshots.
 //!
 //! # Files
 //! * `hello`: the version, what a client negotiates ([`ClientSettings`]) and the
@@ -25,6 +26,7 @@
 //! * `messages`: events, stats, replies and the server hello.
 //! * `frame`: frame kinds, the binary layout's constants and motion codes.
 //! * `binary`: the binary snapshot encoder and decoder.
+//! * `plan`: the hand-written `plan` and `demo_motion` messages.
 //! * `numbers`: fixed-point and integer writing shared by the hand-written encoders.
 
 mod binary;
@@ -34,6 +36,7 @@ mod json;
 mod messages;
 mod numbers;
 mod parse;
+mod plan;
 
 pub use binary::{
     decode_snapshot_binary, encode_snapshot_binary, BinarySnapshot, BinaryTouch, DecodeError,
@@ -57,6 +60,7 @@ pub use messages::{
 };
 pub use numbers::MAX_COORD_ABS;
 pub use parse::{parse_client_message, ClientMessage, ProtocolError};
+pub use plan::encode_plan_json;
 
 #[cfg(test)]
 mod tests;

@@ -261,7 +261,7 @@ fn parse_hello(map: Map<String, Value>) -> Result<ClientSettings, ProtocolError>
         names_into(
             v,
             "subscribe",
-            "a list of \"snapshot\", \"mesh\", \"events\", \"stats\"",
+            "a list of \"snapshot\", \"mesh\", \"events\", \"stats\", \"plan\"",
             |n| subs.set(n),
         )?;
         s.subscriptions = subs;

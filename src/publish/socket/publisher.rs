@@ -3,7 +3,8 @@
 //!
 //! A snapshot is encoded once per (format, field set) in use, outside every lock, and
 //! the bytes are shared (`Arc`) by the clients' queues. A command's answer goes to
-//! the client that asked, and only to it.
+//! the client that asked, and only to it. Plans and a motion's life
+//! (`gesture_motion`) go to clients subscribed to `plan` only.
 
 use super::hub::Hub;
 use super::queue::{ClientShared, EncodedSnapshot};
@@ -56,7 +57,16 @@ impl Publisher {
                 if let Event::Reset { agents, .. } = *e {
                     self.hub.agents.store(agents, Ordering::Relaxed);
                 }
-                self.broadcast(|s| s.events, |out| protocol::encode_event(&e, out));
+                // A motion's life goes with the plans it belongs to: a client that did
+                // not ask for `plan` sees no message type it did not know.
+                if matches!(*e, Event::GestureMotion { .. }) {
+                    self.broadcast(|s| s.plan, |out| protocol::encode_event(&e, out));
+                } else {
+                    self.broadcast(|s| s.events, |out| protocol::encode_event(&e, out));
+                }
+            }
+            Outgoing::Plan(p) => {
+                self.broadcast(|s| s.plan, |out| protocol::encode_plan_json(&p, out))
             }
             Outgoing::Stats(r) => {
                 self.broadcast(|s| s.stats, |out| protocol::encode_stats(&r, out))

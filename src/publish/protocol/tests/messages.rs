@@ -31,6 +31,8 @@ fn events_and_replies_are_json_lines() {
             contacts: 4,
             duration_us: 900,
             cancelled: false,
+            recognition: None,
+            rejected: Some("tap".into()),
             t: Micros(7),
         },
         Event::Reset {
@@ -68,6 +70,8 @@ fn events_and_replies_are_json_lines() {
     assert_eq!(lines[1]["cancelled"], true);
     assert_eq!(lines[2]["type"], "gesture");
     assert_eq!(lines[2]["duration_us"], 900);
+    assert_eq!(lines[2]["recognition"], Value::Null);
+    assert_eq!(lines[2]["rejected"], "tap");
     assert_eq!(lines[3]["type"], "reset");
     assert_eq!(lines[4]["paused"], true);
     assert_eq!(lines[4]["t_us"], 9);
@@ -130,7 +134,7 @@ fn server_hello_echoes_settings() {
         format: Format::Binary,
         subscriptions: Subscriptions {
             mesh: false,
-            ..Subscriptions::ALL
+            ..Subscriptions::DEFAULT
         },
         max_rate_hz: Some(30.0),
         fields: FieldSet::NONE,

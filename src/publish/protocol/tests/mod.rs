@@ -3,6 +3,7 @@
 
 mod binary;
 mod fixtures;
+mod gesture;
 mod json;
 mod messages;
 mod numbers;
