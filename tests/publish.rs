@@ -1250,3 +1250,118 @@ fn the_python_reference_client_decodes_binary_motions() {
         json!(["run", "crawl", "duck", "swim", "jump", "climb_up"])
     );
 }
+
+/// Gesture commands on the wire: a `gesture` end event carries its recognition to
+/// every events client; `gesture_motion`, `plan` and `demo_motion` reach only the
+/// clients that subscribed to `plan`, in JSON lines or as JSON frames.
+#[test]
+fn plans_reach_only_the_clients_that_subscribe_to_them() {
+    use crowdtouch::vocab::{MotionPhase, NeighbourView, PlanOrigin, PlanView, Recognition};
+    let d = Daemon::start(socket_config(64));
+    // A client written before plans existed: the default hello.
+    let mut old = Client::ready(&d.path);
+    let reply = old.hello(json!({"type":"hello","protocol":1}));
+    assert_eq!(
+        reply["subscriptions"],
+        json!(["snapshot", "mesh", "events", "stats"])
+    );
+    let mut js = Client::ready(&d.path);
+    let reply = js.hello(json!({"type":"hello","protocol":1,"subscribe":["plan","stats"]}));
+    assert_eq!(reply["subscriptions"], json!(["stats", "plan"]));
+    let mut bin = Client::ready(&d.path);
+    bin.hello(json!({"type":"hello","protocol":1,"format":"binary","subscribe":["plan"]}));
+
+    d.send(Outgoing::Event(Arc::new(Event::GestureEnd {
+        id: 4,
+        fingers: 2,
+        contacts: 2,
+        duration_us: 900_000,
+        cancelled: false,
+        recognition: Some(Recognition {
+            class: "expand".into(),
+            weight: 1.0,
+            neighbours: vec![NeighbourView {
+                class: "expand".into(),
+                distance: 0.0,
+                weight: 1.0,
+                origin: "generated".into(),
+            }],
+            synth_us: 3100,
+            agents: 3,
+        }),
+        rejected: None,
+        t: Micros(20),
+    })));
+    d.send(Outgoing::Event(Arc::new(Event::GestureMotion {
+        id: 4,
+        class: "expand".into(),
+        phase: MotionPhase::Approach,
+        t: Micros(21),
+    })));
+    let plan = PlanView {
+        origin: PlanOrigin::Gesture { id: 4 },
+        class: "expand".into(),
+        duration_s: 2.5,
+        samples: 2,
+        points: vec![
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.5, 0.5),
+            Vec2::new(2.0, 1.0),
+            Vec2::new(2.5, 0.5),
+            Vec2::new(1.5, 2.0),
+            Vec2::new(1.5, 2.75),
+        ],
+    };
+    d.send(Outgoing::Plan(Arc::new(plan.clone())));
+    let demo = PlanView {
+        origin: PlanOrigin::Demo { motion: 7 },
+        ..plan
+    };
+    d.send(Outgoing::Plan(Arc::new(demo)));
+    d.send(Outgoing::Stats(Arc::new(StatsReport::default())));
+
+    // The old client: the end event with its recognition, then stats; nothing new.
+    let end = old.json();
+    assert_eq!(
+        (end["type"].as_str(), end["phase"].as_str()),
+        (Some("gesture"), Some("end"))
+    );
+    assert_eq!(end["recognition"]["class"], "expand");
+    assert_eq!(end["recognition"]["neighbours"][0]["origin"], "generated");
+    assert_eq!(end["recognition"]["synth_us"], 3100);
+    assert_eq!(end["rejected"], Value::Null);
+    assert_eq!(old.json()["type"], "stats");
+
+    // The plan client: the motion's life and the plans, then stats; no event.
+    let m = js.json();
+    assert_eq!(
+        m,
+        json!({"type":"gesture_motion","id":4,"class":"expand","phase":"approach","t_us":21})
+    );
+    let p = js.json();
+    assert_eq!(p["type"], "plan");
+    assert_eq!(p["gesture"], 4);
+    assert_eq!(p["duration_s"], 2.5);
+    assert_eq!(p["samples"], 2);
+    assert_eq!(
+        p["agents"],
+        json!([
+            [1.0, 1.0, 0.5, 0.5],
+            [2.0, 1.0, 2.5, 0.5],
+            [1.5, 2.0, 1.5, 2.75]
+        ])
+    );
+    let demo = js.json();
+    assert_eq!(demo["type"], "demo_motion");
+    assert_eq!(demo["motion"], 7);
+    assert_eq!(demo["agents"], p["agents"]);
+    assert_eq!(js.json()["type"], "stats");
+
+    // The binary plan client: the same messages as JSON frames.
+    for expect in ["gesture_motion", "plan", "demo_motion"] {
+        let frame = bin.frame();
+        assert_eq!(frame[4], FRAME_KIND_JSON);
+        let v: Value = serde_json::from_slice(&frame[5..]).unwrap();
+        assert_eq!(v["type"], expect);
+    }
+}

@@ -6,9 +6,7 @@ use crate::publish::protocol::{
     encode_event, encode_plan_json, parse_client_message, ClientMessage, ClientSettings,
     ProtocolError, Subscriptions,
 };
-use crate::vocab::{
-    Event, Micros, MotionPhase, NeighbourView, PlanOrigin, PlanView, Recognition,
-};
+use crate::vocab::{Event, Micros, MotionPhase, NeighbourView, PlanOrigin, PlanView, Recognition};
 use serde_json::{json, Value};
 
 fn one_line(out: &[u8]) -> Value {
@@ -85,7 +83,13 @@ fn a_recognised_gesture_end_carries_its_class_weight_neighbours_and_synthesis_ti
 #[test]
 fn a_gesture_begin_has_no_recognition_keys() {
     let mut out = Vec::new();
-    encode_event(&Event::GestureBegin { id: 9, t: Micros(5) }, &mut out);
+    encode_event(
+        &Event::GestureBegin {
+            id: 9,
+            t: Micros(5),
+        },
+        &mut out,
+    );
     assert_eq!(
         one_line(&out),
         json!({"type":"gesture","phase":"begin","id":9,"t_us":5})
@@ -138,7 +142,13 @@ fn read_agents(v: &Value) -> Vec<Vec<f64>> {
         .as_array()
         .unwrap()
         .iter()
-        .map(|a| a.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect())
+        .map(|a| {
+            a.as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect()
+        })
         .collect()
 }
 
@@ -220,10 +230,9 @@ fn plan_is_a_subscription_a_client_must_name() {
     assert_eq!(d.names(), vec!["snapshot", "mesh", "events", "stats"]);
     let m = parse_client_message(br#"{"type":"hello","protocol":1}"#).unwrap();
     assert_eq!(m, ClientMessage::Hello(ClientSettings::default()));
-    let m = parse_client_message(
-        br#"{"type":"hello","protocol":1,"subscribe":["snapshot","plan"]}"#,
-    )
-    .unwrap();
+    let m =
+        parse_client_message(br#"{"type":"hello","protocol":1,"subscribe":["snapshot","plan"]}"#)
+            .unwrap();
     let ClientMessage::Hello(s) = m else {
         panic!("not a hello")
     };
