@@ -250,3 +250,40 @@ fn plan_is_a_subscription_a_client_must_name() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn the_documented_gesture_end_example_is_what_the_encoder_writes() {
+    let doc = include_str!("../../../../docs/protocol.md");
+    let line = doc
+        .lines()
+        .find(|l| l.starts_with("{\"type\":\"gesture\",\"phase\":\"end\",\"id\":9,"))
+        .expect("docs/protocol.md shows a recognised gesture end");
+    let n = |class: &str, distance: f64, weight: f64, origin: &str| NeighbourView {
+        class: class.into(),
+        distance,
+        weight,
+        origin: origin.into(),
+    };
+    let e = Event::GestureEnd {
+        id: 9,
+        fingers: 2,
+        contacts: 2,
+        duration_us: 840_000,
+        cancelled: false,
+        recognition: Some(Recognition {
+            class: "translate".into(),
+            weight: 0.82,
+            neighbours: vec![
+                n("translate", 0.113, 0.82, "generated"),
+                n("split_then_translate", 0.514, 0.18, "alice-03.jsonl"),
+            ],
+            synth_us: 4100,
+            agents: 200,
+        }),
+        rejected: None,
+        t: Micros(73_921_090_000),
+    };
+    let mut out = Vec::new();
+    encode_event(&e, &mut out);
+    assert_eq!(std::str::from_utf8(&out).unwrap().trim_end(), line);
+}
