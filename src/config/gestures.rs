@@ -141,8 +141,9 @@ pub struct ContinuousConfig {
 
 impl GesturesConfig {
     /// Range checks, as `(field path, message)` pairs pushed to `p`;
-    /// `max_speed_m_s` is `crowd.max_speed_m_s`.
-    pub(super) fn validate_into(&self, max_speed_m_s: f64, p: &mut Vec<(String, String)>) {
+    /// `max_speed_m_s` is `crowd.max_speed_m_s` when that is valid (`None`: it is
+    /// reported at its own field, and `motion_speed_m_s` is only checked positive).
+    pub(super) fn validate_into(&self, max_speed_m_s: Option<f64>, p: &mut Vec<(String, String)>) {
         let mut check = |ok: bool, field: &str, msg: String| {
             if !ok {
                 p.push((format!("gestures.{field}"), msg));
@@ -249,12 +250,16 @@ impl GesturesConfig {
             ),
         );
         let v = self.motion_speed_m_s;
+        let limit = max_speed_m_s.unwrap_or(f64::INFINITY);
         check(
-            v.is_finite() && v > 0.0 && v <= max_speed_m_s,
+            v.is_finite() && v > 0.0 && v <= limit,
             "motion_speed_m_s",
-            format!(
-                "motion speed must be positive and at most crowd.max_speed_m_s ({max_speed_m_s} m/s), got {v}"
-            ),
+            match max_speed_m_s {
+                Some(m) => format!(
+                    "motion speed must be positive and at most crowd.max_speed_m_s ({m} m/s), got {v}"
+                ),
+                None => format!("motion speed must be positive, got {v}"),
+            },
         );
         if let Some(c) = self.continuous {
             check(

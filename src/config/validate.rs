@@ -348,8 +348,9 @@ impl Config {
             "formations.lambda",
             format!("least-effort weight must be in 0 ..= 1, got {l}"),
         );
-        self.gestures
-            .validate_into(self.crowd.max_speed_m_s, &mut p);
+        let max_speed = self.crowd.max_speed_m_s;
+        let max_speed = (max_speed > 0.0 && max_speed <= 50.0).then_some(max_speed);
+        self.gestures.validate_into(max_speed, &mut p);
 
         p
     }
