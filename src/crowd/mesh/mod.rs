@@ -5,6 +5,7 @@
 //! for area controls ([`mean_value_coordinates`]).
 
 mod arap;
+mod around;
 mod envelope;
 mod goals;
 mod mvc;
@@ -13,6 +14,7 @@ mod trimesh;
 pub use arap::{
     Arap, ArapBuffer, ArapError, Constraint, PointConstraint, ANCHOR_WEIGHT, MAX_CONSTRAINT_WEIGHT,
 };
+pub use around::{mesh_around, ALPHA_FACTOR, HELPER_OFFSET_FACTOR};
 pub use goals::{
     goal_positions, sample_goals, sample_goals_cancellable, GoalSample, GOAL_CANDIDATES_PER_SAMPLE,
     GOAL_LLOYD_ITERATIONS,
