@@ -1,11 +1,11 @@
 //! Turning touch frames into controls (touches on the crowd) and gestures (in open
 //! space), and recognising gestures (gesture-driven-crowd-motion sections 5 and 7.1).
 
-//pub mod dtw;
+pub mod dtw;
 pub mod error;
-//pub mod eval;
+pub mod eval;
 pub mod features;
-//pub mod knn;
+pub mod knn;
 pub mod library;
 pub mod mobb;
 pub mod resample;
