@@ -66,6 +66,17 @@ fn columns(i: usize, n: usize, m: usize, band: Option<usize>) -> (usize, usize) 
     }
 }
 
+/// The smaller of two numbers that are never NaN (one instruction, unlike
+/// `f64::min`, which must also handle NaN).
+#[inline(always)]
+fn fmin(a: f64, b: f64) -> f64 {
+    if b < a {
+        b
+    } else {
+        a
+    }
+}
+
 /// A DTW workspace: two reused rows, so a call allocates only when a longer
 /// sequence than any before arrives.
 #[derive(Clone, Debug, Default)]
@@ -123,12 +134,13 @@ impl Dtw {
             cur[lo] = f64::INFINITY;
             let mut left = f64::INFINITY;
             let mut row_min = f64::INFINITY;
-            for j in lo..hi {
-                let best = prev[j].min(prev[j + 1]).min(left);
-                let c = ai.sq_dist(&b[j]) + best;
-                cur[j + 1] = c;
+            // Slices of equal length, so the loop runs without bounds checks.
+            let (diag_up, out, cols) = (&prev[lo..=hi], &mut cur[lo + 1..=hi], &b[lo..hi]);
+            for ((du, o), bj) in diag_up.windows(2).zip(out.iter_mut()).zip(cols) {
+                let c = ai.sq_dist(bj) + fmin(fmin(du[0], du[1]), left);
+                *o = c;
                 left = c;
-                row_min = row_min.min(c);
+                row_min = fmin(row_min, c);
             }
             if hi < m {
                 cur[hi + 1] = f64::INFINITY;
