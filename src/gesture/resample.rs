@@ -229,7 +229,7 @@ fn normalise(fingers: &mut [[Vec2; T_H]]) -> Result<(), GestureError> {
         hi = hi.sup(p);
     }
     let extent_mm = (hi.x - lo.x).max(hi.y - lo.y);
-    if !(extent_mm > MIN_EXTENT_MM) {
+    if extent_mm.is_nan() || extent_mm <= MIN_EXTENT_MM {
         return Err(GestureError::NoExtent { extent_mm });
     }
     let lambda = 1.0 / extent_mm;
