@@ -2,6 +2,13 @@
 //! space), and recognising gestures (gesture-driven-crowd-motion sections 5 and 7.1).
 
 pub mod capture;
+pub mod dtw;
+pub mod error;
+pub mod eval;
+pub mod features;
+pub mod knn;
 pub mod library;
+pub mod mobb;
+pub mod resample;
 pub mod segment;
 pub mod track;

@@ -1,0 +1,439 @@
+//! How well the gesture features recognise classes (gesture-driven section 8.2):
+//! leave-one-out over a labelled set, or a test set against a training set, with
+//! weighted KNN voting; confusion matrices, per-class and average accuracy on the six
+//! basic classes and on all ten, and a feature ablation (each feature's weight set
+//! to 0, the others rescaled to the same total).
+//!
+//! Results are plain data; the command line formats them.
+
+use super::dtw::Weights;
+use super::features::GestureFeatures;
+use super::knn::{inverse_distance_weights, vote, GestureIndex, Neighbour, SearchParams, Searcher};
+use super::library::MotionClass;
+
+/// One of the four features of eq. 11.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum Feature {
+    /// `C(G)`, weight α.
+    Centroid,
+    /// `S(G)`, weight β.
+    Spread,
+    /// `R(G)`, weight γ.
+    Rotation,
+    /// `B(G)`, weight δ.
+    Mobb,
+}
+
+impl Feature {
+    /// The four, in the order of eq. 12.
+    pub const ALL: [Feature; 4] = [
+        Feature::Centroid,
+        Feature::Spread,
+        Feature::Rotation,
+        Feature::Mobb,
+    ];
+
+    /// Its name (`centroid`, `spread`, `rotation`, `mobb`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Feature::Centroid => "centroid",
+            Feature::Spread => "spread",
+            Feature::Rotation => "rotation",
+            Feature::Mobb => "mobb",
+        }
+    }
+
+    /// The weights with this feature's set to 0 and the others scaled so that the
+    /// total is unchanged (all zero if only this feature had weight).
+    pub fn without(self, w: &Weights) -> Weights {
+        let mut a = w.as_array();
+        let total: f64 = a.iter().sum();
+        let i = self as usize;
+        a[i] = 0.0;
+        let rest: f64 = a.iter().sum();
+        if rest > 0.0 {
+            a.iter_mut().for_each(|x| *x *= total / rest);
+        }
+        Weights::from_array(a)
+    }
+}
+
+/// Counts of true class against recognised class.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Confusion {
+    /// The classes of the rows and columns: those present among the true or the
+    /// recognised classes, in [`MotionClass::ALL`] order.
+    pub classes: Vec<MotionClass>,
+    /// `counts[i][j]`: test gestures of class `classes[i]` recognised as `classes[j]`.
+    pub counts: Vec<Vec<u32>>,
+}
+
+/// A class's accuracy.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct ClassAccuracy {
+    /// The class.
+    pub class: MotionClass,
+    /// Test gestures of the class.
+    pub tested: u32,
+    /// Of those, recognised as the class.
+    pub correct: u32,
+}
+
+impl ClassAccuracy {
+    /// `correct / tested` (0 when nothing was tested).
+    pub fn accuracy(&self) -> f64 {
+        if self.tested == 0 {
+            0.0
+        } else {
+            self.correct as f64 / self.tested as f64
+        }
+    }
+}
+
+/// The outcome of classifying a labelled set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Evaluation {
+    /// The confusion matrix.
+    pub confusion: Confusion,
+    /// Per tested class, in [`MotionClass::ALL`] order.
+    pub per_class: Vec<ClassAccuracy>,
+    /// Correct over tested, all gestures together.
+    pub accuracy: f64,
+    /// Mean of the per-class accuracies.
+    pub mean_class_accuracy: f64,
+    /// Test gestures without a neighbour (an empty training set); counted as wrong.
+    pub unclassified: u32,
+}
+
+impl Evaluation {
+    fn from_pairs(pairs: &[(MotionClass, Option<MotionClass>)]) -> Evaluation {
+        let mut present = [false; 10];
+        for (t, r) in pairs {
+            present[t.index()] = true;
+            if let Some(r) = r {
+                present[r.index()] = true;
+            }
+        }
+        let classes: Vec<MotionClass> = MotionClass::ALL
+            .iter()
+            .copied()
+            .filter(|c| present[c.index()])
+            .collect();
+        let at = |c: MotionClass| classes.iter().position(|&x| x == c).unwrap_or(0);
+        let mut counts = vec![vec![0u32; classes.len()]; classes.len()];
+        let mut per = [(0u32, 0u32); 10];
+        let mut unclassified = 0;
+        for &(t, r) in pairs {
+            per[t.index()].0 += 1;
+            match r {
+                Some(r) => {
+                    counts[at(t)][at(r)] += 1;
+                    if r == t {
+                        per[t.index()].1 += 1;
+                    }
+                }
+                None => unclassified += 1,
+            }
+        }
+        let per_class: Vec<ClassAccuracy> = MotionClass::ALL
+            .iter()
+            .filter(|c| per[c.index()].0 > 0)
+            .map(|&c| ClassAccuracy {
+                class: c,
+                tested: per[c.index()].0,
+                correct: per[c.index()].1,
+            })
+            .collect();
+        let tested: u32 = per_class.iter().map(|c| c.tested).sum();
+        let correct: u32 = per_class.iter().map(|c| c.correct).sum();
+        let accuracy = if tested == 0 {
+            0.0
+        } else {
+            correct as f64 / tested as f64
+        };
+        let mean_class_accuracy = if per_class.is_empty() {
+            0.0
+        } else {
+            per_class.iter().map(|c| c.accuracy()).sum::<f64>() / per_class.len() as f64
+        };
+        Evaluation {
+            confusion: Confusion { classes, counts },
+            per_class,
+            accuracy,
+            mean_class_accuracy,
+            unclassified,
+        }
+    }
+}
+
+/// Accuracy with one feature removed.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Ablation {
+    /// The feature whose weight was set to 0.
+    pub removed: Feature,
+    /// Accuracy on all classes without it.
+    pub accuracy_all: f64,
+    /// Accuracy on the six basic classes without it.
+    pub accuracy_basic: f64,
+}
+
+/// The full evaluation the `library eval` command prints.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Report {
+    /// On every class.
+    pub all: Evaluation,
+    /// Training and test both restricted to the six basic classes.
+    pub basic: Evaluation,
+    /// Each feature removed in turn.
+    pub ablation: Vec<Ablation>,
+}
+
+/// Leave-one-out classification (section 8.2): each gesture classified by weighted
+/// KNN voting among all the others.
+///
+/// # Complexity
+///
+/// One search per gesture over the set.
+pub fn leave_one_out(set: &[(MotionClass, GestureFeatures)], p: &SearchParams) -> Evaluation {
+    let index = GestureIndex::with_band(set.iter().map(|(_, f)| f.clone()).collect(), p.band);
+    let mut searcher = Searcher::new();
+    let wider = SearchParams { k: p.k + 1, ..*p };
+    let mut kept: Vec<Neighbour> = Vec::with_capacity(p.k + 1);
+    let pairs: Vec<(MotionClass, Option<MotionClass>)> = set
+        .iter()
+        .enumerate()
+        .map(|(i, (class, f))| {
+            kept.clear();
+            kept.extend(
+                searcher
+                    .search(&index, f, &wider)
+                    .iter()
+                    .filter(|n| n.entry != i)
+                    .take(p.k),
+            );
+            inverse_distance_weights(&mut kept);
+            (*class, vote(&kept, |e| set[e].0).map(|v| v.0))
+        })
+        .collect();
+    Evaluation::from_pairs(&pairs)
+}
+
+/// Classification of every gesture of `test` by weighted KNN voting among `train`.
+pub fn train_test(
+    train: &[(MotionClass, GestureFeatures)],
+    test: &[(MotionClass, GestureFeatures)],
+    p: &SearchParams,
+) -> Evaluation {
+    let index = GestureIndex::with_band(train.iter().map(|(_, f)| f.clone()).collect(), p.band);
+    let mut searcher = Searcher::new();
+    let pairs: Vec<(MotionClass, Option<MotionClass>)> = test
+        .iter()
+        .map(|(class, f)| {
+            (
+                *class,
+                vote(searcher.search(&index, f, p), |e| train[e].0).map(|v| v.0),
+            )
+        })
+        .collect();
+    Evaluation::from_pairs(&pairs)
+}
+
+fn basic_only(set: &[(MotionClass, GestureFeatures)]) -> Vec<(MotionClass, GestureFeatures)> {
+    set.iter().filter(|(c, _)| c.is_basic()).cloned().collect()
+}
+
+/// [`leave_one_out`] on all classes, on the basic ones, and with each feature removed.
+pub fn leave_one_out_report(set: &[(MotionClass, GestureFeatures)], p: &SearchParams) -> Report {
+    let basic_set = basic_only(set);
+    let run = |p: &SearchParams| (leave_one_out(set, p), leave_one_out(&basic_set, p));
+    report(p, run)
+}
+
+/// [`train_test`] on all classes, on the basic ones (both sets restricted), and with
+/// each feature removed.
+pub fn train_test_report(
+    train: &[(MotionClass, GestureFeatures)],
+    test: &[(MotionClass, GestureFeatures)],
+    p: &SearchParams,
+) -> Report {
+    let (basic_train, basic_test) = (basic_only(train), basic_only(test));
+    let run = |p: &SearchParams| {
+        (
+            train_test(train, test, p),
+            train_test(&basic_train, &basic_test, p),
+        )
+    };
+    report(p, run)
+}
+
+fn report(p: &SearchParams, run: impl Fn(&SearchParams) -> (Evaluation, Evaluation)) -> Report {
+    let (all, basic) = run(p);
+    let ablation = Feature::ALL
+        .iter()
+        .map(|&removed| {
+            let (a, b) = run(&SearchParams {
+                weights: removed.without(&p.weights),
+                ..*p
+            });
+            Ablation {
+                removed,
+                accuracy_all: a.accuracy,
+                accuracy_basic: b.accuracy,
+            }
+        })
+        .collect();
+    Report {
+        all,
+        basic,
+        ablation,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::Vec2;
+    use crate::gesture::library::T_H;
+
+    /// Features told apart by one feature each: class `Twist` rotates, `Expand`
+    /// spreads, `Translate` moves its centroid; `jitter` varies the instances.
+    fn made(class: MotionClass, jitter: f64) -> (MotionClass, GestureFeatures) {
+        let s = |t: usize| t as f64 / (T_H - 1) as f64;
+        let mut f = GestureFeatures {
+            centroid: [Vec2::new(0.5, 0.5); T_H],
+            spread: [0.2 + jitter; T_H],
+            rotation: [0.0; T_H],
+            mobb: [Vec2::new(0.1, 0.4); T_H],
+        };
+        match class {
+            MotionClass::Twist => f.rotation = std::array::from_fn(|t| (3.0 + jitter) * s(t)),
+            MotionClass::Expand => {
+                f.spread = std::array::from_fn(|t| 0.1 + (0.4 + jitter) * s(t));
+                f.mobb = std::array::from_fn(|t| Vec2::new(0.1, 0.2 + 0.8 * s(t)));
+            }
+            _ => f.centroid = std::array::from_fn(|t| Vec2::new(s(t), 0.5 + jitter)),
+        }
+        (class, f)
+    }
+
+    fn set(classes: &[MotionClass], per: usize) -> Vec<(MotionClass, GestureFeatures)> {
+        classes
+            .iter()
+            .flat_map(|&c| (0..per).map(move |i| made(c, 0.01 * i as f64)))
+            .collect()
+    }
+
+    #[test]
+    fn separable_classes_are_all_recognised() {
+        let s = set(
+            &[
+                MotionClass::Translate,
+                MotionClass::Twist,
+                MotionClass::Expand,
+            ],
+            5,
+        );
+        let p = SearchParams {
+            k: 3,
+            ..SearchParams::default()
+        };
+        let e = leave_one_out(&s, &p);
+        assert_eq!(e.accuracy, 1.0);
+        assert_eq!(
+            e.confusion.classes,
+            vec![
+                MotionClass::Translate,
+                MotionClass::Twist,
+                MotionClass::Expand
+            ]
+        );
+        assert_eq!(
+            e.confusion.counts,
+            vec![vec![5, 0, 0], vec![0, 5, 0], vec![0, 0, 5]]
+        );
+        assert_eq!(e.per_class.len(), 3);
+    }
+
+    #[test]
+    fn a_mislabelled_gesture_is_counted_wrong_where_it_is() {
+        let mut s = set(&[MotionClass::Twist, MotionClass::Expand], 4);
+        // A twist labelled as split: its neighbours are the twists.
+        s.push((MotionClass::Split, made(MotionClass::Twist, 0.2).1));
+        let p = SearchParams {
+            k: 3,
+            ..SearchParams::default()
+        };
+        let e = leave_one_out(&s, &p);
+        assert_eq!(
+            e.confusion.classes,
+            vec![MotionClass::Twist, MotionClass::Expand, MotionClass::Split]
+        );
+        assert_eq!(e.confusion.counts[2], vec![1, 0, 0]);
+        assert!((e.accuracy - 8.0 / 9.0).abs() < 1e-12);
+        assert!((e.mean_class_accuracy - 2.0 / 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn removing_the_only_discriminating_feature_hurts() {
+        // Pairs that differ only in the sign of their rotation: without the rotation
+        // feature each gesture's twin is an exact match of the other class.
+        let mut s: Vec<(MotionClass, GestureFeatures)> = Vec::new();
+        for i in 0..6 {
+            let (_, mut f) = made(MotionClass::Twist, 0.01 * i as f64);
+            s.push((MotionClass::Twist, f.clone()));
+            f.rotation =
+                std::array::from_fn(|t| -(3.0 + 0.01 * i as f64) * t as f64 / (T_H - 1) as f64);
+            s.push((MotionClass::Contract, f));
+        }
+        let p = SearchParams {
+            k: 3,
+            ..SearchParams::default()
+        };
+        let r = leave_one_out_report(&s, &p);
+        assert_eq!(r.all.accuracy, 1.0);
+        let rot = r
+            .ablation
+            .iter()
+            .find(|a| a.removed == Feature::Rotation)
+            .map(|a| a.accuracy_all);
+        assert!(rot.is_some_and(|a| a < 0.75), "{rot:?}");
+        let spread = r
+            .ablation
+            .iter()
+            .find(|a| a.removed == Feature::Spread)
+            .map(|a| a.accuracy_all);
+        assert_eq!(spread, Some(1.0));
+        // Both classes are basic, so the basic figure is the same.
+        assert_eq!(r.basic.accuracy, 1.0);
+    }
+
+    #[test]
+    fn train_test_and_basic_restriction() {
+        let train = set(
+            &[
+                MotionClass::Twist,
+                MotionClass::Expand,
+                MotionClass::TwistWhileExpanding,
+            ],
+            3,
+        );
+        let test = set(&[MotionClass::Twist, MotionClass::Expand], 2);
+        let p = SearchParams {
+            k: 3,
+            ..SearchParams::default()
+        };
+        let r = train_test_report(&train, &test, &p);
+        assert_eq!(r.basic.accuracy, 1.0);
+        assert!(r.basic.confusion.classes.iter().all(|c| c.is_basic()));
+        let empty = train_test(&[], &test, &p);
+        assert_eq!((empty.accuracy, empty.unclassified), (0.0, 4));
+    }
+
+    #[test]
+    fn ablated_weights_keep_their_total() {
+        let w = Feature::Spread.without(&Weights::default());
+        assert_eq!(w.beta, 0.0);
+        assert!((w.alpha + w.gamma + w.delta - 1.0).abs() < 1e-12);
+        assert!((w.gamma / w.alpha - 9.0).abs() < 1e-12);
+    }
+}
