@@ -38,8 +38,18 @@ impl GestureTracks {
     /// When the first finger landed, and when the last sample was taken (`None`
     /// when there is no sample).
     pub fn span(&self) -> Option<(Micros, Micros)> {
-        let first = self.fingers.iter().filter_map(|f| f.samples.first()).map(|s| s.t).min()?;
-        let last = self.fingers.iter().filter_map(|f| f.samples.last()).map(|s| s.t).max()?;
+        let first = self
+            .fingers
+            .iter()
+            .filter_map(|f| f.samples.first())
+            .map(|s| s.t)
+            .min()?;
+        let last = self
+            .fingers
+            .iter()
+            .filter_map(|f| f.samples.last())
+            .map(|s| s.t)
+            .max()?;
         Some((first, last))
     }
 }

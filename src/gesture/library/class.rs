@@ -72,7 +72,10 @@ impl MotionClass {
 
     /// Index in [`MotionClass::ALL`] (0–9), the class's number in library files.
     pub fn index(self) -> usize {
-        MotionClass::ALL.iter().position(|&c| c == self).unwrap_or(0)
+        MotionClass::ALL
+            .iter()
+            .position(|&c| c == self)
+            .unwrap_or(0)
     }
 
     /// The class numbered `i` in library files.
@@ -121,6 +124,9 @@ mod tests {
         }
         assert_eq!(MotionClass::ALL.iter().filter(|c| c.is_basic()).count(), 6);
         let e = "spin".parse::<MotionClass>().unwrap_err().to_string();
-        assert!(e.contains("`spin`") && e.contains("twist_while_contracting"), "{e}");
+        assert!(
+            e.contains("`spin`") && e.contains("twist_while_contracting"),
+            "{e}"
+        );
     }
 }
