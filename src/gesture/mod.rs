@@ -3,4 +3,5 @@
 
 pub mod library;
 pub mod segment;
+pub mod synth;
 pub mod track;
