@@ -470,22 +470,34 @@ impl<'a> Reader<'a> {
         )?;
         let mut fingers = Vec::with_capacity(n_f);
         for f in 0..n_f {
+            let base = self.pos;
+            let b = self.take(FINGER_BYTES, "finger", &item)?;
             let mut pts = [Vec2::zeros(); T_H];
-            for (s, p) in pts.iter_mut().enumerate() {
-                let it = Item::Sample {
-                    gesture: i,
-                    finger: f,
-                    sample: s,
+            for (s, (p, w)) in pts.iter_mut().zip(b.chunks_exact(16)).enumerate() {
+                let word = |k: usize| {
+                    f64::from_le_bytes([
+                        w[k],
+                        w[k + 1],
+                        w[k + 2],
+                        w[k + 3],
+                        w[k + 4],
+                        w[k + 5],
+                        w[k + 6],
+                        w[k + 7],
+                    ])
                 };
-                let mut xy = [0.0; 2];
-                for (axis, v) in ["x", "y"].into_iter().zip(&mut xy) {
-                    let at = self.pos;
-                    let b = self.take(8, "point", &it)?;
-                    *v = f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]);
-                    validate::check_coordinate(axis, *v)
-                        .map_err(|pr| self.error(at, it.clone(), pr))?;
+                let (x, y) = (word(0), word(8));
+                for (k, axis, v) in [(0, "x", x), (8, "y", y)] {
+                    validate::check_coordinate(axis, v).map_err(|pr| {
+                        let it = Item::Sample {
+                            gesture: i,
+                            finger: f,
+                            sample: s,
+                        };
+                        self.error(base + 16 * s + k, it, pr)
+                    })?;
                 }
-                *p = Vec2::new(xy[0], xy[1]);
+                *p = Vec2::new(x, y);
             }
             fingers.push(pts);
         }

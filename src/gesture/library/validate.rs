@@ -199,8 +199,9 @@ fn check_orthonormal(basis: &[Vec<f64>]) -> Result<(), Problem> {
         for (j, b) in basis.iter().enumerate().take(i + 1) {
             let dot: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
             let expected = if i == j { 1.0 } else { 0.0 };
-            // `!(<=)` also catches a NaN dot product of huge finite values.
-            if !((dot - expected).abs() <= ORTHONORMAL_TOLERANCE) {
+            // A NaN dot product (of huge finite values) is refused too.
+            let off = (dot - expected).abs();
+            if off.is_nan() || off > ORTHONORMAL_TOLERANCE {
                 return Err(Problem::NotOrthonormal {
                     i: j,
                     j: i,
