@@ -237,7 +237,7 @@ fn class_list(classes: &[MotionClass]) -> String {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("{file}{}: {item}: {problem}", match .offset { Some(o) => format!(": offset {o}"), None => String::new() })]
 pub struct LibraryError {
-    /// The file's name, as given to the reader (`(in memory)` for [`validate`](super::validate)).
+    /// The file's name, as given to the reader (`(in memory)` for [`validate`](fn@super::validate)).
     pub file: String,
     /// The byte offset of the value or record at fault, when read from bytes.
     pub offset: Option<usize>,

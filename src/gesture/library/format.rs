@@ -56,7 +56,7 @@ const CHECKSUM_BYTES: usize = 4;
 
 /// Serialises a library (layout in the module doc).
 ///
-/// Writes any library as it is; one that [`validate`](super::validate) refuses is
+/// Writes any library as it is; one that [`validate`](fn@super::validate) refuses is
 /// written faithfully and refused by [`read_library`].
 pub fn write_library(lib: &Library) -> Vec<u8> {
     let size = HEADER_BYTES

@@ -1,4 +1,4 @@
-//! Random libraries that pass [`validate`](super::validate): the inputs of the
+//! Random libraries that pass [`validate`](fn@super::validate): the inputs of the
 //! format's property tests, its benchmark and its fuzz seeds. Their numbers satisfy
 //! every invariant (orthonormal bases, symmetric positive definite covariances,
 //! weights summing to 1) but describe no real gesture or crowd motion.
