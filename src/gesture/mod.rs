@@ -11,4 +11,5 @@ pub mod library;
 pub mod mobb;
 pub mod resample;
 pub mod segment;
+pub mod synth;
 pub mod track;

@@ -2,10 +2,26 @@
 //! (gesture-driven section 4), its file format and the shipped library.
 
 mod class;
+mod error;
+mod format;
 mod model;
+mod random;
+mod shipped;
+mod validate;
 
 pub use class::{MotionClass, UnknownClass};
+pub use error::{Item, LibraryError, Problem};
+pub use format::{
+    crc32, read_library, read_library_with, reseal, write_library, FORMAT_VERSION, MAGIC,
+    MAX_LIBRARY_BYTES,
+};
 pub use model::{
     GmmComponent, Library, LibraryGesture, MotionFeatures, Resampled, MAX_COMPONENTS, S_H,
     TRAJ_DIM, T_H,
+};
+pub use random::{random_library, RandomLibrarySpec};
+pub use shipped::{shipped_from, SHIPPED_NAME};
+pub use validate::{
+    validate, validate_with, LoadPolicy, IN_MEMORY, MAX_GMM_COMPONENTS, MAX_MOTION_DURATION_S,
+    MAX_ORIGIN_BYTES, ORTHONORMAL_TOLERANCE, POINT_SLACK, SYMMETRY_TOLERANCE, WEIGHT_SUM_TOLERANCE,
 };
