@@ -2,3 +2,13 @@
 //! a crowd motion's features (FPCA and a Gaussian mixture over eigenscores),
 //! blending the motions of a gesture's neighbours, synthesising trajectories for the
 //! crowd at hand, and the controller that walks agents along them.
+
+mod crowd_motion;
+mod error;
+mod fpca;
+
+pub use crowd_motion::{
+    deserialise, resample_hermite, serialise, start_centroid_radius, CrowdMotion, SPREAD_FLOOR_REL,
+};
+pub use error::MotionError;
+pub use fpca::{fpca, reconstruct, Fpca, ReconstructionError};
