@@ -12,3 +12,8 @@ pub use crowd_motion::{
 };
 pub use error::MotionError;
 pub use fpca::{fpca, reconstruct, Fpca, ReconstructionError};
+mod gmm;
+pub use gmm::{
+    fit, fit_auto, log_likelihood, standard_normal_pair, validate_mixture, GmmFit, GmmParams,
+    GmmSampler, PRUNE_WEIGHT,
+};
