@@ -17,3 +17,9 @@ pub use gmm::{
     fit, fit_auto, log_likelihood, standard_normal_pair, validate_mixture, GmmFit, GmmParams,
     GmmSampler, PRUNE_WEIGHT,
 };
+mod features;
+pub use features::{features, validate_features, FeatureParams};
+mod blend;
+pub use blend::{blend, combine, modified_gram_schmidt, GS_DROP_REL};
+mod synth;
+pub use synth::{synthesise, Placement, Synthesis, Synthesiser, MIN_CROWD_SCALE_M};
