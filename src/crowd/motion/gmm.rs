@@ -915,4 +915,48 @@ mod tests {
         ));
         assert_eq!(GmmSampler::new(&[]).err(), Some(MotionError::NoComponents));
     }
+
+    /// Writes the cross-check dataset and this fit's log-likelihood per sample for
+    /// `benches/gmm_crosscheck.py` (scikit-learn's `GaussianMixture` on the same data)
+    /// into `target/gmm_crosscheck/`.
+    #[test]
+    #[ignore = "writes files for benches/gmm_crosscheck.py"]
+    fn gmm_crosscheck_dataset() {
+        let mut rng = SplitMix64::new(2024);
+        let mut x = gaussian(
+            &mut rng,
+            180,
+            &[0.0, 0.0, 0.0],
+            &[1.0, 0.0, 0.0, 0.4, 0.8, 0.0, -0.3, 0.2, 0.5],
+        );
+        x.extend(gaussian(
+            &mut rng,
+            120,
+            &[3.0, 1.0, -1.0],
+            &[0.6, 0.0, 0.0, 0.1, 1.1, 0.0, 0.0, 0.3, 0.7],
+        ));
+        let p = GmmParams {
+            reg: 1e-9,
+            tol: 1e-13,
+            max_iter: 2000,
+            n_init: 8,
+            ..GmmParams::default()
+        };
+        let f = fit(&x, 2, 0, &p).unwrap();
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/gmm_crosscheck");
+        std::fs::create_dir_all(&dir).unwrap();
+        let csv: String = x
+            .iter()
+            .map(|r| format!("{:.17e},{:.17e},{:.17e}\n", r[0], r[1], r[2]))
+            .collect();
+        std::fs::write(dir.join("data.csv"), csv).unwrap();
+        let json = format!(
+            "{{\"k\": 2, \"ll_per_sample\": {:.17e}, \"converged\": {}, \"weights\": [{:.6}, {:.6}]}}\n",
+            f.log_likelihood / x.len() as f64,
+            f.converged,
+            f.components[0].weight,
+            f.components[1].weight
+        );
+        std::fs::write(dir.join("rust.json"), json).unwrap();
+    }
 }

@@ -3,23 +3,23 @@
 //! blending the motions of a gesture's neighbours, synthesising trajectories for the
 //! crowd at hand, and the controller that walks agents along them.
 
+mod blend;
 mod crowd_motion;
 mod error;
+mod features;
 mod fpca;
+mod gmm;
+mod synth;
 
+pub use blend::{blend, combine, modified_gram_schmidt, GS_DROP_REL};
 pub use crowd_motion::{
     deserialise, resample_hermite, serialise, start_centroid_radius, CrowdMotion, SPREAD_FLOOR_REL,
 };
 pub use error::MotionError;
+pub use features::{features, validate_features, FeatureParams};
 pub use fpca::{fpca, reconstruct, Fpca, ReconstructionError};
-mod gmm;
 pub use gmm::{
     fit, fit_auto, log_likelihood, standard_normal_pair, validate_mixture, GmmFit, GmmParams,
     GmmSampler, PRUNE_WEIGHT,
 };
-mod features;
-pub use features::{features, validate_features, FeatureParams};
-mod blend;
-pub use blend::{blend, combine, modified_gram_schmidt, GS_DROP_REL};
-mod synth;
 pub use synth::{synthesise, Placement, Synthesis, Synthesiser, MIN_CROWD_SCALE_M};
