@@ -11,3 +11,23 @@ pub use simulate::{
     library_specs, measure, simulate, MotionMeasure, MotionSpec, SimulateError, SimulatedMotion,
     ARRIVE_TOLERANCE_M, LIBRARY_AGENTS, REST_SPEED_M_S, SETTLE_CAP_S, WAYPOINTS_PER_PHASE,
 };
+mod blend;
+mod crowd_motion;
+mod error;
+mod features;
+mod fpca;
+mod gmm;
+mod synth;
+
+pub use blend::{blend, combine, modified_gram_schmidt, GS_DROP_REL};
+pub use crowd_motion::{
+    deserialise, resample_hermite, serialise, start_centroid_radius, CrowdMotion, SPREAD_FLOOR_REL,
+};
+pub use error::MotionError;
+pub use features::{features, validate_features, FeatureParams};
+pub use fpca::{fpca, reconstruct, Fpca, ReconstructionError};
+pub use gmm::{
+    fit, fit_auto, log_likelihood, standard_normal_pair, validate_mixture, GmmFit, GmmParams,
+    GmmSampler, PRUNE_WEIGHT,
+};
+pub use synth::{synthesise, Placement, Synthesis, Synthesiser, MIN_CROWD_SCALE_M};
