@@ -33,6 +33,9 @@
 //! class is the class of the heaviest neighbour (the first among equals), the
 //! duration the weighted mean.
 
+// NaN-aware comparisons (`!(a > b)` is true for NaN) are deliberate.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::error::MotionError;
 use super::features::validate_features;
 use crate::crowd::assign::{CostMatrix, Solver};

@@ -9,6 +9,9 @@
 //! point is at the origin"; the uniform scale is ours, so that motions of crowds of
 //! any size and density blend, and synthesis scales them to the crowd at hand).
 
+// NaN-aware comparisons (`!(a > b)` is true for NaN) are deliberate.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::error::MotionError;
 use crate::geom::Vec2;
 use crate::gesture::library::{S_H, TRAJ_DIM};

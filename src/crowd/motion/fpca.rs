@@ -91,8 +91,7 @@ pub fn fpca(m: &CrowdMotion, max_components: usize) -> Result<Fpca, MotionError>
     let mean: Vec<f64> = (0..TRAJ_DIM)
         .map(|c| x.column(c).sum() / rows as f64)
         .collect();
-    for c in 0..TRAJ_DIM {
-        let mc = mean[c];
+    for (c, &mc) in mean.iter().enumerate() {
         x.column_mut(c).iter_mut().for_each(|v| *v -= mc);
     }
     // The eigen-decomposition of the scatter matrix XᵀX = V Σ² Vᵀ (see the module

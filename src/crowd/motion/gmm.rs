@@ -23,6 +23,9 @@
 //!   empty component; components whose weight falls below [`PRUNE_WEIGHT`] are
 //!   dropped at the end.
 
+// NaN-aware comparisons (`!(a > b)` is true for NaN) are deliberate.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::error::MotionError;
 use crate::gesture::library::GmmComponent;
 use crate::rng::SplitMix64;
