@@ -27,7 +27,9 @@ mod calibrate;
 mod check;
 mod devices;
 mod formations;
+mod gesture;
 mod hid;
+mod library;
 mod output;
 mod record;
 mod running;
@@ -130,6 +132,12 @@ enum Cmd {
         #[arg(long, short)]
         output: Option<PathBuf>,
     },
+    /// Gesture commands: recognise the gestures of recordings.
+    #[command(subcommand)]
+    Gesture(gesture::GestureCmd),
+    /// The gesture library: build, show, evaluate, add to it, make a test set.
+    #[command(subcommand)]
+    Library(library::LibraryCmd),
     /// Regenerate the shipped recordings (deterministic).
     SynthRecordings {
         /// Output directory.
@@ -232,6 +240,25 @@ pub fn main() -> i32 {
         Cmd::Record(a) => done(record::record(a)),
         Cmd::Hid(c) => done(hid::hid(c)),
         Cmd::Scene(c) => scene::scene(c),
+        Cmd::Gesture(c) => {
+            let config = match &c {
+                gesture::GestureCmd::Classify { config, .. } => config.clone(),
+            };
+            done(find_config(config.as_deref()).and_then(|(cfg, _)| gesture::gesture(c, &cfg)))
+        }
+        Cmd::Library(c) => {
+            let config = match &c {
+                library::LibraryCmd::Eval { config, .. }
+                | library::LibraryCmd::Add { config, .. } => config.clone(),
+                _ => None,
+            };
+            let cfg = match &c {
+                // Building needs no config (nor a library to load one with).
+                library::LibraryCmd::Build { .. } | library::LibraryCmd::TestSet { .. } => Ok(None),
+                _ => find_config(config.as_deref()).map(|(cfg, _)| Some(cfg)),
+            };
+            done(cfg.and_then(|cfg| library::library(c, cfg.as_ref())))
+        }
         Cmd::Formations { config, output } => done(
             find_config(config.as_deref())
                 .and_then(|(cfg, _)| formations::formations(&cfg, output.as_deref())),

@@ -100,6 +100,7 @@ pub const FIELDS: &[FieldClass] = &[
     live("mesh.field_step_m", "from the next tick"),
     live("controls.group_window_ms", "from the next touch"),
     live("controls.hand_span_mm", "from the next touch"),
+    live("controls.gesture_span_mm", "from the next touch"),
     live("controls.grab_radius_m", "from the next touch"),
     live("controls.gesture_grace_ms", "from the next touch"),
     live("controls.checkpoint_spacing_m", "from the next touch"),
@@ -290,6 +291,7 @@ pub fn plan_reload(running: &Config, new: Config) -> ReloadPlan {
             Ok(mut merged) => {
                 merged.loaded_scene = new.loaded_scene.clone();
                 merged.library = new.library.clone();
+                merged.recogniser = new.recogniser.clone();
                 merged
             }
             // Every value came from a config of this build, so it reads back; if it

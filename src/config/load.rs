@@ -5,9 +5,10 @@ use super::error::{ConfigIssue, Error};
 use super::inputs::InputConfig;
 use super::model::Config;
 use crate::crowd::formation::FormationLibrary;
+use crate::gesture::recognise::Recogniser;
 use crate::located::{locate_field, parse_strict, read_capped};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// Largest config file read (bytes).
 pub const MAX_CONFIG_BYTES: u64 = 1 << 20;
@@ -85,6 +86,15 @@ impl Config {
                 }
             }
         }
+        if problems.is_empty() && cfg.gestures.enabled {
+            match load_recogniser(cfg.gestures.library.as_deref(), cfg.gestures.band) {
+                Ok(r) => cfg.recogniser = Some(r),
+                Err(e) => problems.push((
+                    "gestures.library".to_string(),
+                    format!("gesture library not usable: {e}"),
+                )),
+            }
+        }
         if problems.is_empty() {
             Ok(cfg)
         } else {
@@ -117,6 +127,57 @@ impl Config {
                 }
                 InputConfig::Device { .. } => {}
             }
+        }
+    }
+}
+
+/// The gesture library at `path` (the shipped one for `None`), indexed for
+/// recognition with DTW band `band`. The shipped library is read and indexed once
+/// per process (every config shares it); a file is read on every load, so a
+/// SIGHUP picks up a new library and a corrupt one is refused with the config,
+/// leaving the running one in place.
+///
+/// # Errors
+/// The file's read error or [`crate::gesture::library::LibraryError`], as text.
+pub fn load_recogniser(path: Option<&Path>, band: Option<u32>) -> Result<Arc<Recogniser>, String> {
+    use crate::gesture::library::{read_library, shipped, MAX_LIBRARY_BYTES, SHIPPED_NAME};
+    let band = band.map(|b| b as usize);
+    match path {
+        None if band.is_none() => {
+            static SHIPPED: OnceLock<Result<Arc<Recogniser>, String>> = OnceLock::new();
+            SHIPPED
+                .get_or_init(|| {
+                    let lib = shipped().map_err(|e| e.to_string())?;
+                    let name = format!("{SHIPPED_NAME} (shipped)");
+                    Recogniser::new(lib, name, None)
+                        .map(Arc::new)
+                        .map_err(|e| e.to_string())
+                })
+                .clone()
+        }
+        None => {
+            let lib = shipped().map_err(|e| e.to_string())?;
+            Recogniser::new(lib, format!("{SHIPPED_NAME} (shipped)"), band)
+                .map(Arc::new)
+                .map_err(|e| e.to_string())
+        }
+        Some(p) => {
+            let len = std::fs::metadata(p)
+                .map_err(|e| format!("{}: cannot read: {e}", p.display()))?
+                .len();
+            if len > MAX_LIBRARY_BYTES as u64 {
+                return Err(format!(
+                    "{}: {len} bytes, more than a library may have ({MAX_LIBRARY_BYTES})",
+                    p.display()
+                ));
+            }
+            let bytes =
+                std::fs::read(p).map_err(|e| format!("{}: cannot read: {e}", p.display()))?;
+            let name = p.display().to_string();
+            let lib = read_library(&bytes, &name).map_err(|e| e.to_string())?;
+            Recogniser::new(lib, name, band)
+                .map(Arc::new)
+                .map_err(|e| e.to_string())
         }
     }
 }

@@ -38,7 +38,7 @@ pub use live::{
     field_class, plan_reload, show_value, unclassified_fields, FieldChange, FieldClass,
     ReloadClass, ReloadPlan, FIELDS,
 };
-pub use load::{locate_issues, search_path, DEFAULT_CONFIG_RON, MAX_CONFIG_BYTES};
+pub use load::{load_recogniser, locate_issues, search_path, DEFAULT_CONFIG_RON, MAX_CONFIG_BYTES};
 pub use model::{
     AssignmentConfig, AssignmentCost, BudgetsConfig, Config, ControlsConfig, CrowdConfig,
     FormationsConfig, LogLevel, MeshConfig, PipelineConfig, RealtimeConfig, SocketConfig,

@@ -6,6 +6,7 @@ use super::inputs::InputConfig;
 use crate::crowd::environment::Scene;
 use crate::crowd::formation::{FormationDef, FormationLibrary, DEFAULT_LAMBDA};
 use crate::geom::Rect;
+use crate::gesture::recognise::Recogniser;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -112,6 +113,11 @@ pub struct ControlsConfig {
     pub group_window_ms: u64,
     /// ...and only if within this distance of one of its fingers on the surface (mm).
     pub hand_span_mm: f64,
+    /// A finger landing in open space joins a gesture under way if within this
+    /// distance of one of its fingers (mm): a person's two hands make one gesture
+    /// (join, split); farther, another person's gesture begins.
+    #[serde(default = "default_gesture_span_mm")]
+    pub gesture_span_mm: f64,
     /// A touch grabs the crowd if it lands within this distance of the mesh (m).
     pub grab_radius_m: f64,
     /// A gesture ends this long after its last finger lifts (ms).
@@ -123,6 +129,13 @@ pub struct ControlsConfig {
     /// Gain of the opposing force that slows constraints while agents lag (1/s):
     /// force = gain × mean agent-to-goal distance, never more than the constraint speed.
     pub opposing_gain_per_s: f64,
+}
+
+/// Default of `controls.gesture_span_mm` (mm): about a person's reach with both hands.
+pub const DEFAULT_GESTURE_SPAN_MM: f64 = 600.0;
+
+fn default_gesture_span_mm() -> f64 {
+    DEFAULT_GESTURE_SPAN_MM
 }
 
 /// Cost of sending an agent to a goal.
@@ -317,6 +330,10 @@ pub struct Config {
     /// out: the defaults).
     #[serde(default)]
     pub gestures: GesturesConfig,
+    /// The gesture library of `gestures.library` (or the shipped one), loaded and
+    /// indexed with the config.
+    #[serde(skip)]
+    pub(super) recogniser: Option<Arc<Recogniser>>,
     /// Threads, queues and budgets.
     pub pipeline: PipelineConfig,
     /// The Unix socket.
@@ -327,6 +344,12 @@ impl Config {
     /// The loaded scene (`None` without a `scene` field).
     pub fn loaded_scene(&self) -> Option<&Arc<Scene>> {
         self.loaded_scene.as_ref()
+    }
+
+    /// The gesture library, indexed for recognition (`None` when gestures are
+    /// disabled).
+    pub fn gesture_recogniser(&self) -> Option<&Arc<Recogniser>> {
+        self.recogniser.as_ref()
     }
 
     /// The formation shapes: shipped and `formations.shapes`.

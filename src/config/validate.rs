@@ -145,6 +145,14 @@ impl Config {
             ),
         );
         check(
+            k.gesture_span_mm > 0.0 && k.gesture_span_mm.is_finite(),
+            "controls.gesture_span_mm",
+            format!(
+                "gesture span must be positive millimetres, got {}",
+                k.gesture_span_mm
+            ),
+        );
+        check(
             k.grab_radius_m >= 0.0 && k.grab_radius_m.is_finite(),
             "controls.grab_radius_m",
             format!(

@@ -113,6 +113,7 @@ impl Engine {
             && self.switch_outbox.is_none()
             && self.segmenter.controls().is_empty()
             && self.segmenter.gestures().is_empty()
+            && !self.gestures.playing()
             && self.direct.is_at_rest()
     }
 
@@ -124,6 +125,7 @@ impl Engine {
         }
         self.segmenter.cancel_all(now, &mut self.seg_out);
         self.forget_switches();
+        self.forget_gestures(now);
         if self.formation_name != START {
             self.restore_start(now);
         }

@@ -18,6 +18,8 @@
 
 mod commands;
 mod error;
+mod gesture;
+mod gesture_state;
 mod params;
 mod pool;
 mod replay;
@@ -30,7 +32,10 @@ mod tick;
 mod tests;
 
 pub use error::{CommandError, SwitchError};
-pub use params::{inline_planner, planner_for, planner_params, point_metric, same_scene};
+pub use params::{
+    inline_planner, planner_for, planner_params, point_metric, same_scene, search_params,
+    segment_params, tap_thresholds,
+};
 pub use replay::{replay_virtual, VirtualClock};
 pub use state::{Engine, EngineCounters, MAX_TICK_S, RADIUS_FIT};
 pub use tick::TickOutput;

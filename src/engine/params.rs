@@ -6,6 +6,9 @@ use crate::crowd::agents::AgentParams;
 use crate::crowd::assign::PointMetric;
 use crate::crowd::control::DirectParams;
 use crate::crowd::environment::{FieldParams, Planner, PlannerParams, Scene, MESH_FIELD_RANGE_M};
+use crate::gesture::capture::TapThresholds;
+use crate::gesture::dtw::Weights;
+use crate::gesture::knn::SearchParams;
 use crate::gesture::segment::SegmentParams;
 use crate::vocab::Micros;
 use std::sync::Arc;
@@ -59,10 +62,38 @@ pub(super) fn agent_params(cfg: &Config) -> AgentParams {
     }
 }
 
-pub(super) fn segment_params(cfg: &Config) -> SegmentParams {
+/// The tap and length thresholds of the config's `gestures` section.
+pub fn tap_thresholds(cfg: &Config) -> TapThresholds {
+    let g = &cfg.gestures;
+    TapThresholds {
+        min_duration: Micros(g.min_duration_ms.saturating_mul(1000)),
+        min_travel_mm: g.min_travel_mm,
+        max_duration: Micros::from_secs_f64(g.max_duration_s),
+    }
+}
+
+/// The search parameters of the config's `gestures` section (K, eq. 12's weights,
+/// the band).
+pub fn search_params(cfg: &Config) -> SearchParams {
+    let g = &cfg.gestures;
+    SearchParams {
+        k: g.k as usize,
+        weights: Weights {
+            alpha: g.weights.alpha,
+            beta: g.weights.beta,
+            gamma: g.weights.gamma,
+            delta: g.weights.delta,
+        },
+        band: g.band.map(|b| b as usize),
+    }
+}
+
+/// The segmenter's parameters (grouping window, hand span, gesture grace).
+pub fn segment_params(cfg: &Config) -> SegmentParams {
     SegmentParams {
         group_window: Micros(cfg.controls.group_window_ms * 1000),
         hand_span_mm: cfg.controls.hand_span_mm,
+        gesture_span_mm: cfg.controls.gesture_span_mm,
         gesture_grace: Micros(cfg.controls.gesture_grace_ms * 1000),
     }
 }

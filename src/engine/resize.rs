@@ -118,6 +118,7 @@ impl Engine {
             Some((name, None, Vec2::new(1.0, 0.0)))
         });
         self.forget_switches();
+        self.forget_gestures(now);
         self.start_samples = match p.start_samples {
             Some(s) => s,
             None => self.direct.samples().to_vec(),

@@ -119,6 +119,8 @@ pub struct Engine {
     pub(super) switch_outbox: Option<SwitchRequest>,
     /// The resize being prepared, if any (`resize.rs`).
     pub(super) resize: ResizeState,
+    /// Gesture commands: capture, recognition, the motion playing (`gesture.rs`).
+    pub(super) gestures: super::gesture_state::Gestures,
 }
 
 impl Engine {
@@ -189,7 +191,10 @@ impl Engine {
             switch_queued: None,
             switch_outbox: None,
             resize: ResizeState::default(),
+            gestures: super::gesture_state::Gestures::new(cfg, inline_assignment),
         };
+        e.segmenter
+            .set_all_touches_are_gestures(cfg.gestures.all_touches_are_gestures);
         e.start_samples = e.direct.samples().to_vec();
         e.fit_radius();
         if inline_assignment {
@@ -282,6 +287,9 @@ impl Engine {
         self.formation_lambda = cfg.formations.lambda;
         self.agent_params = agent_params(cfg);
         self.segmenter.set_params(segment_params(cfg));
+        self.segmenter
+            .set_all_touches_are_gestures(cfg.gestures.all_touches_are_gestures);
+        self.gestures.configure(cfg);
         self.direct.set_params(direct_params(cfg));
         self.fit_radius();
         let params = planner_params(cfg);

@@ -6,7 +6,7 @@ use crate::crowd::environment::steer_target;
 use crate::geom::Vec2;
 use crate::gesture::segment::{control_kind, Segment, TouchPoint};
 use crate::vocab::{AgentView, ContactFlags, ContactId, Event, MeshView, Micros, Snapshot};
-use crate::vocab::{TouchFrame, TouchView};
+use crate::vocab::{PlanView, TouchFrame, TouchView};
 use std::sync::Arc;
 
 /// What one tick produced.
@@ -17,6 +17,8 @@ pub struct TickOutput<'a> {
     pub mesh: Option<Arc<MeshView>>,
     /// Events of this tick.
     pub events: &'a [Event],
+    /// The planned trajectories of a gesture motion that started this tick.
+    pub plan: Option<Arc<PlanView>>,
 }
 
 impl Engine {
@@ -38,9 +40,19 @@ impl Engine {
                 glass_mm: Vec2::new(c.x as f64 * self.glass_mm.x, c.y as f64 * self.glass_mm.y),
                 flags: c.flags,
             };
-            let on_crowd =
-                c.flags.contains(ContactFlags::DOWN) && self.direct.hits(world, self.grab_radius_m);
+            let down = c.flags.contains(ContactFlags::DOWN);
+            let on_crowd = down
+                && if self.gestures.playing() {
+                    self.near_agent(world)
+                } else {
+                    self.direct.hits(world, self.grab_radius_m)
+                };
             self.segmenter.touch(t, &tp, on_crowd, &mut self.seg_out);
+            self.capture_touch(t, &tp);
+            if on_crowd && self.gestures.playing() && !self.segmenter.all_touches_are_gestures() {
+                // The person takes the crowd in hand: the motion stops where it is.
+                self.cancel_gesture_motion(t);
+            }
             if c.flags.ended() {
                 self.touches.retain(|v| v.id != c.id.0);
             } else if let Some(v) = self.touches.iter_mut().find(|v| v.id == c.id.0) {
@@ -126,7 +138,9 @@ impl Engine {
                 );
             }
         }
-        if !self.paused {
+        if self.step_gesture_motion(dt, now) {
+            // A gesture's crowd motion moves the agents.
+        } else if !self.paused {
             if self.scene.is_some() {
                 self.step_in_scene(dt);
             } else {
@@ -233,6 +247,7 @@ impl Engine {
         TickOutput {
             snapshot: snap,
             mesh,
+            plan: self.take_plan(),
             events: &self.events,
         }
     }
@@ -276,7 +291,8 @@ impl Engine {
     }
 
     pub(super) fn translate_segments(&mut self, now: Micros) {
-        for s in self.seg_out.drain(..) {
+        for k in 0..self.seg_out.len() {
+            let s = self.seg_out[k].clone();
             let ev = match s {
                 Segment::ControlBegin(id) | Segment::ControlUpdate(id) => {
                     let fingers = self
@@ -323,18 +339,14 @@ impl Engine {
                     contacts,
                     duration,
                     cancelled,
-                } => Event::GestureEnd {
-                    id,
-                    fingers,
-                    contacts,
-                    duration_us: duration.0,
-                    cancelled,
-                    recognition: None,
-                    rejected: None,
-                    t: now,
+                } => match self.gesture_ended(id, fingers, contacts, duration.0, cancelled, now) {
+                    Some(e) => e,
+                    // Its event goes out with its recognition.
+                    None => continue,
                 },
             };
             self.events.push(ev);
         }
+        self.seg_out.clear();
     }
 }

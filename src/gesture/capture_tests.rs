@@ -20,6 +20,7 @@ impl Table {
             seg: Segmenter::new(SegmentParams {
                 group_window: Micros(150 * MS),
                 hand_span_mm: 200.0,
+                gesture_span_mm: 200.0,
                 gesture_grace: Micros(250 * MS),
             }),
             cap: GestureCapture::new(params, TapThresholds::default()),

@@ -64,6 +64,11 @@ pub struct SegmentParams {
     pub group_window: Micros,
     /// ...if within this distance of one of its fingers on the glass (mm).
     pub hand_span_mm: f64,
+    /// A finger landing in open space joins a gesture under way if within this
+    /// distance of one of its fingers on the glass (mm): a person's second hand
+    /// (gesture-driven section 4: join and split are drawn with two hands). Farther,
+    /// it starts a gesture of its own (another person at the table).
+    pub gesture_span_mm: f64,
     /// A gesture ends this long after its last lift (µs).
     pub gesture_grace: Micros,
 }
@@ -360,7 +365,11 @@ impl Segmenter {
     }
 
     fn near(&self, fingers: &[Finger], p: Vec2) -> bool {
-        let span2 = self.params.hand_span_mm * self.params.hand_span_mm;
+        self.near_span(fingers, p, self.params.hand_span_mm)
+    }
+
+    fn near_span(&self, fingers: &[Finger], p: Vec2, span_mm: f64) -> bool {
+        let span2 = span_mm * span_mm;
         fingers
             .iter()
             .any(|f| (f.glass_mm - p).norm_squared() <= span2)
@@ -408,7 +417,7 @@ impl Segmenter {
                 g.state != GestureState::Ended
                     && g.fingers.len() < MAX_GESTURE_CONTACTS
                     && g.down_count() < MAX_FINGERS
-                    && self.near(&g.fingers, t.glass_mm)
+                    && self.near_span(&g.fingers, t.glass_mm, self.params.gesture_span_mm)
             });
             match join {
                 Some(i) => {
@@ -573,6 +582,7 @@ mod tests {
         SegmentParams {
             group_window: Micros(150 * MS),
             hand_span_mm: 200.0,
+            gesture_span_mm: 200.0,
             gesture_grace: Micros(250 * MS),
         }
     }

@@ -25,6 +25,10 @@ pub const MAX_RESIZE_WAITERS: usize = 64;
 /// stale to the worker giving it up.
 pub const ABANDON_BUDGET_US: u64 = 50_000;
 
+/// Budget of a gesture command on the worker: recognition, blending, synthesis
+/// and assignment (µs; issue figure: 20 ms at 1,000 agents).
+pub const GESTURE_BUDGET_US: u64 = 20_000;
+
 /// The control thread's figures for one stats interval.
 #[derive(Clone, Debug, Default)]
 pub struct ControlStats {
@@ -86,6 +90,8 @@ pub(super) struct ControlLoop {
     switch_out: Option<FormationJob>,
     /// A resize request the formation thread had no room for yet.
     resize_out: Option<FormationJob>,
+    /// Gesture work the formation thread had no room for yet.
+    gesture_out: Option<FormationJob>,
     /// `set_agent_count` commands acknowledged once their resize is applied.
     resize_waiters: Vec<(ClientId, serde_json::Value)>,
     /// What the workers poll to give up stale jobs.
@@ -95,6 +101,7 @@ pub(super) struct ControlLoop {
     t_control: StageTimer,
     t_assign: StageTimer,
     t_abandon: StageTimer,
+    t_gesture: StageTimer,
     last_stats: Micros,
     last_gesture: Option<String>,
     publish_overflow: u64,
@@ -129,6 +136,7 @@ impl ControlLoop {
             idle_job: Some(Box::new(job)),
             switch_out: None,
             resize_out: None,
+            gesture_out: None,
             resize_waiters: Vec::with_capacity(MAX_RESIZE_WAITERS),
             fresh,
             t_input: StageTimer::new("input", b.input_us),
@@ -136,6 +144,7 @@ impl ControlLoop {
             t_control: StageTimer::new("control", b.control_us),
             t_assign: StageTimer::new("assignment", b.assignment_us),
             t_abandon: StageTimer::new("abandon", ABANDON_BUDGET_US),
+            t_gesture: StageTimer::new("gesture", GESTURE_BUDGET_US),
             last_stats: monotonic_now(),
             last_gesture: None,
             publish_overflow: 0,
@@ -326,6 +335,11 @@ impl ControlLoop {
                         self.answer_resize_waiters(Ok(()));
                     }
                 }
+                FormationDone::Gesture(p, us) => {
+                    self.t_gesture.record(us);
+                    self.engine.apply_gesture(*p, us, now);
+                }
+                FormationDone::Remesh(p) => self.engine.apply_remesh(*p, now),
                 FormationDone::Abandoned(us) => {
                     self.t_abandon.record(us);
                 }
@@ -334,6 +348,7 @@ impl ControlLoop {
         let out = self.engine.tick(now);
         let snapshot = out.snapshot;
         let mesh = out.mesh;
+        let plan = out.plan;
         let mut describe = None;
         let events: Vec<Arc<Event>> = out.events.iter().cloned().map(Arc::new).collect();
         for e in &events {
@@ -351,6 +366,9 @@ impl ControlLoop {
         if let Some(m) = mesh {
             self.send(Outgoing::Mesh(m));
         }
+        if let Some(p) = plan {
+            self.send(Outgoing::Plan(p));
+        }
         self.send(Outgoing::Snapshot(snapshot));
         // What is current goes out before any job does: a worker that takes a job
         // sees it as current unless something superseded it since.
@@ -363,7 +381,17 @@ impl ControlLoop {
         if let Some(r) = self.engine.take_resize_request() {
             self.resize_out = Some(FormationJob::Resize(Box::new(r)));
         }
-        for slot in [&mut self.switch_out, &mut self.resize_out] {
+        if self.gesture_out.is_none() {
+            self.gesture_out = self
+                .engine
+                .take_gesture_job()
+                .map(|j| FormationJob::Gesture(Box::new(j)));
+        }
+        for slot in [
+            &mut self.gesture_out,
+            &mut self.switch_out,
+            &mut self.resize_out,
+        ] {
             if let Some(job) = slot.take() {
                 if let Err(TrySendError::Full(job)) = self.ch.formation.try_send(job) {
                     *slot = Some(job);
@@ -409,6 +437,7 @@ impl ControlLoop {
                     &mut self.t_control,
                     &mut self.t_assign,
                     &mut self.t_abandon,
+                    &mut self.t_gesture,
                 ]
                 .into_iter()
                 .map(|t| {

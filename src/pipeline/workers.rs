@@ -9,7 +9,9 @@
 use crate::crowd::assign::{Assigner, Cancel, PointMetric};
 use crate::crowd::control::{PreparedResize, PreparedSwitch, ResizeRequest, SwitchRequest};
 use crate::crowd::environment::{Planner, PlannerParams, Scene};
+use crate::crowd::motion::{GestureJob, PreparedGesture, PreparedRemesh, Synthesiser};
 use crate::geom::Vec2;
+use crate::gesture::knn::Searcher;
 use crate::rt::monotonic_now;
 use crate::vocab::Micros;
 use crossbeam_channel::{Receiver, Sender};
@@ -195,6 +197,8 @@ pub(super) enum FormationJob {
     Switch(Box<SwitchRequest>),
     /// A new crowd size to prepare.
     Resize(Box<ResizeRequest>),
+    /// A gesture to recognise and play, or a mesh to rebuild after its motion.
+    Gesture(Box<GestureJob>),
 }
 
 /// What the formation thread hands back.
@@ -204,6 +208,10 @@ pub(super) enum FormationDone {
     Switch(Box<PreparedSwitch>),
     /// A prepared resize.
     Resize(Box<PreparedResize>),
+    /// A gesture recognised and its motion synthesised, with the µs it took.
+    Gesture(Box<PreparedGesture>, u64),
+    /// A mesh rebuilt around the crowd after a gesture motion.
+    Remesh(Box<PreparedRemesh>),
     /// A job given up because a newer one superseded it: µs from the change to the
     /// preparation giving up.
     Abandoned(u64),
@@ -221,6 +229,9 @@ pub(super) fn formation_worker(
     fresh: Arc<Freshness>,
 ) {
     crate::rt::make_background("formation");
+    // Gesture commands' workspaces, reused from gesture to gesture.
+    let mut searcher = Searcher::new();
+    let mut synth = Synthesiser::new();
     for job in requests.iter() {
         if fresh.stopping() {
             break;
@@ -244,6 +255,17 @@ pub(super) fn formation_worker(
                     .flatten()
                     .map(|p| FormationDone::Resize(Box::new(p)))
             }
+            // Gesture work is short (milliseconds) and not cancelled; a result
+            // made stale meanwhile is told apart by the engine's gesture epoch.
+            FormationJob::Gesture(job) => match *job {
+                GestureJob::Recognise(r) => {
+                    let start = monotonic_now();
+                    let p = r.prepare(&mut searcher, &mut synth);
+                    let us = monotonic_now().saturating_since(start).0;
+                    Some(FormationDone::Gesture(Box::new(p), us))
+                }
+                GestureJob::Remesh(r) => Some(FormationDone::Remesh(Box::new(r.prepare()))),
+            },
         };
         if fresh.stopping() {
             break;

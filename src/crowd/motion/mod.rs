@@ -3,9 +3,16 @@
 //! blending the motions of a gesture's neighbours, synthesising trajectories for the
 //! crowd at hand, and the controller that walks agents along them.
 
+mod build;
+mod command;
 mod follow;
 mod simulate;
 
+pub use build::{build_library, library_agents, BuildError, BuildParams, SHIPPED_SEED};
+pub use command::{
+    play_duration, GestureCommandError, GestureJob, GestureMotion, GestureRequest, PreparedGesture,
+    PreparedRemesh, RemeshRequest, MOTION_DURATION_S,
+};
 pub use follow::{FollowError, FollowParams, FollowPhase, Follower};
 pub use simulate::{
     library_specs, measure, simulate, MotionMeasure, MotionSpec, SimulateError, SimulatedMotion,

@@ -20,7 +20,7 @@ pub use model::{
     TRAJ_DIM, T_H,
 };
 pub use random::{random_library, RandomLibrarySpec};
-pub use shipped::{shipped_from, SHIPPED_NAME};
+pub use shipped::{shipped, shipped_from, SHIPPED_BYTES, SHIPPED_NAME};
 pub use validate::{
     validate, validate_with, LoadPolicy, IN_MEMORY, MAX_GMM_COMPONENTS, MAX_MOTION_DURATION_S,
     MAX_ORIGIN_BYTES, ORTHONORMAL_TOLERANCE, POINT_SLACK, SYMMETRY_TOLERANCE, WEIGHT_SUM_TOLERANCE,

@@ -1,0 +1,305 @@
+//! A gesture command, end to end off the control thread: recognise the gesture
+//! against the library (gesture-driven sections 5, 7.1), blend the crowd motions of
+//! its neighbours (section 7.2) and synthesise trajectories for the crowd at hand,
+//! matched to the agents by optimal assignment (section 7.3).
+//!
+//! The engine builds a [`GestureRequest`] when a gesture ends; the daemon's worker
+//! (or the engine itself in a replay) calls [`GestureRequest::prepare`], and the
+//! engine plays the [`PreparedGesture`] with a [`Follower`](super::Follower).
+//!
+//! # Orientation
+//!
+//! Eq. 12 weighs direction only through the centroid feature (α = 0.04), so the K
+//! nearest translates of a swipe to the right may be library translates to the
+//! right, up and left alike; blended as they are, their directions would average
+//! out. Section 7.3 places the motion "relative to the crowd"; here each
+//! neighbour's motion is also *turned to the gesture drawn* before the blend: by
+//! the rotation that best maps the neighbour's gesture onto the drawn one (2-D
+//! Procrustes of their centred centroid paths; for gestures whose centroid hardly
+//! moves — twists, pinches, joins — of their fingers' principal axes, modulo a half
+//! turn). A rotation is linear, so it turns the mean trajectory and every
+//! eigenvector pair by pair, keeps the basis orthonormal and leaves the
+//! eigenscores' mixture as it is.
+//!
+//! One choice differs from the paper: section 7.2 blends the motions of all K
+//! neighbours. Here only the neighbours that voted for the recognised class are
+//! blended (their eq. 18 weights renormalised): a minority neighbour of another
+//! class (a contract among expands) would otherwise pull a motion of the wrong kind
+//! into the blend. With a unanimous vote the two are the same.
+
+use super::blend::blend;
+use super::error::MotionError;
+use super::synth::{Placement, Synthesis, Synthesiser};
+use crate::crowd::mesh::{mesh_around, GoalSample, MeshError, TriMesh};
+use crate::geom::Vec2;
+use crate::gesture::features::GestureFeatures;
+use crate::gesture::knn::{SearchParams, Searcher};
+use crate::gesture::library::{MotionClass, MotionFeatures};
+use crate::gesture::library::{Resampled, T_H};
+use crate::gesture::recognise::{RecogniseError, Recognised, Recogniser};
+use crate::gesture::resample::prepare;
+use crate::gesture::track::GestureTracks;
+use std::sync::Arc;
+
+/// Slowest and fastest a synthesised motion plays (s), whatever its length.
+pub const MOTION_DURATION_S: (f64, f64) = (1.0, 20.0);
+
+/// A gesture to turn into a crowd motion.
+#[derive(Clone, Debug)]
+pub struct GestureRequest {
+    /// The gesture's id.
+    pub id: u32,
+    /// The engine's gesture epoch when asked (a result of another epoch is stale).
+    pub epoch: u64,
+    /// The gesture's tracks (mm of glass).
+    pub tracks: GestureTracks,
+    /// Where the agents are (m).
+    pub agents: Vec<Vec2>,
+    /// The library.
+    pub recogniser: Arc<Recogniser>,
+    /// K, eq. 12's weights, the band.
+    pub search: SearchParams,
+    /// Seed of the eigenscores sampled for this crowd.
+    pub seed: u64,
+    /// How fast agents walk a synthesised motion (m/s): the motion lasts as long as
+    /// its longest trajectory takes at this speed (within [`MOTION_DURATION_S`]).
+    pub speed_m_s: f64,
+}
+
+/// A gesture recognised and its crowd motion synthesised.
+#[derive(Clone, Debug)]
+pub struct GestureMotion {
+    /// What the gesture was recognised as.
+    pub recognised: Recognised,
+    /// Each neighbour's class and origin, in `recognised.neighbours`' order.
+    pub neighbours: Vec<(MotionClass, String)>,
+    /// One trajectory per agent (m) and how long it plays (s).
+    pub synthesis: Synthesis,
+}
+
+/// Why a gesture gave no crowd motion.
+#[derive(Debug, thiserror::Error)]
+pub enum GestureCommandError {
+    /// Not recognised.
+    #[error("not recognised: {0}")]
+    Recognise(#[from] RecogniseError),
+    /// The neighbours' motions could not be blended or synthesised.
+    #[error("no crowd motion: {0}")]
+    Motion(#[from] MotionError),
+    /// No agents to move.
+    #[error("no agents to move")]
+    NoAgents,
+}
+
+/// The outcome of a [`GestureRequest`].
+#[derive(Debug)]
+pub struct PreparedGesture {
+    /// The gesture's id.
+    pub id: u32,
+    /// The epoch it was asked in.
+    pub epoch: u64,
+    /// The motion, or why there is none.
+    pub outcome: Result<GestureMotion, GestureCommandError>,
+}
+
+impl GestureRequest {
+    /// Recognises, blends and synthesises (see the module doc), reusing `searcher`
+    /// and `synth`.
+    pub fn prepare(self, searcher: &mut Searcher, synth: &mut Synthesiser) -> PreparedGesture {
+        let outcome = self.run(searcher, synth);
+        PreparedGesture {
+            id: self.id,
+            epoch: self.epoch,
+            outcome,
+        }
+    }
+
+    fn run(
+        &self,
+        searcher: &mut Searcher,
+        synth: &mut Synthesiser,
+    ) -> Result<GestureMotion, GestureCommandError> {
+        if self.agents.is_empty() {
+            return Err(GestureCommandError::NoAgents);
+        }
+        let rec = &self.recogniser;
+        let drawn = prepare(&self.tracks).map_err(RecogniseError::from)?;
+        let recognised =
+            rec.recognise_features(&GestureFeatures::of(&drawn), &self.search, searcher)?;
+        let lib = rec.library();
+        let neighbours: Vec<(MotionClass, String)> = recognised
+            .neighbours
+            .iter()
+            .map(|n| {
+                let g = &lib.gestures[n.entry];
+                (g.class, g.origin.clone())
+            })
+            .collect();
+        // Section 7.2 with the voted class's neighbours (module doc).
+        let mut turned: Vec<(MotionFeatures, f64)> = Vec::new();
+        for n in &recognised.neighbours {
+            let g = &lib.gestures[n.entry];
+            if g.class != recognised.class {
+                continue;
+            }
+            let theta = alignment(&g.gesture, &drawn);
+            turned.push((rotated(&lib.motions[g.motion as usize], theta), n.weight));
+        }
+        let mut parts: Vec<(&MotionFeatures, f64)> = turned.iter().map(|(m, w)| (m, *w)).collect();
+        let total: f64 = parts.iter().map(|p| p.1).sum();
+        if total > 0.0 {
+            for p in &mut parts {
+                p.1 /= total;
+            }
+        } else {
+            let w = 1.0 / parts.len().max(1) as f64;
+            for p in &mut parts {
+                p.1 = w;
+            }
+        }
+        let motion = blend(&parts)?;
+        let placement = Placement::for_crowd(&self.agents);
+        let mut synthesis = synth.synthesise(&motion, &self.agents, &placement, self.seed)?;
+        synthesis.duration_s = play_duration(&synthesis, self.speed_m_s);
+        Ok(GestureMotion {
+            recognised,
+            neighbours,
+            synthesis,
+        })
+    }
+}
+
+/// A centroid path whose RMS distance from its mean is below this (normalised
+/// gesture units) hardly moves: the fingers' axes orient the gesture instead.
+pub const STILL_CENTROID: f64 = 0.08;
+
+/// The rotation (rad, the glass's and the world's x towards y) that best maps
+/// gesture `from` onto gesture `to` (module doc).
+pub fn alignment(from: &Resampled, to: &Resampled) -> f64 {
+    let path = |g: &Resampled| -> Vec<Vec2> {
+        let n = g.fingers.len().max(1) as f64;
+        let c: Vec<Vec2> = (0..T_H)
+            .map(|t| g.fingers.iter().map(|f| f[t]).sum::<Vec2>() / n)
+            .collect();
+        let mean = c.iter().sum::<Vec2>() / T_H as f64;
+        c.into_iter().map(|p| p - mean).collect()
+    };
+    let (a, b) = (path(from), path(to));
+    let rms =
+        |v: &[Vec2]| (v.iter().map(|p| p.norm_squared()).sum::<f64>() / v.len() as f64).sqrt();
+    if rms(&a) >= STILL_CENTROID && rms(&b) >= STILL_CENTROID {
+        // Kabsch in 2-D: the angle maximising Σ b·R(θ)a.
+        let (s, c) = a.iter().zip(&b).fold((0.0, 0.0), |(s, c), (p, q)| {
+            (s + (p.x * q.y - p.y * q.x), c + p.dot(q))
+        });
+        return s.atan2(c);
+    }
+    // The principal axis of the fingers about their centroid, over the whole gesture.
+    let axis = |g: &Resampled| -> Option<f64> {
+        let n = g.fingers.len() as f64;
+        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+        for t in 0..T_H {
+            let c = g.fingers.iter().map(|f| f[t]).sum::<Vec2>() / n;
+            for f in &g.fingers {
+                let d = f[t] - c;
+                sxx += d.x * d.x;
+                sxy += d.x * d.y;
+                syy += d.y * d.y;
+            }
+        }
+        let strength = ((sxx - syy).powi(2) + 4.0 * sxy * sxy).sqrt();
+        (strength > 1e-9 * (sxx + syy).max(1e-300)).then(|| 0.5 * (2.0 * sxy).atan2(sxx - syy))
+    };
+    match (axis(from), axis(to)) {
+        (Some(p), Some(q)) => {
+            // Axes have no direction: the turn within a quarter turn either way.
+            let mut d = q - p;
+            while d > std::f64::consts::FRAC_PI_2 {
+                d -= std::f64::consts::PI;
+            }
+            while d < -std::f64::consts::FRAC_PI_2 {
+                d += std::f64::consts::PI;
+            }
+            d
+        }
+        _ => 0.0,
+    }
+}
+
+/// `m` turned by `theta` (rad) about the crowd's starting centroid (the origin of
+/// crowd units): the mean trajectory and every eigenvector, pair by pair.
+pub fn rotated(m: &MotionFeatures, theta: f64) -> MotionFeatures {
+    let (s, c) = theta.sin_cos();
+    let turn = |v: &[f64]| -> Vec<f64> {
+        let mut out = v.to_vec();
+        for k in 0..v.len() / 2 {
+            let (x, y) = (v[2 * k], v[2 * k + 1]);
+            out[2 * k] = c * x - s * y;
+            out[2 * k + 1] = s * x + c * y;
+        }
+        out
+    };
+    MotionFeatures {
+        class: m.class,
+        duration_s: m.duration_s,
+        mean: turn(&m.mean),
+        basis: m.basis.iter().map(|b| turn(b)).collect(),
+        gmm: m.gmm.clone(),
+    }
+}
+
+/// How long a synthesis plays at `speed_m_s`: its longest trajectory's length over
+/// the speed, within [`MOTION_DURATION_S`].
+pub fn play_duration(s: &Synthesis, speed_m_s: f64) -> f64 {
+    let longest = s
+        .trajectories
+        .iter()
+        .map(|t| t.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>())
+        .fold(0.0, f64::max);
+    let d = longest / speed_m_s.max(1e-3);
+    if d.is_finite() {
+        d.clamp(MOTION_DURATION_S.0, MOTION_DURATION_S.1)
+    } else {
+        MOTION_DURATION_S.0
+    }
+}
+
+/// A mesh to rebuild around where the agents stopped (after a gesture motion), so
+/// that direct touch control goes on from there (`crate::crowd::mesh::mesh_around`).
+#[derive(Clone, Debug)]
+pub struct RemeshRequest {
+    /// The engine's gesture epoch when asked.
+    pub epoch: u64,
+    /// Where the agents are (m).
+    pub agents: Vec<Vec2>,
+    /// Agent radius (m): the mesh's spacing floor.
+    pub radius_m: f64,
+}
+
+/// A rebuilt mesh with one goal per agent at its vertex, or why there is none.
+#[derive(Debug)]
+pub struct PreparedRemesh {
+    /// The epoch it was asked in.
+    pub epoch: u64,
+    /// The mesh and its goal samples (goal `i` is agent `i`'s position).
+    pub built: Result<(TriMesh, Vec<GoalSample>), MeshError>,
+}
+
+impl RemeshRequest {
+    /// Builds the mesh.
+    pub fn prepare(self) -> PreparedRemesh {
+        PreparedRemesh {
+            epoch: self.epoch,
+            built: mesh_around(&self.agents, self.radius_m),
+        }
+    }
+}
+
+/// Slow work of gesture commands, for a worker.
+#[derive(Clone, Debug)]
+pub enum GestureJob {
+    /// Recognise a gesture and synthesise its crowd motion.
+    Recognise(GestureRequest),
+    /// Rebuild the direct-control mesh around the crowd.
+    Remesh(RemeshRequest),
+}

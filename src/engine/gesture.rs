@@ -1,0 +1,366 @@
+//! Gesture commands in the engine (gesture-driven-crowd-motion sections 5–7): a
+//! gesture drawn in open space is captured finger by finger, recognised against the
+//! library, and played as a crowd motion; afterwards the direct-control mesh is
+//! rebuilt around where the crowd stopped, so touch control goes on.
+//!
+//! ```text
+//!  gesture ends ──► capture.finish ──tap/too long/disabled──► `gesture` event (rejected)
+//!                        │ tracks
+//!                        ▼
+//!              GestureRequest::prepare          (worker; in the tick for replays)
+//!              recognise · blend · synthesise
+//!                        │
+//!     not recognised ◄───┴───► `gesture` event (recognition), `plan`,
+//!     `gesture` event          `gesture_motion` approach ─► follow ─► done
+//!     (rejected)                                                       │
+//!                                              RemeshRequest::prepare ◄┘ (worker)
+//!                                              mesh_around → install: touch control
+//! ```
+//!
+//! While a motion plays, agents walk towards the [`Follower`]'s targets (their
+//! trajectory's start, then along it); the spring-mass push of
+//! [`Agents::step_towards`](crate::crowd::agents::Agents::step_towards) keeps them
+//! apart. A touch landing near an agent during a motion cancels it (the person takes
+//! the crowd in hand); so do a reset, a resize and a newer gesture's motion. Nothing
+//! here allocates in a steady tick: requests and plans are built once per gesture.
+
+use super::gesture_state::{phase_of, PendingEnd, Playing};
+use super::state::Engine;
+use crate::crowd::motion::{
+    FollowPhase, Follower, GestureJob, GestureRequest, PreparedGesture, PreparedRemesh,
+    RemeshRequest,
+};
+use crate::geom::Vec2;
+use crate::gesture::capture::Rejected;
+use crate::gesture::library::{MotionClass, S_H};
+use crate::vocab::{Event, Micros, MotionPhase, NeighbourView, PlanOrigin, PlanView, Recognition};
+use std::sync::Arc;
+
+impl Engine {
+    /// Records a touch into the gesture it belongs to (after the segmenter saw it).
+    pub(super) fn capture_touch(&mut self, t: Micros, tp: &crate::gesture::segment::TouchPoint) {
+        self.gestures.capture.observe(t, &self.segmenter, tp);
+    }
+
+    /// Whether `p` is within the grab radius of an agent (during a motion the mesh is
+    /// where the crowd was, so agents are what a finger lands on).
+    pub(super) fn near_agent(&self, p: Vec2) -> bool {
+        let r2 = self.grab_radius_m * self.grab_radius_m;
+        self.agents
+            .positions()
+            .iter()
+            .any(|a| (a - p).norm_squared() <= r2)
+    }
+
+    /// A gesture ended: capture its tracks and ask for its motion, or say why not
+    /// (the `gesture` event then goes out at once).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn gesture_ended(
+        &mut self,
+        id: u32,
+        fingers: u32,
+        contacts: u32,
+        duration_us: u64,
+        cancelled: bool,
+        now: Micros,
+    ) -> Option<Event> {
+        let g = &mut self.gestures;
+        let captured = g.capture.finish(id, &mut g.tracks);
+        let rejected = match (&captured, &g.recogniser) {
+            _ if cancelled => Some("cancelled".to_string()),
+            _ if !g.enabled => Some("disabled".to_string()),
+            (Err(r), _) => Some(rejected_reason(r)),
+            (Ok(_), None) => Some("no_library".to_string()),
+            (Ok(_), Some(_)) if self.agents.is_empty() => Some("no_agents".to_string()),
+            (Ok(_), Some(_)) => None,
+        };
+        if let Some(rejected) = rejected {
+            return Some(Event::GestureEnd {
+                id,
+                fingers,
+                contacts,
+                duration_us,
+                cancelled,
+                recognition: None,
+                rejected: Some(rejected),
+                t: now,
+            });
+        }
+        let recogniser = g.recogniser.clone()?;
+        let req = GestureRequest {
+            id,
+            epoch: g.epoch,
+            tracks: g.tracks.clone(),
+            agents: self.agents.positions().to_vec(),
+            recogniser,
+            search: g.search,
+            seed: g.seed ^ u64::from(id).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+            speed_m_s: g.speed_m_s,
+        };
+        g.waiting.push(PendingEnd {
+            id,
+            fingers,
+            contacts,
+            duration_us,
+            t: now,
+        });
+        match &mut g.inline {
+            Some(ws) => {
+                let (searcher, synth) = &mut **ws;
+                let p = req.prepare(searcher, synth);
+                self.apply_gesture(p, 0, now);
+            }
+            None => g.outbox.push(GestureJob::Recognise(req)),
+        }
+        None
+    }
+
+    /// Slow gesture work for the worker ([`GestureRequest::prepare`] or
+    /// [`RemeshRequest::prepare`], then [`Engine::apply_gesture`] or
+    /// [`Engine::apply_remesh`]).
+    pub fn take_gesture_job(&mut self) -> Option<GestureJob> {
+        if self.gestures.outbox.is_empty() {
+            None
+        } else {
+            Some(self.gestures.outbox.remove(0))
+        }
+    }
+
+    /// The plan of a motion that started this tick, for `plan` subscribers.
+    pub fn take_plan(&mut self) -> Option<Arc<PlanView>> {
+        self.gestures.plan.take()
+    }
+
+    /// Uses a prepared gesture: its `gesture` event goes out with the recognition
+    /// (or why there is no motion), and its motion starts (`synth_us`: how long the
+    /// worker took, 0 in replays).
+    pub fn apply_gesture(&mut self, p: PreparedGesture, synth_us: u64, now: Micros) {
+        let g = &mut self.gestures;
+        let Some(k) = g.waiting.iter().position(|w| w.id == p.id) else {
+            return;
+        };
+        let end = g.waiting.remove(k);
+        let mut event = Event::GestureEnd {
+            id: end.id,
+            fingers: end.fingers,
+            contacts: end.contacts,
+            duration_us: end.duration_us,
+            cancelled: false,
+            recognition: None,
+            rejected: None,
+            t: end.t,
+        };
+        let stale = p.epoch != g.epoch || self.agents.is_empty();
+        match p.outcome {
+            _ if stale => set_rejected(&mut event, "superseded".to_string()),
+            Err(e) => set_rejected(&mut event, e.to_string()),
+            Ok(m) => {
+                let agents = m.synthesis.trajectories.len();
+                if agents != self.agents.len() {
+                    set_rejected(&mut event, "superseded".to_string());
+                } else {
+                    let rec = Recognition {
+                        class: m.recognised.class.as_str().to_string(),
+                        weight: m.recognised.weight,
+                        neighbours: m
+                            .recognised
+                            .neighbours
+                            .iter()
+                            .zip(&m.neighbours)
+                            .map(|(n, (class, origin))| NeighbourView {
+                                class: class.as_str().to_string(),
+                                distance: n.distance,
+                                weight: n.weight,
+                                origin: origin.clone(),
+                            })
+                            .collect(),
+                        synth_us,
+                        agents: agents as u32,
+                    };
+                    if let Event::GestureEnd { recognition, .. } = &mut event {
+                        *recognition = Some(rec);
+                    }
+                    self.events.push(event);
+                    self.play(p.id, m.recognised.class, m.synthesis, now);
+                    return;
+                }
+            }
+        }
+        self.events.push(event);
+    }
+
+    /// Starts playing a synthesised motion (a playing one is cancelled).
+    fn play(
+        &mut self,
+        id: u32,
+        class: MotionClass,
+        synthesis: crate::crowd::motion::Synthesis,
+        now: Micros,
+    ) {
+        self.cancel_gesture_motion(now);
+        let points: Vec<Vec2> = synthesis
+            .trajectories
+            .iter()
+            .flat_map(|t| t.iter().copied())
+            .collect();
+        let duration_s = synthesis.duration_s;
+        let follower = match Follower::new(synthesis.trajectories, duration_s, self.gestures.follow)
+        {
+            Ok(f) => f,
+            Err(e) => {
+                log::warn!("gesture {id}: {class} motion not played: {e}");
+                return;
+            }
+        };
+        self.gestures.plan = Some(Arc::new(PlanView {
+            origin: PlanOrigin::Gesture { id },
+            class: class.as_str().to_string(),
+            duration_s,
+            samples: S_H as u32,
+            points,
+        }));
+        log::info!(
+            "gesture {id}: {class}, {} agents over {duration_s:.1} s",
+            self.agents.len()
+        );
+        self.gestures.played += 1;
+        self.gestures.playing = Some(Playing {
+            id,
+            class,
+            follower,
+            phase: FollowPhase::Approach,
+        });
+        self.events.push(Event::GestureMotion {
+            id,
+            class: class.as_str().to_string(),
+            phase: MotionPhase::Approach,
+            t: now,
+        });
+    }
+
+    /// Cancels a playing motion (a reset, a resize, a touch on the crowd, a newer
+    /// motion): a `gesture_motion` `cancelled` event; the mesh is rebuilt around the
+    /// crowd where it stopped.
+    pub(super) fn cancel_gesture_motion(&mut self, now: Micros) {
+        let Some(mut p) = self.gestures.playing.take() else {
+            return;
+        };
+        self.gestures.epoch += 1;
+        self.gestures.remesh_pending = false;
+        if !p.follower.done() {
+            p.follower.cancel();
+            self.events.push(Event::GestureMotion {
+                id: p.id,
+                class: p.class.as_str().to_string(),
+                phase: MotionPhase::Cancelled,
+                t: now,
+            });
+        }
+    }
+
+    /// Forgets gesture work under way (a reset or resize): motions and results
+    /// asked for before are stale.
+    pub(super) fn forget_gestures(&mut self, now: Micros) {
+        self.cancel_gesture_motion(now);
+        self.gestures.epoch += 1;
+        self.gestures.outbox.clear();
+    }
+
+    /// One tick of a playing motion: agents walk to their targets; phase changes are
+    /// events; at the end the mesh is rebuilt around the crowd. Returns false when
+    /// no motion plays (the direct controller moves the agents).
+    pub(super) fn step_gesture_motion(&mut self, dt: f64, now: Micros) -> bool {
+        let t = self.scene_t_s;
+        let Some(p) = &mut self.gestures.playing else {
+            return false;
+        };
+        let targets = p.follower.targets(self.agents.positions(), t);
+        self.targets.clear();
+        self.targets.extend_from_slice(targets);
+        let phase = p.follower.phase();
+        if phase != p.phase {
+            p.phase = phase;
+            self.events.push(Event::GestureMotion {
+                id: p.id,
+                class: p.class.as_str().to_string(),
+                phase: phase_of(phase),
+                t: now,
+            });
+        }
+        let finished = p.follower.done() && !self.gestures.remesh_pending;
+        if !self.paused {
+            match &self.scene {
+                Some(scene) => {
+                    let scene = Arc::clone(scene);
+                    self.agents.step_towards(
+                        &self.targets,
+                        |x| scene.terrain_at(x, t).speed_factor,
+                        dt,
+                        &self.agent_params,
+                    );
+                    let r = self.agent_params.radius_m;
+                    for i in 0..self.agents.len() {
+                        let q = self.agents.positions()[i];
+                        if scene.signed_distance(q, t) < r {
+                            let out = scene.project_out(q, r, t);
+                            self.agents.set_position(i, out);
+                        }
+                    }
+                }
+                None => self
+                    .agents
+                    .step_towards(&self.targets, |_| 1.0, dt, &self.agent_params),
+            }
+        }
+        if finished {
+            self.gestures.remesh_pending = true;
+            let req = RemeshRequest {
+                epoch: self.gestures.epoch,
+                agents: self.agents.positions().to_vec(),
+                radius_m: self.agent_params.radius_m,
+            };
+            if self.gestures.inline.is_some() {
+                self.apply_remesh(req.prepare(), now);
+            } else {
+                self.gestures.outbox.push(GestureJob::Remesh(req));
+            }
+        }
+        true
+    }
+
+    /// Installs the mesh rebuilt around the crowd after a motion: every agent's goal
+    /// is where it stands, so nothing jumps, and touch control goes on from there.
+    pub fn apply_remesh(&mut self, p: PreparedRemesh, now: Micros) {
+        if p.epoch != self.gestures.epoch || !self.gestures.remesh_pending {
+            return;
+        }
+        self.gestures.remesh_pending = false;
+        self.gestures.playing = None;
+        match p.built {
+            Ok((mesh, samples)) if samples.len() == self.agents.len() => {
+                let identity: Vec<u32> = (0..self.agents.len() as u32).collect();
+                self.install(mesh, samples, &identity);
+                self.formation_name.clear();
+                self.formation_name.push_str("gesture");
+                let _ = now;
+            }
+            Ok(_) => log::warn!("gesture motion: the crowd changed size; the mesh stays"),
+            Err(e) => log::warn!("gesture motion: no mesh around the crowd ({e}); the mesh stays"),
+        }
+    }
+
+    /// Gesture commands played since start.
+    pub fn gestures_played(&self) -> u64 {
+        self.gestures.played
+    }
+}
+
+fn set_rejected(e: &mut Event, why: String) {
+    if let Event::GestureEnd { rejected, .. } = e {
+        *rejected = Some(why);
+    }
+}
+
+fn rejected_reason(r: &Rejected) -> String {
+    r.as_str().to_string()
+}

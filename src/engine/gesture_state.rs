@@ -1,0 +1,126 @@
+//! The engine's gesture-command state (`gesture.rs` drives it): the capture, the
+//! library in use, the search and follow parameters, work out on the worker and the
+//! motion playing.
+
+use super::params::{search_params, tap_thresholds};
+use crate::config::Config;
+use crate::crowd::motion::{FollowParams, FollowPhase, Follower, GestureJob, Synthesiser};
+use crate::gesture::capture::{CaptureParams, GestureCapture, TapThresholds};
+use crate::gesture::knn::{SearchParams, Searcher};
+use crate::gesture::library::MotionClass;
+use crate::gesture::recognise::Recogniser;
+use crate::gesture::track::GestureTracks;
+use crate::vocab::{Micros, MotionPhase, PlanView};
+use std::sync::Arc;
+
+/// A gesture's end, held back until its recognition is known.
+#[derive(Clone, Debug)]
+pub(super) struct PendingEnd {
+    pub(super) id: u32,
+    pub(super) fingers: u32,
+    pub(super) contacts: u32,
+    pub(super) duration_us: u64,
+    pub(super) t: Micros,
+}
+
+/// A crowd motion playing.
+#[derive(Debug)]
+pub(super) struct Playing {
+    pub(super) id: u32,
+    pub(super) class: MotionClass,
+    pub(super) follower: Follower,
+    pub(super) phase: FollowPhase,
+}
+
+/// The engine's gesture commands (see the module doc).
+pub(super) struct Gestures {
+    pub(super) capture: GestureCapture,
+    pub(super) tracks: GestureTracks,
+    pub(super) recogniser: Option<Arc<Recogniser>>,
+    pub(super) enabled: bool,
+    pub(super) search: SearchParams,
+    pub(super) follow: FollowParams,
+    pub(super) speed_m_s: f64,
+    pub(super) seed: u64,
+    /// Bumped by a reset, a resize or a cancelled motion: a result of another epoch
+    /// is stale.
+    pub(super) epoch: u64,
+    /// Slow work for the worker, until the pipeline takes it.
+    pub(super) outbox: Vec<GestureJob>,
+    pub(super) waiting: Vec<PendingEnd>,
+    pub(super) playing: Option<Playing>,
+    /// A mesh is being rebuilt (the crowd holds still until it is installed).
+    pub(super) remesh_pending: bool,
+    pub(super) plan: Option<Arc<PlanView>>,
+    /// Prepared in the tick (replays) rather than by the worker.
+    pub(super) inline: Option<Box<(Searcher, Synthesiser)>>,
+    /// Gestures recognised and played, for stats.
+    pub(super) played: u64,
+}
+
+impl Gestures {
+    pub(super) fn new(cfg: &Config, inline: bool) -> Gestures {
+        let mut g = Gestures {
+            capture: GestureCapture::new(
+                CaptureParams {
+                    max_gestures: crate::gesture::capture::DEFAULT_MAX_GESTURES,
+                    samples_per_track: crate::gesture::capture::DEFAULT_SAMPLES_PER_TRACK,
+                },
+                TapThresholds::default(),
+            ),
+            tracks: GestureTracks::default(),
+            recogniser: None,
+            enabled: false,
+            search: SearchParams::default(),
+            follow: follow_params(cfg),
+            speed_m_s: 1.0,
+            seed: 0,
+            epoch: 0,
+            outbox: Vec::with_capacity(2),
+            waiting: Vec::with_capacity(4),
+            playing: None,
+            remesh_pending: false,
+            plan: None,
+            inline: inline.then(|| Box::new((Searcher::new(), Synthesiser::new()))),
+            played: 0,
+        };
+        g.tracks = g.capture.tracks_buffer();
+        g.configure(cfg);
+        g
+    }
+
+    /// Applies the config's `gestures` section (live on reload).
+    pub(super) fn configure(&mut self, cfg: &Config) {
+        let gc = &cfg.gestures;
+        self.capture.set_thresholds(tap_thresholds(cfg));
+        self.enabled = gc.enabled;
+        self.recogniser = cfg.gesture_recogniser().cloned();
+        self.search = search_params(cfg);
+        self.follow = follow_params(cfg);
+        self.speed_m_s = gc.motion_speed_m_s;
+        self.seed = gc.seed;
+    }
+
+    /// Whether a crowd motion is playing (or holding for its new mesh).
+    pub(super) fn playing(&self) -> bool {
+        self.playing.is_some()
+    }
+}
+
+pub(super) fn follow_params(cfg: &Config) -> FollowParams {
+    FollowParams {
+        approach_tolerance_m: (2.0 * cfg.crowd.agent_radius_m).max(0.05),
+        approach_timeout_s: cfg.gestures.approach_timeout_s,
+        time_scale: 1.0,
+        settle_s: 2.0,
+    }
+}
+
+pub(super) fn phase_of(p: FollowPhase) -> MotionPhase {
+    match p {
+        FollowPhase::Approach => MotionPhase::Approach,
+        FollowPhase::Follow => MotionPhase::Follow,
+        FollowPhase::Done => MotionPhase::Done,
+        FollowPhase::Cancelled => MotionPhase::Cancelled,
+    }
+}

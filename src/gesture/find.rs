@@ -1,0 +1,139 @@
+//! Every gesture in a stream of touch frames, for tools (`crowdtouch gesture
+//! classify`, `crowdtouch library add`, `library eval --test`): every touch is
+//! treated as a gesture in open space (no crowd to land on), segmented with the
+//! daemon's own state machine (grouping, grace period) and captured as the daemon
+//! captures it, so a recording is cut into gestures exactly as the table would cut
+//! it.
+
+use super::capture::{CaptureParams, GestureCapture, Rejected, TapThresholds};
+use super::capture::{DEFAULT_MAX_GESTURES, DEFAULT_SAMPLES_PER_TRACK};
+use super::segment::{Segment, SegmentParams, Segmenter, TouchPoint};
+use super::track::GestureTracks;
+use crate::geom::Vec2;
+use crate::vocab::{Micros, TouchFrame};
+
+/// A gesture found in a stream.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Found {
+    /// When its first finger landed (the stream's clock, µs).
+    pub t: Micros,
+    /// Most fingers down at once.
+    pub fingers: u32,
+    /// Its tracks (mm of glass), or why it is not one to recognise (a tap, too long).
+    pub tracks: Result<GestureTracks, Rejected>,
+}
+
+/// Cuts frames into gestures (see the module doc).
+pub struct GestureFinder {
+    seg: Segmenter,
+    capture: GestureCapture,
+    glass_mm: Vec2,
+    out: Vec<Segment>,
+    begun: Vec<(u32, Micros)>,
+    buf: GestureTracks,
+    found: Vec<Found>,
+}
+
+impl GestureFinder {
+    /// A finder for a surface of `glass_mm` (width, height in mm), segmenting with
+    /// `params` and refusing taps and over-long gestures by `thresholds`.
+    pub fn new(glass_mm: Vec2, params: SegmentParams, thresholds: TapThresholds) -> GestureFinder {
+        let mut seg = Segmenter::new(params);
+        seg.set_all_touches_are_gestures(true);
+        let capture = GestureCapture::new(
+            CaptureParams {
+                max_gestures: DEFAULT_MAX_GESTURES,
+                samples_per_track: DEFAULT_SAMPLES_PER_TRACK,
+            },
+            thresholds,
+        );
+        let buf = capture.tracks_buffer();
+        GestureFinder {
+            seg,
+            capture,
+            glass_mm,
+            out: Vec::new(),
+            begun: Vec::new(),
+            buf,
+            found: Vec::new(),
+        }
+    }
+
+    /// Feeds one frame (surface coordinates in `[0, 1]²`).
+    pub fn frame(&mut self, f: &TouchFrame) {
+        self.seg.tick(f.t, &mut self.out);
+        self.collect();
+        for c in f.contacts() {
+            let mm = Vec2::new(c.x as f64 * self.glass_mm.x, c.y as f64 * self.glass_mm.y);
+            let tp = TouchPoint {
+                id: c.id,
+                world: mm,
+                glass_mm: mm,
+                flags: c.flags,
+            };
+            self.seg.touch(f.t, &tp, false, &mut self.out);
+            self.capture.observe(f.t, &self.seg, &tp);
+        }
+        self.collect();
+    }
+
+    /// Ends the stream at `t`: gestures still open end (after their grace period).
+    pub fn finish(&mut self, t: Micros) {
+        let end = Micros(t.0.saturating_add(60_000_000));
+        self.seg.tick(end, &mut self.out);
+        self.collect();
+        self.seg.cancel_all(end, &mut self.out);
+        self.collect();
+    }
+
+    /// The gestures found so far, oldest first (taken).
+    pub fn take(&mut self) -> Vec<Found> {
+        std::mem::take(&mut self.found)
+    }
+
+    fn collect(&mut self) {
+        for s in self.out.drain(..) {
+            match s {
+                Segment::GestureBegin(id) => {
+                    let t = self
+                        .seg
+                        .gestures()
+                        .iter()
+                        .find(|g| g.id == id)
+                        .map_or(Micros::ZERO, |g| g.t_begin);
+                    self.begun.push((id, t));
+                }
+                Segment::GestureEnd { id, fingers, .. } => {
+                    let t = self
+                        .begun
+                        .iter()
+                        .position(|b| b.0 == id)
+                        .map_or(Micros::ZERO, |k| self.begun.swap_remove(k).1);
+                    let tracks = self
+                        .capture
+                        .finish(id, &mut self.buf)
+                        .map(|_| self.buf.clone());
+                    self.found.push(Found { t, fingers, tracks });
+                }
+                _ => {}
+            }
+        }
+    }
+}
+
+/// Every gesture in `frames` (see the module doc).
+pub fn find_gestures<'a>(
+    frames: impl IntoIterator<Item = &'a TouchFrame>,
+    glass_mm: Vec2,
+    params: SegmentParams,
+    thresholds: TapThresholds,
+) -> Vec<Found> {
+    let mut f = GestureFinder::new(glass_mm, params, thresholds);
+    let mut last = Micros::ZERO;
+    for fr in frames {
+        f.frame(fr);
+        last = fr.t;
+    }
+    f.finish(last);
+    f.take()
+}
