@@ -837,7 +837,13 @@ impl Arap {
         let anchored = self
             .constraints
             .iter()
-            .map(|c| (piece[c.vertex as usize], c.weight, anchor[c.vertex as usize]))
+            .map(|c| {
+                (
+                    piece[c.vertex as usize],
+                    c.weight,
+                    anchor[c.vertex as usize],
+                )
+            })
             .chain(
                 self.points
                     .iter()
@@ -950,12 +956,12 @@ impl MotionFit {
             return RigidMotion::IDENTITY;
         }
         let norm = self.dot.hypot(self.crs);
-        let (cos, sin) =
-            if norm > ROTATION_FIT_EPS * (self.aa * self.qq).sqrt() && norm.is_finite() {
-                (self.dot / norm, self.crs / norm)
-            } else {
-                (1.0, 0.0)
-            };
+        let (cos, sin) = if norm > ROTATION_FIT_EPS * (self.aa * self.qq).sqrt() && norm.is_finite()
+        {
+            (self.dot / norm, self.crs / norm)
+        } else {
+            (1.0, 0.0)
+        };
         RigidMotion {
             cos,
             sin,
@@ -1782,14 +1788,18 @@ mod tests {
             bary: [0.2, 0.3, 0.5],
             weight: 100.0,
         };
-        assert!(pt.corners.iter().all(|&v| v >= 12), "a right-piece triangle");
+        assert!(
+            pt.corners.iter().all(|&v| v >= 12),
+            "a right-piece triangle"
+        );
         let mut targets: Vec<Vec2> = cs
             .iter()
             .map(|c| jitter(m.rest()[c.vertex as usize], 0.8))
             .collect();
         targets.push(jitter(pt.position(m.rest()), 0.8));
         let mut both = Arap::new(&m);
-        both.set_constraints_and_points(&cs, &[pt]).expect("factorises");
+        both.set_constraints_and_points(&cs, &[pt])
+            .expect("factorises");
         let out = solve(&mut both, &targets, &anchor);
 
         let mut a = Arap::new(&left);
@@ -1810,8 +1820,16 @@ mod tests {
         .expect("factorises");
         let out_r = solve(&mut b, &targets[2..], &anchor[12..]);
         let tol = 1e-9 * mesh_size(&m);
-        assert!(max_err(&out[..12], &out_l) <= tol, "{}", max_err(&out[..12], &out_l));
-        assert!(max_err(&out[12..], &out_r) <= tol, "{}", max_err(&out[12..], &out_r));
+        assert!(
+            max_err(&out[..12], &out_l) <= tol,
+            "{}",
+            max_err(&out[..12], &out_l)
+        );
+        assert!(
+            max_err(&out[12..], &out_r) <= tol,
+            "{}",
+            max_err(&out[12..], &out_r)
+        );
     }
 
     #[test]

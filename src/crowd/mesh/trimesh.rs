@@ -135,7 +135,10 @@ pub(super) fn tri_edges(t: &[u32; 3]) -> [(u32, u32); 3] {
 /// Returns `(outlines, piece_of)`: one boundary loop per piece (pieces numbered by
 /// their first triangle, each loop starting at the first boundary edge of the piece
 /// in triangle order) and the piece of every vertex (`u32::MAX` for an unused one).
-fn boundary_loops(triangles: &[[u32; 3]], n: usize) -> Result<(Vec<Vec<u32>>, Vec<u32>), MeshError> {
+fn boundary_loops(
+    triangles: &[[u32; 3]],
+    n: usize,
+) -> Result<(Vec<Vec<u32>>, Vec<u32>), MeshError> {
     let mut directed: HashSet<(u32, u32)> = HashSet::with_capacity(triangles.len() * 3);
     for t in triangles {
         for (a, b) in tri_edges(t) {
@@ -191,7 +194,10 @@ fn boundary_loops(triangles: &[[u32; 3]], n: usize) -> Result<(Vec<Vec<u32>>, Ve
     for (piece, start) in starts.into_iter().enumerate() {
         let Some(start) = start else {
             // A closed surface has no boundary; not a planar formation.
-            let vertex = piece_of.iter().position(|&p| p as usize == piece).unwrap_or(0);
+            let vertex = piece_of
+                .iter()
+                .position(|&p| p as usize == piece)
+                .unwrap_or(0);
             return Err(MeshError::BoundaryNotSingleLoop {
                 vertex: vertex as u32,
             });
@@ -516,8 +522,7 @@ impl TriMesh {
         if let Some(v) = used.iter().position(|u| !u) {
             return Err(format!("vertex {v} is not used by any triangle"));
         }
-        let (expected, piece_of) =
-            boundary_loops(&self.triangles, n).map_err(|e| e.to_string())?;
+        let (expected, piece_of) = boundary_loops(&self.triangles, n).map_err(|e| e.to_string())?;
         if self.outlines.len() != expected.len() {
             return Err(format!(
                 "{} outlines stored, the mesh has {} pieces",
