@@ -133,7 +133,10 @@ fn dragging_one_group_of_a_split_crowd_leaves_the_other() {
     }
     let g = dc.goals();
     for (q, r) in g[25..].iter().zip(&p[25..]) {
-        assert!((q - r - Vec2::new(0.0, 1.0)).norm() < 0.02, "{q:?} from {r:?}");
+        assert!(
+            (q - r - Vec2::new(0.0, 1.0)).norm() < 0.02,
+            "{q:?} from {r:?}"
+        );
     }
     let moved = p[..25]
         .iter()
@@ -144,5 +147,8 @@ fn dragging_one_group_of_a_split_crowd_leaves_the_other() {
     assert!(moved < 0.01, "the left group moved {moved} m");
     // Both pieces are still there to grab.
     assert!(dc.hits(p[0], 1e-6) && dc.hits(g[37], 1e-6));
-    assert!(!dc.hits(Vec2::new(4.5, 0.5), 0.3), "nothing between the groups");
+    assert!(
+        !dc.hits(Vec2::new(4.5, 0.5), 0.3),
+        "nothing between the groups"
+    );
 }
