@@ -25,6 +25,13 @@
 //! [`Arap::solve`] then costs two right-hand-side assemblies and three pairs of
 //! triangular solves, with no allocation.
 //!
+//! Meshes of several pieces ([`TriMesh::piece_count`]): the systems have no terms
+//! between pieces, so they are block diagonal and each piece deforms on its own.
+//! Every vertex carries the anchor term, so each piece's block is positive
+//! definite even when no constraint is on it, and the rigid motion that carries the
+//! anchor pose is fitted per piece (the identity for a piece without constraints):
+//! a piece no finger holds stays where it is.
+//!
 //! The sparse factorisation is a reverse Cuthill–McKee ordering of the vertices followed
 //! by an envelope (skyline, profile) Cholesky factorisation (`envelope.rs`), which
 //! suits the banded matrices of grid-like meshes: for a `c × r` grid the envelope has
@@ -38,9 +45,9 @@ use crate::geom::Vec2;
 
 /// Weight of the anchor term `ANCHOR_WEIGHT · ‖v - T(a_v)‖²` on every vertex, relative
 /// to the unit weight of each rigidity (edge) term (see [`Arap::solve`] for the rigid
-/// motion `T`). Keeps both systems positive definite with zero or one constraint and
-/// resolves the free rotation and scale; small enough not to be felt next to handle
-/// weights (≥ 1).
+/// motion `T`, one per piece). Keeps both systems positive definite with zero or one
+/// constraint on any piece and resolves the free rotation and scale; small enough
+/// not to be felt next to handle weights (≥ 1).
 pub const ANCHOR_WEIGHT: f64 = 1e-4;
 
 /// Largest accepted constraint weight; larger weights make the systems ill-conditioned
@@ -388,6 +395,12 @@ pub struct Arap {
     rhs1: Vec<f64>,
     /// Step-2 right-hand sides, then solutions (permuted, `[x, y]`).
     rhs2: Vec<[f64; 2]>,
+    /// Piece of every vertex (caller's indices).
+    piece: Vec<u32>,
+    /// Per piece: the rigid motion carrying the anchor pose in the current solve.
+    motions: Vec<RigidMotion>,
+    /// Per piece: the sums the rigid motion is fitted from.
+    fits: Vec<MotionFit>,
 }
 
 impl Arap {
@@ -404,6 +417,16 @@ impl Arap {
     /// [`Arap::solve`] returns [`ArapError::Degenerate`].
     pub fn new(mesh: &TriMesh) -> Arap {
         let n = mesh.vertex_count();
+        let pieces = mesh.piece_count().max(1);
+        let piece: Vec<u32> = (0..n)
+            .map(|v| {
+                mesh.piece_of_vertex()
+                    .get(v)
+                    .copied()
+                    .filter(|&p| (p as usize) < pieces)
+                    .unwrap_or(0)
+            })
+            .collect();
         let rest = mesh.rest();
         let tris_orig: Vec<[u32; 3]> = mesh
             .triangles()
@@ -495,6 +518,9 @@ impl Arap {
             factorizations: 0,
             rhs1: vec![0.0; 2 * n],
             rhs2: vec![[0.0; 2]; n],
+            piece,
+            motions: vec![RigidMotion::IDENTITY; pieces],
+            fits: vec![MotionFit::default(); pieces],
         };
         // A failure is reported by `solve` as `Degenerate`.
         let _ = arap.refactor();
@@ -723,7 +749,10 @@ impl Arap {
     /// translation with one. So the anchor only settles what the constraints leave free
     /// (with one handle: the rotation and scale about it), dragging one handle
     /// translates the mesh, and a rigid motion of all targets moves the mesh exactly
-    /// rigidly instead of being held back by the old pose.
+    /// rigidly instead of being held back by the old pose. On a mesh of several
+    /// pieces each piece has its own `T`, fitted to the constraints on that piece:
+    /// a piece without constraints keeps its anchor pose (the identity), so dragging
+    /// one piece leaves the others where they are.
     ///
     /// # Formula
     /// Igarashi, Moscovich, Hughes 2005, sections 4.1–4.2 (mesh-formation-control
@@ -731,7 +760,7 @@ impl Arap {
     /// step 1 minimises
     /// `Σ_t Σ_(i,j,k) ‖v_k - v_i - x_ij (v_j - v_i) - y_ij R90 (v_j - v_i)‖²`
     /// `+ Σ_c w_c ‖v_c - q_c‖² + Σ_p w_p ‖Σ_k b_pk v_pk - q_p‖²`
-    /// `+ ANCHOR_WEIGHT Σ_v ‖v - T(a_v)‖²`;
+    /// `+ ANCHOR_WEIGHT Σ_v ‖v - T_piece(v)(a_v)‖²`;
     /// step 2 minimises `Σ_t Σ_(i,j) ‖(v_j - v_i) - R_t (r_j - r_i)‖²` plus the same
     /// constraint and anchor terms, with `R_t` the rotation of the similarity that best
     /// maps the rest triangle onto its step-1 image.
@@ -786,9 +815,11 @@ impl Arap {
         if !self.factored {
             self.refactor()?;
         }
-        let motion = self.anchor_motion(targets, anchor);
-        self.step1(targets, anchor, &motion);
-        self.step2(targets, anchor, &motion);
+        self.fit_anchor_motions(targets, anchor);
+        let motions = std::mem::take(&mut self.motions);
+        self.step1(targets, anchor, &motions);
+        self.step2(targets, anchor, &motions);
+        self.motions = motions;
         for (o, &p) in out.iter_mut().zip(&self.inv) {
             let [x, y] = self.rhs2[p as usize];
             *o = Vec2::new(x, y);
@@ -796,56 +827,60 @@ impl Arap {
         Ok(())
     }
 
-    /// The rigid motion that best carries the constrained vertices' and points' anchor
-    /// positions to their targets (weighted least squares; [`RigidMotion::IDENTITY`]
-    /// without constraints, a translation with one constrained position).
-    fn anchor_motion(&self, targets: &[Vec2], anchor: &[Vec2]) -> RigidMotion {
-        let mut wsum = 0.0;
-        let (mut abar, mut qbar) = (Vec2::zeros(), Vec2::zeros());
+    /// Per piece, the rigid motion that best carries the piece's constrained
+    /// vertices' and points' anchor positions to their targets (weighted least
+    /// squares; [`RigidMotion::IDENTITY`] for a piece without constraints, a
+    /// translation with one constrained position), into `motions`. No allocation.
+    fn fit_anchor_motions(&mut self, targets: &[Vec2], anchor: &[Vec2]) {
         let (vt, pt) = targets.split_at(self.constraints.len());
+        let piece = &self.piece;
         let anchored = self
             .constraints
             .iter()
-            .map(|c| (c.weight, anchor[c.vertex as usize]))
-            .chain(self.points.iter().map(|p| (p.weight, p.position(anchor))));
-        for ((w, a), q) in anchored.clone().zip(vt.iter().chain(pt)) {
-            wsum += w;
-            abar += a * w;
-            qbar += q * w;
+            .map(|c| {
+                (
+                    piece[c.vertex as usize],
+                    c.weight,
+                    anchor[c.vertex as usize],
+                )
+            })
+            .chain(
+                self.points
+                    .iter()
+                    .map(|p| (piece[p.corners[0] as usize], p.weight, p.position(anchor))),
+            );
+        self.fits.fill(MotionFit::default());
+        for ((k, w, a), q) in anchored.clone().zip(vt.iter().chain(pt)) {
+            let f = &mut self.fits[k as usize];
+            f.wsum += w;
+            f.abar += a * w;
+            f.qbar += q * w;
         }
-        if wsum.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-            return RigidMotion::IDENTITY;
+        for f in &mut self.fits {
+            if f.wsum > 0.0 {
+                f.abar /= f.wsum;
+                f.qbar /= f.wsum;
+            }
         }
-        abar /= wsum;
-        qbar /= wsum;
-        let (mut dot, mut crs, mut aa, mut qq) = (0.0, 0.0, 0.0, 0.0);
-        for ((w, a), q) in anchored.zip(vt.iter().chain(pt)) {
-            let a = a - abar;
-            let q = q - qbar;
-            dot += w * a.dot(&q);
-            crs += w * (a.x * q.y - a.y * q.x);
-            aa += w * a.norm_squared();
-            qq += w * q.norm_squared();
+        for ((k, w, a), q) in anchored.zip(vt.iter().chain(pt)) {
+            let f = &mut self.fits[k as usize];
+            let a = a - f.abar;
+            let q = q - f.qbar;
+            f.dot += w * a.dot(&q);
+            f.crs += w * (a.x * q.y - a.y * q.x);
+            f.aa += w * a.norm_squared();
+            f.qq += w * q.norm_squared();
         }
-        let norm = dot.hypot(crs);
-        let (cos, sin) = if norm > ROTATION_FIT_EPS * (aa * qq).sqrt() && norm.is_finite() {
-            (dot / norm, crs / norm)
-        } else {
-            (1.0, 0.0)
-        };
-        RigidMotion {
-            cos,
-            sin,
-            from: abar,
-            to: qbar,
+        for (m, f) in self.motions.iter_mut().zip(&self.fits) {
+            *m = f.motion();
         }
     }
 
     /// Step 1 (similarity-invariant energy); the solution is left in `rhs1`.
-    fn step1(&mut self, targets: &[Vec2], anchor: &[Vec2], motion: &RigidMotion) {
-        for (a, &p) in anchor.iter().zip(&self.inv) {
+    fn step1(&mut self, targets: &[Vec2], anchor: &[Vec2], motions: &[RigidMotion]) {
+        for ((a, &p), &k) in anchor.iter().zip(&self.inv).zip(&self.piece) {
             let p = 2 * p as usize;
-            let a = motion.apply(*a);
+            let a = motions[k as usize].apply(*a);
             self.rhs1[p] = ANCHOR_WEIGHT * a.x;
             self.rhs1[p + 1] = ANCHOR_WEIGHT * a.y;
         }
@@ -866,9 +901,9 @@ impl Arap {
 
     /// Step 2 (rotation fit + scale adjustment) from the step-1 solution in `rhs1`;
     /// the solution is left in `rhs2`.
-    fn step2(&mut self, targets: &[Vec2], anchor: &[Vec2], motion: &RigidMotion) {
-        for (a, &p) in anchor.iter().zip(&self.inv) {
-            let a = motion.apply(*a);
+    fn step2(&mut self, targets: &[Vec2], anchor: &[Vec2], motions: &[RigidMotion]) {
+        for ((a, &p), &k) in anchor.iter().zip(&self.inv).zip(&self.piece) {
+            let a = motions[k as usize].apply(*a);
             self.rhs2[p as usize] = [ANCHOR_WEIGHT * a.x, ANCHOR_WEIGHT * a.y];
         }
         for (c, q) in self.constraints.iter().zip(targets) {
@@ -896,6 +931,43 @@ impl Arap {
             }
         }
         self.fac2.solve2(&mut self.rhs2);
+    }
+}
+
+/// Weighted sums over one piece's constrained positions (anchor `a`, target `q`)
+/// from which its rigid motion is fitted: total weight, weighted means, then about
+/// the means `Σ w a·q`, `Σ w a×q`, `Σ w ‖a‖²`, `Σ w ‖q‖²`.
+#[derive(Copy, Clone, Debug, Default)]
+struct MotionFit {
+    wsum: f64,
+    abar: Vec2,
+    qbar: Vec2,
+    dot: f64,
+    crs: f64,
+    aa: f64,
+    qq: f64,
+}
+
+impl MotionFit {
+    /// The rigid motion of the weighted Procrustes fit (rotation from the summed dot
+    /// and cross products); the identity without weight.
+    fn motion(&self) -> RigidMotion {
+        if self.wsum.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            return RigidMotion::IDENTITY;
+        }
+        let norm = self.dot.hypot(self.crs);
+        let (cos, sin) = if norm > ROTATION_FIT_EPS * (self.aa * self.qq).sqrt() && norm.is_finite()
+        {
+            (self.dot / norm, self.crs / norm)
+        } else {
+            (1.0, 0.0)
+        };
+        RigidMotion {
+            cos,
+            sin,
+            from: self.abar,
+            to: self.qbar,
+        }
     }
 }
 
@@ -1645,6 +1717,139 @@ mod tests {
                 arap.fac1.vals.as_ptr()
             )
         );
+    }
+
+    /// One piece of `two_grids` as a mesh of its own: vertices `range`, renumbered.
+    fn piece_alone(m: &TriMesh, range: std::ops::Range<u32>) -> TriMesh {
+        let rest = m.rest()[range.start as usize..range.end as usize].to_vec();
+        let tris = m
+            .triangles()
+            .iter()
+            .filter(|t| range.contains(&t[0]))
+            .map(|t| t.map(|v| v - range.start))
+            .collect();
+        TriMesh::from_triangles(rest, tris).expect("a disc")
+    }
+
+    #[test]
+    fn a_piece_without_constraints_stays_where_it_is() {
+        let m = crate::crowd::mesh::trimesh::two_grids(1.0);
+        let mut arap = Arap::new(&m);
+        let rest = m.rest();
+        let tol = 1e-9 * mesh_size(&m);
+        // No constraints anywhere: nothing moves (each piece's anchor alone).
+        assert!(max_err(&solve(&mut arap, &[], rest), rest) <= tol);
+        // Stretch the left piece (vertices 0..12) between two handles.
+        let cs = hard(&[0, 11]);
+        arap.set_constraints(&cs).expect("factorises");
+        let targets = [rest[0], rest[11] + Vec2::new(1.0, 0.5)];
+        let out = solve(&mut arap, &targets, rest);
+        assert!((out[11] - targets[1]).norm() < 1e-2, "{:?}", out[11]);
+        assert!(max_err(&out[12..], &rest[12..]) <= tol, "right piece moved");
+        // One handle drags the left piece; the right one stays.
+        arap.set_constraints(&hard(&[5])).expect("factorises");
+        let d = Vec2::new(-2.0, 0.3);
+        let out = solve(&mut arap, &[rest[5] + d], rest);
+        for (p, r) in out[..12].iter().zip(&rest[..12]) {
+            assert!((p - r - d).norm() <= 1e-3 * d.norm());
+        }
+        assert!(max_err(&out[12..], &rest[12..]) <= tol);
+    }
+
+    /// The two-piece system is block diagonal: solving it equals solving each piece
+    /// as a mesh of its own, with each piece's own constraints (vertex and point).
+    #[test]
+    fn two_pieces_solve_as_two_separate_meshes() {
+        let m = crate::crowd::mesh::trimesh::two_grids(0.5);
+        let (left, right) = (piece_alone(&m, 0..12), piece_alone(&m, 12..32));
+        let mut rng = SplitMix64::new(9);
+        let mut jitter = |p: Vec2, s: f64| p + s * Vec2::new(rng.unit() - 0.5, rng.unit() - 0.5);
+        let anchor: Vec<Vec2> = m.rest().iter().map(|&p| jitter(p, 0.05)).collect();
+        let cs = [
+            Constraint {
+                vertex: 2,
+                weight: W_HARD,
+            },
+            Constraint {
+                vertex: 9,
+                weight: 30.0,
+            },
+            Constraint {
+                vertex: 13,
+                weight: W_HARD,
+            },
+            Constraint {
+                vertex: 31,
+                weight: W_HARD,
+            },
+        ];
+        let pt = PointConstraint {
+            corners: m.triangles()[20],
+            bary: [0.2, 0.3, 0.5],
+            weight: 100.0,
+        };
+        assert!(
+            pt.corners.iter().all(|&v| v >= 12),
+            "a right-piece triangle"
+        );
+        let mut targets: Vec<Vec2> = cs
+            .iter()
+            .map(|c| jitter(m.rest()[c.vertex as usize], 0.8))
+            .collect();
+        targets.push(jitter(pt.position(m.rest()), 0.8));
+        let mut both = Arap::new(&m);
+        both.set_constraints_and_points(&cs, &[pt])
+            .expect("factorises");
+        let out = solve(&mut both, &targets, &anchor);
+
+        let mut a = Arap::new(&left);
+        a.set_constraints(&cs[..2]).expect("factorises");
+        let out_l = solve(&mut a, &targets[..2], &anchor[..12]);
+        let shift = |c: &Constraint| Constraint {
+            vertex: c.vertex - 12,
+            ..*c
+        };
+        let mut b = Arap::new(&right);
+        b.set_constraints_and_points(
+            &[shift(&cs[2]), shift(&cs[3])],
+            &[PointConstraint {
+                corners: pt.corners.map(|v| v - 12),
+                ..pt
+            }],
+        )
+        .expect("factorises");
+        let out_r = solve(&mut b, &targets[2..], &anchor[12..]);
+        let tol = 1e-9 * mesh_size(&m);
+        assert!(
+            max_err(&out[..12], &out_l) <= tol,
+            "{}",
+            max_err(&out[..12], &out_l)
+        );
+        assert!(
+            max_err(&out[12..], &out_r) <= tol,
+            "{}",
+            max_err(&out[12..], &out_r)
+        );
+    }
+
+    #[test]
+    fn each_piece_follows_its_own_rigid_motion() {
+        let m = crate::crowd::mesh::trimesh::two_grids(1.0);
+        let mut arap = Arap::new(&m);
+        let cs = hard(&[0, 11, 12, 31]);
+        arap.set_constraints(&cs).expect("factorises");
+        let (rl, tl) = (Rotation2::new(0.4), Vec2::new(-1.0, 2.0));
+        let (rr, tr) = (Rotation2::new(-1.1), Vec2::new(3.0, 0.5));
+        let moved: Vec<Vec2> = m
+            .rest()
+            .iter()
+            .enumerate()
+            .map(|(v, p)| if v < 12 { rl * p + tl } else { rr * p + tr })
+            .collect();
+        let targets: Vec<Vec2> = cs.iter().map(|c| moved[c.vertex as usize]).collect();
+        let out = solve(&mut arap, &targets, m.rest());
+        let e = max_err(&out, &moved) / mesh_size(&m);
+        assert!(e <= 1e-3, "relative error {e}");
     }
 
     proptest! {

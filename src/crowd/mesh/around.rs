@@ -8,26 +8,36 @@
 //! (`crowd::control::DirectController::set_mesh_sampled`) moves
 //! nobody.
 //!
-//! The mesh is the Delaunay triangulation of the agents (spade) sculpted inwards from
-//! its convex hull like a chi-shape (Duckham et al. 2008, "Efficient generation of
-//! simple polygons for characterizing the shape of a set of points in the plane"):
-//! the boundary triangle behind the longest boundary edge is removed while that edge
-//! is longer than [`ALPHA_FACTOR`] times the crowd's spacing (the median
-//! nearest-neighbour distance, at least two body radii) and the triangle's third
-//! vertex is interior. Removing only such triangles keeps a single disc with a simple
-//! boundary loop and every agent on a triangle, which [`TriMesh`] requires (one
-//! boundary loop: no holes, no separate pieces).
+//! The mesh is the Delaunay triangulation of the agents (spade), cut into one piece
+//! per group and each piece sculpted inwards like a chi-shape (Duckham et al. 2008,
+//! "Efficient generation of simple polygons for characterizing the shape of a set
+//! of points in the plane"):
+//! 1. *Groups*: agents joined by Delaunay edges no longer than [`ALPHA_FACTOR`]
+//!    times the crowd's spacing (the median nearest-neighbour distance, at least two
+//!    body radii) form one group (single linkage: two agents of different groups
+//!    are farther apart than that threshold, since the Euclidean minimum spanning
+//!    tree is part of the triangulation). Triangles with corners in two groups —
+//!    the corridor between a split crowd's halves — are dropped, so each group is a
+//!    piece of its own ([`TriMesh`] holds several pieces) and a finger dragging one
+//!    group leaves the others where they are.
+//! 2. *Chi-shape per group*: from the group's own triangles, the boundary triangle
+//!    behind the longest boundary edge is removed while that edge is longer than the
+//!    threshold and the triangle's third vertex is interior, which keeps the piece a
+//!    disc with every agent on a triangle.
+//! 3. *Groups without a triangle* (an isolated agent, two agents, agents on a line)
+//!    get two helper vertices off their line, [`HELPER_OFFSET_FACTOR`] spacings away
+//!    or less — at most a third of the clearance to everything else, so the helper
+//!    triangles overlap no other piece — and are triangulated on their own. An
+//!    isolated agent thus gets a small triangle of its own rather than joining the
+//!    nearest group: joining would be a corridor again, and a drag of the group would
+//!    pull the straggler along (and the straggler's drag the group). Agents at the
+//!    same position share a vertex.
 //!
-//! Consequences, chosen deliberately:
-//! - An isolated agent keeps the (long) triangles that tie it to the crowd; nobody
-//!   is left without a triangle.
-//! - Two groups far apart (a split crowd) become two dense pieces joined by a
-//!   corridor of long triangles, not two meshes: [`TriMesh`] holds one boundary
-//!   loop. ARAP treats the corridor like any triangle, so a hand on one piece
-//!   carries the other along rigidly rather than leaving it in place.
-//! - Degenerate crowds (one or two distinct positions, all on a line) get two helper
-//!   vertices off the line ([`HELPER_OFFSET_FACTOR`]) so a triangle exists; agents at
-//!   the same position share a vertex.
+//! A group whose own triangles are not one disc — a ring of agents around another
+//! group has a hole — is merged with the group nearest to it (shortest Delaunay edge)
+//! and the pieces rebuilt; an agent of a group left without a triangle becomes a
+//! group of its own. At worst all groups merge and the mesh is the single sculpted
+//! disc over the whole crowd. Agents all on one line are one group.
 
 use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap};
@@ -36,30 +46,39 @@ use spade::{DelaunayTriangulation, Point2, Triangulation};
 
 use super::goals::GoalSample;
 use super::trimesh::{MeshError, TriMesh};
-use crate::geom::{cross, Vec2};
+use crate::geom::{cross, segment_distance_squared, Vec2};
 
-/// A boundary edge longer than this many times the crowd's spacing is cut away.
+/// A boundary edge longer than this many times the crowd's spacing is cut away, and
+/// groups farther apart than this many spacings are separate pieces.
 pub const ALPHA_FACTOR: f64 = 3.0;
 
-/// Helper vertices of a degenerate crowd sit this many spacings off its line.
+/// Helper vertices of a group without a triangle sit at most this many spacings
+/// off its line.
 pub const HELPER_OFFSET_FACTOR: f64 = 1.0;
 
 /// Spacing assumed when neither the agents nor `radius_m` give one (m).
 const FALLBACK_SPACING_M: f64 = 0.5;
 
-/// A mesh whose vertices are the agents at `positions` (plus helpers for a
-/// degenerate crowd), and one goal sample per agent at its own vertex.
+/// A helper triangle reaches at most this fraction of its group's clearance (the
+/// distance to the nearest other agent or piece).
+const HELPER_CLEARANCE_FRACTION: f64 = 1.0 / 3.0;
+
+/// A mesh whose vertices are the agents at `positions` (plus helpers for groups
+/// without a triangle), one piece per group of agents, and one goal sample per
+/// agent at its own vertex.
 ///
-/// `radius_m` is the agents' body radius: the spacing used for cutting long edges is
-/// at least `2 · radius_m` (a non-positive or non-finite radius is ignored).
+/// `radius_m` is the agents' body radius: the spacing used for cutting long edges
+/// and separating groups is at least `2 · radius_m` (a non-positive or non-finite
+/// radius is ignored).
 ///
 /// # Errors
 /// [`MeshError::Empty`] without agents; [`MeshError::NonFinite`] naming the first
 /// agent with a NaN or infinite coordinate (or one too large for the triangulation).
 ///
 /// # Complexity
-/// O(n log n): the triangulation, then each triangle removed at most once through a
-/// heap of boundary edges.
+/// O(n log n) per build: the triangulation, then each triangle removed at most once
+/// through a heap of boundary edges; plus O(g · (n + T)) for the clearances of `g`
+/// groups without a triangle. A group that must be merged costs one more build.
 pub fn mesh_around(
     positions: &[Vec2],
     radius_m: f64,
@@ -76,13 +95,13 @@ pub fn mesh_around(
     // Distinct positions become vertices; agents on the same spot share one.
     let key = |p: Vec2| ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits());
     let mut index: HashMap<(u64, u64), u32> = HashMap::with_capacity(positions.len());
-    let mut rest: Vec<Vec2> = Vec::with_capacity(positions.len() + 2);
+    let mut points: Vec<Vec2> = Vec::with_capacity(positions.len());
     let agent_vertex: Vec<u32> = positions
         .iter()
         .map(|&p| {
             *index.entry(key(p)).or_insert_with(|| {
-                rest.push(p);
-                (rest.len() - 1) as u32
+                points.push(p);
+                (points.len() - 1) as u32
             })
         })
         .collect();
@@ -91,39 +110,53 @@ pub fn mesh_around(
     } else {
         0.0
     };
-    let mut tris = delaunay(&rest, positions, &agent_vertex)?;
-    let nn = median_nearest(&rest, &tris);
+    let not_finite = |v: usize| {
+        let agent = agent_vertex
+            .iter()
+            .position(|&a| a as usize == v)
+            .unwrap_or(positions.len());
+        MeshError::NonFinite { vertex: agent }
+    };
+    let tris = delaunay(&points).map_err(not_finite)?;
+    let nn = median_nearest(&points, &tris);
     let spacing = nn.unwrap_or(0.0).max(body);
     let spacing = if spacing > 0.0 {
         spacing
     } else {
         FALLBACK_SPACING_M
     };
-    if tris.is_empty() {
-        // One point or a line: two helpers across it, at the centroid.
-        let c = rest.iter().fold(Vec2::zeros(), |a, p| a + p) / rest.len() as f64;
-        let far = rest
-            .iter()
-            .copied()
-            .max_by(|a, b| (a - c).norm().total_cmp(&(b - c).norm()))
-            .unwrap_or(c);
-        let along = if (far - c).norm() > 0.0 {
-            (far - c).normalize()
-        } else {
-            Vec2::new(1.0, 0.0)
+    let max_edge_m = ALPHA_FACTOR * spacing;
+    let mut group = groups(points.len(), &points, &tris, max_edge_m);
+    let mesh = loop {
+        let (rest, pieces, vertex_group) =
+            build(&points, &tris, &group, spacing).map_err(not_finite)?;
+        let err = match TriMesh::from_triangles(rest, pieces) {
+            Ok(mesh) => break mesh,
+            Err(e) => e,
         };
-        let across = Vec2::new(-along.y, along.x) * (HELPER_OFFSET_FACTOR * spacing);
-        if rest.len() == 1 {
-            rest.push(c + along * spacing + across * 0.5);
-            rest.push(c + across);
-        } else {
-            rest.push(c + across);
-            rest.push(c - across);
+        // Repair the group the error is about and build again; every repair splits
+        // an agent off a group that has triangles (at most once per agent) or
+        // merges two groups, so this ends.
+        let culprit = match err {
+            MeshError::UnusedVertex { vertex } => {
+                let g = vertex_group.get(vertex).copied();
+                let shared = g.is_some_and(|g| group.iter().filter(|&&h| h == g).count() > 1);
+                if vertex < points.len() && shared {
+                    group[vertex] = next_group(&group);
+                    continue;
+                }
+                g
+            }
+            MeshError::NonManifoldEdge { from, .. } => vertex_group.get(from as usize).copied(),
+            MeshError::BoundaryNotSingleLoop { vertex } => {
+                vertex_group.get(vertex as usize).copied()
+            }
+            _ => None,
+        };
+        if !merge_nearest(&mut group, culprit, &points, &tris) {
+            return Err(err);
         }
-        tris = delaunay(&rest, positions, &agent_vertex)?;
-    }
-    sculpt(&rest, &mut tris, ALPHA_FACTOR * spacing);
-    let mesh = TriMesh::from_triangles(rest, tris)?;
+    };
     // One triangle and corner per vertex, then each agent's sample at its vertex.
     let mut corner_of: Vec<Option<(u32, usize)>> = vec![None; mesh.vertex_count()];
     for (ti, t) in mesh.triangles().iter().enumerate() {
@@ -144,31 +177,232 @@ pub fn mesh_around(
     Ok((mesh, samples))
 }
 
-/// The Delaunay triangles of `rest`, counter-clockwise, as vertex indices.
-fn delaunay(
-    rest: &[Vec2],
-    positions: &[Vec2],
-    agent_vertex: &[u32],
-) -> Result<Vec<[u32; 3]>, MeshError> {
+/// The group of every point: connected components of the Delaunay edges no longer
+/// than `max_edge_m`, numbered by their lowest point. All points are one group when
+/// the triangulation is empty (one point, or all on a line).
+fn groups(n: usize, points: &[Vec2], tris: &[[u32; 3]], max_edge_m: f64) -> Vec<u32> {
+    if tris.is_empty() {
+        return vec![0; n];
+    }
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    for t in tris {
+        for k in 0..3 {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            if (points[a] - points[b]).norm() <= max_edge_m {
+                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+                parent[ra.max(rb)] = ra.min(rb);
+            }
+        }
+    }
+    (0..n).map(|v| find(&mut parent, v) as u32).collect()
+}
+
+/// A group id no point has.
+fn next_group(group: &[u32]) -> u32 {
+    group.iter().max().map_or(0, |g| g + 1)
+}
+
+/// Merges group `culprit` (all groups when `None`) with the group nearest to it
+/// (across its shortest Delaunay edge to another group). `false` when there is
+/// only one group.
+fn merge_nearest(
+    group: &mut [u32],
+    culprit: Option<u32>,
+    points: &[Vec2],
+    tris: &[[u32; 3]],
+) -> bool {
+    let distinct = {
+        let mut g: Vec<u32> = group.to_vec();
+        g.sort_unstable();
+        g.dedup();
+        g.len()
+    };
+    if distinct <= 1 {
+        return false;
+    }
+    let Some(c) = culprit else {
+        group.fill(0);
+        return true;
+    };
+    let mut best: Option<(f64, u32)> = None;
+    for t in tris {
+        for k in 0..3 {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            if group[a] == c && group[b] != c {
+                let d = (points[a] - points[b]).norm();
+                if best.is_none_or(|(bd, _)| d < bd) {
+                    best = Some((d, group[b]));
+                }
+            }
+        }
+    }
+    // A group split off without a Delaunay edge to another (cannot happen in a
+    // connected triangulation): join everything.
+    let into = match best {
+        Some((_, g)) => g,
+        None => {
+            group.fill(0);
+            return true;
+        }
+    };
+    for g in group.iter_mut() {
+        if *g == c {
+            *g = into;
+        }
+    }
+    true
+}
+
+/// A built mesh: vertices, triangles, and the group of every vertex.
+type Built = (Vec<Vec2>, Vec<[u32; 3]>, Vec<u32>);
+
+/// The vertices (the points, then helpers), triangles and vertex groups of one mesh
+/// with a piece per group: each group's own Delaunay triangles sculpted, then the
+/// groups without a triangle with their helpers. `Err(point)` if the triangulation
+/// refuses a point.
+fn build(points: &[Vec2], tris: &[[u32; 3]], group: &[u32], spacing: f64) -> Result<Built, usize> {
+    let max_edge_m = ALPHA_FACTOR * spacing;
+    let mut own: HashMap<u32, Vec<[u32; 3]>> = HashMap::new();
+    for t in tris {
+        let g = group[t[0] as usize];
+        if t.iter().all(|&v| group[v as usize] == g) {
+            own.entry(g).or_default().push(*t);
+        }
+    }
+    let mut ids: Vec<u32> = group.to_vec();
+    ids.sort_unstable();
+    ids.dedup();
+    let mut rest = points.to_vec();
+    let mut vertex_group = group.to_vec();
+    let mut out: Vec<[u32; 3]> = Vec::with_capacity(tris.len());
+    for g in &ids {
+        if let Some(mut piece) = own.remove(g) {
+            sculpt(&rest, &mut piece, max_edge_m);
+            out.extend(piece);
+        }
+    }
+    // Groups without a triangle: the segment their points span.
+    let lone: Vec<(u32, Vec<u32>, Vec2, Vec2)> = ids
+        .iter()
+        .filter(|g| !out.iter().any(|t| group[t[0] as usize] == **g))
+        .map(|&g| {
+            let members: Vec<u32> = (0..points.len() as u32)
+                .filter(|&v| group[v as usize] == g)
+                .collect();
+            let (a, b) = span(points, &members);
+            (g, members, a, b)
+        })
+        .collect();
+    for (g, members, a, b) in &lone {
+        // Clearance: the other groups' points and segments, and the triangles built.
+        let mut clear2 = f64::INFINITY;
+        for (v, p) in points.iter().enumerate() {
+            if group[v] != *g {
+                clear2 = clear2.min(segment_distance_squared(*p, *a, *b));
+            }
+        }
+        for (h, _, c, d) in &lone {
+            if h != g {
+                clear2 = clear2.min(segments_distance2(*a, *b, *c, *d));
+            }
+        }
+        for t in &out {
+            for k in 0..3 {
+                let (c, d) = (rest[t[k] as usize], rest[t[(k + 1) % 3] as usize]);
+                clear2 = clear2.min(segments_distance2(*a, *b, c, d));
+            }
+        }
+        let reach = (HELPER_CLEARANCE_FRACTION * clear2.sqrt()).min(spacing);
+        let offset = (HELPER_OFFSET_FACTOR * spacing).min(reach);
+        let c = members
+            .iter()
+            .fold(Vec2::zeros(), |acc, &v| acc + points[v as usize])
+            / members.len() as f64;
+        let along = if (b - a).norm() > 0.0 {
+            (b - a).normalize()
+        } else {
+            Vec2::new(1.0, 0.0)
+        };
+        let across = Vec2::new(-along.y, along.x) * offset;
+        let first = rest.len() as u32;
+        if members.len() == 1 {
+            rest.push(c + along * reach + across * 0.5);
+            rest.push(c + across);
+        } else {
+            rest.push(c + across);
+            rest.push(c - across);
+        }
+        vertex_group.extend([*g, *g]);
+        // Triangulate the group with its helpers on their own.
+        let local: Vec<u32> = members.iter().copied().chain([first, first + 1]).collect();
+        let local_points: Vec<Vec2> = local.iter().map(|&v| rest[v as usize]).collect();
+        let mut piece: Vec<[u32; 3]> = delaunay(&local_points)
+            .map_err(|i| local.get(i).map_or(0, |&v| v as usize))?
+            .into_iter()
+            .map(|t| t.map(|i| local[i as usize]))
+            .collect();
+        sculpt(&rest, &mut piece, max_edge_m);
+        out.extend(piece);
+    }
+    Ok((rest, out, vertex_group))
+}
+
+/// The two extreme points of `members` along their longest direction from the
+/// centroid (the same point twice for a single member).
+fn span(points: &[Vec2], members: &[u32]) -> (Vec2, Vec2) {
+    let c = members
+        .iter()
+        .fold(Vec2::zeros(), |acc, &v| acc + points[v as usize])
+        / members.len().max(1) as f64;
+    let far = members
+        .iter()
+        .map(|&v| points[v as usize])
+        .max_by(|a, b| (a - c).norm().total_cmp(&(b - c).norm()))
+        .unwrap_or(c);
+    let other = members
+        .iter()
+        .map(|&v| points[v as usize])
+        .max_by(|a, b| (a - far).norm().total_cmp(&(b - far).norm()))
+        .unwrap_or(far);
+    (far, other)
+}
+
+/// Squared distance between segments `ab` and `cd` (0 when they cross or touch).
+fn segments_distance2(a: Vec2, b: Vec2, c: Vec2, d: Vec2) -> f64 {
+    let (d1, d2) = (cross(b - a, c - a), cross(b - a, d - a));
+    let (d3, d4) = (cross(d - c, a - c), cross(d - c, b - c));
+    if d1 * d2 < 0.0 && d3 * d4 < 0.0 {
+        return 0.0;
+    }
+    segment_distance_squared(c, a, b)
+        .min(segment_distance_squared(d, a, b))
+        .min(segment_distance_squared(a, c, d))
+        .min(segment_distance_squared(b, c, d))
+}
+
+/// The Delaunay triangles of `points`, counter-clockwise, as indices into `points`;
+/// `Err(index)` of a point the triangulation refuses.
+fn delaunay(points: &[Vec2]) -> Result<Vec<[u32; 3]>, usize> {
     let mut dt: DelaunayTriangulation<Point2<f64>> = DelaunayTriangulation::new();
-    let mut handle_to_vertex: Vec<u32> = vec![u32::MAX; rest.len()];
-    for (v, p) in rest.iter().enumerate() {
+    let mut handle_to_vertex: Vec<u32> = vec![u32::MAX; points.len()];
+    for (v, p) in points.iter().enumerate() {
         match dt.insert(Point2::new(p.x, p.y)) {
             Ok(h) => handle_to_vertex[h.index()] = v as u32,
-            Err(_) => {
-                let agent = agent_vertex
-                    .iter()
-                    .position(|&a| a as usize == v)
-                    .unwrap_or(positions.len());
-                return Err(MeshError::NonFinite { vertex: agent });
-            }
+            Err(_) => return Err(v),
         }
     }
     Ok(dt
         .inner_faces()
         .map(|f| {
             let mut t = f.vertices().map(|h| handle_to_vertex[h.fix().index()]);
-            let [a, b, c] = t.map(|v| rest[v as usize]);
+            let [a, b, c] = t.map(|v| points[v as usize]);
             if cross(b - a, c - a) < 0.0 {
                 t.swap(1, 2);
             }
@@ -374,12 +608,15 @@ mod tests {
     }
 
     #[test]
-    fn two_far_groups_give_two_pieces_joined_by_a_thin_corridor() {
+    fn two_far_groups_give_two_pieces_without_a_corridor() {
         let mut p = jittered(25, Vec2::zeros(), 1);
         p.extend(jittered(25, Vec2::new(8.0, 0.5), 2));
         let (mesh, _) = check(&p);
+        assert_eq!(mesh.piece_count(), 2);
+        assert_eq!(mesh.components()[0], (0..25).collect::<Vec<u32>>());
+        assert_eq!(mesh.components()[1], (25..50).collect::<Vec<u32>>());
         assert_eq!(short_pieces(&mesh, ALPHA_FACTOR * 0.5), 2);
-        // The corridor: few triangles reach across the gap.
+        // No triangle reaches across the gap.
         let r = mesh.rest();
         let across = mesh
             .triangles()
@@ -389,21 +626,75 @@ mod tests {
                 xs.iter().any(|&x| x < 3.0) && xs.iter().any(|&x| x > 7.0)
             })
             .count();
-        assert!(
-            (1..=4).contains(&across),
-            "{across} triangles across the gap"
-        );
-        // Far less area than the convex hull's.
-        assert!(mesh.area() < 2.0 * 4.0 + 2.0 * 4.0 + 6.0, "{}", mesh.area());
+        assert_eq!(across, 0);
+        assert!(mesh.area() < 10.0, "{}", mesh.area());
+        // Groups closer than the threshold stay one piece.
+        let mut q = jittered(25, Vec2::zeros(), 1);
+        q.extend(jittered(25, Vec2::new(3.0, 0.0), 2));
+        assert_eq!(check(&q).0.piece_count(), 1);
     }
 
     #[test]
-    fn an_outlier_keeps_a_triangle() {
+    fn an_outlier_gets_a_small_triangle_of_its_own() {
         let mut p = jittered(30, Vec2::zeros(), 4);
         p.push(Vec2::new(10.0, 10.0));
         let (mesh, samples) = check(&p);
+        assert_eq!(mesh.piece_count(), 2);
         let t = mesh.triangles()[samples[30].tri as usize];
         assert!(t.contains(&30));
+        let piece = mesh.piece_of_vertex()[30] as usize;
+        assert_eq!(
+            mesh.components()[piece],
+            vec![30, 31, 32],
+            "agent + 2 helpers"
+        );
+        for &v in &t {
+            assert!((mesh.rest()[v as usize] - p[30]).norm() <= 1.2 * 0.5);
+        }
+    }
+
+    #[test]
+    fn stragglers_and_lines_far_apart_get_helper_pieces_that_overlap_nothing() {
+        // A group, a pair, a line of four and a lone agent, all far apart, with the
+        // line passing close by the pair.
+        let mut p = jittered(16, Vec2::zeros(), 8);
+        p.extend([Vec2::new(6.0, 0.0), Vec2::new(6.3, 0.1)]);
+        p.extend((0..4).map(|k| Vec2::new(6.0 + 0.5 * k as f64, 2.0)));
+        p.push(Vec2::new(-6.0, 5.0));
+        let (mesh, _) = check(&p);
+        assert_eq!(mesh.piece_count(), 4);
+        // Every agent is inside exactly the triangles of its own piece: no two
+        // pieces overlap (each triangle's centroid lies in no other piece).
+        let r = mesh.rest();
+        for (ti, t) in mesh.triangles().iter().enumerate() {
+            let c = t.iter().map(|&v| r[v as usize]).sum::<Vec2>() / 3.0;
+            let piece = mesh.piece_of_vertex()[t[0] as usize];
+            for (tj, u) in mesh.triangles().iter().enumerate() {
+                if ti == tj || mesh.piece_of_vertex()[u[0] as usize] == piece {
+                    continue;
+                }
+                let [a, b, d] = u.map(|v| r[v as usize]);
+                let inside = cross(b - a, c - a) > 0.0
+                    && cross(d - b, c - b) > 0.0
+                    && cross(a - d, c - d) > 0.0;
+                assert!(!inside, "triangle {ti} overlaps {tj}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_group_ringed_by_another_is_joined_to_it() {
+        // A ring of agents around a small group: the ring alone would be a piece
+        // with a hole, so the two are merged into one disc.
+        let mut p: Vec<Vec2> = (0..40)
+            .map(|k| {
+                let a = k as f64 / 40.0 * std::f64::consts::TAU;
+                Vec2::new(a.cos(), a.sin()) * 3.2
+            })
+            .collect();
+        p.extend(jittered(9, Vec2::new(-0.5, -0.5), 9));
+        let (mesh, _) = check(&p);
+        assert_eq!(mesh.piece_count(), 1);
     }
 
     #[test]

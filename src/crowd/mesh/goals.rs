@@ -2,7 +2,9 @@
 //! (mesh-formation-control section 4.1), so the number of agents is independent of the
 //! number of vertices. [`sample_goals`] spreads `n` samples evenly over the mesh
 //! (farthest-point sampling from a dense candidate set, then Lloyd relaxation);
-//! [`goal_positions`] maps them through any pose of the mesh.
+//! [`goal_positions`] maps them through any pose of the mesh. On a mesh of several
+//! pieces each piece gets its share of the samples in proportion to its area and is
+//! sampled on its own, so no sample sits between pieces.
 
 use super::trimesh::{dist2, tri_edges, TriMesh};
 use crate::geom::{cross, Vec2};
@@ -87,6 +89,11 @@ impl Ord for HeapEntry {
 ///    sample stands for about the same area, and the outer row moves off the outline
 ///    (about 0.3 spacings inwards), as agents filling the formation would stand.
 ///
+/// On a mesh of several pieces, the `n` samples are first shared out in proportion
+/// to the pieces' rest areas (largest remainders, ties to the lower piece), then
+/// steps 2–3 run on each piece's candidates alone, starting at its first outline
+/// vertex; the samples come piece by piece.
+///
 /// Measured on a 12 m × 8 m grid mesh for n = 50, 100, 1000: nearest-neighbour distances
 /// between `0.69` and `1.28 · sqrt(area / n)` (mean about `0.95`, standard deviation
 /// about `0.08–0.10`).
@@ -169,20 +176,82 @@ pub fn sample_goals_cancellable(
                 .collect(),
         );
     }
+    let counts = share_by_area(mesh, n);
     let mut delta = (2.0 * area / (3f64.sqrt() * GOAL_CANDIDATES_PER_SAMPLE * n as f64)).sqrt();
-    loop {
+    'refine: loop {
         let candidates = goal_candidates(mesh, &incident, delta, cancelled)?;
-        // Vertices come first among the candidates: start at the first outline vertex.
-        let first = mesh.outline().first().map_or(0, |&v| v as usize);
-        if let Some(chosen) = farthest_point_sampling(&candidates, n, first, cancelled)? {
-            return lloyd_relax(mesh, &candidates, &chosen, GOAL_LLOYD_ITERATIONS, cancelled);
+        if mesh.piece_count() == 1 {
+            // Vertices come first among the candidates: start at the first outline
+            // vertex.
+            let first = mesh.outline().first().map_or(0, |&v| v as usize);
+            if let Some(chosen) = farthest_point_sampling(&candidates, n, first, cancelled)? {
+                return lloyd_relax(mesh, &candidates, &chosen, GOAL_LLOYD_ITERATIONS, cancelled);
+            }
+            // Too few distinct candidates (very thin mesh): refine the lattice.
+            delta *= 0.5;
+            continue;
         }
-        // Too few distinct candidates (very thin mesh): refine the lattice.
-        delta *= 0.5;
+        let piece_of = mesh.piece_of_vertex();
+        let mut samples = Vec::with_capacity(n);
+        for (piece, &count) in counts.iter().enumerate() {
+            if count == 0 {
+                continue;
+            }
+            let in_piece = |c: &&Candidate| {
+                let t = mesh.triangles()[c.sample.tri as usize];
+                piece_of[t[0] as usize] as usize == piece
+            };
+            let own: Vec<Candidate> = candidates.iter().filter(in_piece).copied().collect();
+            // The piece's vertices come first among its candidates, in vertex order.
+            let start = mesh.outlines()[piece].first().copied().unwrap_or(0);
+            let first = mesh.components()[piece]
+                .iter()
+                .position(|&v| v == start)
+                .unwrap_or(0);
+            let Some(chosen) = farthest_point_sampling(&own, count, first, cancelled)? else {
+                delta *= 0.5;
+                continue 'refine;
+            };
+            samples.extend(lloyd_relax(
+                mesh,
+                &own,
+                &chosen,
+                GOAL_LLOYD_ITERATIONS,
+                cancelled,
+            )?);
+        }
+        return Some(samples);
     }
 }
 
-/// Candidate set for [`sample_goals`]: the vertices, the outline subdivided at about
+/// `n` shared out over the pieces of `mesh` in proportion to their rest areas:
+/// largest remainders (Hamilton), ties to the lower piece. Sums to `n`.
+fn share_by_area(mesh: &TriMesh, n: usize) -> Vec<usize> {
+    let pieces = mesh.piece_count();
+    let mut area = vec![0.0; pieces];
+    let (rest, piece_of) = (mesh.rest(), mesh.piece_of_vertex());
+    for t in mesh.triangles() {
+        let [a, b, c] = t.map(|v| rest[v as usize]);
+        if let Some(s) = area.get_mut(piece_of[t[0] as usize] as usize) {
+            *s += 0.5 * cross(b - a, c - a);
+        }
+    }
+    let total: f64 = area.iter().sum();
+    let quota: Vec<f64> = area.iter().map(|a| n as f64 * a / total).collect();
+    let mut counts: Vec<usize> = quota.iter().map(|q| q.floor() as usize).collect();
+    let mut order: Vec<usize> = (0..pieces).collect();
+    order.sort_by(|&i, &j| {
+        let (fi, fj) = (quota[i] - quota[i].floor(), quota[j] - quota[j].floor());
+        fj.total_cmp(&fi).then(i.cmp(&j))
+    });
+    let missing = n.saturating_sub(counts.iter().sum());
+    for &i in order.iter().cycle().take(missing) {
+        counts[i] += 1;
+    }
+    counts
+}
+
+/// Candidate set for [`sample_goals`]: the vertices, every piece's outline subdivided at about
 /// `delta`, and a hexagonal lattice of spacing `delta` clipped to each triangle.
 /// `None` when `cancelled` said so (checked every [`VISITS_PER_CHECK`] lattice
 /// points tried, and at the end).
@@ -211,23 +280,25 @@ fn goal_candidates(
             edge_tri.insert(e, (ti as u32, k));
         }
     }
-    let m = mesh.outline().len();
-    for i in 0..m {
-        let (a, b) = (mesh.outline()[i], mesh.outline()[(i + 1) % m]);
-        let Some(&(tri, k)) = edge_tri.get(&(a, b)) else {
-            continue;
-        };
-        let len = (rest[b as usize] - rest[a as usize]).norm();
-        let steps = (len / delta).ceil().max(1.0) as usize;
-        for s in 1..steps {
-            let t = s as f64 / steps as f64;
-            let mut bary = [0.0; 3];
-            bary[k] = 1.0 - t;
-            bary[(k + 1) % 3] = t;
-            out.push(Candidate {
-                p: rest[a as usize] * (1.0 - t) + rest[b as usize] * t,
-                sample: GoalSample { tri, bary },
-            });
+    for outline in mesh.outlines() {
+        let m = outline.len();
+        for i in 0..m {
+            let (a, b) = (outline[i], outline[(i + 1) % m]);
+            let Some(&(tri, k)) = edge_tri.get(&(a, b)) else {
+                continue;
+            };
+            let len = (rest[b as usize] - rest[a as usize]).norm();
+            let steps = (len / delta).ceil().max(1.0) as usize;
+            for s in 1..steps {
+                let t = s as f64 / steps as f64;
+                let mut bary = [0.0; 3];
+                bary[k] = 1.0 - t;
+                bary[(k + 1) % 3] = t;
+                out.push(Candidate {
+                    p: rest[a as usize] * (1.0 - t) + rest[b as usize] * t,
+                    sample: GoalSample { tri, bary },
+                });
+            }
         }
     }
     // Hexagonal lattice, offset half a step from the bounding box so that it does not
@@ -732,6 +803,38 @@ mod tests {
                 "n = {n}: {left} on the left"
             );
         }
+    }
+
+    #[test]
+    fn two_pieces_share_the_samples_by_area() {
+        let m = crate::crowd::mesh::trimesh::two_grids(1.0);
+        // Areas 2 m² and 6 m².
+        for (n, left) in [(80, 20), (41, 10), (7, 2), (1, 0)] {
+            let s = sample_goals(&m, n);
+            assert_eq!(s.len(), n);
+            assert_eq!(s, sample_goals(&m, n), "deterministic");
+            let on_left = s
+                .iter()
+                .filter(|g| m.triangles()[g.tri as usize][0] < 12)
+                .count();
+            assert_eq!(on_left, left, "n = {n}");
+            let mut pos = Vec::new();
+            goal_positions(&m, &s, m.rest(), &mut pos);
+            for p in &pos {
+                assert_eq!(distance_to_mesh(&m, m.rest(), *p), 0.0);
+            }
+            if n >= 40 {
+                // Even spacing inside each piece.
+                let h = (m.area() / n as f64).sqrt();
+                let (min, max) = nn_spacing(&pos);
+                assert!(min >= 0.5 * h && max <= 1.35 * h, "{min} {max} vs {h}");
+            }
+        }
+        // Counts equal to the vertex count: the vertices.
+        let s = sample_goals(&m, m.vertex_count());
+        let mut pos = Vec::new();
+        goal_positions(&m, &s, m.rest(), &mut pos);
+        assert_eq!(pos, m.rest());
     }
 
     /// The check is called at bounded intervals and the sampling stops at the first

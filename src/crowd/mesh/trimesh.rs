@@ -11,6 +11,16 @@
 //! right and y up. The outline is the boundary loop traversed in the same sense as the
 //! triangles' own edges.
 //!
+//! Pieces: a mesh may consist of several *pieces* (connected components: triangles
+//! joined through shared vertices), each a disc with one boundary loop — a crowd
+//! split into groups far apart (`mesh_around`) is one piece per group, so
+//! deforming one group leaves the others where they are. Pieces are numbered in the
+//! order their first triangle appears; [`TriMesh::outlines`] has one loop per piece
+//! and [`TriMesh::outline`] is the loop of the largest piece (by rest area), so a
+//! one-piece mesh has exactly the outline it always had. Pieces are not checked for
+//! overlapping each other in the plane (the triangulations that build them do not
+//! produce overlaps).
+//!
 //! ```text
 //!   row 1   3 ─── 4 ─── 5        grid(rect, 3, 2): vertex = row * cols + col,
 //!           │   ╱ │ ╲   │        row 0 at rect.min[1]; the diagonal alternates
@@ -28,13 +38,21 @@ use crate::geom::{cross, segment_distance_squared, Rect, Vec2};
 /// [`TriMesh::from_triangles`] and by [`TriMesh::grid`] for a finite rectangle of
 /// positive size): every rest position is finite, every vertex is used by a triangle,
 /// every triangle is CCW with positive rest area, every directed edge occurs at most once
-/// (a consistently oriented manifold), and the boundary is a single closed CCW loop,
-/// stored in `outline`.
+/// (a consistently oriented manifold), and every piece (vertex-connected component)
+/// has a boundary that is a single closed CCW loop, stored in `outlines` (one per
+/// piece, in piece order).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TriMesh {
     rest: Vec<Vec2>,
     triangles: Vec<[u32; 3]>,
-    outline: Vec<u32>,
+    /// One boundary loop per piece.
+    outlines: Vec<Vec<u32>>,
+    /// Piece index of every vertex.
+    piece_of: Vec<u32>,
+    /// Vertex ids of every piece, ascending.
+    components: Vec<Vec<u32>>,
+    /// Index of the piece with the largest rest area (lowest index on ties).
+    largest: usize,
 }
 
 /// Why a triangle list is not a usable crowd mesh.
@@ -81,9 +99,10 @@ pub enum MeshError {
         /// Edge end vertex.
         to: u32,
     },
-    /// The boundary edges do not form one simple closed loop (holes, several
-    /// components, or a vertex where the boundary touches itself).
-    #[error("boundary is not a single simple closed loop (at vertex {vertex})")]
+    /// The boundary edges of a piece do not form one simple closed loop (holes, a
+    /// closed surface, or a vertex where the boundary touches itself — two triangles
+    /// meeting only at a vertex are one piece with such a boundary).
+    #[error("boundary of a piece is not a single simple closed loop (at vertex {vertex})")]
     BoundaryNotSingleLoop {
         /// A vertex where the loop structure fails.
         vertex: u32,
@@ -110,8 +129,16 @@ pub(super) fn tri_edges(t: &[u32; 3]) -> [(u32, u32); 3] {
     [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]
 }
 
-/// The boundary loop of a consistently oriented triangle set, or why there is none.
-fn boundary_loop(triangles: &[[u32; 3]]) -> Result<Vec<u32>, MeshError> {
+/// The pieces of a consistently oriented triangle set over `n` vertices and their
+/// boundary loops, or why they are not a set of discs.
+///
+/// Returns `(outlines, piece_of)`: one boundary loop per piece (pieces numbered by
+/// their first triangle, each loop starting at the first boundary edge of the piece
+/// in triangle order) and the piece of every vertex (`u32::MAX` for an unused one).
+fn boundary_loops(
+    triangles: &[[u32; 3]],
+    n: usize,
+) -> Result<(Vec<Vec<u32>>, Vec<u32>), MeshError> {
     let mut directed: HashSet<(u32, u32)> = HashSet::with_capacity(triangles.len() * 3);
     for t in triangles {
         for (a, b) in tri_edges(t) {
@@ -120,45 +147,121 @@ fn boundary_loop(triangles: &[[u32; 3]]) -> Result<Vec<u32>, MeshError> {
             }
         }
     }
+    // Pieces: union-find over the vertices of each triangle.
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn find(parent: &mut [u32], mut x: u32) -> u32 {
+        while parent[x as usize] != x {
+            let up = parent[parent[x as usize] as usize];
+            parent[x as usize] = up;
+            x = up;
+        }
+        x
+    }
+    for t in triangles {
+        let r = find(&mut parent, t[0]);
+        for &v in &t[1..] {
+            let s = find(&mut parent, v);
+            parent[s as usize] = r;
+        }
+    }
+    let mut piece_of_root: HashMap<u32, u32> = HashMap::new();
+    let mut piece_of = vec![u32::MAX; n];
+    for t in triangles {
+        let r = find(&mut parent, t[0]);
+        let next_id = piece_of_root.len() as u32;
+        let id = *piece_of_root.entry(r).or_insert(next_id);
+        for &v in t {
+            piece_of[v as usize] = id;
+        }
+    }
+    let pieces = piece_of_root.len();
     // Boundary edges: directed edges whose reverse is absent. Walk them in triangle
-    // order so the start vertex is deterministic.
+    // order so each loop's start vertex is deterministic.
     let mut next: HashMap<u32, u32> = HashMap::new();
-    let mut start = None;
+    let mut starts: Vec<Option<u32>> = vec![None; pieces];
     for t in triangles {
         for (a, b) in tri_edges(t) {
             if !directed.contains(&(b, a)) {
                 if next.insert(a, b).is_some() {
                     return Err(MeshError::BoundaryNotSingleLoop { vertex: a });
                 }
-                start.get_or_insert(a);
+                starts[piece_of[a as usize] as usize].get_or_insert(a);
             }
         }
     }
-    let Some(start) = start else {
-        // A closed surface has no boundary; not a planar formation.
-        return Err(MeshError::BoundaryNotSingleLoop {
-            vertex: triangles[0][0],
-        });
-    };
-    let mut outline = Vec::with_capacity(next.len());
-    let mut v = start;
-    loop {
-        outline.push(v);
-        let Some(&w) = next.get(&v) else {
-            return Err(MeshError::BoundaryNotSingleLoop { vertex: v });
+    let mut outlines = Vec::with_capacity(pieces);
+    let mut walked = 0;
+    for (piece, start) in starts.into_iter().enumerate() {
+        let Some(start) = start else {
+            // A closed surface has no boundary; not a planar formation.
+            let vertex = piece_of
+                .iter()
+                .position(|&p| p as usize == piece)
+                .unwrap_or(0);
+            return Err(MeshError::BoundaryNotSingleLoop {
+                vertex: vertex as u32,
+            });
         };
-        if w == start {
-            break;
+        let mut outline = Vec::new();
+        let mut v = start;
+        loop {
+            outline.push(v);
+            let Some(&w) = next.get(&v) else {
+                return Err(MeshError::BoundaryNotSingleLoop { vertex: v });
+            };
+            if w == start {
+                break;
+            }
+            if outline.len() >= next.len() {
+                return Err(MeshError::BoundaryNotSingleLoop { vertex: w });
+            }
+            v = w;
         }
-        if outline.len() >= next.len() {
-            return Err(MeshError::BoundaryNotSingleLoop { vertex: w });
+        walked += outline.len();
+        outlines.push(outline);
+    }
+    if walked != next.len() {
+        // A boundary edge on no walked loop: some piece has a second loop (a hole).
+        let mut on_loop = vec![false; n];
+        for &v in outlines.iter().flatten() {
+            on_loop[v as usize] = true;
         }
-        v = w;
+        let vertex = next.keys().copied().filter(|&v| !on_loop[v as usize]).min();
+        return Err(MeshError::BoundaryNotSingleLoop {
+            vertex: vertex.unwrap_or(0),
+        });
     }
-    if outline.len() != next.len() {
-        return Err(MeshError::BoundaryNotSingleLoop { vertex: start });
+    Ok((outlines, piece_of))
+}
+
+/// Vertex ids per piece (ascending) and the piece with the largest rest area
+/// (lowest index on ties).
+fn pieces_of(
+    rest: &[Vec2],
+    triangles: &[[u32; 3]],
+    piece_of: &[u32],
+    pieces: usize,
+) -> (Vec<Vec<u32>>, usize) {
+    let mut components = vec![Vec::new(); pieces];
+    for (v, &p) in piece_of.iter().enumerate() {
+        if let Some(c) = components.get_mut(p as usize) {
+            c.push(v as u32);
+        }
     }
-    Ok(outline)
+    let mut area = vec![0.0; pieces];
+    for t in triangles {
+        let [a, b, c] = t.map(|v| rest[v as usize]);
+        if let Some(s) = area.get_mut(piece_of[t[0] as usize] as usize) {
+            *s += 0.5 * cross(b - a, c - a);
+        }
+    }
+    let mut largest = 0;
+    for (p, &s) in area.iter().enumerate() {
+        if s > area[largest] {
+            largest = p;
+        }
+    }
+    (components, largest)
 }
 
 impl TriMesh {
@@ -222,16 +325,34 @@ impl TriMesh {
         outline.extend((0..rows - 1).map(|r| idx(cols - 1, r)));
         outline.extend((1..cols).rev().map(|c| idx(c, rows - 1)));
         outline.extend((1..rows).rev().map(|r| idx(0, r)));
+        let n = rest.len();
         TriMesh {
             rest,
             triangles,
-            outline,
+            outlines: vec![outline],
+            piece_of: vec![0; n],
+            components: vec![(0..n as u32).collect()],
+            largest: 0,
         }
     }
 
     /// Builds a mesh from rest positions and triangles (e.g. a Delaunay triangulation of a
-    /// formation shape). Clockwise triangles are flipped to CCW; the outline is derived
-    /// from the boundary edges.
+    /// formation shape). Clockwise triangles are flipped to CCW; the pieces and their
+    /// outlines are derived from the boundary edges. Several pieces are accepted, each
+    /// a disc (one boundary loop).
+    ///
+    /// ```
+    /// use crowdtouch::crowd::mesh::TriMesh;
+    /// use crowdtouch::geom::Vec2;
+    /// // Two triangles 5 m apart: two pieces.
+    /// let p = |x: f64, y: f64| Vec2::new(x, y);
+    /// let rest = vec![p(0.0, 0.0), p(1.0, 0.0), p(0.0, 1.0), p(5.0, 0.0), p(7.0, 0.0), p(5.0, 2.0)];
+    /// let m = TriMesh::from_triangles(rest, vec![[0, 1, 2], [3, 4, 5]]).unwrap();
+    /// assert_eq!(m.piece_count(), 2);
+    /// assert_eq!(m.components(), &[vec![0, 1, 2], vec![3, 4, 5]]);
+    /// assert_eq!(m.outlines(), &[vec![0, 1, 2], vec![3, 4, 5]]);
+    /// assert_eq!(m.outline(), &[3, 4, 5], "the larger piece's loop");
+    /// ```
     ///
     /// # Complexity
     /// O(V + T) expected (hashing of edges).
@@ -276,11 +397,15 @@ impl TriMesh {
         if let Some(vertex) = used.iter().position(|u| !u) {
             return Err(MeshError::UnusedVertex { vertex });
         }
-        let outline = boundary_loop(&triangles)?;
+        let (outlines, piece_of) = boundary_loops(&triangles, n)?;
+        let (components, largest) = pieces_of(&rest, &triangles, &piece_of, outlines.len());
         Ok(TriMesh {
             rest,
             triangles,
-            outline,
+            outlines,
+            piece_of,
+            components,
+            largest,
         })
     }
 
@@ -301,9 +426,32 @@ impl TriMesh {
         &self.triangles
     }
 
-    /// The boundary loop (CCW vertex indices, first vertex not repeated at the end).
+    /// The boundary loop (CCW vertex indices, first vertex not repeated at the end)
+    /// of the largest piece by rest area: the mesh's only loop for a one-piece mesh.
+    /// All pieces' loops: [`TriMesh::outlines`].
     pub fn outline(&self) -> &[u32] {
-        &self.outline
+        &self.outlines[self.largest]
+    }
+
+    /// The boundary loop of every piece, in piece order (CCW vertex indices, first
+    /// vertex not repeated at the end).
+    pub fn outlines(&self) -> &[Vec<u32>] {
+        &self.outlines
+    }
+
+    /// Number of pieces (connected components, each a disc with one boundary loop).
+    pub fn piece_count(&self) -> usize {
+        self.outlines.len()
+    }
+
+    /// The vertex ids of every piece (ascending), in piece order.
+    pub fn components(&self) -> &[Vec<u32>] {
+        &self.components
+    }
+
+    /// The piece of every vertex (index into [`TriMesh::components`]).
+    pub fn piece_of_vertex(&self) -> &[u32] {
+        &self.piece_of
     }
 
     /// Number of vertices.
@@ -374,27 +522,24 @@ impl TriMesh {
         if let Some(v) = used.iter().position(|u| !u) {
             return Err(format!("vertex {v} is not used by any triangle"));
         }
-        let expected = boundary_loop(&self.triangles).map_err(|e| e.to_string())?;
-        if self.outline.len() != expected.len() {
+        let (expected, piece_of) = boundary_loops(&self.triangles, n).map_err(|e| e.to_string())?;
+        if self.outlines.len() != expected.len() {
             return Err(format!(
-                "outline has {} vertices, the boundary loop has {}",
-                self.outline.len(),
+                "{} outlines stored, the mesh has {} pieces",
+                self.outlines.len(),
                 expected.len()
             ));
         }
-        // Same cyclic sequence, possibly starting elsewhere.
-        let Some(shift) = self.outline.iter().position(|&v| v == expected[0]) else {
-            return Err(format!("outline misses boundary vertex {}", expected[0]));
-        };
-        let m = expected.len();
-        for (k, &e) in expected.iter().enumerate() {
-            let got = self.outline[(shift + k) % m];
-            if got != e {
-                return Err(format!(
-                    "outline position {} is vertex {got}, the boundary loop has {e}",
-                    (shift + k) % m
-                ));
-            }
+        if self.piece_of != piece_of {
+            return Err("stored piece of a vertex differs from its component".into());
+        }
+        let (components, largest) =
+            pieces_of(&self.rest, &self.triangles, &piece_of, expected.len());
+        if self.components != components || self.largest != largest {
+            return Err("stored components differ from the mesh's".into());
+        }
+        for (outline, expected) in self.outlines.iter().zip(&expected) {
+            same_cycle(outline, expected)?;
         }
         Ok(())
     }
@@ -413,6 +558,31 @@ impl TriMesh {
         }
         inc
     }
+}
+
+/// Whether `outline` is the cyclic sequence `expected`, possibly starting elsewhere.
+fn same_cycle(outline: &[u32], expected: &[u32]) -> Result<(), String> {
+    if outline.len() != expected.len() {
+        return Err(format!(
+            "outline has {} vertices, the boundary loop has {}",
+            outline.len(),
+            expected.len()
+        ));
+    }
+    let Some(shift) = outline.iter().position(|&v| v == expected[0]) else {
+        return Err(format!("outline misses boundary vertex {}", expected[0]));
+    };
+    let m = expected.len();
+    for (k, &e) in expected.iter().enumerate() {
+        let got = outline[(shift + k) % m];
+        if got != e {
+            return Err(format!(
+                "outline position {} is vertex {got}, the boundary loop has {e}",
+                (shift + k) % m
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Nearest vertex of `positions` to `p`: `(index, distance)`.
@@ -489,6 +659,37 @@ pub fn distance_to_mesh(mesh: &TriMesh, positions: &[Vec2], p: Vec2) -> f64 {
         best2 = best2.min(e);
     }
     best2.sqrt()
+}
+
+/// Test mesh of two pieces: a 4×3 grid over 2 m × 1 m at (-1, 2) and a 5×4 grid over
+/// 3 m × 2 m `gap_m` to its right; the second's vertices (12..32) after the first's.
+#[cfg(test)]
+pub(super) fn two_grids(gap_m: f64) -> TriMesh {
+    let a = TriMesh::grid(
+        Rect {
+            min: [-1.0, 2.0],
+            max: [1.0, 3.0],
+        },
+        4,
+        3,
+    );
+    let b = TriMesh::grid(
+        Rect {
+            min: [1.0 + gap_m, 2.0],
+            max: [4.0 + gap_m, 4.0],
+        },
+        5,
+        4,
+    );
+    let off = a.vertex_count() as u32;
+    let rest: Vec<Vec2> = a.rest().iter().chain(b.rest()).copied().collect();
+    let tris: Vec<[u32; 3]> = a
+        .triangles()
+        .iter()
+        .copied()
+        .chain(b.triangles().iter().map(|t| t.map(|v| v + off)))
+        .collect();
+    TriMesh::from_triangles(rest, tris).expect("two discs")
 }
 
 #[cfg(test)]
@@ -622,13 +823,77 @@ mod tests {
     }
 
     #[test]
+    fn two_pieces_are_accepted_with_one_outline_each() {
+        let m = two_grids(1.0);
+        m.sanity_check().expect("sane");
+        assert_eq!(m.piece_count(), 2);
+        assert_eq!(m.components()[0], (0..12).collect::<Vec<u32>>());
+        assert_eq!(m.components()[1], (12..32).collect::<Vec<u32>>());
+        assert!(m.piece_of_vertex()[..12].iter().all(|&p| p == 0));
+        assert!(m.piece_of_vertex()[12..].iter().all(|&p| p == 1));
+        assert_eq!(m.outlines()[0].len(), 2 * (4 + 3) - 4);
+        assert_eq!(m.outlines()[1].len(), 2 * (5 + 4) - 4);
+        assert!(m.outlines()[1].iter().all(|&v| v >= 12));
+        // The larger piece's loop is `outline`.
+        assert_eq!(m.outline(), m.outlines()[1].as_slice());
+        assert!((m.area() - (2.0 + 6.0)).abs() < 1e-12);
+        // A one-piece mesh: one outline, the same as `outline`.
+        let g = TriMesh::grid(rect(2.0, 1.0), 4, 3);
+        assert_eq!(g.outlines(), &[g.outline().to_vec()]);
+        assert_eq!(g.piece_count(), 1);
+        // A stored piece list that disagrees is caught.
+        let mut bad = m.clone();
+        bad.outlines.swap(0, 1);
+        assert!(bad.sanity_check().is_err());
+        let mut bad = m.clone();
+        bad.outlines.pop();
+        assert!(bad.sanity_check().is_err());
+        let mut bad = m;
+        bad.largest = 0;
+        assert!(bad.sanity_check().is_err());
+    }
+
+    #[test]
+    fn a_piece_with_a_hole_or_a_closed_piece_is_refused() {
+        // A 4x4 grid without its two middle triangles: an annulus.
+        let g = TriMesh::grid(rect(3.0, 3.0), 4, 4);
+        let centre: Vec<[u32; 3]> = g
+            .triangles()
+            .iter()
+            .copied()
+            .filter(|t| !(t.contains(&5) && t.contains(&10)))
+            .collect();
+        assert_eq!(centre.len(), g.triangles().len() - 2);
+        assert!(matches!(
+            TriMesh::from_triangles(g.rest().to_vec(), centre.clone()),
+            Err(MeshError::BoundaryNotSingleLoop { .. })
+        ));
+        // The same annulus next to a good piece: still refused.
+        let m = two_grids(1.0);
+        let off = g.vertex_count() as u32;
+        let rest: Vec<Vec2> = g.rest().iter().chain(m.rest()).copied().collect();
+        let mut tris = centre;
+        tris.extend(m.triangles().iter().map(|t| t.map(|v| v + off)));
+        assert!(matches!(
+            TriMesh::from_triangles(rest, tris),
+            Err(MeshError::BoundaryNotSingleLoop { .. })
+        ));
+        // A tetrahedron's surface drawn flat cannot be all CCW; but the boundary walk
+        // also rejects a piece without boundary edges.
+        assert!(matches!(
+            boundary_loops(&[[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]], 4),
+            Err(MeshError::BoundaryNotSingleLoop { .. })
+        ));
+    }
+
+    #[test]
     fn sanity_check_catches_broken_outline_and_orientation() {
         let g = TriMesh::grid(rect(1.0, 1.0), 3, 3);
         let mut bad = g.clone();
-        bad.outline.reverse();
+        bad.outlines[0].reverse();
         assert!(bad.sanity_check().is_err());
         let mut bad = g.clone();
-        bad.outline.pop();
+        bad.outlines[0].pop();
         assert!(bad.sanity_check().is_err());
         let mut bad = g.clone();
         bad.triangles[0].swap(1, 2);
