@@ -51,21 +51,25 @@
 //!
 //! # State machine (one per live gesture, in a fixed slot)
 //! ```text
-//!           begin        due: lasted window
-//!  ┌──────┐ ────► ┌─────────┐ ────────────► ┌──────────┐ ◄──── no class ahead ─────┐
-//!  │ Free │       │ Filling │               │ Watching │ ◄──────────┐              │
-//!  └──────┘       └─────────┘               └──────────┘            │              │
-//!     ▲                     class c ahead, c ≠ last fired │         │ no class     │
-//!     │ end (any state)                                   ▼         │ ahead        │
-//!     │                    other class c' ahead ┌──────────────────┐│              │
-//!     │           (Leading(c') or Fired(c'))  ◄─│ Leading(c, since)│┘              │
-//!     │                                         └──────────────────┘               │
-//!     │                          c ahead and now − since ≥ hold: FIRE │            │
-//!     │                     (class c ahead, c = last fired, from      ▼            │
-//!     │                      Watching or Leading, goes here too) ┌──────────┐      │
-//!     │                                                          │ Fired(c) │──────┘
-//!     │                       other class c' ahead: Leading(c') ◄└──────────┘
+//!          begin           due: lasted window       c ahead,
+//!  Free ─────────► Filling ─────────────────► Watching ───────────► Leading(c, since)
+//!   ▲                                          ▲   ▲  c ≠ last fired    │      │ ▲
+//!   │ end                            none ahead│   │                    │      │ │ c' ahead,
+//!   │ (any state)                              │   └──── none ahead ────┘      │ │ c' ≠ last
+//!   │                                          │                c still ahead, │ │ fired
+//!   │                                          │              now − since ≥ hold │ │
+//!   │                                          │                     FIRE      ▼ │
+//!   │                                          └─────────────────────────── Fired(c)
 //! ```
+//! Every transition on a vote, by the class ahead (the winner, if its weight is at
+//! least `min_weight`):
+//!
+//! | state \ vote      | `c` ahead, `c` ≠ last fired              | `c` ahead, `c` = last fired | none ahead |
+//! |-------------------|------------------------------------------|-----------------------------|------------|
+//! | Watching          | Leading(c, now); FIRE now if `hold` = 0   | Fired(c)                    | Watching   |
+//! | Leading(c, since) | same `c`: FIRE → Fired(c) once `now − since ≥ hold`; another: Leading(c, now) | Fired(c) | Watching |
+//! | Fired(k)          | Leading(c, now)                          | (`c` = `k`) stays           | Watching   |
+//!
 //! `Fired(c)` means "the class ahead has already fired": it stays quiet while `c`
 //! stays ahead. A vote while `Filling` (before the gesture has lasted a window)
 //! cannot come from a due window; it is counted in [`ContinuousStats::early`] and
@@ -606,6 +610,23 @@ fn hold_or_fire(
 ///
 /// # Complexity
 /// `O(F log n)` to find the cuts plus the samples copied.
+///
+/// ```
+/// use crowdtouch::geom::Vec2;
+/// use crowdtouch::gesture::continuous::window;
+/// use crowdtouch::gesture::track::{GestureTracks, TouchTrack, TrackSample};
+/// use crowdtouch::vocab::Micros;
+/// // A finger moving 100 mm/s rightwards, sampled every 100 ms for 1 s.
+/// let line = TouchTrack { samples: (0..=10).map(|i| TrackSample {
+///     t: Micros(i * 100_000), mm: Vec2::new(10.0 * i as f64, 0.0) }).collect() };
+/// let g = GestureTracks { fingers: vec![line] };
+/// let mut out = GestureTracks::default();
+/// // The 300 ms ending at 750 ms: cut at 450 ms and 750 ms, between samples.
+/// assert_eq!(window(&g, Micros(750_000), Micros(300_000), &mut out), 1);
+/// let s = &out.fingers[0].samples;
+/// assert_eq!(s.len(), 5); // 450 (cut), 500, 600, 700, 750 (cut)
+/// assert!((s[0].mm.x - 45.0).abs() < 1e-12 && (s[4].mm.x - 75.0).abs() < 1e-12);
+/// ```
 pub fn window(
     tracks: &GestureTracks,
     now: Micros,

@@ -556,7 +556,8 @@ fn a_resting_hand_is_still_and_an_empty_index_has_no_neighbours() {
     let g = translating(&mut rng, 2000, 100.0);
     let v = recognise_window(&g, Micros(2000 * MS), &wp, &empty, |_| Twist, &mut buf);
     assert_eq!(v, WindowVote::NoNeighbours);
-    // After the last finger lifted, the window is empty: refused.
+    // After the last finger lifted the window is empty: no travel (still), and
+    // refused when no travel is required.
     let v = recognise_window(&g, Micros(9000 * MS), &wp, &empty, |_| Twist, &mut buf);
     assert!(matches!(v, WindowVote::Still { .. }), "{v:?}");
     let wp0 = WindowParams {
