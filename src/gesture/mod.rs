@@ -2,6 +2,7 @@
 //! space), and recognising gestures (gesture-driven-crowd-motion sections 5 and 7.1).
 
 pub mod capture;
+pub mod continuous;
 pub mod dtw;
 pub mod error;
 pub mod eval;
