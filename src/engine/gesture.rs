@@ -27,11 +27,12 @@
 use super::gesture_state::{phase_of, PendingEnd, Playing};
 use super::state::Engine;
 use crate::crowd::motion::{
-    FollowPhase, Follower, GestureJob, GestureRequest, PreparedGesture, PreparedRemesh,
-    RemeshRequest,
+    FollowPhase, Follower, GestureJob, GestureMotion, GestureRequest, PreparedGesture,
+    PreparedRemesh, PreparedWindow, RemeshRequest, WindowRequest,
 };
 use crate::geom::Vec2;
 use crate::gesture::capture::Rejected;
+use crate::gesture::continuous::WindowParams;
 use crate::gesture::library::{MotionClass, S_H};
 use crate::vocab::{Event, Micros, MotionPhase, NeighbourView, PlanOrigin, PlanView, Recognition};
 use std::sync::Arc;
@@ -66,6 +67,30 @@ impl Engine {
     ) -> Option<Event> {
         let g = &mut self.gestures;
         let captured = g.capture.finish(id, &mut g.tracks);
+        g.windows_out.retain(|&w| w != id);
+        let fired = g
+            .continuous
+            .as_mut()
+            .and_then(|c| c.end(id))
+            .map_or(0, |e| e.fired);
+        if fired > 0 {
+            // Recognised while it was drawn: its motion is under way already.
+            let recognition = g
+                .fired
+                .iter()
+                .position(|f| f.0 == id)
+                .map(|k| g.fired.swap_remove(k).1);
+            return Some(Event::GestureEnd {
+                id,
+                fingers,
+                contacts,
+                duration_us,
+                cancelled,
+                recognition,
+                rejected: None,
+                t: now,
+            });
+        }
         let rejected = match (&captured, &g.recogniser) {
             _ if cancelled => Some("cancelled".to_string()),
             _ if !g.enabled => Some("disabled".to_string()),
@@ -103,6 +128,7 @@ impl Engine {
             contacts,
             duration_us,
             t: now,
+            live: false,
         });
         match &mut g.inline {
             Some(ws) => {
@@ -140,6 +166,20 @@ impl Engine {
             return;
         };
         let end = g.waiting.remove(k);
+        if end.live {
+            // A continuous fire: the motion starts; the gesture's end event comes
+            // when it ends, with this recognition.
+            let stale = p.epoch != g.epoch || self.agents.is_empty();
+            if let (false, Ok(m)) = (stale, p.outcome) {
+                if m.synthesis.trajectories.len() == self.agents.len() {
+                    let rec = recognition_view(&m, synth_us);
+                    self.gestures.fired.retain(|f| f.0 != p.id);
+                    self.gestures.fired.push((p.id, rec));
+                    self.play(p.id, m.recognised.class, m.synthesis, now);
+                }
+            }
+            return;
+        }
         let mut event = Event::GestureEnd {
             id: end.id,
             fingers: end.fingers,
@@ -159,24 +199,7 @@ impl Engine {
                 if agents != self.agents.len() {
                     set_rejected(&mut event, "superseded".to_string());
                 } else {
-                    let rec = Recognition {
-                        class: m.recognised.class.as_str().to_string(),
-                        weight: m.recognised.weight,
-                        neighbours: m
-                            .recognised
-                            .neighbours
-                            .iter()
-                            .zip(&m.neighbours)
-                            .map(|(n, (class, origin))| NeighbourView {
-                                class: class.as_str().to_string(),
-                                distance: n.distance,
-                                weight: n.weight,
-                                origin: origin.clone(),
-                            })
-                            .collect(),
-                        synth_us,
-                        agents: agents as u32,
-                    };
+                    let rec = recognition_view(&m, synth_us);
                     if let Event::GestureEnd { recognition, .. } = &mut event {
                         *recognition = Some(rec);
                     }
@@ -349,9 +372,136 @@ impl Engine {
         }
     }
 
+    /// A gesture began: continuous recognition watches it (when configured).
+    pub(super) fn continuous_begin(&mut self, id: u32, now: Micros) {
+        if let Some(c) = &mut self.gestures.continuous {
+            c.begin(id, now);
+        }
+    }
+
+    /// Continuous recognition (`gestures.continuous`, the paper's future work of
+    /// section 10): every live gesture whose window is due has its latest window
+    /// recognised (on the worker; in the tick for replays).
+    pub(super) fn poll_continuous(&mut self, now: Micros) {
+        let g = &mut self.gestures;
+        let (Some(c), Some(rec)) = (&mut g.continuous, &g.recogniser) else {
+            return;
+        };
+        if !g.enabled {
+            return;
+        }
+        for k in 0..self.segmenter.gestures().len() {
+            let live = &self.segmenter.gestures()[k];
+            let id = live.id;
+            if live.state != crate::gesture::segment::GestureState::Active
+                || g.windows_out.contains(&id)
+                || !c.due(id, now)
+            {
+                continue;
+            }
+            let mut tracks = crate::gesture::track::GestureTracks::default();
+            if !g.capture.snapshot(id, &mut tracks) {
+                continue;
+            }
+            let req = WindowRequest {
+                id,
+                epoch: g.epoch,
+                at: now,
+                tracks,
+                recogniser: Arc::clone(rec),
+                params: WindowParams {
+                    search: g.search,
+                    ..g.window
+                },
+            };
+            g.windows_out.push(id);
+            match &mut g.inline_windows {
+                Some(buf) => {
+                    let p = req.prepare(buf);
+                    self.apply_window(p, now);
+                    return self.poll_continuous(now);
+                }
+                None => g.outbox.push(GestureJob::Window(req)),
+            }
+        }
+    }
+
+    /// Uses a recognised window: when its class has stayed ahead for the hold time
+    /// the gesture fires, and its motion is synthesised from the window.
+    pub fn apply_window(&mut self, p: PreparedWindow, now: Micros) {
+        let g = &mut self.gestures;
+        g.windows_out.retain(|&w| w != p.id);
+        let (Some(c), Some(rec)) = (&mut g.continuous, &g.recogniser) else {
+            return;
+        };
+        if p.epoch != g.epoch {
+            return;
+        }
+        let Some(fire) = c.observe(p.id, p.at, p.vote) else {
+            return;
+        };
+        log::info!(
+            "gesture {}: {} recognised while drawn (weight {:.2})",
+            fire.id,
+            fire.class,
+            fire.weight
+        );
+        let req = GestureRequest {
+            id: p.id,
+            epoch: g.epoch,
+            tracks: p.cut,
+            agents: self.agents.positions().to_vec(),
+            recogniser: Arc::clone(rec),
+            search: g.search,
+            seed: g.seed
+                ^ u64::from(p.id).wrapping_mul(0x9e37_79b9_7f4a_7c15)
+                ^ u64::from(fire.count),
+            speed_m_s: g.speed_m_s,
+        };
+        g.waiting.retain(|w| w.id != p.id);
+        g.waiting.push(PendingEnd {
+            id: p.id,
+            fingers: 0,
+            contacts: 0,
+            duration_us: 0,
+            t: now,
+            live: true,
+        });
+        match &mut g.inline {
+            Some(ws) => {
+                let (searcher, synth) = &mut **ws;
+                let prepared = req.prepare(searcher, synth);
+                self.apply_gesture(prepared, 0, now);
+            }
+            None => g.outbox.push(GestureJob::Recognise(req)),
+        }
+    }
+
     /// Gesture commands played since start.
     pub fn gestures_played(&self) -> u64 {
         self.gestures.played
+    }
+}
+
+/// A recognition as clients see it.
+fn recognition_view(m: &GestureMotion, synth_us: u64) -> Recognition {
+    Recognition {
+        class: m.recognised.class.as_str().to_string(),
+        weight: m.recognised.weight,
+        neighbours: m
+            .recognised
+            .neighbours
+            .iter()
+            .zip(&m.neighbours)
+            .map(|(n, (class, origin))| NeighbourView {
+                class: class.as_str().to_string(),
+                distance: n.distance,
+                weight: n.weight,
+                origin: origin.clone(),
+            })
+            .collect(),
+        synth_us,
+        agents: m.synthesis.trajectories.len() as u32,
     }
 }
 

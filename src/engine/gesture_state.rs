@@ -6,11 +6,15 @@ use super::params::{search_params, tap_thresholds};
 use crate::config::Config;
 use crate::crowd::motion::{FollowParams, FollowPhase, Follower, GestureJob, Synthesiser};
 use crate::gesture::capture::{CaptureParams, GestureCapture, TapThresholds};
+use crate::gesture::continuous::{
+    ContinuousParams, ContinuousRecogniser, WindowBuffers, WindowParams,
+    DEFAULT_WINDOW_MIN_TRAVEL_MM,
+};
 use crate::gesture::knn::{SearchParams, Searcher};
 use crate::gesture::library::MotionClass;
 use crate::gesture::recognise::Recogniser;
 use crate::gesture::track::GestureTracks;
-use crate::vocab::{Micros, MotionPhase, PlanView};
+use crate::vocab::{Micros, MotionPhase, PlanView, Recognition};
 use std::sync::Arc;
 
 /// A gesture's end, held back until its recognition is known.
@@ -21,6 +25,9 @@ pub(super) struct PendingEnd {
     pub(super) contacts: u32,
     pub(super) duration_us: u64,
     pub(super) t: Micros,
+    /// A continuous recognition's fire: the gesture goes on, its end event comes
+    /// later (with this recognition).
+    pub(super) live: bool,
 }
 
 /// A crowd motion playing.
@@ -56,6 +63,16 @@ pub(super) struct Gestures {
     pub(super) inline: Option<Box<(Searcher, Synthesiser)>>,
     /// Gestures recognised and played, for stats.
     pub(super) played: u64,
+    /// Continuous recognition (`gestures.continuous`), when configured.
+    pub(super) continuous: Option<ContinuousRecogniser>,
+    /// How its windows are recognised.
+    pub(super) window: WindowParams,
+    /// Live gestures with a window out on the worker.
+    pub(super) windows_out: Vec<u32>,
+    /// Recognitions of live gestures that fired, for their end events.
+    pub(super) fired: Vec<(u32, Recognition)>,
+    /// Window workspaces, in the tick (replays).
+    pub(super) inline_windows: Option<Box<WindowBuffers>>,
 }
 
 impl Gestures {
@@ -83,6 +100,15 @@ impl Gestures {
             plan: None,
             inline: inline.then(|| Box::new((Searcher::new(), Synthesiser::new()))),
             played: 0,
+            continuous: None,
+            window: WindowParams {
+                window: Micros(1_000_000),
+                min_travel_mm: DEFAULT_WINDOW_MIN_TRAVEL_MM,
+                search: SearchParams::default(),
+            },
+            windows_out: Vec::with_capacity(4),
+            fired: Vec::with_capacity(4),
+            inline_windows: inline.then(|| Box::new(WindowBuffers::new())),
         };
         g.tracks = g.capture.tracks_buffer();
         g.configure(cfg);
@@ -99,6 +125,20 @@ impl Gestures {
         self.follow = follow_params(cfg);
         self.speed_m_s = gc.motion_speed_m_s;
         self.seed = gc.seed;
+        match gc.continuous {
+            Some(c) => {
+                let p = ContinuousParams::from_ms(c.window_ms, c.hold_ms);
+                if self.continuous.as_ref().map(|r| r.params()) != Some(p) {
+                    self.continuous = Some(ContinuousRecogniser::new(p));
+                }
+                self.window = WindowParams {
+                    window: p.window,
+                    min_travel_mm: DEFAULT_WINDOW_MIN_TRAVEL_MM.max(gc.min_travel_mm),
+                    search: self.search,
+                };
+            }
+            None => self.continuous = None,
+        }
     }
 
     /// Whether a crowd motion is playing (or holding for its new mesh).

@@ -111,6 +111,7 @@ impl Engine {
         self.last_t = Some(now);
         self.seq += 1;
         self.segmenter.tick(now, &mut self.seg_out);
+        self.poll_continuous(now);
         let t0 = *self.scene_t0.get_or_insert(now);
         self.scene_t_s = now.saturating_since(t0).as_secs_f64();
         self.direct.set_time(self.scene_t_s);
@@ -332,7 +333,10 @@ impl Engine {
                     cancelled,
                     t: now,
                 },
-                Segment::GestureBegin(id) => Event::GestureBegin { id, t: now },
+                Segment::GestureBegin(id) => {
+                    self.continuous_begin(id, now);
+                    Event::GestureBegin { id, t: now }
+                }
                 Segment::GestureEnd {
                     id,
                     fingers,

@@ -340,6 +340,7 @@ impl ControlLoop {
                     self.engine.apply_gesture(*p, us, now);
                 }
                 FormationDone::Remesh(p) => self.engine.apply_remesh(*p, now),
+                FormationDone::Window(p) => self.engine.apply_window(*p, now),
                 FormationDone::Abandoned(us) => {
                     self.t_abandon.record(us);
                 }

@@ -9,8 +9,11 @@
 use crate::crowd::assign::{Assigner, Cancel, PointMetric};
 use crate::crowd::control::{PreparedResize, PreparedSwitch, ResizeRequest, SwitchRequest};
 use crate::crowd::environment::{Planner, PlannerParams, Scene};
-use crate::crowd::motion::{GestureJob, PreparedGesture, PreparedRemesh, Synthesiser};
+use crate::crowd::motion::{
+    GestureJob, PreparedGesture, PreparedRemesh, PreparedWindow, Synthesiser,
+};
 use crate::geom::Vec2;
+use crate::gesture::continuous::WindowBuffers;
 use crate::gesture::knn::Searcher;
 use crate::rt::monotonic_now;
 use crate::vocab::Micros;
@@ -212,6 +215,8 @@ pub(super) enum FormationDone {
     Gesture(Box<PreparedGesture>, u64),
     /// A mesh rebuilt around the crowd after a gesture motion.
     Remesh(Box<PreparedRemesh>),
+    /// A live gesture's window recognised (continuous recognition).
+    Window(Box<PreparedWindow>),
     /// A job given up because a newer one superseded it: µs from the change to the
     /// preparation giving up.
     Abandoned(u64),
@@ -232,6 +237,7 @@ pub(super) fn formation_worker(
     // Gesture commands' workspaces, reused from gesture to gesture.
     let mut searcher = Searcher::new();
     let mut synth = Synthesiser::new();
+    let mut windows = WindowBuffers::new();
     for job in requests.iter() {
         if fresh.stopping() {
             break;
@@ -265,6 +271,9 @@ pub(super) fn formation_worker(
                     Some(FormationDone::Gesture(Box::new(p), us))
                 }
                 GestureJob::Remesh(r) => Some(FormationDone::Remesh(Box::new(r.prepare()))),
+                GestureJob::Window(r) => {
+                    Some(FormationDone::Window(Box::new(r.prepare(&mut windows))))
+                }
             },
         };
         if fresh.stopping() {

@@ -32,6 +32,7 @@ use super::error::MotionError;
 use super::synth::{Placement, Synthesis, Synthesiser};
 use crate::crowd::mesh::{mesh_around, GoalSample, MeshError, TriMesh};
 use crate::geom::Vec2;
+use crate::gesture::continuous::{recognise_window, WindowBuffers, WindowParams};
 use crate::gesture::features::GestureFeatures;
 use crate::gesture::knn::{SearchParams, Searcher};
 use crate::gesture::library::{MotionClass, MotionFeatures};
@@ -39,6 +40,7 @@ use crate::gesture::library::{Resampled, T_H};
 use crate::gesture::recognise::{RecogniseError, Recognised, Recogniser};
 use crate::gesture::resample::prepare;
 use crate::gesture::track::GestureTracks;
+use crate::vocab::Micros;
 use std::sync::Arc;
 
 /// Slowest and fastest a synthesised motion plays (s), whatever its length.
@@ -295,9 +297,67 @@ impl RemeshRequest {
     }
 }
 
+/// A live gesture's latest window to recognise (continuous recognition,
+/// `crate::gesture::continuous`).
+#[derive(Clone, Debug)]
+pub struct WindowRequest {
+    /// The gesture's id.
+    pub id: u32,
+    /// The engine's gesture epoch when asked.
+    pub epoch: u64,
+    /// The window's end: the tick that asked (µs).
+    pub at: Micros,
+    /// The gesture's tracks so far (mm of glass).
+    pub tracks: GestureTracks,
+    /// The library.
+    pub recogniser: Arc<Recogniser>,
+    /// The window's length, its stillness threshold and the search.
+    pub params: WindowParams,
+}
+
+/// A window recognised.
+#[derive(Debug)]
+pub struct PreparedWindow {
+    /// The gesture's id.
+    pub id: u32,
+    /// The epoch it was asked in.
+    pub epoch: u64,
+    /// The window's end (µs).
+    pub at: Micros,
+    /// The weighted vote, if the window was recognised.
+    pub vote: Option<(MotionClass, f64)>,
+    /// The window's tracks (to synthesise from when the vote fires).
+    pub cut: GestureTracks,
+}
+
+impl WindowRequest {
+    /// Recognises the window, reusing `buf`.
+    pub fn prepare(self, buf: &mut WindowBuffers) -> PreparedWindow {
+        let rec = &self.recogniser;
+        let vote = recognise_window(
+            &self.tracks,
+            self.at,
+            &self.params,
+            rec.index(),
+            |e| rec.class_of(e),
+            buf,
+        )
+        .vote();
+        PreparedWindow {
+            id: self.id,
+            epoch: self.epoch,
+            at: self.at,
+            vote,
+            cut: buf.cut.clone(),
+        }
+    }
+}
+
 /// Slow work of gesture commands, for a worker.
 #[derive(Clone, Debug)]
 pub enum GestureJob {
+    /// Recognise a live gesture's latest window.
+    Window(WindowRequest),
     /// Recognise a gesture and synthesise its crowd motion.
     Recognise(GestureRequest),
     /// Rebuild the direct-control mesh around the crowd.
