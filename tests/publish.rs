@@ -203,6 +203,7 @@ fn mesh(seq: u64, topology: u64) -> Arc<MeshView> {
         ],
         triangles: Arc::new(vec![[0, 1, 2]]),
         outline: Arc::new(vec![0, 1, 2]),
+        outlines: Arc::default(),
         topology,
     })
 }

@@ -92,6 +92,7 @@ pub struct Engine {
     pub(super) meshes: ArcPool<MeshView>,
     pub(super) triangles: Arc<Vec<[u32; 3]>>,
     pub(super) outline: Arc<Vec<u32>>,
+    pub(super) outlines: Arc<Vec<Vec<u32>>>,
     pub(super) topology: u64,
     pub(super) counters: EngineCounters,
     /// Formation shapes the scene's checkpoints name.
@@ -177,6 +178,7 @@ impl Engine {
             meshes: ArcPool::new(),
             triangles,
             outline,
+            outlines: Arc::default(),
             topology: 1,
             counters: EngineCounters::default(),
             formations: Arc::clone(cfg.formation_library()),
@@ -389,6 +391,7 @@ impl Engine {
             vertices: self.direct.vertices().to_vec(),
             triangles: Arc::clone(&self.triangles),
             outline: Arc::clone(&self.outline),
+            outlines: Arc::clone(&self.outlines),
             topology: self.topology,
         }
     }

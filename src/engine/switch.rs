@@ -231,6 +231,12 @@ impl Engine {
         self.direct.set_mesh_sampled(mesh, samples);
         self.triangles = Arc::new(self.direct.mesh().triangles().to_vec());
         self.outline = Arc::new(self.direct.mesh().outline().to_vec());
+        let loops = self.direct.mesh().outlines();
+        self.outlines = Arc::new(if loops.len() > 1 {
+            loops.to_vec()
+        } else {
+            Vec::new()
+        });
         self.topology += 1;
         if goal_of.len() == self.goal_of.len() {
             self.goal_of.copy_from_slice(goal_of);

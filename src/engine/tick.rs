@@ -173,6 +173,7 @@ impl Engine {
                 mv.vertices.extend_from_slice(self.direct.vertices());
                 mv.triangles = Arc::clone(&self.triangles);
                 mv.outline = Arc::clone(&self.outline);
+                mv.outlines = Arc::clone(&self.outlines);
                 mv.topology = self.topology;
             }
             self.meshes.keep(&m);

@@ -64,8 +64,12 @@ pub struct MeshView {
     pub vertices: Vec<Vec2>,
     /// Triangles as vertex index triples; shared while the topology is unchanged.
     pub triangles: Arc<Vec<[u32; 3]>>,
-    /// Boundary loop of the mesh, as vertex indices in order.
+    /// Boundary loop of the mesh, as vertex indices in order (of its largest piece
+    /// when it has several).
     pub outline: Arc<Vec<u32>>,
+    /// Every piece's boundary loop, when the mesh has more than one piece (a crowd
+    /// split into far groups after a gesture); empty for a mesh of one piece.
+    pub outlines: Arc<Vec<Vec<u32>>>,
     /// Incremented whenever `triangles` changes.
     pub topology: u64,
 }

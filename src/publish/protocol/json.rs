@@ -177,5 +177,15 @@ pub fn encode_mesh_json(m: &MeshView, with_triangles: bool, out: &mut Vec<u8>) {
     }
     out.extend_from_slice(b",\"outline\":");
     push_u32_list(out, m.outline.iter().copied(), &mut b);
+    if m.outlines.len() > 1 {
+        out.extend_from_slice(b",\"outlines\":[");
+        for (k, loop_) in m.outlines.iter().enumerate() {
+            if k > 0 {
+                out.push(b',');
+            }
+            push_u32_list(out, loop_.iter().copied(), &mut b);
+        }
+        out.push(b']');
+    }
     out.extend_from_slice(b"}\n");
 }

@@ -81,6 +81,23 @@ fn shared_json_splices_to_the_same_bytes() {
 }
 
 #[test]
+fn a_mesh_of_several_pieces_lists_every_outline() {
+    let m = MeshView {
+        seq: 1,
+        vertices: vec![Vec2::new(0.0, 0.0); 6],
+        triangles: Arc::new(vec![[0, 1, 2], [3, 4, 5]]),
+        outline: Arc::new(vec![0, 1, 2]),
+        outlines: Arc::new(vec![vec![0, 1, 2], vec![3, 4, 5]]),
+        topology: 2,
+    };
+    let mut out = Vec::new();
+    encode_mesh_json(&m, false, &mut out);
+    let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    assert_eq!(v["outline"], serde_json::json!([0, 1, 2]));
+    assert_eq!(v["outlines"], serde_json::json!([[0, 1, 2], [3, 4, 5]]));
+}
+
+#[test]
 fn mesh_triangles_only_when_asked() {
     let m = MeshView {
         seq: 3,
@@ -91,6 +108,7 @@ fn mesh_triangles_only_when_asked() {
         ],
         triangles: Arc::new(vec![[0, 1, 2]]),
         outline: Arc::new(vec![0, 1, 2]),
+        outlines: Arc::default(),
         topology: 9,
     };
     let mut a = Vec::new();
