@@ -605,8 +605,10 @@ impl Start {
                 let cmd_tx = commands.clone();
                 self.spawn("input", move || {
                     Start::realtime(priority, "input");
-                    let mut on_item = |i: usize| {
-                        if reset_between && i > 0 {
+                    // Between any two items, the last and the first of a loop too.
+                    let mut first = true;
+                    let mut on_item = |_: usize| {
+                        if reset_between && !std::mem::take(&mut first) {
                             let _ = cmd_tx.try_send(CommandRequest {
                                 client: INTERNAL_CLIENT,
                                 id: serde_json::Value::Null,
