@@ -109,7 +109,7 @@ fn a_separate_test_set_reaches_the_papers_accuracy() {
     let seg: SegmentParams = crowdtouch::engine::segment_params(&defaults);
     let taps: TapThresholds = crowdtouch::engine::tap_thresholds(&defaults);
     let mut rng = SplitMix64::new(0x7e57_0015);
-    let per_class = 40;
+    let per_class = 25;
     let mut test = Vec::new();
     let mut lost = Vec::new();
     for class in MotionClass::BASIC {
