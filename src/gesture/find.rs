@@ -137,3 +137,104 @@ pub fn find_gestures<'a>(
     f.finish(last);
     f.take()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gesture::library::MotionClass;
+    use crate::gesture::synth::{generate, to_frames, GestureStyle};
+    use crate::vocab::{Contact, ContactFlags, ContactId};
+
+    /// The default config's segmentation.
+    fn params() -> SegmentParams {
+        SegmentParams {
+            group_window: Micros(150_000),
+            hand_span_mm: 200.0,
+            gesture_span_mm: 600.0,
+            gesture_grace: Micros(250_000),
+        }
+    }
+
+    #[test]
+    fn a_two_hand_join_is_one_gesture_with_all_its_fingers() {
+        let style = GestureStyle {
+            fingers: vec![3, 2],
+            duration_s: 1.2,
+            size_mm: 200.0,
+            placement: Vec2::new(0.5, 0.5),
+            orientation_rad: 0.2,
+            jitter_mm: 0.5,
+            device_mm: (1210.0, 680.0),
+            rate_hz: 120.0,
+            stagger_ms: 60.0,
+            early_lifts: 0,
+            bow: 0.1,
+            spacing_mm: 20.0,
+            clockwise: true,
+        };
+        let tracks = generate(MotionClass::Join, &style, 77);
+        assert_eq!(tracks.fingers.len(), 5);
+        let frames = to_frames(&tracks, style.device_mm, Micros(3_000_000));
+        let found = find_gestures(
+            &frames,
+            Vec2::new(1210.0, 680.0),
+            params(),
+            TapThresholds::default(),
+        );
+        assert_eq!(found.len(), 1, "{found:?}");
+        let g = &found[0];
+        assert_eq!(g.t, Micros(3_000_000));
+        assert_eq!(g.fingers, 5);
+        let got = g.tracks.as_ref().unwrap();
+        assert_eq!(got.fingers.len(), 5);
+        // Every finger comes back whole: its landing and its lift (within f32).
+        for (a, b) in got.fingers.iter().zip(&tracks.fingers) {
+            let (a0, b0) = (a.samples[0], b.samples[0]);
+            assert_eq!(a0.t, Micros(3_000_000) + b0.t);
+            assert!((a0.mm - b0.mm).norm() < 1e-3, "{a0:?} {b0:?}");
+            let (a1, b1) = (a.samples.last().unwrap(), b.samples.last().unwrap());
+            assert!((a1.mm - b1.mm).norm() < 1e-3, "{a1:?} {b1:?}");
+        }
+    }
+
+    fn touch(t_ms: u64, id: u32, x: f32, flags: ContactFlags) -> TouchFrame {
+        let mut f = TouchFrame::new(Micros(t_ms * 1000));
+        f.push(Contact {
+            id: ContactId(id),
+            x,
+            y: 0.5,
+            flags,
+            ..Contact::default()
+        })
+        .unwrap();
+        f
+    }
+
+    #[test]
+    fn two_taps_are_two_rejected_taps() {
+        let mut frames = Vec::new();
+        // Two quick touches a second apart, each 80 ms long and still.
+        for (start, id) in [(0, 1), (1000, 2)] {
+            frames.push(touch(start, id, 0.3, ContactFlags::DOWN));
+            frames.push(touch(start + 40, id, 0.3, ContactFlags::NONE));
+            frames.push(touch(start + 80, id, 0.3, ContactFlags::UP));
+        }
+        let found = find_gestures(
+            &frames,
+            Vec2::new(1210.0, 680.0),
+            params(),
+            TapThresholds::default(),
+        );
+        assert_eq!(found.len(), 2, "{found:?}");
+        assert_eq!(found[0].t, Micros(0));
+        assert_eq!(found[1].t, Micros(1_000_000));
+        for f in &found {
+            assert_eq!(f.fingers, 1);
+            assert!(
+                matches!(f.tracks, Err(Rejected::Tap { .. })),
+                "{:?}",
+                f.tracks
+            );
+        }
+    }
+}

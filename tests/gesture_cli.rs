@@ -1,0 +1,256 @@
+//! `crowdtouch gesture classify` and `crowdtouch library …` on the command line
+//! (issue 15, "Done when" 3): every recording format the project reads, a labelled
+//! test directory, adding a person's gesture, and a corrupt library.
+
+use crowdtouch::crowd::motion::BuildParams;
+use crowdtouch::geom::Vec2;
+use crowdtouch::gesture::library::{MotionClass, SHIPPED_BYTES};
+use crowdtouch::gesture::synth::{generate, to_frames, GestureStyle};
+use crowdtouch::input::recording::JsonlWriter;
+use crowdtouch::input::{AxisRange, SurfaceInfo};
+use crowdtouch::vocab::Micros;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The binary, with an empty config search path (the embedded default config).
+fn bin(home: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_crowdtouch"));
+    c.env("XDG_CONFIG_HOME", home).env("HOME", home);
+    c
+}
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name)
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn ok(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "exit {:?}\nstdout:\n{}\nstderr:\n{}",
+        out.status.code(),
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    text(&out.stdout)
+}
+
+/// A generated gesture of `class` as a JSONL recording on a 1210 × 680 mm glass.
+fn write_gesture(class: MotionClass, seed: u64, path: &Path) {
+    let device = (1210.0, 680.0);
+    let two_hands = matches!(
+        class,
+        MotionClass::Join
+            | MotionClass::Split
+            | MotionClass::SplitThenTranslate
+            | MotionClass::TranslateThenJoin
+    );
+    let fingers = if two_hands { vec![2, 2] } else { vec![3] };
+    let style = GestureStyle {
+        fingers,
+        duration_s: 1.0,
+        size_mm: 150.0,
+        placement: Vec2::new(0.5, 0.5),
+        orientation_rad: 0.3,
+        jitter_mm: 0.3,
+        device_mm: device,
+        rate_hz: 100.0,
+        stagger_ms: 30.0,
+        early_lifts: 0,
+        bow: 0.05,
+        spacing_mm: 20.0,
+        clockwise: seed % 2 == 0,
+    };
+    let surface = SurfaceInfo {
+        name: "generated".to_string(),
+        x: AxisRange {
+            min: 0.0,
+            max: device.0 * 10.0,
+            resolution: 10.0,
+        },
+        y: AxisRange {
+            min: 0.0,
+            max: device.1 * 10.0,
+            resolution: 10.0,
+        },
+        max_contacts: 10,
+    };
+    let frames = to_frames(&generate(class, &style, seed), device, Micros(250_000));
+    let file = std::fs::File::create(path).unwrap();
+    let mut w = JsonlWriter::new(&surface, std::io::BufWriter::new(file)).unwrap();
+    for f in &frames {
+        w.frame(f).unwrap();
+    }
+    w.flush().unwrap();
+}
+
+/// `gesture classify --json` reads every format: JSONL, evemu (a `.events` file
+/// with its own header, and a `.evemu`), libinput's YAML and hid-recorder; every
+/// line is a JSON object with the documented keys, every file has a line.
+#[test]
+fn classify_json_reads_every_recording_format() {
+    let dir = tempfile::tempdir().unwrap();
+    let jsonl = dir.path().join("twist.jsonl");
+    write_gesture(MotionClass::Twist, 4, &jsonl);
+    let files = [
+        jsonl.clone(),
+        fixture("atmel-maxtouch.4-finger-drag-down.events"),
+        fixture("dell-canvas-27-touch.evemu"),
+        fixture("ite-8595-touchpad-06cb-2968.two-finger-scroll.yml"),
+        fixture("hid/wacom-intuos-pro-m-pth660.touch.two-finger-vert-in-center.hid"),
+    ];
+    let out = bin(dir.path())
+        .args(["gesture", "classify", "--json"])
+        .args(&files)
+        .output()
+        .unwrap();
+    let stdout = ok(&out);
+    let mut per_file = vec![0; files.len()];
+    for line in stdout.lines() {
+        let v: Value =
+            serde_json::from_str(line).unwrap_or_else(|e| panic!("not JSON ({e}): {line}"));
+        for key in ["file", "t_us", "fingers", "class", "weight"] {
+            assert!(v.get(key).is_some(), "no {key}: {line}");
+        }
+        assert!(v["t_us"].is_u64() && v["fingers"].is_u64() && v["weight"].is_f64());
+        let w = v["weight"].as_f64().unwrap();
+        assert!((0.0..=1.0).contains(&w), "{line}");
+        match &v["class"] {
+            Value::String(c) => {
+                assert!(c.parse::<MotionClass>().is_ok(), "{line}");
+                assert!(v["neighbours"].as_array().is_some_and(|n| !n.is_empty()));
+            }
+            Value::Null => assert!(v["rejected"].is_string(), "{line}"),
+            other => panic!("class {other}: {line}"),
+        }
+        let file = v["file"].as_str().unwrap();
+        let k = files
+            .iter()
+            .position(|f| f.display().to_string() == file)
+            .unwrap_or_else(|| panic!("unknown file {file}"));
+        per_file[k] += 1;
+    }
+    eprintln!("{stdout}");
+    for (f, n) in files.iter().zip(&per_file) {
+        assert!(*n > 0, "no gesture line for {}", f.display());
+    }
+    // The generated gesture is one gesture, recognised as what was drawn.
+    let first: Value = serde_json::from_str(stdout.lines().next().unwrap()).unwrap();
+    assert_eq!(per_file[0], 1);
+    assert_eq!(first["class"], "twist", "{first}");
+    assert_eq!(first["fingers"], 3);
+}
+
+/// `library eval --test DIR` on a small labelled directory prints both confusion
+/// matrices (basic classes and all ten) and the feature ablation.
+#[test]
+fn library_eval_on_a_test_directory_prints_both_matrices() {
+    let dir = tempfile::tempdir().unwrap();
+    let test = dir.path().join("test");
+    for (i, class) in MotionClass::ALL.iter().enumerate() {
+        let sub = test.join(class.as_str());
+        std::fs::create_dir_all(&sub).unwrap();
+        write_gesture(*class, 100 + i as u64, &sub.join("a.jsonl"));
+    }
+    let out = bin(dir.path())
+        .args(["library", "eval", "--test"])
+        .arg(&test)
+        .output()
+        .unwrap();
+    let stdout = ok(&out);
+    eprintln!("{stdout}");
+    assert!(stdout.contains("10 test gestures"), "{stdout}");
+    let basic = stdout.find("six basic classes").expect("basic matrix");
+    let all = stdout.find("all ten classes").expect("all-class matrix");
+    assert!(basic < all);
+    assert_eq!(stdout.matches("true \\ recognised").count(), 2, "{stdout}");
+    // Each matrix has a row per class tested: 6, then 10.
+    let rows = |from: usize, to: usize| {
+        stdout[from..to]
+            .lines()
+            .filter(|l| {
+                MotionClass::ALL
+                    .iter()
+                    .any(|c| l.split_whitespace().next() == Some(c.as_str()))
+            })
+            .count()
+    };
+    let ablation = stdout.find("with one feature removed").unwrap();
+    assert_eq!(rows(basic, all), 6);
+    assert_eq!(rows(all, ablation), 10);
+    for f in ["centroid", "spread", "rotation", "mobb"] {
+        assert!(stdout[ablation..].contains(f), "{stdout}");
+    }
+}
+
+/// The gesture count of `class` in `library show`'s table.
+fn shown(out: &str, class: &str) -> u64 {
+    let row = out
+        .lines()
+        .find(|l| l.split_whitespace().next() == Some(class))
+        .unwrap_or_else(|| panic!("no {class} row:\n{out}"));
+    row.split_whitespace().nth(2).unwrap().parse().unwrap()
+}
+
+/// `library add --class twist` writes a library with one more twist gesture.
+#[test]
+fn library_add_writes_a_library_with_one_more_gesture() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("mine.jsonl");
+    write_gesture(MotionClass::Twist, 6, &rec);
+    let lib = dir.path().join("mine.ctgl");
+    let out = bin(dir.path())
+        .args(["library", "add", "--class", "twist", "--out"])
+        .arg(&lib)
+        .arg(&rec)
+        .output()
+        .unwrap();
+    let said = ok(&out);
+    assert!(said.contains("1 twist gestures added"), "{said}");
+    // The shipped library: its builder's gestures per class, and ten classes.
+    let p = BuildParams::default();
+    let per_class = (p.motions_per_class * p.gestures_per_motion) as u64;
+    let after = ok(&bin(dir.path())
+        .args(["library", "show", "--library"])
+        .arg(&lib)
+        .output()
+        .unwrap());
+    assert_eq!(shown(&after, "twist"), per_class + 1);
+    assert_eq!(shown(&after, "translate"), per_class);
+    assert_eq!(shown(&after, "total"), 10 * per_class + 1);
+}
+
+/// A corrupt library is refused by `library eval` with its file and the offset at
+/// fault, exit status 1: bytes flipped inside a motion (caught by the checksum)
+/// and a gesture count made absurd (caught where the structure breaks).
+#[test]
+fn library_eval_refuses_a_corrupt_file_naming_file_and_offset() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut flipped = SHIPPED_BYTES.to_vec();
+    for b in &mut flipped[1000..1004] {
+        *b ^= 0xff;
+    }
+    let mut count = SHIPPED_BYTES.to_vec();
+    count[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+    for (name, bytes) in [("flipped.ctgl", flipped), ("count.ctgl", count)] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let out = bin(dir.path())
+            .args(["library", "eval", "--library"])
+            .arg(&path)
+            .output()
+            .unwrap();
+        let err = text(&out.stderr);
+        eprintln!("{name}: {err}");
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        assert!(err.contains(&path.display().to_string()), "{err}");
+        assert!(err.contains("offset "), "{err}");
+        assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+    }
+}

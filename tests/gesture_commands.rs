@@ -1,0 +1,487 @@
+//! Gesture commands end to end (issue 15, "Done when" 1): a gesture of each of the
+//! ten classes, made by the generator of human-like gestures, written as a JSONL
+//! recording and replayed through the engine on a virtual clock, is recognised as
+//! the class drawn, plays a crowd motion (`gesture_motion` approach → follow → done)
+//! that does what the class says, and leaves a mesh around the crowd where it
+//! stopped (gesture-driven-crowd-motion sections 5–7).
+//!
+//! Every gesture is drawn with 3 fingers (2 per hand for the two-hand classes),
+//! 150 mm, on the default config's 1210 × 680 mm glass, left of the crowd: the
+//! glass maps onto the 16 × 9 m world, the crowd starts in (6, 3)..(10, 6) m, and
+//! the gestures stay within x < 4.5 m, beyond the 0.5 m grab radius.
+
+mod common;
+
+use common::{centroid, Run};
+use crowdtouch::config::Config;
+use crowdtouch::crowd::motion::measure;
+use crowdtouch::engine::{replay_virtual, Engine, VirtualClock};
+use crowdtouch::geom::Vec2;
+use crowdtouch::gesture::library::MotionClass;
+use crowdtouch::gesture::synth::{generate, to_frames, GestureStyle};
+use crowdtouch::gesture::track::GestureTracks;
+use crowdtouch::input::recording::{load_recording, JsonlWriter, OnBadFrame};
+use crowdtouch::input::{AxisRange, SurfaceInfo};
+use crowdtouch::vocab::{Event, Micros, MotionPhase};
+use std::path::Path;
+use std::sync::Arc;
+
+/// Virtual time replayed after the mesh is rebuilt around the stopped crowd (s).
+const AFTER_MESH_S: f64 = 1.0;
+
+/// The default config's glass (mm).
+const GLASS_MM: (f64, f64) = (1210.0, 680.0);
+
+/// Virtual time after the recording's last frame: the approach (at most the
+/// config's 3 s), the motion (a few seconds at 1 m/s) and the remesh.
+const SETTLE_S: f64 = 16.0;
+
+/// How far an agent may still move once the mesh is rebuilt around the crowd (m):
+/// an agent's diameter (agents still moving at the motion's end settle, and
+/// overlapping ones are pushed apart).
+const DRIFT_M: f64 = 0.3;
+
+fn style(class: MotionClass, orientation_rad: f64, clockwise: bool) -> GestureStyle {
+    let two_hands = matches!(
+        class,
+        MotionClass::Join
+            | MotionClass::Split
+            | MotionClass::SplitThenTranslate
+            | MotionClass::TranslateThenJoin
+    );
+    GestureStyle {
+        fingers: if two_hands { vec![2, 2] } else { vec![3] },
+        duration_s: 1.0,
+        size_mm: 150.0,
+        placement: Vec2::new(0.17, 0.5),
+        orientation_rad,
+        jitter_mm: 0.3,
+        device_mm: GLASS_MM,
+        rate_hz: 120.0,
+        stagger_ms: 30.0,
+        early_lifts: 0,
+        bow: 0.0,
+        spacing_mm: 20.0,
+        clockwise,
+    }
+}
+
+/// Writes `tracks` as a JSONL recording of the default glass (0.1 mm units).
+fn write_recording(tracks: &GestureTracks, path: &Path) {
+    let surface = SurfaceInfo {
+        name: "generated gesture".to_string(),
+        x: AxisRange {
+            min: 0.0,
+            max: GLASS_MM.0 * 10.0,
+            resolution: 10.0,
+        },
+        y: AxisRange {
+            min: 0.0,
+            max: GLASS_MM.1 * 10.0,
+            resolution: 10.0,
+        },
+        max_contacts: 10,
+    };
+    let frames = to_frames(tracks, GLASS_MM, Micros(500_000));
+    let file = std::fs::File::create(path).unwrap();
+    let mut w = JsonlWriter::new(&surface, std::io::BufWriter::new(file)).unwrap();
+    for f in &frames {
+        w.frame(f).unwrap();
+    }
+    w.flush().unwrap();
+}
+
+/// Replays the recording at `path` through the engine (default config, inline
+/// assignment and gesture work), ticking on after its last frame until
+/// `AFTER_MESH_S` after the first mesh that follows a finished motion (at most
+/// `SETTLE_S`).
+fn replay_file(path: &Path) -> Run {
+    let mut cfg = Config::embedded_default();
+    // Timer ticks at 60 Hz (the recording's frames tick at its 120 Hz): half the
+    // work of a debug build; motions are timed in seconds, not ticks.
+    cfg.pipeline.tick_hz = 60.0;
+    let rec = load_recording(path, OnBadFrame::Stop).unwrap();
+    assert_eq!(rec.surface.size_mm(), Some(GLASS_MM));
+    let mut engine = Engine::new(&cfg, rec.surface.size_mm(), true);
+    let mut run = Run {
+        snapshots: vec![],
+        events: vec![],
+        meshes: vec![],
+    };
+    let clock = VirtualClock {
+        period: Micros((1e6 / cfg.pipeline.tick_hz) as u64),
+        settle: Micros::from_secs_f64(SETTLE_S),
+        max_gap: Micros(crowdtouch::input::replay::MAX_GAP_US),
+    };
+    // Set at the first mesh after `done`: stop this long after.
+    let mut stop_at: Option<Micros> = None;
+    let mut done = false;
+    let stopped = replay_virtual(
+        &mut engine,
+        rec.frames.iter().map(|f| Ok(*f)),
+        clock,
+        |_| {},
+        |o| {
+            run.snapshots.push(Arc::clone(&o.snapshot));
+            run.events.extend(o.events.iter().cloned());
+            done |= o.events.iter().any(|e| {
+                matches!(
+                    e,
+                    Event::GestureMotion {
+                        phase: MotionPhase::Done | MotionPhase::Cancelled,
+                        ..
+                    }
+                )
+            });
+            if let Some(m) = &o.mesh {
+                run.meshes.push(Arc::clone(m));
+                if done && stop_at.is_none() {
+                    stop_at = Some(o.snapshot.t + Micros::from_secs_f64(AFTER_MESH_S));
+                }
+            }
+            match stop_at {
+                Some(t) if o.snapshot.t >= t => Err(Stop),
+                _ => Ok(()),
+            }
+        },
+    );
+    assert!(
+        stopped.is_err() || run.meshes.len() > 1,
+        "no mesh after the motion within {SETTLE_S} s"
+    );
+    run
+}
+
+/// Ends a replay early.
+#[derive(Debug)]
+struct Stop;
+
+/// A gesture of `class` generated, recorded, replayed.
+struct Played {
+    tracks: GestureTracks,
+    run: Run,
+}
+
+fn play(class: MotionClass, orientation_rad: f64, clockwise: bool, seed: u64) -> Played {
+    let tracks = generate(class, &style(class, orientation_rad, clockwise), seed);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(format!("{}.jsonl", class.as_str()));
+    write_recording(&tracks, &path);
+    let t = std::time::Instant::now();
+    let run = replay_file(&path);
+    eprintln!(
+        "{class}: replayed {} ticks in {:?}",
+        run.snapshots.len(),
+        t.elapsed()
+    );
+    Played { tracks, run }
+}
+
+/// Where the fingers' centroid went, first samples to last (mm of glass; glass
+/// and world share their axes).
+fn finger_travel(t: &GestureTracks) -> Vec2 {
+    let first = centroid(t.fingers.iter().map(|f| f.samples[0].mm));
+    let last = centroid(t.fingers.iter().map(|f| f.samples.last().unwrap().mm));
+    last - first
+}
+
+fn positions(run: &Run, k: usize) -> Vec<Vec2> {
+    run.snapshots[k].agents.iter().map(|a| a.pos).collect()
+}
+
+/// What the user sees of one played gesture, checked for every class; returns the
+/// agents' tracks (every 4th tick) from the first snapshot to the last.
+fn check_common(class: MotionClass, p: &Played) -> Vec<Vec<Vec2>> {
+    let run = &p.run;
+    let ends: Vec<_> = run
+        .events
+        .iter()
+        .filter_map(|e| match e {
+            Event::GestureEnd {
+                recognition,
+                rejected,
+                cancelled,
+                ..
+            } => Some((
+                recognition.as_ref().map(|r| (r.class.clone(), r.weight)),
+                rejected.clone(),
+                *cancelled,
+            )),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(ends.len(), 1, "{class}: gesture ends {ends:?}");
+    let (rec, rejected, cancelled) = &ends[0];
+    assert!(!cancelled && rejected.is_none(), "{class}: {ends:?}");
+    let (got, weight) = rec.clone().unwrap();
+    assert_eq!(
+        got,
+        class.as_str(),
+        "{class} recognised as {got} ({weight:.2})"
+    );
+    let timeline: Vec<(MotionPhase, f64)> = run
+        .events
+        .iter()
+        .filter_map(|e| match e {
+            Event::GestureMotion { phase, t, .. } => Some((*phase, t.as_secs_f64())),
+            _ => None,
+        })
+        .collect();
+    eprintln!(
+        "{class}: recognised ({weight:.2}); motion {timeline:?}; last tick {:.2} s",
+        run.last().t.as_secs_f64()
+    );
+    let phases: Vec<MotionPhase> = run
+        .events
+        .iter()
+        .filter_map(|e| match e {
+            Event::GestureMotion {
+                phase, class: c, ..
+            } => {
+                assert_eq!(c, class.as_str());
+                Some(*phase)
+            }
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        phases,
+        vec![
+            MotionPhase::Approach,
+            MotionPhase::Follow,
+            MotionPhase::Done
+        ],
+        "{class}"
+    );
+    // After `done` a mesh arrives whose vertices are at the agents.
+    let done_t = run
+        .events
+        .iter()
+        .find_map(|e| match e {
+            Event::GestureMotion {
+                phase: MotionPhase::Done,
+                t,
+                ..
+            } => Some(*t),
+            _ => None,
+        })
+        .unwrap();
+    let mesh = run
+        .meshes
+        .iter()
+        .find(|m| run.at(m.seq).t >= done_t)
+        .unwrap_or_else(|| panic!("{class}: no mesh after the motion"));
+    let at_mesh = run.at(mesh.seq);
+    let worst = at_mesh
+        .agents
+        .iter()
+        .map(|a| {
+            mesh.vertices
+                .iter()
+                .map(|v| (v - a.pos).norm())
+                .fold(f64::INFINITY, f64::min)
+        })
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 0.01,
+        "{class}: an agent is {worst:.3} m from the rebuilt mesh's vertices"
+    );
+    // Touch control holds the crowd where the mesh was built.
+    let last = run.last();
+    let drift = last
+        .agents
+        .iter()
+        .zip(&at_mesh.agents)
+        .map(|(a, b)| (a.pos - b.pos).norm())
+        .fold(0.0, f64::max);
+    eprintln!("{class}: agents drift up to {drift:.3} m after the mesh");
+    assert!(
+        drift < DRIFT_M,
+        "{class}: agents drift {drift:.3} m after the mesh"
+    );
+    let n = run.snapshots[0].agents.len();
+    let ticks: Vec<usize> = (0..run.snapshots.len())
+        .step_by(4)
+        .chain(std::iter::once(run.snapshots.len() - 1))
+        .collect();
+    (0..n)
+        .map(|i| {
+            ticks
+                .iter()
+                .map(|&k| run.snapshots[k].agents[i].pos)
+                .collect()
+        })
+        .collect()
+}
+
+/// Labels agents 0/1 by the side of `axis` (through the centroid) they start on.
+fn halves(run: &Run, axis: Vec2) -> Vec<u8> {
+    let start = positions(run, 0);
+    let c = centroid(start.iter().copied());
+    start
+        .iter()
+        .map(|p| u8::from((p - c).dot(&axis) > 0.0))
+        .collect()
+}
+
+fn unit(a: f64) -> Vec2 {
+    Vec2::new(a.cos(), a.sin())
+}
+
+fn assert_moved_along(class: MotionClass, shift: Vec2, dir: Vec2) {
+    let cos = shift.normalize().dot(&dir.normalize());
+    assert!(
+        shift.norm() > 1.0 && cos > 0.7,
+        "{class}: crowd moved {:.2} m at cos {cos:.2} to the gesture's travel {dir:?} ({shift:?})",
+        shift.norm()
+    );
+}
+
+fn assert_turned(class: MotionClass, rotation_rad: f64, clockwise: bool) {
+    let deg = rotation_rad.to_degrees();
+    // `clockwise` on the glass turns +x towards +y: a positive rotation in
+    // `measure`'s convention (x towards y), the world sharing the glass's axes.
+    let sign = if clockwise { 1.0 } else { -1.0 };
+    assert!(
+        deg * sign > 20.0,
+        "{class}: crowd turned {deg:.1}° for a {} gesture",
+        if clockwise {
+            "clockwise"
+        } else {
+            "anticlockwise"
+        }
+    );
+}
+
+fn group_ratio(class: MotionClass, tracks: &[Vec<Vec2>], group: &[u8]) -> f64 {
+    let m = measure(tracks, group);
+    let (d0, d1) = m.group_distance.unwrap();
+    eprintln!("{class}: halves {d0:.2} m -> {d1:.2} m apart");
+    d1 / d0
+}
+
+#[test]
+fn translate_moves_the_crowd_the_way_of_the_swipe() {
+    let c = MotionClass::Translate;
+    let p = play(c, 0.4, true, 1501);
+    let tracks = check_common(c, &p);
+    let m = measure(&tracks, &vec![0; tracks.len()]);
+    eprintln!("{c}: {m:?}");
+    assert_moved_along(c, m.centroid_shift, finger_travel(&p.tracks));
+}
+
+#[test]
+fn twist_turns_the_crowd_the_way_of_the_fingers() {
+    let c = MotionClass::Twist;
+    for (clockwise, seed) in [(true, 1502), (false, 1512)] {
+        let p = play(c, 0.0, clockwise, seed);
+        let tracks = check_common(c, &p);
+        let m = measure(&tracks, &vec![0; tracks.len()]);
+        eprintln!("{c} clockwise {clockwise}: {m:?}");
+        assert_turned(c, m.rotation_rad, clockwise);
+    }
+}
+
+#[test]
+fn contract_gathers_the_crowd() {
+    let c = MotionClass::Contract;
+    let p = play(c, 0.0, true, 1503);
+    let tracks = check_common(c, &p);
+    let m = measure(&tracks, &vec![0; tracks.len()]);
+    eprintln!("{c}: {m:?}");
+    assert!(
+        m.rms_ratio < 0.8,
+        "{c}: RMS radius ratio {:.2}",
+        m.rms_ratio
+    );
+}
+
+#[test]
+fn expand_spreads_the_crowd() {
+    let c = MotionClass::Expand;
+    let p = play(c, 0.0, true, 1504);
+    let tracks = check_common(c, &p);
+    let m = measure(&tracks, &vec![0; tracks.len()]);
+    eprintln!("{c}: {m:?}");
+    assert!(
+        m.rms_ratio > 1.25,
+        "{c}: RMS radius ratio {:.2}",
+        m.rms_ratio
+    );
+}
+
+#[test]
+fn join_brings_the_halves_together() {
+    let c = MotionClass::Join;
+    let p = play(c, 0.0, true, 1505);
+    let tracks = check_common(c, &p);
+    let group = halves(&p.run, unit(0.0));
+    let r = group_ratio(c, &tracks, &group);
+    assert!(r < 0.8, "{c}: halves' distance ratio {r:.2}");
+}
+
+#[test]
+fn split_moves_the_halves_apart() {
+    let c = MotionClass::Split;
+    let p = play(c, 0.0, true, 1506);
+    let tracks = check_common(c, &p);
+    let group = halves(&p.run, unit(0.0));
+    let r = group_ratio(c, &tracks, &group);
+    assert!(r > 1.25, "{c}: halves' distance ratio {r:.2}");
+}
+
+#[test]
+fn split_then_translate_splits_and_moves_on() {
+    let c = MotionClass::SplitThenTranslate;
+    let p = play(c, 0.0, true, 1507);
+    let tracks = check_common(c, &p);
+    let group = halves(&p.run, unit(0.0));
+    let r = group_ratio(c, &tracks, &group);
+    let m = measure(&tracks, &group);
+    eprintln!("{c}: {m:?}, travel {:?}", finger_travel(&p.tracks));
+    assert!(r > 1.25, "{c}: halves' distance ratio {r:.2}");
+    assert_moved_along(c, m.centroid_shift, finger_travel(&p.tracks));
+}
+
+#[test]
+fn translate_then_join_moves_on_and_joins() {
+    let c = MotionClass::TranslateThenJoin;
+    let p = play(c, 0.0, true, 1508);
+    let tracks = check_common(c, &p);
+    let group = halves(&p.run, unit(0.0));
+    let r = group_ratio(c, &tracks, &group);
+    let m = measure(&tracks, &group);
+    eprintln!("{c}: {m:?}, travel {:?}", finger_travel(&p.tracks));
+    assert!(r < 0.8, "{c}: halves' distance ratio {r:.2}");
+    assert_moved_along(c, m.centroid_shift, finger_travel(&p.tracks));
+}
+
+#[test]
+fn twist_while_expanding_turns_and_spreads() {
+    let c = MotionClass::TwistWhileExpanding;
+    let p = play(c, 0.0, false, 1509);
+    let tracks = check_common(c, &p);
+    let m = measure(&tracks, &vec![0; tracks.len()]);
+    eprintln!("{c}: {m:?}");
+    assert_turned(c, m.rotation_rad, false);
+    assert!(
+        m.rms_ratio > 1.25,
+        "{c}: RMS radius ratio {:.2}",
+        m.rms_ratio
+    );
+}
+
+#[test]
+fn twist_while_contracting_turns_and_gathers() {
+    let c = MotionClass::TwistWhileContracting;
+    let p = play(c, 0.0, true, 1510);
+    let tracks = check_common(c, &p);
+    let m = measure(&tracks, &vec![0; tracks.len()]);
+    eprintln!("{c}: {m:?}");
+    assert_turned(c, m.rotation_rad, true);
+    assert!(
+        m.rms_ratio < 0.8,
+        "{c}: RMS radius ratio {:.2}",
+        m.rms_ratio
+    );
+}
