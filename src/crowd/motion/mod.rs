@@ -10,7 +10,7 @@ mod simulate;
 
 pub use build::{build_library, library_agents, BuildError, BuildParams, SHIPPED_SEED};
 pub use command::{
-    play_duration, GestureCommandError, GestureJob, GestureMotion, GestureRequest, PreparedGesture,
+    alignment, play_duration, rotated, GestureCommandError, GestureJob, GestureMotion, GestureRequest, PreparedGesture,
     PreparedRemesh, RemeshRequest, MOTION_DURATION_S,
 };
 pub use follow::{FollowError, FollowParams, FollowPhase, Follower};
