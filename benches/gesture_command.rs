@@ -66,9 +66,11 @@ fn bench(c: &mut Criterion) {
     g.sample_size(20);
     for (name, lib) in libraries {
         let bytes = write_library(&lib);
-        g.bench_with_input(BenchmarkId::new("read_library", name), &bytes, |b, bytes| {
-            b.iter(|| read_library(black_box(bytes), "bench.ctgl").expect("valid"))
-        });
+        g.bench_with_input(
+            BenchmarkId::new("read_library", name),
+            &bytes,
+            |b, bytes| b.iter(|| read_library(black_box(bytes), "bench.ctgl").expect("valid")),
+        );
         g.bench_with_input(BenchmarkId::new("recogniser_new", name), &lib, |b, lib| {
             b.iter_batched(
                 || lib.clone(),

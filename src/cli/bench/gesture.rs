@@ -44,8 +44,7 @@ use anyhow::{ensure, Context, Result};
 use crowdtouch::config::{load_recogniser, Config};
 use crowdtouch::crowd::assign::{CostMatrix, Solver};
 use crowdtouch::crowd::motion::{
-    alignment, blend, build_library, rotated, BuildParams, GestureRequest, Placement,
-    Synthesiser,
+    alignment, blend, build_library, rotated, BuildParams, GestureRequest, Placement, Synthesiser,
 };
 use crowdtouch::engine::{search_params, Engine};
 use crowdtouch::geom::Vec2;
@@ -138,8 +137,9 @@ fn piece(name: &str, samples_ms: Samples, target_ms: Option<f64>, note: String) 
 /// This thread's CPU time (ms).
 fn cpu_ms() -> f64 {
     use nix::time::{clock_gettime, ClockId};
-    clock_gettime(ClockId::CLOCK_THREAD_CPUTIME_ID)
-        .map_or(f64::NAN, |t| t.tv_sec() as f64 * 1e3 + t.tv_nsec() as f64 * 1e-6)
+    clock_gettime(ClockId::CLOCK_THREAD_CPUTIME_ID).map_or(f64::NAN, |t| {
+        t.tv_sec() as f64 * 1e3 + t.tv_nsec() as f64 * 1e-6
+    })
 }
 
 /// A start of timing: the wall clock and the thread's CPU time.

@@ -78,24 +78,23 @@ pub fn write_recording(glass_mm: (f64, f64), path: &Path, seed: u64) -> Result<O
             next[1] = end / 2;
         }
         next[person] = start + end + PAUSE_US;
-        all.fingers.extend(tracks.fingers.into_iter().map(|f| TouchTrack {
-            samples: f
-                .samples
-                .into_iter()
-                .map(|s| TrackSample {
-                    t: Micros(s.t.0 + start),
-                    mm: s.mm,
-                })
-                .collect(),
+        all.fingers.extend(tracks.fingers.into_iter().map(|f| {
+            TouchTrack {
+                samples: f
+                    .samples
+                    .into_iter()
+                    .map(|s| TrackSample {
+                        t: Micros(s.t.0 + start),
+                        mm: s.mm,
+                    })
+                    .collect(),
+            }
         }));
         gestures += 1;
     }
     let frames = to_frames(&all, glass_mm, Micros(0));
     let surface = SurfaceInfo {
-        name: format!(
-            "bench gestures {:.0}x{:.0} mm",
-            glass_mm.0, glass_mm.1
-        ),
+        name: format!("bench gestures {:.0}x{:.0} mm", glass_mm.0, glass_mm.1),
         x: AxisRange {
             min: 0.0,
             max: glass_mm.0 * 10.0,
@@ -108,8 +107,8 @@ pub fn write_recording(glass_mm: (f64, f64), path: &Path, seed: u64) -> Result<O
         },
         max_contacts: 64,
     };
-    let file =
-        std::fs::File::create(path).with_context(|| format!("{}: cannot create", path.display()))?;
+    let file = std::fs::File::create(path)
+        .with_context(|| format!("{}: cannot create", path.display()))?;
     let mut w = JsonlWriter::new(&surface, std::io::BufWriter::new(file))?;
     for f in &frames {
         w.frame(f)?;
