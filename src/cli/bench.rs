@@ -16,6 +16,8 @@ use std::time::Instant;
 
 mod assign;
 mod e2e;
+mod gesture;
+mod open_space;
 mod shutdown;
 
 /// Which workload to run.
@@ -45,6 +47,12 @@ pub enum Workload {
     /// `--agents` being prepared), `--repeats` runs each, and how soon a stale
     /// solve is given up when the crowd shrinks back to 100. Not part of `all`.
     Shutdown,
+    /// One gesture command, piece by piece, against the budgets: a library
+    /// of `--library-size` gestures (built as the shipped one is) loaded from its
+    /// file, `--repeats` generated query gestures recognised (features, KNN with
+    /// its pruning counts), their neighbours' motions blended and synthesised for
+    /// `--agents` agents (assignment included and alone). Not part of `all`.
+    Gesture,
 }
 
 /// Arguments of `bench`.
@@ -94,13 +102,24 @@ pub struct BenchArgs {
     /// (goals in the formation moved 3 m east).
     #[arg(long, default_value = "uniform")]
     layout: String,
-    /// Assignment workload: timed solves.
+    /// Assignment, shutdown and gesture workloads: timed solves, runs per state,
+    /// query gestures and library loads.
     #[arg(long, default_value_t = 50)]
     repeats: usize,
     /// Assignment workload: also write the instances (points, as JSON) to this file,
     /// for `benches/scipy_lsa.py`.
     #[arg(long)]
     dump: Option<std::path::PathBuf>,
+    /// Gesture workload: gestures in the library (at least 10; 750 is the shipped
+    /// library, multiples of 50 are built exactly).
+    #[arg(long, default_value_t = 1500)]
+    library_size: usize,
+    /// End-to-end workload: replay generated gesture commands drawn in open space
+    /// (several in a row, two people at opposite ends of the glass) instead of the
+    /// shipped recordings, so that gestures are recognised and synthesised on the
+    /// formation thread while the latency is measured.
+    #[arg(long)]
+    gestures: bool,
     /// Fast-marching workload: cells per side of the square grid.
     #[arg(long, default_value_t = 256)]
     grid: usize,
@@ -187,6 +206,14 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             json: a.json,
         });
     }
+    if a.workload == Workload::Gesture {
+        return gesture::gesture(&gesture::GestureRun {
+            library_size: a.library_size,
+            agents: a.agents,
+            repeats: a.repeats,
+            json: a.json,
+        });
+    }
     let mut rows = Vec::new();
     if matches!(a.workload, Workload::All | Workload::Arap) {
         rows.push(arap_step());
@@ -225,6 +252,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             scene: a.scene.as_deref(),
             format: a.format,
             fields: a.fields,
+            gestures: a.gestures,
         })?);
     }
     if a.json {

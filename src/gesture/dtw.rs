@@ -188,7 +188,8 @@ impl Envelope {
     ///
     /// # Complexity
     ///
-    /// `O(rows · DIM · window)`; sequences here are 64 long.
+    /// `O(rows · DIM · window)` in a band; unbanded, every row has the same window
+    /// and it is scanned once: `O((rows + len) · DIM)`.
     pub fn of<P: DtwPoint>(b: &[P], rows: usize, band: Option<usize>) -> Envelope {
         let mut e = Envelope::default();
         e.fill(b, rows, band);
@@ -204,8 +205,21 @@ impl Envelope {
         if b.is_empty() {
             return;
         }
+        let mut prev = None;
         for i in 0..rows {
             let (lo, hi) = columns(i, rows, b.len(), band);
+            if prev == Some((lo, hi)) {
+                // The row before had the same window (every row does when unbanded):
+                // the same minima and maxima.
+                let at = self.lower.len() - P::DIM;
+                for k in at..at + P::DIM {
+                    let (l, u) = (self.lower[k], self.upper[k]);
+                    self.lower.push(l);
+                    self.upper.push(u);
+                }
+                continue;
+            }
+            prev = Some((lo, hi));
             for k in 0..P::DIM {
                 let (mut l, mut u) = (f64::INFINITY, f64::NEG_INFINITY);
                 for p in &b[lo..hi] {
@@ -421,6 +435,25 @@ mod tests {
             if a.len() == b.len() {
                 let env = Envelope::of(&b, a.len(), r);
                 prop_assert!(lb_keogh(&a, &env, f64::INFINITY) <= d + 1e-12);
+            }
+        }
+
+        #[test]
+        fn envelope_is_the_min_and_max_over_each_rows_window(
+            b in proptest::collection::vec((-3.0f64..3.0, -3.0f64..3.0), 1..20),
+            rows in 1usize..20,
+            r in proptest::option::of(0usize..6),
+        ) {
+            let b: Vec<Vec2> = b.into_iter().map(|(x, y)| Vec2::new(x, y)).collect();
+            let env = Envelope::of(&b, rows, r);
+            prop_assert_eq!(env.lower.len(), rows * 2);
+            for i in 0..rows {
+                let (lo, hi) = columns(i, rows, b.len(), r);
+                for k in 0..2 {
+                    let w = b[lo..hi].iter().map(|p| p[k]);
+                    prop_assert_eq!(env.lower[i * 2 + k], w.clone().fold(f64::INFINITY, f64::min));
+                    prop_assert_eq!(env.upper[i * 2 + k], w.fold(f64::NEG_INFINITY, f64::max));
+                }
             }
         }
 

@@ -1,5 +1,8 @@
 //! `crowdtouch bench e2e`: the full daemon replaying the shipped recordings at
-//! 120 Hz to one socket client reading in the format and field set asked for.
+//! 120 Hz to one socket client reading in the format and field set asked for; with
+//! `--gestures`, replaying gesture commands drawn in open space instead
+//! ([`super::open_space`]), so that the latency is measured while gestures are
+//! recognised and their motions synthesised on the formation thread.
 
 use super::{row_from_samples, row_from_stage, Row};
 use anyhow::{bail, Context, Result};
@@ -38,6 +41,8 @@ pub struct E2eRun<'a> {
     pub scene: Option<&'a std::path::Path>,
     pub format: WireFormat,
     pub fields: FieldChoice,
+    /// Replay generated gesture commands instead of the shipped recordings.
+    pub gestures: bool,
 }
 
 /// What the client read.
@@ -166,9 +171,30 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
     if !run.realtime {
         cfg.pipeline.realtime = Default::default();
     }
+    let recording = std::env::temp_dir().join(format!(
+        "crowdtouch-bench-gestures-{}.jsonl",
+        std::process::id()
+    ));
+    let open_space = if run.gestures {
+        let glass = cfg.surface.size_mm.unwrap_or((1210.0, 680.0));
+        let written = super::open_space::write_recording(glass, &recording, 0x15)?;
+        cfg.inputs = vec![crowdtouch::config::InputConfig::Replay {
+            files: vec![recording.clone()],
+            looped: true,
+            gap_ms: 500,
+            reset_between: true,
+        }];
+        Some(written)
+    } else {
+        None
+    };
     cfg.log_level = crowdtouch::config::LogLevel::Error;
     let sock = std::env::temp_dir().join(format!("crowdtouch-bench-{}.sock", std::process::id()));
-    let sources = sources_from_config(&cfg)?;
+    let sources = sources_from_config(&cfg);
+    if open_space.is_some() {
+        let _ = std::fs::remove_file(&recording);
+    }
+    let sources = sources?;
     let mut daemon = Daemon::start(
         cfg,
         sources,
@@ -220,15 +246,22 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
     } else {
         String::new()
     };
+    let input_note = match &open_space {
+        Some(o) => format!(
+            "{} generated gesture commands in open space, two people, {:.1} s looped; ",
+            o.gestures, o.seconds
+        ),
+        None => String::new(),
+    };
     let abandon = find("abandon")
         .map(|s| format!(", {} stale jobs given up", s.count))
         .unwrap_or_default();
-    Ok(vec![
+    let mut rows = vec![
         row_from_stage(
             &format!("end_to_end {agents} agents"),
             find("end_to_end"),
             format!(
-                "input timestamp -> bytes written ({wire}){beyond}; SCHED_FIFO {}; {} snapshots read ({:.1}/s, {:.1} MB/s), {dropped} dropped, touch transitions lost {lost}, motion frames coalesced {coalesced}, RSS {:.1} MB",
+                "{input_note}input timestamp -> bytes written ({wire}){beyond}; SCHED_FIFO {}; {} snapshots read ({:.1}/s, {:.1} MB/s), {dropped} dropped, touch transitions lost {lost}, motion frames coalesced {coalesced}, RSS {:.1} MB",
                 if crowdtouch::rt::realtime_granted() { "on" } else { "off" },
                 read.snapshots,
                 read.snapshots as f64 / elapsed,
@@ -259,5 +292,13 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
             "input timestamp -> frame on the queue (replay source: the added latency of the input thread)".into(),
         ),
         row_from_stage("queue", find("queue"), "frame on the queue -> control thread takes it".into()),
-    ])
+    ];
+    if let Some(g) = find("gesture").filter(|g| g.count > 0 || open_space.is_some()) {
+        rows.push(row_from_stage(
+            &format!("gesture {agents} agents"),
+            Some(g),
+            "formation thread: recognise + blend + synthesise + assign, per gesture command".into(),
+        ));
+    }
+    Ok(rows)
 }

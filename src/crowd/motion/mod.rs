@@ -10,8 +10,9 @@ mod simulate;
 
 pub use build::{build_library, library_agents, BuildError, BuildParams, SHIPPED_SEED};
 pub use command::{
-    play_duration, GestureCommandError, GestureJob, GestureMotion, GestureRequest, PreparedGesture,
-    PreparedRemesh, PreparedWindow, RemeshRequest, WindowRequest, MOTION_DURATION_S,
+    alignment, play_duration, rotated, GestureCommandError, GestureJob, GestureMotion,
+    GestureRequest, PreparedGesture, PreparedRemesh, PreparedWindow, RemeshRequest, WindowRequest,
+    MOTION_DURATION_S,
 };
 pub use follow::{FollowError, FollowParams, FollowPhase, Follower};
 pub use simulate::{
