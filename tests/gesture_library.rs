@@ -79,32 +79,13 @@ fn leave_one_out_basic_accuracy_reaches_the_papers() {
     );
 }
 
-/// `crowdtouch library test-set`'s style ranges (src/cli/library.rs
-/// `test_ranges`): a 65″ and a 32″ table and a 13″ tablet, none of the library's
-/// devices; longer and larger gestures, more jitter, lower rates, more stagger and
-/// early lifts, more bow.
-fn test_ranges() -> StyleRanges {
-    StyleRanges {
-        fingers: (1, 5),
-        duration_s: (0.4, 3.0),
-        size_mm: (30.0, 300.0),
-        jitter_mm: (0.2, 1.5),
-        rate_hz: (50.0, 200.0),
-        stagger_ms: (0.0, 150.0),
-        early_lift_chance: 0.3,
-        bow: 0.2,
-        spacing_mm: (13.0, 28.0),
-        devices_mm: vec![(1430.0, 804.0), (698.0, 393.0), (286.0, 179.0)],
-    }
-}
-
 /// (c) A test set made apart from the library: other seeds (and seeds unlike
 /// `library test-set`'s), the test ranges; each gesture turned into touch frames and
 /// cut by the daemon's segmentation (`find_gestures`, the default config's
 /// thresholds) before it is recognised against the shipped library's basic classes.
 #[test]
 fn a_separate_test_set_reaches_the_papers_accuracy() {
-    let ranges = test_ranges();
+    let ranges = StyleRanges::test_set();
     let defaults = crowdtouch::config::Config::embedded_default();
     let seg: SegmentParams = crowdtouch::engine::segment_params(&defaults);
     let taps: TapThresholds = crowdtouch::engine::tap_thresholds(&defaults);

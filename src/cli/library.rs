@@ -414,25 +414,8 @@ fn nearest_motion(
     Ok(rec.library().gestures[r.neighbours[0].entry].motion)
 }
 
-/// The test set's style ranges: other devices (a 65″ and a 32″ table, a 13″
-/// tablet), narrower and wider hands, other speeds, more jitter.
-pub fn test_ranges() -> StyleRanges {
-    StyleRanges {
-        fingers: (1, 5),
-        duration_s: (0.4, 3.0),
-        size_mm: (30.0, 300.0),
-        jitter_mm: (0.2, 1.5),
-        rate_hz: (50.0, 200.0),
-        stagger_ms: (0.0, 150.0),
-        early_lift_chance: 0.3,
-        bow: 0.2,
-        spacing_mm: (13.0, 28.0),
-        devices_mm: vec![(1430.0, 804.0), (698.0, 393.0), (286.0, 179.0)],
-    }
-}
-
 fn test_set(out: &Path, seed: u64, per_class: usize) -> Result<()> {
-    let ranges = test_ranges();
+    let ranges = StyleRanges::test_set();
     let mut n = 0;
     for class in MotionClass::ALL {
         let dir = out.join(class.as_str());

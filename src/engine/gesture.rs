@@ -122,14 +122,24 @@ impl Engine {
             seed: g.seed ^ u64::from(id).wrapping_mul(0x9e37_79b9_7f4a_7c15),
             speed_m_s: g.speed_m_s,
         };
-        g.waiting.push(PendingEnd {
+        let end = PendingEnd {
             id,
             fingers,
             contacts,
             duration_us,
             t: now,
             live: false,
-        });
+        };
+        self.ask_for_motion(req, end, now);
+        None
+    }
+
+    /// Prepares `req` (in the tick for replays) or hands it to the worker; `end`
+    /// is what its `gesture` event (or, for a live gesture, its motion) waits on.
+    fn ask_for_motion(&mut self, req: GestureRequest, end: PendingEnd, now: Micros) {
+        let g = &mut self.gestures;
+        g.waiting.retain(|w| w.id != end.id);
+        g.waiting.push(end);
         match &mut g.inline {
             Some(ws) => {
                 let (searcher, synth) = &mut **ws;
@@ -138,7 +148,6 @@ impl Engine {
             }
             None => g.outbox.push(GestureJob::Recognise(req)),
         }
-        None
     }
 
     /// Slow gesture work for the worker ([`GestureRequest::prepare`] or
@@ -458,23 +467,15 @@ impl Engine {
                 ^ u64::from(fire.count),
             speed_m_s: g.speed_m_s,
         };
-        g.waiting.retain(|w| w.id != p.id);
-        g.waiting.push(PendingEnd {
+        let end = PendingEnd {
             id: p.id,
             fingers: 0,
             contacts: 0,
             duration_us: 0,
             t: now,
             live: true,
-        });
-        match &mut g.inline {
-            Some(ws) => {
-                let (searcher, synth) = &mut **ws;
-                let prepared = req.prepare(searcher, synth);
-                self.apply_gesture(prepared, 0, now);
-            }
-            None => g.outbox.push(GestureJob::Recognise(req)),
-        }
+        };
+        self.ask_for_motion(req, end, now);
     }
 
     /// Gesture commands played since start.

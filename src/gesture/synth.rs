@@ -125,6 +125,26 @@ impl Default for StyleRanges {
     }
 }
 
+impl StyleRanges {
+    /// The ranges of the separate test set (`crowdtouch library test-set`): other
+    /// devices than the library's (a 65″ and a 32″ table, a 13″ tablet), longer and
+    /// larger gestures, more jitter, other rates, more stagger and early lifts.
+    pub fn test_set() -> StyleRanges {
+        StyleRanges {
+            fingers: (1, 5),
+            duration_s: (0.4, 3.0),
+            size_mm: (30.0, 300.0),
+            jitter_mm: (0.2, 1.5),
+            rate_hz: (50.0, 200.0),
+            stagger_ms: (0.0, 150.0),
+            early_lift_chance: 0.3,
+            bow: 0.2,
+            spacing_mm: (13.0, 28.0),
+            devices_mm: vec![(1430.0, 804.0), (698.0, 393.0), (286.0, 179.0)],
+        }
+    }
+}
+
 /// The fingers per hand a class allows, and its hand count.
 fn class_hands(class: MotionClass) -> (usize, (usize, usize)) {
     match class {

@@ -38,7 +38,6 @@
 //! the thread waited for a core). The quantiles and the budget check are of the CPU
 //! time; the wall clock's p50 and p99 are shown beside them.
 
-use super::super::library::test_ranges;
 use super::super::output::outln;
 use anyhow::{ensure, Context, Result};
 use crowdtouch::config::{load_recogniser, Config};
@@ -53,7 +52,7 @@ use crowdtouch::gesture::knn::{vote, Searcher};
 use crowdtouch::gesture::library::{read_library, write_library, Library, MotionClass};
 use crowdtouch::gesture::recognise::Recogniser;
 use crowdtouch::gesture::resample::prepare;
-use crowdtouch::gesture::synth::{generate, GestureStyle};
+use crowdtouch::gesture::synth::{generate, GestureStyle, StyleRanges};
 use crowdtouch::gesture::track::GestureTracks;
 use serde::Serialize;
 use std::sync::Arc;
@@ -206,7 +205,7 @@ fn keep_evenly(lib: Library, n: usize) -> Library {
 fn query(i: usize) -> (MotionClass, GestureTracks) {
     let class = MotionClass::ALL[i % MotionClass::ALL.len()];
     let seed = 0x6E57_C0DE_u64.wrapping_mul(i as u64 + 1) ^ 0x15;
-    let style = GestureStyle::random(class, seed, &test_ranges());
+    let style = GestureStyle::random(class, seed, &StyleRanges::test_set());
     (class, generate(class, &style, seed ^ 0xA5A5))
 }
 
