@@ -52,8 +52,10 @@ fn requests(rec: &Arc<Recogniser>, cfg: &Config) -> Vec<GestureRequest> {
 fn bench(c: &mut Criterion) {
     let mut cfg = Config::embedded_default();
     cfg.crowd.agents = 1000;
+    // A debug build is `cargo test --benches`' smoke run: a small library keeps it
+    // to seconds (building 300 motions unoptimised takes minutes).
     let big = build_library(&BuildParams {
-        motions_per_class: 30,
+        motions_per_class: if cfg!(debug_assertions) { 2 } else { 30 },
         gestures_per_motion: 5,
         ..BuildParams::default()
     })
