@@ -272,7 +272,7 @@ fn match_components(
         .collect())
 }
 
-/// Modified Gram–Schmidt [CK08] in place, in order; returns the indices of the
+/// Modified Gram–Schmidt \[CK08\] in place, in order; returns the indices of the
 /// vectors kept (those keeping more than [`GS_DROP_REL`] of their norm), now
 /// orthonormal. Dropped vectors are left as they are.
 pub fn modified_gram_schmidt(vs: &mut [Vec<f64>]) -> Vec<usize> {

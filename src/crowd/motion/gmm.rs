@@ -115,7 +115,7 @@ pub fn fit(scores: &[Vec<f64>], k: usize, seed: u64, p: &GmmParams) -> Result<Gm
 /// Fits mixtures of `1..=min(k_max, M)` components and returns the one of least BIC
 /// (the smallest count among ties).
 ///
-/// Section 6.2 suggests "iterating from one and choos[ing] the smallest value that
+/// Section 6.2 suggests "iterating from one and choos\[ing\] the smallest value that
 /// reaches the required data likelihood"; BIC makes "required" precise by charging
 /// each component its parameters.
 ///
@@ -262,7 +262,7 @@ const SAMPLER_JITTER_REL: [f64; 5] = [1e-14, 1e-12, 1e-10, 1e-8, 1e-6];
 
 impl GmmSampler {
     /// A sampler for a mixture ([`validate_mixture`]). A covariance that is only
-    /// semi-definite is factored with the smallest jitter of [`SAMPLER_JITTER_REL`]
+    /// semi-definite is factored with the smallest jitter of `SAMPLER_JITTER_REL`
     /// that works; an all-zero one samples its mean.
     ///
     /// # Errors
