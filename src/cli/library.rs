@@ -6,7 +6,7 @@ use super::gesture::gestures_in;
 use super::output::outln;
 use anyhow::{bail, Context, Result};
 use crowdtouch::config::Config;
-use crowdtouch::crowd::motion::{build_library, BuildParams, SHIPPED_SEED};
+use crowdtouch::crowd::motion::{build_library, BuildParams, FeatureParams, SHIPPED_SEED};
 use crowdtouch::engine::search_params;
 use crowdtouch::gesture::eval::{leave_one_out_report, train_test_report, Evaluation, Report};
 use crowdtouch::gesture::features::GestureFeatures;
@@ -42,6 +42,10 @@ pub enum LibraryCmd {
         /// Gestures drawn for each motion.
         #[arg(long, default_value_t = 5)]
         gestures_per_motion: usize,
+        /// Config whose `gestures.gmm_components` and `gestures.auto_components_max`
+        /// fit the motions' mixtures (default: 2 components, as shipped).
+        #[arg(long)]
+        config: Option<PathBuf>,
     },
     /// Summarise a library: motions and gestures per class.
     Show {
@@ -111,7 +115,20 @@ pub fn library(cmd: LibraryCmd, cfg: Option<&Config>) -> Result<()> {
             seed,
             motions_per_class,
             gestures_per_motion,
-        } => build(&out, seed, motions_per_class, gestures_per_motion),
+            config,
+        } => {
+            let mixtures = match config {
+                Some(p) => {
+                    let c = Config::load(&p)?;
+                    (
+                        c.gestures.gmm_components as usize,
+                        c.gestures.auto_components_max.map(|k| k as usize),
+                    )
+                }
+                None => (2, None),
+            };
+            build(&out, seed, motions_per_class, gestures_per_motion, mixtures)
+        }
         LibraryCmd::TestSet {
             out,
             seed,
@@ -154,12 +171,24 @@ fn load_with(path: Option<&Path>, policy: LoadPolicy) -> Result<Library> {
     }
 }
 
-fn build(out: &Path, seed: u64, per_class: usize, per_motion: usize) -> Result<()> {
+fn build(
+    out: &Path,
+    seed: u64,
+    per_class: usize,
+    per_motion: usize,
+    (gmm_components, auto_components): (usize, Option<usize>),
+) -> Result<()> {
+    let defaults = BuildParams::default();
     let p = BuildParams {
         seed,
         motions_per_class: per_class,
         gestures_per_motion: per_motion,
-        ..BuildParams::default()
+        features: FeatureParams {
+            gmm_components,
+            auto_components,
+            ..defaults.features
+        },
+        ..defaults
     };
     let lib = build_library(&p)?;
     let bytes = write_library(&lib);

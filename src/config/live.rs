@@ -141,11 +141,13 @@ pub const FIELDS: &[FieldClass] = &[
     live("gestures.band", "from the next recognition"),
     live(
         "gestures.gmm_components",
-        "the library's motion mixtures are fitted again with the library's reload",
+        "read when a library is built (`library build --config`); a loaded library \
+         keeps the mixtures it was built with",
     ),
     live(
         "gestures.auto_components_max",
-        "the library's motion mixtures are fitted again with the library's reload",
+        "read when a library is built (`library build --config`); a loaded library \
+         keeps the mixtures it was built with",
     ),
     live("gestures.seed", "from the next synthesis"),
     live("gestures.approach_timeout_s", "from the next motion"),
