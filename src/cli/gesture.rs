@@ -6,11 +6,11 @@ use anyhow::{bail, Context, Result};
 use crowdtouch::config::{load_recogniser, Config};
 use crowdtouch::engine::{search_params, segment_params, tap_thresholds};
 use crowdtouch::geom::Vec2;
-use crowdtouch::gesture::find::{find_gestures, Found};
+use crowdtouch::gesture::find::{Found, GestureFinder};
 use crowdtouch::gesture::knn::Searcher;
 use crowdtouch::gesture::recognise::Recogniser;
 use crowdtouch::input::recording::{OnBadFrame, RecordingStream};
-use crowdtouch::vocab::TouchFrame;
+use crowdtouch::vocab::Micros;
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -81,19 +81,18 @@ pub fn gestures_in(path: &Path, cfg: &Config) -> Result<Vec<Found>> {
             path.display()
         ),
     };
-    let mut frames: Vec<TouchFrame> = Vec::new();
+    // A frame at a time: a recording of any length in the same memory.
+    let mut finder = GestureFinder::new(glass, segment_params(cfg), tap_thresholds(cfg));
+    let mut last = Micros::ZERO;
     while let Some(f) = stream
         .next_frame()
         .with_context(|| format!("{}: bad recording", path.display()))?
     {
-        frames.push(*f);
+        finder.frame(f);
+        last = f.t;
     }
-    Ok(find_gestures(
-        &frames,
-        glass,
-        segment_params(cfg),
-        tap_thresholds(cfg),
-    ))
+    finder.finish(last);
+    Ok(finder.take())
 }
 
 fn classify(cfg: &Config, rec: &Recogniser, files: &[PathBuf], json: bool) -> Result<()> {

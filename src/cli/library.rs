@@ -8,14 +8,13 @@ use anyhow::{bail, Context, Result};
 use crowdtouch::config::Config;
 use crowdtouch::crowd::motion::{build_library, BuildParams, FeatureParams, SHIPPED_SEED};
 use crowdtouch::engine::search_params;
+use crowdtouch::gesture::dtw::{gesture_distance, Dtw};
 use crowdtouch::gesture::eval::{leave_one_out_report, train_test_report, Evaluation, Report};
 use crowdtouch::gesture::features::GestureFeatures;
-use crowdtouch::gesture::knn::Searcher;
 use crowdtouch::gesture::library::{
     read_library, read_library_with, shipped, write_library, Library, LibraryGesture, LoadPolicy,
     MotionClass, MAX_LIBRARY_BYTES,
 };
-use crowdtouch::gesture::recognise::Recogniser;
 use crowdtouch::gesture::resample::prepare;
 use crowdtouch::gesture::synth::{generate, to_frames, GestureStyle, StyleRanges};
 use crowdtouch::input::recording::JsonlWriter;
@@ -417,30 +416,27 @@ fn nearest_motion(
     f: &GestureFeatures,
     cfg: &Config,
 ) -> Result<u32> {
-    let of_class = Library {
-        motions: lib.motions.clone(),
-        gestures: lib
-            .gestures
-            .iter()
-            .filter(|g| g.class == class)
-            .cloned()
-            .collect(),
-    };
-    if of_class.gestures.is_empty() {
-        return match lib.motions.iter().position(|m| m.class == class) {
-            Some(m) => Ok(m as u32),
-            None => bail!("the library has no {class} motion to pair the gesture with"),
-        };
+    // The nearest library gesture of the class (eq. 12; the first of equals).
+    let p = search_params(cfg);
+    let mut dtw = Dtw::new();
+    let mut best: Option<(f64, u32)> = None;
+    for g in lib.gestures.iter().filter(|g| g.class == class) {
+        let d = gesture_distance(
+            &mut dtw,
+            f,
+            &GestureFeatures::of(&g.gesture),
+            &p.weights,
+            p.band,
+        );
+        if best.is_none_or(|(bd, _)| d < bd) {
+            best = Some((d, g.motion));
+        }
     }
-    let rec = Recogniser::new(of_class, "library", None)?;
-    let p = crowdtouch::gesture::knn::SearchParams {
-        k: 1,
-        ..search_params(cfg)
-    };
-    let r = rec
-        .recognise_features(f, &p, &mut Searcher::new())
-        .map_err(anyhow::Error::msg)?;
-    Ok(rec.library().gestures[r.neighbours[0].entry].motion)
+    match (best, lib.motions.iter().position(|m| m.class == class)) {
+        (Some((_, motion)), _) => Ok(motion),
+        (None, Some(m)) => Ok(m as u32),
+        (None, None) => bail!("the library has no {class} motion to pair the gesture with"),
+    }
 }
 
 fn test_set(out: &Path, seed: u64, per_class: usize) -> Result<()> {
