@@ -50,6 +50,10 @@ const RULES: &[Rule] = &[
         may_use: &["crowd::mesh", "crowd::assign", "crowd::agents", "gesture", "vocab", "geom", "rng"],
     },
     Rule {
+        module: "crowd::transform",
+        may_use: &["crowd::mesh", "crowd::assign", "crowd::environment", "crowd::formation", "crowd::agents", "vocab", "geom", "rng"],
+    },
+    Rule {
         module: "crowd::control",
         may_use: &["crowd::mesh", "crowd::assign", "crowd::environment", "crowd::formation", "gesture", "vocab", "geom", "rng"],
     },

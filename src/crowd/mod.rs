@@ -13,6 +13,7 @@
 //! | [`formation`] | formation shapes the crowd switches between, meshed for a crowd | mesh-formation-control 7.3 |
 //! | [`control`] | the controllers: direct manipulation by touch, formation switches | mesh-formation-control 4, 7.3 |
 //! | [`motion`] | crowd motions from gestures: FPCA, Gaussian mixtures, blending, synthesis, following | gesture-driven 6, 7 |
+//! | [`transform`] | formation transforms: sampling, least-effort pairing, affinity-propagation subgroups, social forces with mutual-information feedback, the paper's measures | formation-transform 3, 5 |
 //! | [`agents`] | agents following their goals (PD control, overlap resolution) | mesh-formation-control 6.2.1 |
 
 pub mod agents;
@@ -22,3 +23,4 @@ pub mod environment;
 pub mod formation;
 pub mod mesh;
 pub mod motion;
+pub mod transform;

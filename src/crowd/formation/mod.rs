@@ -2,7 +2,10 @@
 //! the shipped ones and the config's, validated, and meshed for a crowd where it
 //! stands. Switching to one is [`crate::crowd::control`]'s job.
 
+mod sample;
 mod shapes;
+
+pub use sample::{SampleError, SampleParams};
 
 pub use shapes::{
     Formation, FormationDef, FormationError, FormationLibrary, Placement, DEFAULT_LAMBDA,

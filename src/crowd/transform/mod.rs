@@ -1,0 +1,26 @@
+//! Formation transforms (formation-transform, Xu et al. 2015): the crowd morphs from
+//! where it stands into a new formation shape, each agent walking to a target of its
+//! own, neighbours staying neighbours.
+//!
+//! | step | file | paper |
+//! |---|---|---|
+//! | target points sampled in the shape | [`crate::crowd::formation`] (`sample.rs`) | 3.1, eq. 1 |
+//! | agents paired with targets (least effort, Euclidean, Manhattan) | `pairing.rs` | 3.2, eqs. 2–6; 5.2 |
+//! | subgroups by affinity propagation | `subgroups.rs` | 3.4, eq. 20 |
+//! | a request prepared off the control thread | `prepare.rs` | 3 |
+//! | social forces with subgroup terms, mutual-information feedback | `run.rs`, `social.rs`, `feedback.rs` | 3.3, 3.5, eqs. 7–19, 21–23 |
+//! | the objective measures | `measures.rs` | 5.1, eqs. 17, 24–26 |
+//! | the ORCA baseline of the comparison | `orca.rs` | 5.4 |
+
+mod measures;
+mod orca;
+mod pairing;
+mod prepare;
+mod run;
+mod subgroups;
+
+pub use measures::Measures;
+pub use pairing::{pair, PairCost};
+pub use prepare::{PreparedTransform, TransformError, TransformPlan, TransformRequest};
+pub use run::{MoveParams, Mover, RunSummary, StepReport, TransformRun};
+pub use subgroups::{subgroups, ApParams, Preference, Subgroups};
