@@ -241,7 +241,9 @@ mod tests {
         let line = |needle: &str| text.lines().position(|l| l.contains(needle)).unwrap() + 1;
         assert!(
             e.contains(&format!("f.ron:{}:", line("\"bow\"")))
-                && e.contains("field `formations.shapes[0].outline`: edges 0 and 2 cross or touch"),
+                && e.contains(
+                    "field `formations.shapes[0].outline`: outline: edges 0 and 2 cross or touch"
+                ),
             "{e}"
         );
         assert!(
