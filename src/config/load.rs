@@ -64,7 +64,8 @@ impl Config {
             issues: vec![issue],
         })?;
         let mut problems = cfg.validate();
-        match FormationLibrary::with(&cfg.formations.shapes) {
+        let read = |p: &str| read_image(&base.join(p));
+        match FormationLibrary::with_files(&cfg.formations.shapes, &read) {
             Ok(lib) => cfg.library = Arc::new(lib),
             Err(e) => problems.extend(
                 e.into_iter()
@@ -129,6 +130,23 @@ impl Config {
             }
         }
     }
+}
+
+/// Largest formation image read (bytes).
+pub const MAX_IMAGE_BYTES: u64 = 16 << 20;
+
+/// A formation bitmap's bytes (`formations.shapes[i].bitmap.path`, relative to the
+/// config file's directory), at most [`MAX_IMAGE_BYTES`].
+fn read_image(path: &Path) -> Result<Vec<u8>, String> {
+    let shown = path.display();
+    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read {shown}: {e}"))?;
+    if meta.len() > MAX_IMAGE_BYTES {
+        return Err(format!(
+            "{shown} is {} bytes, more than the {MAX_IMAGE_BYTES} byte limit",
+            meta.len()
+        ));
+    }
+    std::fs::read(path).map_err(|e| format!("cannot read {shown}: {e}"))
 }
 
 /// The gesture library at `path` (the shipped one for `None`), indexed for
@@ -226,6 +244,42 @@ mod tests {
             Err(Error::Invalid { issues, .. }) => issues,
             other => panic!("expected invalid, got {other:?}"),
         }
+    }
+
+    #[test]
+    fn formation_bitmaps_load_next_to_the_config_and_their_problems_are_located() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("shapes")).unwrap();
+        let mut pgm = b"P5 8 4 255\n".to_vec();
+        pgm.extend((0..32).map(|i| if (i % 8) < 4 { 0u8 } else { 255 }));
+        std::fs::write(dir.path().join("shapes/half.pgm"), &pgm).unwrap();
+        let shapes = |text: &str| DEFAULT_CONFIG_RON.replace("        shapes: [],", text);
+        let path = dir.path().join("c.ron");
+        std::fs::write(
+            &path,
+            shapes("        shapes: [(name: \"half\", bitmap: Some((path: \"shapes/half.pgm\", c_min: (0, 0, 0), c_max: (9, 9, 9))))],"),
+        )
+        .unwrap();
+        let c = Config::load(&path).unwrap();
+        assert!(c.formation_library().get("half").is_some());
+        std::fs::write(
+            &path,
+            shapes("        shapes: [\n            (name: \"gone\", bitmap: Some((path: \"shapes/none.png\", c_min: (0, 0, 0), c_max: (9, 9, 9)))),\n            (name: \"all\", bitmap: Some((path: \"shapes/half.pgm\", c_min: (0, 0, 0), c_max: (255, 255, 255)))),\n        ],"),
+        )
+        .unwrap();
+        let e = Config::load(&path).unwrap_err().to_string();
+        assert!(
+            e.contains(":127:")
+                && e.contains(
+                    "field `formations.shapes[0].bitmap`: bitmap shapes/none.png: cannot read"
+                )
+                && e.contains("none.png: No such file"),
+            "{e}"
+        );
+        assert!(
+            e.contains(":128:") && e.contains("field `formations.shapes[1].bitmap`: bitmap shapes/half.pgm: the colour range (0, 0, 0) ..= (255, 255, 255) selects all 32 pixels"),
+            "{e}"
+        );
     }
 
     #[test]
