@@ -9,7 +9,10 @@ use crate::geom::{twice_signed_area, Vec2};
 use std::collections::{HashMap, VecDeque};
 
 /// Boundary loops (directed edges whose reverse is absent, followed head to tail).
-fn loops(triangles: &[[u32; 3]]) -> (Vec<Vec<u32>>, HashMap<(u32, u32), usize>) {
+/// The triangle holding each directed edge `(from, to)`.
+type EdgeTriangles = HashMap<(u32, u32), usize>;
+
+fn loops(triangles: &[[u32; 3]]) -> (Vec<Vec<u32>>, EdgeTriangles) {
     let mut tri_of = HashMap::with_capacity(triangles.len() * 3);
     for (t, tr) in triangles.iter().enumerate() {
         for k in 0..3 {

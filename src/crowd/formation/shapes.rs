@@ -409,7 +409,7 @@ fn normalise(mut pieces: Vec<Piece>) -> Result<(Vec<Piece>, f64), FormationError
         }
     }
     let (a2, m) = region::area_and_moment(&pieces);
-    if !(a2 > 1e-9) {
+    if a2.is_nan() || a2 <= 1e-9 {
         return Err(FormationError::NoArea {
             at: Ring::Outline(0),
         });
