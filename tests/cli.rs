@@ -629,7 +629,19 @@ fn formations_lists_and_draws_every_shape_of_the_config() {
     assert_success(&out);
     let text = String::from_utf8_lossy(&out.stdout);
     for name in [
-        "start", "square", "arrow", "column", "line", "wedge", "diamond", "tee",
+        "start",
+        "square",
+        "arrow",
+        "column",
+        "line",
+        "wedge",
+        "diamond",
+        "circle",
+        "ring",
+        "two_groups",
+        "letter_a",
+        "heart",
+        "tee",
     ] {
         assert!(
             text.lines().any(|l| l.starts_with(&format!("{name} "))),
@@ -638,8 +650,10 @@ fn formations_lists_and_draws_every_shape_of_the_config() {
     }
     let pic = std::fs::read_to_string(&svg).unwrap();
     assert!(pic.starts_with("<svg") && pic.contains(">tee</text>"));
-    // 100 goals drawn per formation.
-    assert_eq!(pic.matches("<circle").count(), 8 * 100);
+    // 100 sampled target points drawn per formation (none for the start grid);
+    // holes dashed (ring, letter_a).
+    assert_eq!(pic.matches("<circle").count(), 12 * 100);
+    assert_eq!(pic.matches("stroke-dasharray").count(), 2);
 }
 
 #[test]

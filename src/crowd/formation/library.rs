@@ -220,7 +220,17 @@ pub fn heart_pixels() -> (u32, u32, Vec<u8>) {
 
 #[cfg(test)]
 mod tests {
+    use super::super::shapes::Placement;
     use super::*;
+    use crate::geom::Vec2;
+
+    fn def(name: &str, outline: &[(f64, f64)]) -> FormationDef {
+        FormationDef {
+            name: name.into(),
+            outline: outline.to_vec(),
+            ..FormationDef::default()
+        }
+    }
 
     fn encode_heart() -> Vec<u8> {
         let (w, h, grey) = heart_pixels();
@@ -242,6 +252,52 @@ mod tests {
     fn write_heart_png() {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/config/formations/heart.png");
         std::fs::write(path, encode_heart()).unwrap();
+    }
+
+    #[test]
+    fn the_library_adds_replaces_and_reports() {
+        let star = def(
+            "star",
+            &[
+                (1.0, 0.0),
+                (0.2, 0.2),
+                (0.0, 1.0),
+                (-0.2, 0.2),
+                (-1.0, 0.0),
+                (-0.2, -0.2),
+                (0.0, -1.0),
+                (0.2, -0.2),
+            ],
+        );
+        let sq = def("square", &[(0.0, 0.0), (3.0, 0.0), (3.0, 1.0), (0.0, 1.0)]);
+        let lib = FormationLibrary::with(&[star.clone(), sq]).unwrap();
+        assert!(lib.knows("star") && lib.knows("start") && !lib.knows("nope"));
+        assert_eq!(lib.names().count(), SHIPPED.len() + 1);
+        // The replaced square is 3:1 now.
+        let o = lib.get("square").unwrap().outline();
+        let w = o.iter().map(|p| p.x).fold(f64::MIN, f64::max)
+            - o.iter().map(|p| p.x).fold(f64::MAX, f64::min);
+        assert!((w - 3.0f64.sqrt()).abs() < 1e-12, "{w}");
+        let m = lib
+            .get("star")
+            .unwrap()
+            .mesh(
+                &Placement {
+                    centre_m: Vec2::new(3.0, 3.0),
+                    heading: Vec2::new(1.0, 1.0),
+                    area_m2: 5.0,
+                },
+                150,
+            )
+            .unwrap();
+        m.sanity_check().unwrap();
+        assert!((m.area() - 5.0).abs() < 1e-9);
+        let e = FormationLibrary::with(&[star.clone(), def("x", &[(0.0, 0.0)]), star]).unwrap_err();
+        assert_eq!(e.len(), 2);
+        assert_eq!(e[0].0, "[1].outline");
+        assert_eq!(e[1].0, "[2].name");
+        assert!(e[1].1.contains("defined twice"), "{e:?}");
+        assert!(lib.names_list().starts_with("start, square, arrow"));
     }
 
     #[test]

@@ -849,7 +849,6 @@ fn inside_faces(cdt: &ConstrainedDelaunayTriangulation<Point2<f64>>) -> Vec<[u32
 
 #[cfg(test)]
 mod tests {
-    use super::super::library::{FormationLibrary, SHIPPED};
     use super::*;
     use crate::geom::{cross, segment_distance_squared};
     use proptest::prelude::*;
@@ -860,6 +859,31 @@ mod tests {
             outline: outline.to_vec(),
             ..FormationDef::default()
         }
+    }
+
+    /// The shipped shapes, read from `config/formations` (the library embeds the
+    /// same files; it is tested in `library.rs`).
+    fn shipped() -> Vec<Formation> {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/config/formations");
+        let read = |p: &str| std::fs::read(format!("{dir}/{p}")).map_err(|e| e.to_string());
+        let mut names: Vec<_> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+            .collect();
+        names.sort();
+        names
+            .iter()
+            .map(|p| {
+                let def: FormationDef =
+                    ron::from_str(&std::fs::read_to_string(p).unwrap()).unwrap();
+                Formation::from_def(&def, &read).unwrap()
+            })
+            .collect()
+    }
+
+    fn shipped_get(name: &str) -> Formation {
+        shipped().into_iter().find(|f| f.name() == name).unwrap()
     }
 
     fn segment_distance(a: Vec2, b: Vec2, p: Vec2) -> f64 {
@@ -922,10 +946,10 @@ mod tests {
 
     #[test]
     fn shipped_shapes_are_valid_and_mesh_at_the_asked_size_and_place() {
-        let lib = FormationLibrary::shipped();
-        assert_eq!(lib.names().count(), SHIPPED.len());
-        for name in lib.names() {
-            let f = lib.get(name).unwrap();
+        let all = shipped();
+        assert_eq!(all.len(), 11);
+        for f in &all {
+            let name = f.name();
             let (a2, m) = region::area_and_moment(f.pieces());
             assert!((0.5 * a2 - 1.0).abs() < 1e-12, "{name}");
             assert!(m.norm() < 1e-9, "{name}: centroid moment {m:?}");
@@ -945,8 +969,7 @@ mod tests {
 
     #[test]
     fn the_heading_turns_the_shape() {
-        let lib = FormationLibrary::shipped();
-        let arrow = lib.get("arrow").unwrap();
+        let arrow = &shipped_get("arrow");
         // Heading +y: the tip (the farthest point ahead) is straight above the centre.
         let p = place(0.0, 0.0, 0.0, 2.0, 4.0);
         let poly = arrow.placed_outline(&p);
@@ -957,7 +980,7 @@ mod tests {
             .unwrap();
         assert!(tip.x.abs() < 1e-12 && tip.y > 1.0, "tip {tip:?}");
         // A column headed along x is four times longer in x than in y.
-        let col = lib.get("column").unwrap();
+        let col = &shipped_get("column");
         let m = check_mesh(col, &place(0.0, 0.0, 1.0, 0.0, 4.0), 80);
         let (lo, hi) = m.rest().iter().fold(
             (Vec2::repeat(f64::MAX), Vec2::repeat(f64::MIN)),
@@ -977,7 +1000,7 @@ mod tests {
 
     #[test]
     fn the_arrows_notch_stays_open() {
-        let arrow = FormationLibrary::shipped().get("arrow").cloned().unwrap();
+        let arrow = shipped_get("arrow");
         let p = place(0.0, 0.0, 1.0, 0.0, 10.0);
         let m = check_mesh(&arrow, &p, 200);
         // The notch vertex (outline vertex 2 of the definition, at the tail) is on
@@ -1061,43 +1084,6 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_library_adds_replaces_and_reports() {
-        let star = def(
-            "star",
-            &[
-                (1.0, 0.0),
-                (0.2, 0.2),
-                (0.0, 1.0),
-                (-0.2, 0.2),
-                (-1.0, 0.0),
-                (-0.2, -0.2),
-                (0.0, -1.0),
-                (0.2, -0.2),
-            ],
-        );
-        let sq = def("square", &[(0.0, 0.0), (3.0, 0.0), (3.0, 1.0), (0.0, 1.0)]);
-        let lib = FormationLibrary::with(&[star.clone(), sq]).unwrap();
-        assert!(lib.knows("star") && lib.knows("start") && !lib.knows("nope"));
-        assert_eq!(lib.names().count(), SHIPPED.len() + 1);
-        // The replaced square is 3:1 now.
-        let o = lib.get("square").unwrap().outline();
-        let w = o.iter().map(|p| p.x).fold(f64::MIN, f64::max)
-            - o.iter().map(|p| p.x).fold(f64::MAX, f64::min);
-        assert!((w - 3.0f64.sqrt()).abs() < 1e-12, "{w}");
-        check_mesh(
-            lib.get("star").unwrap(),
-            &place(3.0, 3.0, 1.0, 1.0, 5.0),
-            150,
-        );
-        let e = FormationLibrary::with(&[star.clone(), def("x", &[(0.0, 0.0)]), star]).unwrap_err();
-        assert_eq!(e.len(), 2);
-        assert_eq!(e[0].0, "[1].outline");
-        assert_eq!(e[1].0, "[2].name");
-        assert!(e[1].1.contains("defined twice"), "{e:?}");
-        assert!(lib.names_list().starts_with("start, square, arrow"));
-    }
-
     fn sq(c: (f64, f64), r: f64) -> Vec<(f64, f64)> {
         vec![
             (c.0 - r, c.1 - r),
@@ -1118,8 +1104,7 @@ mod tests {
 
     #[test]
     fn a_ring_meshes_without_a_triangle_in_its_hole_and_two_groups_in_two_pieces() {
-        let lib = FormationLibrary::shipped();
-        let ring = lib.get("ring").unwrap();
+        let ring = &shipped_get("ring");
         let p = place(2.0, 1.0, 0.0, 1.0, 30.0);
         let m = check_mesh(ring, &p, 300);
         // The hole's centre (the placement centre) is in no triangle.
@@ -1132,7 +1117,7 @@ mod tests {
                 "a triangle covers the hole"
             );
         }
-        let two = lib.get("two_groups").unwrap();
+        let two = &shipped_get("two_groups");
         let m = check_mesh(two, &p, 200);
         // No triangle has corners in both groups (their gap is empty): split the
         // vertices by the side of the heading axis.
@@ -1144,8 +1129,8 @@ mod tests {
                 "a triangle bridges the two groups"
             );
         }
-        check_mesh(lib.get("letter_a").unwrap(), &p, 250);
-        check_mesh(lib.get("heart").unwrap(), &p, 250);
+        check_mesh(&shipped_get("letter_a"), &p, 250);
+        check_mesh(&shipped_get("heart"), &p, 250);
     }
 
     #[test]
