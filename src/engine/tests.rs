@@ -41,7 +41,7 @@ fn refused_commands_say_why_in_the_words_clients_read() {
     assert_eq!(
         err.to_string(),
         format!(
-            "no formation is called `{}…`; the config defines start, square, arrow, column, line, wedge, diamond",
+            "no formation is called `{}…`; the config defines start, square, arrow, column, line, wedge, diamond, circle, ring, two_groups, letter_a, heart",
             "x".repeat(64)
         )
     );
