@@ -233,14 +233,17 @@ fn median(v: &mut [f64]) -> f64 {
 /// `a(k,k) + r(k,k) > 0`, converged when they stay the same for
 /// `convergence_iterations` iterations. As scikit-learn does, each agent then joins
 /// its most similar exemplar, each subgroup's exemplar becomes the member most
-/// similar to the others, and the agents join their most similar exemplar again; an
-/// agent with no exemplar among its candidates joins the subgroup of its most similar
-/// candidate. Exemplars are listed by agent index.
+/// similar to the others, and the agents join their most similar exemplar again;
+/// except that an agent whose candidate exemplars are all less similar than the
+/// preference joins the subgroup of its most similar candidate instead (`assign`).
+/// Exemplars are listed by agent index.
 ///
 /// # Degenerate input
 /// No agent: no subgroup. An agent whose source or target is not finite is a
 /// subgroup of its own, the others are clustered without it. Equal similarities
-/// everywhere: one subgroup if the preference is below them, else one per agent.
+/// everywhere (a rigid motion): one subgroup, or one per agent if the preference is
+/// above them (scikit-learn makes the median case one per agent; a crowd that moves
+/// rigidly is one group).
 /// No exemplar at the end: one subgroup, `converged == false`.
 ///
 /// # Complexity
@@ -318,9 +321,18 @@ fn cluster(s: &[Vec2], t: &[Vec2], p: &ApParams, cancel: Cancel<'_>) -> Option<S
     let (lo, hi) = off
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
-    if off.is_empty() || lo == hi {
-        // Nothing tells the agents apart (scikit-learn's special case).
-        if off.is_empty() || pref < lo {
+    // Similarities equal up to rounding: distance changes below 1e-9 of the extent.
+    let extent = s
+        .iter()
+        .chain(t)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| {
+            (a.min(q.x).min(q.y), b.max(q.x).max(q.y))
+        });
+    let flat = (1e-9 * (extent.1 - extent.0)).powi(2);
+    if off.is_empty() || hi - lo <= flat {
+        // Nothing tells the agents apart (a rigid motion keeps every distance): one
+        // subgroup, unless the preference is above every similarity.
+        if off.is_empty() || !(pref > hi + flat) {
             return Some(Subgroups::single(n));
         }
         return Some(Subgroups {
@@ -422,7 +434,7 @@ fn cluster(s: &[Vec2], t: &[Vec2], p: &ApParams, cancel: Cancel<'_>) -> Option<S
         for (g, &k) in exemplars.iter().enumerate() {
             is_ex[k as usize] = g as u32;
         }
-        assign(&pairs, &sim, &is_ex, &mut group_of);
+        assign(&pairs, &sim, pref, &is_ex, &mut group_of);
         if pass == 1 {
             break;
         }
@@ -469,59 +481,355 @@ fn cluster(s: &[Vec2], t: &[Vec2], p: &ApParams, cancel: Cancel<'_>) -> Option<S
 }
 
 /// Every agent joins the exemplar among its candidates with the largest similarity
-/// (an exemplar joins itself); agents without one join the subgroup of their most
-/// similar candidate that has one, repeatedly (the candidate graph is connected, so
-/// every agent ends in a subgroup; an agent that could not would join the first).
-/// `is_ex[k]`: the subgroup of exemplar `k`, `u32::MAX` for the others.
-fn assign(pairs: &Pairs, sim: &[f64], is_ex: &[u32], group_of: &mut [u32]) {
-    let n = group_of.len();
+/// if that is at least the preference `pref` (an exemplar joins itself); an agent
+/// for which none is (it would rather be an exemplar than join one — in a sparse
+/// crowd, the exemplar of its own subgroup may be out of its candidates' reach)
+/// joins, repeatedly, the subgroup of its most similar candidate that has one with
+/// similarity at least `pref`; the agents still left join their most similar
+/// exemplar among their candidates, or the subgroup of their most similar candidate
+/// (the candidate graph is connected, so every agent ends in a subgroup; one that
+/// could not would join the first). `is_ex[k]`: the subgroup of exemplar `k`,
+/// `u32::MAX` for the others.
+fn assign(pairs: &Pairs, sim: &[f64], pref: f64, is_ex: &[u32], group_of: &mut [u32]) {
     const NONE: u32 = u32::MAX;
+    let n = group_of.len();
+    // The most similar candidate `k` of `i` with `ok(k)`, and its similarity.
+    let best = |i: usize, ok: &dyn Fn(usize) -> bool| {
+        let (mut b, mut arg) = (f64::NEG_INFINITY, usize::MAX);
+        for e in pairs.start[i]..pairs.start[i + 1] {
+            let k = pairs.col[e] as usize;
+            if k != i && ok(k) && sim[e] > b {
+                b = sim[e];
+                arg = k;
+            }
+        }
+        (b, arg)
+    };
     for i in 0..n {
-        group_of[i] = if is_ex[i] != NONE {
-            is_ex[i]
-        } else {
-            let (mut best, mut g) = (f64::NEG_INFINITY, NONE);
-            for e in pairs.start[i]..pairs.start[i + 1] {
-                let k = pairs.col[e] as usize;
-                if k != i && is_ex[k] != NONE && sim[e] > best {
-                    best = sim[e];
-                    g = is_ex[k];
-                }
+        group_of[i] = is_ex[i];
+        if is_ex[i] == NONE {
+            let (b, k) = best(i, &|k| is_ex[k] != NONE);
+            if k != usize::MAX && b >= pref {
+                group_of[i] = is_ex[k];
             }
-            g
-        };
+        }
     }
-    loop {
-        let mut changed = false;
-        let mut left = false;
-        for i in 0..n {
-            if group_of[i] != NONE {
-                continue;
-            }
-            let (mut best, mut g) = (f64::NEG_INFINITY, NONE);
-            for e in pairs.start[i]..pairs.start[i + 1] {
-                let k = pairs.col[e] as usize;
-                if k != i && group_of[k] != NONE && sim[e] > best {
-                    best = sim[e];
-                    g = group_of[k];
+    for strict in [true, false] {
+        loop {
+            let (mut changed, mut left) = (false, false);
+            for i in 0..n {
+                if group_of[i] != NONE {
+                    continue;
+                }
+                let g = &*group_of;
+                let (b, k) = best(i, &|k| g[k] != NONE);
+                if k != usize::MAX && (!strict || b >= pref) {
+                    group_of[i] = group_of[k];
+                    changed = true;
+                } else {
+                    left = true;
                 }
             }
-            if g != NONE {
-                group_of[i] = g;
-                changed = true;
+            if !left {
+                return;
+            }
+            if !changed {
+                break;
+            }
+        }
+        if strict {
+            for i in 0..n {
+                if group_of[i] == NONE {
+                    let (_, k) = best(i, &|k| is_ex[k] != NONE);
+                    if k != usize::MAX {
+                        group_of[i] = is_ex[k];
+                    }
+                }
+            }
+        }
+    }
+    for g in group_of.iter_mut().filter(|g| **g == NONE) {
+        *g = 0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    fn points(rng: &mut SplitMix64, n: usize, side: f64) -> Vec<Vec2> {
+        (0..n)
+            .map(|_| Vec2::new(side * rng.unit(), side * rng.unit()))
+            .collect()
+    }
+
+    /// Targets: the sources turned, the right half stretched, jittered (subgroups
+    /// with distinct distance changes).
+    fn deform(rng: &mut SplitMix64, s: &[Vec2]) -> Vec<Vec2> {
+        s.iter()
+            .map(|p| {
+                let q = Vec2::new(0.8 * p.x - 0.6 * p.y, 0.6 * p.x + 0.8 * p.y);
+                let stretch = if p.x > 0.5 { 1.8 } else { 1.0 };
+                Vec2::new(stretch * q.x + 0.05 * rng.unit(), q.y + 0.05 * rng.unit())
+            })
+            .collect()
+    }
+
+    /// Affinity propagation on full matrices, written from the formulas of
+    /// [`subgroups`] (the reference of the CSR code): the exemplar flags at the end,
+    /// and the iterations run.
+    fn reference(s: &[Vec2], t: &[Vec2], p: &ApParams) -> (Vec<bool>, u32) {
+        let n = s.len();
+        let mut off = Vec::new();
+        for i in 0..n {
+            for k in 0..n {
+                if i != k {
+                    off.push(delta_dis(s, t, i, k));
+                }
+            }
+        }
+        let pref = median(&mut off);
+        let sm: Vec<Vec<f64>> = (0..n)
+            .map(|i| (0..n).map(|k| similarity(s, t, pref, i, k)).collect())
+            .collect();
+        let (mut r, mut a) = (vec![vec![0.0; n]; n], vec![vec![0.0; n]; n]);
+        let l = p.damping;
+        let (mut prev, mut stable) = (vec![false; n], 0);
+        for it in 0..p.max_iterations {
+            for i in 0..n {
+                for k in 0..n {
+                    let m = (0..n)
+                        .filter(|&kk| kk != k)
+                        .map(|kk| a[i][kk] + sm[i][kk])
+                        .fold(f64::NEG_INFINITY, f64::max);
+                    r[i][k] = l * r[i][k] + (1.0 - l) * (sm[i][k] - m);
+                }
+            }
+            for i in 0..n {
+                for k in 0..n {
+                    let sum: f64 = (0..n)
+                        .filter(|&ii| ii != i && ii != k)
+                        .map(|ii| r[ii][k].max(0.0))
+                        .sum();
+                    let an = if i == k { sum } else { (r[k][k] + sum).min(0.0) };
+                    a[i][k] = l * a[i][k] + (1.0 - l) * an;
+                }
+            }
+            let ex: Vec<bool> = (0..n).map(|k| a[k][k] + r[k][k] > 0.0).collect();
+            if ex == prev {
+                stable += 1;
             } else {
-                left = true;
+                stable = 1;
+                prev = ex;
+            }
+            if prev.iter().any(|&e| e) && stable >= p.convergence_iterations {
+                return (prev, it + 1);
             }
         }
-        if !left {
-            return;
-        }
-        if !changed {
-            // A component without an exemplar (not reached through candidates).
-            for g in group_of.iter_mut().filter(|g| **g == NONE) {
-                *g = 0;
+        (prev, p.max_iterations)
+    }
+
+    #[test]
+    fn defaults_and_single() {
+        let p = ApParams::default();
+        assert!(p.damping >= 0.5 && p.damping < 1.0);
+        assert_eq!((p.max_iterations, p.convergence_iterations), (200, 15));
+        assert_eq!(p.preference, Preference::Median);
+        let g = Subgroups::single(4);
+        assert_eq!((g.group_of, g.exemplars, g.converged), (vec![0; 4], vec![0], true));
+        assert_eq!(Subgroups::single(0).count(), 0);
+    }
+
+    /// The message passing agrees with the matrix formulas (same exemplars before
+    /// the refinement; same iteration count), on crowds of 30 and 60.
+    #[test]
+    fn dense_matches_the_matrix_formulas() {
+        let mut rng = SplitMix64::new(0xa9);
+        for n in [30usize, 60] {
+            let s = points(&mut rng, n, 1.0);
+            let t = deform(&mut rng, &s);
+            let p = ApParams::default();
+            let (ex, iters) = reference(&s, &t, &p);
+            let g = subgroups(&s, &t, &p, Cancel::NEVER).unwrap();
+            assert_eq!(g.iterations, iters, "n={n}");
+            assert!(g.converged);
+            // Each refined exemplar lies in the subgroup of a message-passing exemplar,
+            // and there are as many.
+            assert_eq!(g.count(), ex.iter().filter(|&&e| e).count(), "n={n}");
+            for (i, &gi) in g.group_of.iter().enumerate() {
+                assert_eq!(g.group_of[g.exemplars[gi as usize] as usize], gi, "agent {i}");
             }
-            return;
         }
+    }
+
+    /// A ring covering the whole crowd gives the dense answer exactly; the default
+    /// 3-ring on the same crowd gives subgroups that never join the two halves the
+    /// deformation tells apart.
+    #[test]
+    fn sparse_matches_dense_when_the_ring_covers_the_crowd() {
+        let mut rng = SplitMix64::new(0x5ba);
+        for n in [50usize, 150] {
+            let s = points(&mut rng, n, 1.0);
+            let t = deform(&mut rng, &s);
+            let dense = ApParams {
+                dense_up_to: n,
+                ..ApParams::default()
+            };
+            let sparse = ApParams {
+                dense_up_to: 0,
+                ring: n as u32,
+                ..ApParams::default()
+            };
+            let a = subgroups(&s, &t, &dense, Cancel::NEVER).unwrap();
+            let b = subgroups(&s, &t, &sparse, Cancel::NEVER).unwrap();
+            assert_eq!(a, b, "n={n}");
+            assert!(a.count() > 1 && a.count() < n / 2, "n={n}: {} subgroups", a.count());
+        }
+    }
+
+    /// Two crowds: one translated, the other spread to twice its size and moved
+    /// 10 m away (every distance between the crowds changes by metres, within
+    /// them by at most 2 m). No subgroup takes agents of both.
+    #[test]
+    fn subgroups_follow_the_distance_changes() {
+        let mut rng = SplitMix64::new(0x2c);
+        let n = 80;
+        let mut s = points(&mut rng, n, 1.0);
+        for p in &mut s[n / 2..] {
+            p.x += 3.0;
+        }
+        let t: Vec<Vec2> = s
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                if i < n / 2 {
+                    *p + Vec2::new(0.0, 2.0)
+                } else {
+                    Vec2::new(13.0 + 2.0 * (p.x - 3.0), 2.0 * p.y)
+                }
+            })
+            .collect();
+        for dense_up_to in [n, 0] {
+            let p = ApParams {
+                dense_up_to,
+                ..ApParams::default()
+            };
+            let g = subgroups(&s, &t, &p, Cancel::NEVER).unwrap();
+            for k in 0..g.count() {
+                let sides: Vec<bool> = (0..n)
+                    .filter(|&i| g.group_of[i] as usize == k)
+                    .map(|i| i < n / 2)
+                    .collect();
+                assert!(
+                    sides.iter().all(|&x| x == sides[0]),
+                    "dense_up_to {dense_up_to}: subgroup {k} spans both crowds: {g:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn degenerate_input() {
+        let p = ApParams::default();
+        let none = subgroups(&[], &[], &p, Cancel::NEVER).unwrap();
+        assert_eq!(none.count(), 0);
+        let one = subgroups(&[Vec2::new(1.0, 1.0)], &[Vec2::new(2.0, 2.0)], &p, Cancel::NEVER);
+        assert_eq!(one.unwrap().group_of, [0]);
+        // A rigid translation: every similarity is 0, one subgroup.
+        let mut rng = SplitMix64::new(9);
+        let s = points(&mut rng, 40, 1.0);
+        let t: Vec<Vec2> = s.iter().map(|p| *p + Vec2::new(5.0, 1.0)).collect();
+        assert_eq!(subgroups(&s, &t, &p, Cancel::NEVER).unwrap().count(), 1);
+        let above = ApParams {
+            preference: Preference::Value(1.0),
+            ..p
+        };
+        assert_eq!(subgroups(&s, &t, &above, Cancel::NEVER).unwrap().count(), 40);
+        // NaN positions: their agents are subgroups of their own.
+        let mut bad = s.clone();
+        bad[3].x = f64::NAN;
+        let mut tb = deform(&mut rng, &s);
+        tb[7].y = f64::INFINITY;
+        for dense_up_to in [100, 0] {
+            let q = ApParams { dense_up_to, ..p };
+            let g = subgroups(&bad, &tb, &q, Cancel::NEVER).unwrap();
+            assert_eq!(g.group_of.len(), 40);
+            for i in [3usize, 7] {
+                let gi = g.group_of[i];
+                assert_eq!(g.exemplars[gi as usize], i as u32);
+                assert_eq!(g.group_of.iter().filter(|&&x| x == gi).count(), 1);
+            }
+        }
+        // Fewer targets than agents: the unpaired ones are alone too.
+        let g = subgroups(&s, &t[..30], &p, Cancel::NEVER).unwrap();
+        assert!(g.count() >= 11);
+        // Duplicated sources and no iterations.
+        let dup = vec![Vec2::new(0.5, 0.5); 12];
+        let td = deform(&mut rng, &dup);
+        for dense_up_to in [100, 0] {
+            let q = ApParams { dense_up_to, ..p };
+            let g = subgroups(&dup, &td, &q, Cancel::NEVER).unwrap();
+            assert!(g.group_of.iter().all(|&x| (x as usize) < g.count()));
+            let q0 = ApParams {
+                max_iterations: 0,
+                ..q
+            };
+            let g = subgroups(&dup, &td, &q0, Cancel::NEVER).unwrap();
+            assert!(!g.converged);
+            assert_eq!(g.count(), 1);
+        }
+    }
+
+    #[test]
+    fn cancelled() {
+        let mut rng = SplitMix64::new(4);
+        let s = points(&mut rng, 50, 1.0);
+        let t = deform(&mut rng, &s);
+        let stop = || true;
+        assert_eq!(subgroups(&s, &t, &ApParams::default(), Cancel::new(&stop)), None);
+    }
+
+    /// Writes the instances `benches/ap_crosscheck.py` gives scikit-learn:
+    /// `target/ap_crosscheck/cases.json`, with each instance's similarity matrix
+    /// (eq. 20, off the diagonal), the preference, the parameters and our labels.
+    #[test]
+    #[ignore = "writes the data of benches/ap_crosscheck.py"]
+    fn ap_crosscheck_dataset() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/ap_crosscheck");
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut rng = SplitMix64::new(0xc4055);
+        let mut cases = Vec::new();
+        for (n, damping) in [(40usize, 0.7), (80, 0.5), (150, 0.7), (300, 0.9)] {
+            let s = points(&mut rng, n, 1.0);
+            let t = deform(&mut rng, &s);
+            let p = ApParams {
+                damping,
+                max_iterations: 1000,
+                ..ApParams::default()
+            };
+            let g = subgroups(&s, &t, &p, Cancel::NEVER).unwrap();
+            let mut off = Vec::new();
+            let sm: Vec<Vec<f64>> = (0..n)
+                .map(|i| (0..n).map(|k| if i == k { 0.0 } else { delta_dis(&s, &t, i, k) }).collect())
+                .collect();
+            for (i, row) in sm.iter().enumerate() {
+                off.extend(row.iter().enumerate().filter(|&(k, _)| k != i).map(|(_, &v)| v));
+            }
+            let pref = median(&mut off);
+            cases.push(serde_json::json!({
+                "n": n,
+                "damping": damping,
+                "max_iter": p.max_iterations,
+                "convergence_iter": p.convergence_iterations,
+                "preference": pref,
+                "S": sm,
+                "labels": g.group_of,
+                "exemplars": g.exemplars,
+                "converged": g.converged,
+                "iterations": g.iterations,
+            }));
+        }
+        std::fs::write(dir.join("cases.json"), serde_json::to_string(&cases).unwrap()).unwrap();
     }
 }
