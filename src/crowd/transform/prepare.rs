@@ -139,3 +139,74 @@ impl TransformRequest {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    fn points(rng: &mut SplitMix64, n: usize, side: f64, dx: f64) -> Vec<Vec2> {
+        (0..n)
+            .map(|_| Vec2::new(dx + side * rng.unit(), side * rng.unit()))
+            .collect()
+    }
+
+    /// The plan gives each agent the target its pairing chose, every target once,
+    /// and the subgroups of the paired targets.
+    #[test]
+    fn plan_permutes_the_targets_by_the_pairing() {
+        let mut rng = SplitMix64::new(0x91a);
+        let (s, t) = (points(&mut rng, 60, 1.0, 0.0), points(&mut rng, 60, 1.5, 2.0));
+        for cost in [
+            PairCost::LeastEffort { lambda: 0.5 },
+            PairCost::Euclidean,
+            PairCost::Manhattan,
+        ] {
+            let ap = ApParams::default();
+            let plan = TransformPlan::new(&s, &t, cost, Some(&ap), Cancel::NEVER)
+                .unwrap()
+                .unwrap();
+            let to = pair(&s, &t, cost, Cancel::NEVER).unwrap();
+            assert_eq!(plan.sources_m, s);
+            assert_eq!(plan.cost, cost);
+            for (i, &j) in to.iter().enumerate() {
+                assert_eq!(plan.targets_m[i], t[j as usize]);
+            }
+            let mut sorted: Vec<(u64, u64)> = plan
+                .targets_m
+                .iter()
+                .map(|p| (p.x.to_bits(), p.y.to_bits()))
+                .collect();
+            sorted.sort_unstable();
+            sorted.dedup();
+            assert_eq!(sorted.len(), 60);
+            let g = subgroups(&s, &plan.targets_m, &ap, Cancel::NEVER).unwrap();
+            assert_eq!(plan.subgroups, g);
+            let off = TransformPlan::new(&s, &t, cost, None, Cancel::NEVER)
+                .unwrap()
+                .unwrap();
+            assert_eq!(off.subgroups, Subgroups::single(60));
+            assert_eq!(off.targets_m, plan.targets_m);
+        }
+    }
+
+    #[test]
+    fn errors_and_cancellation() {
+        let p = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 1.0)];
+        let nan = [Vec2::new(0.0, 0.0), Vec2::new(f64::NAN, 1.0)];
+        let le = PairCost::LeastEffort { lambda: 0.5 };
+        assert!(matches!(
+            TransformPlan::new(&nan, &p, le, None, Cancel::NEVER),
+            Err(TransformError::Pair(AssignError::NotFinite { .. }))
+        ));
+        assert!(matches!(
+            TransformPlan::new(&[], &[], le, None, Cancel::NEVER),
+            Err(TransformError::Pair(AssignError::Empty))
+        ));
+        let stop = || true;
+        let mut rng = SplitMix64::new(1);
+        let (s, t) = (points(&mut rng, 300, 1.0, 0.0), points(&mut rng, 300, 1.0, 0.5));
+        let r = TransformPlan::new(&s, &t, le, Some(&ApParams::default()), Cancel::new(&stop));
+        assert!(matches!(r, Ok(None)));
+    }
+}
