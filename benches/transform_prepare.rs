@@ -130,10 +130,5 @@ fn transform_plan(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(
-    benches,
-    transform_pair,
-    transform_subgroups,
-    transform_plan
-);
+criterion_group!(benches, transform_pair, transform_subgroups, transform_plan);
 criterion_main!(benches);

@@ -114,7 +114,8 @@ impl SwitchRequest {
                 let samples = sample_goals_cancellable(&mesh, agents.len(), &cancel.as_fn())?;
                 let mut goals = Vec::with_capacity(samples.len());
                 goal_positions(&mesh, &samples, mesh.rest(), &mut goals);
-                let goal_of = match pair(&agents, &goals, PairCost::LeastEffort { lambda }, cancel) {
+                let goal_of = match pair(&agents, &goals, PairCost::LeastEffort { lambda }, cancel)
+                {
                     Ok(cols) => cols,
                     Err(AssignError::Cancelled) => return None,
                     Err(e) => {

@@ -218,7 +218,10 @@ mod tests {
     #[test]
     fn names_round_trip() {
         for c in COSTS {
-            assert_eq!(PairCost::parse(c.name(), 0.5).map(|p| p.name()), Some(c.name()));
+            assert_eq!(
+                PairCost::parse(c.name(), 0.5).map(|p| p.name()),
+                Some(c.name())
+            );
         }
         assert_eq!(
             PairCost::parse("least-effort", 0.25),
@@ -241,7 +244,10 @@ mod tests {
                     assert_eq!(seen, (0..n as u32).collect::<Vec<_>>());
                     let c = source(&s, &t, cost);
                     let (got, want) = (total(&*c, &to), brute_force(n, &*c));
-                    assert!((got - want).abs() <= 1e-9 * want.max(1.0), "{cost:?} n={n}: {got} vs {want}");
+                    assert!(
+                        (got - want).abs() <= 1e-9 * want.max(1.0),
+                        "{cost:?} n={n}: {got} vs {want}"
+                    );
                 }
             }
         }
@@ -259,7 +265,10 @@ mod tests {
                 let (km, _): (i64, _) = kuhn_munkres_min(&w);
                 let to = pair(&s, &t, cost, Cancel::NEVER).unwrap();
                 let (got, want) = (total(&*c, &to), km as f64 * 1e-9);
-                assert!((got - want).abs() <= n as f64 * 1e-9, "{cost:?} n={n}: {got} vs {want}");
+                assert!(
+                    (got - want).abs() <= n as f64 * 1e-9,
+                    "{cost:?} n={n}: {got} vs {want}"
+                );
             }
         }
     }
@@ -301,7 +310,10 @@ mod tests {
                 let mut dense = Solver::with_strategy(Strategy::Dense);
                 let want: Vec<u32> = dense.solve(&m).unwrap().iter().map(|&j| j as u32).collect();
                 let (a, b) = (total(&*c, &got), total(&*c, &want));
-                assert!((a - b).abs() <= 1e-9 * b, "{cost:?} round {round}: {a} vs {b}");
+                assert!(
+                    (a - b).abs() <= 1e-9 * b,
+                    "{cost:?} round {round}: {a} vs {b}"
+                );
                 if cost != PairCost::Manhattan {
                     assert_eq!(got, want, "{cost:?} round {round}");
                 }
@@ -330,7 +342,10 @@ mod tests {
             let mut rng = SplitMix64::new(3);
             let (s, t) = (points(&mut rng, 400, 1.0), points(&mut rng, 400, 1.0));
             let stop = || true;
-            assert_eq!(pair(&s, &t, cost, Cancel::new(&stop)), Err(AssignError::Cancelled));
+            assert_eq!(
+                pair(&s, &t, cost, Cancel::new(&stop)),
+                Err(AssignError::Cancelled)
+            );
         }
     }
 }

@@ -156,7 +156,10 @@ mod tests {
     #[test]
     fn plan_permutes_the_targets_by_the_pairing() {
         let mut rng = SplitMix64::new(0x91a);
-        let (s, t) = (points(&mut rng, 60, 1.0, 0.0), points(&mut rng, 60, 1.5, 2.0));
+        let (s, t) = (
+            points(&mut rng, 60, 1.0, 0.0),
+            points(&mut rng, 60, 1.5, 2.0),
+        );
         for cost in [
             PairCost::LeastEffort { lambda: 0.5 },
             PairCost::Euclidean,
@@ -205,7 +208,10 @@ mod tests {
         ));
         let stop = || true;
         let mut rng = SplitMix64::new(1);
-        let (s, t) = (points(&mut rng, 300, 1.0, 0.0), points(&mut rng, 300, 1.0, 0.5));
+        let (s, t) = (
+            points(&mut rng, 300, 1.0, 0.0),
+            points(&mut rng, 300, 1.0, 0.5),
+        );
         let r = TransformPlan::new(&s, &t, le, Some(&ApParams::default()), Cancel::new(&stop));
         assert!(matches!(r, Ok(None)));
     }

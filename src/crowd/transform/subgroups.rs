@@ -268,7 +268,11 @@ pub fn subgroups(
     let t: Vec<Vec2> = ok.iter().map(|&i| paired_targets[i]).collect();
     let inner = cluster(&s, &t, p, cancel)?;
     let mut group_of = vec![0u32; n];
-    let mut exemplars: Vec<u32> = inner.exemplars.iter().map(|&e| ok[e as usize] as u32).collect();
+    let mut exemplars: Vec<u32> = inner
+        .exemplars
+        .iter()
+        .map(|&e| ok[e as usize] as u32)
+        .collect();
     for (&i, &g) in ok.iter().zip(&inner.group_of) {
         group_of[i] = g;
     }
@@ -320,7 +324,9 @@ fn cluster(s: &[Vec2], t: &[Vec2], p: &ApParams, cancel: Cancel<'_>) -> Option<S
     };
     let (lo, hi) = off
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
     // Similarities equal up to rounding: distance changes below 1e-9 of the extent.
     let extent = s
         .iter()
@@ -612,7 +618,11 @@ mod tests {
                         .filter(|&ii| ii != i && ii != k)
                         .map(|ii| r[ii][k].max(0.0))
                         .sum();
-                    let an = if i == k { sum } else { (r[k][k] + sum).min(0.0) };
+                    let an = if i == k {
+                        sum
+                    } else {
+                        (r[k][k] + sum).min(0.0)
+                    };
                     a[i][k] = l * a[i][k] + (1.0 - l) * an;
                 }
             }
@@ -637,7 +647,10 @@ mod tests {
         assert_eq!((p.max_iterations, p.convergence_iterations), (200, 15));
         assert_eq!(p.preference, Preference::Median);
         let g = Subgroups::single(4);
-        assert_eq!((g.group_of, g.exemplars, g.converged), (vec![0; 4], vec![0], true));
+        assert_eq!(
+            (g.group_of, g.exemplars, g.converged),
+            (vec![0; 4], vec![0], true)
+        );
         assert_eq!(Subgroups::single(0).count(), 0);
     }
 
@@ -658,7 +671,10 @@ mod tests {
             // and there are as many.
             assert_eq!(g.count(), ex.iter().filter(|&&e| e).count(), "n={n}");
             for (i, &gi) in g.group_of.iter().enumerate() {
-                assert_eq!(g.group_of[g.exemplars[gi as usize] as usize], gi, "agent {i}");
+                assert_eq!(
+                    g.group_of[g.exemplars[gi as usize] as usize], gi,
+                    "agent {i}"
+                );
             }
         }
     }
@@ -684,7 +700,11 @@ mod tests {
             let a = subgroups(&s, &t, &dense, Cancel::NEVER).unwrap();
             let b = subgroups(&s, &t, &sparse, Cancel::NEVER).unwrap();
             assert_eq!(a, b, "n={n}");
-            assert!(a.count() > 1 && a.count() < n / 2, "n={n}: {} subgroups", a.count());
+            assert!(
+                a.count() > 1 && a.count() < n / 2,
+                "n={n}: {} subgroups",
+                a.count()
+            );
         }
     }
 
@@ -734,7 +754,12 @@ mod tests {
         let p = ApParams::default();
         let none = subgroups(&[], &[], &p, Cancel::NEVER).unwrap();
         assert_eq!(none.count(), 0);
-        let one = subgroups(&[Vec2::new(1.0, 1.0)], &[Vec2::new(2.0, 2.0)], &p, Cancel::NEVER);
+        let one = subgroups(
+            &[Vec2::new(1.0, 1.0)],
+            &[Vec2::new(2.0, 2.0)],
+            &p,
+            Cancel::NEVER,
+        );
         assert_eq!(one.unwrap().group_of, [0]);
         // A rigid translation: every similarity is 0, one subgroup.
         let mut rng = SplitMix64::new(9);
@@ -745,7 +770,10 @@ mod tests {
             preference: Preference::Value(1.0),
             ..p
         };
-        assert_eq!(subgroups(&s, &t, &above, Cancel::NEVER).unwrap().count(), 40);
+        assert_eq!(
+            subgroups(&s, &t, &above, Cancel::NEVER).unwrap().count(),
+            40
+        );
         // NaN positions: their agents are subgroups of their own.
         let mut bad = s.clone();
         bad[3].x = f64::NAN;
@@ -787,7 +815,10 @@ mod tests {
         let s = points(&mut rng, 50, 1.0);
         let t = deform(&mut rng, &s);
         let stop = || true;
-        assert_eq!(subgroups(&s, &t, &ApParams::default(), Cancel::new(&stop)), None);
+        assert_eq!(
+            subgroups(&s, &t, &ApParams::default(), Cancel::new(&stop)),
+            None
+        );
     }
 
     /// Writes the instances `benches/ap_crosscheck.py` gives scikit-learn:
@@ -811,10 +842,19 @@ mod tests {
             let g = subgroups(&s, &t, &p, Cancel::NEVER).unwrap();
             let mut off = Vec::new();
             let sm: Vec<Vec<f64>> = (0..n)
-                .map(|i| (0..n).map(|k| if i == k { 0.0 } else { delta_dis(&s, &t, i, k) }).collect())
+                .map(|i| {
+                    (0..n)
+                        .map(|k| if i == k { 0.0 } else { delta_dis(&s, &t, i, k) })
+                        .collect()
+                })
                 .collect();
             for (i, row) in sm.iter().enumerate() {
-                off.extend(row.iter().enumerate().filter(|&(k, _)| k != i).map(|(_, &v)| v));
+                off.extend(
+                    row.iter()
+                        .enumerate()
+                        .filter(|&(k, _)| k != i)
+                        .map(|(_, &v)| v),
+                );
             }
             let pref = median(&mut off);
             cases.push(serde_json::json!({
@@ -830,6 +870,10 @@ mod tests {
                 "iterations": g.iterations,
             }));
         }
-        std::fs::write(dir.join("cases.json"), serde_json::to_string(&cases).unwrap()).unwrap();
+        std::fs::write(
+            dir.join("cases.json"),
+            serde_json::to_string(&cases).unwrap(),
+        )
+        .unwrap();
     }
 }
