@@ -18,6 +18,17 @@ use crowdtouch::crowd::transform::{pair, subgroups, ApParams, PairCost, Transfor
 use crowdtouch::geom::Vec2;
 use crowdtouch::rng::SplitMix64;
 
+/// Crowd sizes of the pairing benches; a debug build (`cargo test --benches`, the
+/// CI smoke run) takes small ones.
+const PAIR_SIZES: &[usize] = if cfg!(debug_assertions) {
+    &[200]
+} else {
+    &[1000, 2000, 5000]
+};
+
+/// Crowd size of the subgroup and plan benches (small in a debug build).
+const PLAN_SIZE: usize = if cfg!(debug_assertions) { 400 } else { 2000 };
+
 /// Spacing of the crowd's grid (m).
 const SPACING_M: f64 = 0.05;
 
@@ -81,7 +92,7 @@ fn costs() -> [PairCost; 3] {
 fn transform_pair(c: &mut Criterion) {
     let mut g = c.benchmark_group("transform_pair");
     g.sample_size(10);
-    for n in [1000usize, 2000, 5000] {
+    for &n in PAIR_SIZES {
         let (s, t) = instance(n);
         for cost in costs() {
             g.bench_with_input(BenchmarkId::new(cost.name(), n), &n, |b, _| {
@@ -95,7 +106,7 @@ fn transform_pair(c: &mut Criterion) {
 fn transform_subgroups(c: &mut Criterion) {
     let mut g = c.benchmark_group("transform_subgroups");
     g.sample_size(10);
-    let n = 2000;
+    let n = PLAN_SIZE;
     let (s, t) = instance(n);
     let to = pair(&s, &t, PairCost::LeastEffort { lambda: 0.5 }, Cancel::NEVER).unwrap();
     let paired: Vec<Vec2> = to.iter().map(|&j| t[j as usize]).collect();
@@ -109,7 +120,7 @@ fn transform_subgroups(c: &mut Criterion) {
 fn transform_plan(c: &mut Criterion) {
     let mut g = c.benchmark_group("transform_plan");
     g.sample_size(10);
-    let n = 2000;
+    let n = PLAN_SIZE;
     let (s, t) = instance(n);
     let p = ApParams::default();
     g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {

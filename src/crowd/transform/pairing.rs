@@ -432,7 +432,7 @@ mod tests {
             for cost in COSTS {
                 let got = pair(&s, &t, cost, Cancel::NEVER).unwrap();
                 let c = source(&s, &t, cost);
-                let m = crate::crowd::assign::CostMatrix::from_fn(500, 500, |i, j| c(i, j));
+                let m = crate::crowd::assign::CostMatrix::from_fn(500, 500, &*c);
                 let mut dense = Solver::with_strategy(Strategy::Dense);
                 let want: Vec<u32> = dense.solve(&m).unwrap().iter().map(|&j| j as u32).collect();
                 let (a, b) = (total(&*c, &got), total(&*c, &want));

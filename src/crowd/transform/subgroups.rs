@@ -9,6 +9,10 @@
 //! left out has similarity `−∞`). Dense and sparse run the same code, so a ring that
 //! covers the whole crowd gives the dense answer bit for bit.
 
+// NaN-aware comparisons (`!(a > b)` is true for NaN) are deliberate; the message
+// loops index several per-pair arrays by the same compressed-row range.
+#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
+
 use crate::crowd::assign::Cancel;
 use crate::geom::Vec2;
 use spade::{DelaunayTriangulation, Point2, Triangulation};
