@@ -55,7 +55,7 @@ const RULES: &[Rule] = &[
     },
     Rule {
         module: "crowd::control",
-        may_use: &["crowd::mesh", "crowd::assign", "crowd::environment", "crowd::formation", "gesture", "vocab", "geom", "rng"],
+        may_use: &["crowd::mesh", "crowd::assign", "crowd::environment", "crowd::formation", "crowd::transform", "gesture", "vocab", "geom", "rng"],
     },
     // The edges, and the core that drives the crowd.
     Rule { module: "input", may_use: &["vocab", "geom", "rng", "sys", "rt", "located"] },

@@ -5,11 +5,12 @@
 //! the slow part of a new crowd size (drawing a goal per agent), likewise. Both can
 //! be given up half-way ([`Cancel`]) when they are no longer wanted.
 
-use crate::crowd::assign::{AssignError, Cancel, LeastEffort, Solver};
+use crate::crowd::assign::{AssignError, Cancel};
 use crate::crowd::formation::{Formation, Placement};
 use crate::crowd::mesh::{
     goal_positions, sample_goals_cancellable, GoalSample, MeshError, TriMesh,
 };
+use crate::crowd::transform::{pair, PairCost};
 use crate::geom::Vec2;
 use std::sync::Arc;
 
@@ -75,8 +76,8 @@ impl SwitchRequest {
     /// # Complexity
     /// [`Formation::mesh`], then [`sample_goals`](crate::crowd::mesh::sample_goals)
     /// (`O(K n log(K n))` for `n` agents), then the exact assignment on `n × n`
-    /// costs computed as the solver reads them ([`LeastEffort::costs`]: no matrix
-    /// in memory). Allocates.
+    /// least-effort costs ([`crate::crowd::transform::pair`]: computed as the
+    /// solver reads them, no matrix in memory). Allocates.
     pub fn prepare(self) -> PreparedSwitch {
         self.prepare_cancellable(Cancel::NEVER)
             .expect("a switch that is never cancelled is always prepared")
@@ -113,9 +114,9 @@ impl SwitchRequest {
                 let samples = sample_goals_cancellable(&mesh, agents.len(), &cancel.as_fn())?;
                 let mut goals = Vec::with_capacity(samples.len());
                 goal_positions(&mesh, &samples, mesh.rest(), &mut goals);
-                let costs = LeastEffort::new(lambda).costs(&agents, &goals);
-                let goal_of = match Solver::new().solve_with_cancel(&costs, cancel) {
-                    Ok(cols) => cols.iter().map(|&j| j as u32).collect(),
+                let goal_of = match pair(&agents, &goals, PairCost::LeastEffort { lambda }, cancel)
+                {
+                    Ok(cols) => cols,
                     Err(AssignError::Cancelled) => return None,
                     Err(e) => {
                         log::warn!("formation `{name}`: least-effort pairing failed: {e}");
