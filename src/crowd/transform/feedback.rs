@@ -197,7 +197,9 @@ impl Feedback {
 
     /// Eqs. 18–19 as interpreted in the module docs: pulls each agent's unit
     /// heading `e[i]` and desired speed `v0[i]` towards the others' in its `R × R`
-    /// bin with gains `min(info.i_d, 1)` and `min(info.i_v, 1)`. Uses the bins of the
+    /// bin with gains `min(info.i_d, 1)` and `min(info.i_v, 1)`, the heading's gain
+    /// times `weight[i]` (the transform fades it out near the target, where an
+    /// agent's heading is its own). Uses the bins of the
     /// last [`measure`](Self::measure) (same `pos` and `skip`). When the crowd spans
     /// more bins than the buffers hold, bins are merged in blocks (coarser bins).
     pub(crate) fn adjust(
@@ -205,6 +207,7 @@ impl Feedback {
         e: &mut [Vec2],
         v0: &mut [f64],
         skip: &[bool],
+        weight: &[f64],
         info: Information,
     ) {
         let gd = info.i_d.clamp(0.0, 1.0);
@@ -250,7 +253,7 @@ impl Feedback {
             }
             // Σ_{a'≠a} (e_a' − e_a) / num = (Σ e − num e_a) / num.
             let de = (self.cell_e[c] - e[i] * num) / num;
-            let adj = e[i] + de * gd;
+            let adj = e[i] + de * (gd * weight[i]);
             let n = adj.norm();
             if n > 1e-9 {
                 e[i] = adj / n;
@@ -352,7 +355,7 @@ mod tests {
         let mut e = e0.clone();
         let mut v0 = vec![1.0, 1.2, 1.4, 1.6, 1.0, 1.0, 1.0, 1.0];
         let info = Information { i_v: 0.5, ..info };
-        f.adjust(&mut e, &mut v0, &skip, info);
+        f.adjust(&mut e, &mut v0, &skip, &[1.0; 8], info);
         assert!(
             spread(&e) < 0.5 * spread(&e0),
             "{} vs {}",

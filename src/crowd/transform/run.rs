@@ -7,17 +7,22 @@
 //! # One step
 //! In substeps of at most [`MoveParams::max_substep_s`]:
 //! 1. each moving agent's heading `e_a` towards its target and desired speed, its
-//!    own `v⁰_a` ramped down to `distance / arrival_time_s` near the target;
+//!    own `v⁰_a` ramped down to `sqrt(2 · arrival_decel · distance)` near the
+//!    target (braking evenly);
 //! 2. the feedback (eqs. 17–19): `I_d`, `I_v` of the crowd now, headings and
 //!    desired speeds pulled towards their bin's;
 //! 3. `F` of eq. 23: driving force `(v_des e − v)/τ` (eq. 8), inter-agent and
 //!    cross-subgroup repulsion, subgroup attraction, obstacles, fluctuation `ξ`;
 //! 4. semi-implicit Euler with `|a| ≤ max_accel`, `|v| ≤ max_speed`;
 //! 5. overlaps resolved positionally: every pair closer than `2r` is moved apart
-//!    along its centre line, half each, a few rounds; agents out of obstacles;
+//!    along its centre line, a few rounds, the agent with farther to go moving
+//!    less (it has right of way: settled agents step aside for one walking
+//!    through and walk back after); agents out of obstacles;
 //! 6. arrival: an agent within `arrive_m` of its target and slower than
-//!    `settle_speed` settles: velocity zero, no forces act on it; it moves again
-//!    only when a contact pushes it more than `arrive_m` off its target.
+//!    `settle_speed` settles (the ramp brings it in below that speed, so it stops
+//!    as it enters, without overshoot): velocity zero, no forces act on it; it
+//!    moves again only when a contact pushes it more than `arrive_m` off its
+//!    target.
 //!
 //! Nothing allocates in a step once [`TransformRun::new`] has sized the buffers
 //! (the set of distinct overlapping pairs grows only past `4 n` such pairs).
@@ -32,6 +37,10 @@ use crate::crowd::environment::Scene;
 use crate::geom::Vec2;
 use crate::rng::SplitMix64;
 use std::collections::HashSet;
+
+/// Added to both distances to target when sharing an overlap (m), so that two
+/// agents at their targets share it half each.
+const YIELD_EPS_M: f64 = 0.05;
 
 /// Two agents closer than `2 r − OVERLAP_TOLERANCE_M` overlap (m): what the
 /// positional resolution may leave (it moves pairs to exactly `2 r`, and moving
@@ -67,9 +76,9 @@ pub struct MoveParams {
     pub max_accel_m_s2: f64,
     /// `τ`: relaxation time of the driving force, eq. 8 (s).
     pub tau_s: f64,
-    /// Arrival ramp: within `desired speed × arrival_time_s` of its target an agent
-    /// wants `distance / arrival_time_s` (s); `≥ 4 τ` approaches without overshoot.
-    pub arrival_time_s: f64,
+    /// Arrival ramp: an agent wants at most `sqrt(2 · arrival_decel · distance)`,
+    /// braking evenly to its target (m/s²).
+    pub arrival_decel_m_s2: f64,
     /// The forces other than the driving force fade out linearly over this last
     /// stretch before the target (m), so neighbours cannot hold an agent off it.
     pub fade_m: f64,
@@ -118,11 +127,11 @@ impl Default for MoveParams {
             max_speed_m_s: 2.0,
             max_accel_m_s2: 4.0,
             tau_s: 0.4,
-            arrival_time_s: 1.6,
+            arrival_decel_m_s2: 0.6,
             fade_m: 1.0,
-            repulsion_a_m_s2: 5.0,
+            repulsion_a_m_s2: 2.0,
             repulsion_b_m: 0.3,
-            obstacle_a_m_s2: 5.0,
+            obstacle_a_m_s2: 3.0,
             subgroup_a_m_s2: 1.0,
             subgroup_b_m: 0.5,
             interaction_range_m: 1.2,
@@ -132,7 +141,7 @@ impl Default for MoveParams {
             feedback: true,
             subgroup_forces: true,
             arrive_m: 0.05,
-            settle_speed_m_s: 0.1,
+            settle_speed_m_s: 0.6,
             timeout_s: 120.0,
             max_substep_s: 1.0 / 30.0,
             overlap_rounds: 4,
@@ -323,7 +332,7 @@ impl TransformRun {
             .feedback
             .measure(pos, vel, p.max_speed_m_s, &self.still);
         self.feedback
-            .adjust(&mut self.e, &mut self.v0, &self.settled, info);
+            .adjust(&mut self.e, &mut self.v0, &self.settled, &self.fade, info);
         let vmax = p.max_speed_m_s;
         for v in &mut self.v0 {
             *v = v.clamp(0.0, vmax);
@@ -334,7 +343,7 @@ impl TransformRun {
     /// The velocity agent `i` wants now: its heading at its desired speed, ramped
     /// down near the target.
     fn wanted(&self, i: usize) -> Vec2 {
-        let ramp = self.dist[i] / self.p.arrival_time_s.max(1e-9);
+        let ramp = (2.0 * self.p.arrival_decel_m_s2.max(0.0) * self.dist[i]).sqrt();
         self.e[i] * self.v0[i].min(ramp)
     }
 
@@ -347,15 +356,18 @@ impl TransformRun {
     ) {
         let n = pos.len();
         self.desire(pos, vel);
-        if let Some(orca) = &mut self.orca {
+        if self.orca.is_some() {
             // ORCA: the wanted velocity made collision-free for a time horizon.
             for i in 0..n {
                 self.acc[i] = if self.settled[i] {
                     Vec2::zeros()
                 } else {
-                    self.e[i] * self.v0[i].min(self.dist[i] / self.p.arrival_time_s.max(1e-9))
+                    self.wanted(i)
                 };
             }
+            let Some(orca) = &mut self.orca else {
+                return;
+            };
             orca.velocities(pos, vel, &self.acc, &self.settled, &self.p, h);
             for i in 0..n {
                 if !self.settled[i] {
@@ -438,8 +450,8 @@ impl TransformRun {
     }
 
     /// Step 5: pairs closer than `2 r` moved apart to `2 r` along their centre
-    /// line, half each (Gauss–Seidel, a few rounds), the velocity into the contact
-    /// removed.
+    /// line (Gauss–Seidel, a few rounds), shared by right of way, the velocity
+    /// into the contact removed.
     fn resolve_overlaps(&mut self, pos: &mut [Vec2], vel: &mut [Vec2]) {
         let two_r = 2.0 * self.p.radius_m;
         if two_r <= 0.0 {
@@ -450,6 +462,7 @@ impl TransformRun {
             self.scratch.copy_from_slice(pos);
             self.grid.build(&self.scratch, two_r);
             let mut pushed = 0usize;
+            let targets = &self.targets;
             self.grid
                 .for_each_pair(&self.scratch, two_r, |i, j, _, n0| {
                     let d = pos[i] - pos[j];
@@ -458,14 +471,22 @@ impl TransformRun {
                         return;
                     }
                     let n = if dn > 1e-12 { d / dn } else { n0 };
-                    let half = 0.5 * (two_r - dn);
-                    pos[i] += n * half;
-                    pos[j] -= n * half;
-                    for (k, s) in [(i, 1.0), (j, -1.0)] {
-                        // Velocity into the other agent (against s·n) removed.
+                    // Right of way to the agent with farther to go: each moves by
+                    // a share of the overlap proportional to the other's distance
+                    // to its target (half each when both are there).
+                    let (di, dj) = (
+                        (pos[i] - targets[i]).norm() + YIELD_EPS_M,
+                        (pos[j] - targets[j]).norm() + YIELD_EPS_M,
+                    );
+                    let depth = two_r - dn;
+                    pos[i] += n * (depth * dj / (di + dj));
+                    pos[j] -= n * (depth * di / (di + dj));
+                    for (k, s, share) in [(i, 1.0, dj / (di + dj)), (j, -1.0, di / (di + dj))] {
+                        // Velocity into the other agent (against s·n) removed by the
+                        // agent's share: the one with right of way keeps walking.
                         let into = vel[k].dot(&n) * s;
                         if into < 0.0 {
-                            vel[k] -= n * (into * s);
+                            vel[k] -= n * (into * s * share);
                         }
                     }
                     pushed += 1;
