@@ -24,6 +24,7 @@ pub(crate) const MAX_AXIS_BINS: usize = 1024;
 /// `g[k] ∈ 0..ng`, `h[k] ∈ 0..nh`; entries with `skip[k]` do not count. `joint`
 /// holds at least `ng · nh`, `pg` at least `ng`, `ph` at least `nh` counters
 /// (cleared here). Zero when fewer than one entry counts.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn mutual_information(
     g: &[u32],
     ng: usize,
@@ -216,10 +217,10 @@ impl Feedback {
             return;
         }
         let (mut nx, mut ny) = (1u32, 1u32);
-        for i in 0..e.len() {
-            if !skip[i] {
-                nx = nx.max(self.bx[i] + 1);
-                ny = ny.max(self.by[i] + 1);
+        for ((&s, &x), &y) in skip.iter().zip(&self.bx).zip(&self.by).take(e.len()) {
+            if !s {
+                nx = nx.max(x + 1);
+                ny = ny.max(y + 1);
             }
         }
         let cap = self.cell_count.len();

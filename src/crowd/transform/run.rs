@@ -300,8 +300,8 @@ impl TransformRun {
             let t = scene.map(|(s, t0)| (s, t0 + k as f64 * h));
             self.substep(positions, velocities, h, t);
         }
-        for i in 0..n {
-            self.travel[i] += (positions[i] - self.before[i]).norm();
+        for ((t, x), b) in self.travel.iter_mut().zip(&*positions).zip(&self.before) {
+            *t += (x - b).norm();
         }
         self.elapsed_s += dt_s;
         self.steps += 1;
@@ -398,9 +398,9 @@ impl TransformRun {
         }
         self.resolve_overlaps(pos, vel);
         if let Some((s, t)) = scene {
-            for i in 0..n {
-                if s.signed_distance(pos[i], t) < self.p.radius_m {
-                    pos[i] = s.project_out(pos[i], self.p.radius_m, t);
+            for x in pos.iter_mut() {
+                if s.signed_distance(*x, t) < self.p.radius_m {
+                    *x = s.project_out(*x, self.p.radius_m, t);
                 }
             }
         }
@@ -411,9 +411,9 @@ impl TransformRun {
     fn forces(&mut self, pos: &[Vec2], vel: &[Vec2], scene: Option<(&Scene, f64)>) {
         let n = pos.len();
         let inv_tau = 1.0 / self.p.tau_s.max(1e-6);
-        for i in 0..n {
+        for (i, v) in vel.iter().enumerate().take(n) {
             // Eq. 8, with eq. 7's ξ uniform in a disc.
-            let mut a = (self.wanted(i) - vel[i]) * inv_tau;
+            let mut a = (self.wanted(i) - v) * inv_tau;
             let xi = self.fluctuation();
             a += xi * self.fade[i];
             self.acc[i] = a;
@@ -528,8 +528,8 @@ impl TransformRun {
                 let _ = overlapped.insert((i.min(j) as u32, i.max(j) as u32));
             });
         let (sigma_min_dis_m, min_d) = sigma_min_dis(&self.grid, pos, &mut self.nearest);
-        for i in 0..n {
-            self.still[i] = self.settled[i] || vel[i].norm_squared() < 1e-12;
+        for ((still, &settled), v) in self.still.iter_mut().zip(&self.settled).zip(vel) {
+            *still = settled || v.norm_squared() < 1e-12;
         }
         let info = self
             .feedback
