@@ -17,6 +17,7 @@ mod grid;
 mod measures;
 mod orca;
 mod pairing;
+mod params;
 mod prepare;
 mod run;
 mod social;

@@ -11,7 +11,7 @@
 //! baseline allocates there, the social force model does not.
 
 use super::grid::Grid;
-use super::run::MoveParams;
+use super::params::MoveParams;
 use crate::geom::Vec2;
 use dodgy_2d::{Agent, AvoidanceOptions, Vec2 as V2};
 use std::borrow::Cow;

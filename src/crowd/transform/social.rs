@@ -25,7 +25,7 @@
 //! target; contacts are kept apart positionally in `run.rs`.
 
 use super::grid::Grid;
-use super::run::MoveParams;
+use super::params::MoveParams;
 use crate::crowd::environment::Scene;
 use crate::geom::Vec2;
 
