@@ -12,15 +12,19 @@
 //! | the objective measures | `measures.rs` | 5.1, eqs. 17, 24–26 |
 //! | the ORCA baseline of the comparison | `orca.rs` | 5.4 |
 
+mod feedback;
+mod grid;
 mod measures;
 mod orca;
 mod pairing;
+mod params;
 mod prepare;
 mod run;
+mod social;
 mod subgroups;
 
 pub use measures::Measures;
 pub use pairing::{pair, PairCost};
 pub use prepare::{PreparedTransform, TransformError, TransformPlan, TransformRequest};
-pub use run::{MoveParams, Mover, RunSummary, StepReport, TransformRun};
+pub use run::{MoveParams, Mover, RunSummary, StepReport, TransformRun, OVERLAP_TOLERANCE_M};
 pub use subgroups::{subgroups, ApParams, Preference, Subgroups};

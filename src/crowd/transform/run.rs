@@ -1,45 +1,52 @@
-//! A transform running: social forces with subgroup terms and mutual-information
-//! feedback (formation-transform sections 3.3, 3.5). CONTRACT ONLY.
+//! A transform running: each agent walks to its target by the social force model
+//! with subgroup terms and mutual-information feedback (formation-transform
+//! sections 3.3, 3.5; forces in `social.rs`, feedback in `feedback.rs`), or by ORCA
+//! (`orca.rs`, the comparison of section 5.4); the measures of section 5.1 every
+//! step.
+//!
+//! # One step
+//! In substeps of at most [`MoveParams::max_substep_s`]:
+//! 1. each moving agent's heading `e_a` towards its target and desired speed, its
+//!    own `v⁰_a` ramped down to `sqrt(2 · arrival_decel · distance)` near the
+//!    target (braking evenly);
+//! 2. the feedback (eqs. 17–19): `I_d`, `I_v` of the crowd now, headings and
+//!    desired speeds pulled towards their bin's;
+//! 3. `F` of eq. 23: driving force `(v_des e − v)/τ` (eq. 8), inter-agent and
+//!    cross-subgroup repulsion, subgroup attraction, obstacles, fluctuation `ξ`;
+//! 4. semi-implicit Euler with `|a| ≤ max_accel`, `|v| ≤ max_speed`;
+//! 5. overlaps resolved positionally: every pair closer than `2r` is moved apart
+//!    along its centre line, a few rounds, the agent with farther to go moving
+//!    less (it has right of way: settled agents step aside for one walking
+//!    through and walk back after); agents out of obstacles;
+//! 6. arrival: an agent within `arrive_m` of its target and slower than
+//!    `settle_speed` settles (the ramp brings it in below that speed, so it stops
+//!    as it enters, without overshoot): velocity zero, no forces act on it; it
+//!    moves again only when a contact pushes it more than `arrive_m` off its
+//!    target.
+//!
+//! Nothing allocates in a step once [`TransformRun::new`] has sized the buffers
+//! (the set of distinct overlapping pairs grows only past `4 n` such pairs).
 
-use super::measures::Measures;
+use super::feedback::{Feedback, Information};
+use super::grid::Grid;
+use super::measures::{sigma_curr_eft, sigma_min_dis, Measures};
+use super::orca::Orca;
+pub use super::params::{MoveParams, Mover};
 use super::prepare::TransformPlan;
+use super::social::{self, Groups};
 use crate::crowd::environment::Scene;
 use crate::geom::Vec2;
+use crate::rng::SplitMix64;
+use std::collections::HashSet;
 
-/// What moves the agents.
-#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
-pub enum Mover {
-    /// The paper's social force model (eqs. 7–10, 21–23) with feedback (eqs. 18–19).
-    #[default]
-    SocialForce,
-    /// ORCA (the comparison of section 5.4) on the same pairing.
-    Orca,
-}
+/// Added to both distances to target when sharing an overlap (m), so that two
+/// agents at their targets share it half each.
+const YIELD_EPS_M: f64 = 0.05;
 
-/// How a transform moves the agents.
-#[derive(Clone, Debug, PartialEq)]
-pub struct MoveParams {
-    /// What moves them.
-    pub mover: Mover,
-    /// Agent radius (m).
-    pub radius_m: f64,
-    /// `v⁰`: desired speed (m/s).
-    pub desired_speed_m_s: f64,
-    /// Mutual-information feedback on heading and desired speed (eqs. 18–19).
-    pub feedback: bool,
-    /// Subgroup attraction and cross-group repulsion (eqs. 21–23).
-    pub subgroup_forces: bool,
-    /// An agent within this distance of its target has arrived (m).
-    pub arrive_m: f64,
-    /// The transform ends after this long even if not every agent arrived (s).
-    pub timeout_s: f64,
-}
-
-impl Default for MoveParams {
-    fn default() -> MoveParams {
-        todo!()
-    }
-}
+/// Two agents closer than `2 r − OVERLAP_TOLERANCE_M` overlap (m): what the
+/// positional resolution may leave (it moves pairs to exactly `2 r`, and moving
+/// one pair may press another).
+pub const OVERLAP_TOLERANCE_M: f64 = 0.005;
 
 /// One step's report.
 #[derive(Copy, Clone, Debug, Default, PartialEq)]
@@ -85,18 +92,90 @@ pub struct RunSummary {
 #[derive(Clone, Debug)]
 pub struct TransformRun {
     targets: Vec<Vec2>,
+    sources: Vec<Vec2>,
+    p: MoveParams,
+    rng: SplitMix64,
+    groups: Groups,
+    feedback: Feedback,
+    orca: Option<Orca>,
+    grid: Grid,
+    /// Agent `a`'s own desired speed `v⁰_a` (m/s), evened out by eq. 19.
+    v0: Vec<f64>,
+    /// Heading `e_a` this substep (unit).
+    e: Vec<Vec2>,
+    /// Distance to the target this substep (m).
+    dist: Vec<f64>,
+    /// Weight of the forces other than the driving one (0 when settled).
+    fade: Vec<f64>,
+    acc: Vec<Vec2>,
+    settled: Vec<bool>,
+    /// No heading: settled or at rest (left out of `I_d`, `I_v`).
+    still: Vec<bool>,
+    before: Vec<Vec2>,
+    scratch: Vec<Vec2>,
+    travel: Vec<f64>,
+    nearest: Vec<f64>,
+    overlapped: HashSet<(u32, u32)>,
+    elapsed_s: f64,
+    steps: u64,
+    sum: Measures,
+    min_distance_m: f64,
+    last: StepReport,
 }
 
 impl TransformRun {
-    /// A run of `plan` with `params`, fluctuation drawn from `seed`. Allocates its
-    /// buffers once.
+    /// A run of `plan` with `params`, fluctuation and desired speeds drawn from
+    /// `seed`. Allocates its buffers once. Agents are those of `plan.sources_m`;
+    /// `plan.targets_m` and `plan.subgroups.group_of` give one entry per agent
+    /// (missing ones: the source as target, group 0).
     pub fn new(plan: &TransformPlan, params: &MoveParams, seed: u64) -> TransformRun {
-        let _ = (plan, params, seed);
-        todo!()
+        let n = plan.sources_m.len();
+        let sources = plan.sources_m.clone();
+        let targets: Vec<Vec2> = (0..n)
+            .map(|i| plan.targets_m.get(i).copied().unwrap_or(sources[i]))
+            .collect();
+        let mut rng = SplitMix64::new(seed);
+        let spread = params.desired_speed_spread_m_s.abs();
+        let v0 = (0..n)
+            .map(|_| {
+                (params.desired_speed_m_s + rng.uniform(-spread, spread))
+                    .clamp(0.0, params.max_speed_m_s)
+            })
+            .collect();
+        let orca = (params.mover == Mover::Orca).then(|| Orca::new(n));
+        TransformRun {
+            groups: Groups::new(&plan.subgroups.group_of, &sources, &targets),
+            feedback: Feedback::new(n, params.bin_m, params.sectors),
+            orca,
+            grid: Grid::with_capacity(n),
+            v0,
+            e: vec![Vec2::zeros(); n],
+            dist: vec![0.0; n],
+            fade: vec![0.0; n],
+            acc: vec![Vec2::zeros(); n],
+            settled: vec![false; n],
+            still: vec![false; n],
+            before: vec![Vec2::zeros(); n],
+            scratch: vec![Vec2::zeros(); n],
+            travel: vec![0.0; n],
+            nearest: vec![0.0; n],
+            overlapped: HashSet::with_capacity(4 * n),
+            elapsed_s: 0.0,
+            steps: 0,
+            sum: Measures::default(),
+            min_distance_m: f64::INFINITY,
+            last: StepReport::default(),
+            targets,
+            sources,
+            p: params.clone(),
+            rng,
+        }
     }
 
     /// One step of `dt_s` seconds: forces, feedback, integration, arrival; the scene's
     /// obstacles at scene time `t_s` when given. No allocation in steady state.
+    /// A `dt_s` that is not positive and finite, or slices of another length than
+    /// the plan's, leave everything as it is and report the state now.
     pub fn step(
         &mut self,
         positions: &mut [Vec2],
@@ -104,18 +183,288 @@ impl TransformRun {
         dt_s: f64,
         scene: Option<(&Scene, f64)>,
     ) -> StepReport {
-        let _ = (positions, velocities, dt_s, scene);
-        todo!()
+        let n = self.targets.len();
+        if positions.len() != n || velocities.len() != n || !(dt_s.is_finite() && dt_s > 0.0) {
+            return self.last;
+        }
+        let max_sub = if self.p.max_substep_s > 0.0 {
+            self.p.max_substep_s
+        } else {
+            dt_s
+        };
+        let substeps = (dt_s / max_sub).ceil().clamp(1.0, 64.0) as usize;
+        let h = dt_s / substeps as f64;
+        self.before.copy_from_slice(positions);
+        for k in 0..substeps {
+            let t = scene.map(|(s, t0)| (s, t0 + k as f64 * h));
+            self.substep(positions, velocities, h, t);
+        }
+        for ((t, x), b) in self.travel.iter_mut().zip(&*positions).zip(&self.before) {
+            *t += (x - b).norm();
+        }
+        self.elapsed_s += dt_s;
+        self.steps += 1;
+        let report = self.report(positions, velocities);
+        self.last = report;
+        report
+    }
+
+    /// Headings, desired speeds and fades of the moving agents (steps 1–2).
+    fn desire(&mut self, pos: &[Vec2], vel: &[Vec2]) -> Information {
+        let p = &self.p;
+        for i in 0..pos.len() {
+            let d = self.targets[i] - pos[i];
+            let dn = d.norm();
+            self.dist[i] = dn;
+            self.e[i] = if dn > 1e-12 { d / dn } else { Vec2::zeros() };
+            self.fade[i] = if self.settled[i] {
+                0.0
+            } else {
+                ((dn - p.arrive_m) / p.fade_m.max(1e-9)).clamp(0.0, 1.0)
+            };
+            self.still[i] = self.settled[i] || vel[i].norm_squared() < 1e-12;
+        }
+        if !p.feedback {
+            return Information::default();
+        }
+        let info = self
+            .feedback
+            .measure(pos, vel, p.max_speed_m_s, &self.still);
+        self.feedback
+            .adjust(&mut self.e, &mut self.v0, &self.settled, &self.fade, info);
+        let vmax = p.max_speed_m_s;
+        for v in &mut self.v0 {
+            *v = v.clamp(0.0, vmax);
+        }
+        info
+    }
+
+    /// The velocity agent `i` wants now: its heading at its desired speed, ramped
+    /// down near the target.
+    fn wanted(&self, i: usize) -> Vec2 {
+        let ramp = (2.0 * self.p.arrival_decel_m_s2.max(0.0) * self.dist[i]).sqrt();
+        self.e[i] * self.v0[i].min(ramp)
+    }
+
+    fn substep(
+        &mut self,
+        pos: &mut [Vec2],
+        vel: &mut [Vec2],
+        h: f64,
+        scene: Option<(&Scene, f64)>,
+    ) {
+        let n = pos.len();
+        self.desire(pos, vel);
+        if self.orca.is_some() {
+            // ORCA: the wanted velocity made collision-free for a time horizon.
+            for i in 0..n {
+                self.acc[i] = if self.settled[i] {
+                    Vec2::zeros()
+                } else {
+                    self.wanted(i)
+                };
+            }
+            let Some(orca) = &mut self.orca else {
+                return;
+            };
+            orca.velocities(pos, vel, &self.acc, &self.settled, &self.p, h);
+            for i in 0..n {
+                if !self.settled[i] {
+                    pos[i] += vel[i] * h;
+                }
+            }
+        } else {
+            self.forces(pos, vel, scene);
+            let (amax, vmax) = (self.p.max_accel_m_s2, self.p.max_speed_m_s);
+            for i in 0..n {
+                if self.settled[i] {
+                    vel[i] = Vec2::zeros();
+                    continue;
+                }
+                let mut a = self.acc[i];
+                let an = a.norm();
+                if an > amax {
+                    a *= amax / an;
+                }
+                let mut v = vel[i] + a * h;
+                let vn = v.norm();
+                if vn > vmax {
+                    v *= vmax / vn;
+                }
+                vel[i] = v;
+                pos[i] += v * h;
+            }
+        }
+        self.resolve_overlaps(pos, vel);
+        if let Some((s, t)) = scene {
+            for x in pos.iter_mut() {
+                if s.signed_distance(*x, t) < self.p.radius_m {
+                    *x = s.project_out(*x, self.p.radius_m, t);
+                }
+            }
+        }
+        self.settle(pos, vel);
+    }
+
+    /// `F` of eq. 23 for every moving agent into `acc` (step 3).
+    fn forces(&mut self, pos: &[Vec2], vel: &[Vec2], scene: Option<(&Scene, f64)>) {
+        let n = pos.len();
+        let inv_tau = 1.0 / self.p.tau_s.max(1e-6);
+        for (i, v) in vel.iter().enumerate().take(n) {
+            // Eq. 8, with eq. 7's ξ uniform in a disc.
+            let mut a = (self.wanted(i) - v) * inv_tau;
+            let xi = self.fluctuation();
+            a += xi * self.fade[i];
+            self.acc[i] = a;
+        }
+        let p = &self.p;
+        self.grid
+            .build(pos, p.interaction_range_m.max(2.0 * p.radius_m));
+        let groups = p.subgroup_forces.then_some(&self.groups.group_of[..]);
+        social::repulse(&self.grid, pos, groups, &self.fade, p, &mut self.acc);
+        if p.subgroup_forces {
+            self.groups.attract(
+                pos,
+                &self.sources,
+                &self.targets,
+                &self.fade,
+                p,
+                &mut self.acc,
+            );
+        }
+        if let Some((s, t)) = scene {
+            social::obstacles(s, t, pos, &self.fade, p, &mut self.acc);
+        }
+    }
+
+    /// A draw of `ξ`: uniform in the disc of radius `fluctuation_m_s2`.
+    fn fluctuation(&mut self) -> Vec2 {
+        let r = self.p.fluctuation_m_s2;
+        if r <= 0.0 {
+            return Vec2::zeros();
+        }
+        let a = self.rng.uniform(0.0, std::f64::consts::TAU);
+        let m = r * self.rng.unit().sqrt();
+        Vec2::new(a.cos(), a.sin()) * m
+    }
+
+    /// Step 5: pairs closer than `2 r` moved apart to `2 r` along their centre
+    /// line (Gauss–Seidel, a few rounds), shared by right of way, the velocity
+    /// into the contact removed.
+    fn resolve_overlaps(&mut self, pos: &mut [Vec2], vel: &mut [Vec2]) {
+        let two_r = 2.0 * self.p.radius_m;
+        if two_r <= 0.0 {
+            return;
+        }
+        for _ in 0..self.p.overlap_rounds {
+            // Pairs are found on a copy; each push reads the positions as they are.
+            self.scratch.copy_from_slice(pos);
+            self.grid.build(&self.scratch, two_r);
+            let mut pushed = 0usize;
+            let targets = &self.targets;
+            self.grid
+                .for_each_pair(&self.scratch, two_r, |i, j, _, n0| {
+                    let d = pos[i] - pos[j];
+                    let dn = d.norm();
+                    if dn >= two_r {
+                        return;
+                    }
+                    let n = if dn > 1e-12 { d / dn } else { n0 };
+                    // Right of way to the agent with farther to go: each moves by
+                    // a share of the overlap proportional to the other's distance
+                    // to its target (half each when both are there).
+                    let (di, dj) = (
+                        (pos[i] - targets[i]).norm() + YIELD_EPS_M,
+                        (pos[j] - targets[j]).norm() + YIELD_EPS_M,
+                    );
+                    let depth = two_r - dn;
+                    pos[i] += n * (depth * dj / (di + dj));
+                    pos[j] -= n * (depth * di / (di + dj));
+                    for (k, s, share) in [(i, 1.0, dj / (di + dj)), (j, -1.0, di / (di + dj))] {
+                        // Velocity into the other agent (against s·n) removed by the
+                        // agent's share: the one with right of way keeps walking.
+                        let into = vel[k].dot(&n) * s;
+                        if into < 0.0 {
+                            vel[k] -= n * (into * s * share);
+                        }
+                    }
+                    pushed += 1;
+                });
+            if pushed == 0 {
+                break;
+            }
+        }
+    }
+
+    /// Step 6: agents near enough and slow enough settle; settled agents pushed
+    /// within `arrive_m` of their target stay settled.
+    fn settle(&mut self, pos: &[Vec2], vel: &mut [Vec2]) {
+        let (arrive, slow) = (self.p.arrive_m, self.p.settle_speed_m_s);
+        for i in 0..pos.len() {
+            let near = (pos[i] - self.targets[i]).norm() <= arrive;
+            if near && (self.settled[i] || vel[i].norm() <= slow) {
+                self.settled[i] = true;
+                vel[i] = Vec2::zeros();
+            } else {
+                self.settled[i] = false;
+            }
+        }
+    }
+
+    /// The measures and contacts now.
+    fn report(&mut self, pos: &[Vec2], vel: &[Vec2]) -> StepReport {
+        let n = pos.len();
+        let two_r = 2.0 * self.p.radius_m;
+        let arrived = (0..n)
+            .filter(|&i| (pos[i] - self.targets[i]).norm() <= self.p.arrive_m)
+            .count();
+        self.grid.build(pos, two_r.max(self.p.interaction_range_m));
+        let mut overlapping = 0usize;
+        let overlapped = &mut self.overlapped;
+        self.grid
+            .for_each_pair(pos, two_r - OVERLAP_TOLERANCE_M, |i, j, _, _| {
+                overlapping += 1;
+                let _ = overlapped.insert((i.min(j) as u32, i.max(j) as u32));
+            });
+        let (sigma_min_dis_m, min_d) = sigma_min_dis(&self.grid, pos, &mut self.nearest);
+        for ((still, &settled), v) in self.still.iter_mut().zip(&self.settled).zip(vel) {
+            *still = settled || v.norm_squared() < 1e-12;
+        }
+        let info = self
+            .feedback
+            .measure(pos, vel, self.p.max_speed_m_s, &self.still);
+        let measures = Measures {
+            i_d: info.i_d,
+            i_v: info.i_v,
+            sigma_min_dis_m,
+            sigma_curr_eft_m: sigma_curr_eft(&self.sources, pos),
+        };
+        self.sum.i_d += measures.i_d;
+        self.sum.i_v += measures.i_v;
+        self.sum.sigma_min_dis_m += measures.sigma_min_dis_m;
+        self.sum.sigma_curr_eft_m += measures.sigma_curr_eft_m;
+        self.min_distance_m = self.min_distance_m.min(min_d);
+        StepReport {
+            arrived,
+            arrived_fraction: if n == 0 {
+                1.0
+            } else {
+                arrived as f64 / n as f64
+            },
+            measures,
+            min_distance_m: min_d,
+            overlapping_pairs: overlapping,
+        }
     }
 
     /// Every agent arrived and settled, or the timeout passed.
     pub fn done(&self) -> bool {
-        todo!()
+        self.settled.iter().all(|&s| s) || self.elapsed_s >= self.p.timeout_s
     }
 
     /// Simulated time since the start (s).
     pub fn elapsed_s(&self) -> f64 {
-        todo!()
+        self.elapsed_s
     }
 
     /// Agent `i`'s target is `targets()[i]` (m).
@@ -123,8 +472,39 @@ impl TransformRun {
         &self.targets
     }
 
+    /// Whether agent `i` has arrived and settled.
+    pub fn settled(&self, i: usize) -> bool {
+        self.settled[i]
+    }
+
     /// The run so far, summarised.
     pub fn summary(&self) -> RunSummary {
-        todo!()
+        let n = self.targets.len();
+        let steps = self.steps.max(1) as f64;
+        RunSummary {
+            agents: n,
+            steps: self.steps,
+            simulated_s: self.elapsed_s,
+            arrived_fraction: self.last.arrived_fraction,
+            min_distance_m: self.min_distance_m,
+            overlapping_pairs: self.overlapped.len(),
+            mean_travel_m: if n == 0 {
+                0.0
+            } else {
+                self.travel.iter().sum::<f64>() / n as f64
+            },
+            max_travel_m: self.travel.iter().cloned().fold(0.0, f64::max),
+            mean: Measures {
+                i_d: self.sum.i_d / steps,
+                i_v: self.sum.i_v / steps,
+                sigma_min_dis_m: self.sum.sigma_min_dis_m / steps,
+                sigma_curr_eft_m: self.sum.sigma_curr_eft_m / steps,
+            },
+            timed_out: self.elapsed_s >= self.p.timeout_s && !self.settled.iter().all(|&s| s),
+        }
     }
 }
+
+#[cfg(test)]
+#[path = "run_tests.rs"]
+mod tests;

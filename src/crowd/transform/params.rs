@@ -1,0 +1,105 @@
+//! How a transform moves the agents: the mover and its parameters (SI units),
+//! apart from `run.rs` so that the force and ORCA modules read them without an
+//! import cycle.
+
+/// What moves the agents.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub enum Mover {
+    /// The paper's social force model (eqs. 7–10, 21–23) with feedback (eqs. 18–19).
+    #[default]
+    SocialForce,
+    /// ORCA (the comparison of section 5.4) on the same pairing.
+    Orca,
+}
+
+/// How a transform moves the agents. Lengths in metres, times in seconds,
+/// accelerations (forces on a unit mass) in m/s².
+#[derive(Clone, Debug, PartialEq)]
+pub struct MoveParams {
+    /// What moves them.
+    pub mover: Mover,
+    /// Agent radius (m).
+    pub radius_m: f64,
+    /// `v⁰`: desired speed (m/s), the mean of the agents' own.
+    pub desired_speed_m_s: f64,
+    /// Each agent's own desired speed is drawn uniformly within this much of
+    /// `desired_speed_m_s` (m/s); eq. 19 then evens them out within bins.
+    pub desired_speed_spread_m_s: f64,
+    /// Most speed of any agent (m/s).
+    pub max_speed_m_s: f64,
+    /// Most acceleration of any agent (m/s²).
+    pub max_accel_m_s2: f64,
+    /// `τ`: relaxation time of the driving force, eq. 8 (s).
+    pub tau_s: f64,
+    /// Arrival ramp: an agent wants at most `sqrt(2 · arrival_decel · distance)`,
+    /// braking evenly to its target (m/s²).
+    pub arrival_decel_m_s2: f64,
+    /// The forces other than the driving force fade out linearly over this last
+    /// stretch before the target (m), so neighbours cannot hold an agent off it.
+    pub fade_m: f64,
+    /// `A` of eqs. 9–10 (m/s²).
+    pub repulsion_a_m_s2: f64,
+    /// `B` of eqs. 9–10 (m).
+    pub repulsion_b_m: f64,
+    /// `A` of eq. 9 for the scene's obstacles (m/s²).
+    pub obstacle_a_m_s2: f64,
+    /// `A'` of eqs. 21–22 (m/s²).
+    pub subgroup_a_m_s2: f64,
+    /// `B'` of eqs. 21–22 (m).
+    pub subgroup_b_m: f64,
+    /// Agents (and obstacles) farther apart than this exert no social force (m).
+    pub interaction_range_m: f64,
+    /// `ξ`: the fluctuation of eq. 7, uniform in a disc of this radius (m/s²).
+    pub fluctuation_m_s2: f64,
+    /// `R`: side of the mutual-information bins (m), eqs. 12–13, 18–19.
+    pub bin_m: f64,
+    /// `K`: heading sectors (eq. 14) and speed bins.
+    pub sectors: usize,
+    /// Mutual-information feedback on heading and desired speed (eqs. 18–19).
+    pub feedback: bool,
+    /// Subgroup attraction and cross-group repulsion (eqs. 21–23).
+    pub subgroup_forces: bool,
+    /// An agent within this distance of its target has arrived (m).
+    pub arrive_m: f64,
+    /// An arrived agent slower than this settles: it stops and holds (m/s).
+    pub settle_speed_m_s: f64,
+    /// The transform ends after this long even if not every agent arrived (s).
+    pub timeout_s: f64,
+    /// A step longer than this is taken in substeps (s).
+    pub max_substep_s: f64,
+    /// Rounds of positional overlap resolution after each substep.
+    pub overlap_rounds: usize,
+}
+
+impl Default for MoveParams {
+    /// People-sized agents: radius 0.25 m, walking at 1.3 m/s.
+    fn default() -> MoveParams {
+        MoveParams {
+            mover: Mover::SocialForce,
+            radius_m: 0.25,
+            desired_speed_m_s: 1.3,
+            desired_speed_spread_m_s: 0.2,
+            max_speed_m_s: 2.0,
+            max_accel_m_s2: 4.0,
+            tau_s: 0.4,
+            arrival_decel_m_s2: 0.6,
+            fade_m: 1.0,
+            repulsion_a_m_s2: 2.0,
+            repulsion_b_m: 0.3,
+            obstacle_a_m_s2: 3.0,
+            subgroup_a_m_s2: 1.0,
+            subgroup_b_m: 0.5,
+            interaction_range_m: 1.2,
+            fluctuation_m_s2: 0.1,
+            bin_m: 2.0,
+            sectors: 8,
+            feedback: true,
+            subgroup_forces: true,
+            arrive_m: 0.05,
+            settle_speed_m_s: 0.6,
+            timeout_s: 120.0,
+            max_substep_s: 1.0 / 30.0,
+            overlap_rounds: 4,
+        }
+    }
+}

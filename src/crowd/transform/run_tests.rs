@@ -1,0 +1,407 @@
+//! Tests of a transform running (`run.rs`, `social.rs`, `orca.rs`).
+
+use super::*;
+use crate::crowd::transform::{PairCost, Subgroups};
+use std::path::Path;
+
+const DT_S: f64 = 1.0 / 60.0;
+
+fn plan(sources: &[Vec2], targets: &[Vec2], group_of: Vec<u32>) -> TransformPlan {
+    let groups = group_of.iter().map(|&g| g as usize + 1).max().unwrap_or(1);
+    TransformPlan {
+        sources_m: sources.to_vec(),
+        targets_m: targets.to_vec(),
+        subgroups: Subgroups {
+            group_of,
+            exemplars: (0..groups as u32).collect(),
+            iterations: 0,
+            converged: true,
+        },
+        cost: PairCost::Euclidean,
+    }
+}
+
+/// Runs to the end (or `max_s`), returning the last report and the smallest
+/// distance between two agents seen after any step.
+fn run_out(
+    run: &mut TransformRun,
+    pos: &mut [Vec2],
+    vel: &mut [Vec2],
+    max_s: f64,
+    scene: Option<&Scene>,
+) -> StepReport {
+    let mut last = StepReport::default();
+    while !run.done() && run.elapsed_s() < max_s {
+        let t = run.elapsed_s();
+        last = run.step(pos, vel, DT_S, scene.map(|s| (s, t)));
+    }
+    last
+}
+
+fn lattice(n: usize, spacing: f64, origin: Vec2) -> Vec<Vec2> {
+    let w = (n as f64).sqrt().ceil() as usize;
+    (0..n)
+        .map(|i| origin + Vec2::new((i % w) as f64, (i / w) as f64) * spacing)
+        .collect()
+}
+
+/// Brute-force smallest distance between two of `pos`.
+fn min_pair_distance(pos: &[Vec2]) -> f64 {
+    let mut m = f64::INFINITY;
+    for i in 0..pos.len() {
+        for j in i + 1..pos.len() {
+            m = m.min((pos[i] - pos[j]).norm());
+        }
+    }
+    m
+}
+
+#[test]
+fn a_lone_agent_reaches_its_target_and_stays() {
+    for mover in [Mover::SocialForce, Mover::Orca] {
+        let p = MoveParams {
+            mover,
+            ..MoveParams::default()
+        };
+        let (s, t) = (Vec2::new(0.0, 0.0), Vec2::new(6.0, 2.0));
+        let mut run = TransformRun::new(&plan(&[s], &[t], vec![0]), &p, 1);
+        let (mut pos, mut vel) = ([s], [Vec2::zeros()]);
+        let axis = (t - s).normalize();
+        let mut overshoot: f64 = 0.0;
+        let mut vmax: f64 = 0.0;
+        while !run.done() {
+            let r = run.step(&mut pos, &mut vel, DT_S, None);
+            overshoot = overshoot.max((pos[0] - t).dot(&axis));
+            vmax = vmax.max(vel[0].norm());
+            assert!(r.overlapping_pairs == 0 && r.min_distance_m == f64::INFINITY);
+        }
+        let sum = run.summary();
+        assert!(
+            !sum.timed_out && sum.arrived_fraction == 1.0,
+            "{mover:?} {sum:?}"
+        );
+        assert!(overshoot <= p.arrive_m, "{mover:?} overshoot {overshoot}");
+        assert!(
+            vmax <= p.max_speed_m_s + 1e-9 && vmax > 1.0,
+            "{mover:?} {vmax}"
+        );
+        // 6.3 m at 1.3 ± 0.2 m/s takes more than 4 s.
+        assert!(sum.simulated_s > 4.0, "{sum:?}");
+        assert!((sum.mean_travel_m - (t - s).norm()).abs() < 0.3, "{sum:?}");
+        let settled_at = pos[0];
+        for _ in 0..120 {
+            let _ = run.step(&mut pos, &mut vel, DT_S, None);
+            assert_eq!(pos[0], settled_at);
+            assert_eq!(vel[0], Vec2::zeros());
+        }
+        assert!((pos[0] - t).norm() <= p.arrive_m);
+    }
+}
+
+#[test]
+fn two_agents_swapping_places_keep_apart() {
+    for mover in [Mover::SocialForce, Mover::Orca] {
+        let p = MoveParams {
+            mover,
+            ..MoveParams::default()
+        };
+        let (a, b) = (Vec2::new(0.0, 0.0), Vec2::new(5.0, 0.0));
+        let mut run = TransformRun::new(&plan(&[a, b], &[b, a], vec![0, 1]), &p, 3);
+        let (mut pos, mut vel) = ([a, b], [Vec2::zeros(); 2]);
+        let mut closest = f64::INFINITY;
+        while !run.done() {
+            let r = run.step(&mut pos, &mut vel, DT_S, None);
+            closest = closest.min((pos[0] - pos[1]).norm());
+            assert_eq!(r.min_distance_m, (pos[0] - pos[1]).norm());
+        }
+        let sum = run.summary();
+        assert!(
+            closest >= 2.0 * p.radius_m - OVERLAP_TOLERANCE_M,
+            "{mover:?}: {closest}"
+        );
+        assert_eq!(sum.overlapping_pairs, 0, "{mover:?}");
+        assert!(
+            !sum.timed_out && sum.arrived_fraction == 1.0,
+            "{mover:?} {sum:?}"
+        );
+        assert!((sum.min_distance_m - closest).abs() < 1e-12);
+    }
+}
+
+/// A square block of agents walks to a wider, flatter block beside it (each
+/// agent to its own place stretched 1.3× in x and 0.8× in y: neighbours stay
+/// neighbours, as a least-effort pairing keeps them).
+fn crowd_transform(n: usize, mover: Mover) {
+    let p = MoveParams {
+        mover,
+        ..MoveParams::default()
+    };
+    let sources = lattice(n, 0.7, Vec2::new(0.0, 0.0));
+    let side = (n as f64).sqrt().ceil() * 0.7;
+    let targets: Vec<Vec2> = sources
+        .iter()
+        .map(|s| Vec2::new(side + 2.0 + 1.3 * s.x, 0.8 * s.y))
+        .collect();
+    let group_of = sources
+        .iter()
+        .map(|s| ((s.x / 2.5) as u32) + 100 * ((s.y / 2.5) as u32))
+        .collect::<Vec<_>>();
+    // Groups numbered densely.
+    let mut ids: Vec<u32> = group_of.clone();
+    ids.sort_unstable();
+    ids.dedup();
+    let group_of = group_of
+        .iter()
+        .map(|g| ids.binary_search(g).unwrap_or(0) as u32)
+        .collect();
+    let mut run = TransformRun::new(&plan(&sources, &targets, group_of), &p, 11);
+    let (mut pos, mut vel) = (sources.clone(), vec![Vec2::zeros(); n]);
+    let last = run_out(&mut run, &mut pos, &mut vel, p.timeout_s, None);
+    let sum = run.summary();
+    if sum.timed_out {
+        for i in 0..n {
+            if !run.settled(i) {
+                let near: Vec<(usize, f64, bool)> = (0..n)
+                    .filter(|&j| j != i && (pos[j] - pos[i]).norm() < 0.8)
+                    .map(|j| (j, (pos[j] - targets[j]).norm(), run.settled(j)))
+                    .collect();
+                eprintln!(
+                    "stuck {i}: at {:?} target {:?} vel {:?} near {near:?}",
+                    pos[i], targets[i], vel[i]
+                );
+            }
+        }
+    }
+    assert!(!sum.timed_out, "{mover:?} {n}: {sum:?}");
+    assert_eq!(sum.arrived_fraction, 1.0);
+    assert_eq!(last.overlapping_pairs, 0);
+    for i in 0..n {
+        assert!((pos[i] - targets[i]).norm() <= p.arrive_m, "agent {i}");
+        assert_eq!(vel[i], Vec2::zeros());
+    }
+    let closest = if n <= 200 {
+        min_pair_distance(&pos)
+    } else {
+        last.min_distance_m
+    };
+    assert!(
+        closest >= 2.0 * p.radius_m - OVERLAP_TOLERANCE_M,
+        "{closest}"
+    );
+    assert!(sum.mean.sigma_curr_eft_m > 0.0 && sum.mean.i_d >= 0.0);
+    assert!(sum.max_travel_m >= sum.mean_travel_m && sum.mean_travel_m > side);
+}
+
+#[test]
+fn a_hundred_agents_transform_without_overlap() {
+    crowd_transform(100, Mover::SocialForce);
+    crowd_transform(100, Mover::Orca);
+}
+
+#[test]
+fn four_hundred_agents_transform_without_overlap() {
+    crowd_transform(400, Mover::SocialForce);
+}
+
+#[test]
+#[ignore = "minutes in a debug build: cargo test --release --lib -- --ignored thousand"]
+fn a_thousand_agents_transform_without_overlap() {
+    crowd_transform(1000, Mover::SocialForce);
+}
+
+#[test]
+fn the_same_seed_gives_the_same_run() {
+    let sources = lattice(50, 0.8, Vec2::zeros());
+    let targets: Vec<Vec2> = sources.iter().map(|s| Vec2::new(s.y, s.x) * 1.3).collect();
+    let p = MoveParams::default();
+    let go = |seed| {
+        let mut run = TransformRun::new(&plan(&sources, &targets, vec![0; 50]), &p, seed);
+        let (mut pos, mut vel) = (sources.clone(), vec![Vec2::zeros(); 50]);
+        for _ in 0..200 {
+            let _ = run.step(&mut pos, &mut vel, DT_S, None);
+        }
+        (pos, run.summary())
+    };
+    assert_eq!(go(5), go(5));
+    assert_ne!(go(5).0, go(6).0);
+}
+
+/// The mean distance of a group's members to its centroid over a run.
+fn group_spread(subgroup_forces: bool) -> f64 {
+    let n = 16;
+    let sources = lattice(n, 0.8, Vec2::zeros());
+    let targets: Vec<Vec2> = sources.iter().map(|s| s + Vec2::new(15.0, 0.0)).collect();
+    let p = MoveParams {
+        subgroup_forces,
+        feedback: false,
+        desired_speed_spread_m_s: 0.5,
+        fluctuation_m_s2: 0.0,
+        ..MoveParams::default()
+    };
+    let mut run = TransformRun::new(&plan(&sources, &targets, vec![0; n]), &p, 2);
+    let (mut pos, mut vel) = (sources.clone(), vec![Vec2::zeros(); n]);
+    let mut spread = 0.0;
+    for _ in 0..600 {
+        let _ = run.step(&mut pos, &mut vel, DT_S, None);
+        let c: Vec2 = pos.iter().sum::<Vec2>() / n as f64;
+        spread += pos.iter().map(|x| (x - c).norm()).sum::<f64>() / n as f64;
+    }
+    spread / 600.0
+}
+
+#[test]
+fn subgroup_forces_keep_a_group_together() {
+    let (with, without) = (group_spread(true), group_spread(false));
+    assert!(with < 0.9 * without, "with {with} without {without}");
+}
+
+#[test]
+fn cross_group_repulsion_pushes_other_groups_only() {
+    let pos = [Vec2::new(0.0, 0.0), Vec2::new(0.8, 0.0)];
+    let p = MoveParams::default();
+    let mut g = Grid::with_capacity(2);
+    g.build(&pos, p.interaction_range_m);
+    let force = |groups: Option<&[u32]>| {
+        let mut acc = [Vec2::zeros(); 2];
+        social::repulse(&g, &pos, groups, &[1.0, 1.0], &p, &mut acc);
+        acc
+    };
+    let same = force(Some(&[0, 0]));
+    let other = force(Some(&[0, 1]));
+    let want = p.repulsion_a_m_s2 * (-0.8 / p.repulsion_b_m).exp() / 0.8;
+    assert!(
+        (same[0].x + want).abs() < 1e-12 && same[0].y == 0.0,
+        "{same:?}"
+    );
+    assert_eq!(same[0], -same[1]);
+    let extra = p.subgroup_a_m_s2 * (-0.8 / p.subgroup_b_m).exp() / 0.8;
+    assert!((other[0].x + want + extra).abs() < 1e-12, "{other:?}");
+}
+
+const WALL_SCENE: &str = "(
+    version: 1,
+    bounds_m: (min: (-5.0, -5.0), max: (20.0, 10.0)),
+    obstacles: [
+        (name: \"wall\", parts: [Polygon(vertices_m: [(2.0, 0.5), (8.0, 0.5), (8.0, 1.5), (2.0, 1.5)])]),
+    ],
+)";
+
+#[test]
+fn obstacles_push_agents_away() {
+    let scene = match Scene::from_str(WALL_SCENE, Path::new("wall.ron"), 0.25) {
+        Ok(s) => s,
+        Err(e) => panic!("{e}"),
+    };
+    let p = MoveParams::default();
+    // Eq. 9 directly: an agent 0.3 m below the wall is pushed down (−y).
+    let mut acc = [Vec2::zeros()];
+    social::obstacles(&scene, 0.0, &[Vec2::new(5.0, 0.2)], &[1.0], &p, &mut acc);
+    let want = p.obstacle_a_m_s2 * (-0.3 / p.repulsion_b_m).exp();
+    assert!(
+        acc[0].x.abs() < 1e-12 && (acc[0].y + want).abs() < 1e-12,
+        "{acc:?}"
+    );
+    // Walking along the wall: farther from it with the scene than without.
+    let (s, t) = (Vec2::new(0.0, 0.1), Vec2::new(10.0, 0.1));
+    let lowest = |with_scene: bool| {
+        let mut run = TransformRun::new(&plan(&[s], &[t], vec![0]), &p, 4);
+        let (mut pos, mut vel) = ([s], [Vec2::zeros()]);
+        let mut y: f64 = f64::INFINITY;
+        for _ in 0..300 {
+            let sc = with_scene.then_some((&scene, run.elapsed_s()));
+            let _ = run.step(&mut pos, &mut vel, DT_S, sc);
+            if (2.0..8.0).contains(&pos[0].x) {
+                y = y.min(0.5 - pos[0].y);
+            }
+        }
+        y
+    };
+    let (with, without) = (lowest(true), lowest(false));
+    assert!(
+        with > without + 0.02,
+        "clearance with {with}, without {without}"
+    );
+    assert!(with >= p.radius_m - 1e-9);
+}
+
+#[test]
+fn an_agent_inside_an_obstacle_is_put_out_of_it() {
+    let scene = match Scene::from_str(WALL_SCENE, Path::new("wall.ron"), 0.25) {
+        Ok(s) => s,
+        Err(e) => panic!("{e}"),
+    };
+    let p = MoveParams::default();
+    let (s, t) = (Vec2::new(5.0, 1.2), Vec2::new(5.0, 4.0));
+    let mut run = TransformRun::new(&plan(&[s], &[t], vec![0]), &p, 4);
+    let (mut pos, mut vel) = ([s], [Vec2::zeros()]);
+    let _ = run.step(&mut pos, &mut vel, DT_S, Some((&scene, 0.0)));
+    assert!(
+        scene.signed_distance(pos[0], 0.0) >= p.radius_m - 1e-6,
+        "{pos:?}"
+    );
+}
+
+/// Mean squared divergence of the moving agents' unit headings from their
+/// `R × R` bin's mean heading.
+fn bin_divergence(pos: &[Vec2], vel: &[Vec2], r: f64) -> f64 {
+    let key = |x: Vec2| ((x.x / r).floor() as i64, (x.y / r).floor() as i64);
+    let moving: Vec<usize> = (0..pos.len()).filter(|&i| vel[i].norm() > 1e-6).collect();
+    let mut total = 0.0;
+    for &i in &moving {
+        let mates: Vec<Vec2> = moving
+            .iter()
+            .filter(|&&j| key(pos[j]) == key(pos[i]))
+            .map(|&j| vel[j].normalize())
+            .collect();
+        let mean: Vec2 = mates.iter().sum::<Vec2>() / mates.len() as f64;
+        total += (vel[i].normalize() - mean).norm_squared();
+    }
+    total / moving.len().max(1) as f64
+}
+
+#[test]
+fn feedback_lowers_heading_divergence_within_bins() {
+    // Interleaved agents cross: half head right-up, half right-down.
+    let n = 64;
+    let sources = lattice(n, 0.8, Vec2::zeros());
+    let targets: Vec<Vec2> = sources
+        .iter()
+        .enumerate()
+        .map(|(i, s)| s + Vec2::new(8.0, if i % 2 == 0 { 3.0 } else { -3.0 }))
+        .collect();
+    let divergence = |feedback: bool| {
+        let p = MoveParams {
+            feedback,
+            subgroup_forces: false,
+            ..MoveParams::default()
+        };
+        let mut run = TransformRun::new(&plan(&sources, &targets, vec![0; n]), &p, 9);
+        let (mut pos, mut vel) = (sources.clone(), vec![Vec2::zeros(); n]);
+        let mut d = 0.0;
+        for _ in 0..120 {
+            let _ = run.step(&mut pos, &mut vel, DT_S, None);
+            d += bin_divergence(&pos, &vel, p.bin_m);
+        }
+        d / 120.0
+    };
+    let (on, off) = (divergence(true), divergence(false));
+    assert!(
+        on < 0.9 * off,
+        "divergence with feedback {on}, without {off}"
+    );
+}
+
+#[test]
+fn a_bad_step_changes_nothing() {
+    let s = [Vec2::zeros(), Vec2::new(1.0, 0.0)];
+    let mut run = TransformRun::new(&plan(&s, &s, vec![0, 0]), &MoveParams::default(), 1);
+    let (mut pos, mut vel) = (s, [Vec2::zeros(); 2]);
+    for dt in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let _ = run.step(&mut pos, &mut vel, dt, None);
+    }
+    let _ = run.step(&mut pos[..1], &mut vel[..1], DT_S, None);
+    assert_eq!(pos, s);
+    assert_eq!(run.elapsed_s(), 0.0);
+    let _ = run.step(&mut pos, &mut vel, DT_S, None);
+    assert!(run.done());
+}
