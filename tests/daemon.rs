@@ -334,6 +334,8 @@ fn scene_config(dir: &Path, with_scene: bool, agents: u32, worker: bool) -> Path
     let text = crowdtouch::config::DEFAULT_CONFIG_RON
         .replacen("agents: 100", &format!("agents: {agents}"), 1)
         .replacen("worker: true", &format!("worker: {worker}"), 1)
+        // The checkpoint test watches the mesh switch (transforms: daemon_transforms.rs).
+        .replacen("method: transform", "method: mesh", 1)
         .replacen(
             "scene: None",
             if with_scene {

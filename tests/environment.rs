@@ -34,6 +34,9 @@ fn cfg(scene_name: &str, agents: u32, formation: Rect, mesh: u32) -> Config {
     c.mesh.cols = mesh;
     c.mesh.rows = mesh;
     c.set_loaded_scene(Some(scene(scene_name)));
+    // These are the mesh switch's tests (mesh-formation-control section 7.3);
+    // transforms have theirs in `engine_transforms.rs`.
+    c.formations.method = crowdtouch::vocab::FormationMethod::Mesh;
     c
 }
 
@@ -665,7 +668,7 @@ fn set_formation_mid_drag_keeps_the_drag_going() {
         .to_string();
     assert!(
         err.contains("`hexagon`")
-            && err.contains("start, square, arrow, column, line, wedge, diamond"),
+            && err.contains("start, square, arrow, column, line, wedge, diamond, circle, ring"),
         "{err}"
     );
     let topology = e.mesh_view().topology;

@@ -197,6 +197,42 @@ fn a_steady_control_tick_does_not_allocate() {
     assert_eq!(n, 0, "480 control ticks allocated {n} times");
 }
 
+/// A formation transform driving the agents (social forces, subgroups, feedback,
+/// measures, the progress message) allocates nothing in a steady tick: the run
+/// reuses its buffers and progress messages are recycled.
+#[test]
+fn a_tick_of_a_running_transform_does_not_allocate() {
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = 300;
+    let mut engine = Engine::new(&cfg, None, true);
+    drop(engine.tick(Micros(0)));
+    engine.clear_events();
+    // Prepared in the tick (as in replays): a one-off, not counted.
+    engine.set_formation("arrow", Micros(1)).unwrap();
+    assert!(engine.transform_running());
+    for k in 1..40 {
+        let out = engine.tick(Micros(k * 8_333));
+        assert!(out.transform.is_some());
+        drop(out);
+        engine.clear_events();
+    }
+    let mut progressed = 0;
+    let n = allocations(|| {
+        for k in 40..160 {
+            let out = engine.tick(Micros(k * 8_333));
+            assert!(out.events.is_empty() && out.transform_end.is_none());
+            progressed += usize::from(out.transform.is_some());
+            drop(out);
+            engine.clear_events();
+        }
+    });
+    assert_eq!(
+        progressed, 120,
+        "the transform ran through the counted ticks"
+    );
+    assert_eq!(n, 0, "120 transform ticks allocated {n} times");
+}
+
 /// After a fast one-finger drag lifts, the crowd goes on through the rest of the
 /// drag's check points: those ticks allocate nothing either.
 #[test]

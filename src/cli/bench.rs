@@ -120,6 +120,11 @@ pub struct BenchArgs {
     /// formation thread while the latency is measured.
     #[arg(long)]
     gestures: bool,
+    /// End-to-end workload: formation transforms to this formation and back to
+    /// `start`, one after the other, while touches are replayed in open space
+    /// (the `--gestures` input, recognition off): the latency during transforms.
+    #[arg(long)]
+    transform: Option<String>,
     /// Fast-marching workload: cells per side of the square grid.
     #[arg(long, default_value_t = 256)]
     grid: usize,
@@ -253,6 +258,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             format: a.format,
             fields: a.fields,
             gestures: a.gestures,
+            transform: a.transform.as_deref(),
         })?);
     }
     if a.json {

@@ -120,6 +120,17 @@ pub const FIELDS: &[FieldClass] = &[
     ),
     live("formations.lambda", "from the next switch"),
     live("formations.shapes", "from the next switch"),
+    live("formations.method", "from the next formation request"),
+    live("formations.cost", "from the next transform"),
+    live(
+        "formations.transform",
+        "from the next transform; a running one keeps its settings",
+    ),
+    live(
+        "formations.subgroups",
+        "from the next transform; a running one keeps its subgroups",
+    ),
+    live("formations.gestures", "from the next recognised gesture"),
     live(
         "gestures.enabled",
         "from the next gesture; a motion playing plays to its end",

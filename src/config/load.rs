@@ -87,6 +87,12 @@ impl Config {
                 }
             }
         }
+        if problems.is_empty() {
+            problems.extend(super::transform::check_gesture_formations(
+                &cfg.formations.gestures,
+                &cfg.library.known_names(),
+            ));
+        }
         if problems.is_empty() && cfg.gestures.enabled {
             match load_recogniser(cfg.gestures.library.as_deref(), cfg.gestures.band) {
                 Ok(r) => cfg.recogniser = Some(r),
@@ -319,7 +325,7 @@ mod tests {
         // shape can use it in a scene.
         let bare: String = {
             let start = DEFAULT_CONFIG_RON.find("    formations: (").unwrap();
-            let end = start + DEFAULT_CONFIG_RON[start..].find("    ),\n").unwrap() + 7;
+            let end = start + DEFAULT_CONFIG_RON[start..].find("\n    ),\n").unwrap() + 8;
             format!(
                 "{}{}",
                 &DEFAULT_CONFIG_RON[..start],

@@ -22,6 +22,9 @@ mod inputs;
 mod live;
 mod load;
 mod model;
+mod transform;
+#[cfg(test)]
+mod transform_tests;
 mod validate;
 
 pub use edit::set_calibration_matrix;
@@ -43,5 +46,9 @@ pub use model::{
     AssignmentConfig, AssignmentCost, BudgetsConfig, Config, ControlsConfig, CrowdConfig,
     FormationsConfig, LogLevel, MeshConfig, PipelineConfig, RealtimeConfig, SocketConfig,
     SurfaceConfig, CONFIG_VERSION, DEFAULT_FIELD_STEP_M,
+};
+pub use transform::{
+    GestureFormation, SubgroupsConfig, TransformCost, TransformMoveConfig, DEFAULT_METHOD,
+    MAX_DESIRED_SPEED_M_S,
 };
 pub use validate::MAX_AGENTS;

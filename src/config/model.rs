@@ -3,10 +3,14 @@
 
 use super::gestures::GesturesConfig;
 use super::inputs::InputConfig;
+use super::transform::{
+    GestureFormation, SubgroupsConfig, TransformCost, TransformMoveConfig, DEFAULT_METHOD,
+};
 use crate::crowd::environment::Scene;
 use crate::crowd::formation::{FormationDef, FormationLibrary, DEFAULT_LAMBDA};
 use crate::geom::Rect;
 use crate::gesture::recognise::Recogniser;
+use crate::vocab::FormationMethod;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -171,6 +175,24 @@ pub struct FormationsConfig {
     /// `wedge`, `diamond`); one with a shipped name replaces it.
     #[serde(default)]
     pub shapes: Vec<FormationDef>,
+    /// How a formation request (a checkpoint, `set_formation` without a method, a
+    /// mapped gesture) is carried out: `transform`, the paper's full model, or
+    /// `mesh`, the mesh switch (mesh-formation-control section 7.3).
+    #[serde(default = "default_method")]
+    pub method: FormationMethod,
+    /// How a transform pairs agents with targets (least effort uses `lambda`).
+    #[serde(default)]
+    pub cost: TransformCost,
+    /// How a transform moves the agents.
+    #[serde(default)]
+    pub transform: TransformMoveConfig,
+    /// Subgroups of a transform (affinity propagation).
+    #[serde(default)]
+    pub subgroups: SubgroupsConfig,
+    /// Recognised gesture classes that start a transform to a formation instead of
+    /// their crowd motion.
+    #[serde(default)]
+    pub gestures: Vec<GestureFormation>,
 }
 
 impl Default for FormationsConfig {
@@ -178,8 +200,17 @@ impl Default for FormationsConfig {
         FormationsConfig {
             lambda: DEFAULT_LAMBDA,
             shapes: Vec::new(),
+            method: DEFAULT_METHOD,
+            cost: TransformCost::default(),
+            transform: TransformMoveConfig::default(),
+            subgroups: SubgroupsConfig::default(),
+            gestures: Vec::new(),
         }
     }
+}
+
+fn default_method() -> FormationMethod {
+    DEFAULT_METHOD
 }
 
 fn default_lambda() -> f64 {

@@ -356,6 +356,8 @@ impl Config {
             "formations.lambda",
             format!("least-effort weight must be in 0 ..= 1, got {l}"),
         );
+        let f = &self.formations;
+        super::transform::validate_transform(&f.transform, &f.subgroups, &f.gestures, &mut p);
         let max_speed = self.crowd.max_speed_m_s;
         let max_speed = (max_speed > 0.0 && max_speed <= 50.0).then_some(max_speed);
         self.gestures.validate_into(max_speed, &mut p);

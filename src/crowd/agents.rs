@@ -70,6 +70,12 @@ impl Agents {
         &self.vel
     }
 
+    /// Positions (m) and velocities (m/s) for a mover that integrates them itself
+    /// (a formation transform, [`crate::crowd::transform::TransformRun::step`]).
+    pub fn state_mut(&mut self) -> (&mut [Vec2], &mut [Vec2]) {
+        (&mut self.pos, &mut self.vel)
+    }
+
     /// Moves every agent to `positions` and stops it (hard reset).
     pub fn teleport(&mut self, positions: &[Vec2]) {
         self.pos.clear();

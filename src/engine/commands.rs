@@ -34,7 +34,11 @@ impl Engine {
                 Ok(())
             }
             Command::SetAgentCount { count } => self.set_agent_count(*count, now),
-            Command::SetFormation { formation } => self.set_formation(formation, now),
+            Command::SetFormation {
+                formation,
+                method,
+                duration,
+            } => self.set_formation_by(formation, *method, *duration, now),
             Command::Pause => {
                 self.set_paused(true, now);
                 Ok(())
@@ -114,6 +118,7 @@ impl Engine {
             && self.segmenter.controls().is_empty()
             && self.segmenter.gestures().is_empty()
             && !self.gestures.playing()
+            && !self.transforms.busy()
             && self.direct.is_at_rest()
     }
 
@@ -126,6 +131,7 @@ impl Engine {
         self.segmenter.cancel_all(now, &mut self.seg_out);
         self.forget_switches();
         self.forget_gestures(now);
+        self.drop_transforms(crate::vocab::TransformOutcome::Dropped, now);
         if self.formation_name != START {
             self.restore_start(now);
         }
@@ -278,7 +284,13 @@ mod tests {
             .unwrap();
         assert!(resets(&next_tick(&mut e, 40_000)).is_empty());
         // Agents walking back from another formation are: it is announced, once.
-        e.set_formation("arrow", Micros(40_001)).unwrap();
+        e.set_formation_by(
+            "arrow",
+            Some(crate::vocab::FormationMethod::Mesh),
+            None,
+            Micros(40_001),
+        )
+        .unwrap();
         for k in 1..=10 {
             let _ = next_tick(&mut e, 40_000 + k * 10_000);
         }
@@ -301,7 +313,13 @@ mod tests {
     #[test]
     fn a_reset_out_of_another_formation_is_announced() {
         let mut e = engine();
-        e.set_formation("arrow", Micros(1)).unwrap();
+        e.set_formation_by(
+            "arrow",
+            Some(crate::vocab::FormationMethod::Mesh),
+            None,
+            Micros(1),
+        )
+        .unwrap();
         let _ = next_tick(&mut e, 10_000);
         assert!(!e.at_rest());
         e.command(&Command::Reset { hard: false }, Micros(10_001))

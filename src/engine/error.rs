@@ -2,6 +2,7 @@
 //! client that asked (as an `error` reply) and to the log.
 
 use crate::crowd::mesh::MeshError;
+use crate::crowd::transform::TransformError;
 
 /// Why a client command could not be applied.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -21,6 +22,15 @@ pub enum CommandError {
         name: String,
         /// The formations the config defines (`start, square, …`).
         known: String,
+    },
+    /// `set_formation`'s `duration` is not a positive number of seconds up to the
+    /// limit.
+    #[error("duration must be in (0, {max_s}] s, got {duration_s}")]
+    Duration {
+        /// Asked for (s).
+        duration_s: f64,
+        /// The longest (s).
+        max_s: f64,
     },
     /// The formation could not be laid out for the crowd (without the formation
     /// thread; with it, the failure is logged when the switch arrives).
@@ -42,6 +52,9 @@ pub enum SwitchError {
     /// The shape could not be meshed for the crowd.
     #[error(transparent)]
     Mesh(#[from] MeshError),
+    /// A transform could not be prepared (targets sampled, agents paired).
+    #[error(transparent)]
+    Transform(#[from] TransformError),
 }
 
 /// A client-given name as shown in a message: at most 64 characters, `…` when cut.

@@ -229,7 +229,18 @@ impl Engine {
         synthesis: crate::crowd::motion::Synthesis,
         now: Micros,
     ) {
+        if let Some(name) = self.gesture_formation(class) {
+            // `formations.gestures` maps this class to a formation: a transform
+            // goes there instead of the gesture's motion.
+            log::info!("gesture {id}: {class} starts a transform to `{name}`");
+            let heading = self.crowd_heading();
+            let _ = self.request_transform(&name, None, None, heading, now);
+            return;
+        }
         self.cancel_gesture_motion(now);
+        if self.transforms.busy() {
+            self.drop_transforms(crate::vocab::TransformOutcome::Superseded, now);
+        }
         let points: Vec<Vec2> = synthesis
             .trajectories
             .iter()

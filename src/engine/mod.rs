@@ -12,6 +12,7 @@
 //! | `commands.rs` | client commands ([`Engine::command`]) |
 //! | `resize.rs` | a new crowd size: goal sampling prepared off the tick ([`ResizeRequest`](crate::crowd::control::ResizeRequest)), installed between ticks |
 //! | `switch.rs` | formation switches at checkpoints and on request |
+//! | `transform.rs`, `transform_state.rs` | formation transforms (formation-transform): prepared off the tick, run every tick, direct control after |
 //! | `params.rs` | the config turned into the crowd's and gesture's parameter structs |
 //! | `replay.rs` | replays on a virtual clock |
 //! | `error.rs` | why a command or switch was refused |
@@ -27,6 +28,8 @@ mod resize;
 mod state;
 mod switch;
 mod tick;
+mod transform;
+mod transform_state;
 
 #[cfg(test)]
 mod tests;
@@ -39,3 +42,7 @@ pub use params::{
 pub use replay::{replay_virtual, VirtualClock};
 pub use state::{Engine, EngineCounters, MAX_TICK_S, RADIUS_FIT};
 pub use tick::TickOutput;
+pub use transform::{
+    MAX_DURATION_S, MIN_DESIRED_SPEED_M_S, SAMPLE_RELAX_ITERATIONS, SAMPLE_SPACING_RADII,
+    TOUCHED_FORMATION,
+};

@@ -1,11 +1,12 @@
 //! The one place where the config becomes the parameters of the crowd, gesture and
 //! assignment code, which know nothing of the config.
 
-use crate::config::{AssignmentCost, Config};
+use crate::config::{AssignmentCost, Config, TransformCost};
 use crate::crowd::agents::AgentParams;
 use crate::crowd::assign::PointMetric;
 use crate::crowd::control::DirectParams;
 use crate::crowd::environment::{FieldParams, Planner, PlannerParams, Scene, MESH_FIELD_RANGE_M};
+use crate::crowd::transform::{ApParams, MoveParams, Mover, PairCost, Preference};
 use crate::gesture::capture::TapThresholds;
 use crate::gesture::dtw::Weights;
 use crate::gesture::knn::SearchParams;
@@ -115,4 +116,61 @@ pub(super) fn direct_params(cfg: &Config) -> DirectParams {
 /// validation refuses.
 pub(super) fn mesh_field_params(step_m: f64, margin_m: f64) -> Option<FieldParams> {
     FieldParams::new(MESH_FIELD_RANGE_M, step_m, margin_m).ok()
+}
+
+/// The pairing cost `cfg` names (least effort with `formations.lambda`).
+pub fn pair_cost(cfg: &Config) -> PairCost {
+    match cfg.formations.cost {
+        TransformCost::LeastEffort => PairCost::LeastEffort {
+            lambda: cfg.formations.lambda,
+        },
+        TransformCost::Euclidean => PairCost::Euclidean,
+        TransformCost::Manhattan => PairCost::Manhattan,
+    }
+}
+
+/// How a transform moves the agents (`formations.transform`), at agent radius
+/// `radius_m`.
+pub fn move_params(cfg: &Config, radius_m: f64) -> MoveParams {
+    let t = &cfg.formations.transform;
+    MoveParams {
+        mover: Mover::SocialForce,
+        radius_m,
+        desired_speed_m_s: t.desired_speed_m_s,
+        feedback: t.feedback,
+        subgroup_forces: t.subgroup_forces,
+        arrive_m: t.arrive_m,
+        timeout_s: t.timeout_s,
+        desired_speed_spread_m_s: t.desired_speed_spread_m_s,
+        max_speed_m_s: t.max_speed_m_s,
+        max_accel_m_s2: t.max_accel_m_s2,
+        tau_s: t.tau_s,
+        arrival_decel_m_s2: t.arrival_decel_m_s2,
+        fade_m: t.fade_m,
+        repulsion_a_m_s2: t.repulsion_a_m_s2,
+        repulsion_b_m: t.repulsion_b_m,
+        obstacle_a_m_s2: t.obstacle_a_m_s2,
+        subgroup_a_m_s2: t.subgroup_a_m_s2,
+        subgroup_b_m: t.subgroup_b_m,
+        interaction_range_m: t.interaction_range_m,
+        fluctuation_m_s2: t.fluctuation_m_s2,
+        bin_m: t.bin_m,
+        sectors: t.sectors,
+        settle_speed_m_s: t.settle_speed_m_s,
+        ..MoveParams::default()
+    }
+}
+
+/// Affinity propagation's parameters (`formations.subgroups`); `None` when
+/// subgroups are off.
+pub fn ap_params(cfg: &Config) -> Option<ApParams> {
+    let s = &cfg.formations.subgroups;
+    s.enabled.then_some(ApParams {
+        damping: s.damping,
+        max_iterations: s.max_iterations,
+        convergence_iterations: s.convergence_iterations,
+        preference: s.preference.map_or(Preference::Median, Preference::Value),
+        ring: s.ring,
+        dense_up_to: s.dense_up_to,
+    })
 }

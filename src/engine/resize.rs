@@ -119,6 +119,7 @@ impl Engine {
         });
         self.forget_switches();
         self.forget_gestures(now);
+        self.drop_transforms(crate::vocab::TransformOutcome::Dropped, now);
         self.start_samples = match p.start_samples {
             Some(s) => s,
             None => self.direct.samples().to_vec(),
@@ -239,7 +240,13 @@ mod tests {
         e.tick(Micros(0));
         e.set_agent_count(120, Micros(1)).unwrap();
         let r = e.take_resize_request().unwrap();
-        e.set_formation("square", Micros(2)).unwrap();
+        e.set_formation_by(
+            "square",
+            Some(crate::vocab::FormationMethod::Mesh),
+            None,
+            Micros(2),
+        )
+        .unwrap();
         let s = e.take_switch_request().unwrap();
         assert_eq!(s.agents.len(), 40);
         // The switch lands first: the mesh changes under the resize.
@@ -261,7 +268,13 @@ mod tests {
         // A switch asked for while a resize is out is asked for again after it.
         e.set_agent_count(80, Micros(6)).unwrap();
         let r = e.take_resize_request().unwrap();
-        e.set_formation("wedge", Micros(7)).unwrap();
+        e.set_formation_by(
+            "wedge",
+            Some(crate::vocab::FormationMethod::Mesh),
+            None,
+            Micros(7),
+        )
+        .unwrap();
         let stale = e.take_switch_request().unwrap();
         assert_eq!(stale.agents.len(), 120);
         assert!(e.apply_resize(r.prepare(Cancel::NEVER).unwrap(), Micros(8)));

@@ -122,6 +122,8 @@ pub struct Engine {
     pub(super) resize: ResizeState,
     /// Gesture commands: capture, recognition, the motion playing (`gesture.rs`).
     pub(super) gestures: super::gesture_state::Gestures,
+    /// Formation transforms: settings, the request out, the run (`transform.rs`).
+    pub(super) transforms: super::transform_state::Transforms,
 }
 
 impl Engine {
@@ -194,6 +196,7 @@ impl Engine {
             switch_outbox: None,
             resize: ResizeState::default(),
             gestures: super::gesture_state::Gestures::new(cfg, inline_assignment),
+            transforms: super::transform_state::Transforms::new(cfg, cfg.crowd.agent_radius_m),
         };
         e.segmenter
             .set_all_touches_are_gestures(cfg.gestures.all_touches_are_gestures);
@@ -292,6 +295,8 @@ impl Engine {
         self.segmenter
             .set_all_touches_are_gestures(cfg.gestures.all_touches_are_gestures);
         self.gestures.configure(cfg);
+        self.transforms.settings =
+            super::transform_state::TransformSettings::from_config(cfg, cfg.crowd.agent_radius_m);
         self.direct.set_params(direct_params(cfg));
         self.fit_radius();
         let params = planner_params(cfg);

@@ -30,30 +30,15 @@ impl Engine {
     /// not one; without the formation thread, [`CommandError::FormationNotBuilt`]
     /// when the formation could not be built.
     pub fn set_formation(&mut self, name: &str, now: Micros) -> Result<(), CommandError> {
-        if !self.formations.knows(name) {
-            return Err(CommandError::UnknownFormation {
-                name: name.to_string(),
-                known: self.formations.names_list(),
-            });
-        }
-        let n = self.agents.len().max(1) as f64;
-        let v = self.agents.velocities().iter().sum::<Vec2>() / n;
-        let heading = if v.norm() > 1e-3 {
-            v
-        } else {
-            Vec2::new(1.0, 0.0)
-        };
-        self.request_switch(name, None, heading, now)
-            .map_err(|why| CommandError::FormationNotBuilt {
-                name: name.to_string(),
-                why,
-            })
+        self.set_formation_by(name, None, None, now)
     }
 
     /// Prepares formation switches on the daemon's formation thread instead of
     /// inside the tick (the daemon; replays keep them in the tick, deterministic).
+    /// Transforms are prepared there too.
     pub fn set_switch_worker(&mut self, on: bool) {
         self.switch_worker = on;
+        self.transforms.inline = !on;
     }
 
     /// The switch request for the formation thread, if one is waiting
@@ -84,17 +69,14 @@ impl Engine {
         else {
             return;
         };
-        let target = self
-            .switch_pending
-            .as_deref()
-            .unwrap_or(&self.formation_name);
-        if scene.checkpoints()[k].formation == target {
+        if scene.checkpoints()[k].formation == self.formation_target() {
             return;
         }
         // The scene outlives the request (an `Arc` clone, no allocation).
         let scene = Arc::clone(scene);
         let cp = &scene.checkpoints()[k];
-        let _ = self.request_switch(&cp.formation, Some(&cp.name), c - prev, now);
+        let method = self.transforms.settings.method;
+        let _ = self.request_formation(&cp.formation, Some(&cp.name), method, None, c - prev, now);
     }
 
     /// Asks for formation `name` (mesh-formation-control section 7.3).
@@ -298,7 +280,7 @@ impl Engine {
 
 /// The translation that brings `poly`'s bounding box inside `world` (centred on
 /// an axis where it does not fit).
-fn shift_inside(poly: &[Vec2], world: Rect) -> Vec2 {
+pub(super) fn shift_inside(poly: &[Vec2], world: Rect) -> Vec2 {
     let mut d = Vec2::zeros();
     if poly.is_empty() {
         return d;

@@ -33,6 +33,8 @@ fn refused_commands_say_why_in_the_words_clients_read() {
         .command(
             &Command::SetFormation {
                 formation: long.clone(),
+                method: None,
+                duration: None,
             },
             Micros(0),
         )
@@ -99,7 +101,7 @@ fn a_formation_asked_for_is_switched_to_and_announced() {
     let mut e = engine(40);
     e.tick(Micros(0));
     e.clear_events();
-    e.set_formation("arrow", Micros(1)).unwrap();
+    mesh_switch(&mut e, "arrow", Micros(1)).unwrap();
     assert_eq!(e.formation(), "arrow");
     let out = e.tick(Micros(10_000));
     assert!(
@@ -112,6 +114,24 @@ fn a_formation_asked_for_is_switched_to_and_announced() {
     assert_eq!(out.snapshot.goals.len(), 40);
     // Asking for the formation the crowd is in changes nothing.
     let topology = e.mesh_view().topology;
-    e.set_formation("arrow", Micros(20_000)).unwrap();
+    mesh_switch(&mut e, "arrow", Micros(20_000)).unwrap();
     assert_eq!(e.mesh_view().topology, topology);
+}
+
+/// A formation by the mesh switch (mesh-formation-control section 7.3).
+fn mesh_switch(e: &mut Engine, name: &str, now: Micros) -> Result<(), CommandError> {
+    e.set_formation_by(name, Some(crate::vocab::FormationMethod::Mesh), None, now)
+}
+
+/// The config's transform defaults are the crowd-level defaults.
+#[test]
+fn the_configured_transform_defaults_are_the_models() {
+    use crate::crowd::transform::{ApParams, MoveParams};
+    let cfg = Config::embedded_default();
+    let radius = MoveParams::default().radius_m;
+    assert_eq!(
+        super::params::move_params(&cfg, radius),
+        MoveParams::default()
+    );
+    assert_eq!(super::params::ap_params(&cfg), Some(ApParams::default()));
 }

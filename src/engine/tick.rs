@@ -6,7 +6,7 @@ use crate::crowd::environment::steer_target;
 use crate::geom::Vec2;
 use crate::gesture::segment::{control_kind, Segment, TouchPoint};
 use crate::vocab::{AgentView, ContactFlags, ContactId, Event, MeshView, Micros, Snapshot};
-use crate::vocab::{PlanView, TouchFrame, TouchView};
+use crate::vocab::{PlanView, TouchFrame, TouchView, TransformSummary, TransformView};
 use std::sync::Arc;
 
 /// What one tick produced.
@@ -19,6 +19,10 @@ pub struct TickOutput<'a> {
     pub events: &'a [Event],
     /// The planned trajectories of a gesture motion that started this tick.
     pub plan: Option<Arc<PlanView>>,
+    /// A running transform's progress this tick.
+    pub transform: Option<Arc<TransformView>>,
+    /// A transform that ended this tick, summarised.
+    pub transform_end: Option<Arc<TransformSummary>>,
 }
 
 impl Engine {
@@ -42,7 +46,7 @@ impl Engine {
             };
             let down = c.flags.contains(ContactFlags::DOWN);
             let on_crowd = down
-                && if self.gestures.playing() {
+                && if self.gestures.playing() || self.transforms.active() {
                     self.near_agent(world)
                 } else {
                     self.direct.hits(world, self.grab_radius_m)
@@ -52,6 +56,10 @@ impl Engine {
             if on_crowd && self.gestures.playing() && !self.segmenter.all_touches_are_gestures() {
                 // The person takes the crowd in hand: the motion stops where it is.
                 self.cancel_gesture_motion(t);
+            }
+            if on_crowd && !self.segmenter.all_touches_are_gestures() {
+                // The same during a transform: direct control from where they are.
+                self.touch_transform(t);
             }
             if c.flags.ended() {
                 self.touches.retain(|v| v.id != c.id.0);
@@ -84,6 +92,7 @@ impl Engine {
         waypoints: &[Vec2],
     ) -> bool {
         if generation != self.generation
+            || self.transforms.active()
             || goal_of.len() != self.agents.len()
             || seq < self.assignment_seq
         {
@@ -139,8 +148,11 @@ impl Engine {
                 );
             }
         }
+        self.transforms.view = None;
         if self.step_gesture_motion(dt, now) {
             // A gesture's crowd motion moves the agents.
+        } else if self.step_transform(dt, now) {
+            // A formation transform moves the agents.
         } else if !self.paused {
             if self.scene.is_some() {
                 self.step_in_scene(dt);
@@ -197,7 +209,10 @@ impl Engine {
                     .map(|((&pos, &vel), &goal)| AgentView { pos, vel, goal }),
             );
             s.goals.clear();
-            s.goals.extend_from_slice(self.direct.goals());
+            match self.transform_goals() {
+                Some(targets) => s.goals.extend_from_slice(targets),
+                None => s.goals.extend_from_slice(self.direct.goals()),
+            }
             s.assignment_seq = self.assignment_seq;
             s.touches.clear();
             s.touches.extend_from_slice(&self.touches);
@@ -209,7 +224,9 @@ impl Engine {
         self.counters.ticks += 1;
         // Inline assignment: solved on this tick's state, used from the next tick.
         // (The error's text is formed only on a failure, which is logged.)
+        // While a transform drives the agents, its pairing is not overwritten.
         let result = match (&mut self.planner, &mut self.inline) {
+            _ if self.transforms.active() => None,
             (Some(p), _) => Some(
                 p.plan(
                     self.agents.positions(),
@@ -250,6 +267,8 @@ impl Engine {
             snapshot: snap,
             mesh,
             plan: self.take_plan(),
+            transform: self.transforms.view.take(),
+            transform_end: self.transforms.ended.take(),
             events: &self.events,
         }
     }

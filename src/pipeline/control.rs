@@ -8,7 +8,9 @@ use crate::crowd::environment::Planner;
 use crate::engine::Engine;
 use crate::publish::{Outgoing, Outputs};
 use crate::rt::monotonic_now;
-use crate::vocab::{ClientId, Command, CommandRequest, Event, Micros, TouchFrame};
+use crate::vocab::{
+    ClientId, Command, CommandRequest, Event, Micros, TouchFrame, TransformSummary,
+};
 use crossbeam_channel::{never, select, Receiver, Sender, TryRecvError, TrySendError};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
@@ -28,6 +30,11 @@ pub const ABANDON_BUDGET_US: u64 = 50_000;
 /// Budget of a gesture command on the worker: recognition, blending, synthesis
 /// and assignment (µs; issue figure: 20 ms at 1,000 agents).
 pub const GESTURE_BUDGET_US: u64 = 20_000;
+
+/// Budget of preparing a formation transform on the formation thread: sampling,
+/// triangulations, pairing and subgroups (µs; issue 16 figure: 300 ms at 2,000
+/// agents).
+pub const TRANSFORM_PREPARE_BUDGET_US: u64 = 300_000;
 
 /// The control thread's figures for one stats interval.
 #[derive(Clone, Debug, Default)]
@@ -52,6 +59,10 @@ pub struct ControlStats {
     pub formation_switches: u64,
     /// Messages to the publisher dropped because its queue was full.
     pub publish_overflow: u64,
+    /// Formation transforms started since start.
+    pub transforms: u64,
+    /// The last transform that ended, summarised.
+    pub last_transform: Option<TransformSummary>,
 }
 
 /// A reload on its way to the control thread: the config, and what was prepared
@@ -92,6 +103,8 @@ pub(super) struct ControlLoop {
     resize_out: Option<FormationJob>,
     /// Gesture work the formation thread had no room for yet.
     gesture_out: Option<FormationJob>,
+    /// A transform (or the mesh after one) the formation thread had no room for yet.
+    transform_out: Option<FormationJob>,
     /// `set_agent_count` commands acknowledged once their resize is applied.
     resize_waiters: Vec<(ClientId, serde_json::Value)>,
     /// What the workers poll to give up stale jobs.
@@ -102,6 +115,7 @@ pub(super) struct ControlLoop {
     t_assign: StageTimer,
     t_abandon: StageTimer,
     t_gesture: StageTimer,
+    t_transform: StageTimer,
     last_stats: Micros,
     last_gesture: Option<String>,
     publish_overflow: u64,
@@ -137,6 +151,7 @@ impl ControlLoop {
             switch_out: None,
             resize_out: None,
             gesture_out: None,
+            transform_out: None,
             resize_waiters: Vec::with_capacity(MAX_RESIZE_WAITERS),
             fresh,
             t_input: StageTimer::new("input", b.input_us),
@@ -145,6 +160,7 @@ impl ControlLoop {
             t_assign: StageTimer::new("assignment", b.assignment_us),
             t_abandon: StageTimer::new("abandon", ABANDON_BUDGET_US),
             t_gesture: StageTimer::new("gesture", GESTURE_BUDGET_US),
+            t_transform: StageTimer::new("transform_prepare", TRANSFORM_PREPARE_BUDGET_US),
             last_stats: monotonic_now(),
             last_gesture: None,
             publish_overflow: 0,
@@ -209,6 +225,7 @@ impl ControlLoop {
             self.engine.generation(),
             self.engine.switch_epoch(),
             self.engine.resize_ticket(),
+            self.engine.transform_epoch(),
         );
     }
 
@@ -341,6 +358,12 @@ impl ControlLoop {
                 }
                 FormationDone::Remesh(p) => self.engine.apply_remesh(*p, now),
                 FormationDone::Window(p) => self.engine.apply_window(*p, now),
+                FormationDone::Transform(p, us) => {
+                    self.t_transform.record(us);
+                    // One that could not be prepared is logged and counted by the engine.
+                    let _ = self.engine.apply_transform(*p, now);
+                }
+                FormationDone::TransformRemesh(p) => self.engine.apply_transform_remesh(*p, now),
                 FormationDone::Abandoned(us) => {
                     self.t_abandon.record(us);
                 }
@@ -350,6 +373,8 @@ impl ControlLoop {
         let snapshot = out.snapshot;
         let mesh = out.mesh;
         let plan = out.plan;
+        let transform = out.transform;
+        let transform_end = out.transform_end;
         let mut describe = None;
         let events: Vec<Arc<Event>> = out.events.iter().cloned().map(Arc::new).collect();
         for e in &events {
@@ -370,6 +395,12 @@ impl ControlLoop {
         if let Some(p) = plan {
             self.send(Outgoing::Plan(p));
         }
+        if let Some(t) = transform {
+            self.send(Outgoing::Transform(t));
+        }
+        if let Some(t) = transform_end {
+            self.send(Outgoing::TransformEnd(t));
+        }
         self.send(Outgoing::Snapshot(snapshot));
         // What is current goes out before any job does: a worker that takes a job
         // sees it as current unless something superseded it since.
@@ -388,7 +419,18 @@ impl ControlLoop {
                 .take_gesture_job()
                 .map(|j| FormationJob::Gesture(Box::new(j)));
         }
+        // A newer transform request replaces one still waiting here (the mesh after
+        // a run is asked for after its run's request was taken).
+        if let Some(r) = self.engine.take_transform_request() {
+            self.transform_out = Some(FormationJob::Transform(Box::new(r)));
+        } else if self.transform_out.is_none() {
+            self.transform_out = self
+                .engine
+                .take_transform_remesh()
+                .map(|r| FormationJob::TransformRemesh(Box::new(r)));
+        }
         for slot in [
+            &mut self.transform_out,
             &mut self.gesture_out,
             &mut self.switch_out,
             &mut self.resize_out,
@@ -399,7 +441,8 @@ impl ControlLoop {
                 }
             }
         }
-        if self.worker {
+        // While a transform drives the agents its pairing is theirs: no solve.
+        if self.worker && !self.engine.transform_running() {
             if let Some(mut job) = self.idle_job.take() {
                 job.generation = self.engine.generation();
                 job.seq = self.engine.seq();
@@ -439,6 +482,7 @@ impl ControlLoop {
                     &mut self.t_assign,
                     &mut self.t_abandon,
                     &mut self.t_gesture,
+                    &mut self.t_transform,
                 ]
                 .into_iter()
                 .map(|t| {
@@ -455,6 +499,8 @@ impl ControlLoop {
                 formation: self.engine.formation().to_string(),
                 formation_switches: c.formation_switches,
                 publish_overflow: self.publish_overflow,
+                transforms: self.engine.transforms_started(),
+                last_transform: self.engine.last_transform().map(|s| (**s).clone()),
             };
             let _ = self.ch.stats.try_send(cs);
         }

@@ -433,6 +433,8 @@ impl Daemon {
             last_gesture: cs.last_gesture,
             formation: cs.formation,
             formation_switches: cs.formation_switches,
+            transforms: cs.transforms,
+            last_transform: cs.last_transform,
             restart_pending: self.restart_pending.clone(),
         });
         self.out.send(Outgoing::Stats(Arc::clone(&report)));

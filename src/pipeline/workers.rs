@@ -10,8 +10,9 @@ use crate::crowd::assign::{Assigner, Cancel, PointMetric};
 use crate::crowd::control::{PreparedResize, PreparedSwitch, ResizeRequest, SwitchRequest};
 use crate::crowd::environment::{Planner, PlannerParams, Scene};
 use crate::crowd::motion::{
-    GestureJob, PreparedGesture, PreparedRemesh, PreparedWindow, Synthesiser,
+    GestureJob, PreparedGesture, PreparedRemesh, PreparedWindow, RemeshRequest, Synthesiser,
 };
+use crate::crowd::transform::{PreparedTransform, TransformRequest};
 use crate::geom::Vec2;
 use crate::gesture::continuous::WindowBuffers;
 use crate::gesture::knn::Searcher;
@@ -32,6 +33,8 @@ pub(super) struct Freshness {
     switch_epoch: AtomicU64,
     /// The engine's resize ticket: a resize request of another is stale.
     resize_ticket: AtomicU64,
+    /// The engine's transform epoch: a transform request of another is stale.
+    transform_epoch: AtomicU64,
     /// When one of the three last changed (µs, CLOCK_MONOTONIC): the start of an
     /// abandoned job's abandonment latency.
     changed_us: AtomicU64,
@@ -41,11 +44,20 @@ pub(super) struct Freshness {
 
 impl Freshness {
     /// Stores what is current; notes the time when something changed.
-    pub(super) fn update(&self, generation: u64, switch_epoch: u64, resize_ticket: u64) {
+    pub(super) fn update(
+        &self,
+        generation: u64,
+        switch_epoch: u64,
+        resize_ticket: u64,
+        transform_epoch: u64,
+    ) {
         let g = self.generation.swap(generation, Ordering::Relaxed);
         let s = self.switch_epoch.swap(switch_epoch, Ordering::Relaxed);
         let r = self.resize_ticket.swap(resize_ticket, Ordering::Relaxed);
-        if (g, s, r) != (generation, switch_epoch, resize_ticket) {
+        let t = self
+            .transform_epoch
+            .swap(transform_epoch, Ordering::Relaxed);
+        if (g, s, r, t) != (generation, switch_epoch, resize_ticket, transform_epoch) {
             self.changed_us.store(monotonic_now().0, Ordering::Relaxed);
         }
     }
@@ -202,6 +214,10 @@ pub(super) enum FormationJob {
     Resize(Box<ResizeRequest>),
     /// A gesture to recognise and play, or a mesh to rebuild after its motion.
     Gesture(Box<GestureJob>),
+    /// A formation transform to prepare: targets, pairing, subgroups.
+    Transform(Box<TransformRequest>),
+    /// The direct-control mesh to rebuild after a transform.
+    TransformRemesh(Box<RemeshRequest>),
 }
 
 /// What the formation thread hands back.
@@ -217,6 +233,10 @@ pub(super) enum FormationDone {
     Remesh(Box<PreparedRemesh>),
     /// A live gesture's window recognised (continuous recognition).
     Window(Box<PreparedWindow>),
+    /// A prepared transform, with the µs it took.
+    Transform(Box<PreparedTransform>, u64),
+    /// The mesh rebuilt after a transform.
+    TransformRemesh(Box<PreparedRemesh>),
     /// A job given up because a newer one superseded it: µs from the change to the
     /// preparation giving up.
     Abandoned(u64),
@@ -260,6 +280,23 @@ pub(super) fn formation_worker(
                     .then(|| r.prepare(Cancel::new(&stale)))
                     .flatten()
                     .map(|p| FormationDone::Resize(Box::new(p)))
+            }
+            FormationJob::Transform(r) => {
+                let epoch = r.epoch;
+                let stale =
+                    || fresh.stopping() || fresh.transform_epoch.load(Ordering::Relaxed) != epoch;
+                let start = monotonic_now();
+                (!stale())
+                    .then(|| r.prepare(Cancel::new(&stale)))
+                    .flatten()
+                    .map(|p| {
+                        let us = monotonic_now().saturating_since(start).0;
+                        FormationDone::Transform(Box::new(p), us)
+                    })
+            }
+            // Told apart by the transform epoch when stale; a mesh is milliseconds.
+            FormationJob::TransformRemesh(r) => {
+                Some(FormationDone::TransformRemesh(Box::new(r.prepare())))
             }
             // Gesture work is short (milliseconds) and not cancelled; a result
             // made stale meanwhile is told apart by the engine's gesture epoch.
@@ -313,7 +350,7 @@ mod tests {
     #[test]
     fn the_worker_gives_up_stale_jobs_and_ends_on_stop() {
         let fresh = Arc::new(Freshness::default());
-        fresh.update(1, 0, 0);
+        fresh.update(1, 0, 0, 0);
         let (job_tx, job_rx) = bounded(1);
         let (res_tx, res_rx) = bounded(1);
         let f = Arc::clone(&fresh);
@@ -324,7 +361,7 @@ mod tests {
         assert!(done.ok && !done.abandoned);
         assert_eq!(done.goal_of.len(), 300);
         // The crowd changes before the next job is solved.
-        fresh.update(2, 0, 0);
+        fresh.update(2, 0, 0, 0);
         job_tx.send(job(300, 1)).unwrap();
         let done = res_rx.recv().unwrap();
         assert!(
@@ -348,7 +385,7 @@ mod tests {
         use crate::geom::Rect;
         use std::time::Duration;
         let fresh = Arc::new(Freshness::default());
-        fresh.update(0, 0, 1);
+        fresh.update(0, 0, 1, 0);
         let (tx, rx) = bounded(2);
         let (done_tx, done_rx) = bounded(2);
         let f = Arc::clone(&fresh);
@@ -372,7 +409,7 @@ mod tests {
         };
         tx.send(resize(20_000, 1)).unwrap();
         std::thread::sleep(Duration::from_millis(50));
-        fresh.update(0, 0, 2);
+        fresh.update(0, 0, 2, 0);
         // Generous: a preparation that went on to the end would take far longer.
         match done_rx.recv_timeout(Duration::from_secs(10)) {
             Ok(FormationDone::Abandoned(_)) => {}

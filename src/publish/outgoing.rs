@@ -1,6 +1,8 @@
 //! What the control thread hands to the outputs.
 
-use crate::vocab::{ClientId, Event, MeshView, PlanView, Snapshot, StatsReport};
+use crate::vocab::{
+    ClientId, Event, MeshView, PlanView, Snapshot, StatsReport, TransformSummary, TransformView,
+};
 use std::sync::Arc;
 
 /// What the control thread sends to the publisher thread.
@@ -15,6 +17,12 @@ pub enum Outgoing {
     /// Every agent's planned trajectory (a gesture's motion, or a library motion
     /// shown by `library collect`): to clients subscribed to `plan` only.
     Plan(Arc<PlanView>),
+    /// A running formation transform's progress (every tick): to clients
+    /// subscribed to `transform` only.
+    Transform(Arc<TransformView>),
+    /// A formation transform ended, summarised: to clients subscribed to
+    /// `transform` only.
+    TransformEnd(Arc<TransformSummary>),
     /// Periodic stats.
     Stats(Arc<StatsReport>),
     /// The answer to a command: `Ok` becomes `ack`, `Err` becomes `error`.

@@ -22,11 +22,42 @@ pub enum Command {
     SetFormation {
         /// Formation name.
         formation: String,
+        /// How: the config's `formations.method` when not given.
+        #[serde(default)]
+        method: Option<FormationMethod>,
+        /// About how long a transform takes (s): its desired walking speed is set
+        /// from it. Not given: `formations.transform.desired_speed_m_s`.
+        #[serde(default)]
+        duration: Option<f64>,
     },
     /// Freeze agents.
     Pause,
     /// Unfreeze agents.
     Resume,
+}
+
+/// How the crowd goes into a new formation.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FormationMethod {
+    /// The formation transform of formation-transform (Xu et al. 2015): targets
+    /// sampled in the shape, least-effort pairing, social forces with subgroups and
+    /// mutual-information feedback; direct control resumes on the new shape when
+    /// every agent arrived.
+    Transform,
+    /// The mesh switch (mesh-formation-control section 7.3): the new shape's mesh
+    /// replaces the old one at once and the agents follow its goals.
+    Mesh,
+}
+
+impl FormationMethod {
+    /// The name on the wire and in files.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            FormationMethod::Transform => "transform",
+            FormationMethod::Mesh => "mesh",
+        }
+    }
 }
 
 /// Identifies a connected client.

@@ -3,7 +3,8 @@
 //! Time ([`Micros`] on CLOCK_MONOTONIC), touch frames as sources produce them, motion
 //! types, and what the control thread publishes (snapshots, meshes, events, stats) or
 //! takes from clients (commands), and what a recognised gesture makes the crowd do
-//! (recognitions, planned trajectories). Nothing here does work: `input` fills touch frames,
+//! (recognitions, planned trajectories), and a formation transform's progress and
+//! summary. Nothing here does work: `input` fills touch frames,
 //! `gesture` and `crowd` read them, `engine` fills snapshots, `publish` encodes them.
 //! It depends on [`geom`](crate::geom) only, so every other module may use it.
 
@@ -16,8 +17,9 @@ mod snapshot;
 mod stats;
 mod time;
 mod touch;
+mod transform;
 
-pub use command::{ClientId, Command, CommandRequest};
+pub use command::{ClientId, Command, CommandRequest, FormationMethod};
 pub use device::parse_vendor_product;
 pub use event::{ControlKind, DeviceState, Event};
 pub use motion::MotionType;
@@ -26,3 +28,4 @@ pub use snapshot::{AgentView, MeshView, Snapshot, TouchView};
 pub use stats::{RestartPending, StageStats, StatsReport};
 pub use time::Micros;
 pub use touch::{Contact, ContactFlags, ContactId, FrameFull, TouchFrame, MAX_CONTACTS};
+pub use transform::{TransformMeasures, TransformOutcome, TransformSummary, TransformView};

@@ -62,6 +62,12 @@ pub struct StatsReport {
     /// Formation switches at scene checkpoints since start.
     #[serde(default)]
     pub formation_switches: u64,
+    /// Formation transforms started since start.
+    #[serde(default)]
+    pub transforms: u64,
+    /// The last transform that ended, summarised.
+    #[serde(default)]
+    pub last_transform: Option<super::transform::TransformSummary>,
     /// Config fields changed in the file by a reload that the daemon keeps at their
     /// running values until it restarts (empty when the file and the daemon agree).
     #[serde(default)]

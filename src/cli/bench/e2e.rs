@@ -2,7 +2,9 @@
 //! 120 Hz to one socket client reading in the format and field set asked for; with
 //! `--gestures`, replaying gesture commands drawn in open space instead
 //! ([`super::open_space`]), so that the latency is measured while gestures are
-//! recognised and their motions synthesised on the formation thread.
+//! recognised and their motions synthesised on the formation thread; with
+//! `--transform NAME`, the same open-space touches (recognition off) while a
+//! second client keeps formation transforms running (to `NAME`, back to `start`).
 
 use super::{row_from_samples, row_from_stage, Row};
 use anyhow::{bail, Context, Result};
@@ -43,6 +45,100 @@ pub struct E2eRun<'a> {
     pub fields: FieldChoice,
     /// Replay generated gesture commands instead of the shipped recordings.
     pub gestures: bool,
+    /// Formation transforms to this formation and back, one after the other,
+    /// with the open-space input and recognition off.
+    pub transform: Option<&'a str>,
+}
+
+/// What the transform commander saw.
+#[derive(Default)]
+struct Commanded {
+    /// `set_formation` commands acknowledged.
+    started: u64,
+    /// `transform` progress messages read.
+    progress: u64,
+    /// Transforms that ended, by outcome.
+    outcomes: Vec<(String, u64)>,
+    /// The first refusal, if any.
+    refused: Option<String>,
+}
+
+/// Sends `set_formation` to `name` and back to `start` over `stream`, the next one
+/// when the last one ended, until the daemon closes the stream.
+fn command_transforms(stream: UnixStream, name: &str) -> Commanded {
+    let mut out = Commanded::default();
+    let Ok(mut w) = stream.try_clone() else {
+        return out;
+    };
+    let mut r = BufReader::new(stream);
+    if w.write_all(b"{\"type\":\"hello\",\"protocol\":1,\"subscribe\":[\"transform\"]}\n")
+        .is_err()
+    {
+        return out;
+    }
+    let targets = [name, "start"];
+    let mut k = 0usize;
+    let mut line = String::new();
+    let send = |w: &mut UnixStream, k: usize| {
+        let cmd = format!(
+            "{{\"type\":\"command\",\"id\":{k},\"name\":\"set_formation\",\"formation\":\"{}\",\"method\":\"transform\"}}\n",
+            targets[k % 2]
+        );
+        w.write_all(cmd.as_bytes()).is_ok()
+    };
+    let mut hellos = 0;
+    // A request that starts no transform (refused, or the formation the crowd is
+    // in) is followed by the next one after this long without progress.
+    let _ = r.get_ref().set_read_timeout(Some(Duration::from_secs(5)));
+    loop {
+        line.clear();
+        match r.read_line(&mut line) {
+            Ok(0) => return out,
+            Ok(_) => {}
+            Err(e)
+                if e.kind() == std::io::ErrorKind::WouldBlock
+                    || e.kind() == std::io::ErrorKind::TimedOut =>
+            {
+                k += 1;
+                if hellos < 2 || !send(&mut w, k) {
+                    return out;
+                }
+                continue;
+            }
+            Err(_) => return out,
+        }
+        let Ok(v) = serde_json::from_str::<serde_json::Value>(&line) else {
+            continue;
+        };
+        match v["type"].as_str() {
+            Some("hello") => {
+                hellos += 1;
+                if hellos == 2 && !send(&mut w, k) {
+                    return out;
+                }
+            }
+            Some("ack") => out.started += 1,
+            Some("error") => {
+                out.refused
+                    .get_or_insert_with(|| v["message"].as_str().unwrap_or("").to_string());
+            }
+            Some("transform") => out.progress += 1,
+            Some("transform_end") => {
+                let o = v["outcome"].as_str().unwrap_or("?").to_string();
+                match out.outcomes.iter_mut().find(|(n, _)| *n == o) {
+                    Some((_, c)) => *c += 1,
+                    None => out.outcomes.push((o, 1)),
+                }
+                if v["outcome"] != "superseded" {
+                    k += 1;
+                    if !send(&mut w, k) {
+                        return out;
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
 }
 
 /// What the client read.
@@ -175,7 +271,7 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
         "crowdtouch-bench-gestures-{}.jsonl",
         std::process::id()
     ));
-    let open_space = if run.gestures {
+    let open_space = if run.gestures || run.transform.is_some() {
         let glass = cfg.surface.size_mm.unwrap_or((1210.0, 680.0));
         let written = super::open_space::write_recording(glass, &recording, 0x15)?;
         cfg.inputs = vec![crowdtouch::config::InputConfig::Replay {
@@ -188,6 +284,12 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
     } else {
         None
     };
+    if run.transform.is_some() {
+        // Touches stay gestures (not recognised), even one that lands near an
+        // agent: the transforms run undisturbed while their input is timed.
+        cfg.gestures.enabled = false;
+        cfg.gestures.all_touches_are_gestures = true;
+    }
     cfg.log_level = crowdtouch::config::LogLevel::Error;
     let sock = std::env::temp_dir().join(format!("crowdtouch-bench-{}.sock", std::process::id()));
     let sources = sources_from_config(&cfg);
@@ -208,6 +310,14 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
         .context("sending the bench client's hello")?;
     let format = run.format;
     let reader = std::thread::spawn(move || read_stream(stream, format));
+    let commander = match run.transform {
+        Some(name) => {
+            let s = UnixStream::connect(&sock).context("connecting the transform commander")?;
+            let name = name.to_string();
+            Some(std::thread::spawn(move || command_transforms(s, &name)))
+        }
+        None => None,
+    };
     let start = monotonic_now();
     let until = start + Micros::from_secs_f64(run.seconds);
     while monotonic_now() < until {
@@ -224,6 +334,10 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
     let rss = crowdtouch::pipeline::timing::rss_bytes().unwrap_or(0);
     daemon.shutdown();
     let read = reader.join().unwrap_or_default();
+    let commanded = commander.map(|c| c.join().unwrap_or_default());
+    if let Some(why) = commanded.as_ref().and_then(|c| c.refused.as_ref()) {
+        bail!("set_formation was refused: {why}");
+    }
     let find = |n: &str| totals.iter().find(|s| s.stage == n);
     let assign = find("assignment");
     let refresh = assign.map(|s| s.count).unwrap_or(0) as f64 / elapsed;
@@ -246,12 +360,26 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
     } else {
         String::new()
     };
-    let input_note = match &open_space {
-        Some(o) => format!(
+    let input_note = match (&open_space, &commanded) {
+        (Some(o), Some(c)) => format!(
+            "{} open-space touches (recognition off), {:.1} s looped, during transforms to `{}` and back: {} started, {} progress ticks ({:.0} % of snapshots read), ended {}; ",
+            o.gestures,
+            o.seconds,
+            run.transform.unwrap_or(""),
+            c.started,
+            c.progress,
+            100.0 * c.progress as f64 / read.snapshots.max(1) as f64,
+            c.outcomes
+                .iter()
+                .map(|(n, k)| format!("{k} {n}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        (Some(o), None) => format!(
             "{} generated gesture commands in open space, two people, {:.1} s looped; ",
             o.gestures, o.seconds
         ),
-        None => String::new(),
+        (None, _) => String::new(),
     };
     let abandon = find("abandon")
         .map(|s| format!(", {} stale jobs given up", s.count))
@@ -298,6 +426,13 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
             &format!("gesture {agents} agents"),
             Some(g),
             "formation thread: recognise + blend + synthesise + assign, per gesture command".into(),
+        ));
+    }
+    if let Some(t) = find("transform_prepare").filter(|t| t.count > 0) {
+        rows.push(row_from_stage(
+            &format!("transform prepare {agents} agents"),
+            Some(t),
+            "formation thread: sample + pair + subgroups, per transform".into(),
         ));
     }
     Ok(rows)

@@ -113,6 +113,23 @@ impl Grid {
         radius: f64,
         mut f: impl FnMut(usize, usize, f64, Vec2),
     ) {
+        self.for_each_pair_d2(pos, radius, |i, j, d, d2| {
+            let dist = d2.sqrt();
+            f(i, j, dist, unit_or_fixed(d, dist, i, j));
+        });
+    }
+
+    /// Calls `f(i, j, pos[i] − pos[j], squared distance)` once for every pair closer
+    /// than `radius` (at most the cell side), in the order of
+    /// [`for_each_pair`](Self::for_each_pair), without a square root: for callers
+    /// that need only a cut-off test or the squared distance.
+    #[inline]
+    pub(crate) fn for_each_pair_d2(
+        &self,
+        pos: &[Vec2],
+        radius: f64,
+        mut f: impl FnMut(usize, usize, Vec2, f64),
+    ) {
         if self.nx == 0 {
             return;
         }
@@ -134,21 +151,14 @@ impl Grid {
                     let b = self.cell_items(o);
                     for (ai, &i) in a.iter().enumerate() {
                         let i = i as usize;
+                        let pi = pos[i];
                         let rest = if o == c { &b[ai + 1..] } else { b };
                         for &j in rest {
                             let j = j as usize;
-                            let d = pos[i] - pos[j];
+                            let d = pi - pos[j];
                             let d2 = d.norm_squared();
                             if d2 < r2 {
-                                let dist = d2.sqrt();
-                                let n = if dist > 1e-12 {
-                                    d / dist
-                                } else {
-                                    let a = (i.min(j) as f64) * 2.399963;
-                                    let s = if i < j { 1.0 } else { -1.0 };
-                                    Vec2::new(a.cos(), a.sin()) * s
-                                };
-                                f(i, j, dist, n);
+                                f(i, j, d, d2);
                             }
                         }
                     }
@@ -194,6 +204,19 @@ impl Grid {
             }
         }
         best2.sqrt()
+    }
+}
+
+/// `d / dist`, or for coincident agents (`dist ≤ 1e-12`) a unit vector fixed by
+/// their indices, opposite for `(i, j)` and `(j, i)`.
+#[inline]
+pub(crate) fn unit_or_fixed(d: Vec2, dist: f64, i: usize, j: usize) -> Vec2 {
+    if dist > 1e-12 {
+        d / dist
+    } else {
+        let a = (i.min(j) as f64) * 2.399963;
+        let s = if i < j { 1.0 } else { -1.0 };
+        Vec2::new(a.cos(), a.sin()) * s
     }
 }
 

@@ -30,18 +30,52 @@ pub(crate) fn std_dev(n: usize, f: impl Fn(usize) -> f64) -> f64 {
 }
 
 /// `σ_min_dis` (eq. 24): the deviation of each agent's distance to its nearest
-/// neighbour `min_dis(i)`, found with `grid` (built on `pos`) by a ring search and
-/// left in `nearest`; with the smallest of them. `(0, ∞)` for fewer than two agents.
+/// neighbour `min_dis(i)`, found with `grid` (built on `pos`) by
+/// [`nearest_distances`] and left in `nearest`; with the smallest of them. `(0, ∞)`
+/// for fewer than two agents.
+#[cfg(test)]
 pub(crate) fn sigma_min_dis(grid: &Grid, pos: &[Vec2], nearest: &mut [f64]) -> (f64, f64) {
-    let mut min = f64::INFINITY;
-    for (i, m) in nearest.iter_mut().enumerate().take(pos.len()) {
-        *m = grid.nearest_distance(pos, i);
-        min = min.min(*m);
-    }
-    if pos.len() < 2 {
+    nearest_distances(grid, pos, nearest, |_, _, _| {});
+    spread_and_min(&nearest[..pos.len()])
+}
+
+/// The deviation (eq. 24) and the smallest of the nearest-neighbour distances
+/// `nearest`; `(0, ∞)` for fewer than two.
+pub(crate) fn spread_and_min(nearest: &[f64]) -> (f64, f64) {
+    let min = nearest.iter().cloned().fold(f64::INFINITY, f64::min);
+    if nearest.len() < 2 {
         return (0.0, min);
     }
-    (std_dev(pos.len(), |i| nearest[i]), min)
+    (std_dev(nearest.len(), |i| nearest[i]), min)
+}
+
+/// Each agent's distance to its nearest other agent into `nearest` (m, `∞` when
+/// alone), `grid` built on `pos`. One pass over the pairs closer than the grid's
+/// cell side finds it for every agent with a neighbour that near (each such pair
+/// is also handed to `visit(i, j, squared distance)`); the others, in sparse
+/// places, by the grid's ring search. The same values as a ring search for every
+/// agent, without one.
+pub(crate) fn nearest_distances(
+    grid: &Grid,
+    pos: &[Vec2],
+    nearest: &mut [f64],
+    mut visit: impl FnMut(usize, usize, f64),
+) {
+    let n = pos.len();
+    let best2 = &mut nearest[..n];
+    best2.fill(f64::INFINITY);
+    grid.for_each_pair_d2(pos, grid.cell_m(), |i, j, _, d2| {
+        best2[i] = best2[i].min(d2);
+        best2[j] = best2[j].min(d2);
+        visit(i, j, d2);
+    });
+    for (i, m) in best2.iter_mut().enumerate() {
+        *m = if m.is_finite() {
+            m.sqrt()
+        } else {
+            grid.nearest_distance(pos, i)
+        };
+    }
 }
 
 /// `σ_curr_eft` (eq. 26) of `curr_eft(i) = |s_i − pos(a_i)|` (eq. 25).
@@ -78,6 +112,41 @@ mod tests {
         let mut nearest = [0.0; 100];
         let (sigma, min) = sigma_min_dis(&g, &lattice, &mut nearest);
         assert!(sigma < 1e-12 && (min - 0.8).abs() < 1e-12);
+    }
+
+    #[test]
+    fn nearest_distances_match_brute_force_dense_and_sparse() {
+        // A dense cluster (neighbours within a cell) and scattered stragglers (found
+        // by the ring search), with the pairs handed over checked too.
+        let mut r = crate::rng::SplitMix64::new(7);
+        let mut pos: Vec<Vec2> = (0..200)
+            .map(|_| Vec2::new(r.uniform(0.0, 5.0), r.uniform(0.0, 5.0)))
+            .collect();
+        pos.extend((0..20).map(|_| Vec2::new(r.uniform(10.0, 60.0), r.uniform(-40.0, 0.0))));
+        pos.push(pos[3]);
+        let mut g = Grid::with_capacity(pos.len());
+        g.build(&pos, 0.6);
+        let mut nearest = vec![0.0; pos.len()];
+        let mut seen = vec![];
+        nearest_distances(&g, &pos, &mut nearest, |i, j, d2| {
+            assert_eq!(d2, (pos[i] - pos[j]).norm_squared());
+            seen.push((i.min(j), i.max(j)));
+        });
+        for i in 0..pos.len() {
+            let brute = (0..pos.len())
+                .filter(|&j| j != i)
+                .map(|j| (pos[i] - pos[j]).norm())
+                .fold(f64::INFINITY, f64::min);
+            assert_eq!(nearest[i], brute, "agent {i}");
+        }
+        seen.sort();
+        let c = g.cell_m();
+        let want: Vec<(usize, usize)> = (0..pos.len())
+            .flat_map(|i| (i + 1..pos.len()).map(move |j| (i, j)))
+            .filter(|&(i, j)| (pos[i] - pos[j]).norm_squared() < c * c)
+            .collect();
+        assert_eq!(seen, want);
+        assert!(nearest[200..220].iter().any(|&d| d > c));
     }
 
     #[test]

@@ -232,7 +232,7 @@ impl CostSource for EqualisedLeastEffort {
 ///
 /// # Complexity
 /// Least effort: two Delaunay triangulations (`O(n log n)`), then the sparse solve
-/// on costs computed as read, in equalised coordinates ([`EqualisedLeastEffort`])
+/// on costs computed as read, in equalised coordinates (`EqualisedLeastEffort`)
 /// when `λ > 0`. Euclidean: the solver's bucket-grid candidate lists.
 /// Allocates.
 ///

@@ -25,11 +25,19 @@
 //!    target.
 //!
 //! Nothing allocates in a step once [`TransformRun::new`] has sized the buffers
-//! (the set of distinct overlapping pairs grows only past `4 n` such pairs).
+//! (the set of distinct overlapping pairs grows only past `4 n` such pairs, the
+//! list of candidate contacts only past `4 n` pairs closer than `2 r` plus skin).
+//!
+//! # Work shared within a step
+//! One grid (cells of the interaction range) serves the forces; the overlap rounds
+//! take their pairs from a contact list made once per substep; the report finds
+//! the contacts and every agent's nearest neighbour in one pass over its grid's
+//! pairs, and the next step reuses that grid and the report's `I_d`, `I_v` while
+//! it starts from exactly the reported positions and velocities.
 
 use super::feedback::{Feedback, Information};
-use super::grid::Grid;
-use super::measures::{sigma_curr_eft, sigma_min_dis, Measures};
+use super::grid::{unit_or_fixed, Grid};
+use super::measures::{nearest_distances, sigma_curr_eft, spread_and_min, Measures};
 use super::orca::Orca;
 pub use super::params::{MoveParams, Mover};
 use super::prepare::TransformPlan;
@@ -47,6 +55,10 @@ const YIELD_EPS_M: f64 = 0.05;
 /// positional resolution may leave (it moves pairs to exactly `2 r`, and moving
 /// one pair may press another).
 pub const OVERLAP_TOLERANCE_M: f64 = 0.005;
+
+/// How far an agent may move during the overlap rounds before the list of
+/// candidate contact pairs is made again (m).
+const CONTACT_SKIN_M: f64 = 0.05;
 
 /// One step's report.
 #[derive(Copy, Clone, Debug, Default, PartialEq)]
@@ -99,6 +111,13 @@ pub struct TransformRun {
     feedback: Feedback,
     orca: Option<Orca>,
     grid: Grid,
+    /// Grid for the candidate contact pairs of the overlap rounds.
+    contact_grid: Grid,
+    /// Pairs closer than `2 r + 2 CONTACT_SKIN_M` at `listed_at`.
+    contacts: Vec<(u32, u32)>,
+    /// Entries of `contacts` in use.
+    contacts_len: usize,
+    listed_at: Vec<Vec2>,
     /// Agent `a`'s own desired speed `v⁰_a` (m/s), evened out by eq. 19.
     v0: Vec<f64>,
     /// Heading `e_a` this substep (unit).
@@ -116,6 +135,15 @@ pub struct TransformRun {
     travel: Vec<f64>,
     nearest: Vec<f64>,
     overlapped: HashSet<(u32, u32)>,
+    /// Positions and velocities the last report measured, with what it found:
+    /// while the next step starts from them bit for bit, its first substep takes
+    /// `I_d`, `I_v` (and the bins they left in `feedback`) and the grid from the
+    /// report instead of computing them again.
+    reported_pos: Vec<Vec2>,
+    reported_vel: Vec<Vec2>,
+    reported: Option<Information>,
+    /// `grid` is built on `reported_pos` with the forces' cell size.
+    grid_at_report: bool,
     elapsed_s: f64,
     steps: u64,
     sum: Measures,
@@ -148,6 +176,10 @@ impl TransformRun {
             feedback: Feedback::new(n, params.bin_m, params.sectors),
             orca,
             grid: Grid::with_capacity(n),
+            contact_grid: Grid::with_capacity(n),
+            contacts: vec![(0, 0); 4 * n],
+            contacts_len: 0,
+            listed_at: vec![Vec2::zeros(); n],
             v0,
             e: vec![Vec2::zeros(); n],
             dist: vec![0.0; n],
@@ -160,6 +192,10 @@ impl TransformRun {
             travel: vec![0.0; n],
             nearest: vec![0.0; n],
             overlapped: HashSet::with_capacity(4 * n),
+            reported_pos: vec![Vec2::zeros(); n],
+            reported_vel: vec![Vec2::zeros(); n],
+            reported: None,
+            grid_at_report: false,
             elapsed_s: 0.0,
             steps: 0,
             sum: Measures::default(),
@@ -227,9 +263,14 @@ impl TransformRun {
         if !p.feedback {
             return Information::default();
         }
-        let info = self
-            .feedback
-            .measure(pos, vel, p.max_speed_m_s, &self.still);
+        // `still` is that of the report when the state is: `settled` changes
+        // only in `settle`, before the report.
+        let info = match self.reported.take() {
+            Some(info) if self.at_report(pos, vel) => info,
+            _ => self
+                .feedback
+                .measure(pos, vel, p.max_speed_m_s, &self.still),
+        };
         self.feedback
             .adjust(&mut self.e, &mut self.v0, &self.settled, &self.fade, info);
         let vmax = p.max_speed_m_s;
@@ -237,6 +278,17 @@ impl TransformRun {
             *v = v.clamp(0.0, vmax);
         }
         info
+    }
+
+    /// Whether `pos` and `vel` are bit for bit those of the last report.
+    fn at_report(&self, pos: &[Vec2], vel: &[Vec2]) -> bool {
+        let same = |a: &[Vec2], b: &[Vec2]| {
+            a.len() == b.len()
+                && a.iter()
+                    .zip(b)
+                    .all(|(x, y)| x.x.to_bits() == y.x.to_bits() && x.y.to_bits() == y.y.to_bits())
+        };
+        same(pos, &self.reported_pos) && same(vel, &self.reported_vel)
     }
 
     /// The velocity agent `i` wants now: its heading at its desired speed, ramped
@@ -318,8 +370,12 @@ impl TransformRun {
             self.acc[i] = a;
         }
         let p = &self.p;
-        self.grid
-            .build(pos, p.interaction_range_m.max(2.0 * p.radius_m));
+        let cell_m = p.interaction_range_m.max(2.0 * p.radius_m);
+        // The report's grid has this cell size; it is reused when built on `pos`.
+        if !(self.grid_at_report && self.at_report(pos, vel)) {
+            self.grid.build(pos, cell_m);
+        }
+        self.grid_at_report = false;
         let groups = p.subgroup_forces.then_some(&self.groups.group_of[..]);
         social::repulse(&self.grid, pos, groups, &self.fade, p, &mut self.acc);
         if p.subgroup_forces {
@@ -350,50 +406,95 @@ impl TransformRun {
 
     /// Step 5: pairs closer than `2 r` moved apart to `2 r` along their centre
     /// line (Gauss–Seidel, a few rounds), shared by right of way, the velocity
-    /// into the contact removed.
+    /// into the contact removed. Each round takes the pairs closer than `2 r` at
+    /// the round's start; they are drawn from a list of the pairs closer than
+    /// `2 r + 2 CONTACT_SKIN_M` made once (a grid over the positions then), made
+    /// again only when an agent has since moved more than the skin, so the pairs
+    /// are exactly those a grid built every round would give.
     fn resolve_overlaps(&mut self, pos: &mut [Vec2], vel: &mut [Vec2]) {
         let two_r = 2.0 * self.p.radius_m;
         if two_r <= 0.0 {
             return;
         }
+        let skin2 = CONTACT_SKIN_M * CONTACT_SKIN_M;
+        let r2 = two_r * two_r;
+        let mut listed = false;
         for _ in 0..self.p.overlap_rounds {
             // Pairs are found on a copy; each push reads the positions as they are.
             self.scratch.copy_from_slice(pos);
-            self.grid.build(&self.scratch, two_r);
+            let stale = !listed
+                || self
+                    .scratch
+                    .iter()
+                    .zip(&self.listed_at)
+                    .any(|(x, a)| (x - a).norm_squared() > skin2);
+            if stale {
+                self.list_contacts(two_r + 2.0 * CONTACT_SKIN_M);
+                listed = true;
+            }
             let mut pushed = 0usize;
-            let targets = &self.targets;
-            self.grid
-                .for_each_pair(&self.scratch, two_r, |i, j, _, n0| {
-                    let d = pos[i] - pos[j];
-                    let dn = d.norm();
-                    if dn >= two_r {
-                        return;
+            let (targets, scratch) = (&self.targets, &self.scratch);
+            for &(i, j) in &self.contacts[..self.contacts_len] {
+                let (i, j) = (i as usize, j as usize);
+                let ds = scratch[i] - scratch[j];
+                let ds2 = ds.norm_squared();
+                if ds2 >= r2 {
+                    continue;
+                }
+                let d = pos[i] - pos[j];
+                let dn = d.norm();
+                if dn >= two_r {
+                    continue;
+                }
+                let n = if dn > 1e-12 {
+                    d / dn
+                } else {
+                    unit_or_fixed(ds, ds2.sqrt(), i, j)
+                };
+                // Right of way to the agent with farther to go: each moves by a
+                // share of the overlap proportional to the other's distance to its
+                // target (half each when both are there).
+                let (di, dj) = (
+                    (pos[i] - targets[i]).norm() + YIELD_EPS_M,
+                    (pos[j] - targets[j]).norm() + YIELD_EPS_M,
+                );
+                let depth = two_r - dn;
+                pos[i] += n * (depth * dj / (di + dj));
+                pos[j] -= n * (depth * di / (di + dj));
+                for (k, s, share) in [(i, 1.0, dj / (di + dj)), (j, -1.0, di / (di + dj))] {
+                    // Velocity into the other agent (against s·n) removed by the
+                    // agent's share: the one with right of way keeps walking.
+                    let into = vel[k].dot(&n) * s;
+                    if into < 0.0 {
+                        vel[k] -= n * (into * s * share);
                     }
-                    let n = if dn > 1e-12 { d / dn } else { n0 };
-                    // Right of way to the agent with farther to go: each moves by
-                    // a share of the overlap proportional to the other's distance
-                    // to its target (half each when both are there).
-                    let (di, dj) = (
-                        (pos[i] - targets[i]).norm() + YIELD_EPS_M,
-                        (pos[j] - targets[j]).norm() + YIELD_EPS_M,
-                    );
-                    let depth = two_r - dn;
-                    pos[i] += n * (depth * dj / (di + dj));
-                    pos[j] -= n * (depth * di / (di + dj));
-                    for (k, s, share) in [(i, 1.0, dj / (di + dj)), (j, -1.0, di / (di + dj))] {
-                        // Velocity into the other agent (against s·n) removed by the
-                        // agent's share: the one with right of way keeps walking.
-                        let into = vel[k].dot(&n) * s;
-                        if into < 0.0 {
-                            vel[k] -= n * (into * s * share);
-                        }
-                    }
-                    pushed += 1;
-                });
+                }
+                pushed += 1;
+            }
             if pushed == 0 {
                 break;
             }
         }
+    }
+
+    /// The pairs closer than `reach_m` at `scratch` into `contacts`, and `scratch`
+    /// into `listed_at`.
+    fn list_contacts(&mut self, reach_m: f64) {
+        self.contact_grid.build(&self.scratch, reach_m);
+        // Written in place over the whole length (kept by a clone of the run, which
+        // keeps lengths, not capacities); grown only past it.
+        let (contacts, mut k) = (&mut self.contacts, 0usize);
+        self.contact_grid
+            .for_each_pair_d2(&self.scratch, reach_m, |i, j, _, _| {
+                let pair = (i as u32, j as u32);
+                match contacts.get_mut(k) {
+                    Some(slot) => *slot = pair,
+                    None => contacts.push(pair),
+                }
+                k += 1;
+            });
+        self.contacts_len = k;
+        self.listed_at.copy_from_slice(&self.scratch);
     }
 
     /// Step 6: agents near enough and slow enough settle; settled agents pushed
@@ -421,18 +522,26 @@ impl TransformRun {
         self.grid.build(pos, two_r.max(self.p.interaction_range_m));
         let mut overlapping = 0usize;
         let overlapped = &mut self.overlapped;
-        self.grid
-            .for_each_pair(pos, two_r - OVERLAP_TOLERANCE_M, |i, j, _, _| {
+        let limit = two_r - OVERLAP_TOLERANCE_M;
+        let limit2 = limit * limit;
+        // One pass over the pairs for the contacts and the nearest neighbours.
+        nearest_distances(&self.grid, pos, &mut self.nearest, |i, j, d2| {
+            if d2 < limit2 {
                 overlapping += 1;
                 let _ = overlapped.insert((i.min(j) as u32, i.max(j) as u32));
-            });
-        let (sigma_min_dis_m, min_d) = sigma_min_dis(&self.grid, pos, &mut self.nearest);
+            }
+        });
+        let (sigma_min_dis_m, min_d) = spread_and_min(&self.nearest[..n]);
         for ((still, &settled), v) in self.still.iter_mut().zip(&self.settled).zip(vel) {
             *still = settled || v.norm_squared() < 1e-12;
         }
         let info = self
             .feedback
             .measure(pos, vel, self.p.max_speed_m_s, &self.still);
+        self.reported_pos.copy_from_slice(pos);
+        self.reported_vel.copy_from_slice(vel);
+        self.reported = Some(info);
+        self.grid_at_report = true;
         let measures = Measures {
             i_d: info.i_d,
             i_v: info.i_v,

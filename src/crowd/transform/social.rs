@@ -24,7 +24,7 @@
 //! neighbours standing at their own targets cannot hold an arriving agent off its
 //! target; contacts are kept apart positionally in `run.rs`.
 
-use super::grid::Grid;
+use super::grid::{unit_or_fixed, Grid};
 use super::params::MoveParams;
 use crate::crowd::environment::Scene;
 use crate::geom::Vec2;
@@ -137,10 +137,13 @@ pub(crate) fn repulse(
     let (a2, inv_b2) = (p.subgroup_a_m_s2, 1.0 / p.subgroup_b_m.max(1e-6));
     // Closer than this the 1/d of eqs. 10 and 22 is held at its value here.
     let d_floor = 0.25 * p.radius_m.max(1e-3);
-    grid.for_each_pair(pos, range, |i, j, d, n| {
+    grid.for_each_pair_d2(pos, range, |i, j, dv, d2| {
+        // Settled pairs are skipped before the square root.
         if fade[i] <= 0.0 && fade[j] <= 0.0 {
             return;
         }
+        let d = d2.sqrt();
+        let n = unit_or_fixed(dv, d, i, j);
         let dd = d.max(d_floor);
         let mut f = a * (-dd * inv_b).exp() / dd;
         if let Some(g) = groups {

@@ -31,8 +31,9 @@ impl Format {
 }
 
 /// Which message streams a client receives. Replies (`hello`, `ack`, `error`,
-/// `dropped`, `bye`) are always sent. `plan` is off unless a client names it, so a
-/// client written before it existed gets none of its message types.
+/// `dropped`, `bye`) are always sent. `plan` and `transform` are off unless a client
+/// names them, so a client written before they existed gets none of their message
+/// types.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
 pub struct Subscriptions {
     /// `snapshot` messages.
@@ -46,6 +47,9 @@ pub struct Subscriptions {
     /// `plan`, `demo_motion` and `gesture_motion` messages: the crowd's planned
     /// trajectories and the life of the motion a gesture started.
     pub plan: bool,
+    /// `transform` and `transform_end` messages: a formation transform's progress
+    /// every tick and its summary.
+    pub transform: bool,
 }
 
 impl Subscriptions {
@@ -56,10 +60,13 @@ impl Subscriptions {
         events: true,
         stats: true,
         plan: true,
+        transform: true,
     };
-    /// What a client that names no stream gets: every stream but `plan`.
+    /// What a client that names no stream gets: every stream but `plan` and
+    /// `transform`.
     pub const DEFAULT: Subscriptions = Subscriptions {
         plan: false,
+        transform: false,
         ..Subscriptions::ALL
     };
     /// No stream.
@@ -69,13 +76,22 @@ impl Subscriptions {
         events: false,
         stats: false,
         plan: false,
+        transform: false,
     };
     /// Wire names known to the parser, in wire order.
-    pub const NAMES: [&'static str; 5] = ["snapshot", "mesh", "events", "stats", "plan"];
+    pub const NAMES: [&'static str; 6] =
+        ["snapshot", "mesh", "events", "stats", "plan", "transform"];
 
     /// The names of the streams switched on, in wire order.
     pub fn names(&self) -> Vec<&'static str> {
-        let on = [self.snapshot, self.mesh, self.events, self.stats, self.plan];
+        let on = [
+            self.snapshot,
+            self.mesh,
+            self.events,
+            self.stats,
+            self.plan,
+            self.transform,
+        ];
         Self::NAMES
             .iter()
             .zip(on)
@@ -91,6 +107,7 @@ impl Subscriptions {
             "events" => self.events = true,
             "stats" => self.stats = true,
             "plan" => self.plan = true,
+            "transform" => self.transform = true,
             _ => return false,
         }
         true

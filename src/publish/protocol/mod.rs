@@ -27,6 +27,7 @@
 //! * `frame`: frame kinds, the binary layout's constants and motion codes.
 //! * `binary`: the binary snapshot encoder and decoder.
 //! * `plan`: the hand-written `plan` and `demo_motion` messages.
+//! * `transform`: a formation transform's `transform` and `transform_end` messages.
 //! * `numbers`: fixed-point and integer writing shared by the hand-written encoders.
 
 mod binary;
@@ -37,6 +38,7 @@ mod messages;
 mod numbers;
 mod parse;
 mod plan;
+mod transform;
 
 pub use binary::{
     decode_snapshot_binary, encode_snapshot_binary, BinarySnapshot, BinaryTouch, DecodeError,
@@ -61,6 +63,7 @@ pub use messages::{
 pub use numbers::MAX_COORD_ABS;
 pub use parse::{parse_client_message, ClientMessage, ProtocolError};
 pub use plan::encode_plan_json;
+pub use transform::{encode_transform_end_json, encode_transform_json};
 
 #[cfg(test)]
 mod tests;

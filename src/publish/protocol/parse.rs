@@ -261,7 +261,7 @@ fn parse_hello(map: Map<String, Value>) -> Result<ClientSettings, ProtocolError>
         names_into(
             v,
             "subscribe",
-            "a list of \"snapshot\", \"mesh\", \"events\", \"stats\", \"plan\"",
+            "a list of \"snapshot\", \"mesh\", \"events\", \"stats\", \"plan\", \"transform\"",
             |n| subs.set(n),
         )?;
         s.subscriptions = subs;
@@ -382,6 +382,32 @@ fn parse_command(mut map: Map<String, Value>) -> Result<ClientMessage, ProtocolE
                 name: shorten(&name),
             },
         ));
+    }
+    if name == "set_formation" {
+        // serde's message would not name the field.
+        type Check = (&'static str, &'static str, fn(&Value) -> bool);
+        let checks: [Check; 2] = [
+            ("method", "\"transform\" or \"mesh\"", |v| {
+                v.is_null() || matches!(v.as_str(), Some("transform" | "mesh"))
+            }),
+            ("duration", "a number of seconds", |v| {
+                v.is_null() || v.is_number()
+            }),
+        ];
+        for (field, expected, ok) in checks {
+            if let Some(v) = map.get(field).filter(|v| !ok(v)) {
+                let found = quote(v);
+                return Err(in_command(
+                    id,
+                    ProtocolError::InvalidValue {
+                        message: MSG,
+                        field,
+                        expected,
+                        found,
+                    },
+                ));
+            }
+        }
     }
     let keys: Vec<String> = map.keys().cloned().collect();
     match serde_json::from_value::<Command>(Value::Object(map)) {

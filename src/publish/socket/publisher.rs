@@ -4,7 +4,8 @@
 //! A snapshot is encoded once per (format, field set) in use, outside every lock, and
 //! the bytes are shared (`Arc`) by the clients' queues. A command's answer goes to
 //! the client that asked, and only to it. Plans and a motion's life
-//! (`gesture_motion`) go to clients subscribed to `plan` only.
+//! (`gesture_motion`) go to clients subscribed to `plan` only; a formation transform's
+//! progress and summary to clients subscribed to `transform` only.
 
 use super::hub::Hub;
 use super::queue::{ClientShared, EncodedSnapshot};
@@ -68,6 +69,14 @@ impl Publisher {
             Outgoing::Plan(p) => {
                 self.broadcast(|s| s.plan, |out| protocol::encode_plan_json(&p, out))
             }
+            Outgoing::Transform(t) => self.broadcast(
+                |s| s.transform,
+                |out| protocol::encode_transform_json(&t, out),
+            ),
+            Outgoing::TransformEnd(t) => self.broadcast(
+                |s| s.transform,
+                |out| protocol::encode_transform_end_json(&t, out),
+            ),
             Outgoing::Stats(r) => {
                 self.broadcast(|s| s.stats, |out| protocol::encode_stats(&r, out))
             }

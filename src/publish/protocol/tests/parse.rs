@@ -49,10 +49,46 @@ fn commands_parse() {
         ClientMessage::Command {
             id: Value::from(4),
             command: Command::SetFormation {
-                formation: "arrow".into()
+                formation: "arrow".into(),
+                method: None,
+                duration: None,
             }
         }
     );
+    assert_eq!(
+        parse_client_message(
+            br#"{"type":"command","id":5,"name":"set_formation","formation":"ring","method":"mesh","duration":4.5}"#
+        )
+        .unwrap(),
+        ClientMessage::Command {
+            id: Value::from(5),
+            command: Command::SetFormation {
+                formation: "ring".into(),
+                method: Some(crate::vocab::FormationMethod::Mesh),
+                duration: Some(4.5),
+            }
+        }
+    );
+    // An unknown method is an `error` reply naming the methods.
+    match parse_client_message(
+        br#"{"type":"command","id":6,"name":"set_formation","formation":"ring","method":"teleport"}"#,
+    ) {
+        Err(e) => {
+            assert!(!e.is_fatal());
+            let m = e.to_string();
+            assert!(
+                m.contains("teleport") && m.contains("transform") && m.contains("mesh"),
+                "{m}"
+            );
+        }
+        other => panic!("expected an error, got {other:?}"),
+    }
+    match parse_client_message(
+        br#"{"type":"command","id":7,"name":"set_formation","formation":"ring","duration":"soon"}"#,
+    ) {
+        Err(e) => assert!(e.to_string().contains("duration"), "{e}"),
+        other => panic!("expected an error, got {other:?}"),
+    }
     let m = parse_client_message(
         b"{\"type\":\"command\",\"id\":\"a\",\"name\":\"set_agent_count\",\"count\":50}\r",
     )
