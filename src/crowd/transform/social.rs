@@ -20,7 +20,8 @@
 //!   distance from the centre to the nearest obstacle boundary (zero inside).
 //!
 //! Each agent's forces other than the driving force are scaled by its `fade`
-//! (`run.rs`: it falls to zero on the last metres to the target), so that
+//! (`run.rs`: it falls to zero on the last metres to the target), and the
+//! repulsion between two agents by both their fades, so that
 //! neighbours standing at their own targets cannot hold an arriving agent off its
 //! target; contacts are kept apart positionally in `run.rs`.
 
@@ -124,11 +125,19 @@ impl Groups {
 /// between every pair closer than the interaction range, to both agents, each
 /// scaled by its own `fade`. `grid` is built on `pos` with cells of at least the
 /// interaction range.
+///
+/// The force between two agents is scaled by both their fades, and an agent that
+/// has settled at its target (`settled`) repels no one: an agent at or near its
+/// target steps aside when a walker reaches it (the positional contacts of
+/// `run.rs` give the walker right of way) and walks back after. Were it to repel,
+/// the settled outer rows of a formation would hold off the agents whose targets
+/// lie behind them, whose driving force weakens as they near their targets.
 pub(crate) fn repulse(
     grid: &Grid,
     pos: &[Vec2],
     groups: Option<&[u32]>,
     fade: &[f64],
+    settled: &[bool],
     p: &MoveParams,
     acc: &mut [Vec2],
 ) {
@@ -151,8 +160,13 @@ pub(crate) fn repulse(
                 f += a2 * (-dd * inv_b2).exp() / dd;
             }
         }
-        acc[i] += n * (f * fade[i]);
-        acc[j] -= n * (f * fade[j]);
+        let w = if settled[i] || settled[j] {
+            0.0
+        } else {
+            f * fade[i] * fade[j]
+        };
+        acc[i] += n * w;
+        acc[j] -= n * w;
     });
 }
 
