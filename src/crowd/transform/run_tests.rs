@@ -462,7 +462,7 @@ fn shipped_pairs(n: usize, radius_m: f64, area_m2: f64) -> (usize, usize) {
     let (mut runs, mut failed) = (0, 0);
     for a in &names {
         let Some(fa) = lib.get(a) else { continue };
-        let Ok(src) = fa.sample(&place, n, &sample, 7, &|| false) else {
+        let Ok(Some(src)) = fa.sample(&place, n, &sample, 7, &|| false) else {
             continue;
         };
         for b in &names {
