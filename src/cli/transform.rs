@@ -268,7 +268,7 @@ impl Setup {
             (
                 needed,
                 Some(format!(
-                    "crowd.formation's {rect_area:.1} m² scaled up to {needed:.1} m²: {agents} agents {spacing_m:.2} m apart fill at most {:.0} % of it (hex fit {})",
+                    "{needed:.1} m², crowd.formation's {rect_area:.1} m² scaled up so that {agents} agents {spacing_m:.2} m apart fill at most {:.0} % of it (hex fit {})",
                     100.0 * PACKING_SLACK,
                     hex_fit(needed, spacing_m)
                 )),

@@ -11,10 +11,12 @@ use std::fmt::Write;
 
 /// Widest picture of a run (px).
 const RUN_WIDTH_PX: f64 = 960.0;
+/// Narrowest picture of a run (px): room for its caption.
+const MIN_RUN_WIDTH_PX: f64 = 900.0;
 /// Margin around what a run picture shows (m).
 const RUN_MARGIN_M: f64 = 0.8;
 /// Height of the caption under a picture (px).
-const CAPTION_PX: f64 = 46.0;
+const CAPTION_PX: f64 = 62.0;
 /// One panel of the measures plot (px), axes inside.
 const PANEL_W_PX: f64 = 420.0;
 const PANEL_H_PX: f64 = 300.0;
@@ -61,7 +63,9 @@ pub fn run_picture(plan: &TransformPlan, rec: &Recorded, radius_m: f64, title: &
     hi += Vec2::repeat(RUN_MARGIN_M);
     let (wm, hm) = (hi.x - lo.x, hi.y - lo.y);
     let k = (RUN_WIDTH_PX / wm).clamp(10.0, 120.0);
-    let (w, h) = (wm * k, hm * k);
+    let h = hm * k;
+    // Wide enough for the caption.
+    let w = (wm * k).max(MIN_RUN_WIDTH_PX);
     // World y up, picture y down.
     let px = |p: Vec2| ((p.x - lo.x) * k, (hi.y - p.y) * k);
     let mut s = String::new();
@@ -114,20 +118,31 @@ pub fn run_picture(plan: &TransformPlan, rec: &Recorded, radius_m: f64, title: &
         }
     }
     let sm = &rec.summary;
-    let _ = writeln!(
-        s,
-        r##"<text x="8" y="{:.0}" fill="#222">{}</text>"##,
-        h + 18.0,
-        xml_escape(title)
-    );
-    let _ = writeln!(
-        s,
-        r##"<text x="8" y="{:.0}" fill="#555">grey dots: sources; grey rings: targets (agent size); lines: paths, coloured by subgroup; filled: where agents ended ({:.1} % arrived in {:.1} s, {} overlapping pairs); 1 m = {k:.0} px</text>"##,
-        h + 36.0,
-        100.0 * sm.arrived_fraction,
-        sm.simulated_s,
-        sm.overlapping_pairs
-    );
+    let lines = [
+        (title.to_string(), "#222"),
+        (
+            "grey dots: sources; grey rings: targets (agent size); lines: paths by subgroup; filled: where agents ended".to_string(),
+            "#555",
+        ),
+        (
+            format!(
+                "{:.1} % arrived in {:.1} s simulated, {} overlapping pairs, closest two agents {:.3} m; 1 m = {k:.0} px",
+                100.0 * sm.arrived_fraction,
+                sm.simulated_s,
+                sm.overlapping_pairs,
+                sm.min_distance_m
+            ),
+            "#555",
+        ),
+    ];
+    for (j, (text, colour)) in lines.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            r##"<text x="8" y="{:.0}" fill="{colour}">{}</text>"##,
+            h + 18.0 + 17.0 * j as f64,
+            xml_escape(text)
+        );
+    }
     s.push_str("</svg>\n");
     s
 }
@@ -149,14 +164,23 @@ fn ticks(lo: f64, hi: f64, n: usize) -> Vec<f64> {
         .collect()
 }
 
-/// A tick label: as few decimals as the step needs.
+/// A tick label: as few decimals as the step needs (0.025 keeps three).
 fn tick_label(v: f64, step: f64) -> String {
-    let decimals = if step >= 1.0 {
-        0
-    } else {
-        (-step.log10()).ceil().clamp(0.0, 6.0) as usize
-    };
+    let decimals = (0..6)
+        .find(|&d| {
+            let k = 10f64.powi(d as i32);
+            ((step * k).round() - step * k).abs() < 1e-6 * step.abs().max(1e-12) * k
+        })
+        .unwrap_or(6);
     format!("{v:.decimals$}")
+}
+
+/// Ticks from 0 to the first round value at or above `hi`, that value.
+fn axis(hi: f64, n: usize) -> (Vec<f64>, f64) {
+    let t = ticks(0.0, hi, n);
+    let step = if t.len() > 1 { t[1] - t[0] } else { hi };
+    let top = ((hi / step).ceil() * step).max(step);
+    (ticks(0.0, top, n), top)
 }
 
 /// The three measures over time: one panel each (`I_d` in bits, `σ_min_dis` and
@@ -199,10 +223,9 @@ pub fn measures_plot(variants: &[Variant], title: &str) -> String {
             .flat_map(|v| v.rec.series.iter().map(|s| pick(&s.1)))
             .filter(|v| v.is_finite())
             .fold(0.0f64, f64::max);
-        let yt = ticks(0.0, y_max.max(1e-6), 5);
-        let y_top = yt.last().copied().unwrap_or(1.0).max(y_max).max(1e-6);
-        let xt = ticks(0.0, t_max, 6);
-        let sx = |t: f64| x0 + (x1 - x0) * t / t_max;
+        let (yt, y_top) = axis(y_max.max(1e-6), 5);
+        let (xt, x_top) = axis(t_max, 6);
+        let sx = |t: f64| x0 + (x1 - x0) * t / x_top;
         let sy = |v: f64| y0 - (y0 - y1) * v / y_top;
         let _ = writeln!(
             s,
@@ -340,6 +363,10 @@ mod tests {
         assert_eq!(t.first(), Some(&0.0));
         assert!(t.len() >= 4 && t.len() <= 9 && *t.last().unwrap() <= 37.0);
         assert_eq!(tick_label(0.25, 0.05), "0.25");
+        assert_eq!(tick_label(0.025, 0.025), "0.025");
+        assert_eq!(tick_label(0.5, 0.5), "0.5");
+        let (t, top) = axis(1.45, 5);
+        assert_eq!((t.len(), top), (4, 1.5));
         assert_eq!(tick_label(20.0, 10.0), "20");
     }
 }
