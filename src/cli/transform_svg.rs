@@ -25,6 +25,11 @@ const AXIS_LEFT_PX: f64 = 62.0;
 const AXIS_BOTTOM_PX: f64 = 44.0;
 /// Most points drawn per curve.
 const MAX_CURVE_POINTS: usize = 600;
+/// The time axis of the measures plot is cut at this many times the slowest
+/// arrival when a run went on (timed out) past it.
+const CUT_FACTOR: f64 = 3.0;
+/// The time axis is never cut shorter than this (s).
+const MIN_CUT_S: f64 = 10.0;
 /// Colours of the compare variants, in their order.
 const VARIANT_COLOURS: [&str; 5] = ["#1f4e9c", "#e07b00", "#2b9348", "#8e44ad", "#c0392b"];
 
@@ -201,6 +206,15 @@ pub fn measures_plot(variants: &[Variant], title: &str) -> String {
         .filter_map(|v| v.rec.series.last().map(|s| s.0))
         .fold(0.0f64, f64::max)
         .max(1e-3);
+    // Runs that time out go on long after the others arrived: the axis is cut
+    // at a few times the slowest arrival so the transforms themselves show.
+    let slowest_arrival = variants
+        .iter()
+        .filter_map(|v| v.rec.arrival_s())
+        .fold(0.0f64, f64::max);
+    let cut = (slowest_arrival > 0.0 && t_max > CUT_FACTOR * slowest_arrival)
+        .then(|| (CUT_FACTOR * slowest_arrival).max(MIN_CUT_S).min(t_max));
+    let t_max = cut.unwrap_or(t_max);
     let legend_h = 22.0 * variants.len() as f64 + 16.0;
     let (w, h) = (3.0 * PANEL_W_PX, 34.0 + PANEL_H_PX + legend_h);
     let mut s = String::new();
@@ -213,6 +227,13 @@ pub fn measures_plot(variants: &[Variant], title: &str) -> String {
         r##"<rect width="100%" height="100%" fill="#ffffff"/><text x="10" y="20" font-size="14" fill="#222">{}</text>"##,
         xml_escape(title)
     );
+    if let Some(c) = cut {
+        let _ = writeln!(
+            s,
+            r##"<text x="{:.1}" y="20" fill="#666" text-anchor="end">time axis cut at {c:.0} s; the runs that had not all arrived go on to their timeout</text>"##,
+            w - 12.0
+        );
+    }
     let top = 34.0;
     for (k, (name, unit, pick)) in panels.iter().enumerate() {
         let ox = k as f64 * PANEL_W_PX;
@@ -266,7 +287,9 @@ pub fn measures_plot(variants: &[Variant], title: &str) -> String {
             xml_escape(unit)
         );
         for (i, v) in variants.iter().enumerate() {
-            let series = &v.rec.series;
+            // The steps within the time axis.
+            let shown = v.rec.series.partition_point(|p| p.0 <= t_max + 1e-9);
+            let series = &v.rec.series[..shown];
             if series.is_empty() {
                 continue;
             }
