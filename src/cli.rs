@@ -39,6 +39,7 @@ mod soak;
 mod svg;
 mod transform;
 mod transform_compare;
+mod transform_setup;
 mod transform_svg;
 mod watch;
 

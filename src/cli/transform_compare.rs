@@ -14,7 +14,8 @@
 //! section 5.1 averaged over the run; `--svg` plots them over time.
 
 use super::output::outln;
-use super::transform::{finite_or_null, run, Common, Recorded, Setup};
+use super::transform::{finite_or_null, run, Common, Recorded};
+use super::transform_setup::Setup;
 use super::transform_svg;
 use anyhow::{anyhow, Context, Result};
 use crowdtouch::crowd::assign::Cancel;
