@@ -37,6 +37,10 @@ mod scene;
 mod scene_render;
 mod soak;
 mod svg;
+mod transform;
+mod transform_compare;
+mod transform_setup;
+mod transform_svg;
 mod watch;
 
 /// crowdtouch — a multi-touch table daemon that drives a crowd.
@@ -132,6 +136,11 @@ enum Cmd {
         #[arg(long, short)]
         output: Option<PathBuf>,
     },
+    /// Run a formation transform headless (formation-transform): `--from A --to B`
+    /// (formation names or files) on a virtual clock, reporting arrival, contacts,
+    /// travel, the paper's measures and step times; `transform compare` runs the
+    /// paper's comparisons (pairing costs, feedback off, ORCA).
+    Transform(transform::TransformCmd),
     /// Gesture commands: recognise the gestures of recordings.
     #[command(subcommand)]
     Gesture(gesture::GestureCmd),
@@ -263,6 +272,7 @@ pub fn main() -> i32 {
             find_config(config.as_deref())
                 .and_then(|(cfg, _)| formations::formations(&cfg, output.as_deref())),
         ),
+        Cmd::Transform(c) => done(transform::transform(c)),
         Cmd::Devices { config, json } => done(
             find_config(config.as_deref())
                 .and_then(|(cfg, _)| devices::devices(&cfg, json, Path::new("/"))),

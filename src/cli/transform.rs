@@ -1,0 +1,338 @@
+//! `crowdtouch transform`: one formation transform (formation-transform, Xu et al.
+//! 2015) run headless on a virtual clock, set up as the daemon sets one up
+//! (`engine/transform.rs`), and measured: arrival, the closest two agents came,
+//! travel, the paper's three measures of section 5.1 averaged over the run (`I_d`
+//! eq. 17, `σ_min_dis` eq. 24, `σ_curr_eft` eq. 26) and the wall-clock time of
+//! each `TransformRun::step` (the start is `transform_setup.rs`). `transform
+//! compare` (`transform_compare.rs`) runs the paper's comparisons on the same
+//! start; `transform_svg.rs` draws both.
+//!
+//! ```text
+//!  --from A ──► A.sample(place, N)  = sources s_i        (section 3.1)
+//!  --to   B ──► TransformRequest::prepare: B sampled,   (sections 3.1, 3.2, 3.4)
+//!               paired (eq. 3 or a distance), subgroups
+//!          ──► TransformRun::step at 1/60 s until done   (sections 3.3, 3.5)
+//! ```
+
+use super::output::outln;
+use super::transform_setup::{run_seed, Setup};
+use super::transform_svg;
+use anyhow::{anyhow, Context, Result};
+use clap::{Args, Subcommand, ValueEnum};
+use crowdtouch::crowd::assign::Cancel;
+use crowdtouch::crowd::transform::{
+    Measures, MoveParams, PairCost, RunSummary, TransformPlan, TransformRun,
+};
+use crowdtouch::geom::Vec2;
+use hdrhistogram::Histogram;
+use serde_json::{json, Value};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// The virtual clock's step (s): the daemon's tick at 60 Hz.
+pub const DT_S: f64 = 1.0 / 60.0;
+/// Seed of a run when `--seed` is not given.
+pub const DEFAULT_SEED: u64 = 16;
+/// Longest step recorded in the step-time histogram (µs).
+const MAX_STEP_US: u64 = 60_000_000;
+
+/// `transform`: run one formation transform, or `transform compare`.
+#[derive(Args, Debug)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct TransformCmd {
+    /// `compare`: the paper's comparisons.
+    #[command(subcommand)]
+    pub sub: Option<TransformSub>,
+    /// The single run's arguments.
+    #[command(flatten)]
+    pub run: TransformArgs,
+}
+
+/// Subcommands of `transform`.
+#[derive(Subcommand, Debug)]
+pub enum TransformSub {
+    /// The paper's comparisons on one start and one set of targets: least-effort,
+    /// Euclidean and Manhattan pairing (section 5.2, Table 2), without the
+    /// mutual-information feedback (section 5.3), and ORCA on the least-effort
+    /// pairing (section 5.4); a table of arrival time and the three measures,
+    /// `--svg` plots the measures over time.
+    Compare(Common),
+}
+
+/// What every transform run needs.
+#[derive(Args, Debug, Clone)]
+pub struct Common {
+    /// Source formation: a name from the config's library (`crowdtouch
+    /// formations` lists them) or a file (a polygon `.ron` FormationDef, or a PNG
+    /// or PGM image whose dark pixels are the shape).
+    #[arg(long, required = true)]
+    pub from: Option<String>,
+    /// Target formation, as --from.
+    #[arg(long, required = true)]
+    pub to: Option<String>,
+    /// Agents (default: the config's crowd.agents), 1 to 5000.
+    #[arg(long)]
+    pub agents: Option<u32>,
+    /// Config (default: the embedded default).
+    #[arg(long, short)]
+    pub config: Option<PathBuf>,
+    /// One JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Write a picture (SVG) to this file.
+    #[arg(long)]
+    pub svg: Option<PathBuf>,
+    /// Seed of the sampling and the run (same seed, same result but timings).
+    #[arg(long, default_value_t = DEFAULT_SEED)]
+    pub seed: u64,
+}
+
+/// `transform --from A --to B`.
+#[derive(Args, Debug)]
+pub struct TransformArgs {
+    /// Source, target, crowd and output.
+    #[command(flatten)]
+    pub common: Common,
+    /// Pairing cost (default: the config's formations.cost).
+    #[arg(long, value_enum)]
+    pub cost: Option<CostArg>,
+    /// Without the mutual-information feedback (eqs. 18–19).
+    #[arg(long)]
+    pub no_feedback: bool,
+    /// Without subgroups (no clustering, no forces of eqs. 21–22).
+    #[arg(long)]
+    pub no_subgroups: bool,
+}
+
+/// `--cost`.
+#[derive(ValueEnum, Copy, Clone, Debug, PartialEq, Eq)]
+pub enum CostArg {
+    /// ΔE of eq. 3 with the config's formations.lambda.
+    LeastEffort,
+    /// Euclidean distance.
+    Euclidean,
+    /// Manhattan distance.
+    Manhattan,
+}
+
+/// Runs `transform` or `transform compare`.
+pub fn transform(c: TransformCmd) -> Result<()> {
+    match c.sub {
+        Some(TransformSub::Compare(common)) => super::transform_compare::compare(&common),
+        None => single(&c.run),
+    }
+}
+
+/// What one run recorded.
+pub struct Recorded {
+    /// The run's own summary.
+    pub summary: RunSummary,
+    /// Wall-clock time of each `TransformRun::step` (µs).
+    pub step_us: Histogram<u64>,
+    /// Each step's simulated time (s), measures and fraction arrived.
+    pub series: Vec<(f64, Measures, f64)>,
+    /// Every agent's positions, every [`PATH_EVERY_STEPS`] steps and at the end
+    /// (when asked for).
+    pub paths: Option<Vec<Vec<Vec2>>>,
+}
+
+/// Steps between two recorded path points (0.2 s).
+pub const PATH_EVERY_STEPS: u64 = 12;
+
+impl Recorded {
+    /// The step time at `q` (µs).
+    pub fn step_us_at(&self, q: f64) -> u64 {
+        self.step_us.value_at_quantile(q)
+    }
+
+    /// Arrival time (s), `None` when the run timed out.
+    pub fn arrival_s(&self) -> Option<f64> {
+        (!self.summary.timed_out).then_some(self.summary.simulated_s)
+    }
+}
+
+/// Runs `plan` with `params` from its sources at rest, steps of [`DT_S`], until
+/// every agent settled or the timeout.
+pub fn run(plan: &TransformPlan, params: &MoveParams, seed: u64, keep_paths: bool) -> Recorded {
+    let mut pos = plan.sources_m.clone();
+    let mut vel = vec![Vec2::zeros(); pos.len()];
+    let mut r = TransformRun::new(plan, params, run_seed(seed));
+    let mut step_us = match Histogram::new_with_bounds(1, MAX_STEP_US, 3) {
+        Ok(h) => h,
+        Err(e) => unreachable!("constant histogram bounds: {e}"),
+    };
+    let mut series = Vec::new();
+    let mut paths = keep_paths.then(|| pos.iter().map(|&p| vec![p]).collect::<Vec<_>>());
+    // The run ends itself at its timeout; this bounds a run that would not.
+    let max_steps = (params.timeout_s / DT_S).ceil() as u64 + 2;
+    let mut steps = 0u64;
+    while !r.done() && steps < max_steps {
+        let t0 = Instant::now();
+        let report = r.step(&mut pos, &mut vel, DT_S, None);
+        step_us.saturating_record(t0.elapsed().as_micros().max(1) as u64);
+        steps += 1;
+        series.push((r.elapsed_s(), report.measures, report.arrived_fraction));
+        if let Some(p) = &mut paths {
+            if steps % PATH_EVERY_STEPS == 0 {
+                for (path, &x) in p.iter_mut().zip(&pos) {
+                    path.push(x);
+                }
+            }
+        }
+    }
+    if let Some(p) = &mut paths {
+        if steps % PATH_EVERY_STEPS != 0 {
+            for (path, &x) in p.iter_mut().zip(&pos) {
+                path.push(x);
+            }
+        }
+    }
+    Recorded {
+        summary: r.summary(),
+        step_us,
+        series,
+        paths,
+    }
+}
+
+/// `transform --from A --to B`.
+fn single(a: &TransformArgs) -> Result<()> {
+    let c = &a.common;
+    let setup = Setup::new(c)?;
+    let s = &setup.settings;
+    let cost = match a.cost {
+        None => s.cost,
+        Some(CostArg::LeastEffort) => PairCost::LeastEffort {
+            lambda: setup.cfg.formations.lambda,
+        },
+        Some(CostArg::Euclidean) => PairCost::Euclidean,
+        Some(CostArg::Manhattan) => PairCost::Manhattan,
+    };
+    let ap = if a.no_subgroups { None } else { s.ap };
+    let mut params = s.moves.clone();
+    params.feedback = params.feedback && !a.no_feedback;
+    params.subgroup_forces = params.subgroup_forces && !a.no_subgroups;
+    let t0 = Instant::now();
+    let prepared = setup
+        .request(cost, ap)
+        .prepare(Cancel::default())
+        .ok_or_else(|| anyhow!("preparing the transform was cancelled"))?;
+    let prepare_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let plan = prepared
+        .plan
+        .map_err(|e| anyhow!("--to {}: {e}", setup.to_label))?;
+    let rec = run(&plan, &params, setup.seed, c.svg.is_some());
+    if let Some(path) = &c.svg {
+        let title = format!(
+            "{} → {}: {} agents, {} cost, feedback {}, {} subgroups",
+            setup.from_label,
+            setup.to_label,
+            setup.agents,
+            cost.name(),
+            on_off(params.feedback),
+            plan.subgroups.count()
+        );
+        let text = transform_svg::run_picture(&plan, &rec, setup.radius_m, &title);
+        std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    let sm = &rec.summary;
+    if c.json {
+        let v = json!({
+            "from": setup.from_label,
+            "to": setup.to_label,
+            "cost": cost.name(),
+            "feedback": params.feedback,
+            "subgroups": plan.subgroups.count(),
+            "seed": setup.seed,
+            "agents": sm.agents,
+            "radius_m": setup.radius_m,
+            "area_m2": setup.place.area_m2,
+            "steps": sm.steps,
+            "simulated_s": sm.simulated_s,
+            "timed_out": sm.timed_out,
+            "arrived_fraction": sm.arrived_fraction,
+            "min_distance_m": finite_or_null(sm.min_distance_m),
+            "overlapping_pairs": sm.overlapping_pairs,
+            "mean_travel_m": sm.mean_travel_m,
+            "max_travel_m": sm.max_travel_m,
+            "I_d": sm.mean.i_d,
+            "sigma_min_dis": sm.mean.sigma_min_dis_m,
+            "sigma_curr_eft": sm.mean.sigma_curr_eft_m,
+            "step_us_p50": rec.step_us_at(0.5),
+            "step_us_p99": rec.step_us_at(0.99),
+            "prepare_ms": prepare_ms,
+        });
+        outln!("{v}")?;
+    } else {
+        let cost_text = match cost {
+            PairCost::LeastEffort { lambda } => format!("least-effort (λ {lambda})"),
+            c => c.name().to_string(),
+        };
+        outln!(
+            "transform {} → {}: {} agents (radius {} m), {cost_text} pairing, feedback {}, {}",
+            setup.from_label,
+            setup.to_label,
+            sm.agents,
+            setup.radius_m,
+            on_off(params.feedback),
+            if params.subgroup_forces {
+                format!("{} subgroups", plan.subgroups.count())
+            } else {
+                "no subgroups".to_string()
+            }
+        )?;
+        if let Some(note) = &setup.area_note {
+            outln!("  area                {note}")?;
+        }
+        outln!("  prepare             {prepare_ms:.1} ms (sampling, pairing, subgroups)")?;
+        outln!(
+            "  steps               {} of 1/60 s = {:.2} s simulated{}",
+            sm.steps,
+            sm.simulated_s,
+            if sm.timed_out { " (timed out)" } else { "" }
+        )?;
+        outln!("  arrived             {:.1} %", 100.0 * sm.arrived_fraction)?;
+        outln!(
+            "  closest two agents  {:.4} m at any time (two radii {:.2} m); {} pairs overlapped",
+            sm.min_distance_m,
+            2.0 * setup.radius_m,
+            sm.overlapping_pairs
+        )?;
+        outln!(
+            "  travel              mean {:.2} m, max {:.2} m",
+            sm.mean_travel_m,
+            sm.max_travel_m
+        )?;
+        outln!("  measures averaged over the run (formation-transform section 5.1):")?;
+        outln!("    I_d (eq. 17)        {:.4} bits", sm.mean.i_d)?;
+        outln!("    σ_min_dis (eq. 24)  {:.4} m", sm.mean.sigma_min_dis_m)?;
+        outln!("    σ_curr_eft (eq. 26) {:.4} m", sm.mean.sigma_curr_eft_m)?;
+        outln!(
+            "  step time           p50 {} µs, p99 {} µs",
+            rec.step_us_at(0.5),
+            rec.step_us_at(0.99)
+        )?;
+        if let Some(path) = &c.svg {
+            outln!("wrote {}", path.display())?;
+        }
+    }
+    Ok(())
+}
+
+/// `on` or `off`.
+pub fn on_off(b: bool) -> &'static str {
+    if b {
+        "on"
+    } else {
+        "off"
+    }
+}
+
+/// `x` as JSON, `null` when not finite.
+pub fn finite_or_null(x: f64) -> Value {
+    if x.is_finite() {
+        json!(x)
+    } else {
+        Value::Null
+    }
+}

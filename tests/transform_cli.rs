@@ -1,0 +1,395 @@
+//! `crowdtouch transform` and `transform compare` (formation-transform, issue 16
+//! items 7–8): the report of a run, formations from files, the pairing costs, the
+//! comparison and its plot, and every bad input as a clear error.
+
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_crowdtouch"))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().arg("transform").args(args).output().unwrap()
+}
+
+fn json_of(out: &Output) -> Value {
+    assert!(
+        out.status.success(),
+        "status {:?}: {}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// Fails with the output unless the command failed cleanly (status 1, one
+/// `crowdtouch: error:` line, no panic) with every one of `want` in its message.
+fn assert_error(out: &Output, want: &[&str]) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.starts_with("crowdtouch: error:"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for w in want {
+        assert!(err.contains(w), "missing `{w}` in: {err}");
+    }
+}
+
+/// Default radius of the embedded config (m).
+const RADIUS_M: f64 = 0.15;
+
+#[test]
+fn square_to_arrow_reports_every_key_and_a_clean_arrival() {
+    let args = [
+        "--from", "square", "--to", "arrow", "--agents", "60", "--json",
+    ];
+    let v = json_of(&run(&args));
+    for key in [
+        "from",
+        "to",
+        "cost",
+        "agents",
+        "radius_m",
+        "steps",
+        "simulated_s",
+        "timed_out",
+        "arrived_fraction",
+        "min_distance_m",
+        "overlapping_pairs",
+        "mean_travel_m",
+        "max_travel_m",
+        "I_d",
+        "sigma_min_dis",
+        "sigma_curr_eft",
+        "step_us_p50",
+        "step_us_p99",
+        "prepare_ms",
+    ] {
+        assert!(v.get(key).is_some(), "no `{key}` in {v}");
+    }
+    let f = |k: &str| v[k].as_f64().unwrap();
+    assert_eq!(v["agents"], 60);
+    assert_eq!(v["from"], "square");
+    assert_eq!(v["cost"], "least-effort");
+    assert_eq!(f("radius_m"), RADIUS_M);
+    assert_eq!(f("arrived_fraction"), 1.0, "{v}");
+    assert_eq!(v["timed_out"], false);
+    assert_eq!(v["overlapping_pairs"], 0, "{v}");
+    assert!(f("min_distance_m") >= 2.0 * RADIUS_M - 0.005, "{v}");
+    assert!(f("I_d") > 0.0 && f("I_d") < 3.0, "{v}");
+    assert!(f("sigma_min_dis") > 0.0 && f("sigma_curr_eft") > 0.0, "{v}");
+    assert!(
+        f("mean_travel_m") > 0.1 && f("max_travel_m") >= f("mean_travel_m"),
+        "{v}"
+    );
+    assert!(f("max_travel_m") < 20.0, "{v}");
+    assert!(
+        f("simulated_s") > 0.5 && v["steps"].as_u64().unwrap() > 30,
+        "{v}"
+    );
+    assert!(v["step_us_p99"].as_u64().unwrap() >= v["step_us_p50"].as_u64().unwrap());
+    // Same seed, same run: everything but the timings.
+    let mut w = json_of(&run(&args));
+    let mut v = v;
+    for m in [&mut v, &mut w] {
+        let o = m.as_object_mut().unwrap();
+        for k in ["step_us_p50", "step_us_p99", "prepare_ms"] {
+            o.remove(k);
+        }
+    }
+    assert_eq!(v, w);
+}
+
+#[test]
+fn text_report_names_the_measures() {
+    let out = run(&["--from", "ring", "--to", "square", "--agents", "30"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let t = String::from_utf8_lossy(&out.stdout);
+    for w in [
+        "ring → square: 30 agents",
+        "arrived",
+        "pairs overlapped",
+        "I_d (eq. 17)",
+        "σ_min_dis (eq. 24)",
+        "σ_curr_eft (eq. 26)",
+        "p50",
+    ] {
+        assert!(t.contains(w), "missing `{w}`:\n{t}");
+    }
+}
+
+/// A disc of dark pixels on white, as a plain PGM.
+fn disc_pgm(side: usize) -> String {
+    let mut s = format!("P2\n{side} {side}\n255\n");
+    let c = side as f64 / 2.0;
+    for y in 0..side {
+        for x in 0..side {
+            let d = ((x as f64 + 0.5 - c).powi(2) + (y as f64 + 0.5 - c).powi(2)).sqrt();
+            s.push_str(if d < 0.4 * side as f64 { "0 " } else { "255 " });
+        }
+        s.push('\n');
+    }
+    s
+}
+
+#[test]
+fn formations_from_a_bitmap_and_a_polygon_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let pgm = dir.path().join("disc.pgm");
+    std::fs::write(&pgm, disc_pgm(32)).unwrap();
+    let ron = dir.path().join("tri.ron");
+    std::fs::write(
+        &ron,
+        "(name: \"tri\", outline: [(0.0, 0.0), (4.0, 0.0), (2.0, 3.0)])\n",
+    )
+    .unwrap();
+    let (p, r) = (pgm.to_str().unwrap(), ron.to_str().unwrap());
+    for (a, b) in [(p, r), (r, p)] {
+        let v = json_of(&run(&["--from", a, "--to", b, "--agents", "40", "--json"]));
+        assert_eq!(v["agents"], 40);
+        assert_eq!(v["from"], a);
+        assert_eq!(v["arrived_fraction"].as_f64(), Some(1.0), "{v}");
+        assert_eq!(v["overlapping_pairs"], 0, "{v}");
+    }
+}
+
+#[test]
+fn euclidean_pairing_spreads_the_effort_more_than_least_effort() {
+    // Section 5.2, Table 2: least effort gives the most balanced efforts
+    // (σ_curr_eft) of the three costs.
+    let go = |cost: &str| {
+        json_of(&run(&[
+            "--from", "square", "--to", "arrow", "--agents", "60", "--cost", cost, "--json",
+        ]))
+    };
+    let (le, eu) = (go("least-effort"), go("euclidean"));
+    assert_eq!(eu["cost"], "euclidean");
+    let s = |v: &Value| v["sigma_curr_eft"].as_f64().unwrap();
+    assert!(s(&eu) > s(&le), "least effort {le}\neuclidean {eu}");
+}
+
+/// Whether `svg` is one `<svg>` element with properly nested tags.
+fn well_formed(svg: &str) -> Result<(), String> {
+    let mut stack: Vec<String> = Vec::new();
+    let mut rest = svg.trim();
+    if !rest.starts_with("<svg") {
+        return Err("does not start with <svg".into());
+    }
+    let mut roots = 0;
+    while let Some(i) = rest.find('<') {
+        let end = rest[i..].find('>').ok_or("unclosed tag")? + i;
+        let tag = &rest[i + 1..end];
+        if let Some(name) = tag.strip_prefix('/') {
+            match stack.pop() {
+                Some(open) if open == name.trim() => {}
+                other => return Err(format!("</{name}> closes {other:?}")),
+            }
+        } else if !tag.ends_with('/') {
+            let name = tag.split_whitespace().next().unwrap_or("").to_string();
+            if stack.is_empty() {
+                roots += 1;
+            }
+            stack.push(name);
+        } else if stack.is_empty() {
+            return Err("an element outside <svg>".into());
+        }
+        rest = &rest[end + 1..];
+    }
+    if !stack.is_empty() || roots != 1 || !rest.trim().is_empty() {
+        return Err(format!("open at the end: {stack:?}, roots {roots}"));
+    }
+    Ok(())
+}
+
+#[test]
+fn compare_prints_five_variants_and_plots_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let svg = dir.path().join("cmp.svg");
+    let out = bin()
+        .args(["transform", "compare", "--from", "square", "--to", "arrow"])
+        .args(["--agents", "40", "--svg"])
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let t = String::from_utf8_lossy(&out.stdout);
+    for name in [
+        "least-effort",
+        "euclidean",
+        "manhattan",
+        "no-feedback",
+        "orca",
+        "I_d",
+        "σ_min_dis",
+        "σ_curr_eft",
+        "overlaps",
+    ] {
+        assert!(t.contains(name), "missing `{name}`:\n{t}");
+    }
+    let text = std::fs::read_to_string(&svg).unwrap();
+    well_formed(&text).unwrap();
+    for w in [
+        "time (s)",
+        "I_d (bits)",
+        "σ_min_dis (m)",
+        "σ_curr_eft (m)",
+        "no-feedback",
+        "ORCA",
+    ] {
+        assert!(text.contains(w), "the plot misses `{w}`");
+    }
+    // The run picture too.
+    let pic = dir.path().join("run.svg");
+    let out = run(&[
+        "--from",
+        "square",
+        "--to",
+        "ring",
+        "--agents",
+        "30",
+        "--svg",
+        pic.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&pic).unwrap();
+    well_formed(&text).unwrap();
+    assert!(text.matches("<polyline").count() >= 30);
+}
+
+#[test]
+fn compare_json_has_a_row_per_variant() {
+    let out = bin()
+        .args(["transform", "compare", "--from", "line", "--to", "square"])
+        .args(["--agents", "20", "--json"])
+        .output()
+        .unwrap();
+    let v = json_of(&out);
+    let rows = v["variants"].as_array().unwrap();
+    let names: Vec<&str> = rows
+        .iter()
+        .map(|r| r["variant"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "least-effort",
+            "euclidean",
+            "manhattan",
+            "no-feedback",
+            "orca"
+        ]
+    );
+    for r in rows {
+        for k in [
+            "arrival_s",
+            "arrived_fraction",
+            "I_d",
+            "sigma_min_dis",
+            "sigma_curr_eft",
+            "overlapping_pairs",
+        ] {
+            assert!(r.get(k).is_some(), "no `{k}` in {r}");
+        }
+    }
+    assert_eq!(rows[4]["mover"], "orca");
+    assert_eq!(rows[3]["feedback"], false);
+}
+
+#[test]
+fn bad_input_is_a_clear_error() {
+    // An unknown name lists the known ones.
+    assert_error(
+        &run(&["--from", "squircle", "--to", "arrow"]),
+        &["unknown formation `squircle`", "square", "arrow", "heart"],
+    );
+    // Agent counts out of range.
+    assert_error(
+        &run(&["--from", "square", "--to", "arrow", "--agents", "0"]),
+        &["--agents must be 1 to 5000, got 0"],
+    );
+    assert_error(
+        &run(&["--from", "square", "--to", "arrow", "--agents", "5001"]),
+        &["--agents must be 1 to 5000, got 5001"],
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A missing file, a RON file with a syntax error and one with a bad shape,
+    // an image that selects nothing: each named, RON ones with line and column.
+    let missing = d.join("none.ron");
+    assert_error(
+        &run(&["--from", missing.to_str().unwrap(), "--to", "arrow"]),
+        &["none.ron", "cannot read"],
+    );
+    let syntax = d.join("syntax.ron");
+    std::fs::write(&syntax, "(name: \"s\", outline: [(0.0, 0.0), (1.0 0.0)])\n").unwrap();
+    assert_error(
+        &run(&["--from", "square", "--to", syntax.to_str().unwrap()]),
+        &["--to", "syntax.ron:1:"],
+    );
+    let bow = d.join("bow.ron");
+    std::fs::write(
+        &bow,
+        "(\n  name: \"bow\",\n  outline: [(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)],\n)\n",
+    )
+    .unwrap();
+    assert_error(
+        &run(&["--from", bow.to_str().unwrap(), "--to", "arrow"]),
+        &["bow.ron:3:", "outline", "cross"],
+    );
+    let white = d.join("white.pgm");
+    std::fs::write(&white, "P2\n2 2\n255\n255 255 255 255\n").unwrap();
+    assert_error(
+        &run(&["--from", "square", "--to", white.to_str().unwrap()]),
+        &["white.pgm", "no pixel has a colour"],
+    );
+    let junk = d.join("junk.png");
+    std::fs::write(&junk, b"\x89PNG\r\n\x1a\nnot really").unwrap();
+    assert_error(
+        &run(&["--from", junk.to_str().unwrap(), "--to", "arrow"]),
+        &["junk.png"],
+    );
+    // More agents than a formation of fixed size holds: the sampling's message.
+    let cfg_text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("config/crowdtouch.ron"),
+    )
+    .unwrap();
+    assert!(cfg_text.contains("shapes: [],"));
+    std::fs::write(d.join("disc.pgm"), disc_pgm(16)).unwrap();
+    let cfg = d.join("small.ron");
+    std::fs::write(
+        &cfg,
+        cfg_text.replace(
+            "shapes: [],",
+            "shapes: [(name: \"coin\", bitmap: Some((path: \"disc.pgm\", c_min: (0, 0, 0), c_max: (10, 10, 10), size_m: Some((1.0, 1.0)))))],",
+        ),
+    )
+    .unwrap();
+    let c = cfg.to_str().unwrap();
+    assert_error(
+        &run(&[
+            "--from", "square", "--to", "coin", "--agents", "60", "--config", c,
+        ]),
+        &["60 agents do not fit in formation `coin`"],
+    );
+    assert_error(
+        &bin()
+            .args(["transform", "compare", "--from", "coin", "--to", "square"])
+            .args(["--agents", "60", "--config", c])
+            .output()
+            .unwrap(),
+        &["--from coin", "do not fit"],
+    );
+}
