@@ -399,6 +399,33 @@ fn a_duration_sets_how_long_the_transform_takes() {
 }
 
 #[test]
+fn a_transform_back_to_start_ends_in_the_start_rectangle() {
+    let cfg = config(60);
+    let (mut e, mut now) = engine(&cfg);
+    let mut seen = Seen::default();
+    e.set_formation("arrow", Micros(now)).unwrap();
+    assert!(run_until_formation(&mut e, &mut now, &mut seen, "arrow"));
+    seen.events.clear();
+    e.set_formation("start", Micros(now)).unwrap();
+    assert!(run_until_formation(&mut e, &mut now, &mut seen, "start"));
+    assert_eq!(seen.ends.len(), 2);
+    assert_eq!(seen.ends[1].outcome, TransformOutcome::Arrived);
+    assert_eq!(e.formation(), "start");
+    // Every agent inside a rectangle of the start's size around the crowd.
+    let r = cfg.crowd.formation;
+    let ps = e.agent_positions();
+    let c = centroid(ps);
+    let slack = cfg.crowd.agent_radius_m;
+    for p in ps {
+        assert!(
+            (p.x - c.x).abs() <= 0.5 * r.width() + slack
+                && (p.y - c.y).abs() <= 0.5 * r.height() + slack,
+            "{p:?} outside the start rectangle around {c:?}"
+        );
+    }
+}
+
+#[test]
 fn reset_drops_a_transform() {
     let (mut e, mut now) = engine(&config(40));
     e.set_formation("arrow", Micros(now)).unwrap();

@@ -9,9 +9,7 @@ use crowdtouch::config::{Config, MAX_AGENTS};
 use crowdtouch::crowd::formation::{
     hex_fit, BitmapDef, Formation, FormationDef, FormationLibrary, Placement, SampleParams, START,
 };
-use crowdtouch::crowd::transform::{
-    ApParams, MoveParams, Mover, PairCost, Preference, TransformRequest,
-};
+use crowdtouch::crowd::transform::{ApParams, MoveParams, PairCost, TransformRequest};
 use crowdtouch::geom::Vec2;
 use crowdtouch::located::{format_issues, locate_field, parse_strict, Issue};
 use std::path::Path;
@@ -45,50 +43,12 @@ pub struct Settings {
 impl Settings {
     /// The settings of `cfg` for agents of radius `radius_m`.
     pub fn of(cfg: &Config, radius_m: f64) -> Settings {
-        use crowdtouch::config::TransformCost;
-        let f = &cfg.formations;
-        let cost = match f.cost {
-            TransformCost::LeastEffort => PairCost::LeastEffort { lambda: f.lambda },
-            TransformCost::Euclidean => PairCost::Euclidean,
-            TransformCost::Manhattan => PairCost::Manhattan,
-        };
-        let s = &f.subgroups;
-        let ap = s.enabled.then_some(ApParams {
-            damping: s.damping,
-            max_iterations: s.max_iterations,
-            convergence_iterations: s.convergence_iterations,
-            preference: s.preference.map_or(Preference::Median, Preference::Value),
-            ring: s.ring,
-            dense_up_to: s.dense_up_to,
-        });
-        let t = &f.transform;
-        let moves = MoveParams {
-            mover: Mover::SocialForce,
-            radius_m,
-            desired_speed_m_s: t.desired_speed_m_s,
-            feedback: t.feedback,
-            subgroup_forces: t.subgroup_forces,
-            arrive_m: t.arrive_m,
-            timeout_s: t.timeout_s,
-            desired_speed_spread_m_s: t.desired_speed_spread_m_s,
-            max_speed_m_s: t.max_speed_m_s,
-            max_accel_m_s2: t.max_accel_m_s2,
-            tau_s: t.tau_s,
-            arrival_decel_m_s2: t.arrival_decel_m_s2,
-            fade_m: t.fade_m,
-            repulsion_a_m_s2: t.repulsion_a_m_s2,
-            repulsion_b_m: t.repulsion_b_m,
-            obstacle_a_m_s2: t.obstacle_a_m_s2,
-            subgroup_a_m_s2: t.subgroup_a_m_s2,
-            subgroup_b_m: t.subgroup_b_m,
-            interaction_range_m: t.interaction_range_m,
-            fluctuation_m_s2: t.fluctuation_m_s2,
-            bin_m: t.bin_m,
-            sectors: t.sectors,
-            settle_speed_m_s: t.settle_speed_m_s,
-            ..MoveParams::default()
-        };
-        Settings { cost, ap, moves }
+        use crowdtouch::engine::{ap_params, move_params, pair_cost};
+        Settings {
+            cost: pair_cost(cfg),
+            ap: ap_params(cfg),
+            moves: move_params(cfg, radius_m),
+        }
     }
 }
 

@@ -36,8 +36,8 @@ mod tests;
 
 pub use error::{CommandError, SwitchError};
 pub use params::{
-    inline_planner, planner_for, planner_params, point_metric, same_scene, search_params,
-    segment_params, tap_thresholds,
+    ap_params, inline_planner, move_params, pair_cost, planner_for, planner_params, point_metric,
+    same_scene, search_params, segment_params, tap_thresholds,
 };
 pub use replay::{replay_virtual, VirtualClock};
 pub use state::{Engine, EngineCounters, MAX_TICK_S, RADIUS_FIT};

@@ -168,8 +168,10 @@ impl Engine {
         };
         let (formation, mut place) = if name == START {
             let r = self.formation;
+            // `start` is reserved for the library's names; the shape itself is the
+            // `crowd.formation` rectangle (the request keeps the name `start`).
             let def = FormationDef {
-                name: START.to_string(),
+                name: "crowd.formation".to_string(),
                 outline: vec![
                     (r.min[0], r.min[1]),
                     (r.max[0], r.min[1]),
