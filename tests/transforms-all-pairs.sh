@@ -50,10 +50,10 @@ import json, sys
 v = json.loads(sys.argv[1])
 ok = v["arrived_fraction"] >= 1.0 and v["overlapping_pairs"] == 0
 md = v["min_distance_m"]
-print("%s %-10s -> %-10s arrived %5.1f %%  overlapping pairs %3d  closest %s m  %6.2f s%s" % (
+print("%s %-10s -> %-10s arrived %5.1f %%  overlapping pairs %3d  closest %s m  %6.2f s  swaps %4d%s" % (
     "ok  " if ok else "FAIL", sys.argv[2], sys.argv[3], 100.0 * v["arrived_fraction"],
     v["overlapping_pairs"], "%.3f" % md if md is not None else "-", v["simulated_s"],
-    " (timed out)" if v["timed_out"] else ""))
+    v["swaps"], " (timed out)" if v["timed_out"] else ""))
 ' "$out" "$a" "$b") || { line="FAIL $a -> $b: unreadable report: $out"; }
         printf '%s\n' "$line"
         case "$line" in FAIL*) failed=$((failed + 1)) ;; esac

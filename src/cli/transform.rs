@@ -134,7 +134,13 @@ pub struct Recorded {
     /// Every agent's positions, every [`PATH_EVERY_STEPS`] steps and at the end
     /// (when asked for).
     pub paths: Option<Vec<Vec<Vec2>>>,
+    /// The agents that had not settled at their targets at the end: index,
+    /// distance to the target (m) and speed (m/s).
+    pub short: Vec<(usize, f64, f64)>,
 }
+
+/// Agents short of their targets listed in a report.
+const SHORT_LISTED: usize = 10;
 
 /// Steps between two recorded path points (0.2 s).
 pub const PATH_EVERY_STEPS: u64 = 12;
@@ -187,11 +193,16 @@ pub fn run(plan: &TransformPlan, params: &MoveParams, seed: u64, keep_paths: boo
             }
         }
     }
+    let short = (0..pos.len())
+        .filter(|&i| !r.settled(i))
+        .map(|i| (i, (pos[i] - r.targets()[i]).norm(), vel[i].norm()))
+        .collect();
     Recorded {
         summary: r.summary(),
         step_us,
         series,
         paths,
+        short,
     }
 }
 
@@ -253,6 +264,7 @@ fn single(a: &TransformArgs) -> Result<()> {
             "arrived_fraction": sm.arrived_fraction,
             "min_distance_m": finite_or_null(sm.min_distance_m),
             "overlapping_pairs": sm.overlapping_pairs,
+            "swaps": sm.swaps,
             "mean_travel_m": sm.mean_travel_m,
             "max_travel_m": sm.max_travel_m,
             "I_d": sm.mean.i_d,
@@ -261,6 +273,9 @@ fn single(a: &TransformArgs) -> Result<()> {
             "step_us_p50": rec.step_us_at(0.5),
             "step_us_p99": rec.step_us_at(0.99),
             "prepare_ms": prepare_ms,
+            "short_of_target": rec.short.iter().take(SHORT_LISTED).map(|&(i, d, v)| json!({
+                "agent": i, "distance_m": d, "speed_m_s": v
+            })).collect::<Vec<_>>(),
         });
         outln!("{v}")?;
     } else {
@@ -292,12 +307,36 @@ fn single(a: &TransformArgs) -> Result<()> {
             if sm.timed_out { " (timed out)" } else { "" }
         )?;
         outln!("  arrived             {:.1} %", 100.0 * sm.arrived_fraction)?;
+        if !rec.short.is_empty() {
+            let listed: Vec<String> = rec
+                .short
+                .iter()
+                .take(SHORT_LISTED)
+                .map(|&(i, d, v)| format!("{i} ({d:.2} m off, {v:.2} m/s)"))
+                .collect();
+            outln!(
+                "  short of target     {} agents: {}{}",
+                rec.short.len(),
+                listed.join(", "),
+                if rec.short.len() > SHORT_LISTED {
+                    ", …"
+                } else {
+                    ""
+                }
+            )?;
+        }
         outln!(
             "  closest two agents  {:.4} m at any time (two radii {:.2} m); {} pairs overlapped",
             sm.min_distance_m,
             2.0 * setup.radius_m,
             sm.overlapping_pairs
         )?;
+        if sm.swaps > 0 {
+            outln!(
+                "  target exchanges    {} (pairs of agents blocking each other head-on)",
+                sm.swaps
+            )?;
+        }
         outln!(
             "  travel              mean {:.2} m, max {:.2} m",
             sm.mean_travel_m,

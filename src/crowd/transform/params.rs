@@ -99,7 +99,7 @@ impl Default for MoveParams {
             settle_speed_m_s: 0.6,
             timeout_s: 120.0,
             max_substep_s: 1.0 / 30.0,
-            overlap_rounds: 8,
+            overlap_rounds: 16,
         }
     }
 }

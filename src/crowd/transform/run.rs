@@ -22,7 +22,14 @@
 //!    along its centre line, a few rounds, the agent with farther to go moving
 //!    less (it has right of way: settled agents step aside for one walking
 //!    through and walk back after); agents out of obstacles;
-//! 6. arrival: an agent within `arrive_m` of its target and slower than
+//! 6. head-on blocks undone: two walking agents in contact, each heading for a
+//!    target beyond the other, exchange targets when that shortens the sum of
+//!    their remaining distances by at least [`SWAP_GAIN_M`]. Agents are
+//!    interchangeable and the exchange lowers the effort the pairing minimises;
+//!    without it, two such agents hemmed in by settled neighbours push against
+//!    each other until the timeout (line → ring at 1,000 agents). Rare: the
+//!    summary counts them (`swaps`);
+//! 7. arrival: an agent within `arrive_m` of its target and slower than
 //!    `settle_speed` settles (the ramp brings it in below that speed, so it stops
 //!    as it enters, without overshoot): velocity zero, no forces act on it; it
 //!    moves again only when a contact pushes it more than `arrive_m` off its
@@ -59,6 +66,10 @@ const YIELD_EPS_M: f64 = 0.05;
 /// positional resolution may leave (it moves pairs to exactly `2 r`, and moving
 /// one pair may press another).
 pub const OVERLAP_TOLERANCE_M: f64 = 0.005;
+
+/// Two blocked agents exchange targets when that shortens the sum of their
+/// distances to target by at least this much (m).
+pub const SWAP_GAIN_M: f64 = 0.05;
 
 /// How far an agent may move during the overlap rounds before the list of
 /// candidate contact pairs is made again (m).
@@ -102,6 +113,8 @@ pub struct RunSummary {
     pub mean: Measures,
     /// Whether it ended by the timeout.
     pub timed_out: bool,
+    /// Pairs of agents that exchanged targets to undo a head-on block (step 6).
+    pub swaps: u64,
 }
 
 /// A transform in progress; the agents' positions and velocities stay the caller's.
@@ -150,6 +163,7 @@ pub struct TransformRun {
     grid_at_report: bool,
     elapsed_s: f64,
     steps: u64,
+    swaps: u64,
     sum: Measures,
     min_distance_m: f64,
     last: StepReport,
@@ -202,6 +216,7 @@ impl TransformRun {
             grid_at_report: false,
             elapsed_s: 0.0,
             steps: 0,
+            swaps: 0,
             sum: Measures::default(),
             min_distance_m: f64::INFINITY,
             last: StepReport::default(),
@@ -352,6 +367,7 @@ impl TransformRun {
             }
         }
         self.resolve_overlaps(pos, vel);
+        self.undo_head_on_blocks(pos);
         if let Some((s, t)) = scene {
             for x in pos.iter_mut() {
                 if s.signed_distance(*x, t) < self.p.radius_m {
@@ -489,6 +505,37 @@ impl TransformRun {
         }
     }
 
+    /// Step 6: walking agents in contact that head for targets beyond each other
+    /// exchange targets when the sum of their distances to target falls by at
+    /// least [`SWAP_GAIN_M`]. Reads the contact list of the overlap rounds (every
+    /// pair closer than `2 r` is in it).
+    fn undo_head_on_blocks(&mut self, pos: &[Vec2]) {
+        let touch = 2.0 * self.p.radius_m + 0.01;
+        let touch2 = touch * touch;
+        for k in 0..self.contacts_len {
+            let (i, j) = self.contacts[k];
+            let (i, j) = (i as usize, j as usize);
+            if self.settled[i] || self.settled[j] || (pos[i] - pos[j]).norm_squared() > touch2 {
+                continue;
+            }
+            let (ti, tj) = (self.targets[i], self.targets[j]);
+            let (ei, ej) = (ti - pos[i], tj - pos[j]);
+            // Heading for each other's side: opposed, and each target beyond the
+            // other agent.
+            let d = pos[j] - pos[i];
+            if ei.dot(&ej) >= 0.0 || ei.dot(&d) <= 0.0 || ej.dot(&d) >= 0.0 {
+                continue;
+            }
+            let now = ei.norm() + ej.norm();
+            let swapped = (tj - pos[i]).norm() + (ti - pos[j]).norm();
+            if swapped <= now - SWAP_GAIN_M {
+                self.targets.swap(i, j);
+                self.groups.swapped(i, j, ti, tj);
+                self.swaps += 1;
+            }
+        }
+    }
+
     /// The pairs closer than `reach_m` at `scratch` into `contacts`, and `scratch`
     /// into `listed_at`.
     fn list_contacts(&mut self, reach_m: f64) {
@@ -622,6 +669,7 @@ impl TransformRun {
                 sigma_curr_eft_m: self.sum.sigma_curr_eft_m / steps,
             },
             timed_out: self.elapsed_s >= self.p.timeout_s && !self.settled.iter().all(|&s| s),
+            swaps: self.swaps,
         }
     }
 }

@@ -77,6 +77,16 @@ impl Groups {
         g
     }
 
+    /// Agents `i` and `j` exchanged targets `ti` and `tj` (`i` had `ti`): the
+    /// groups' target centroids follow.
+    pub(crate) fn swapped(&mut self, i: usize, j: usize, ti: Vec2, tj: Vec2) {
+        let (gi, gj) = (self.group_of[i] as usize, self.group_of[j] as usize);
+        if gi != gj {
+            self.tgt_c[gi] += (tj - ti) / self.count[gi].max(1) as f64;
+            self.tgt_c[gj] += (ti - tj) / self.count[gj].max(1) as f64;
+        }
+    }
+
     /// Adds the bounded subgroup attraction (eq. 21 as read in the module docs) to
     /// `acc[i] · fade[i]` for every agent with `fade[i] > 0`.
     pub(crate) fn attract(
