@@ -32,49 +32,23 @@ Recorded result (scikit-learn 1.9.1, 2026-12-02): all four partitions identical
 """
 import json
 import os
-import subprocess
 import sys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from sklearn_check import ROOT, ensure_sklearn, rust_dataset
+
 OUT = os.path.join(ROOT, "target", "ap_crosscheck")
 VENV = os.path.join(ROOT, "target", "ap-venv")
 
 
-def ensure_sklearn():
-    try:
-        import sklearn  # noqa: F401
-        return
-    except ImportError:
-        pass
-    if os.environ.get("AP_CROSSCHECK_IN_VENV"):
-        print("SKIPPED: scikit-learn is not importable even in", VENV)
-        sys.exit(0)
-    py = os.path.join(VENV, "bin", "python")
-    try:
-        if not os.path.exists(py):
-            subprocess.run([sys.executable, "-m", "venv", VENV], check=True)
-        subprocess.run([py, "-m", "pip", "install", "-q", "scikit-learn"], check=True)
-    except (subprocess.CalledProcessError, OSError) as e:
-        print(f"SKIPPED: cannot install scikit-learn into {VENV}: {e}")
-        sys.exit(0)
-    env = dict(os.environ, AP_CROSSCHECK_IN_VENV="1")
-    sys.exit(subprocess.run([py, os.path.abspath(__file__)], env=env).returncode)
-
-
 def main():
-    ensure_sklearn()
+    ensure_sklearn(os.path.abspath(__file__), VENV, "AP_CROSSCHECK_IN_VENV")
     import numpy as np
     import sklearn
     from sklearn.cluster import AffinityPropagation
     from sklearn.metrics import adjusted_rand_score
 
     data = os.path.join(OUT, "cases.json")
-    if not os.path.exists(data):
-        subprocess.run(
-            ["cargo", "test", "--lib", "ap_crosscheck_dataset", "--", "--ignored"],
-            cwd=ROOT,
-            check=True,
-        )
+    rust_dataset(data, "ap_crosscheck_dataset")
     cases = json.load(open(data))
     print(f"scikit-learn {sklearn.__version__}")
     bad = 0

@@ -16,47 +16,21 @@ than 1e-6 nats per sample.
 """
 import json
 import os
-import subprocess
 import sys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from sklearn_check import ROOT, ensure_sklearn, rust_dataset
+
 OUT = os.path.join(ROOT, "target", "gmm_crosscheck")
 VENV = os.path.join(ROOT, "target", "gmm-venv")
 TOL = 1e-6
 
 
-def ensure_sklearn():
-    try:
-        import sklearn  # noqa: F401
-        return
-    except ImportError:
-        pass
-    if os.environ.get("GMM_CROSSCHECK_IN_VENV"):
-        print("SKIPPED: scikit-learn is not importable even in", VENV)
-        sys.exit(0)
-    py = os.path.join(VENV, "bin", "python")
-    try:
-        if not os.path.exists(py):
-            subprocess.run([sys.executable, "-m", "venv", VENV], check=True)
-        subprocess.run([py, "-m", "pip", "install", "-q", "scikit-learn"], check=True)
-    except (subprocess.CalledProcessError, OSError) as e:
-        print(f"SKIPPED: cannot install scikit-learn into {VENV}: {e}")
-        sys.exit(0)
-    env = dict(os.environ, GMM_CROSSCHECK_IN_VENV="1")
-    sys.exit(subprocess.run([py, os.path.abspath(__file__)], env=env).returncode)
-
-
 def main():
-    ensure_sklearn()
+    ensure_sklearn(os.path.abspath(__file__), VENV, "GMM_CROSSCHECK_IN_VENV")
     import numpy as np
     from sklearn.mixture import GaussianMixture
 
-    if not os.path.exists(os.path.join(OUT, "rust.json")):
-        subprocess.run(
-            ["cargo", "test", "--lib", "gmm_crosscheck_dataset", "--", "--ignored"],
-            cwd=ROOT,
-            check=True,
-        )
+    rust_dataset(os.path.join(OUT, "rust.json"), "gmm_crosscheck_dataset")
     x = np.loadtxt(os.path.join(OUT, "data.csv"), delimiter=",")
     rust = json.load(open(os.path.join(OUT, "rust.json")))
     gm = GaussianMixture(

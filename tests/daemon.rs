@@ -11,7 +11,7 @@ use crowdtouch::pipeline::{Daemon, DaemonOptions, SourceSpec};
 use crowdtouch::vocab::Micros;
 use crowdtouch::vocab::TouchFrame;
 use serde_json::Value;
-use std::io::{BufRead, BufReader, Write};
+use std::io::{BufReader, Write};
 use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -54,40 +54,6 @@ fn start(mut cfg: Config, names: &[&str], path: &Path) -> Daemon {
         },
     )
     .expect("daemon starts")
-}
-
-/// Reads JSON lines until `until` returns true or the time is up.
-fn read_until(
-    r: &mut BufReader<UnixStream>,
-    secs: f64,
-    mut until: impl FnMut(&Value) -> bool,
-) -> Vec<Value> {
-    r.get_ref()
-        .set_read_timeout(Some(Duration::from_millis(200)))
-        .unwrap();
-    let end = Instant::now() + Duration::from_secs_f64(secs);
-    let mut out = vec![];
-    let mut line = String::new();
-    while Instant::now() < end {
-        match r.read_line(&mut line) {
-            Ok(0) => break,
-            Ok(_) => {
-                let v: Value = serde_json::from_str(&line)
-                    .unwrap_or_else(|e| panic!("bad line {line:?}: {e}"));
-                line.clear();
-                let stop = until(&v);
-                out.push(v);
-                if stop {
-                    break;
-                }
-            }
-            Err(e)
-                if e.kind() == std::io::ErrorKind::WouldBlock
-                    || e.kind() == std::io::ErrorKind::TimedOut => {}
-            Err(e) => panic!("read: {e}"),
-        }
-    }
-    out
 }
 
 fn pairs(v: &Value) -> Vec<Vec2> {

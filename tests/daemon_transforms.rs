@@ -4,14 +4,16 @@
 //! `formation` event; a client that did not subscribe gets none of the new
 //! message types; a bad request is an `error` reply and the crowd goes on.
 
+mod common;
+
+use common::read_until;
 use crowdtouch::config::Config;
 use crowdtouch::pipeline::{Daemon, DaemonOptions, SourceSpec};
 use crowdtouch::vocab::TouchFrame;
 use serde_json::Value;
-use std::io::{BufRead, BufReader, Write};
+use std::io::{BufReader, Write};
 use std::os::unix::net::UnixStream;
 use std::path::Path;
-use std::time::{Duration, Instant};
 
 fn start(agents: u32, path: &Path) -> (Daemon, crossbeam_channel::Sender<TouchFrame>) {
     let mut cfg = Config::embedded_default();
@@ -27,38 +29,6 @@ fn start(agents: u32, path: &Path) -> (Daemon, crossbeam_channel::Sender<TouchFr
     )
     .expect("daemon starts");
     (d, tx)
-}
-
-fn read_until(
-    r: &mut BufReader<UnixStream>,
-    secs: f64,
-    mut until: impl FnMut(&Value) -> bool,
-) -> Vec<Value> {
-    r.get_ref()
-        .set_read_timeout(Some(Duration::from_millis(200)))
-        .unwrap();
-    let end = Instant::now() + Duration::from_secs_f64(secs);
-    let mut out = vec![];
-    let mut line = String::new();
-    while Instant::now() < end {
-        match r.read_line(&mut line) {
-            Ok(0) => break,
-            Ok(_) => {
-                let v: Value = serde_json::from_str(&line).unwrap();
-                line.clear();
-                let stop = until(&v);
-                out.push(v);
-                if stop {
-                    break;
-                }
-            }
-            Err(e)
-                if e.kind() == std::io::ErrorKind::WouldBlock
-                    || e.kind() == std::io::ErrorKind::TimedOut => {}
-            Err(e) => panic!("read: {e}"),
-        }
-    }
-    out
 }
 
 #[test]
@@ -85,36 +55,26 @@ fn a_client_sees_a_transform_run_end_and_the_formation_arrive() {
             .collect::<Vec<_>>()
     });
     // Bad requests: an `error` reply each.
-    writeln!(
-        w,
-        r#"{{"type":"command","id":1,"name":"set_formation","formation":"blob"}}"#
-    )
-    .unwrap();
-    let msgs = read_until(&mut r, 3.0, |v| v["type"] == "error");
-    let e = msgs.last().unwrap();
+    let mut error_for = |command: &str| {
+        writeln!(w, "{command}").unwrap();
+        let msgs = read_until(&mut r, 3.0, |v| v["type"] == "error");
+        msgs.last().unwrap().clone()
+    };
+    let e = error_for(r#"{"type":"command","id":1,"name":"set_formation","formation":"blob"}"#);
     assert_eq!(e["id"], 1);
     let m = e["message"].as_str().unwrap();
     assert!(m.contains("`blob`") && m.contains("arrow"), "{m}");
-    writeln!(
-        w,
-        r#"{{"type":"command","id":2,"name":"set_formation","formation":"line","method":"warp"}}"#
-    )
-    .unwrap();
-    let msgs = read_until(&mut r, 3.0, |v| v["type"] == "error");
-    assert!(msgs.last().unwrap()["message"]
+    let e = error_for(
+        r#"{"type":"command","id":2,"name":"set_formation","formation":"line","method":"warp"}"#,
+    );
+    assert!(e["message"]
         .as_str()
         .unwrap()
         .contains("\"transform\" or \"mesh\""));
-    writeln!(
-        w,
-        r#"{{"type":"command","id":3,"name":"set_formation","formation":"line","duration":-1}}"#
-    )
-    .unwrap();
-    let msgs = read_until(&mut r, 3.0, |v| v["type"] == "error");
-    assert!(msgs.last().unwrap()["message"]
-        .as_str()
-        .unwrap()
-        .contains("duration"));
+    let e = error_for(
+        r#"{"type":"command","id":3,"name":"set_formation","formation":"line","duration":-1}"#,
+    );
+    assert!(e["message"].as_str().unwrap().contains("duration"));
     // The transform.
     writeln!(
         w,

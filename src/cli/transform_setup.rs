@@ -214,17 +214,7 @@ pub fn run_seed(seed: u64) -> u64 {
 pub fn resolve(cfg: &Config, arg: &str) -> Result<Formation> {
     let lib: &FormationLibrary = cfg.formation_library();
     if arg == START {
-        let r = cfg.crowd.formation;
-        let def = FormationDef {
-            name: "start rectangle".to_string(),
-            outline: vec![
-                (r.min[0], r.min[1]),
-                (r.max[0], r.min[1]),
-                (r.max[0], r.max[1]),
-                (r.min[0], r.max[1]),
-            ],
-            ..FormationDef::default()
-        };
+        let def = FormationDef::rectangle("start rectangle", cfg.crowd.formation);
         return Formation::new(&def).map_err(|e| anyhow!("crowd.formation: {e}"));
     }
     if let Some(f) = lib.get(arg) {

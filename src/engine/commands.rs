@@ -142,13 +142,7 @@ impl Engine {
             self.goal_of.clear();
             self.goal_of.extend(0..self.agents.len() as u32);
             self.waypoints.fill(Vec2::repeat(f64::NAN));
-            self.generation += 1;
-            if let Some(a) = &mut self.inline {
-                a.forget();
-            }
-            if let Some(p) = &mut self.planner {
-                p.forget();
-            }
+            self.forget_assignments();
         }
         self.queue_reset_event(hard, now);
     }

@@ -129,13 +129,7 @@ impl Engine {
         self.waypoints.clear();
         self.waypoints
             .resize(count as usize, Vec2::repeat(f64::NAN));
-        self.generation += 1;
-        if let Some(a) = &mut self.inline {
-            a.forget();
-        }
-        if let Some(p) = &mut self.planner {
-            p.forget();
-        }
+        self.forget_assignments();
         self.fit_radius();
         self.set_mesh_environment();
         self.queue_reset_event(true, now);

@@ -334,6 +334,18 @@ impl Engine {
         }
     }
 
+    /// The goals changed: a new assignment generation (results for the old goals are
+    /// stale), and the inline assigner and the planner forget what they kept.
+    pub(super) fn forget_assignments(&mut self) {
+        self.generation += 1;
+        if let Some(a) = &mut self.inline {
+            a.forget();
+        }
+        if let Some(p) = &mut self.planner {
+            p.forget();
+        }
+    }
+
     /// Counters.
     pub fn counters(&self) -> EngineCounters {
         self.counters

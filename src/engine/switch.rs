@@ -224,14 +224,8 @@ impl Engine {
             self.goal_of.copy_from_slice(goal_of);
         }
         self.waypoints.fill(Vec2::repeat(f64::NAN));
-        self.generation += 1;
+        self.forget_assignments();
         self.assignment_seq = self.seq;
-        if let Some(a) = &mut self.inline {
-            a.forget();
-        }
-        if let Some(p) = &mut self.planner {
-            p.forget();
-        }
     }
 
     /// The start mesh back where it was configured (a reset), with its cached goal

@@ -170,16 +170,7 @@ impl Engine {
             let r = self.formation;
             // `start` is reserved for the library's names; the shape itself is the
             // `crowd.formation` rectangle (the request keeps the name `start`).
-            let def = FormationDef {
-                name: "crowd.formation".to_string(),
-                outline: vec![
-                    (r.min[0], r.min[1]),
-                    (r.max[0], r.min[1]),
-                    (r.max[0], r.max[1]),
-                    (r.min[0], r.max[1]),
-                ],
-                ..FormationDef::default()
-            };
+            let def = FormationDef::rectangle("crowd.formation", r);
             let Ok(f) = Formation::new(&def) else {
                 let why = SwitchError::NotInLibrary;
                 self.formation_failed(name, &why);
@@ -360,14 +351,8 @@ impl Engine {
         self.goal_of.clear();
         self.goal_of.extend(0..self.agents.len() as u32);
         self.waypoints.fill(Vec2::repeat(f64::NAN));
-        self.generation += 1;
+        self.forget_assignments();
         self.assignment_seq = self.seq;
-        if let Some(a) = &mut self.inline {
-            a.forget();
-        }
-        if let Some(p) = &mut self.planner {
-            p.forget();
-        }
     }
 
     /// One tick of a transform: the run steps the agents and a progress message is

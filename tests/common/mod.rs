@@ -7,9 +7,13 @@ use crowdtouch::geom::Vec2;
 use crowdtouch::input::recording::{OnBadFrame, Recording};
 use crowdtouch::vocab::Micros;
 use crowdtouch::vocab::{Event, MeshView, Snapshot};
+use serde_json::Value;
 use std::convert::Infallible;
+use std::io::{BufRead, BufReader};
+use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 /// Path of a shipped recording.
 pub fn shipped(name: &str) -> PathBuf {
@@ -78,6 +82,41 @@ pub fn replay(name: &str, cfg: &Config, settle_s: f64) -> Run {
     )
     .unwrap();
     run
+}
+
+/// Reads a socket client's JSON lines until `until` returns true (that line is the
+/// last one returned) or `secs` are up.
+pub fn read_until(
+    r: &mut BufReader<UnixStream>,
+    secs: f64,
+    mut until: impl FnMut(&Value) -> bool,
+) -> Vec<Value> {
+    r.get_ref()
+        .set_read_timeout(Some(Duration::from_millis(200)))
+        .unwrap();
+    let end = Instant::now() + Duration::from_secs_f64(secs);
+    let mut out = vec![];
+    let mut line = String::new();
+    while Instant::now() < end {
+        match r.read_line(&mut line) {
+            Ok(0) => break,
+            Ok(_) => {
+                let v: Value = serde_json::from_str(&line)
+                    .unwrap_or_else(|e| panic!("bad line {line:?}: {e}"));
+                line.clear();
+                let stop = until(&v);
+                out.push(v);
+                if stop {
+                    break;
+                }
+            }
+            Err(e)
+                if e.kind() == std::io::ErrorKind::WouldBlock
+                    || e.kind() == std::io::ErrorKind::TimedOut => {}
+            Err(e) => panic!("read: {e}"),
+        }
+    }
+    out
 }
 
 pub fn centroid(ps: impl IntoIterator<Item = Vec2>) -> Vec2 {

@@ -131,18 +131,34 @@ impl LeastEffort {
     /// The costs of sending `agents` to `goals`, computed on demand
     /// ([`LeastEffortCosts`]).
     pub fn costs(&self, agents: &[Vec2], goals: &[Vec2]) -> LeastEffortCosts {
-        let mut c = LeastEffortCosts {
+        let (mut ds, mut dt) = (Vec::new(), Vec::new());
+        mean_edge_lengths(agents, &mut ds);
+        mean_edge_lengths(goals, &mut dt);
+        self.costs_with_lengths(agents, goals, ds, dt)
+    }
+
+    /// The costs of sending `agents` to `goals` with the local edge lengths given
+    /// (`ds` of the agents, `dt` of the goals, one each) instead of triangulated:
+    /// for callers that solve in other coordinates, positions and lengths mapped
+    /// alike.
+    pub fn costs_with_lengths(
+        &self,
+        agents: &[Vec2],
+        goals: &[Vec2],
+        ds: Vec<f64>,
+        dt: Vec<f64>,
+    ) -> LeastEffortCosts {
+        debug_assert_eq!((ds.len(), dt.len()), (agents.len(), goals.len()));
+        LeastEffortCosts {
             ax: agents.iter().map(|p| p.x).collect(),
             ay: agents.iter().map(|p| p.y).collect(),
             gx: goals.iter().map(|p| p.x).collect(),
             gy: goals.iter().map(|p| p.y).collect(),
+            ds,
+            dt,
             l: self.lambda,
             m: 1.0 - self.lambda,
-            ..LeastEffortCosts::default()
-        };
-        mean_edge_lengths(agents, &mut c.ds);
-        mean_edge_lengths(goals, &mut c.dt);
-        c
+        }
     }
 }
 

@@ -224,14 +224,6 @@ mod tests {
     use super::*;
     use crate::geom::Vec2;
 
-    fn def(name: &str, outline: &[(f64, f64)]) -> FormationDef {
-        FormationDef {
-            name: name.into(),
-            outline: outline.to_vec(),
-            ..FormationDef::default()
-        }
-    }
-
     fn encode_heart() -> Vec<u8> {
         let (w, h, grey) = heart_pixels();
         let mut out = Vec::new();
@@ -256,7 +248,7 @@ mod tests {
 
     #[test]
     fn the_library_adds_replaces_and_reports() {
-        let star = def(
+        let star = FormationDef::polygon(
             "star",
             &[
                 (1.0, 0.0),
@@ -269,7 +261,7 @@ mod tests {
                 (0.2, -0.2),
             ],
         );
-        let sq = def("square", &[(0.0, 0.0), (3.0, 0.0), (3.0, 1.0), (0.0, 1.0)]);
+        let sq = FormationDef::polygon("square", &[(0.0, 0.0), (3.0, 0.0), (3.0, 1.0), (0.0, 1.0)]);
         let lib = FormationLibrary::with(&[star.clone(), sq]).unwrap();
         assert!(lib.knows("star") && lib.knows("start") && !lib.knows("nope"));
         assert_eq!(lib.names().count(), SHIPPED.len() + 1);
@@ -292,7 +284,12 @@ mod tests {
             .unwrap();
         m.sanity_check().unwrap();
         assert!((m.area() - 5.0).abs() < 1e-9);
-        let e = FormationLibrary::with(&[star.clone(), def("x", &[(0.0, 0.0)]), star]).unwrap_err();
+        let e = FormationLibrary::with(&[
+            star.clone(),
+            FormationDef::polygon("x", &[(0.0, 0.0)]),
+            star,
+        ])
+        .unwrap_err();
         assert_eq!(e.len(), 2);
         assert_eq!(e[0].0, "[1].outline");
         assert_eq!(e[1].0, "[2].name");

@@ -32,7 +32,7 @@
 use super::bitmap::{self, BitmapDef, ImageError, MAX_IMAGE_SIDE, MAX_PIECES, MAX_TRACED_VERTICES};
 use super::region::{self, Piece, Problem, RegionIndex, Ring};
 use crate::crowd::mesh::{MeshError, TriMesh};
-use crate::geom::{twice_signed_area, Vec2};
+use crate::geom::{twice_signed_area, Rect, Vec2};
 use serde::{Deserialize, Serialize};
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 
@@ -78,6 +78,31 @@ pub struct FormationDef {
     /// The shape as an image instead of polygons.
     #[serde(default)]
     pub bitmap: Option<BitmapDef>,
+}
+
+impl FormationDef {
+    /// The rectangle `r` as a shape named `name`: its corners counter-clockwise from
+    /// the minimum one.
+    pub fn rectangle(name: &str, r: Rect) -> FormationDef {
+        FormationDef::polygon(
+            name,
+            &[
+                (r.min[0], r.min[1]),
+                (r.max[0], r.min[1]),
+                (r.max[0], r.max[1]),
+                (r.min[0], r.max[1]),
+            ],
+        )
+    }
+
+    /// The polygon `outline` (no holes, one piece) as a shape named `name`.
+    pub fn polygon(name: &str, outline: &[(f64, f64)]) -> FormationDef {
+        FormationDef {
+            name: name.to_string(),
+            outline: outline.to_vec(),
+            ..FormationDef::default()
+        }
+    }
 }
 
 /// One more piece of a polygon shape.
@@ -853,14 +878,6 @@ mod tests {
     use crate::geom::{cross, segment_distance_squared};
     use proptest::prelude::*;
 
-    fn def(name: &str, outline: &[(f64, f64)]) -> FormationDef {
-        FormationDef {
-            name: name.into(),
-            outline: outline.to_vec(),
-            ..FormationDef::default()
-        }
-    }
-
     /// The shipped shapes, read from `config/formations` (the library embeds the
     /// same files; it is tested in `library.rs`).
     fn shipped() -> Vec<Formation> {
@@ -1028,43 +1045,43 @@ mod tests {
         const O: Ring = Ring::Outline(0);
         let cases: &[(FormationDef, FormationError)] = &[
             (
-                def("", &[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]),
+                FormationDef::polygon("", &[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]),
                 FormationError::EmptyName,
             ),
             (
-                def("start", &[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]),
+                FormationDef::polygon("start", &[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]),
                 FormationError::ReservedName,
             ),
             (
-                def("a", &[(0.0, 0.0), (1.0, 0.0)]),
+                FormationDef::polygon("a", &[(0.0, 0.0), (1.0, 0.0)]),
                 FormationError::VertexCount { at: O, got: 2 },
             ),
             (
-                def("a", &[(0.0, 0.0), (f64::NAN, 0.0), (0.0, 1.0)]),
+                FormationDef::polygon("a", &[(0.0, 0.0), (f64::NAN, 0.0), (0.0, 1.0)]),
                 FormationError::NonFinite { at: O, vertex: 1 },
             ),
             (
-                def("a", &[(0.0, 0.0), (1.0, 0.0), (0.0, 0.0), (0.0, 1.0)]),
+                FormationDef::polygon("a", &[(0.0, 0.0), (1.0, 0.0), (0.0, 0.0), (0.0, 1.0)]),
                 FormationError::Repeated { at: O, a: 0, b: 2 },
             ),
             // A bow tie.
             (
-                def("a", &[(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)]),
+                FormationDef::polygon("a", &[(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)]),
                 FormationError::SelfIntersecting { at: O, a: 0, b: 2 },
             ),
             // Collinear.
             (
-                def("a", &[(0.0, 0.0), (1.0, 0.0), (2.0, 0.0)]),
+                FormationDef::polygon("a", &[(0.0, 0.0), (1.0, 0.0), (2.0, 0.0)]),
                 FormationError::SelfIntersecting { at: O, a: 0, b: 2 },
             ),
             // A spike folding back on its own edge.
             (
-                def("a", &[(0.0, 0.0), (2.0, 0.0), (1.0, 0.0), (1.0, 1.0)]),
+                FormationDef::polygon("a", &[(0.0, 0.0), (2.0, 0.0), (1.0, 0.0), (1.0, 1.0)]),
                 FormationError::SelfIntersecting { at: O, a: 0, b: 1 },
             ),
             // Scale is free (a tiny triangle is fine), but a sliver has no area.
             (
-                def("a", &[(0.0, 0.0), (1.0, 0.0), (0.5, 1e-12)]),
+                FormationDef::polygon("a", &[(0.0, 0.0), (1.0, 0.0), (0.5, 1e-12)]),
                 FormationError::NoArea { at: O },
             ),
         ];
@@ -1072,8 +1089,16 @@ mod tests {
             assert_eq!(Formation::new(d).as_ref().err(), Some(want), "{d:?}");
         }
         // Either winding is fine and gives the same shape.
-        let cw = Formation::new(&def("t", &[(0.0, 0.0), (0.0, 1.0), (1.0, 0.0)])).unwrap();
-        let ccw = Formation::new(&def("t", &[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)])).unwrap();
+        let cw = Formation::new(&FormationDef::polygon(
+            "t",
+            &[(0.0, 0.0), (0.0, 1.0), (1.0, 0.0)],
+        ))
+        .unwrap();
+        let ccw = Formation::new(&FormationDef::polygon(
+            "t",
+            &[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)],
+        ))
+        .unwrap();
         assert!(twice_signed_area(cw.outline()) > 0.0);
         let mut a: Vec<_> = cw.outline().iter().map(|p| (p.x, p.y)).collect();
         let mut b: Vec<_> = ccw.outline().iter().map(|p| (p.x, p.y)).collect();
@@ -1383,7 +1408,7 @@ mod tests {
                 let a = std::f64::consts::TAU * i as f64 / n as f64;
                 (r * a.cos(), r * a.sin())
             }).collect();
-            let f = Formation::new(&def("s", &outline)).unwrap();
+            let f = Formation::new(&FormationDef::polygon("s", &outline)).unwrap();
             let p = place(cx, cy, angle.cos(), angle.sin(), area);
             check_mesh(&f, &p, vertices);
         }
@@ -1391,7 +1416,7 @@ mod tests {
         /// Arbitrary outlines never panic: either an error or a usable shape.
         #[test]
         fn arbitrary_outlines_never_panic(pts in prop::collection::vec((-3.0f64..3.0, -3.0f64..3.0), 0..12)) {
-            if let Ok(f) = Formation::new(&def("r", &pts)) {
+            if let Ok(f) = Formation::new(&FormationDef::polygon("r", &pts)) {
                 let _ = f.mesh(&place(0.0, 0.0, 1.0, 0.0, 2.0), 60);
             }
         }

@@ -3,7 +3,7 @@
 //! neighbour distances `σ_min_dis` (eq. 24) and the spread of their current efforts
 //! `σ_curr_eft` (eqs. 25–26).
 
-use super::grid::Grid;
+use crate::crowd::agents::NeighbourGrid;
 use crate::geom::Vec2;
 
 /// The three measures of section 5.1 (and `I_v`), for one instant or averaged.
@@ -34,7 +34,7 @@ pub(crate) fn std_dev(n: usize, f: impl Fn(usize) -> f64) -> f64 {
 /// [`nearest_distances`] and left in `nearest`; with the smallest of them. `(0, ∞)`
 /// for fewer than two agents.
 #[cfg(test)]
-pub(crate) fn sigma_min_dis(grid: &Grid, pos: &[Vec2], nearest: &mut [f64]) -> (f64, f64) {
+pub(crate) fn sigma_min_dis(grid: &NeighbourGrid, pos: &[Vec2], nearest: &mut [f64]) -> (f64, f64) {
     nearest_distances(grid, pos, nearest, |_, _, _| {});
     spread_and_min(&nearest[..pos.len()])
 }
@@ -56,7 +56,7 @@ pub(crate) fn spread_and_min(nearest: &[f64]) -> (f64, f64) {
 /// places, by the grid's ring search. The same values as a ring search for every
 /// agent, without one.
 pub(crate) fn nearest_distances(
-    grid: &Grid,
+    grid: &NeighbourGrid,
     pos: &[Vec2],
     nearest: &mut [f64],
     mut visit: impl FnMut(usize, usize, f64),
@@ -95,7 +95,7 @@ mod tests {
             Vec2::new(1.0, 0.0),
             Vec2::new(3.0, 0.0),
         ];
-        let mut g = Grid::with_capacity(3);
+        let mut g = NeighbourGrid::with_capacity(3);
         g.build(&pos, 0.5);
         let mean = 4.0 / 3.0;
         let want = ((2.0 * (1.0f64 - mean).powi(2) + (2.0f64 - mean).powi(2)) / 3.0).sqrt();
@@ -107,7 +107,7 @@ mod tests {
         let lattice: Vec<Vec2> = (0..100)
             .map(|i| Vec2::new((i % 10) as f64 * 0.8, (i / 10) as f64 * 0.8))
             .collect();
-        let mut g = Grid::with_capacity(100);
+        let mut g = NeighbourGrid::with_capacity(100);
         g.build(&lattice, 1.0);
         let mut nearest = [0.0; 100];
         let (sigma, min) = sigma_min_dis(&g, &lattice, &mut nearest);
@@ -124,7 +124,7 @@ mod tests {
             .collect();
         pos.extend((0..20).map(|_| Vec2::new(r.uniform(10.0, 60.0), r.uniform(-40.0, 0.0))));
         pos.push(pos[3]);
-        let mut g = Grid::with_capacity(pos.len());
+        let mut g = NeighbourGrid::with_capacity(pos.len());
         g.build(&pos, 0.6);
         let mut nearest = vec![0.0; pos.len()];
         let mut seen = vec![];

@@ -8,12 +8,11 @@
 //! | agents paired with targets (least effort, Euclidean, Manhattan) | `pairing.rs` | 3.2, eqs. 2–6; 5.2 |
 //! | subgroups by affinity propagation | `subgroups.rs` | 3.4, eq. 20 |
 //! | a request prepared off the control thread | `prepare.rs` | 3 |
-//! | social forces with subgroup terms, mutual-information feedback | `run.rs` (the step), `params.rs` (its constants), `social.rs` (forces), `feedback.rs` (eqs. 11–19), `grid.rs` (neighbours and nearest distances) | 3.3, 3.5, eqs. 7–19, 21–23 |
+//! | social forces with subgroup terms, mutual-information feedback | `run.rs` (the step), `params.rs` (its constants), `social.rs` (forces), `feedback.rs` (eqs. 11–19), `crate::crowd::agents::NeighbourGrid` (neighbours and nearest distances) | 3.3, 3.5, eqs. 7–19, 21–23 |
 //! | the objective measures | `measures.rs` | 5.1, eqs. 17, 24–26 |
 //! | the ORCA baseline of the comparison | `orca.rs` | 5.4 |
 
 mod feedback;
-mod grid;
 mod measures;
 mod orca;
 mod pairing;

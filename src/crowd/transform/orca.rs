@@ -10,8 +10,8 @@
 //! in `f32` and builds its constraint lines in a vector of its own per call: the
 //! baseline allocates there, the social force model does not.
 
-use super::grid::Grid;
 use super::params::MoveParams;
+use crate::crowd::agents::NeighbourGrid;
 use crate::geom::Vec2;
 use dodgy_2d::{Agent, AvoidanceOptions, Vec2 as V2};
 use std::borrow::Cow;
@@ -24,7 +24,7 @@ pub const TIME_HORIZON_S: f64 = 1.0;
 /// ORCA's buffers for `n` agents.
 #[derive(Clone, Debug)]
 pub(crate) struct Orca {
-    grid: Grid,
+    grid: NeighbourGrid,
     /// `MAX_NEIGHBOURS` (distance², index) slots per agent.
     near: Vec<(f64, u32)>,
     near_len: Vec<u8>,
@@ -36,7 +36,7 @@ impl Orca {
     /// Buffers for `n` agents.
     pub(crate) fn new(n: usize) -> Orca {
         Orca {
-            grid: Grid::with_capacity(n),
+            grid: NeighbourGrid::with_capacity(n),
             near: vec![(0.0, 0); n * MAX_NEIGHBOURS],
             near_len: vec![0; n],
             out: vec![Vec2::zeros(); n],

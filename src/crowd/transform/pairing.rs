@@ -19,8 +19,8 @@
 //! cost matrix when the solver returns (`Solver`'s module documentation).
 
 use crate::crowd::assign::{
-    mean_edge_lengths, AffineMap, AssignError, Cancel, CostSource, LeastEffort, PointCosts,
-    PointMetric, Solver,
+    mean_edge_lengths, AffineMap, AssignError, Cancel, CostSource, LeastEffort, LeastEffortCosts,
+    PointCosts, PointMetric, Solver,
 };
 use crate::geom::Vec2;
 
@@ -106,8 +106,11 @@ impl CostSource for ManhattanCosts {
     }
 }
 
-/// The least-effort costs of eq. 3 in coordinates where the agents and the targets
-/// are alike, with the same optimal pairing as [`LeastEffortCosts`](crate::crowd::assign::LeastEffortCosts).
+/// The least-effort costs of eq. 3 of sending `agents` to `goals` (same number) with
+/// `λ`, in coordinates where the agents and the targets are alike, with the same
+/// optimal pairing as [`LeastEffort::costs`]. The positions are left as given where
+/// [`AffineMap::equalising`] does not apply, and the edge lengths unscaled where one
+/// side has no spread.
 ///
 /// # Why the optimum is the same
 /// `ΔE(i, j) = λ|s_i − t_j|² + (1 − λ)(δs_i − δt_j)²` expands to a term of `i`
@@ -132,95 +135,40 @@ impl CostSource for ManhattanCosts {
 /// # Units
 /// Dimensionless mapped coordinates; entries are not the costs in m² (use
 /// [`LeastEffortCosts`](crate::crowd::assign::LeastEffortCosts) for those).
-#[derive(Clone, Debug, Default)]
-pub struct EqualisedLeastEffort {
-    ax: Vec<f64>,
-    ay: Vec<f64>,
-    gx: Vec<f64>,
-    gy: Vec<f64>,
-    ds: Vec<f64>,
-    dt: Vec<f64>,
-    l: f64,
-    m: f64,
-}
-
-impl EqualisedLeastEffort {
-    /// The mapped costs of sending `agents` to `goals` (same number) with `λ`; the
-    /// positions are left as given where [`AffineMap::equalising`] does not apply,
-    /// and the edge lengths unscaled where one side has no spread.
-    pub fn new(lambda: f64, agents: &[Vec2], goals: &[Vec2]) -> EqualisedLeastEffort {
-        let le = LeastEffort::new(lambda);
-        let (mut ds, mut dt) = (Vec::new(), Vec::new());
-        mean_edge_lengths(agents, &mut ds);
-        mean_edge_lengths(goals, &mut dt);
-        let map = if agents.len() == goals.len() {
-            AffineMap::equalising(agents, goals)
+fn equalised_least_effort(lambda: f64, agents: &[Vec2], goals: &[Vec2]) -> LeastEffortCosts {
+    let (mut ds, mut dt) = (Vec::new(), Vec::new());
+    mean_edge_lengths(agents, &mut ds);
+    mean_edge_lengths(goals, &mut dt);
+    let map = if agents.len() == goals.len() {
+        AffineMap::equalising(agents, goals)
+    } else {
+        None
+    };
+    let (a, g): (Vec<Vec2>, Vec<Vec2>) = match &map {
+        Some(m) => (
+            agents.iter().map(|&p| m.agent(p)).collect(),
+            goals.iter().map(|&p| m.goal(p)).collect(),
+        ),
+        None => (agents.to_vec(), goals.to_vec()),
+    };
+    if agents.len() == goals.len() && !agents.is_empty() {
+        let stats = |d: &[f64]| {
+            let mean = d.iter().sum::<f64>() / d.len() as f64;
+            let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / d.len() as f64;
+            (mean, var.sqrt())
+        };
+        let ((ms, ss), (mt, st)) = (stats(&ds), stats(&dt));
+        let alpha = if ss > 0.0 && st > 0.0 && (st / ss).is_finite() {
+            (st / ss).sqrt()
         } else {
-            None
+            1.0
         };
-        let (a, g): (Vec<Vec2>, Vec<Vec2>) = match &map {
-            Some(m) => (
-                agents.iter().map(|&p| m.agent(p)).collect(),
-                goals.iter().map(|&p| m.goal(p)).collect(),
-            ),
-            None => (agents.to_vec(), goals.to_vec()),
-        };
-        if agents.len() == goals.len() && !agents.is_empty() {
-            let stats = |d: &[f64]| {
-                let mean = d.iter().sum::<f64>() / d.len() as f64;
-                let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / d.len() as f64;
-                (mean, var.sqrt())
-            };
-            let ((ms, ss), (mt, st)) = (stats(&ds), stats(&dt));
-            let alpha = if ss > 0.0 && st > 0.0 && (st / ss).is_finite() {
-                (st / ss).sqrt()
-            } else {
-                1.0
-            };
-            if ms.is_finite() && mt.is_finite() {
-                ds.iter_mut().for_each(|x| *x = alpha * (*x - ms));
-                dt.iter_mut().for_each(|x| *x = (*x - mt) / alpha);
-            }
-        }
-        EqualisedLeastEffort {
-            ax: a.iter().map(|p| p.x).collect(),
-            ay: a.iter().map(|p| p.y).collect(),
-            gx: g.iter().map(|p| p.x).collect(),
-            gy: g.iter().map(|p| p.y).collect(),
-            ds,
-            dt,
-            l: le.lambda,
-            m: 1.0 - le.lambda,
+        if ms.is_finite() && mt.is_finite() {
+            ds.iter_mut().for_each(|x| *x = alpha * (*x - ms));
+            dt.iter_mut().for_each(|x| *x = (*x - mt) / alpha);
         }
     }
-}
-
-impl CostSource for EqualisedLeastEffort {
-    fn rows(&self) -> usize {
-        self.ax.len()
-    }
-    fn cols(&self) -> usize {
-        self.gx.len()
-    }
-    #[inline]
-    fn get(&self, i: usize, j: usize) -> f64 {
-        let (dx, dy) = (self.ax[i] - self.gx[j], self.ay[i] - self.gy[j]);
-        let de = self.ds[i] - self.dt[j];
-        self.l * (dx * dx + dy * dy) + self.m * (de * de)
-    }
-    fn row<'a>(&'a self, i: usize, buf: &'a mut Vec<f64>) -> &'a [f64] {
-        let (ax, ay, da) = (self.ax[i], self.ay[i], self.ds[i]);
-        buf.resize(self.gx.len(), 0.0);
-        for (e, ((&gx, &gy), &dg)) in buf
-            .iter_mut()
-            .zip(self.gx.iter().zip(&self.gy).zip(&self.dt))
-        {
-            let (dx, dy) = (ax - gx, ay - gy);
-            let de = da - dg;
-            *e = self.l * (dx * dx + dy * dy) + self.m * (de * de);
-        }
-        buf
-    }
+    LeastEffort::new(lambda).costs_with_lengths(&a, &g, ds, dt)
 }
 
 /// The exact pairing minimising the sum of `cost` (eq. 6): `target_of[i]` is the
@@ -232,7 +180,7 @@ impl CostSource for EqualisedLeastEffort {
 ///
 /// # Complexity
 /// Least effort: two Delaunay triangulations (`O(n log n)`), then the sparse solve
-/// on costs computed as read, in equalised coordinates (`EqualisedLeastEffort`)
+/// on costs computed as read, in equalised coordinates (`equalised_least_effort`)
 /// when `λ > 0`. Euclidean: the solver's bucket-grid candidate lists.
 /// Allocates.
 ///
@@ -252,7 +200,7 @@ pub fn pair(
         // 2,000 agents; λ = 0.5: 79 ms mapped against 128 ms, 0.48 s against 0.75 s
         // at 5,000 (bench `transform_prepare`'s instance, a loaded machine).
         PairCost::LeastEffort { lambda } if lambda > 0.0 => {
-            let c = EqualisedLeastEffort::new(lambda, sources, targets);
+            let c = equalised_least_effort(lambda, sources, targets);
             solver.solve_with_cancel(&c, cancel)?
         }
         PairCost::LeastEffort { lambda } => {

@@ -47,12 +47,12 @@
 //! it starts from exactly the reported positions and velocities.
 
 use super::feedback::{Feedback, Information};
-use super::grid::{unit_or_fixed, Grid};
 use super::measures::{nearest_distances, sigma_curr_eft, spread_and_min, Measures};
 use super::orca::Orca;
 pub use super::params::{MoveParams, Mover};
 use super::prepare::TransformPlan;
 use super::social::{self, Groups};
+use crate::crowd::agents::{unit_or_fixed, NeighbourGrid};
 use crate::crowd::environment::Scene;
 use crate::geom::Vec2;
 use crate::rng::SplitMix64;
@@ -127,9 +127,9 @@ pub struct TransformRun {
     groups: Groups,
     feedback: Feedback,
     orca: Option<Orca>,
-    grid: Grid,
+    grid: NeighbourGrid,
     /// Grid for the candidate contact pairs of the overlap rounds.
-    contact_grid: Grid,
+    contact_grid: NeighbourGrid,
     /// Pairs closer than `2 r + 2 CONTACT_SKIN_M` at `listed_at`.
     contacts: Vec<(u32, u32)>,
     /// Entries of `contacts` in use.
@@ -193,8 +193,8 @@ impl TransformRun {
             groups: Groups::new(&plan.subgroups.group_of, &sources, &targets),
             feedback: Feedback::new(n, params.bin_m, params.sectors),
             orca,
-            grid: Grid::with_capacity(n),
-            contact_grid: Grid::with_capacity(n),
+            grid: NeighbourGrid::with_capacity(n),
+            contact_grid: NeighbourGrid::with_capacity(n),
             contacts: vec![(0, 0); 4 * n],
             contacts_len: 0,
             listed_at: vec![Vec2::zeros(); n],

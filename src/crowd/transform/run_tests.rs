@@ -291,7 +291,7 @@ fn subgroup_forces_keep_a_group_together() {
 fn cross_group_repulsion_pushes_other_groups_only() {
     let pos = [Vec2::new(0.0, 0.0), Vec2::new(0.8, 0.0)];
     let p = MoveParams::default();
-    let mut g = Grid::with_capacity(2);
+    let mut g = NeighbourGrid::with_capacity(2);
     g.build(&pos, p.interaction_range_m);
     let force = |groups: Option<&[u32]>| {
         let mut acc = [Vec2::zeros(); 2];

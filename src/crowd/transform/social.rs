@@ -25,8 +25,8 @@
 //! neighbours standing at their own targets cannot hold an arriving agent off its
 //! target; contacts are kept apart positionally in `run.rs`.
 
-use super::grid::{unit_or_fixed, Grid};
 use super::params::MoveParams;
+use crate::crowd::agents::{unit_or_fixed, NeighbourGrid};
 use crate::crowd::environment::Scene;
 use crate::geom::Vec2;
 
@@ -143,7 +143,7 @@ impl Groups {
 /// the settled outer rows of a formation would hold off the agents whose targets
 /// lie behind them, whose driving force weakens as they near their targets.
 pub(crate) fn repulse(
-    grid: &Grid,
+    grid: &NeighbourGrid,
     pos: &[Vec2],
     groups: Option<&[u32]>,
     fade: &[f64],
