@@ -274,8 +274,14 @@ mod tests {
         )
         .unwrap();
         let e = Config::load(&path).unwrap_err().to_string();
+        // The first listed shape is on the line after `shapes: [`.
+        let line = DEFAULT_CONFIG_RON
+            .lines()
+            .position(|l| l == "        shapes: [],")
+            .expect("the default config lists no shapes")
+            + 2;
         assert!(
-            e.contains(":127:")
+            e.contains(&format!(":{line}:"))
                 && e.contains(
                     "field `formations.shapes[0].bitmap`: bitmap shapes/none.png: cannot read"
                 )
@@ -283,7 +289,7 @@ mod tests {
             "{e}"
         );
         assert!(
-            e.contains(":128:") && e.contains("field `formations.shapes[1].bitmap`: bitmap shapes/half.pgm: the colour range (0, 0, 0) ..= (255, 255, 255) selects all 32 pixels"),
+            e.contains(&format!(":{}:", line + 1)) && e.contains("field `formations.shapes[1].bitmap`: bitmap shapes/half.pgm: the colour range (0, 0, 0) ..= (255, 255, 255) selects all 32 pixels"),
             "{e}"
         );
     }

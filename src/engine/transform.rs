@@ -550,6 +550,7 @@ fn summary(r: &RunningTransform, s: &RunSummary, outcome: TransformOutcome) -> T
         arrived_fraction: s.arrived_fraction,
         min_distance_m: s.min_distance_m,
         overlapping_pairs: s.overlapping_pairs as u64,
+        swaps: s.swaps,
         mean_travel_m: s.mean_travel_m,
         max_travel_m: s.max_travel_m,
         mean: measures(&s.mean),

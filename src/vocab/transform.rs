@@ -93,6 +93,8 @@ pub struct TransformSummary {
     pub min_distance_m: f64,
     /// Distinct pairs that were closer than two radii at some step.
     pub overlapping_pairs: u64,
+    /// Pairs of agents that exchanged targets to undo a head-on block.
+    pub swaps: u64,
     /// Mean distance walked (m).
     pub mean_travel_m: f64,
     /// Largest distance walked (m).

@@ -45,6 +45,7 @@ struct EndWire<'a> {
     arrived_fraction: f64,
     min_distance_m: f64,
     overlapping_pairs: u64,
+    swaps: u64,
     mean_travel_m: f64,
     max_travel_m: f64,
     #[serde(rename = "I_d")]
@@ -92,6 +93,7 @@ pub fn encode_transform_end_json(s: &TransformSummary, out: &mut Vec<u8>) {
         arrived_fraction: s.arrived_fraction,
         min_distance_m: s.min_distance_m,
         overlapping_pairs: s.overlapping_pairs,
+        swaps: s.swaps,
         mean_travel_m: s.mean_travel_m,
         max_travel_m: s.max_travel_m,
         i_d: s.mean.i_d,
@@ -154,6 +156,7 @@ mod tests {
             arrived_fraction: 0.9,
             min_distance_m: 0.2,
             overlapping_pairs: 1,
+            swaps: 2,
             mean_travel_m: 2.0,
             max_travel_m: 4.0,
             mean: TransformMeasures::default(),
@@ -167,5 +170,6 @@ mod tests {
         assert_eq!(j["outcome"], "timed_out");
         assert_eq!(j["steps"], 300);
         assert_eq!(j["arrived_fraction"], 0.9);
+        assert_eq!(j["swaps"], 2);
     }
 }
