@@ -312,8 +312,7 @@ impl Engine {
         self.transforms.remeshing = None;
         self.transforms.remesh_outbox = None;
         let s = &self.transforms.settings;
-        let mut params = s.moves.clone();
-        params.radius_m = self.agent_params.radius_m;
+        let mut params = s.moves.clone().with_radius(self.agent_params.radius_m);
         if let Some(d) = pending.duration_s {
             let far = self
                 .agents

@@ -71,6 +71,29 @@ pub struct MoveParams {
     pub overlap_rounds: usize,
 }
 
+impl MoveParams {
+    /// These parameters for agents of radius `radius_m`. Agents smaller than
+    /// `self.radius_m` (a crowd shrunk to fit its area) get every length of the
+    /// model scaled by the ratio — interaction range, `B`, `B'`, the fade, the
+    /// feedback's bins `R` and the arrival distance — so that an agent meets as many
+    /// neighbours as at full size (at a quarter of the radius and the same range, a
+    /// dense crowd has sixteen times as many pairs within range). Speeds,
+    /// accelerations and times stay. Larger agents keep the lengths as they are.
+    pub fn with_radius(mut self, radius_m: f64) -> MoveParams {
+        let k = radius_m / self.radius_m;
+        if k.is_finite() && k > 0.0 && k < 1.0 {
+            self.interaction_range_m *= k;
+            self.repulsion_b_m *= k;
+            self.subgroup_b_m *= k;
+            self.fade_m *= k;
+            self.bin_m *= k;
+            self.arrive_m *= k;
+        }
+        self.radius_m = radius_m;
+        self
+    }
+}
+
 impl Default for MoveParams {
     /// People-sized agents: radius 0.25 m, walking at 1.3 m/s.
     fn default() -> MoveParams {

@@ -24,7 +24,7 @@
 //!    through and walk back after); agents out of obstacles;
 //! 6. head-on blocks undone: two walking agents in contact, each heading for a
 //!    target beyond the other, exchange targets when that shortens the sum of
-//!    their remaining distances by at least [`SWAP_GAIN_M`]. Agents are
+//!    their remaining distances by at least [`SWAP_GAIN_RADII`] radii. Agents are
 //!    interchangeable and the exchange lowers the effort the pairing minimises;
 //!    without it, two such agents hemmed in by settled neighbours push against
 //!    each other until the timeout (line → ring at 1,000 agents). Rare: the
@@ -58,9 +58,9 @@ use crate::geom::Vec2;
 use crate::rng::SplitMix64;
 use std::collections::HashSet;
 
-/// Added to both distances to target when sharing an overlap (m), so that two
-/// agents at their targets share it half each.
-const YIELD_EPS_M: f64 = 0.05;
+/// Added to both distances to target when sharing an overlap, in agent radii (5 cm
+/// at 0.15 m), so that two agents at their targets share it half each.
+const YIELD_EPS_RADII: f64 = 1.0 / 3.0;
 
 /// Two agents closer than `2 r − OVERLAP_TOLERANCE_M` overlap (m): what the
 /// positional resolution may leave (it moves pairs to exactly `2 r`, and moving
@@ -68,12 +68,16 @@ const YIELD_EPS_M: f64 = 0.05;
 pub const OVERLAP_TOLERANCE_M: f64 = 0.005;
 
 /// Two blocked agents exchange targets when that shortens the sum of their
-/// distances to target by at least this much (m).
-pub const SWAP_GAIN_M: f64 = 0.05;
+/// distances to target by at least this much, in agent radii (5 cm at 0.15 m).
+pub const SWAP_GAIN_RADII: f64 = 1.0 / 3.0;
+
+/// Two agents are in contact for an exchange of targets when closer than two
+/// radii plus this much, in agent radii (1 cm at 0.15 m).
+const SWAP_TOUCH_RADII: f64 = 1.0 / 15.0;
 
 /// How far an agent may move during the overlap rounds before the list of
-/// candidate contact pairs is made again (m).
-const CONTACT_SKIN_M: f64 = 0.05;
+/// candidate contact pairs is made again, in agent radii (5 cm at 0.15 m).
+const CONTACT_SKIN_RADII: f64 = 1.0 / 3.0;
 
 /// One step's report.
 #[derive(Copy, Clone, Debug, Default, PartialEq)]
@@ -130,7 +134,7 @@ pub struct TransformRun {
     grid: NeighbourGrid,
     /// Grid for the candidate contact pairs of the overlap rounds.
     contact_grid: NeighbourGrid,
-    /// Pairs closer than `2 r + 2 CONTACT_SKIN_M` at `listed_at`.
+    /// Pairs closer than `2 r` plus twice the contact skin at `listed_at`.
     contacts: Vec<(u32, u32)>,
     /// Entries of `contacts` in use.
     contacts_len: usize,
@@ -436,7 +440,7 @@ impl TransformRun {
     /// line (Gauss–Seidel, a few rounds), shared by right of way, the velocity
     /// into the contact removed. Each round takes the pairs closer than `2 r` at
     /// the round's start; they are drawn from a list of the pairs closer than
-    /// `2 r + 2 CONTACT_SKIN_M` made once (a grid over the positions then), made
+    /// `2 r` plus twice the contact skin made once (a grid over the positions then), made
     /// again only when an agent has since moved more than the skin, so the pairs
     /// are exactly those a grid built every round would give.
     fn resolve_overlaps(&mut self, pos: &mut [Vec2], vel: &mut [Vec2]) {
@@ -444,7 +448,9 @@ impl TransformRun {
         if two_r <= 0.0 {
             return;
         }
-        let skin2 = CONTACT_SKIN_M * CONTACT_SKIN_M;
+        let skin = CONTACT_SKIN_RADII * self.p.radius_m;
+        let skin2 = skin * skin;
+        let eps = YIELD_EPS_RADII * self.p.radius_m;
         let r2 = two_r * two_r;
         let mut listed = false;
         for _ in 0..self.p.overlap_rounds {
@@ -457,7 +463,7 @@ impl TransformRun {
                     .zip(&self.listed_at)
                     .any(|(x, a)| (x - a).norm_squared() > skin2);
             if stale {
-                self.list_contacts(two_r + 2.0 * CONTACT_SKIN_M);
+                self.list_contacts(two_r + 2.0 * skin);
                 listed = true;
             }
             let mut pushed = 0usize;
@@ -483,8 +489,8 @@ impl TransformRun {
                 // share of the overlap proportional to the other's distance to its
                 // target (half each when both are there).
                 let (di, dj) = (
-                    (pos[i] - targets[i]).norm() + YIELD_EPS_M,
-                    (pos[j] - targets[j]).norm() + YIELD_EPS_M,
+                    (pos[i] - targets[i]).norm() + eps,
+                    (pos[j] - targets[j]).norm() + eps,
                 );
                 let depth = two_r - dn;
                 pos[i] += n * (depth * dj / (di + dj));
@@ -507,10 +513,11 @@ impl TransformRun {
 
     /// Step 6: walking agents in contact that head for targets beyond each other
     /// exchange targets when the sum of their distances to target falls by at
-    /// least [`SWAP_GAIN_M`]. Reads the contact list of the overlap rounds (every
+    /// least [`SWAP_GAIN_RADII`] radii. Reads the contact list of the overlap rounds (every
     /// pair closer than `2 r` is in it).
     fn undo_head_on_blocks(&mut self, pos: &[Vec2]) {
-        let touch = 2.0 * self.p.radius_m + 0.01;
+        let touch = (2.0 + SWAP_TOUCH_RADII) * self.p.radius_m;
+        let gain = SWAP_GAIN_RADII * self.p.radius_m;
         let touch2 = touch * touch;
         for k in 0..self.contacts_len {
             let (i, j) = self.contacts[k];
@@ -528,7 +535,7 @@ impl TransformRun {
             }
             let now = ei.norm() + ej.norm();
             let swapped = (tj - pos[i]).norm() + (ti - pos[j]).norm();
-            if swapped <= now - SWAP_GAIN_M {
+            if swapped <= now - gain {
                 self.targets.swap(i, j);
                 self.groups.swapped(i, j, ti, tj);
                 self.swaps += 1;
