@@ -42,9 +42,10 @@
 //! # Work shared within a step
 //! One grid (cells of the interaction range) serves the forces; the overlap rounds
 //! take their pairs from a contact list made once per substep; the report finds
-//! the contacts and every agent's nearest neighbour in one pass over its grid's
-//! pairs, and the next step reuses that grid and the report's `I_d`, `I_v` while
-//! it starts from exactly the reported positions and velocities.
+//! the contacts and every agent's nearest neighbour in one pass over the pairs of
+//! a grid of a few radii (far fewer pairs than the interaction range holds), and
+//! the next step reuses the report's `I_d`, `I_v` while it starts from exactly the
+//! reported positions and velocities.
 
 use super::feedback::{Feedback, Information};
 use super::measures::{nearest_distances, sigma_curr_eft, spread_and_min, Measures};
@@ -74,6 +75,9 @@ pub const SWAP_GAIN_RADII: f64 = 1.0 / 3.0;
 /// Two agents are in contact for an exchange of targets when closer than two
 /// radii plus this much, in agent radii (1 cm at 0.15 m).
 const SWAP_TOUCH_RADII: f64 = 1.0 / 15.0;
+
+/// Cell side of the grid the report finds nearest neighbours with, in agent radii.
+const NEAREST_CELL_RADII: f64 = 3.0;
 
 /// How far an agent may move during the overlap rounds before the list of
 /// candidate contact pairs is made again, in agent radii (5 cm at 0.15 m).
@@ -158,13 +162,11 @@ pub struct TransformRun {
     overlapped: HashSet<(u32, u32)>,
     /// Positions and velocities the last report measured, with what it found:
     /// while the next step starts from them bit for bit, its first substep takes
-    /// `I_d`, `I_v` (and the bins they left in `feedback`) and the grid from the
-    /// report instead of computing them again.
+    /// `I_d`, `I_v` (and the bins they left in `feedback`) from the report
+    /// instead of computing them again.
     reported_pos: Vec<Vec2>,
     reported_vel: Vec<Vec2>,
     reported: Option<Information>,
-    /// `grid` is built on `reported_pos` with the forces' cell size.
-    grid_at_report: bool,
     elapsed_s: f64,
     steps: u64,
     swaps: u64,
@@ -217,7 +219,6 @@ impl TransformRun {
             reported_pos: vec![Vec2::zeros(); n],
             reported_vel: vec![Vec2::zeros(); n],
             reported: None,
-            grid_at_report: false,
             elapsed_s: 0.0,
             steps: 0,
             swaps: 0,
@@ -395,11 +396,7 @@ impl TransformRun {
         }
         let p = &self.p;
         let cell_m = p.interaction_range_m.max(2.0 * p.radius_m);
-        // The report's grid has this cell size; it is reused when built on `pos`.
-        if !(self.grid_at_report && self.at_report(pos, vel)) {
-            self.grid.build(pos, cell_m);
-        }
-        self.grid_at_report = false;
+        self.grid.build(pos, cell_m);
         let groups = p.subgroup_forces.then_some(&self.groups.group_of[..]);
         social::repulse(
             &self.grid,
@@ -585,13 +582,18 @@ impl TransformRun {
         let arrived = (0..n)
             .filter(|&i| (pos[i] - self.targets[i]).norm() <= self.p.arrive_m)
             .count();
-        self.grid.build(pos, two_r.max(self.p.interaction_range_m));
+        // The nearest neighbour of an agent in a crowd is almost always within a
+        // few radii: a grid of that cell side visits far fewer pairs than one of
+        // the interaction range (a tenth in a packed crowd), and the ring search
+        // finds the nearest of the few agents with none that near.
+        self.contact_grid
+            .build(pos, (NEAREST_CELL_RADII * self.p.radius_m).max(two_r));
         let mut overlapping = 0usize;
         let overlapped = &mut self.overlapped;
         let limit = two_r - OVERLAP_TOLERANCE_M;
         let limit2 = limit * limit;
         // One pass over the pairs for the contacts and the nearest neighbours.
-        nearest_distances(&self.grid, pos, &mut self.nearest, |i, j, d2| {
+        nearest_distances(&self.contact_grid, pos, &mut self.nearest, |i, j, d2| {
             if d2 < limit2 {
                 overlapping += 1;
                 let _ = overlapped.insert((i.min(j) as u32, i.max(j) as u32));
@@ -607,7 +609,6 @@ impl TransformRun {
         self.reported_pos.copy_from_slice(pos);
         self.reported_vel.copy_from_slice(vel);
         self.reported = Some(info);
-        self.grid_at_report = true;
         let measures = Measures {
             i_d: info.i_d,
             i_v: info.i_v,
