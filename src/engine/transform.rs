@@ -33,7 +33,7 @@
 use super::error::{CommandError, SwitchError};
 use super::state::Engine;
 use super::switch::shift_inside;
-use super::transform_state::{PendingTransform, Remeshing, RunningTransform};
+use super::transform_state::{PendingTransform, Remeshing, RunningTransform, MIN_TRANSFORM_STEP_S};
 use crate::config::MAX_DESIRED_SPEED_M_S;
 use crate::crowd::formation::{Formation, FormationDef, Placement, SampleParams, START};
 use crate::crowd::motion::{PreparedRemesh, RemeshRequest};
@@ -343,6 +343,7 @@ impl Engine {
             cost_name: s.cost_name,
             speed_m_s: params.desired_speed_m_s,
             last: StepReport::default(),
+            owed_s: 0.0,
         });
         self.transforms.started += 1;
         // The pairing is the goals now: identity over the targets; assignment
@@ -382,9 +383,13 @@ impl Engine {
             return false;
         };
         if !self.paused && dt > 0.0 {
-            let scene = self.scene.as_deref().map(|s| (s, self.scene_t_s));
-            let (pos, vel) = self.agents.state_mut();
-            r.last = r.run.step(pos, vel, dt, scene);
+            r.owed_s += dt;
+            if r.owed_s >= MIN_TRANSFORM_STEP_S {
+                let scene = self.scene.as_deref().map(|s| (s, self.scene_t_s));
+                let (pos, vel) = self.agents.state_mut();
+                r.last = r.run.step(pos, vel, r.owed_s, scene);
+                r.owed_s = 0.0;
+            }
         }
         let mut view = self.transforms.views.acquire();
         {

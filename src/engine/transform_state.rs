@@ -77,7 +77,17 @@ pub(super) struct RunningTransform {
     pub(super) speed_m_s: f64,
     /// The last step's report.
     pub(super) last: StepReport,
+    /// Time ticked since the last step (s): a tick sooner than
+    /// [`MIN_TRANSFORM_STEP_S`] after the last step leaves it to the next.
+    pub(super) owed_s: f64,
 }
+
+/// The shortest transform step (s), a little under the 120 Hz tick: the control
+/// thread also ticks on every input frame (about 230 ticks a second with a
+/// 120 Hz device), and a step costs the same however short it is, so steps are
+/// taken at the timer's rate and a tick between them publishes the crowd as the
+/// last step left it.
+pub(super) const MIN_TRANSFORM_STEP_S: f64 = 1.0 / 125.0;
 
 /// After a run: the agents hold still while the direct-control mesh is rebuilt
 /// around them.
