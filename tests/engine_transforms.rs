@@ -541,15 +541,13 @@ fn a_mapped_gesture_starts_a_transform_instead_of_its_motion() {
     assert!(seen.views.iter().all(|v| &*v.formation == "diamond"));
 }
 
-/// A crowd shrunk to fit its area (1,500 agents in the default 12 m², radius 4 cm
-/// instead of 15: the model's lengths scale with it) transforms to the arrow and
+/// A crowd shrunk to fit its area (2,000 agents in the default 12 m², radius 3.5
+/// cm instead of 15: the model's lengths scale with it) transforms to the arrow and
 /// back, each agent to its own target, without overlap. Slow in a debug build.
-/// (At 2,000 agents, radius 3.5 cm, six agents stay short of their targets until
-/// the timeout: docs/transforms.md.)
 #[test]
 #[ignore = "slow in debug: cargo test --release --test engine_transforms -- --ignored"]
 fn a_crowd_shrunk_to_fit_transforms_and_arrives() {
-    let cfg = config(1500);
+    let cfg = config(2000);
     let (mut e, mut now) = engine(&cfg);
     let mut seen = Seen::default();
     for target in ["arrow", "start"] {
