@@ -11,8 +11,8 @@ use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criteri
 use crowdtouch::config::Config;
 use crowdtouch::crowd::assign::Cancel;
 use crowdtouch::engine::Engine;
-use crowdtouch::vocab::Micros;
 use crowdtouch::vocab::{Contact, ContactFlags, ContactId, TouchFrame};
+use crowdtouch::vocab::{FormationMethod, Micros};
 
 const PERIOD_US: u64 = 8_333;
 
@@ -77,6 +77,8 @@ fn formation_switch(c: &mut Criterion) {
     for agents in [100u32, 1000] {
         let mut cfg = Config::embedded_default();
         cfg.crowd.agents = agents;
+        // The mesh switch (a formation transform is `transform_prepare`'s).
+        cfg.formations.method = FormationMethod::Mesh;
         let request = || {
             let mut e = Engine::new(&cfg, None, false);
             e.set_switch_worker(true);
