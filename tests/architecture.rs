@@ -54,6 +54,10 @@ const RULES: &[Rule] = &[
         may_use: &["crowd::mesh", "crowd::assign", "crowd::environment", "crowd::formation", "crowd::agents", "vocab", "geom", "rng"],
     },
     Rule {
+        module: "crowd::edit",
+        may_use: &["crowd::mesh", "crowd::environment", "located", "geom", "rng"],
+    },
+    Rule {
         module: "crowd::control",
         may_use: &["crowd::mesh", "crowd::assign", "crowd::environment", "crowd::formation", "crowd::transform", "gesture", "vocab", "geom", "rng"],
     },

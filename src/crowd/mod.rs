@@ -14,11 +14,13 @@
 //! | [`control`] | the controllers: direct manipulation by touch, formation switches | mesh-formation-control 4, 7.3 |
 //! | [`motion`] | crowd motions from gestures: FPCA, Gaussian mixtures, blending, synthesis, following | gesture-driven 6, 7 |
 //! | [`transform`] | formation transforms: sampling, least-effort pairing, affinity-propagation subgroups, social forces with mutual-information feedback, the paper's measures | formation-transform 3, 5 |
+//! | [`edit`] | crowd motion editing: track sets, cage editing in space and time, space-time collisions and their avoidance by retiming | crowd-motion-editing 3, 4 |
 //! | [`agents`] | agents following their goals (PD control, overlap resolution) | mesh-formation-control 6.2.1 |
 
 pub mod agents;
 pub mod assign;
 pub mod control;
+pub mod edit;
 pub mod environment;
 pub mod formation;
 pub mod mesh;

@@ -1,0 +1,15 @@
+//! Crowd motion editing (crowd-motion-editing, Zhang et al. 2020): a crowd's recorded
+//! or authored tracks, edited in space by a concave-hull cage and as-rigid-as-possible
+//! mesh deformation (section 3.2), in time (section 3.3), checked for collisions in
+//! space-time and kept apart by retiming (section 4.1), and kept out of obstacles by
+//! adjusting the cage (section 4.2).
+//!
+//! | file | what | paper |
+//! |---|---|---|
+//! | `tracks.rs` | [`TrackSet`]: per person a spatial and a temporal track, linked samples and gaps | 3.1 |
+//! | [`io`] | readers and writers: the pedestrian datasets' raw format, … | |
+
+pub mod io;
+mod tracks;
+
+pub use tracks::{Track, TrackError, TrackSet, MAX_SAMPLES};
