@@ -26,6 +26,7 @@ mod bench;
 mod calibrate;
 mod check;
 mod devices;
+mod edit;
 mod formations;
 mod gesture;
 mod hid;
@@ -141,6 +142,10 @@ enum Cmd {
     /// travel, the paper's measures and step times; `transform compare` runs the
     /// paper's comparisons (pairing costs, feedback off, ORCA).
     Transform(transform::TransformCmd),
+    /// Crowd motion editing (crowd-motion-editing) on track files: `edit check` finds
+    /// collisions between people in space-time.
+    #[command(subcommand)]
+    Edit(edit::EditCmd),
     /// Gesture commands: recognise the gestures of recordings.
     #[command(subcommand)]
     Gesture(gesture::GestureCmd),
@@ -273,6 +278,7 @@ pub fn main() -> i32 {
                 .and_then(|(cfg, _)| formations::formations(&cfg, output.as_deref())),
         ),
         Cmd::Transform(c) => done(transform::transform(c)),
+        Cmd::Edit(c) => done(edit::edit(c)),
         Cmd::Devices { config, json } => done(
             find_config(config.as_deref())
                 .and_then(|(cfg, _)| devices::devices(&cfg, json, Path::new("/"))),

@@ -1,0 +1,117 @@
+//! `crowdtouch edit`: crowd motion editing (crowd-motion-editing, Zhang et al. 2020)
+//! on track files: collisions (`edit check`), scripted edits (`edit apply`) and
+//! pictures (`edit render`).
+
+use anyhow::{anyhow, Result};
+use clap::{Subcommand, ValueEnum};
+use crowdtouch::crowd::edit::io::{self, EthOptions, Format, ReadOptions};
+use crowdtouch::crowd::edit::TrackSet;
+use std::path::{Path, PathBuf};
+
+/// The largest track file read (bytes).
+pub const MAX_TRACK_FILE_BYTES: u64 = 256 << 20;
+
+/// Subcommands of `edit`.
+#[derive(Subcommand, Debug)]
+pub enum EditCmd {
+    /// Collisions between people (space-time closest approach below a threshold).
+    Check(CheckArgs),
+}
+
+/// A track file's format on the command line.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FormatArg {
+    /// From the extension, else the first line.
+    Auto,
+    /// Our JSON Lines tracks.
+    Jsonl,
+    /// `t,id,x,y`.
+    Csv,
+    /// ETH/UCY raw `frame id x y`.
+    Eth,
+}
+
+/// How a track file is read.
+#[derive(clap::Args, Debug, Clone)]
+pub struct TrackFileArgs {
+    /// Track file (JSON Lines, CSV `t,id,x,y`, or ETH/UCY `frame id x y`).
+    pub file: PathBuf,
+    /// The file's format.
+    #[arg(long, value_enum, default_value_t = FormatArg::Auto)]
+    pub format: FormatArg,
+    /// ETH/UCY: video frames per second.
+    #[arg(long, default_value_t = 25.0)]
+    pub frame_rate: f64,
+    /// ETH/UCY: frames between a person's consecutive annotations.
+    #[arg(long, default_value_t = 10)]
+    pub frame_step: u32,
+}
+
+/// `edit check`.
+#[derive(clap::Args, Debug)]
+pub struct CheckArgs {
+    /// The tracks.
+    #[command(flatten)]
+    pub tracks: TrackFileArgs,
+    /// Two people closer than this collide (metres).
+    #[arg(long, default_value_t = 0.3)]
+    pub threshold: f64,
+    /// One JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs an `edit` subcommand.
+pub fn edit(cmd: EditCmd) -> Result<()> {
+    match cmd {
+        EditCmd::Check(a) => check(a),
+    }
+}
+
+fn check(a: CheckArgs) -> Result<()> {
+    let (_set, _) = load(&a.tracks)?;
+    Err(anyhow!("edit check: collision detection is not built yet"))
+}
+
+/// Reads a track file as the arguments say; errors name `file:line`.
+pub fn load(a: &TrackFileArgs) -> Result<(TrackSet, Format)> {
+    let text = read_text(&a.file)?;
+    let format = match a.format {
+        FormatArg::Auto => io::detect(&a.file, &text),
+        FormatArg::Jsonl => Format::Jsonl,
+        FormatArg::Csv => Format::Csv,
+        FormatArg::Eth => Format::Eth,
+    };
+    let opts = ReadOptions {
+        eth: EthOptions {
+            frame_rate_hz: a.frame_rate,
+            frame_step: a.frame_step,
+        },
+        csv_step_s: None,
+    };
+    let shown = a.file.display();
+    let set = io::read(&text, format, &opts).map_err(|e| match e.line {
+        0 => anyhow!("{shown}: {}", e.what),
+        l => anyhow!("{shown}:{l}: {}", e.what),
+    })?;
+    set.validate().map_err(|e| anyhow!("{shown}: {e}"))?;
+    Ok((set, format))
+}
+
+fn read_text(path: &Path) -> Result<String> {
+    let shown = path.display();
+    let meta = std::fs::metadata(path).map_err(|e| anyhow!("{shown}: {e}"))?;
+    if meta.len() > MAX_TRACK_FILE_BYTES {
+        return Err(anyhow!(
+            "{shown}: {} bytes, more than the {MAX_TRACK_FILE_BYTES} byte limit",
+            meta.len()
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(|e| anyhow!("{shown}: {e}"))?;
+    String::from_utf8(bytes).map_err(|e| {
+        anyhow!(
+            "{shown}: not UTF-8 text (byte {})",
+            e.utf8_error().valid_up_to()
+        )
+    })
+}
