@@ -7,9 +7,12 @@
 //! | file | what | paper |
 //! |---|---|---|
 //! | `tracks.rs` | [`TrackSet`]: per person a spatial and a temporal track, linked samples and gaps | 3.1 |
+//! | `script.rs` | edit scripts (`edit apply --ops`): selections, fixed points, drags, retimes, with their lines | 3.2, 3.3 |
 //! | [`io`] | readers and writers: the pedestrian datasets' raw format, … | |
 
 pub mod io;
+mod script;
 mod tracks;
 
+pub use script::{parse_script, Op, OpDef, Script, ScriptError, SelectSpec, MAX_LIST, MAX_OPS};
 pub use tracks::{Track, TrackError, TrackSet, MAX_SAMPLES};
