@@ -3,11 +3,14 @@
 //!
 //! | format | file | what |
 //! |---|---|---|
+//! | [`Format::Jsonl`] | `jsonl.rs` | ours: a header line (`crowdtouch-tracks`, version, frame step), then one sample per line, explicit gaps |
 //! | [`Format::Eth`] | `eth.rs` | the public pedestrian datasets (ETH/UCY as redistributed by trajectory-prediction projects): `frame id x y` per line, whitespace-separated, metres |
 
 mod eth;
+mod jsonl;
 
 pub use eth::{read_eth, write_eth, EthOptions};
+pub use jsonl::{read_jsonl, write_jsonl, JSONL_FORMAT, JSONL_VERSION};
 
 use super::tracks::TrackSet;
 use thiserror::Error;
@@ -67,19 +70,19 @@ pub fn detect(path: &std::path::Path, text: &str) -> Format {
 /// [`ReadError`] naming the line and what is wrong there.
 pub fn read(text: &str, format: Format, opts: &ReadOptions) -> Result<TrackSet, ReadError> {
     match format {
+        Format::Jsonl => read_jsonl(text),
+        Format::Csv => Err(ReadError::at(0, "CSV tracks cannot be read yet")),
         Format::Eth => read_eth(text, opts.eth),
-        Format::Jsonl | Format::Csv => Err(ReadError::at(
-            0,
-            format!("{format:?} tracks cannot be read yet"),
-        )),
     }
 }
 
-/// Writes a track set in `format` (ETH frames at `opts.eth`).
+/// Writes a track set in `format` (ETH frames at `opts.eth`; JSON Lines without a
+/// `source`).
 pub fn write(set: &TrackSet, format: Format, opts: &ReadOptions) -> String {
     match format {
+        Format::Jsonl => write_jsonl(set, None),
+        Format::Csv => String::new(),
         Format::Eth => write_eth(set, opts.eth),
-        Format::Jsonl | Format::Csv => String::new(),
     }
 }
 
