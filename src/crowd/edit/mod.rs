@@ -7,7 +7,7 @@
 //! | file | what | paper |
 //! |---|---|---|
 //! | `tracks.rs` | [`TrackSet`]: per person a spatial and a temporal track, linked samples and gaps | 3.1 |
-//! | [`io`] | readers and writers: our JSON Lines, the pedestrian datasets' raw format | 3.1 |
+//! | [`io`] | readers and writers: our JSON Lines, CSV `t,id,x,y`, the pedestrian datasets' raw format | 3.1 |
 
 pub mod io;
 mod tracks;
