@@ -45,6 +45,10 @@ pub struct TrackFileArgs {
     /// ETH/UCY: frames between a person's consecutive annotations.
     #[arg(long, default_value_t = 10)]
     pub frame_step: u32,
+    /// CSV: the frame step (s); samples at most 1.5 steps apart are linked
+    /// (default: the median of the people's consecutive time differences).
+    #[arg(long)]
+    pub step: Option<f64>,
 }
 
 /// `edit check`.
@@ -87,7 +91,7 @@ pub fn load(a: &TrackFileArgs) -> Result<(TrackSet, Format)> {
             frame_rate_hz: a.frame_rate,
             frame_step: a.frame_step,
         },
-        csv_step_s: None,
+        csv_step_s: a.step,
     };
     let shown = a.file.display();
     let set = io::read(&text, format, &opts).map_err(|e| match e.line {

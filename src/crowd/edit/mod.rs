@@ -8,7 +8,7 @@
 //! |---|---|---|
 //! | `tracks.rs` | [`TrackSet`]: per person a spatial and a temporal track, linked samples and gaps | 3.1 |
 //! | `script.rs` | edit scripts (`edit apply --ops`): selections, fixed points, drags, retimes, with their lines | 3.2, 3.3 |
-//! | [`io`] | readers and writers: the pedestrian datasets' raw format, … | |
+//! | [`io`] | readers and writers: our JSON Lines, CSV `t,id,x,y`, the pedestrian datasets' raw format | 3.1 |
 
 pub mod io;
 mod script;

@@ -3,11 +3,17 @@
 //!
 //! | format | file | what |
 //! |---|---|---|
+//! | [`Format::Jsonl`] | `jsonl.rs` | ours: a header line (`crowdtouch-tracks`, version, frame step), then one sample per line, explicit gaps |
+//! | [`Format::Csv`] | `csv.rs` | `t,id,x,y` per line, an optional header; links from the frame step |
 //! | [`Format::Eth`] | `eth.rs` | the public pedestrian datasets (ETH/UCY as redistributed by trajectory-prediction projects): `frame id x y` per line, whitespace-separated, metres |
 
+mod csv;
 mod eth;
+mod jsonl;
 
+pub use csv::{median_step, read_csv, write_csv, LINK_STEPS, SINGLE_SAMPLE_STEP_S};
 pub use eth::{read_eth, write_eth, EthOptions};
+pub use jsonl::{read_jsonl, write_jsonl, JSONL_FORMAT, JSONL_VERSION};
 
 use super::tracks::TrackSet;
 use thiserror::Error;
@@ -67,19 +73,19 @@ pub fn detect(path: &std::path::Path, text: &str) -> Format {
 /// [`ReadError`] naming the line and what is wrong there.
 pub fn read(text: &str, format: Format, opts: &ReadOptions) -> Result<TrackSet, ReadError> {
     match format {
+        Format::Jsonl => read_jsonl(text),
+        Format::Csv => read_csv(text, opts.csv_step_s),
         Format::Eth => read_eth(text, opts.eth),
-        Format::Jsonl | Format::Csv => Err(ReadError::at(
-            0,
-            format!("{format:?} tracks cannot be read yet"),
-        )),
     }
 }
 
-/// Writes a track set in `format` (ETH frames at `opts.eth`).
+/// Writes a track set in `format` (ETH frames at `opts.eth`; JSON Lines without a
+/// `source`).
 pub fn write(set: &TrackSet, format: Format, opts: &ReadOptions) -> String {
     match format {
+        Format::Jsonl => write_jsonl(set, None),
+        Format::Csv => write_csv(set),
         Format::Eth => write_eth(set, opts.eth),
-        Format::Jsonl | Format::Csv => String::new(),
     }
 }
 

@@ -1,0 +1,278 @@
+//! Tracks as CSV: one sample per line, `t,id,x,y` (seconds, a whole-number id,
+//! metres), an optional header line `t,id,x,y`, whitespace around fields allowed,
+//! blank lines and lines starting with `#` skipped. Rows of different people may
+//! interleave; each person's times strictly increase.
+//!
+//! CSV has no links: two consecutive samples of a person are linked (the person
+//! moves linearly between them, crowd-motion-editing section 3.1) when they are at
+//! most [`LINK_STEPS`] frame steps apart, else the person is away in between (a
+//! gap). The step is the one the caller gives ([`ReadOptions::csv_step_s`](super::ReadOptions::csv_step_s)),
+//! else the median of every person's consecutive time differences, else (only
+//! single samples) one second.
+//!
+//! A person with a single sample is kept: present at that instant only.
+
+use super::jsonl::check_order;
+use super::ReadError;
+use crate::crowd::edit::tracks::{Track, TrackSet, MAX_SAMPLES};
+use crate::geom::Vec2;
+use std::collections::HashMap;
+use std::fmt::Write as _;
+
+/// Consecutive samples at most this many frame steps apart are linked.
+pub const LINK_STEPS: f64 = 1.5;
+/// The step of a file whose people all have a single sample (seconds).
+pub const SINGLE_SAMPLE_STEP_S: f64 = 1.0;
+/// The header line (fields compared without surrounding whitespace).
+pub const CSV_HEADER: [&str; 4] = ["t", "id", "x", "y"];
+
+/// Reads a CSV track file; `step_s` is the frame step, `None` to take the median.
+///
+/// # Errors
+/// [`ReadError`] naming the line: not four fields, a field that is not a number, an
+/// id that is not a non-negative whole number, a time or position that is not
+/// finite, a person seen twice at one time or going back in time, more than
+/// [`MAX_SAMPLES`] rows; a given step that is not a positive number of seconds is
+/// an error at line 0.
+pub fn read_csv(text: &str, step_s: Option<f64>) -> Result<TrackSet, ReadError> {
+    if let Some(s) = step_s {
+        if !(s.is_finite() && s > 0.0) {
+            return Err(ReadError::at(
+                0,
+                format!("the CSV step must be a positive number of seconds, not {s}"),
+            ));
+        }
+    }
+    let mut tracks: Vec<Track> = Vec::new();
+    // Per person: index in `tracks` and the line of its last sample.
+    let mut people: HashMap<u64, (usize, usize)> = HashMap::new();
+    let mut rows = 0usize;
+    let mut first = true;
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let s = raw.trim();
+        if s.is_empty() || s.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = s.splitn(5, ',').map(str::trim).collect();
+        if std::mem::take(&mut first) && fields == CSV_HEADER {
+            continue;
+        }
+        if fields.len() != 4 {
+            return Err(ReadError::at(
+                line,
+                format!(
+                    "expected `t,id,x,y`, found {}",
+                    if fields.len() > 4 {
+                        "more than 4 fields".to_string()
+                    } else {
+                        format!("{} field(s)", fields.len())
+                    }
+                ),
+            ));
+        }
+        let number = |k: usize, name: &str| -> Result<f64, ReadError> {
+            fields[k].parse::<f64>().map_err(|_| {
+                ReadError::at(
+                    line,
+                    format!("{name} `{}` is not a number", clip(fields[k])),
+                )
+            })
+        };
+        let t = number(0, "t")?;
+        let id = match fields[1].parse::<u64>() {
+            Ok(id) => id,
+            Err(_) => whole(number(1, "id")?).ok_or_else(|| {
+                ReadError::at(
+                    line,
+                    format!(
+                        "id `{}` is not a non-negative whole number",
+                        clip(fields[1])
+                    ),
+                )
+            })?,
+        };
+        let (x, y) = (number(2, "x")?, number(3, "y")?);
+        if !t.is_finite() {
+            return Err(ReadError::at(
+                line,
+                format!("person {id}: time {t} is not finite"),
+            ));
+        }
+        if !x.is_finite() || !y.is_finite() {
+            return Err(ReadError::at(
+                line,
+                format!("person {id}: position ({x}, {y}) is not finite"),
+            ));
+        }
+        rows += 1;
+        if rows > MAX_SAMPLES {
+            return Err(ReadError::at(line, format!("more than {MAX_SAMPLES} rows")));
+        }
+        let p = Vec2::new(x, y);
+        match people.get_mut(&id) {
+            None => {
+                people.insert(id, (tracks.len(), line));
+                tracks.push(Track::linked(id, vec![p], vec![t]));
+            }
+            Some((k, last_line)) => {
+                let tr = &mut tracks[*k];
+                let last = *tr.times_s.last().unwrap_or(&f64::NEG_INFINITY);
+                check_order(id, t, last, line, *last_line)?;
+                tr.points.push(p);
+                tr.times_s.push(t);
+                *last_line = line;
+            }
+        }
+    }
+    let step_s = step_s.unwrap_or_else(|| median_step(&tracks));
+    for tr in &mut tracks {
+        tr.linked = tr
+            .times_s
+            .windows(2)
+            .map(|w| w[1] - w[0] <= LINK_STEPS * step_s)
+            .collect();
+    }
+    Ok(TrackSet { tracks, step_s })
+}
+
+/// The median of every person's consecutive time differences (the upper median for
+/// an even count), or [`SINGLE_SAMPLE_STEP_S`] when no person has two samples.
+pub fn median_step(tracks: &[Track]) -> f64 {
+    let mut d: Vec<f64> = tracks
+        .iter()
+        .flat_map(|t| t.times_s.windows(2).map(|w| w[1] - w[0]))
+        .filter(|d| d.is_finite() && *d > 0.0)
+        .collect();
+    if d.is_empty() {
+        return SINGLE_SAMPLE_STEP_S;
+    }
+    let mid = d.len() / 2;
+    let (_, m, _) = d.select_nth_unstable_by(mid, f64::total_cmp);
+    *m
+}
+
+/// Writes a track set as CSV: the header `t,id,x,y`, then every sample sorted by
+/// time then id. Links are not written: read back, samples more than
+/// [`LINK_STEPS`] steps apart are gaps and closer ones linked, whatever the set said.
+pub fn write_csv(set: &TrackSet) -> String {
+    let mut rows: Vec<(f64, u64, Vec2)> = Vec::with_capacity(set.samples());
+    for t in &set.tracks {
+        for (p, ts) in t.points.iter().zip(&t.times_s) {
+            rows.push((*ts, t.id, *p));
+        }
+    }
+    rows.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut out = String::with_capacity(8 + rows.len() * 48);
+    out.push_str("t,id,x,y\n");
+    for (t, id, p) in rows {
+        let _ = writeln!(out, "{t},{id},{},{}", p.x, p.y);
+    }
+    out
+}
+
+/// `v` as a whole number, if it is one in `0..2^53`.
+fn whole(v: f64) -> Option<u64> {
+    (v.is_finite() && v >= 0.0 && v.fract() == 0.0 && v < 9.007_199_254_740_992e15)
+        .then_some(v as u64)
+}
+
+fn clip(s: &str) -> String {
+    s.chars().take(24).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_header_whitespace_and_links_by_median_step() {
+        let text = " t , id , x , y \n\
+                    0.0, 1, 1.0, 2.0\n\
+                    0.0,2,5,5\n\
+                    # a comment\n\
+                    0.4,1,1.5,2.0\n\
+                    0.8,1,2.0,2.0\n\
+                    2.0,1,2.5,2.0\n";
+        let set = read_csv(text, None).unwrap();
+        set.validate().unwrap();
+        assert_eq!(set.step_s, 0.4, "median of 0.4, 0.4, 1.2");
+        let a = &set.tracks[0];
+        assert_eq!(a.id, 1);
+        assert_eq!(a.times_s, vec![0.0, 0.4, 0.8, 2.0]);
+        assert_eq!(a.linked, vec![true, true, false]);
+        assert_eq!(set.tracks[1].len(), 1, "a single sample is kept");
+    }
+
+    #[test]
+    fn a_given_step_decides_the_links() {
+        let text = "0,1,0,0\n1,1,1,0\n2.6,1,2,0\n";
+        let set = read_csv(text, Some(1.0)).unwrap();
+        assert_eq!(set.step_s, 1.0);
+        assert_eq!(set.tracks[0].linked, vec![true, false]);
+        let set = read_csv(text, Some(2.0)).unwrap();
+        assert_eq!(set.tracks[0].linked, vec![true, true]);
+    }
+
+    #[test]
+    fn single_samples_only_take_one_second() {
+        let set = read_csv("t,id,x,y\n0,1,0,0\n0,2,1,1\n", None).unwrap();
+        assert_eq!(set.step_s, SINGLE_SAMPLE_STEP_S);
+        assert_eq!(set.tracks.len(), 2);
+        let set = read_csv("", None).unwrap();
+        assert!(set.tracks.is_empty());
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let bad = [
+            ("t,id,x,y\n0,1,2\n", 2, "found 3 field(s)"),
+            ("0,1,2,3,4\n", 1, "more than 4 fields"),
+            ("0,1,2,x\n", 1, "y `x` is not a number"),
+            ("0,1,,3\n", 1, "x `` is not a number"),
+            ("0,-1,2,3\n", 1, "id `-1` is not a non-negative whole"),
+            ("0,1.5,2,3\n", 1, "id `1.5`"),
+            ("0,1,2,NaN\n", 1, "position (2, NaN) is not finite"),
+            ("inf,1,2,3\n", 1, "time inf is not finite"),
+            ("garbage\n", 1, "found 1 field(s)"),
+            ("0,1,2,3\nt,id,x,y\n", 2, "t `t` is not a number"),
+            (
+                "1,1,2,3\n1,1,2,3\n",
+                2,
+                "person 1 appears twice at 1 s (also line 1)",
+            ),
+            (
+                "1,1,2,3\n0,2,0,0\n0.5,1,2,3\n",
+                3,
+                "time 0.5 s comes after 1 s (line 1)",
+            ),
+        ];
+        for (text, line, what) in bad {
+            let e = read_csv(text, None).unwrap_err();
+            assert_eq!(e.line, line, "{text:?}: {e}");
+            assert!(e.to_string().contains(what), "{text:?}: {e}");
+        }
+        for step in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(read_csv("", Some(step)).unwrap_err().line, 0);
+        }
+    }
+
+    #[test]
+    fn writes_a_header_and_sorted_rows() {
+        let set = TrackSet {
+            tracks: vec![
+                Track::linked(
+                    5,
+                    vec![Vec2::new(1.0, 2.0), Vec2::new(1.5, 2.0)],
+                    vec![0.0, 0.5],
+                ),
+                Track::linked(1, vec![Vec2::new(-0.25, 0.0)], vec![0.5]),
+            ],
+            step_s: 0.5,
+        };
+        assert_eq!(
+            write_csv(&set),
+            "t,id,x,y\n0,5,1,2\n0.5,1,-0.25,0\n0.5,5,1.5,2\n"
+        );
+    }
+}
