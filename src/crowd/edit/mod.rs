@@ -7,9 +7,14 @@
 //! | file | what | paper |
 //! |---|---|---|
 //! | `tracks.rs` | [`TrackSet`]: per person a spatial and a temporal track, linked samples and gaps | 3.1 |
+//! | `collide.rs` | [`detect`]: people closer than a threshold in space-time (and the all-pairs reference) | 4.1.1 |
 //! | [`io`] | readers and writers: the pedestrian datasets' raw format, … | |
 
+mod collide;
 pub mod io;
 mod tracks;
 
+pub use collide::{
+    collisions_all_pairs, detect, Approach, CollideError, CollisionEvent, Collisions, PairCollision,
+};
 pub use tracks::{Track, TrackError, TrackSet, MAX_SAMPLES};
