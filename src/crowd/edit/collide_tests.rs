@@ -1,0 +1,325 @@
+use super::*;
+use crate::crowd::edit::io::{read_eth, EthOptions};
+use crate::crowd::edit::Track;
+use proptest::prelude::*;
+use proptest::test_runner::{Config as ProptestConfig, RngSeed};
+
+fn v(x: f64, y: f64) -> Vec2 {
+    Vec2::new(x, y)
+}
+
+fn fixture(name: &str) -> TrackSet {
+    let path = format!("{}/tests/fixtures/crowd/{name}", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(path).unwrap();
+    read_eth(&text, EthOptions::default()).unwrap()
+}
+
+/// README's continuous counts: pairs closer than 0.2/0.3/0.5/1.0 m, and the minimum.
+#[test]
+fn fixtures_agree_with_the_readme_continuous_counts() {
+    for (name, want, min) in [
+        ("crowds_zara01.txt", [0, 3, 27, 160], 0.236),
+        ("students001.txt", [48, 168, 606, 1840], 0.078),
+    ] {
+        let set = fixture(name);
+        let got: Vec<usize> = [0.2, 0.3, 0.5, 1.0]
+            .iter()
+            .map(|&d| detect(&set, d).unwrap().pair_count())
+            .collect();
+        let m = detect(&set, 1.0).unwrap().min_distance_m().unwrap();
+        eprintln!("{name}: {got:?} min {m}");
+        assert_eq!(got, want, "{name}");
+        assert!((m - min).abs() < 5e-4, "{name}: {m}");
+    }
+}
+
+fn set(tracks: Vec<Track>) -> TrackSet {
+    TrackSet {
+        tracks,
+        step_s: 1.0,
+    }
+}
+
+fn line(id: u64, from: Vec2, to: Vec2, t0: f64, t1: f64) -> Track {
+    Track::linked(id, vec![from, to], vec![t0, t1])
+}
+
+fn both(s: &TrackSet, d: f64) -> Collisions {
+    let fast = detect(s, d).unwrap();
+    let reference = collisions_all_pairs(s, d).unwrap();
+    assert_eq!(fast, reference);
+    fast
+}
+
+#[test]
+fn head_on_meets_at_the_midpoint() {
+    let s = set(vec![
+        line(1, v(0.0, 0.0), v(4.0, 0.0), 0.0, 4.0),
+        line(2, v(4.0, 0.1), v(0.0, 0.1), 0.0, 4.0),
+    ]);
+    let c = both(&s, 0.3);
+    assert_eq!(c.pair_count(), 1);
+    let a = c.events[0].closest;
+    assert!((a.t_s - 2.0).abs() < 1e-12);
+    assert!((a.distance_m - 0.1).abs() < 1e-12);
+    assert!((a.place() - v(2.0, 0.05)).norm() < 1e-12);
+    assert_eq!(
+        both(&s, 0.1).pair_count(),
+        0,
+        "strictly below the threshold"
+    );
+}
+
+#[test]
+fn equal_velocities_keep_their_distance() {
+    // Eq. 16: w = 0, the distance at the overlap's start.
+    let s = set(vec![
+        line(1, v(0.0, 0.0), v(3.0, 0.0), 0.0, 3.0),
+        line(2, v(1.0, 0.2), v(3.0, 0.2), 1.0, 3.0),
+    ]);
+    let c = both(&s, 0.25);
+    assert_eq!(c.events.len(), 1);
+    assert!((c.events[0].closest.distance_m - 0.2).abs() < 1e-12);
+    assert_eq!(c.events[0].closest.t_s, 1.0);
+    assert_eq!(c.events[0].start_s, 1.0);
+    assert_eq!(c.events[0].end_s, 3.0);
+}
+
+#[test]
+fn closest_approach_is_clamped_to_the_overlap() {
+    // Eq. 17: they would meet at t = 2, but 2 only walks until t = 1.
+    let s = set(vec![
+        line(1, v(0.0, 0.0), v(4.0, 0.0), 0.0, 4.0),
+        line(2, v(4.0, 0.0), v(3.0, 0.0), 0.0, 1.0),
+    ]);
+    let c = both(&s, 2.5);
+    let a = c.events[0].closest;
+    assert_eq!(a.t_s, 1.0);
+    assert!((a.distance_m - 2.0).abs() < 1e-12);
+    assert_eq!(both(&s, 2.0).pair_count(), 0);
+}
+
+#[test]
+fn single_shared_instants_count() {
+    // 1 ends at (1, 0) at t = 1 as 2 starts 0.1 m away.
+    let s = set(vec![
+        line(1, v(0.0, 0.0), v(1.0, 0.0), 0.0, 1.0),
+        line(2, v(1.1, 0.0), v(3.0, 0.0), 1.0, 2.0),
+    ]);
+    let c = both(&s, 0.2);
+    assert_eq!(c.pair_count(), 1);
+    assert_eq!(c.events[0].closest.t_s, 1.0);
+    assert_eq!((c.events[0].start_s, c.events[0].end_s), (1.0, 1.0));
+    // An isolated sample inside the other's segment.
+    let s = set(vec![
+        line(1, v(0.0, 0.0), v(2.0, 0.0), 0.0, 2.0),
+        Track::linked(2, vec![v(0.5, 0.1)], vec![0.5]),
+    ]);
+    let c = both(&s, 0.2);
+    let a = c.events[0].closest;
+    assert_eq!(a.t_s, 0.5);
+    assert!((a.distance_m - 0.1).abs() < 1e-12);
+    assert!(!a.moving_b && a.moving_a);
+    // Two isolated samples at one time.
+    let s = set(vec![
+        Track::linked(1, vec![v(0.0, 0.0)], vec![3.0]),
+        Track::linked(2, vec![v(0.0, 0.1)], vec![3.0]),
+        Track::linked(3, vec![v(0.0, 0.0)], vec![3.5]),
+    ]);
+    let c = both(&s, 0.2);
+    assert_eq!(c.pair_count(), 1);
+    assert_eq!((c.pairs[0].id_a, c.pairs[0].id_b), (1, 2));
+}
+
+#[test]
+fn a_gap_is_absence() {
+    // 1 stands at the origin during [0, 1] and [3, 4], away in between; 2 walks
+    // through the origin at t = 2.
+    let s = set(vec![
+        Track {
+            id: 1,
+            points: vec![v(0.0, 0.0); 4],
+            times_s: vec![0.0, 1.0, 3.0, 4.0],
+            linked: vec![true, false, true],
+        },
+        line(2, v(-2.0, 0.0), v(2.0, 0.0), 0.0, 4.0),
+    ]);
+    assert_eq!(both(&s, 0.5).pair_count(), 0);
+    let mut linked = s.clone();
+    linked.tracks[0].linked[1] = true;
+    assert_eq!(both(&linked, 0.5).pair_count(), 1);
+}
+
+#[test]
+fn two_separate_runs_are_two_events() {
+    // 2 stands by 1's path, 1 walks past, then comes back after a pause far away.
+    let s = set(vec![
+        Track::linked(
+            1,
+            vec![
+                v(-2.0, 0.0),
+                v(2.0, 0.0),
+                v(2.0, 5.0),
+                v(2.0, 0.0),
+                v(-2.0, 0.0),
+            ],
+            vec![0.0, 4.0, 9.0, 14.0, 18.0],
+        ),
+        Track::linked(2, vec![v(0.0, 0.1), v(0.0, 0.1)], vec![0.0, 20.0]),
+    ]);
+    let c = both(&s, 0.2);
+    assert_eq!(c.pair_count(), 1);
+    assert_eq!(c.pairs[0].events, 2);
+    let t: Vec<f64> = c.events.iter().map(|e| e.closest.t_s).collect();
+    assert!(
+        (t[0] - 2.0).abs() < 1e-12 && (t[1] - 16.0).abs() < 1e-12,
+        "{t:?}"
+    );
+    // Consecutive overlaps that all collide are one event.
+    let s = set(vec![
+        Track::linked(
+            1,
+            (0..6).map(|k| v(k as f64 * 0.1, 0.0)).collect(),
+            (0..6).map(f64::from).collect(),
+        ),
+        Track::linked(2, vec![v(0.0, 0.05), v(0.5, 0.05)], vec![0.0, 5.0]),
+    ]);
+    let c = both(&s, 0.2);
+    assert_eq!(c.events.len(), 1);
+    assert_eq!((c.events[0].start_s, c.events[0].end_s), (0.0, 5.0));
+}
+
+#[test]
+fn bad_threshold_and_tracks_are_errors() {
+    let s = set(vec![line(1, v(0.0, 0.0), v(1.0, 0.0), 0.0, 1.0)]);
+    for d in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert!(matches!(detect(&s, d), Err(CollideError::Threshold { .. })));
+    }
+    let mut bad = s.clone();
+    bad.tracks[0].times_s[1] = 0.0;
+    assert!(matches!(detect(&bad, 0.3), Err(CollideError::Tracks(_))));
+    assert_eq!(detect(&set(vec![]), 0.3).unwrap().pair_count(), 0);
+}
+
+/// Random small crowds in a 3 × 3 m square: regular and irregular times, gaps,
+/// single samples, people standing still, and pairs walking with equal velocities.
+fn crowd() -> impl Strategy<Value = TrackSet> {
+    let person = (
+        1usize..8,
+        0.0f64..3.0,
+        prop::collection::vec((0.0f64..3.0, 0.0f64..3.0, 0.05f64..1.0, 0u8..10), 8),
+        any::<bool>(),
+        any::<bool>(),
+    );
+    (
+        prop::collection::vec(person, 1..9),
+        0.1f64..1.0,
+        any::<bool>(),
+    )
+        .prop_map(|(people, step, twin)| {
+            let mut tracks = Vec::new();
+            for (k, (n, start, samples, regular, still)) in people.into_iter().enumerate() {
+                let mut t = start;
+                let mut tr = Track {
+                    id: k as u64,
+                    points: vec![],
+                    times_s: vec![],
+                    linked: vec![],
+                };
+                for (j, &(x, y, dt, link)) in samples.iter().take(n).enumerate() {
+                    if j > 0 {
+                        t += if regular { step } else { dt };
+                        tr.linked.push(link < 8);
+                    }
+                    let p = if still {
+                        tr.points.first().copied().unwrap_or(v(x, y))
+                    } else {
+                        v(x, y)
+                    };
+                    tr.points.push(p);
+                    tr.times_s.push(t);
+                }
+                tracks.push(tr);
+            }
+            if twin {
+                // Same velocities as person 0, 0.1 m to the side.
+                let mut t = tracks[0].clone();
+                t.id = 1000;
+                for p in &mut t.points {
+                    p.y += 0.1;
+                }
+                tracks.push(t);
+            }
+            TrackSet {
+                tracks,
+                step_s: step,
+            }
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 256,
+        rng_seed: RngSeed::Fixed(0x636f_6c6c),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn prop_grid_sweep_equals_all_pairs(s in crowd(), d in 0.05f64..1.5) {
+        let fast = detect(&s, d).unwrap();
+        let reference = collisions_all_pairs(&s, d).unwrap();
+        let pairs = |c: &Collisions| c.pairs.iter().map(|p| (p.a, p.b)).collect::<Vec<_>>();
+        prop_assert_eq!(pairs(&fast), pairs(&reference));
+        for (f, r) in fast.pairs.iter().zip(&reference.pairs) {
+            prop_assert!((f.closest.distance_m - r.closest.distance_m).abs() <= 1e-12);
+            prop_assert!(f.closest.distance_m < d);
+        }
+        prop_assert_eq!(fast, reference);
+    }
+
+    #[test]
+    fn prop_minimum_is_no_more_than_any_sampled_distance(s in crowd()) {
+        // Every shared sample instant bounds the pair's closest approach from above.
+        let c = detect(&s, 10.0).unwrap();
+        for p in &c.pairs {
+            let (ta, tb) = (&s.tracks[p.a], &s.tracks[p.b]);
+            for (&t, &q) in ta.times_s.iter().zip(&ta.points) {
+                if let Some(r) = tb.position_at(t) {
+                    prop_assert!(p.closest.distance_m <= (q - r).norm() + 1e-12);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn random_walkers_grid_equals_all_pairs() {
+    // 300 walkers at 1.3 m/s in a 20 × 20 m square, 0.1 s steps, some entering late
+    // and some leaving for a while.
+    let mut rng = crate::rng::SplitMix64::new(17);
+    let mut tracks = Vec::new();
+    for id in 0..300u64 {
+        let mut p = v(rng.uniform(0.0, 20.0), rng.uniform(0.0, 20.0));
+        let start = (rng.uniform(0.0, 20.0) as usize) as f64 * 0.1;
+        let mut tr = Track::linked(id, vec![], vec![]);
+        for j in 0..40 {
+            let a = rng.uniform(0.0, std::f64::consts::TAU);
+            if j > 0 {
+                tr.linked.push(rng.unit() > 0.05);
+                p += v(a.cos(), a.sin()) * 0.13;
+            }
+            tr.points.push(p);
+            tr.times_s.push(start + j as f64 * 0.1);
+        }
+        tracks.push(tr);
+    }
+    let s = TrackSet {
+        tracks,
+        step_s: 0.1,
+    };
+    for d in [0.2, 0.5, 1.0] {
+        let c = both(&s, d);
+        assert!(c.pair_count() > 0);
+    }
+}
