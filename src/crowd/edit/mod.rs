@@ -8,8 +8,20 @@
 //! |---|---|---|
 //! | `tracks.rs` | [`TrackSet`]: per person a spatial and a temporal track, linked samples and gaps | 3.1 |
 //! | [`io`] | readers and writers: the pedestrian datasets' raw format, … | |
+//! | `error.rs` | [`EditError`]: why an edit was refused | |
+//! | `select.rs` | [`Selection`]: samples by id, rectangle, lasso, time window | 3.2 |
+//! | `hull.rs` | [`concave_hull`]: the cage polygon (geo's concave hull, grown by a margin; convex fallback) | 3.2 |
 
+mod error;
+mod hull;
 pub mod io;
+mod select;
 mod tracks;
 
+pub use error::EditError;
+pub use hull::{
+    concave_hull, grid_cell, grid_subsample, is_simple, Hull, HullParams, DEFAULT_CONCAVITY,
+    DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M,
+};
+pub use select::{point_in_polygon, SampleRef, Selection, SelectionQuery};
 pub use tracks::{Track, TrackError, TrackSet, MAX_SAMPLES};
