@@ -7,7 +7,9 @@
 //! the occupied cells, so every position lies in a cell whose corners the hull
 //! encloses, and the cage keeps a margin of up to one cell around the crowd. The
 //! polygon is cleaned (duplicates and collinear vertices removed, made
-//! counter-clockwise) and checked: simple, positive area, every position inside or on
+//! counter-clockwise), its long edges are subdivided (at most
+//! [`HullParams::max_edge_cells`] cells long, so that a drag can act locally) and it is
+//! checked: simple, positive area, every position inside or on
 //! the boundary. When a check fails the cage falls back to the convex hull of the same
 //! corners ([`Hull::convex_fallback`]), which is always simple and contains every
 //! position.
@@ -34,6 +36,10 @@ pub const DEFAULT_MIN_CELL_M: f64 = 0.25;
 /// cage's unknowns) and the deformation mesh.
 pub const DEFAULT_MAX_POINTS: usize = 1000;
 
+/// Longest hull edge, in grid cells: longer edges are subdivided evenly, so that the
+/// cage has vertices all along the crowd's boundary for a drag to act locally.
+pub const DEFAULT_MAX_EDGE_CELLS: f64 = 4.0;
+
 /// Two consecutive hull vertices closer than this fraction of the cell are merged;
 /// a vertex whose turn (|sin|) is below it is dropped as collinear.
 const MERGE_FRACTION: f64 = 1e-3;
@@ -48,6 +54,8 @@ pub struct HullParams {
     /// Representatives aimed for; the cell grows so that the selection's bounding box
     /// holds about this many cells.
     pub max_points: usize,
+    /// Longest hull edge in grid cells (see [`DEFAULT_MAX_EDGE_CELLS`]).
+    pub max_edge_cells: f64,
 }
 
 impl Default for HullParams {
@@ -56,6 +64,7 @@ impl Default for HullParams {
             concavity: DEFAULT_CONCAVITY,
             min_cell_m: DEFAULT_MIN_CELL_M,
             max_points: DEFAULT_MAX_POINTS,
+            max_edge_cells: DEFAULT_MAX_EDGE_CELLS,
         }
     }
 }
@@ -185,6 +194,20 @@ fn clean(poly: &mut Vec<Vec2>, tol_m: f64) {
     }
 }
 
+/// Splits every edge longer than `max_m` into equal pieces no longer than `max_m`.
+fn subdivide(poly: &[Vec2], max_m: f64) -> Vec<Vec2> {
+    let n = poly.len();
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        let pieces = ((b - a).norm() / max_m).ceil().max(1.0) as usize;
+        for k in 0..pieces {
+            out.push(a + (b - a) * (k as f64 / pieces as f64));
+        }
+    }
+    out
+}
+
 /// Whether every point is inside `poly` or on its boundary.
 fn contains_all(poly: &[Vec2], points: &[Vec2]) -> bool {
     let n = poly.len();
@@ -258,7 +281,7 @@ pub fn concave_hull(points: &[Vec2], params: &HullParams) -> Result<Hull, EditEr
         && contains_all(&poly, points)
     {
         return Ok(Hull {
-            vertices: poly,
+            vertices: subdivide(&poly, params.max_edge_cells * cell),
             cell_m: cell,
             representatives: reps,
             convex_fallback: false,
@@ -277,7 +300,7 @@ pub fn concave_hull(points: &[Vec2], params: &HullParams) -> Result<Hull, EditEr
         });
     }
     Ok(Hull {
-        vertices: poly,
+        vertices: subdivide(&poly, params.max_edge_cells * cell),
         cell_m: cell,
         representatives: reps,
         convex_fallback: true,

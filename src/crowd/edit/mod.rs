@@ -10,18 +10,24 @@
 //! | [`io`] | readers and writers: the pedestrian datasets' raw format, … | |
 //! | `error.rs` | [`EditError`]: why an edit was refused | |
 //! | `select.rs` | [`Selection`]: samples by id, rectangle, lasso, time window | 3.2 |
+//! | `cage.rs` | [`Cage`]: the spatial editor (MVC cage, ARAP mesh, locality and hull-edge energies, exact handle constraints); [`correct_speeds`] | 3.2, eqs. 1–9 |
 //! | `hull.rs` | [`concave_hull`]: the cage polygon (geo's concave hull, grown by a margin; convex fallback) | 3.2 |
 
+mod cage;
 mod error;
 mod hull;
 pub mod io;
 mod select;
 mod tracks;
 
+pub use cage::{
+    correct_speeds, Cage, CageParams, Handle, ShapeError, SpeedReport, MIN_INTERVAL_FRACTION,
+    PAPER_ALPHA, PAPER_BETA, PAPER_K,
+};
 pub use error::EditError;
 pub use hull::{
     concave_hull, grid_cell, grid_subsample, is_simple, Hull, HullParams, DEFAULT_CONCAVITY,
-    DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M,
+    DEFAULT_MAX_EDGE_CELLS, DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M,
 };
 pub use select::{point_in_polygon, SampleRef, Selection, SelectionQuery};
 pub use tracks::{Track, TrackError, TrackSet, MAX_SAMPLES};
