@@ -11,6 +11,7 @@
 //! | `error.rs` | [`EditError`]: why an edit was refused | |
 //! | `select.rs` | [`Selection`]: samples by id, rectangle, lasso, time window | 3.2 |
 //! | `cage.rs` | [`Cage`]: the spatial editor (MVC cage, ARAP mesh, locality and hull-edge energies, exact handle constraints); [`correct_speeds`] | 3.2, eqs. 1–9 |
+//! | `temporal.rs` | [`retime`]: dragging time nodes, intervals kept, locality, times increasing | 3.3, eqs. 10–12 |
 //! | `hull.rs` | [`concave_hull`]: the cage polygon (geo's concave hull, grown by a margin; convex fallback) | 3.2 |
 
 mod cage;
@@ -18,6 +19,7 @@ mod error;
 mod hull;
 pub mod io;
 mod select;
+mod temporal;
 mod tracks;
 
 pub use cage::{
@@ -30,4 +32,5 @@ pub use hull::{
     DEFAULT_MAX_EDGE_CELLS, DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M,
 };
 pub use select::{point_in_polygon, SampleRef, Selection, SelectionQuery};
+pub use temporal::{retime, RetimeParams, RetimeReport, TimeDrag};
 pub use tracks::{Track, TrackError, TrackSet, MAX_SAMPLES};
