@@ -7,17 +7,38 @@
 //! | file | what | paper |
 //! |---|---|---|
 //! | `tracks.rs` | [`TrackSet`]: per person a spatial and a temporal track, linked samples and gaps | 3.1 |
+//! | [`io`] | readers and writers: our JSON Lines, CSV `t,id,x,y`, the pedestrian datasets' raw format; files read capped and written safely | 3.1 |
 //! | `script.rs` | edit scripts (`edit apply --ops`): selections, fixed points, drags, retimes, with their lines | 3.2, 3.3 |
+//! | `error.rs` | [`EditError`]: why an edit was refused | |
+//! | `select.rs` | [`Selection`]: samples by id, rectangle, lasso, time window | 3.2 |
+//! | `hull.rs` | [`concave_hull`]: the cage polygon (geo's concave hull, grown by a margin; convex fallback) | 3.2 |
+//! | `cage.rs` | [`Cage`]: the spatial editor (MVC cage, ARAP mesh, locality and hull-edge energies, exact handle constraints); [`correct_speeds`] | 3.2, eqs. 1–9 |
+//! | `temporal.rs` | [`retime`]: dragging time nodes, intervals kept, locality, times increasing | 3.3, eqs. 10–12 |
 //! | `collide.rs` | [`detect`]: people closer than a threshold in space-time (and the all-pairs reference) | 4.1.1 |
-//! | [`io`] | readers and writers: our JSON Lines, CSV `t,id,x,y`, the pedestrian datasets' raw format | 3.1 |
 
+mod cage;
 mod collide;
+mod error;
+mod hull;
 pub mod io;
 mod script;
+mod select;
+mod temporal;
 mod tracks;
 
+pub use cage::{
+    correct_speeds, Cage, CageParams, Handle, ShapeError, SpeedReport, MIN_INTERVAL_FRACTION,
+    PAPER_ALPHA, PAPER_BETA, PAPER_K,
+};
 pub use collide::{
     collisions_all_pairs, detect, Approach, CollideError, CollisionEvent, Collisions, PairCollision,
 };
+pub use error::EditError;
+pub use hull::{
+    concave_hull, grid_cell, grid_subsample, is_simple, Hull, HullParams, DEFAULT_CONCAVITY,
+    DEFAULT_MAX_EDGE_CELLS, DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M,
+};
 pub use script::{parse_script, Op, OpDef, Script, ScriptError, SelectSpec, MAX_LIST, MAX_OPS};
+pub use select::{point_in_polygon, SampleRef, Selection, SelectionQuery};
+pub use temporal::{retime, RetimeParams, RetimeReport, TimeDrag};
 pub use tracks::{Track, TrackError, TrackSet, MAX_SAMPLES};
