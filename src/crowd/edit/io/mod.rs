@@ -10,6 +10,8 @@
 mod csv;
 mod eth;
 mod jsonl;
+#[cfg(test)]
+mod tests;
 
 pub use csv::{median_step, read_csv, write_csv, LINK_STEPS, SINGLE_SAMPLE_STEP_S};
 pub use eth::{read_eth, write_eth, EthOptions};
