@@ -7,9 +7,12 @@
 //! | file | what | paper |
 //! |---|---|---|
 //! | `tracks.rs` | [`TrackSet`]: per person a spatial and a temporal track, linked samples and gaps | 3.1 |
+//! | `record.rs` | [`TrackRecorder`]: a running crowd's positions, tick by tick, into tracks on a time grid | 3.1 |
 //! | [`io`] | readers and writers: our JSON Lines, CSV `t,id,x,y`, the pedestrian datasets' raw format | 3.1 |
 
 pub mod io;
+mod record;
 mod tracks;
 
+pub use record::{RecordError, TrackRecorder};
 pub use tracks::{Track, TrackError, TrackSet, MAX_SAMPLES};
