@@ -28,6 +28,7 @@ mod calibrate;
 mod check;
 mod devices;
 mod edit;
+mod edit_path;
 mod formations;
 mod gesture;
 mod hid;

@@ -92,3 +92,67 @@ fn replay_refuses_a_bad_track_step() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("track step"), "{err}");
 }
+
+/// `edit path` on a shipped scene named without its extension: one track per
+/// person, the first starting at `--from`, readable as JSON Lines tracks; an
+/// existing output is kept unless `--force`.
+#[test]
+fn edit_path_writes_a_group_and_keeps_an_existing_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_path = dir.path().join("group.jsonl");
+    let run = |force: bool| {
+        let mut c = bin();
+        c.args(["edit", "path", "--scene", "single_block", "--from", "8,4.5"])
+            .args(["--to", "15.5,4.5", "--people", "6", "--spacing", "0.5"])
+            .arg("-o")
+            .arg(&out_path);
+        if force {
+            c.arg("--force");
+        }
+        c.output().unwrap()
+    };
+    let out = run(false);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&out_path).unwrap();
+    let set = read_jsonl(&text).unwrap();
+    set.validate().unwrap();
+    assert_eq!(set.tracks.len(), 6);
+    assert_eq!(set.step_s, 0.1);
+    for t in &set.tracks {
+        for j in 0..t.len() - 1 {
+            let v = t.segment_speed(j);
+            assert!((v - 1.3).abs() < 0.026, "person {}: {v} m/s", t.id);
+        }
+    }
+    let again = run(false);
+    assert!(!again.status.success());
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(err.contains("exists") && err.contains("--force"), "{err}");
+    assert!(run(true).status.success());
+    assert_eq!(
+        std::fs::read_to_string(&out_path).unwrap(),
+        text,
+        "deterministic"
+    );
+
+    let bad = bin()
+        .args([
+            "edit",
+            "path",
+            "--scene",
+            "single_block",
+            "--from",
+            "12.5,4.5",
+        ])
+        .args(["--to", "15.5,4.5", "--people", "2", "-o"])
+        .arg(dir.path().join("x.jsonl"))
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("inside an obstacle"), "{err}");
+}
