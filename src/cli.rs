@@ -3,6 +3,7 @@
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
 use crowdtouch::config::{self, Config};
+use crowdtouch::crowd::edit::{io::write_jsonl, TrackRecorder};
 use crowdtouch::engine::{replay_virtual, Engine, VirtualClock};
 use crowdtouch::input::recording::{OnBadFrame, RecordingStream};
 use crowdtouch::pipeline::{
@@ -27,6 +28,7 @@ mod calibrate;
 mod check;
 mod devices;
 mod edit;
+mod edit_path;
 mod formations;
 mod gesture;
 mod hid;
@@ -212,6 +214,13 @@ struct ReplayArgs {
     /// daemon's own view of a recording, for bug reports.
     #[arg(long)]
     frames: bool,
+    /// Also write every agent's track (JSON Lines tracks, docs/tracks.md): its
+    /// position every `--track-step` seconds of replay time.
+    #[arg(long, conflicts_with = "frames")]
+    tracks: Option<PathBuf>,
+    /// Time between two samples of the tracks (s).
+    #[arg(long, default_value_t = 0.1, requires = "tracks")]
+    track_step: f64,
 }
 
 #[derive(Args, Debug)]
@@ -627,7 +636,11 @@ fn replay(a: ReplayArgs) -> Result<()> {
     let start_wall = monotonic_now();
     let realtime = a.realtime;
     let mut sent_topology = 0;
+    // Replay time of the tick about to run: the virtual clock less the gaps it
+    // skipped, so tracks do not stand still through a skipped gap.
+    let played_now = std::cell::Cell::new(Micros::ZERO);
     let pace = |played: Micros| {
+        played_now.set(played);
         if realtime {
             let due = start_wall + played;
             let now = monotonic_now();
@@ -647,9 +660,20 @@ fn replay(a: ReplayArgs) -> Result<()> {
         next
     });
     let mut trace = a.svg.as_ref().map(|_| svg::Trace::default());
+    let mut tracks = match &a.tracks {
+        Some(_) => Some(TrackRecorder::new(a.track_step).context("--track-step")?),
+        None => None,
+    };
+    let mut positions: Vec<crowdtouch::geom::Vec2> = Vec::new();
     replay_virtual(&mut engine, frames, clock, pace, |o| -> Result<()> {
         if let Some(t) = &mut trace {
             t.tick(&o.snapshot, o.mesh.as_deref());
+        }
+        if let Some(r) = &mut tracks {
+            positions.clear();
+            positions.extend(o.snapshot.agents.iter().map(|g| g.pos));
+            r.tick(played_now.get().as_secs_f64(), &positions)
+                .context("recording tracks")?;
         }
         buf.clear();
         for e in o.events {
@@ -664,6 +688,12 @@ fn replay(a: ReplayArgs) -> Result<()> {
         Ok(())
     })?;
     out.flush().context("writing snapshots")?;
+    if let (Some(path), Some(r)) = (&a.tracks, tracks) {
+        let set = r.finish();
+        let source = a.file.file_name().map(|n| n.to_string_lossy());
+        std::fs::write(path, write_jsonl(&set, source.as_deref()))
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
     if let (Some(path), Some(t)) = (&a.svg, &mut trace) {
         let title = a
             .file

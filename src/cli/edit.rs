@@ -1,6 +1,7 @@
 //! `crowdtouch edit`: crowd motion editing (crowd-motion-editing, Zhang et al. 2020)
 //! on track files: collisions (`edit check`), scripted edits (`edit apply`) and
-//! pictures (`edit render`).
+//! pictures (`edit render`); tracks of a group walking through a scene (`edit path`,
+//! in `edit_path.rs`).
 
 #[path = "edit_check.rs"]
 mod edit_check;
@@ -19,6 +20,9 @@ pub const MAX_TRACK_FILE_BYTES: u64 = 256 << 20;
 pub enum EditCmd {
     /// Collisions between people (space-time closest approach below a threshold).
     Check(CheckArgs),
+    /// Tracks of a group walking a path through a scene in rows (the paper's test
+    /// crowd, section 5.2).
+    Path(super::edit_path::PathArgs),
 }
 
 /// A track file's format on the command line.
@@ -73,6 +77,7 @@ pub struct CheckArgs {
 pub fn edit(cmd: EditCmd) -> Result<()> {
     match cmd {
         EditCmd::Check(a) => check(a),
+        EditCmd::Path(a) => super::edit_path::path(a),
     }
 }
 

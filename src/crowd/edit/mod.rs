@@ -1,14 +1,13 @@
 //! Crowd motion editing (crowd-motion-editing, Zhang et al. 2020): a crowd's recorded
 //! or authored tracks, edited in space by a concave-hull cage and as-rigid-as-possible
 //! mesh deformation (section 3.2), in time (section 3.3), checked for collisions in
-//! space-time and kept apart by retiming (section 4.1), and kept out of obstacles by
 //! adjusting the cage (section 4.2).
 //!
 //! | file | what | paper |
 //! |---|---|---|
 //! | `tracks.rs` | [`TrackSet`]: per person a spatial and a temporal track, linked samples and gaps | 3.1 |
 //! | [`io`] | readers and writers: our JSON Lines, CSV `t,id,x,y`, the pedestrian datasets' raw format; files read capped and written safely | 3.1 |
-//! | `script.rs` | edit scripts (`edit apply --ops`): selections, fixed points, drags, retimes, with their lines | 3.2, 3.3 |
+//! | `record.rs` | [`TrackRecorder`]: a running crowd's positions, tick by tick, into tracks on a time grid | 3.1 |
 //! | `error.rs` | [`EditError`]: why an edit was refused | |
 //! | `select.rs` | [`Selection`]: samples by id, rectangle, lasso, time window | 3.2 |
 //! | `hull.rs` | [`concave_hull`]: the cage polygon (geo's concave hull, grown by a margin; convex fallback) | 3.2 |
@@ -21,6 +20,8 @@ mod collide;
 mod error;
 mod hull;
 pub mod io;
+mod paths;
+mod record;
 mod script;
 mod select;
 mod temporal;
@@ -38,6 +39,8 @@ pub use hull::{
     concave_hull, grid_cell, grid_subsample, is_simple, Hull, HullParams, DEFAULT_CONCAVITY,
     DEFAULT_MAX_EDGE_CELLS, DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M,
 };
+pub use paths::{group_tracks, standard_path, GroupPath, PathError, DIRECTION_SPAN_M};
+pub use record::{RecordError, TrackRecorder};
 pub use script::{parse_script, Op, OpDef, Script, ScriptError, SelectSpec, MAX_LIST, MAX_OPS};
 pub use select::{point_in_polygon, SampleRef, Selection, SelectionQuery};
 pub use temporal::{retime, RetimeParams, RetimeReport, TimeDrag};

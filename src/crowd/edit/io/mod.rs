@@ -8,15 +8,18 @@
 //! | [`Format::Eth`] | `eth.rs` | the public pedestrian datasets (ETH/UCY as redistributed by trajectory-prediction projects): `frame id x y` per line, whitespace-separated, metres |
 
 mod csv;
+mod error;
 mod eth;
 mod jsonl;
+#[cfg(test)]
+mod tests;
 
 pub use csv::{median_step, read_csv, write_csv, LINK_STEPS, SINGLE_SAMPLE_STEP_S};
+pub use error::ReadError;
 pub use eth::{read_eth, write_eth, EthOptions};
 pub use jsonl::{read_jsonl, write_jsonl, JSONL_FORMAT, JSONL_VERSION};
 
 use super::tracks::TrackSet;
-use thiserror::Error;
 
 /// The formats a track set is read from and written to.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -86,25 +89,5 @@ pub fn write(set: &TrackSet, format: Format, opts: &ReadOptions) -> String {
         Format::Jsonl => write_jsonl(set, None),
         Format::Csv => write_csv(set),
         Format::Eth => write_eth(set, opts.eth),
-    }
-}
-
-/// A track file that cannot be read: the line (1-based; 0 when the problem is the
-/// file as a whole) and what is wrong there.
-#[derive(Debug, Error, PartialEq)]
-#[error("line {line}: {what}")]
-pub struct ReadError {
-    /// 1-based line number, 0 for the whole file.
-    pub line: usize,
-    /// What is wrong, for a person.
-    pub what: String,
-}
-
-impl ReadError {
-    pub(crate) fn at(line: usize, what: impl Into<String>) -> ReadError {
-        ReadError {
-            line,
-            what: what.into(),
-        }
     }
 }
