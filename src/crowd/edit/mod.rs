@@ -12,12 +12,14 @@
 //! | `select.rs` | [`Selection`]: samples by id, rectangle, lasso, time window | 3.2 |
 //! | `cage.rs` | [`Cage`]: the spatial editor (MVC cage, ARAP mesh, locality and hull-edge energies, exact handle constraints); [`correct_speeds`] | 3.2, eqs. 1–9 |
 //! | `temporal.rs` | [`retime`]: dragging time nodes, intervals kept, locality, times increasing | 3.3, eqs. 10–12 |
+//! | `obstacles.rs` | [`avoid_obstacles`]: hull vertices mapped out of obstacles, then eq. 1; [`crowd_width`] | 4.2, eq. 29 |
 //! | `hull.rs` | [`concave_hull`]: the cage polygon (geo's concave hull, grown by a margin; convex fallback) | 3.2 |
 
 mod cage;
 mod error;
 mod hull;
 pub mod io;
+mod obstacles;
 mod select;
 mod temporal;
 mod tracks;
@@ -31,6 +33,7 @@ pub use hull::{
     concave_hull, grid_cell, grid_subsample, is_simple, Hull, HullParams, DEFAULT_CONCAVITY,
     DEFAULT_MAX_EDGE_CELLS, DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M,
 };
+pub use obstacles::{avoid_obstacles, crowd_width, crowd_width_at, ObstacleParams, ObstacleReport};
 pub use select::{point_in_polygon, SampleRef, Selection, SelectionQuery};
 pub use temporal::{retime, RetimeParams, RetimeReport, TimeDrag};
 pub use tracks::{Track, TrackError, TrackSet, MAX_SAMPLES};
