@@ -856,6 +856,21 @@ mod tests {
     }
 
     #[test]
+    fn dragging_to_the_rest_position_leaves_the_rest_pose() {
+        let set = band(6, 20);
+        let mut c = cage(&set);
+        let v = c.hull()[2];
+        c.drag(&[(Handle::Hull(2), v)], &[Handle::Hull(7)]).unwrap();
+        for i in 0..c.selection().len() {
+            assert!((c.deformed_sample(i) - c.rest_sample(i)).norm() < 1e-9);
+        }
+        c.drag(&[(Handle::Hull(2), v)], &[]).unwrap();
+        for i in 0..c.hull().len() {
+            assert!((c.deformed_vertex(i) - c.hull()[i]).norm() < 1e-9);
+        }
+    }
+
+    #[test]
     fn dragged_hull_vertex_and_sample_land_exactly() {
         let set = band(8, 25);
         let mut c = cage(&set);

@@ -1,12 +1,14 @@
 //! Crowd motion editing (crowd-motion-editing, Zhang et al. 2020): a crowd's recorded
 //! or authored tracks, edited in space by a concave-hull cage and as-rigid-as-possible
 //! mesh deformation (section 3.2), in time (section 3.3), checked for collisions in
+//! space-time and kept apart by retiming (section 4.1), and kept out of obstacles by
 //! adjusting the cage (section 4.2).
 //!
 //! | file | what | paper |
 //! |---|---|---|
 //! | `tracks.rs` | [`TrackSet`]: per person a spatial and a temporal track, linked samples and gaps | 3.1 |
 //! | [`io`] | readers and writers: our JSON Lines, CSV `t,id,x,y`, the pedestrian datasets' raw format; files read capped and written safely | 3.1 |
+//! | `paths.rs` | [`group_tracks`]: a group walking the standard path through a scene (fast-marching route around obstacles), in rows | 5.2 |
 //! | `record.rs` | [`TrackRecorder`]: a running crowd's positions, tick by tick, into tracks on a time grid | 3.1 |
 //! | `error.rs` | [`EditError`]: why an edit was refused | |
 //! | `select.rs` | [`Selection`]: samples by id, rectangle, lasso, time window | 3.2 |
@@ -14,12 +16,14 @@
 //! | `cage.rs` | [`Cage`]: the spatial editor (MVC cage, ARAP mesh, locality and hull-edge energies, exact handle constraints); [`correct_speeds`] | 3.2, eqs. 1–9 |
 //! | `temporal.rs` | [`retime`]: dragging time nodes, intervals kept, locality, times increasing | 3.3, eqs. 10–12 |
 //! | `collide.rs` | [`detect`]: people closer than a threshold in space-time (and the all-pairs reference) | 4.1.1 |
+//! | `obstacles.rs` | [`avoid_obstacles`]: hull vertices mapped out of obstacles, then eq. 1; [`crowd_width`] | 4.2, eq. 29 |
 
 mod cage;
 mod collide;
 mod error;
 mod hull;
 pub mod io;
+mod obstacles;
 mod paths;
 mod record;
 mod script;
@@ -39,6 +43,7 @@ pub use hull::{
     concave_hull, grid_cell, grid_subsample, is_simple, Hull, HullParams, DEFAULT_CONCAVITY,
     DEFAULT_MAX_EDGE_CELLS, DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M,
 };
+pub use obstacles::{avoid_obstacles, crowd_width, crowd_width_at, ObstacleParams, ObstacleReport};
 pub use paths::{group_tracks, standard_path, GroupPath, PathError, DIRECTION_SPAN_M};
 pub use record::{RecordError, TrackRecorder};
 pub use script::{parse_script, Op, OpDef, Script, ScriptError, SelectSpec, MAX_LIST, MAX_OPS};
