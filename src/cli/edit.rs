@@ -10,10 +10,7 @@ use anyhow::{anyhow, Result};
 use clap::{Subcommand, ValueEnum};
 use crowdtouch::crowd::edit::io::{self, EthOptions, Format, ReadOptions};
 use crowdtouch::crowd::edit::TrackSet;
-use std::path::{Path, PathBuf};
-
-/// The largest track file read (bytes).
-pub const MAX_TRACK_FILE_BYTES: u64 = 256 << 20;
+use std::path::PathBuf;
 
 /// Subcommands of `edit`.
 #[derive(Subcommand, Debug)]
@@ -94,12 +91,11 @@ fn check(a: CheckArgs) -> Result<()> {
 
 /// Reads a track file as the arguments say; errors name `file:line`.
 pub fn load(a: &TrackFileArgs) -> Result<(TrackSet, Format)> {
-    let text = read_text(&a.file)?;
     let format = match a.format {
-        FormatArg::Auto => io::detect(&a.file, &text),
-        FormatArg::Jsonl => Format::Jsonl,
-        FormatArg::Csv => Format::Csv,
-        FormatArg::Eth => Format::Eth,
+        FormatArg::Auto => None,
+        FormatArg::Jsonl => Some(Format::Jsonl),
+        FormatArg::Csv => Some(Format::Csv),
+        FormatArg::Eth => Some(Format::Eth),
     };
     let opts = ReadOptions {
         eth: EthOptions {
@@ -108,29 +104,5 @@ pub fn load(a: &TrackFileArgs) -> Result<(TrackSet, Format)> {
         },
         csv_step_s: a.step,
     };
-    let shown = a.file.display();
-    let set = io::read(&text, format, &opts).map_err(|e| match e.line {
-        0 => anyhow!("{shown}: {}", e.what),
-        l => anyhow!("{shown}:{l}: {}", e.what),
-    })?;
-    set.validate().map_err(|e| anyhow!("{shown}: {e}"))?;
-    Ok((set, format))
-}
-
-fn read_text(path: &Path) -> Result<String> {
-    let shown = path.display();
-    let meta = std::fs::metadata(path).map_err(|e| anyhow!("{shown}: {e}"))?;
-    if meta.len() > MAX_TRACK_FILE_BYTES {
-        return Err(anyhow!(
-            "{shown}: {} bytes, more than the {MAX_TRACK_FILE_BYTES} byte limit",
-            meta.len()
-        ));
-    }
-    let bytes = std::fs::read(path).map_err(|e| anyhow!("{shown}: {e}"))?;
-    String::from_utf8(bytes).map_err(|e| {
-        anyhow!(
-            "{shown}: not UTF-8 text (byte {})",
-            e.utf8_error().valid_up_to()
-        )
-    })
+    io::read_tracks(&a.file, format, &opts).map_err(|e| anyhow!(e))
 }

@@ -118,6 +118,10 @@ pub const FIELDS: &[FieldClass] = &[
         "scene",
         "the scene file is read again and swapped in from the next tick",
     ),
+    live(
+        "edit",
+        "the track file is read again; tracks that changed are loaded (unsaved edits are dropped), the threshold applies from the next edit",
+    ),
     live("formations.lambda", "from the next switch"),
     live("formations.shapes", "from the next switch"),
     live("formations.method", "from the next formation request"),
@@ -398,6 +402,10 @@ mod tests {
         c.log_level = crate::config::LogLevel::Debug;
         c.surface.size_mm = Some((800.0, 450.0));
         c.scene = Some(PathBuf::from("/nonexistent/room.ron"));
+        c.edit = Some(crate::config::EditConfig {
+            tracks: PathBuf::from("/nonexistent/parade.jsonl"),
+            threshold_m: 0.4,
+        });
         c.pipeline.realtime.priority = Some(30);
         c.pipeline.realtime.input_cpus = Some(vec![0]);
         c.socket.path = Some(PathBuf::from("/tmp/x.sock"));

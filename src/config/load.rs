@@ -4,6 +4,7 @@
 use super::error::{ConfigIssue, Error};
 use super::inputs::InputConfig;
 use super::model::Config;
+use crate::crowd::edit::io::{read_tracks, ReadOptions};
 use crate::crowd::formation::FormationLibrary;
 use crate::gesture::recognise::Recogniser;
 use crate::located::{locate_field, parse_strict, read_capped};
@@ -88,6 +89,24 @@ impl Config {
             }
         }
         if problems.is_empty() {
+            if let Some(edit) = &cfg.edit {
+                if !(edit.threshold_m.is_finite()
+                    && edit.threshold_m > 0.0
+                    && edit.threshold_m <= 10.0)
+                {
+                    problems.push((
+                        "edit.threshold_m".to_string(),
+                        format!("must be in (0, 10] m, got {}", edit.threshold_m),
+                    ));
+                }
+                match read_tracks(&edit.tracks, None, &ReadOptions::default()) {
+                    Ok((set, _)) => cfg.loaded_tracks = Some(Arc::new(set)),
+                    Err(e) => problems
+                        .push(("edit.tracks".to_string(), format!("tracks not usable: {e}"))),
+                }
+            }
+        }
+        if problems.is_empty() {
             problems.extend(super::transform::check_gesture_formations(
                 &cfg.formations.gestures,
                 &cfg.library.known_names(),
@@ -116,6 +135,11 @@ impl Config {
         if let Some(s) = &mut self.scene {
             if s.is_relative() {
                 *s = base.join(&*s);
+            }
+        }
+        if let Some(e) = &mut self.edit {
+            if e.tracks.is_relative() {
+                e.tracks = base.join(&e.tracks);
             }
         }
         if let Some(l) = &mut self.gestures.library {

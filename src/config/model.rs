@@ -6,6 +6,7 @@ use super::inputs::InputConfig;
 use super::transform::{
     GestureFormation, SubgroupsConfig, TransformCost, TransformMoveConfig, DEFAULT_METHOD,
 };
+use crate::crowd::edit::TrackSet;
 use crate::crowd::environment::Scene;
 use crate::crowd::formation::{FormationDef, FormationLibrary, DEFAULT_LAMBDA};
 use crate::geom::Rect;
@@ -365,13 +366,43 @@ pub struct Config {
     /// indexed with the config.
     #[serde(skip)]
     pub(super) recogniser: Option<Arc<Recogniser>>,
+    /// Edit mode at start (crowd-motion-editing): a track file whose people play as
+    /// the crowd and whose tracks fingers edit. `None`: the crowd; a client can
+    /// still enter edit mode with `edit.load`.
+    #[serde(default)]
+    pub edit: Option<EditConfig>,
+    /// The tracks of `edit.tracks`, read and validated with the config.
+    #[serde(skip)]
+    pub(super) loaded_tracks: Option<Arc<TrackSet>>,
     /// Threads, queues and budgets.
     pub pipeline: PipelineConfig,
     /// The Unix socket.
     pub socket: SocketConfig,
 }
 
+/// `edit`: the edit mode at start.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EditConfig {
+    /// The track file (JSON Lines, CSV `t,id,x,y`, ETH/UCY `frame id x y`),
+    /// relative to the config file.
+    pub tracks: PathBuf,
+    /// Two people closer than this collide; avoidance after an edit keeps them
+    /// apart (m).
+    #[serde(default = "default_edit_threshold_m")]
+    pub threshold_m: f64,
+}
+
+fn default_edit_threshold_m() -> f64 {
+    0.3
+}
+
 impl Config {
+    /// The tracks of `edit.tracks`, when the config names them.
+    pub fn loaded_tracks(&self) -> Option<&Arc<TrackSet>> {
+        self.loaded_tracks.as_ref()
+    }
+
     /// The loaded scene (`None` without a `scene` field).
     pub fn loaded_scene(&self) -> Option<&Arc<Scene>> {
         self.loaded_scene.as_ref()

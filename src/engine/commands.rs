@@ -1,5 +1,5 @@
 //! What clients may ask of the engine: reset, resize (`resize.rs`), pause and resume,
-//! and formation switches (`switch.rs`).
+//! formation switches (`switch.rs`) and the edit mode's commands (`edit.rs`).
 //!
 //! # The events commands cause
 //! Events wait in the engine until the next tick publishes them, so a burst of
@@ -47,6 +47,11 @@ impl Engine {
                 self.set_paused(false, now);
                 Ok(())
             }
+            Command::EditLoad { path } => self.edit_load(path),
+            Command::EditUndo => self.edit_undo(),
+            Command::EditSave { path, overwrite } => self.edit_save(path.as_deref(), *overwrite),
+            Command::EditRetime { at_s, to_s } => self.edit_retime(*at_s, *to_s),
+            Command::EditExit => self.edit_exit(now),
         }
     }
 

@@ -32,6 +32,10 @@ pub enum CommandError {
         /// The longest (s).
         max_s: f64,
     },
+    /// An edit-mode command that cannot be applied now (no tracks loaded, an edit
+    /// under way, nothing to undo, bad arguments).
+    #[error("{0}")]
+    Edit(String),
     /// The formation could not be laid out for the crowd (without the formation
     /// thread; with it, the failure is logged when the switch arrives).
     #[error("formation `{name}` could not be built: {why}")]

@@ -13,11 +13,14 @@
 //! | `resize.rs` | a new crowd size: goal sampling prepared off the tick ([`ResizeRequest`](crate::crowd::control::ResizeRequest)), installed between ticks |
 //! | `switch.rs` | formation switches at checkpoints and on request |
 //! | `transform.rs`, `transform_state.rs` | formation transforms (formation-transform): prepared off the tick, run every tick, direct control after |
+//! | `edit.rs`, `edit_state.rs` | the edit mode (crowd-motion-editing): tracks loaded and played, grabbed and dragged by fingers, retimed, undone, saved |
 //! | `params.rs` | the config turned into the crowd's and gesture's parameter structs |
 //! | `replay.rs` | replays on a virtual clock |
 //! | `error.rs` | why a command or switch was refused |
 
 mod commands;
+mod edit;
+mod edit_state;
 mod error;
 mod gesture;
 mod gesture_state;
@@ -34,6 +37,7 @@ mod transform_state;
 #[cfg(test)]
 mod tests;
 
+pub use edit_state::{EditDone, EditFileJob, EditJob, EDIT_THRESHOLD_M, GROUP_LINK_M, MAX_UNDO};
 pub use error::{CommandError, SwitchError};
 pub use params::{
     ap_params, inline_planner, move_params, pair_cost, planner_for, planner_params, point_metric,

@@ -124,6 +124,8 @@ pub struct Engine {
     pub(super) gestures: super::gesture_state::Gestures,
     /// Formation transforms: settings, the request out, the run (`transform.rs`).
     pub(super) transforms: super::transform_state::Transforms,
+    /// Edit mode: the tracks, the grab, the jobs out (`edit.rs`).
+    pub(super) edits: super::edit_state::Edits,
 }
 
 impl Engine {
@@ -197,6 +199,7 @@ impl Engine {
             resize: ResizeState::default(),
             gestures: super::gesture_state::Gestures::new(cfg, inline_assignment),
             transforms: super::transform_state::Transforms::new(cfg, cfg.crowd.agent_radius_m),
+            edits: super::edit_state::Edits::new(),
         };
         e.segmenter
             .set_all_touches_are_gestures(cfg.gestures.all_touches_are_gestures);
@@ -206,6 +209,7 @@ impl Engine {
             e.planner = inline_planner(cfg);
         }
         e.set_mesh_environment();
+        e.configure_edit(cfg, Micros(0));
         e
     }
 
@@ -317,6 +321,8 @@ impl Engine {
             };
         }
         self.set_mesh_environment();
+        let now = self.last_t.unwrap_or(Micros(0));
+        self.configure_edit(cfg, now);
         ignored
     }
 

@@ -6,7 +6,9 @@ use crate::crowd::environment::steer_target;
 use crate::geom::Vec2;
 use crate::gesture::segment::{control_kind, Segment, TouchPoint};
 use crate::vocab::{AgentView, ContactFlags, ContactId, Event, MeshView, Micros, Snapshot};
-use crate::vocab::{PlanView, TouchFrame, TouchView, TransformSummary, TransformView};
+use crate::vocab::{
+    EditView, PlanView, TouchFrame, TouchView, TracksView, TransformSummary, TransformView,
+};
 use std::sync::Arc;
 
 /// What one tick produced.
@@ -23,6 +25,10 @@ pub struct TickOutput<'a> {
     pub transform: Option<Arc<TransformView>>,
     /// A transform that ended this tick, summarised.
     pub transform_end: Option<Arc<TransformSummary>>,
+    /// Edit mode: the tracks, when they changed this tick.
+    pub tracks: Option<Arc<TracksView>>,
+    /// Edit mode: its state, when it changed this tick.
+    pub edit: Option<Arc<EditView>>,
 }
 
 impl Engine {
@@ -46,7 +52,9 @@ impl Engine {
             };
             let down = c.flags.contains(ContactFlags::DOWN);
             let on_crowd = down
-                && if self.gestures.playing() || self.transforms.active() {
+                && if self.edits.active() {
+                    self.edit_hits(world)
+                } else if self.gestures.playing() || self.transforms.active() {
                     self.near_agent(world)
                 } else {
                     self.direct.hits(world, self.grab_radius_m)
@@ -139,7 +147,13 @@ impl Engine {
                 self.direct.cancel(id);
             }
         }
-        if let Err(e) = self.direct.update(self.segmenter.controls(), dt, lag) {
+        // In edit mode the fingers edit tracks, not the crowd's mesh.
+        let controls = if self.edits.active() {
+            &[][..]
+        } else {
+            self.segmenter.controls()
+        };
+        if let Err(e) = self.direct.update(controls, dt, lag) {
             self.counters.deform_errors += 1;
             if self.counters.deform_errors.is_power_of_two() {
                 log::warn!(
@@ -149,7 +163,10 @@ impl Engine {
             }
         }
         self.transforms.view = None;
-        if self.step_gesture_motion(dt, now) {
+        let inline = !self.switch_worker;
+        if self.step_edit(dt, now, inline) {
+            // Edit mode: the crowd is the tracks' people at the play time.
+        } else if self.step_gesture_motion(dt, now) {
             // A gesture's crowd motion moves the agents.
         } else if self.step_transform(dt, now) {
             // A formation transform moves the agents.
@@ -200,18 +217,21 @@ impl Engine {
             s.t = now;
             s.input_t = self.pending_input_t.take();
             s.agents.clear();
-            s.agents.extend(
-                self.agents
-                    .positions()
-                    .iter()
-                    .zip(self.agents.velocities())
-                    .zip(&self.goal_of)
-                    .map(|((&pos, &vel), &goal)| AgentView { pos, vel, goal }),
-            );
             s.goals.clear();
-            match self.transform_goals() {
-                Some(targets) => s.goals.extend_from_slice(targets),
-                None => s.goals.extend_from_slice(self.direct.goals()),
+            let editing = self.edits.mode.is_some();
+            if !editing {
+                s.agents.extend(
+                    self.agents
+                        .positions()
+                        .iter()
+                        .zip(self.agents.velocities())
+                        .zip(&self.goal_of)
+                        .map(|((&pos, &vel), &goal)| AgentView { pos, vel, goal }),
+                );
+                match self.transform_goals() {
+                    Some(targets) => s.goals.extend_from_slice(targets),
+                    None => s.goals.extend_from_slice(self.direct.goals()),
+                }
             }
             s.assignment_seq = self.assignment_seq;
             s.touches.clear();
@@ -220,13 +240,21 @@ impl Engine {
             s.motions.extend_from_slice(&self.motions);
             s.paused = self.paused;
         }
+        if self.edits.mode.is_some() {
+            let s = Arc::make_mut(&mut snap);
+            let (mut agents, mut goals) =
+                (std::mem::take(&mut s.agents), std::mem::take(&mut s.goals));
+            self.edit_agents(&mut agents, &mut goals);
+            s.agents = agents;
+            s.goals = goals;
+        }
         self.snapshots.keep(&snap);
         self.counters.ticks += 1;
         // Inline assignment: solved on this tick's state, used from the next tick.
         // (The error's text is formed only on a failure, which is logged.)
         // While a transform drives the agents, its pairing is not overwritten.
         let result = match (&mut self.planner, &mut self.inline) {
-            _ if self.transforms.active() => None,
+            _ if self.transforms.active() || self.edits.active() => None,
             (Some(p), _) => Some(
                 p.plan(
                     self.agents.positions(),
@@ -269,6 +297,8 @@ impl Engine {
             plan: self.take_plan(),
             transform: self.transforms.view.take(),
             transform_end: self.transforms.ended.take(),
+            tracks: self.take_tracks(),
+            edit: self.take_edit_view(),
             events: &self.events,
         }
     }

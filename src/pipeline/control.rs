@@ -105,6 +105,10 @@ pub(super) struct ControlLoop {
     gesture_out: Option<FormationJob>,
     /// A transform (or the mesh after one) the formation thread had no room for yet.
     transform_out: Option<FormationJob>,
+    /// An edit job (a drag, a release) waiting for room on the formation queue.
+    edit_out: Option<FormationJob>,
+    /// An edit file job (`edit.load`, `edit.save`) waiting for room.
+    edit_file_out: Option<FormationJob>,
     /// `set_agent_count` commands acknowledged once their resize is applied.
     resize_waiters: Vec<(ClientId, serde_json::Value)>,
     /// What the workers poll to give up stale jobs.
@@ -152,6 +156,8 @@ impl ControlLoop {
             resize_out: None,
             gesture_out: None,
             transform_out: None,
+            edit_out: None,
+            edit_file_out: None,
             resize_waiters: Vec::with_capacity(MAX_RESIZE_WAITERS),
             fresh,
             t_input: StageTimer::new("input", b.input_us),
@@ -241,7 +247,30 @@ impl ControlLoop {
             });
             return;
         }
+        let file = matches!(
+            req.command,
+            Command::EditLoad { .. } | Command::EditSave { .. }
+        );
+        if file && self.edit_file_out.is_some() {
+            self.send(Outgoing::Reply {
+                client: req.client,
+                id: req.id,
+                result: Err("busy: a track file is still being read or written; try again".into()),
+            });
+            return;
+        }
         let result = self.engine.command(&req.command, monotonic_now());
+        // edit.load and edit.save are answered when their file is read or written.
+        if result.is_ok() {
+            if let Some(job) = self.engine.take_edit_file_job() {
+                self.edit_file_out = Some(FormationJob::EditFile {
+                    job,
+                    client: req.client,
+                    id: req.id,
+                });
+                return;
+            }
+        }
         if req.client == INTERNAL_CLIENT {
             if let Err(e) = result {
                 log::warn!("{:?} refused: {e}", req.command);
@@ -364,6 +393,22 @@ impl ControlLoop {
                     let _ = self.engine.apply_transform(*p, now);
                 }
                 FormationDone::TransformRemesh(p) => self.engine.apply_transform_remesh(*p, now),
+                FormationDone::Edit(d) => self.engine.apply_edit(*d, now),
+                FormationDone::EditLoaded {
+                    epoch,
+                    result,
+                    path,
+                    client,
+                    id,
+                } => {
+                    let result = result.map(|set| {
+                        let _ = self.engine.apply_edit_load(epoch, *set, &path, now);
+                    });
+                    self.send(Outgoing::Reply { client, id, result });
+                }
+                FormationDone::EditSaved { result, client, id } => {
+                    self.send(Outgoing::Reply { client, id, result });
+                }
                 FormationDone::Abandoned(us) => {
                     self.t_abandon.record(us);
                 }
@@ -375,6 +420,8 @@ impl ControlLoop {
         let plan = out.plan;
         let transform = out.transform;
         let transform_end = out.transform_end;
+        let out_tracks = out.tracks;
+        let out_edit = out.edit;
         let mut describe = None;
         let events: Vec<Arc<Event>> = out.events.iter().cloned().map(Arc::new).collect();
         for e in &events {
@@ -400,6 +447,12 @@ impl ControlLoop {
         }
         if let Some(t) = transform_end {
             self.send(Outgoing::TransformEnd(t));
+        }
+        if let Some(t) = out_tracks {
+            self.send(Outgoing::Tracks(t));
+        }
+        if let Some(e) = out_edit {
+            self.send(Outgoing::Edit(e));
         }
         self.send(Outgoing::Snapshot(snapshot));
         // What is current goes out before any job does: a worker that takes a job
@@ -429,7 +482,15 @@ impl ControlLoop {
                 .take_transform_remesh()
                 .map(|r| FormationJob::TransformRemesh(Box::new(r)));
         }
+        if self.edit_out.is_none() {
+            self.edit_out = self
+                .engine
+                .take_edit_job()
+                .map(|j| FormationJob::Edit(Box::new(j)));
+        }
         for slot in [
+            &mut self.edit_file_out,
+            &mut self.edit_out,
             &mut self.transform_out,
             &mut self.gesture_out,
             &mut self.switch_out,

@@ -8,17 +8,22 @@
 
 use crate::crowd::assign::{Assigner, Cancel, PointMetric};
 use crate::crowd::control::{PreparedResize, PreparedSwitch, ResizeRequest, SwitchRequest};
+use crate::crowd::edit::io::{read_tracks, write_tracks, Format, ReadOptions};
+use crate::crowd::edit::TrackSet;
 use crate::crowd::environment::{Planner, PlannerParams, Scene};
 use crate::crowd::motion::{
     GestureJob, PreparedGesture, PreparedRemesh, PreparedWindow, RemeshRequest, Synthesiser,
 };
 use crate::crowd::transform::{PreparedTransform, TransformRequest};
+use crate::engine::{EditDone, EditFileJob, EditJob};
 use crate::geom::Vec2;
 use crate::gesture::continuous::WindowBuffers;
 use crate::gesture::knn::Searcher;
 use crate::rt::monotonic_now;
+use crate::vocab::ClientId;
 use crate::vocab::Micros;
 use crossbeam_channel::{Receiver, Sender};
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 
@@ -218,6 +223,17 @@ pub(super) enum FormationJob {
     Transform(Box<TransformRequest>),
     /// The direct-control mesh to rebuild after a transform.
     TransformRemesh(Box<RemeshRequest>),
+    /// Edit mode: a drag on a cage, or what follows a release.
+    Edit(Box<EditJob>),
+    /// Edit mode: a track file to read or write for a client's command.
+    EditFile {
+        /// The job.
+        job: EditFileJob,
+        /// Who asked.
+        client: ClientId,
+        /// Their id for the command.
+        id: serde_json::Value,
+    },
 }
 
 /// What the formation thread hands back.
@@ -237,6 +253,30 @@ pub(super) enum FormationDone {
     Transform(Box<PreparedTransform>, u64),
     /// The mesh rebuilt after a transform.
     TransformRemesh(Box<PreparedRemesh>),
+    /// An edit job done.
+    Edit(Box<EditDone>),
+    /// A track file read for `edit.load` (at that edit epoch).
+    EditLoaded {
+        /// The edit epoch the load was asked at.
+        epoch: u64,
+        /// The tracks, or why not.
+        result: Result<Box<TrackSet>, String>,
+        /// The file.
+        path: String,
+        /// Who asked.
+        client: ClientId,
+        /// Their id for the command.
+        id: serde_json::Value,
+    },
+    /// Tracks written for `edit.save`.
+    EditSaved {
+        /// Whether they were, or why not.
+        result: Result<(), String>,
+        /// Who asked.
+        client: ClientId,
+        /// Their id for the command.
+        id: serde_json::Value,
+    },
     /// A job given up because a newer one superseded it: µs from the change to the
     /// preparation giving up.
     Abandoned(u64),
@@ -298,6 +338,9 @@ pub(super) fn formation_worker(
             FormationJob::TransformRemesh(r) => {
                 Some(FormationDone::TransformRemesh(Box::new(r.prepare())))
             }
+            // Edit work: a stale result is told apart by the engine's edit epoch.
+            FormationJob::Edit(job) => Some(FormationDone::Edit(Box::new(job.run()))),
+            FormationJob::EditFile { job, client, id } => Some(edit_file(job, client, id)),
             // Gesture work is short (milliseconds) and not cancelled; a result
             // made stale meanwhile is told apart by the engine's gesture epoch.
             FormationJob::Gesture(job) => match *job {
@@ -320,6 +363,29 @@ pub(super) fn formation_worker(
         if done.send(out).is_err() {
             break;
         }
+    }
+}
+
+/// Reads or writes a track file for the edit mode's `edit.load` and `edit.save`.
+fn edit_file(job: EditFileJob, client: ClientId, id: serde_json::Value) -> FormationDone {
+    let opts = ReadOptions::default();
+    match job {
+        EditFileJob::Load { path, epoch } => FormationDone::EditLoaded {
+            epoch,
+            result: read_tracks(Path::new(&path), None, &opts).map(|(set, _)| Box::new(set)),
+            path,
+            client,
+            id,
+        },
+        EditFileJob::Save {
+            set,
+            path,
+            overwrite,
+        } => FormationDone::EditSaved {
+            result: write_tracks(&set, Path::new(&path), Format::Jsonl, &opts, overwrite),
+            client,
+            id,
+        },
     }
 }
 

@@ -1,7 +1,8 @@
 //! What the control thread hands to the outputs.
 
 use crate::vocab::{
-    ClientId, Event, MeshView, PlanView, Snapshot, StatsReport, TransformSummary, TransformView,
+    ClientId, EditView, Event, MeshView, PlanView, Snapshot, StatsReport, TracksView,
+    TransformSummary, TransformView,
 };
 use std::sync::Arc;
 
@@ -23,6 +24,10 @@ pub enum Outgoing {
     /// A formation transform ended, summarised: to clients subscribed to
     /// `transform` only.
     TransformEnd(Arc<TransformSummary>),
+    /// The edit mode's tracks changed: to clients subscribed to `edit` only.
+    Tracks(Arc<TracksView>),
+    /// The edit mode's state changed: to clients subscribed to `edit` only.
+    Edit(Arc<EditView>),
     /// Periodic stats.
     Stats(Arc<StatsReport>),
     /// The answer to a command: `Ok` becomes `ack`, `Err` becomes `error`.

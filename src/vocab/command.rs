@@ -34,6 +34,39 @@ pub enum Command {
     Pause,
     /// Unfreeze agents.
     Resume,
+    /// Edit mode (crowd-motion-editing): load a track file from the daemon's
+    /// machine; the crowd plays its people and fingers edit their tracks.
+    #[serde(rename = "edit.load")]
+    EditLoad {
+        /// The file (JSON Lines, CSV `t,id,x,y` or ETH/UCY `frame id x y`).
+        path: String,
+    },
+    /// Take back the last edit.
+    #[serde(rename = "edit.undo")]
+    EditUndo,
+    /// Write the edited tracks (JSON Lines) to `path`, or back to the file they
+    /// came from when it is a `.jsonl` file and `overwrite` is given.
+    #[serde(rename = "edit.save")]
+    EditSave {
+        /// Where (a new file unless `overwrite`).
+        #[serde(default)]
+        path: Option<String>,
+        /// Replace an existing file.
+        #[serde(default)]
+        overwrite: bool,
+    },
+    /// A temporal edit of every person (section 3.3): the time node nearest
+    /// `at_s` goes to `to_s`, the first and last nodes stay.
+    #[serde(rename = "edit.retime")]
+    EditRetime {
+        /// The node nearest this time (s).
+        at_s: f64,
+        /// Goes here (s).
+        to_s: f64,
+    },
+    /// Leave edit mode: the crowd comes back.
+    #[serde(rename = "edit.exit")]
+    EditExit,
 }
 
 /// How the crowd goes into a new formation.
@@ -58,6 +91,38 @@ impl FormationMethod {
             FormationMethod::Mesh => "mesh",
         }
     }
+}
+
+impl Command {
+    /// The command's name on the wire.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Command::Reset { .. } => "reset",
+            Command::SetAgentCount { .. } => "set_agent_count",
+            Command::SetFormation { .. } => "set_formation",
+            Command::Pause => "pause",
+            Command::Resume => "resume",
+            Command::EditLoad { .. } => "edit.load",
+            Command::EditUndo => "edit.undo",
+            Command::EditSave { .. } => "edit.save",
+            Command::EditRetime { .. } => "edit.retime",
+            Command::EditExit => "edit.exit",
+        }
+    }
+
+    /// Every command name, in the order the protocol doc lists them.
+    pub const NAMES: [&'static str; 10] = [
+        "reset",
+        "set_agent_count",
+        "set_formation",
+        "pause",
+        "resume",
+        "edit.load",
+        "edit.undo",
+        "edit.save",
+        "edit.retime",
+        "edit.exit",
+    ];
 }
 
 /// Identifies a connected client.

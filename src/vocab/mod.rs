@@ -4,12 +4,13 @@
 //! types, and what the control thread publishes (snapshots, meshes, events, stats) or
 //! takes from clients (commands), and what a recognised gesture makes the crowd do
 //! (recognitions, planned trajectories), and a formation transform's progress and
-//! summary. Nothing here does work: `input` fills touch frames,
+//! summary, and the edit mode's tracks and state. Nothing here does work: `input` fills touch frames,
 //! `gesture` and `crowd` read them, `engine` fills snapshots, `publish` encodes them.
 //! It depends on [`geom`](crate::geom) only, so every other module may use it.
 
 mod command;
 mod device;
+mod edit;
 mod event;
 mod motion;
 mod plan;
@@ -21,6 +22,7 @@ mod transform;
 
 pub use command::{ClientId, Command, CommandRequest, FormationMethod};
 pub use device::parse_vendor_product;
+pub use edit::{CollisionView, EditView, TrackView, TracksView};
 pub use event::{ControlKind, DeviceState, Event};
 pub use motion::MotionType;
 pub use plan::{MotionPhase, NeighbourView, PlanOrigin, PlanView, Recognition};

@@ -10,6 +10,8 @@
 //! | [`io`] | readers and writers: our JSON Lines, CSV `t,id,x,y`, the pedestrian datasets' raw format; files read capped and written safely | 3.1 |
 //! | `paths.rs` | [`group_tracks`]: a group walking the standard path through a scene (fast-marching route around obstacles), in rows | 5.2 |
 //! | `record.rs` | [`TrackRecorder`]: a running crowd's positions, tick by tick, into tracks on a time grid | 3.1 |
+//! | `script.rs` | edit scripts (`edit apply --ops`): selections, fixed points, drags, retimes, with their lines | 3.2, 3.3 |
+//! | `apply.rs` | [`run_script`]: an edit script run on a track set, with what each drag did | 3.2, 3.3 |
 //! | `error.rs` | [`EditError`]: why an edit was refused | |
 //! | `select.rs` | [`Selection`]: samples by id, rectangle, lasso, time window | 3.2 |
 //! | `hull.rs` | [`concave_hull`]: the cage polygon (geo's concave hull, grown by a margin; convex fallback) | 3.2 |
@@ -18,6 +20,7 @@
 //! | `collide.rs` | [`detect`]: people closer than a threshold in space-time (and the all-pairs reference) | 4.1.1 |
 //! | `obstacles.rs` | [`avoid_obstacles`]: hull vertices mapped out of obstacles, then eq. 1; [`crowd_width`] | 4.2, eq. 29 |
 
+mod apply;
 mod cage;
 mod collide;
 mod error;
@@ -31,6 +34,7 @@ mod select;
 mod temporal;
 mod tracks;
 
+pub use apply::{run_script, ApplyParams, ApplyReport, DragReport, HANDLE_RADIUS_M};
 pub use cage::{
     correct_speeds, Cage, CageParams, Handle, ShapeError, SpeedReport, MIN_INTERVAL_FRACTION,
     PAPER_ALPHA, PAPER_BETA, PAPER_K,

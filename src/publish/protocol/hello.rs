@@ -31,7 +31,7 @@ impl Format {
 }
 
 /// Which message streams a client receives. Replies (`hello`, `ack`, `error`,
-/// `dropped`, `bye`) are always sent. `plan` and `transform` are off unless a client
+/// `dropped`, `bye`) are always sent. `plan`, `transform` and `edit` are off unless a client
 /// names them, so a client written before they existed gets none of their message
 /// types.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
@@ -50,6 +50,8 @@ pub struct Subscriptions {
     /// `transform` and `transform_end` messages: a formation transform's progress
     /// every tick and its summary.
     pub transform: bool,
+    /// `tracks` and `edit` messages: the edit mode's tracks and its state.
+    pub edit: bool,
 }
 
 impl Subscriptions {
@@ -61,12 +63,14 @@ impl Subscriptions {
         stats: true,
         plan: true,
         transform: true,
+        edit: true,
     };
-    /// What a client that names no stream gets: every stream but `plan` and
-    /// `transform`.
+    /// What a client that names no stream gets: every stream but `plan`,
+    /// `transform` and `edit`.
     pub const DEFAULT: Subscriptions = Subscriptions {
         plan: false,
         transform: false,
+        edit: false,
         ..Subscriptions::ALL
     };
     /// No stream.
@@ -77,10 +81,18 @@ impl Subscriptions {
         stats: false,
         plan: false,
         transform: false,
+        edit: false,
     };
     /// Wire names known to the parser, in wire order.
-    pub const NAMES: [&'static str; 6] =
-        ["snapshot", "mesh", "events", "stats", "plan", "transform"];
+    pub const NAMES: [&'static str; 7] = [
+        "snapshot",
+        "mesh",
+        "events",
+        "stats",
+        "plan",
+        "transform",
+        "edit",
+    ];
 
     /// The names of the streams switched on, in wire order.
     pub fn names(&self) -> Vec<&'static str> {
@@ -91,6 +103,7 @@ impl Subscriptions {
             self.stats,
             self.plan,
             self.transform,
+            self.edit,
         ];
         Self::NAMES
             .iter()
@@ -108,6 +121,7 @@ impl Subscriptions {
             "stats" => self.stats = true,
             "plan" => self.plan = true,
             "transform" => self.transform = true,
+            "edit" => self.edit = true,
             _ => return false,
         }
         true

@@ -28,9 +28,11 @@
 //! * `binary`: the binary snapshot encoder and decoder.
 //! * `plan`: the hand-written `plan` and `demo_motion` messages.
 //! * `transform`: a formation transform's `transform` and `transform_end` messages.
+//! * `edit`: the edit mode's `tracks` and `edit` messages.
 //! * `numbers`: fixed-point and integer writing shared by the hand-written encoders.
 
 mod binary;
+mod edit;
 mod frame;
 mod hello;
 mod json;
@@ -43,6 +45,7 @@ mod transform;
 pub use binary::{
     decode_snapshot_binary, encode_snapshot_binary, BinarySnapshot, BinaryTouch, DecodeError,
 };
+pub use edit::{encode_edit_json, encode_tracks_json};
 pub use frame::{
     frame_json, motion_code, motion_from_code, BINARY_DROPPED_OFFSET, BINARY_HEADER_BYTES,
     BINARY_NO_CONTROL, BINARY_SNAPSHOT_VERSION, BINARY_TOUCH_BYTES, FLAG_ASSIGNMENT, FLAG_GOALS,

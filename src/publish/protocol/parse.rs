@@ -98,7 +98,7 @@ pub enum ProtocolError {
     },
     /// A command name the daemon does not know.
     #[error(
-        "unknown command `{name}` (known: reset, set_agent_count, set_formation, pause, resume)"
+        "unknown command `{name}` (known: reset, set_agent_count, set_formation, pause, resume, edit.load, edit.undo, edit.save, edit.retime, edit.exit)"
     )]
     UnknownCommand {
         /// The name sent (shortened).
@@ -372,10 +372,7 @@ fn parse_command(mut map: Map<String, Value>) -> Result<ClientMessage, ProtocolE
             ));
         }
     };
-    if !matches!(
-        name.as_str(),
-        "reset" | "set_agent_count" | "set_formation" | "pause" | "resume"
-    ) {
+    if !Command::NAMES.contains(&name.as_str()) {
         return Err(in_command(
             id,
             ProtocolError::UnknownCommand {

@@ -5,7 +5,8 @@
 //! the bytes are shared (`Arc`) by the clients' queues. A command's answer goes to
 //! the client that asked, and only to it. Plans and a motion's life
 //! (`gesture_motion`) go to clients subscribed to `plan` only; a formation transform's
-//! progress and summary to clients subscribed to `transform` only.
+//! progress and summary to clients subscribed to `transform` only; the edit mode's
+//! tracks and state to clients subscribed to `edit` only.
 
 use super::hub::Hub;
 use super::queue::{ClientShared, EncodedSnapshot};
@@ -77,6 +78,12 @@ impl Publisher {
                 |s| s.transform,
                 |out| protocol::encode_transform_end_json(&t, out),
             ),
+            Outgoing::Tracks(t) => {
+                self.broadcast(|s| s.edit, |out| protocol::encode_tracks_json(&t, out))
+            }
+            Outgoing::Edit(e) => {
+                self.broadcast(|s| s.edit, |out| protocol::encode_edit_json(&e, out))
+            }
             Outgoing::Stats(r) => {
                 self.broadcast(|s| s.stats, |out| protocol::encode_stats(&r, out))
             }

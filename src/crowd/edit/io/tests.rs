@@ -4,7 +4,7 @@
 //! [`TrackSet::validate`].
 
 use super::*;
-use crate::crowd::edit::tracks::Track;
+use crate::crowd::edit::tracks::{Track, TrackSet};
 use crate::geom::Vec2;
 use proptest::prelude::*;
 use proptest::test_runner::{Config as ProptestConfig, RngSeed};

@@ -1,0 +1,865 @@
+//! The edit mode (crowd-motion-editing, Zhang et al. 2020): a track file is loaded
+//! (`edit.load`, read on the formation thread), its people play as the crowd, and
+//! fingers edit their tracks with the same point, line and area controls that
+//! move the live crowd.
+//!
+//! ```text
+//!  edit.load ──► file read (formation thread) ──► tracks installed, `tracks` (full)
+//!  a control lands on a person ──► the group at the play time is grabbed:
+//!      every sample of its people is the selection; each finger holds the
+//!      sample of its person nearest the play time
+//!  fingers move ──► EditJob::Drag: cage built once per grab (hull, mesh, MVC,
+//!      section 3.2), solved for the fingers (eqs. 1–8) ──► `tracks` (changed
+//!      people), `edit` (hull)
+//!  fingers lift ──► EditJob::Release: speeds corrected (eq. 9), collisions
+//!      avoided by retiming (section 4.1.2) ──► `tracks` (full), `edit` (collisions)
+//!  edit.undo / edit.retime / edit.save / edit.exit
+//! ```
+//!
+//! The control thread never builds or solves a cage: jobs go to the formation
+//! thread one at a time (the newest finger positions are sent when the last drag is
+//! back; a grab's cage travels with its jobs), and results of an older grab or
+//! load are dropped. In replays the jobs run in the tick.
+
+use super::edit_state::{AvoidSettings, CageBox};
+use super::edit_state::{
+    EditDone, EditDoneKind, EditFileJob, EditJob, EditJobKind, EditMode, Grab, GROUP_LINK_M,
+    LOOP_REST_S, MAX_UNDO,
+};
+use super::error::CommandError;
+use super::state::Engine;
+use crate::crowd::edit::{
+    correct_speeds, detect, retime, Cage, Collisions, Handle, RetimeParams, SampleRef, Selection,
+    TimeDrag, Track, TrackSet,
+};
+use crate::geom::Vec2;
+use crate::gesture::segment::Segment;
+use crate::vocab::{AgentView, CollisionView, EditView, Micros, TrackView, TracksView};
+use std::sync::Arc;
+
+impl Engine {
+    /// Whether the crowd is a loaded track set's people (edit mode).
+    pub fn editing(&self) -> bool {
+        self.edits.active()
+    }
+
+    /// Edits applied since start (releases and retimes).
+    pub fn edits_applied(&self) -> u64 {
+        self.edits.edits
+    }
+
+    /// The tracks being edited.
+    pub fn edited_tracks(&self) -> Option<&Arc<TrackSet>> {
+        self.edits.mode.as_ref().map(|m| &m.set)
+    }
+
+    /// The config's `edit` section: the threshold, and its tracks loaded when they
+    /// are not the ones it loaded last (at start, or a reload that changed them).
+    pub(super) fn configure_edit(&mut self, cfg: &crate::config::Config, now: Micros) {
+        self.edits.avoid.threshold_m = cfg
+            .edit
+            .as_ref()
+            .map_or(super::edit_state::EDIT_THRESHOLD_M, |e| e.threshold_m);
+        let tracks = cfg.loaded_tracks();
+        let same = match (tracks, &self.edits.from_config) {
+            (Some(a), Some(b)) => a == b,
+            (None, None) => true,
+            _ => false,
+        };
+        if same {
+            return;
+        }
+        self.edits.from_config = tracks.cloned();
+        if let (Some(set), Some(edit)) = (tracks, &cfg.edit) {
+            let source = edit.tracks.display().to_string();
+            self.edits.epoch += 1;
+            self.load_tracks((**set).clone(), &source, now);
+        }
+    }
+
+    /// `edit.load`: the file is read off the control thread
+    /// ([`take_edit_file_job`](Self::take_edit_file_job)).
+    pub(super) fn edit_load(&mut self, path: &str) -> Result<(), CommandError> {
+        if path.is_empty() {
+            return Err(CommandError::Edit("edit.load needs a `path`".into()));
+        }
+        self.edits.epoch += 1;
+        self.edits.loading = Some(path.to_string());
+        self.edits.file_out = Some(EditFileJob::Load {
+            path: path.to_string(),
+            epoch: self.edits.epoch,
+        });
+        Ok(())
+    }
+
+    /// A file job for the formation thread (`edit.load`, `edit.save`).
+    pub fn take_edit_file_job(&mut self) -> Option<EditFileJob> {
+        self.edits.file_out.take()
+    }
+
+    /// The current edit epoch (a load asked before a newer one is stale).
+    pub fn edit_epoch(&self) -> u64 {
+        self.edits.epoch
+    }
+
+    /// A track file read for `edit.load` at `epoch`: installed unless a newer load
+    /// or an `edit.exit` came since. Returns whether it was installed.
+    pub fn apply_edit_load(
+        &mut self,
+        epoch: u64,
+        set: TrackSet,
+        source: &str,
+        now: Micros,
+    ) -> bool {
+        if epoch != self.edits.epoch {
+            return false;
+        }
+        self.edits.loading = None;
+        self.load_tracks(set, source, now);
+        true
+    }
+
+    /// Enters edit mode with `set` (validated by the reader): the crowd's motion,
+    /// gesture and transform stop, the people play from the set's first time.
+    pub fn load_tracks(&mut self, set: TrackSet, source: &str, now: Micros) {
+        self.segmenter.cancel_all(now, &mut self.seg_out);
+        self.forget_switches();
+        self.forget_gestures(now);
+        self.drop_transforms(crate::vocab::TransformOutcome::Dropped, now);
+        let set = Arc::new(set);
+        let collisions = collisions_of(&set, self.edits.avoid.threshold_m);
+        let (t0, _) = set.span_s();
+        self.edits.mode = Some(Box::new(EditMode {
+            set,
+            source: Arc::from(source),
+            version: 1,
+            undo: Vec::new(),
+            play_t_s: t0,
+            grab: None,
+            collisions,
+            settling: false,
+            hull: Vec::new(),
+        }));
+        self.edits.outbox = None;
+        self.publish_tracks(None);
+        self.edits.view_dirty = true;
+    }
+
+    /// `edit.undo`.
+    pub(super) fn edit_undo(&mut self) -> Result<(), CommandError> {
+        let m = self.edit_mode_mut()?;
+        if m.grab.is_some() || m.settling {
+            return Err(CommandError::Edit(
+                "an edit is under way; undo when the fingers have lifted".into(),
+            ));
+        }
+        let Some(prev) = m.undo.pop() else {
+            return Err(CommandError::Edit("nothing to undo".into()));
+        };
+        m.set = prev;
+        m.version += 1;
+        m.hull.clear();
+        let threshold = self.edits.avoid.threshold_m;
+        let m = self.edits.mode.as_mut().expect("checked above");
+        m.collisions = collisions_of(&m.set, threshold);
+        self.publish_tracks(None);
+        self.edits.view_dirty = true;
+        Ok(())
+    }
+
+    /// `edit.save`: written off the control thread; without a path, back to the
+    /// source (only with `overwrite`).
+    pub(super) fn edit_save(
+        &mut self,
+        path: Option<&str>,
+        overwrite: bool,
+    ) -> Result<(), CommandError> {
+        let m = self.edit_mode_mut()?;
+        let path = match path {
+            Some(p) if !p.is_empty() => p.to_string(),
+            _ if overwrite => m.source.to_string(),
+            _ => return Err(CommandError::Edit(
+                "edit.save needs a `path`, or `overwrite: true` to write back to the loaded file"
+                    .into(),
+            )),
+        };
+        let set = Arc::clone(&m.set);
+        self.edits.file_out = Some(EditFileJob::Save {
+            set,
+            path,
+            overwrite,
+        });
+        Ok(())
+    }
+
+    /// `edit.retime`: a temporal edit of every person, then collisions avoided.
+    pub(super) fn edit_retime(&mut self, at_s: f64, to_s: f64) -> Result<(), CommandError> {
+        if !at_s.is_finite() || !to_s.is_finite() {
+            return Err(CommandError::Edit(
+                "edit.retime needs finite `at_s` and `to_s`".into(),
+            ));
+        }
+        let avoid = self.edits.avoid;
+        let epoch = self.edits.epoch;
+        let m = self.edit_mode_mut()?;
+        if m.grab.is_some() || m.settling {
+            return Err(CommandError::Edit(
+                "an edit is under way; retime when the fingers have lifted".into(),
+            ));
+        }
+        m.settling = true;
+        let base = Arc::clone(&m.set);
+        Engine::push_undo(m, Arc::clone(&base));
+        self.edits.outbox = Some(EditJob {
+            epoch,
+            grab: 0,
+            kind: EditJobKind::Retime {
+                base,
+                at_s,
+                to_s,
+                avoid,
+            },
+        });
+        self.edits.view_dirty = true;
+        Ok(())
+    }
+
+    /// `edit.exit`: the crowd comes back as a hard reset leaves it.
+    pub(super) fn edit_exit(&mut self, now: Micros) -> Result<(), CommandError> {
+        if self.edits.mode.is_none() && self.edits.loading.is_none() {
+            return Err(CommandError::Edit("not in edit mode".into()));
+        }
+        self.edits.epoch += 1;
+        self.edits.mode = None;
+        self.edits.loading = None;
+        self.edits.outbox = None;
+        self.segmenter.cancel_all(now, &mut self.seg_out);
+        self.reset(true, now);
+        self.queue_reset_event(true, now);
+        Ok(())
+    }
+
+    fn edit_mode_mut(&mut self) -> Result<&mut EditMode, CommandError> {
+        self.edits
+            .mode
+            .as_deref_mut()
+            .ok_or_else(|| CommandError::Edit("not in edit mode: send edit.load first".into()))
+    }
+
+    /// Whether a touch at `p` lands on a person (edit mode).
+    pub(super) fn edit_hits(&self, p: Vec2) -> bool {
+        let Some(m) = &self.edits.mode else {
+            return false;
+        };
+        let r2 = self.grab_radius_m * self.grab_radius_m;
+        m.set
+            .tracks
+            .iter()
+            .any(|t| (shown_position(t, m.play_t_s).0 - p).norm_squared() <= r2)
+    }
+
+    /// Slow edit work for the formation thread; run it with [`EditJob::run`] and
+    /// hand the result to [`apply_edit`](Self::apply_edit).
+    pub fn take_edit_job(&mut self) -> Option<EditJob> {
+        self.edits.outbox.take()
+    }
+
+    /// One tick of edit mode (instead of the crowd's step): the playback clock, the
+    /// fingers' grab and its jobs. Returns false when not editing.
+    pub(super) fn step_edit(&mut self, dt: f64, now: Micros, inline: bool) -> bool {
+        if self.edits.mode.is_none() {
+            return false;
+        }
+        let paused = self.paused;
+        {
+            let m = self.edits.mode.as_mut().expect("checked above");
+            let (t0, t1) = m.set.span_s();
+            if !paused && m.grab.is_none() {
+                m.play_t_s += dt;
+                if m.play_t_s > t1 + LOOP_REST_S {
+                    m.play_t_s = t0;
+                }
+            }
+        }
+        self.edit_controls(now);
+        if inline {
+            while let Some(job) = self.take_edit_job() {
+                let done = job.run();
+                self.apply_edit(done, now);
+            }
+        }
+        true
+    }
+
+    /// Grabs on a control's landing, drags as its fingers move, the release when it
+    /// lifts.
+    fn edit_controls(&mut self, _now: Micros) {
+        // In order: a control may land and lift within one tick.
+        for k in 0..self.seg_out.len() {
+            match self.seg_out[k] {
+                Segment::ControlBegin(id) => {
+                    let holding = self
+                        .edits
+                        .mode
+                        .as_ref()
+                        .is_some_and(|m| m.grab.is_some() || m.settling);
+                    if !holding {
+                        self.edit_grab(id);
+                    }
+                }
+                Segment::ControlEnd { id, .. } => {
+                    if let Some(g) = self
+                        .edits
+                        .mode
+                        .as_mut()
+                        .and_then(|m| m.grab.as_mut())
+                        .filter(|g| g.control == id)
+                    {
+                        g.released = true;
+                    }
+                }
+                _ => {}
+            }
+        }
+        self.edit_send_drag();
+        self.edit_try_release();
+    }
+
+    /// The people of the touched person's group at the play time, every sample of
+    /// their tracks selected; each finger holds its nearest person's sample nearest
+    /// the play time.
+    fn edit_grab(&mut self, control: u32) {
+        let Some(c) = self.segmenter.controls().iter().find(|c| c.id == control) else {
+            return;
+        };
+        let fingers: Vec<(u64, Vec2)> = c
+            .fingers
+            .iter()
+            .filter(|f| f.down)
+            .map(|f| (u64::from(f.id.0), f.world_down))
+            .collect();
+        let Some(m) = self.edits.mode.as_mut() else {
+            return;
+        };
+        let t = m.play_t_s;
+        let shown: Vec<(Vec2, bool)> = m
+            .set
+            .tracks
+            .iter()
+            .map(|tr| shown_position(tr, t))
+            .collect();
+        let mut handles = Vec::with_capacity(fingers.len());
+        let mut seeds = Vec::new();
+        for &(fid, p) in &fingers {
+            let Some((k, _)) = shown
+                .iter()
+                .enumerate()
+                .map(|(k, (q, _))| (k, (q - p).norm_squared()))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+            else {
+                return;
+            };
+            let j = nearest_node(&m.set.tracks[k], t);
+            handles.push((
+                fid,
+                SampleRef {
+                    track: k,
+                    sample: j,
+                },
+                p,
+            ));
+            seeds.push(k);
+        }
+        // The group: people linked by being within GROUP_LINK_M of each other now
+        // (those on the scene; one off it joins only as a seed).
+        let mut inside = vec![false; shown.len()];
+        let mut stack = seeds.clone();
+        for &s in &seeds {
+            inside[s] = true;
+        }
+        while let Some(k) = stack.pop() {
+            for (i, (q, on)) in shown.iter().enumerate() {
+                if !inside[i] && *on && (q - shown[k].0).norm() <= GROUP_LINK_M {
+                    inside[i] = true;
+                    stack.push(i);
+                }
+            }
+        }
+        let selected: Vec<usize> = (0..shown.len()).filter(|&i| inside[i]).collect();
+        self.edits.next_grab += 1;
+        let hull = Vec::new();
+        m.hull = hull;
+        m.grab = Some(Grab {
+            id: self.edits.next_grab,
+            control,
+            base: Arc::clone(&m.set),
+            selected,
+            handles,
+            cage: None,
+            out: false,
+            sent: Vec::new(),
+            latest: Vec::new(),
+            edited: None,
+            released: false,
+        });
+        self.edits.view_dirty = true;
+    }
+
+    /// Sends the newest finger positions when no drag is out and they moved (after
+    /// a lift, the positions the fingers had when they lifted).
+    fn edit_send_drag(&mut self) {
+        let epoch = self.edits.epoch;
+        let params = self.edits.cage;
+        let controls = self.segmenter.controls();
+        let Some(g) = self.edits.mode.as_mut().and_then(|m| m.grab.as_mut()) else {
+            return;
+        };
+        if let Some(control) = controls.iter().find(|c| c.id == g.control) {
+            g.latest.clear();
+            for &(fid, s, down) in &g.handles {
+                let now_at = control
+                    .fingers
+                    .iter()
+                    .find(|f| u64::from(f.id.0) == fid)
+                    .map_or(down, |f| f.world);
+                g.latest
+                    .push(g.base.tracks[s.track].points[s.sample] + (now_at - down));
+            }
+        }
+        let moved = g.sent.len() != g.latest.len()
+            || g.sent
+                .iter()
+                .zip(&g.latest)
+                .any(|(a, b)| (a - b).norm() > 1e-4);
+        if g.out || !moved || g.latest.is_empty() {
+            return;
+        }
+        g.out = true;
+        g.sent.clone_from(&g.latest);
+        self.edits.outbox = Some(EditJob {
+            epoch,
+            grab: g.id,
+            kind: EditJobKind::Drag {
+                base: Arc::clone(&g.base),
+                selected: g.selected.clone(),
+                cage: g.cage.take(),
+                params,
+                handles: g.handles.iter().map(|h| h.1).collect(),
+                targets: g.latest.clone(),
+            },
+        });
+    }
+
+    /// After the fingers lift and the last drag is back: the release job.
+    fn edit_try_release(&mut self) {
+        let epoch = self.edits.epoch;
+        let avoid = self.edits.avoid;
+        let Some(m) = self.edits.mode.as_mut() else {
+            return;
+        };
+        let ready = m
+            .grab
+            .as_ref()
+            .is_some_and(|g| g.released && !g.out && g.sent == g.latest);
+        if !ready || self.edits.outbox.is_some() {
+            return;
+        }
+        let g = m.grab.take().expect("checked above");
+        let Some(edited) = g.edited else {
+            // A touch without a move: nothing changed.
+            self.edits.view_dirty = true;
+            return;
+        };
+        m.settling = true;
+        Engine::push_undo(m, Arc::clone(&g.base));
+        self.edits.outbox = Some(EditJob {
+            epoch,
+            grab: g.id,
+            kind: EditJobKind::Release {
+                base: g.base,
+                edited,
+                selected: g.selected,
+                avoid,
+            },
+        });
+        self.edits.view_dirty = true;
+    }
+
+    /// Uses a finished edit job (dropped when a newer load, grab or exit made it
+    /// stale).
+    pub fn apply_edit(&mut self, done: EditDone, _now: Micros) {
+        if done.epoch != self.edits.epoch {
+            return;
+        }
+        let Some(m) = self.edits.mode.as_mut() else {
+            return;
+        };
+        match done.kind {
+            EditDoneKind::Dragged {
+                cage,
+                edited,
+                hull,
+                targets,
+            } => {
+                let Some(g) = m.grab.as_mut().filter(|g| g.id == done.grab) else {
+                    return;
+                };
+                g.out = false;
+                g.cage = cage;
+                match edited {
+                    Ok(set) => {
+                        let changed = g.selected.clone();
+                        g.edited = Some(Arc::clone(&set));
+                        g.sent = targets;
+                        m.hull = hull;
+                        // Shown as edited while the fingers hold it.
+                        m.set = set;
+                        m.version += 1;
+                        self.publish_tracks(Some(&changed));
+                    }
+                    Err(e) => {
+                        self.counters.deform_errors += 1;
+                        if self.counters.deform_errors.is_power_of_two() {
+                            log::warn!(
+                                "edit: the drag could not be solved ({} times): {e}",
+                                self.counters.deform_errors
+                            );
+                        }
+                    }
+                }
+                self.edits.view_dirty = true;
+            }
+            EditDoneKind::Settled { result, release } => {
+                m.settling = false;
+                match result {
+                    Ok((set, collisions)) => {
+                        m.collisions = collisions;
+                        m.version += 1;
+                        self.edits.edits += 1;
+                        m.set = set;
+                        self.publish_tracks(None);
+                    }
+                    Err(e) => {
+                        // The tracks go back to what they were before the edit.
+                        log::warn!(
+                            "edit: {} could not be applied: {e}",
+                            if release { "the drag" } else { "the retime" }
+                        );
+                        if let Some(before) = m.undo.pop() {
+                            m.set = before;
+                            m.version += 1;
+                            self.publish_tracks(None);
+                        }
+                    }
+                }
+                self.edits.view_dirty = true;
+            }
+        }
+    }
+
+    /// The people at the play time, for the snapshot (a person before their first
+    /// sample or after their last stands there, still).
+    pub(super) fn edit_agents(&self, agents: &mut Vec<AgentView>, goals: &mut Vec<Vec2>) -> bool {
+        let Some(m) = &self.edits.mode else {
+            return false;
+        };
+        agents.clear();
+        goals.clear();
+        for (i, t) in m.set.tracks.iter().enumerate() {
+            let (pos, _) = shown_position(t, m.play_t_s);
+            agents.push(AgentView {
+                pos,
+                vel: velocity_at(t, m.play_t_s),
+                goal: i as u32,
+            });
+            goals.push(*t.points.last().unwrap_or(&pos));
+        }
+        true
+    }
+
+    /// The `edit` message when something changed this tick.
+    pub(super) fn take_edit_view(&mut self) -> Option<Arc<EditView>> {
+        if !std::mem::take(&mut self.edits.view_dirty) {
+            return None;
+        }
+        let seq = self.seq;
+        let threshold_m = self.edits.avoid.threshold_m;
+        let Some(m) = &self.edits.mode else {
+            return Some(Arc::new(EditView {
+                seq,
+                state: if self.edits.loading.is_some() {
+                    "loading"
+                } else {
+                    "off"
+                },
+                threshold_m,
+                ..EditView::default()
+            }));
+        };
+        let (state, selected) = match &m.grab {
+            Some(g) => (
+                "grabbed",
+                g.selected.iter().map(|&k| m.set.tracks[k].id).collect(),
+            ),
+            None if m.settling => ("settling", Vec::new()),
+            None => ("idle", Vec::new()),
+        };
+        Some(Arc::new(EditView {
+            seq,
+            version: m.version,
+            state,
+            play_t_s: m.play_t_s,
+            selected,
+            hull: m.hull.clone(),
+            collisions: m.collisions.clone(),
+            threshold_m,
+            undo_depth: m.undo.len() as u32,
+        }))
+    }
+
+    /// The `tracks` message: every person, or those in `changed`.
+    fn publish_tracks(&mut self, changed: Option<&[usize]>) {
+        let Some(m) = &self.edits.mode else {
+            return;
+        };
+        let view = |k: usize| {
+            let t = &m.set.tracks[k];
+            TrackView {
+                id: t.id,
+                points: t.points.clone(),
+                times_s: t.times_s.clone(),
+            }
+        };
+        let tracks = match changed {
+            Some(ks) => ks.iter().map(|&k| view(k)).collect(),
+            None => (0..m.set.tracks.len()).map(view).collect(),
+        };
+        self.edits.tracks_out = Some(Arc::new(TracksView {
+            version: m.version,
+            source: Arc::clone(&m.source),
+            tracks,
+            full: changed.is_none(),
+            span_s: m.set.span_s(),
+        }));
+    }
+
+    /// The `tracks` message of this tick, if the tracks changed.
+    pub(super) fn take_tracks(&mut self) -> Option<Arc<TracksView>> {
+        self.edits.tracks_out.take()
+    }
+
+    /// Pushes the tracks before an edit on the undo stack (called when a release or
+    /// retime is sent).
+    pub(super) fn push_undo(m: &mut EditMode, before: Arc<TrackSet>) {
+        if m.undo.len() == MAX_UNDO {
+            m.undo.remove(0);
+        }
+        m.undo.push(before);
+    }
+}
+
+impl EditJob {
+    /// Does the slow work (on the formation thread, or in the tick for replays).
+    pub fn run(self) -> EditDone {
+        let EditJob { epoch, grab, kind } = self;
+        let kind = match kind {
+            EditJobKind::Drag {
+                base,
+                selected,
+                cage,
+                params,
+                handles,
+                targets,
+            } => {
+                let mut cage = match cage {
+                    Some(c) => Ok(c),
+                    None => every_sample(&base, &selected)
+                        .and_then(|sel| Cage::new(&base, &sel, &params))
+                        .map(|c| CageBox(Box::new(c)))
+                        .map_err(|e| e.to_string()),
+                };
+                let edited = match &mut cage {
+                    Ok(CageBox(c)) => {
+                        let drags: Vec<(Handle, Vec2)> = handles
+                            .iter()
+                            .map(|&h| Handle::Sample(h))
+                            .zip(targets.iter().copied())
+                            .collect();
+                        c.drag(&drags, &[])
+                            .and_then(|()| {
+                                let mut set = (*base).clone();
+                                c.apply(&mut set).map(|()| Arc::new(set))
+                            })
+                            .map_err(|e| e.to_string())
+                    }
+                    Err(e) => Err(e.clone()),
+                };
+                let hull = cage
+                    .as_ref()
+                    .map(|c| c.0.deformed_hull())
+                    .unwrap_or_default();
+                EditDoneKind::Dragged {
+                    cage: cage.ok(),
+                    edited,
+                    hull,
+                    targets,
+                }
+            }
+            EditJobKind::Release {
+                base,
+                edited,
+                selected,
+                avoid,
+            } => {
+                let mut set = (*edited).clone();
+                let result = correct_speeds(&base, &mut set, &selected)
+                    .map_err(|e| e.to_string())
+                    .and_then(|_| keep_apart(&mut set, avoid))
+                    .map(|c| (Arc::new(set), c));
+                EditDoneKind::Settled {
+                    result,
+                    release: true,
+                }
+            }
+            EditJobKind::Retime {
+                base,
+                at_s,
+                to_s,
+                avoid,
+            } => {
+                let mut set = (*base).clone();
+                let result = retime_all(&mut set, at_s, to_s)
+                    .and_then(|()| keep_apart(&mut set, avoid))
+                    .map(|c| (Arc::new(set), c));
+                EditDoneKind::Settled {
+                    result,
+                    release: false,
+                }
+            }
+        };
+        EditDone { epoch, grab, kind }
+    }
+}
+
+/// Every sample of the tracks `selected`.
+fn every_sample(
+    set: &TrackSet,
+    selected: &[usize],
+) -> Result<Selection, crate::crowd::edit::EditError> {
+    let samples = selected
+        .iter()
+        .flat_map(|&k| {
+            (0..set.tracks[k].len()).map(move |j| SampleRef {
+                track: k,
+                sample: j,
+            })
+        })
+        .collect();
+    Selection::from_samples(set, samples)
+}
+
+/// A temporal drag of every person's node nearest `at_s` to `to_s` (section 3.3),
+/// each person's first and last node held.
+fn retime_all(set: &mut TrackSet, at_s: f64, to_s: f64) -> Result<(), String> {
+    let all: Vec<usize> = (0..set.tracks.len())
+        .filter(|&k| set.tracks[k].len() >= 3)
+        .collect();
+    if all.is_empty() {
+        return Err("no one has three samples to retime".into());
+    }
+    let sel = every_sample(set, &all).map_err(|e| e.to_string())?;
+    let mut drags = Vec::new();
+    let mut fixed = Vec::new();
+    for &k in &all {
+        let t = &set.tracks[k];
+        let j = nearest_node(t, at_s);
+        let last = t.len() - 1;
+        if j == 0 || j == last {
+            fixed.push(SampleRef {
+                track: k,
+                sample: j,
+            });
+            continue;
+        }
+        drags.push(TimeDrag {
+            node: SampleRef {
+                track: k,
+                sample: j,
+            },
+            t_s: t.times_s[j] + (to_s - at_s),
+        });
+        fixed.push(SampleRef {
+            track: k,
+            sample: 0,
+        });
+        fixed.push(SampleRef {
+            track: k,
+            sample: last,
+        });
+    }
+    fixed.sort_unstable();
+    fixed.dedup();
+    if drags.is_empty() {
+        return Err(format!(
+            "no one has a time node near {at_s} s between their first and last"
+        ));
+    }
+    retime(set, &sel, &drags, &fixed, &RetimeParams::default())
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+}
+
+fn nearest_node(t: &Track, at_s: f64) -> usize {
+    let j = t.times_s.partition_point(|&ts| ts < at_s).min(t.len() - 1);
+    if j > 0 && (t.times_s[j] - at_s).abs() > (at_s - t.times_s[j - 1]).abs() {
+        j - 1
+    } else {
+        j
+    }
+}
+
+/// Collisions after an edit, as published.
+fn keep_apart(set: &mut TrackSet, avoid: AvoidSettings) -> Result<Vec<CollisionView>, String> {
+    Ok(collisions_of(set, avoid.threshold_m))
+}
+
+fn collisions_of(set: &TrackSet, threshold_m: f64) -> Vec<CollisionView> {
+    match detect(set, threshold_m) {
+        Ok(c) => collision_views(&c),
+        Err(e) => {
+            log::warn!("edit: collisions could not be checked: {e}");
+            Vec::new()
+        }
+    }
+}
+
+/// Where a person is shown at `t_s`, and whether they are on the scene then: on
+/// their tracks, or at their first or last sample (or the sample before a gap).
+fn shown_position(t: &Track, t_s: f64) -> (Vec2, bool) {
+    if let Some(p) = t.position_at(t_s) {
+        return (p, true);
+    }
+    let j = t.times_s.partition_point(|&ts| ts <= t_s);
+    (t.points[j.saturating_sub(1)], false)
+}
+
+fn velocity_at(t: &Track, t_s: f64) -> Vec2 {
+    let j = t.times_s.partition_point(|&ts| ts <= t_s);
+    if j == 0 || j >= t.len() || !t.linked[j - 1] {
+        return Vec2::zeros();
+    }
+    (t.points[j] - t.points[j - 1]) / (t.times_s[j] - t.times_s[j - 1])
+}
+
+fn collision_views(c: &Collisions) -> Vec<CollisionView> {
+    c.events
+        .iter()
+        .map(|e| CollisionView {
+            a: e.id_a,
+            b: e.id_b,
+            t_s: e.closest.t_s,
+            place: e.closest.place(),
+            distance_m: e.closest.distance_m,
+        })
+        .collect()
+}

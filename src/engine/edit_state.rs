@@ -1,0 +1,209 @@
+//! The engine's edit-mode state (`edit.rs` drives it): the track set being edited
+//! and its undo stack, the playback clock, the fingers' grab, the jobs out on the
+//! formation thread and what is published about them.
+
+use crate::crowd::edit::{Cage, CageParams, SampleRef, TrackSet};
+use crate::geom::Vec2;
+use crate::vocab::{CollisionView, TracksView};
+use std::sync::Arc;
+
+/// Edits `edit.undo` can take back.
+pub const MAX_UNDO: usize = 32;
+/// People closer than this at the play time are one group: a touch on one grabs
+/// the group's tracks (m).
+pub const GROUP_LINK_M: f64 = 2.0;
+/// Collision threshold of the edit mode: two people closer than this collide (m).
+pub const EDIT_THRESHOLD_M: f64 = 0.3;
+/// Seconds the playback rests at the end of the set before it loops.
+pub const LOOP_REST_S: f64 = 1.0;
+
+/// A grab's cage, travelling between the control thread and the formation thread.
+pub(super) struct CageBox(pub(super) Box<Cage>);
+
+impl std::fmt::Debug for CageBox {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Cage({} hull vertices, {} samples)",
+            self.0.hull().len(),
+            self.0.selection().len()
+        )
+    }
+}
+
+/// What the edit mode keeps people apart by.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(super) struct AvoidSettings {
+    /// Two people closer than this collide (m).
+    pub(super) threshold_m: f64,
+}
+
+/// A file job for the daemon's formation thread: reading or writing tracks is file
+/// work the control thread never does.
+#[derive(Debug)]
+pub enum EditFileJob {
+    /// Read a track file; the result goes to [`Engine::apply_edit_load`](super::Engine::apply_edit_load).
+    Load {
+        /// The file.
+        path: String,
+        /// The edit epoch asked at.
+        epoch: u64,
+    },
+    /// Write the tracks (JSON Lines).
+    Save {
+        /// The tracks.
+        set: Arc<TrackSet>,
+        /// Where.
+        path: String,
+        /// Replace an existing file.
+        overwrite: bool,
+    },
+}
+
+/// Slow edit work for the formation thread (or the tick, in replays): a drag
+/// solved on the selection's cage, or what follows a release.
+#[derive(Debug)]
+pub struct EditJob {
+    pub(super) epoch: u64,
+    pub(super) grab: u64,
+    pub(super) kind: EditJobKind,
+}
+
+#[derive(Debug)]
+pub(super) enum EditJobKind {
+    /// Deform: build the cage first when `cage` is `None`.
+    Drag {
+        base: Arc<TrackSet>,
+        selected: Vec<usize>,
+        cage: Option<CageBox>,
+        params: CageParams,
+        handles: Vec<SampleRef>,
+        targets: Vec<Vec2>,
+    },
+    /// The fingers lifted: speeds corrected (eq. 9) and collisions avoided by
+    /// retiming (section 4.1.2) on the edited tracks.
+    Release {
+        base: Arc<TrackSet>,
+        edited: Arc<TrackSet>,
+        selected: Vec<usize>,
+        avoid: AvoidSettings,
+    },
+    /// A temporal edit of every person (section 3.3).
+    Retime {
+        base: Arc<TrackSet>,
+        at_s: f64,
+        to_s: f64,
+        avoid: AvoidSettings,
+    },
+}
+
+/// A finished [`EditJob`].
+#[derive(Debug)]
+pub struct EditDone {
+    pub(super) epoch: u64,
+    pub(super) grab: u64,
+    pub(super) kind: EditDoneKind,
+}
+
+#[derive(Debug)]
+pub(super) enum EditDoneKind {
+    Dragged {
+        cage: Option<CageBox>,
+        edited: Result<Arc<TrackSet>, String>,
+        hull: Vec<Vec2>,
+        targets: Vec<Vec2>,
+    },
+    Settled {
+        result: Result<(Arc<TrackSet>, Vec<CollisionView>), String>,
+        /// Whether it was a release (else a retime command).
+        release: bool,
+    },
+}
+
+/// The fingers holding a selection.
+#[derive(Debug)]
+pub(super) struct Grab {
+    /// Bumped per grab: results of an earlier grab are stale.
+    pub(super) id: u64,
+    /// The control holding it.
+    pub(super) control: u32,
+    /// The tracks as they were when grabbed (the cage's rest).
+    pub(super) base: Arc<TrackSet>,
+    /// The grabbed people (track indices).
+    pub(super) selected: Vec<usize>,
+    /// Per finger (contact id): the sample it holds and where it was when it landed.
+    pub(super) handles: Vec<(u64, SampleRef, Vec2)>,
+    /// The cage between drags (`None` while a job has it, or before it is built).
+    pub(super) cage: Option<CageBox>,
+    /// A drag job is out.
+    pub(super) out: bool,
+    /// The targets the last job was sent with.
+    pub(super) sent: Vec<Vec2>,
+    /// The fingers' targets now (kept after a lift).
+    pub(super) latest: Vec<Vec2>,
+    /// The newest edited tracks.
+    pub(super) edited: Option<Arc<TrackSet>>,
+    /// The fingers lifted; the release follows when the last drag is back.
+    pub(super) released: bool,
+}
+
+/// The track set being edited.
+#[derive(Debug)]
+pub(super) struct EditMode {
+    pub(super) set: Arc<TrackSet>,
+    pub(super) source: Arc<str>,
+    pub(super) version: u64,
+    pub(super) undo: Vec<Arc<TrackSet>>,
+    pub(super) play_t_s: f64,
+    pub(super) grab: Option<Grab>,
+    pub(super) collisions: Vec<CollisionView>,
+    /// A release or retime is out.
+    pub(super) settling: bool,
+    /// Hull of the last grab, deformed (m).
+    pub(super) hull: Vec<Vec2>,
+}
+
+/// Edit mode: off (no tracks) or on.
+#[derive(Debug)]
+pub(super) struct Edits {
+    pub(super) mode: Option<Box<EditMode>>,
+    pub(super) epoch: u64,
+    pub(super) next_grab: u64,
+    pub(super) loading: Option<String>,
+    pub(super) file_out: Option<EditFileJob>,
+    pub(super) outbox: Option<EditJob>,
+    pub(super) tracks_out: Option<Arc<TracksView>>,
+    pub(super) view_dirty: bool,
+    pub(super) cage: CageParams,
+    pub(super) avoid: AvoidSettings,
+    pub(super) edits: u64,
+    /// The config's tracks as last loaded (a reload loads them again only when
+    /// they changed).
+    pub(super) from_config: Option<Arc<TrackSet>>,
+}
+
+impl Edits {
+    pub(super) fn new() -> Edits {
+        Edits {
+            mode: None,
+            epoch: 0,
+            next_grab: 0,
+            loading: None,
+            file_out: None,
+            outbox: None,
+            tracks_out: None,
+            view_dirty: false,
+            cage: CageParams::default(),
+            avoid: AvoidSettings {
+                threshold_m: EDIT_THRESHOLD_M,
+            },
+            edits: 0,
+            from_config: None,
+        }
+    }
+
+    /// Whether the crowd is the edited tracks' people.
+    pub(super) fn active(&self) -> bool {
+        self.mode.is_some()
+    }
+}

@@ -1,0 +1,262 @@
+//! The edit mode in the engine, as a client sees it: tracks loaded play as the
+//! crowd; fingers on a group grab its tracks, drag them (the held person's sample
+//! follows the finger exactly, the group's other tracks follow smoothly, people
+//! outside the group stay), and the release corrects speeds and avoids collisions;
+//! undo brings back the tracks before the edit; retime moves time nodes; exit
+//! brings the crowd back.
+
+use crowdtouch::config::Config;
+use crowdtouch::crowd::edit::{detect, Track, TrackSet};
+use crowdtouch::engine::Engine;
+use crowdtouch::geom::Vec2;
+use crowdtouch::vocab::{
+    Command, Contact, ContactFlags, ContactId, EditView, Micros, TouchFrame, TracksView,
+};
+use std::sync::Arc;
+
+const TICK_US: u64 = 16_667;
+
+/// A parade: `rows × cols` people 0.8 m apart walking +x at 1 m/s for 10 s,
+/// sampled every 0.2 s, starting at x = 2 m; and one person far away (id 999).
+fn parade(rows: usize, cols: usize) -> TrackSet {
+    let mut tracks = Vec::new();
+    for r in 0..rows {
+        for c in 0..cols {
+            let id = (r * cols + c) as u64;
+            let p0 = Vec2::new(2.0 + c as f64 * 0.8, 2.0 + r as f64 * 0.8);
+            let times: Vec<f64> = (0..=50).map(|k| k as f64 * 0.2).collect();
+            let points = times.iter().map(|t| p0 + Vec2::new(*t, 0.0)).collect();
+            tracks.push(Track::linked(id, points, times));
+        }
+    }
+    let times: Vec<f64> = (0..=50).map(|k| k as f64 * 0.2).collect();
+    tracks.push(Track::linked(
+        999,
+        times.iter().map(|_| Vec2::new(14.0, 8.0)).collect(),
+        times,
+    ));
+    TrackSet {
+        tracks,
+        step_s: 0.2,
+    }
+}
+
+struct Session {
+    e: Engine,
+    now: u64,
+    tracks: Vec<Arc<TracksView>>,
+    views: Vec<Arc<EditView>>,
+}
+
+impl Session {
+    fn new(set: TrackSet) -> Session {
+        let cfg = Config::embedded_default();
+        let mut e = Engine::new(&cfg, None, true);
+        e.tick(Micros(TICK_US));
+        e.clear_events();
+        e.load_tracks(set, "parade", Micros(TICK_US));
+        let mut s = Session {
+            e,
+            now: TICK_US,
+            tracks: Vec::new(),
+            views: Vec::new(),
+        };
+        s.tick();
+        s
+    }
+    fn tick(&mut self) {
+        self.now += TICK_US;
+        let o = self.e.tick(Micros(self.now));
+        if let Some(t) = &o.tracks {
+            self.tracks.push(Arc::clone(t));
+        }
+        if let Some(v) = &o.edit {
+            self.views.push(Arc::clone(v));
+        }
+        self.e.clear_events();
+    }
+    fn ticks(&mut self, n: usize) {
+        for _ in 0..n {
+            self.tick();
+        }
+    }
+    /// Fingers at world positions (default world 16 × 9 m on the unit square).
+    fn touch(&mut self, fingers: &[(u32, Vec2, ContactFlags)]) {
+        let mut f = TouchFrame::new(Micros(self.now + 1));
+        for &(id, p, flags) in fingers {
+            f.push(Contact {
+                id: ContactId(id),
+                x: (p.x / 16.0) as f32,
+                y: (p.y / 9.0) as f32,
+                pressure: None,
+                major_mm: None,
+                minor_mm: None,
+                flags,
+            })
+            .expect("room");
+        }
+        self.e.push_frame(&f);
+    }
+    fn set(&self) -> Arc<TrackSet> {
+        Arc::clone(self.e.edited_tracks().expect("editing"))
+    }
+    fn agents(&mut self) -> Vec<Vec2> {
+        self.now += TICK_US;
+        let o = self.e.tick(Micros(self.now));
+        let a = o.snapshot.agents.iter().map(|a| a.pos).collect();
+        self.e.clear_events();
+        a
+    }
+}
+
+#[test]
+fn the_crowd_plays_the_loaded_people() {
+    let mut s = Session::new(parade(3, 4));
+    assert!(s.e.editing());
+    let first = s.tracks.first().expect("a tracks message at load");
+    assert!(first.full);
+    assert_eq!(first.tracks.len(), 13);
+    let a0 = s.agents();
+    assert_eq!(a0.len(), 13, "one agent per person");
+    s.ticks(60);
+    let a1 = s.agents();
+    let moved = a1[0].x - a0[0].x;
+    assert!(
+        (moved - 62.0 * TICK_US as f64 / 1e6).abs() < 0.05,
+        "people walk at their tracks' 1 m/s: {moved}"
+    );
+    assert_eq!(a1[12], Vec2::new(14.0, 8.0));
+}
+
+#[test]
+fn a_drag_moves_the_held_person_with_the_finger_and_the_group_with_them() {
+    let mut s = Session::new(parade(3, 4));
+    s.e.command(&Command::Pause, Micros(s.now)).unwrap();
+    s.tick();
+    let before = s.set();
+    // The person at row 1, column 1 stands at (2.8 + t, 2.8) at play time t.
+    let t = s.views.last().map_or(0.0, |v| v.play_t_s);
+    let held = Vec2::new(2.8 + t, 2.8);
+    s.touch(&[(1, held, ContactFlags::DOWN)]);
+    s.ticks(3);
+    let grabbed = s
+        .views
+        .iter()
+        .rev()
+        .find(|v| v.state == "grabbed")
+        .expect("grabbed")
+        .clone();
+    assert_eq!(
+        grabbed.selected.len(),
+        12,
+        "the whole parade, not the far person: {:?}",
+        grabbed.selected
+    );
+    let lift = Vec2::new(0.0, 1.5);
+    for k in 1..=10 {
+        s.touch(&[(1, held + lift * (k as f64 / 10.0), ContactFlags::NONE)]);
+        s.ticks(2);
+    }
+    let during = s.set();
+    let k = during.index_of(5).unwrap();
+    // The held sample: the one nearest the play time.
+    let j = during.tracks[k]
+        .times_s
+        .iter()
+        .position(|&ts| (ts - t).abs() <= 0.1 + 1e-9)
+        .unwrap();
+    let d = during.tracks[k].points[j] - before.tracks[k].points[j];
+    assert!(
+        (d - lift).norm() < 1e-6,
+        "the held sample moved with the finger: {d:?}"
+    );
+    assert!(
+        !s.tracks.last().unwrap().full,
+        "while held, only the group's tracks are sent"
+    );
+    let far = during.index_of(999).unwrap();
+    assert_eq!(
+        during.tracks[far], before.tracks[far],
+        "a person outside the group stays"
+    );
+    s.touch(&[(1, held + lift, ContactFlags::UP)]);
+    s.ticks(10);
+    let after = s.set();
+    let last = s.views.last().unwrap();
+    assert_eq!(last.state, "idle");
+    assert_eq!(last.undo_depth, 1);
+    assert!(s.tracks.last().unwrap().full);
+    // Speeds corrected (eq. 9): every segment within 1 % of its speed before.
+    for (a, b) in after.tracks.iter().zip(&before.tracks) {
+        for jj in 0..a.len() - 1 {
+            let (va, vb) = (a.segment_speed(jj), b.segment_speed(jj));
+            if vb > 0.0 {
+                assert!(
+                    (va / vb - 1.0).abs() < 0.01,
+                    "person {} segment {jj}: {va} vs {vb}",
+                    a.id
+                );
+            }
+        }
+    }
+    assert!(
+        detect(&after, 0.3).unwrap().pairs.is_empty(),
+        "no one closer than 0.3 m after the release"
+    );
+    s.e.command(&Command::EditUndo, Micros(s.now)).unwrap();
+    s.tick();
+    assert_eq!(
+        *s.set(),
+        *before,
+        "undo brings back the tracks before the drag"
+    );
+}
+
+#[test]
+fn retime_moves_time_nodes_and_exit_brings_the_crowd_back() {
+    let mut s = Session::new(parade(2, 2));
+    let before = s.set();
+    s.e.command(
+        &Command::EditRetime {
+            at_s: 5.0,
+            to_s: 7.0,
+        },
+        Micros(s.now),
+    )
+    .unwrap();
+    s.ticks(2);
+    let after = s.set();
+    let j = before.tracks[0]
+        .times_s
+        .iter()
+        .position(|&t| (t - 5.0).abs() < 1e-9)
+        .unwrap();
+    assert!((after.tracks[0].times_s[j] - 7.0).abs() < 1e-6);
+    assert_eq!(
+        after.tracks[0].points, before.tracks[0].points,
+        "a retime keeps the places"
+    );
+    assert!(s
+        .e
+        .command(
+            &Command::EditSave {
+                path: None,
+                overwrite: false
+            },
+            Micros(s.now)
+        )
+        .is_err());
+    s.e.command(&Command::EditExit, Micros(s.now)).unwrap();
+    s.tick();
+    assert!(!s.e.editing());
+    let n = s.agents().len();
+    assert_eq!(
+        n,
+        Config::embedded_default().crowd.agents as usize,
+        "the crowd is back"
+    );
+    assert!(
+        s.e.command(&Command::EditUndo, Micros(s.now)).is_err(),
+        "not in edit mode"
+    );
+}
