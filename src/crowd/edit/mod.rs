@@ -8,12 +8,18 @@
 //! |---|---|---|
 //! | `tracks.rs` | [`TrackSet`]: per person a spatial and a temporal track, linked samples and gaps | 3.1 |
 //! | `collide.rs` | [`detect`]: people closer than a threshold in space-time (and the all-pairs reference) | 4.1.1 |
+//! | `avoid.rs` | [`avoid`]: retiming people apart, positions kept | 4.1.2 |
 //! | [`io`] | readers and writers: the pedestrian datasets' raw format, … | |
 
+mod avoid;
 mod collide;
 pub mod io;
 mod tracks;
 
+pub use avoid::{
+    avoid, AvoidError, AvoidParams, AvoidReport, Remaining, Stuck, MIN_PACE_LENGTH_M,
+    STILL_SPEED_M_S,
+};
 pub use collide::{
     collisions_all_pairs, detect, Approach, CollideError, CollisionEvent, Collisions, PairCollision,
 };
