@@ -18,9 +18,11 @@
 //! | `cage.rs` | [`Cage`]: the spatial editor (MVC cage, ARAP mesh, locality and hull-edge energies, exact handle constraints); [`correct_speeds`] | 3.2, eqs. 1–9 |
 //! | `temporal.rs` | [`retime`]: dragging time nodes, intervals kept, locality, times increasing | 3.3, eqs. 10–12 |
 //! | `collide.rs` | [`detect`]: people closer than a threshold in space-time (and the all-pairs reference) | 4.1.1 |
+//! | `avoid.rs` | [`avoid`]: retiming people apart, positions kept | 4.1.2, eqs. 18–28 |
 //! | `obstacles.rs` | [`avoid_obstacles`]: hull vertices mapped out of obstacles, then eq. 1; [`crowd_width`] | 4.2, eq. 29 |
 
 mod apply;
+mod avoid;
 mod cage;
 mod collide;
 mod error;
@@ -35,6 +37,10 @@ mod temporal;
 mod tracks;
 
 pub use apply::{run_script, ApplyParams, ApplyReport, DragReport, HANDLE_RADIUS_M};
+pub use avoid::{
+    avoid, AvoidError, AvoidParams, AvoidReport, Remaining, Stuck, MIN_PACE_LENGTH_M,
+    STILL_SPEED_M_S,
+};
 pub use cage::{
     correct_speeds, Cage, CageParams, Handle, ShapeError, SpeedReport, MIN_INTERVAL_FRACTION,
     PAPER_ALPHA, PAPER_BETA, PAPER_K,

@@ -1,0 +1,706 @@
+//! Collision avoidance by retiming, crowd-motion-editing section 4.1.2 (eqs. 18–28,
+//! Algorithm 3): the spatial tracks stay as they are; the times at which people
+//! reach their positions move so that no two come closer than the threshold.
+//!
+//! Each round (Algorithm 3) detects collisions ([`detect`]), then, worst pair first
+//! and each person at most once per round:
+//!
+//! 1. the time separation needed at the collision point is estimated (eqs. 20–22):
+//!    `dt = (D_threshold + margin − d_min) / v`, with `v` the slower of the two
+//!    people's speeds on their colliding pieces (the faster one's if the slower
+//!    stands still). Ours: `v` is replaced by the speed at which a time offset
+//!    moves the two apart across their relative path, `|v_i × v_j| / |v_i − v_j|`
+//!    (never more than eq. 20's `v`; equal to `v / √2` for equal speeds crossing
+//!    at right angles, far less for nearly head-on walkers, for whom eq. 22 alone
+//!    needs many rounds), bounded so `dt` is at most [`MAX_DT_FACTOR`] times
+//!    eq. 22's;
+//! 2. the two colliding pieces are retimed (eqs. 18, 19, 23) — see [`retime_pair`];
+//! 3. each of the two people's whole temporal tracks is re-solved with the retimed
+//!    nodes fixed (eq. 28) — see [`smooth_track`].
+//!
+//! Rounds repeat until nothing collides or [`AvoidParams::max_iterations`] is
+//! reached. A pair that retiming cannot separate (both standing still, no feasible
+//! retiming) is reported in [`AvoidReport::remaining`]; nothing panics.
+
+use super::collide::{detect, Approach, CollideError, PairCollision};
+use super::tracks::{Track, TrackSet};
+use nalgebra::{DMatrix, DVector};
+use std::collections::HashMap;
+use thiserror::Error;
+
+/// Speeds below this (m/s) count as standing still in eq. 20.
+pub const STILL_SPEED_M_S: f64 = 1e-6;
+
+/// Segments shorter than this (metres) have no pace in eq. 24 (it divides by the
+/// length) and no speed in [`AvoidReport::max_speed_change_pct`].
+pub const MIN_PACE_LENGTH_M: f64 = 1e-6;
+
+/// Tolerance of the constraint and multiplier checks of the active-set solve
+/// (seconds, on quantities of a few seconds).
+const KKT_TOLERANCE: f64 = 1e-9;
+
+/// The most the separation time may exceed eq. 22's estimate (see [`avoid`]).
+pub const MAX_DT_FACTOR: f64 = 10.0;
+
+/// Relative slack on the interval bounds `[a_min, 1 / a_min]` (rounding).
+const SCALE_TOLERANCE: f64 = 1e-9;
+
+/// Parameters of the avoidance. The paper states the terms but gives no values;
+/// the defaults are ours (see each field).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct AvoidParams {
+    /// `D_threshold` (eq. 21): people closer than this collide (metres).
+    pub threshold_m: f64,
+    /// Added to `distance_{i,j}` (eq. 21) so a retimed pair ends clear of the
+    /// threshold rather than on it (metres). Default 0.02.
+    pub margin_m: f64,
+    /// The least scaling `a` of a colliding piece's duration (constraints `g1`,
+    /// `g2` of eq. 19), in (0, 1]; `1 / min_scale` is the most (ours, see
+    /// [`retime_pair`]). Default 0.8: a retimed piece's speed changes by at most 25 %.
+    pub min_scale: f64,
+    /// `α` (eq. 28), weight of the pace smoothness `E_DT` (eq. 24). Default 0.1.
+    pub alpha: f64,
+    /// `β` (eq. 28), weight of the interval change `E_T` (eq. 26). Default 1.
+    pub beta: f64,
+    /// `γ` (eq. 28), weight of the time change `E_TP` (eq. 27); it must be
+    /// positive (it keeps eq. 28 definite). Smaller values spread a retiming over
+    /// more of the track (about `β / γ` samples). Default 0.1.
+    pub gamma: f64,
+    /// The most detection-and-retiming rounds (Algorithm 3). Default 200.
+    pub max_iterations: usize,
+}
+
+impl Default for AvoidParams {
+    fn default() -> Self {
+        AvoidParams {
+            threshold_m: 0.3,
+            margin_m: 0.02,
+            min_scale: 0.8,
+            alpha: 0.1,
+            beta: 1.0,
+            gamma: 0.1,
+            max_iterations: 200,
+        }
+    }
+}
+
+/// Bad input to [`avoid`].
+#[derive(Debug, Error, PartialEq)]
+pub enum AvoidError {
+    /// A parameter is out of range.
+    #[error("avoidance parameter {name} must be {want}, not {value}")]
+    Param {
+        /// The field.
+        name: &'static str,
+        /// What it must be.
+        want: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// The tracks or threshold are unusable for detection.
+    #[error(transparent)]
+    Collide(#[from] CollideError),
+}
+
+/// Why a pair still collides after [`avoid`].
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Stuck {
+    /// Retiming cannot separate them: both stand still at the collision, or eq. 19
+    /// has no feasible solution.
+    Infeasible,
+    /// They still collided when the rounds ran out.
+    IterationLimit,
+}
+
+impl Stuck {
+    /// A short name for reports.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Stuck::Infeasible => "infeasible",
+            Stuck::IterationLimit => "iteration-limit",
+        }
+    }
+}
+
+/// A pair that still collides.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Remaining {
+    /// The pair and its closest approach after avoidance.
+    pub pair: PairCollision,
+    /// Why.
+    pub why: Stuck,
+}
+
+/// What [`avoid`] did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AvoidReport {
+    /// Detection-and-retiming rounds run.
+    pub iterations: usize,
+    /// Colliding pairs before.
+    pub pairs_before: usize,
+    /// Colliding pairs after.
+    pub pairs_after: usize,
+    /// Pair retimings applied (eq. 19 solves whose result was kept).
+    pub retimings: usize,
+    /// The pairs that still collide.
+    pub remaining: Vec<Remaining>,
+    /// Sum over all samples of `|t̄ − t|` (seconds).
+    pub total_abs_dt_s: f64,
+    /// The largest change of a segment's speed, `|v̄ / v − 1|` in percent, over
+    /// segments at least [`MIN_PACE_LENGTH_M`] long.
+    pub max_speed_change_pct: f64,
+    /// Track re-solves (eq. 28) that broke strictly increasing times and were
+    /// replaced by the correction of [`smooth_track`].
+    pub corrections: usize,
+}
+
+/// The nodes of one person's colliding piece and how the collision time depends on
+/// them: `t_collision = Σ w_n t_n` (the piece's linear interpolation).
+#[derive(Clone, Debug)]
+struct PieceNodes {
+    nodes: Vec<usize>,
+    weights: Vec<f64>,
+    times: Vec<f64>,
+    /// The piece's duration in the input (seconds; 0 for a sample).
+    original_len_s: f64,
+    /// The person's first time (constraints g3/g4, see [`retime_pair`]).
+    first_s: f64,
+    speed_m_s: f64,
+}
+
+fn piece_nodes(
+    track: &Track,
+    original_s: &[f64],
+    sample: usize,
+    moving: bool,
+    t_s: f64,
+) -> PieceNodes {
+    let first_s = track.times_s[0];
+    if moving {
+        let (t0, t1) = (track.times_s[sample], track.times_s[sample + 1]);
+        let lambda = ((t_s - t0) / (t1 - t0)).clamp(0.0, 1.0);
+        PieceNodes {
+            nodes: vec![sample, sample + 1],
+            weights: vec![1.0 - lambda, lambda],
+            times: vec![t0, t1],
+            original_len_s: original_s[sample + 1] - original_s[sample],
+            first_s,
+            speed_m_s: track.segment_speed(sample),
+        }
+    } else {
+        PieceNodes {
+            nodes: vec![sample],
+            weights: vec![1.0],
+            times: vec![track.times_s[sample]],
+            original_len_s: 0.0,
+            first_s,
+            speed_m_s: 0.0,
+        }
+    }
+}
+
+/// New times of the two colliding pieces' nodes, eqs. 18–23.
+///
+/// # Formula
+/// Person `i`'s piece `[t_k, t_{k+1}]` becomes `[a_i t_k + b_i, a_i t_{k+1} + b_i]`
+/// (likewise `j`). Two nodes and two unknowns `(a, b)` are one-to-one, so the
+/// unknowns here are the node shifts `δ`, and eq. 18 is `E_T = |δ|²`. The time at
+/// which a person passes the collision point moves by `wᵀδ` (`w` the linear
+/// interpolation weights of the collision time in the piece). Eq. 19 becomes
+///
+/// ```text
+/// min |δ|²  subject to  σ (w_iᵀδ_i − w_jᵀδ_j) ≥ dt          (g5, σ = ±1: who passes first)
+///                       Δt + δ_{k+1} − δ_k ≥ a_min Δt₀         (g1, g2: a ≥ a_min)
+///                       Δt + δ_{k+1} − δ_k ≤ Δt₀ / a_min       (ours)
+///                       δ_k ≥ −t_first                         (g3, g4)
+/// ```
+///
+/// with `Δt` the piece's current duration and `Δt₀` its duration in the input:
+/// the scale is measured against the input so that rounds do not compound it.
+/// The upper bound is not in the paper: without it a collision near a piece's end
+/// stretches that one piece, and slows it, by up to `dt / Δt`.
+/// `order` fixes `σ` (a pair keeps the order chosen at its first retiming, so
+/// later rounds do not undo it); `None` tries both. Returns `σ` and `δ`.
+///
+/// a projection onto a polyhedron, solved through its KKT conditions (eq. 23) by
+/// enumerating active sets: for each set `S` of active constraints with
+/// independent rows, `δ = G_Sᵀ μ` with `(G_S G_Sᵀ) μ = h_S`; the point is kept when
+/// `μ ≥ 0` and every constraint holds, and the best of both signs `σ` wins. g3/g4
+/// are placed on the person's first time rather than the piece's (the paper's), so
+/// carrying the shift to the track's start (the correction of [`smooth_track`])
+/// never makes a time negative.
+///
+/// # Units
+/// Seconds.
+///
+/// # Errors
+/// `None` when no retiming satisfies the constraints.
+fn retime_pair(
+    pi: &PieceNodes,
+    pj: &PieceNodes,
+    dt: f64,
+    min_scale: f64,
+    order: Option<f64>,
+) -> Option<(f64, Vec<f64>)> {
+    let ni = pi.nodes.len();
+    let m = ni + pj.nodes.len();
+    let mut best: Option<(f64, f64, Vec<f64>)> = None;
+    let signs: &[f64] = match order {
+        Some(s) if s > 0.0 => &[1.0],
+        Some(_) => &[-1.0],
+        None => &[1.0, -1.0],
+    };
+    for &sigma in signs {
+        // Rows of G δ ≥ h.
+        let mut rows: Vec<(Vec<f64>, f64)> = Vec::new();
+        let mut sep = vec![0.0; m];
+        for (k, w) in pi.weights.iter().enumerate() {
+            sep[k] = sigma * w;
+        }
+        for (k, w) in pj.weights.iter().enumerate() {
+            sep[ni + k] = -sigma * w;
+        }
+        rows.push((sep, dt));
+        for (p, off) in [(pi, 0), (pj, ni)] {
+            if p.nodes.len() == 2 {
+                let len = p.times[1] - p.times[0];
+                let mut g = vec![0.0; m];
+                g[off] = -1.0;
+                g[off + 1] = 1.0;
+                rows.push((g.clone(), min_scale * p.original_len_s - len));
+                g[off] = 1.0;
+                g[off + 1] = -1.0;
+                rows.push((g, len - p.original_len_s / min_scale));
+            }
+            let mut g = vec![0.0; m];
+            g[off] = 1.0;
+            // Held with twice the check's slack, so rounding cannot go below 0.
+            rows.push((
+                g,
+                -p.first_s + 2.0 * KKT_TOLERANCE * (1.0 + p.first_s.abs()),
+            ));
+        }
+        let r = rows.len();
+        for mask in 1u32..(1 << r) {
+            let active: Vec<usize> = (0..r).filter(|k| mask & (1 << k) != 0).collect();
+            if active.len() > m {
+                continue;
+            }
+            let g = DMatrix::from_fn(active.len(), m, |a, c| rows[active[a]].0[c]);
+            let h = DVector::from_iterator(active.len(), active.iter().map(|&a| rows[a].1));
+            let Some(mu) = (&g * g.transpose()).cholesky().map(|c| c.solve(&h)) else {
+                continue;
+            };
+            if mu.iter().any(|&x| x.is_nan() || x < -KKT_TOLERANCE) {
+                continue;
+            }
+            let delta = g.transpose() * mu;
+            let feasible = rows.iter().all(|(row, h)| {
+                let lhs: f64 = row.iter().zip(delta.iter()).map(|(a, b)| a * b).sum();
+                lhs >= h - KKT_TOLERANCE * (1.0 + h.abs())
+            });
+            let e = delta.norm_squared();
+            if feasible && e.is_finite() && best.as_ref().is_none_or(|(b, _, _)| e < *b) {
+                best = Some((e, sigma, delta.iter().copied().collect()));
+            }
+        }
+    }
+    best.map(|(_, sigma, d)| (sigma, d))
+}
+
+/// Re-solves one person's temporal track with some nodes fixed, eq. 28.
+///
+/// # Formula
+/// `min α² E_DT + β² E_T + γ² E_TP` subject to the fixed nodes, with
+/// `E_DT = Σ (Δt̄_{i+1}/l_{i+1} − Δt̄_i/l_i)²` over consecutive linked segments both
+/// at least [`MIN_PACE_LENGTH_M`] long (eq. 24), `E_T = Σ (Δt̄_i − Δt_i)²` over all
+/// intervals, gaps included (eq. 26), and `E_TP = Σ (t̄_i − t_i)²` (eq. 27), `t`
+/// the times before this retiming. The
+/// normal equations are pentadiagonal; the fixed nodes are eliminated and the
+/// system solved by a banded Cholesky factorisation, O(n).
+///
+/// If the solution is not strictly increasing, or makes the first time negative
+/// (when it was not), or takes an interval outside
+/// `[a_min, 1 / a_min]` times its length in the input (`original_s`), or the
+/// factorisation fails, the correction is used instead: nodes before the first
+/// fixed node move by its shift, nodes after the last by its shift, and nodes
+/// between two fixed nodes are mapped linearly in the current times between them.
+/// The correction keeps every other interval as it is, so by induction over the
+/// rounds every interval stays within those bounds and the speed of every segment
+/// within `[a_min, 1 / a_min]` times its input speed. Returns whether the
+/// correction was used.
+///
+/// # Units
+/// Seconds; lengths in metres.
+fn smooth_track(
+    track: &mut Track,
+    original_s: &[f64],
+    fixed: &[(usize, f64)],
+    p: &AvoidParams,
+) -> bool {
+    let n = track.len();
+    let t = track.times_s.clone();
+    let mut is_fixed = vec![None; n];
+    for &(k, v) in fixed {
+        is_fixed[k] = Some(v);
+    }
+    // Normal matrix as lower bands: band[i][d] = N[i][i - d].
+    let mut band = vec![[0.0f64; 3]; n];
+    let mut rhs = vec![0.0f64; n];
+    let mut add = |terms: &[(usize, f64)], target: f64, w2: f64| {
+        for &(a, ca) in terms {
+            rhs[a] += w2 * ca * target;
+            for &(b, cb) in terms {
+                if b <= a {
+                    band[a][a - b] += w2 * ca * cb;
+                }
+            }
+        }
+    };
+    let (a2, b2, g2) = (p.alpha * p.alpha, p.beta * p.beta, p.gamma * p.gamma);
+    for (i, &ti) in t.iter().enumerate() {
+        add(&[(i, 1.0)], ti, g2);
+    }
+    for i in 0..n.saturating_sub(1) {
+        add(&[(i, -1.0), (i + 1, 1.0)], t[i + 1] - t[i], b2);
+    }
+    if a2 > 0.0 {
+        let len = |i: usize| (track.points[i + 1] - track.points[i]).norm();
+        for i in 0..n.saturating_sub(2) {
+            if !(track.linked[i] && track.linked[i + 1]) {
+                continue;
+            }
+            let (l0, l1) = (len(i), len(i + 1));
+            if l0 < MIN_PACE_LENGTH_M || l1 < MIN_PACE_LENGTH_M {
+                continue;
+            }
+            add(
+                &[
+                    (i, 1.0 / l0),
+                    (i + 1, -1.0 / l0 - 1.0 / l1),
+                    (i + 2, 1.0 / l1),
+                ],
+                0.0,
+                a2,
+            );
+        }
+    }
+    // Eliminate the fixed nodes: move their columns to the right-hand side.
+    #[allow(clippy::needless_range_loop)]
+    for i in 0..n {
+        for d in 1..3 {
+            if i < d {
+                continue;
+            }
+            let j = i - d;
+            let c = band[i][d];
+            match (is_fixed[i], is_fixed[j]) {
+                (None, Some(v)) => rhs[i] -= c * v,
+                (Some(v), None) => rhs[j] -= c * v,
+                _ => {}
+            }
+            if is_fixed[i].is_some() || is_fixed[j].is_some() {
+                band[i][d] = 0.0;
+            }
+        }
+    }
+    for i in 0..n {
+        if let Some(v) = is_fixed[i] {
+            band[i] = [1.0, 0.0, 0.0];
+            rhs[i] = v;
+        }
+    }
+    let solved = banded_cholesky_solve(&mut band, &mut rhs);
+    let lo = p.min_scale * (1.0 - SCALE_TOLERANCE);
+    let hi = (1.0 + SCALE_TOLERANCE) / p.min_scale;
+    let increasing = solved
+        && rhs.iter().all(|x| x.is_finite())
+        && rhs.first().is_none_or(|&x| x >= t[0].min(0.0))
+        && (1..n).all(|i| {
+            let (new, old) = (rhs[i] - rhs[i - 1], original_s[i] - original_s[i - 1]);
+            new > 0.0 && new >= lo * old && new <= hi * old
+        });
+    if increasing {
+        track.times_s = rhs;
+        false
+    } else {
+        track.times_s = anchored(&t, fixed);
+        true
+    }
+}
+
+/// The correction of [`smooth_track`]: shifts of the fixed nodes carried to the
+/// ends, linear in the original times between fixed nodes.
+fn anchored(t: &[f64], fixed: &[(usize, f64)]) -> Vec<f64> {
+    let mut f = fixed.to_vec();
+    f.sort_by_key(|x| x.0);
+    let mut out = t.to_vec();
+    let Some(&(first, v_first)) = f.first() else {
+        return out;
+    };
+    let &(last, v_last) = f.last().expect("non-empty");
+    for i in 0..first {
+        out[i] = t[i] + (v_first - t[first]);
+    }
+    for i in last + 1..t.len() {
+        out[i] = t[i] + (v_last - t[last]);
+    }
+    for w in f.windows(2) {
+        let ((a, va), (b, vb)) = (w[0], w[1]);
+        for i in a..=b {
+            let s = if b > a {
+                (t[i] - t[a]) / (t[b] - t[a])
+            } else {
+                0.0
+            };
+            out[i] = va + (vb - va) * s;
+        }
+    }
+    out
+}
+
+/// Solves `N x = rhs` in place for a symmetric positive definite matrix given by
+/// its lower bands (`band[i][d] = N[i][i − d]`, `d ≤ 2`); false if not definite.
+fn banded_cholesky_solve(band: &mut [[f64; 3]], rhs: &mut [f64]) -> bool {
+    let n = band.len();
+    // band becomes L's bands: L[i][i - d].
+    for i in 0..n {
+        for d in (0..3).rev() {
+            if i < d {
+                continue;
+            }
+            let j = i - d;
+            let mut s = band[i][d];
+            // Σ_k L[i][k] L[j][k] for k < j, k ≥ i - 2.
+            for k in i.saturating_sub(2)..j {
+                s -= band[i][i - k] * band[j][j - k];
+            }
+            if d == 0 {
+                if s.is_nan() || s <= 0.0 {
+                    return false;
+                }
+                band[i][0] = s.sqrt();
+            } else {
+                band[i][d] = s / band[j][0];
+            }
+        }
+    }
+    for i in 0..n {
+        let mut s = rhs[i];
+        for d in 1..3 {
+            if i >= d {
+                s -= band[i][d] * rhs[i - d];
+            }
+        }
+        rhs[i] = s / band[i][0];
+    }
+    for i in (0..n).rev() {
+        let mut s = rhs[i];
+        for d in 1..3 {
+            if i + d < n {
+                s -= band[i + d][d] * rhs[i + d];
+            }
+        }
+        rhs[i] = s / band[i][0];
+    }
+    true
+}
+
+fn check_params(p: &AvoidParams) -> Result<(), AvoidError> {
+    let bad = |name, want, value: f64| Err(AvoidError::Param { name, want, value });
+    if !(p.margin_m.is_finite() && p.margin_m >= 0.0) {
+        return bad("margin_m", "a non-negative distance", p.margin_m);
+    }
+    if !(p.min_scale > 0.0 && p.min_scale <= 1.0) {
+        return bad("min_scale", "in (0, 1]", p.min_scale);
+    }
+    if !(p.alpha.is_finite() && p.alpha >= 0.0) {
+        return bad("alpha", "finite and non-negative", p.alpha);
+    }
+    if !(p.beta.is_finite() && p.beta >= 0.0) {
+        return bad("beta", "finite and non-negative", p.beta);
+    }
+    if !(p.gamma.is_finite() && p.gamma > 0.0) {
+        return bad("gamma", "finite and positive", p.gamma);
+    }
+    Ok(())
+}
+
+/// One pair's retiming (Algorithm 3 steps 2–4) on the two tracks; `None` if
+/// infeasible. Returns whether a correction replaced a re-solve.
+fn separate(
+    set: &mut TrackSet,
+    pair: &PairCollision,
+    p: &AvoidParams,
+    original: &[Vec<f64>],
+    orders: &mut HashMap<(usize, usize), f64>,
+) -> Option<usize> {
+    let a: &Approach = &pair.closest;
+    let velocity = |t: &Track, a: &Approach| {
+        let (k, moving) = if std::ptr::eq(t, &set.tracks[pair.a]) {
+            (a.sample_a, a.moving_a)
+        } else {
+            (a.sample_b, a.moving_b)
+        };
+        if moving {
+            (t.points[k + 1] - t.points[k]) / (t.times_s[k + 1] - t.times_s[k])
+        } else {
+            crate::geom::Vec2::zeros()
+        }
+    };
+    let pi = piece_nodes(
+        &set.tracks[pair.a],
+        &original[pair.a],
+        a.sample_a,
+        a.moving_a,
+        a.t_s,
+    );
+    let pj = piece_nodes(
+        &set.tracks[pair.b],
+        &original[pair.b],
+        a.sample_b,
+        a.moving_b,
+        a.t_s,
+    );
+    // Eqs. 20–22.
+    let distance = p.threshold_m + p.margin_m - a.distance_m;
+    let slow = pi.speed_m_s.min(pj.speed_m_s);
+    let v = if slow > STILL_SPEED_M_S {
+        slow
+    } else {
+        pi.speed_m_s.max(pj.speed_m_s)
+    };
+    if v.is_nan() || v <= STILL_SPEED_M_S {
+        return None;
+    }
+    // The speed at which a time offset moves the two apart across their relative
+    // path: |v_i × v_j| / |v_i − v_j| (no more than eq. 20's v); at most
+    // MAX_DT_FACTOR times eq. 22's dt.
+    let (vi, vj) = (
+        velocity(&set.tracks[pair.a], a),
+        velocity(&set.tracks[pair.b], a),
+    );
+    let w = (vi - vj).norm();
+    let across = if w > STILL_SPEED_M_S {
+        crate::geom::cross(vi, vj).abs() / w
+    } else {
+        v
+    };
+    let dt = distance / across.clamp(v / MAX_DT_FACTOR, v);
+    let key = (pair.a, pair.b);
+    let (sigma, delta) = retime_pair(&pi, &pj, dt, p.min_scale, orders.get(&key).copied())?;
+    orders.insert(key, sigma);
+    let ni = pi.nodes.len();
+    let fixed_i: Vec<(usize, f64)> = (0..ni)
+        .map(|k| (pi.nodes[k], pi.times[k] + delta[k]))
+        .collect();
+    let fixed_j: Vec<(usize, f64)> = (0..pj.nodes.len())
+        .map(|k| (pj.nodes[k], pj.times[k] + delta[ni + k]))
+        .collect();
+    let mut corrections = 0;
+    for (k, fixed) in [(pair.a, fixed_i), (pair.b, fixed_j)] {
+        if smooth_track(&mut set.tracks[k], &original[k], &fixed, p) {
+            corrections += 1;
+        }
+    }
+    Some(corrections)
+}
+
+/// Retimes the tracks so no two people come closer than `params.threshold_m`
+/// (section 4.1.2, Algorithm 3). Positions are never changed; times stay strictly
+/// increasing and non-negative when they start so.
+///
+/// # Formula
+/// Eqs. 20–22 for the separation, eqs. 18, 19 and 23 for the colliding pieces
+/// ([`retime_pair`]), eq. 28 for the whole tracks ([`smooth_track`]).
+///
+/// # Complexity
+/// Per round one [`detect`] and O(n) per retimed person of n samples.
+///
+/// # Errors
+/// [`AvoidError`]: parameters out of range, a bad threshold or a track set breaking
+/// [`TrackSet::validate`]. Pairs that cannot be separated are not errors: they are
+/// in [`AvoidReport::remaining`].
+pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, AvoidError> {
+    check_params(params)?;
+    let original: Vec<Vec<f64>> = set.tracks.iter().map(|t| t.times_s.clone()).collect();
+    let mut collisions = detect(set, params.threshold_m)?;
+    let pairs_before = collisions.pair_count();
+    let mut infeasible: Vec<(usize, usize)> = Vec::new();
+    let mut iterations = 0;
+    let mut retimings = 0;
+    let mut corrections = 0;
+    let mut orders = HashMap::new();
+    while iterations < params.max_iterations {
+        let mut pairs: Vec<PairCollision> = collisions
+            .pairs
+            .iter()
+            .filter(|q| !infeasible.contains(&(q.a, q.b)))
+            .copied()
+            .collect();
+        if pairs.is_empty() {
+            break;
+        }
+        iterations += 1;
+        pairs.sort_by(|x, y| x.closest.distance_m.total_cmp(&y.closest.distance_m));
+        let mut touched = vec![false; set.tracks.len()];
+        for q in &pairs {
+            if touched[q.a] || touched[q.b] {
+                continue;
+            }
+            match separate(set, q, params, &original, &mut orders) {
+                Some(c) => {
+                    corrections += c;
+                    retimings += 1;
+                    touched[q.a] = true;
+                    touched[q.b] = true;
+                }
+                None => infeasible.push((q.a, q.b)),
+            }
+        }
+        collisions = detect(set, params.threshold_m)?;
+    }
+    let remaining = collisions
+        .pairs
+        .iter()
+        .map(|q| Remaining {
+            pair: *q,
+            why: if infeasible.contains(&(q.a, q.b)) {
+                Stuck::Infeasible
+            } else {
+                Stuck::IterationLimit
+            },
+        })
+        .collect();
+    let mut total_abs_dt_s = 0.0;
+    let mut max_speed_change_pct: f64 = 0.0;
+    for (tr, t0) in set.tracks.iter().zip(&original) {
+        total_abs_dt_s += tr
+            .times_s
+            .iter()
+            .zip(t0)
+            .map(|(a, b)| (a - b).abs())
+            .sum::<f64>();
+        for j in tr.segments() {
+            if (tr.points[j + 1] - tr.points[j]).norm() < MIN_PACE_LENGTH_M {
+                continue;
+            }
+            let ratio = (t0[j + 1] - t0[j]) / (tr.times_s[j + 1] - tr.times_s[j]);
+            max_speed_change_pct = max_speed_change_pct.max((ratio - 1.0).abs() * 100.0);
+        }
+    }
+    Ok(AvoidReport {
+        iterations,
+        pairs_before,
+        pairs_after: collisions.pair_count(),
+        retimings,
+        remaining,
+        total_abs_dt_s,
+        max_speed_change_pct,
+        corrections,
+    })
+}
+
+#[cfg(test)]
+#[path = "avoid_tests.rs"]
+mod tests;
