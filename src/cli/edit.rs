@@ -3,6 +3,8 @@
 //! pictures (`edit render`); tracks of a group walking through a scene (`edit path`,
 //! in `edit_path.rs`).
 
+#[path = "edit_apply.rs"]
+mod edit_apply;
 #[path = "edit_check.rs"]
 mod edit_check;
 
@@ -17,6 +19,11 @@ use std::path::PathBuf;
 pub enum EditCmd {
     /// Collisions between people (space-time closest approach below a threshold).
     Check(CheckArgs),
+    /// Run an edit script (`--ops EDIT.ron`: select, fix, drag, retime) on a track
+    /// file, optionally keep the crowd out of a scene's obstacles and people apart
+    /// by retiming; write the result to `-o` and report collisions before and
+    /// after, the speed change and each drag's hull-shape error.
+    Apply(edit_apply::ApplyArgs),
     /// Tracks of a group walking a path through a scene in rows (the paper's test
     /// crowd, section 5.2).
     Path(super::edit_path::PathArgs),
@@ -74,6 +81,7 @@ pub struct CheckArgs {
 pub fn edit(cmd: EditCmd) -> Result<()> {
     match cmd {
         EditCmd::Check(a) => check(a),
+        EditCmd::Apply(a) => edit_apply::apply(a),
         EditCmd::Path(a) => super::edit_path::path(a),
     }
 }

@@ -78,7 +78,7 @@ pub fn path(a: PathArgs) -> Result<()> {
 
 /// The scene file: the path as given when it exists, else a shipped scene by its
 /// name with or without `.ron`.
-fn scene_file(p: &Path) -> PathBuf {
+pub(super) fn scene_file(p: &Path) -> PathBuf {
     if p.exists() || p.extension().is_some() {
         return p.to_path_buf();
     }

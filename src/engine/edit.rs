@@ -29,8 +29,8 @@ use super::edit_state::{
 use super::error::CommandError;
 use super::state::Engine;
 use crate::crowd::edit::{
-    correct_speeds, detect, retime, Cage, Collisions, Handle, RetimeParams, SampleRef, Selection,
-    TimeDrag, Track, TrackSet,
+    avoid, correct_speeds, detect, retime, AvoidParams, Cage, Collisions, Handle, RetimeParams,
+    SampleRef, Selection, TimeDrag, Track, TrackSet,
 };
 use crate::geom::Vec2;
 use crate::gesture::segment::Segment;
@@ -818,9 +818,15 @@ fn nearest_node(t: &Track, at_s: f64) -> usize {
     }
 }
 
-/// Collisions after an edit, as published.
-fn keep_apart(set: &mut TrackSet, avoid: AvoidSettings) -> Result<Vec<CollisionView>, String> {
-    Ok(collisions_of(set, avoid.threshold_m))
+/// People kept apart by retiming (section 4.1.2), then the collisions that remain,
+/// as published.
+fn keep_apart(set: &mut TrackSet, settings: AvoidSettings) -> Result<Vec<CollisionView>, String> {
+    let params = AvoidParams {
+        threshold_m: settings.threshold_m,
+        ..AvoidParams::default()
+    };
+    avoid(set, &params).map_err(|e| format!("collision avoidance: {e}"))?;
+    Ok(collisions_of(set, settings.threshold_m))
 }
 
 fn collisions_of(set: &TrackSet, threshold_m: f64) -> Vec<CollisionView> {

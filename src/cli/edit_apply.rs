@@ -1,0 +1,349 @@
+//! `crowdtouch edit apply`: an edit script (`--ops EDIT.ron`, [`crowdtouch::crowd::edit::Script`])
+//! run on a track file, optionally followed by obstacle avoidance by the cage
+//! (section 4.2) and collision avoidance by retiming (section 4.1.2); the result is
+//! written to `-o OUT` (never over an existing file without `--force`) with a report:
+//! collisions before and after, the speed change, each drag's hull-shape error.
+
+use super::{load, TrackFileArgs};
+use crate::cli::output::outln;
+use anyhow::{anyhow, bail, Context, Result};
+use crowdtouch::crowd::edit::io::{self, EthOptions, Format, ReadOptions};
+use crowdtouch::crowd::edit::{
+    avoid, avoid_obstacles, correct_speeds, detect, parse_script, run_script, ApplyParams,
+    ApplyReport, AvoidParams, AvoidReport, Cage, CageParams, ObstacleParams, ObstacleReport,
+    ScriptError, Selection, SelectionQuery, TrackSet,
+};
+use crowdtouch::crowd::environment::{load_scene, DEFAULT_AGENT_RADIUS_M};
+use crowdtouch::geom::Rect;
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+
+/// The largest edit script read (bytes).
+pub const MAX_SCRIPT_BYTES: u64 = 16 << 20;
+
+/// `edit apply`.
+#[derive(clap::Args, Debug)]
+pub struct ApplyArgs {
+    /// The tracks.
+    #[command(flatten)]
+    pub tracks: TrackFileArgs,
+    /// The edit script (RON: `(ops: [Select(...), Fix(...), Drag(...), Retime(...)])`).
+    #[arg(long)]
+    pub ops: PathBuf,
+    /// After the script, keep the crowd out of this scene's obstacles by adjusting
+    /// the cage of every person (section 4.2); a file or a shipped scene's name.
+    #[arg(long, value_name = "SCENE")]
+    pub avoid_obstacles: Option<PathBuf>,
+    /// Then retime people so no two come closer than `--threshold` (section 4.1.2).
+    #[arg(long)]
+    pub avoid_collisions: bool,
+    /// Two people closer than this collide (metres).
+    #[arg(long, default_value_t = 0.3)]
+    pub threshold: f64,
+    /// Drags must end inside `x0,y0,x1,y1` (metres); default: the tracks' bounding
+    /// box grown by half its size and at least 10 m.
+    #[arg(long, value_parser = parse_rect)]
+    pub world: Option<Rect>,
+    /// Where to write the edited tracks (format from the extension: `.jsonl`,
+    /// `.csv`, `.txt`/`.eth`).
+    #[arg(long, short)]
+    pub output: PathBuf,
+    /// Replace `-o` if it exists (also when it is the input file).
+    #[arg(long)]
+    pub force: bool,
+    /// One JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `edit apply`.
+pub fn apply(a: ApplyArgs) -> Result<()> {
+    if !(a.threshold.is_finite() && a.threshold > 0.0) {
+        bail!(
+            "--threshold must be a positive number of metres, not {}",
+            a.threshold
+        );
+    }
+    if a.output.exists() && !a.force {
+        bail!("{} exists; give --force to replace it", a.output.display());
+    }
+    let (mut set, format) = load(&a.tracks)?;
+    let shown = a.ops.display().to_string();
+    let text =
+        crowdtouch::located::read_capped(&a.ops, MAX_SCRIPT_BYTES).map_err(|e| anyhow!("{e}"))?;
+    let script = parse_script(&text).map_err(|e| match e {
+        ScriptError::Syntax(i) => anyhow!("{shown}:{}:{}: {}", i.line, i.column, located_what(&i)),
+        ScriptError::Op { line, what } => anyhow!("{shown}:{line}: {what}"),
+    })?;
+    let before = set.clone();
+    let world = a.world.unwrap_or_else(|| default_world(&set));
+    let params = ApplyParams {
+        world: Some(world),
+        ..ApplyParams::default()
+    };
+    let collisions_before = detect(&set, a.threshold).map_err(|e| anyhow!("{e}"))?;
+    let report = run_script(&mut set, &script, &params).map_err(|e| match e {
+        ScriptError::Op { line, what } => anyhow!("{shown}:{line}: {what}"),
+        ScriptError::Syntax(i) => anyhow!("{shown}: {i}"),
+    })?;
+    let obstacles = match &a.avoid_obstacles {
+        Some(scene) => Some(keep_out_of_obstacles(&mut set, scene, world)?),
+        None => None,
+    };
+    let avoided = if a.avoid_collisions {
+        let params = AvoidParams {
+            threshold_m: a.threshold,
+            ..AvoidParams::default()
+        };
+        let r = avoid(&mut set, &params).map_err(|e| anyhow!("collision avoidance: {e}"))?;
+        Some(avoid_json(&r))
+    } else {
+        None
+    };
+    let collisions_after = detect(&set, a.threshold).map_err(|e| anyhow!("{e}"))?;
+    let out_format = output_format(&a.output).unwrap_or(format);
+    let opts = ReadOptions {
+        eth: EthOptions {
+            frame_rate_hz: a.tracks.frame_rate,
+            frame_step: a.tracks.frame_step,
+        },
+        csv_step_s: a.tracks.step,
+    };
+    io::write_tracks(&set, &a.output, out_format, &opts, a.force)
+        .map_err(|e| anyhow!(e))
+        .with_context(|| "writing the edited tracks")?;
+    let speed = speed_change(&before, &set);
+    let j = json!({
+        "file": a.tracks.file.display().to_string(),
+        "output": a.output.display().to_string(),
+        "people": set.tracks.len(),
+        "samples": set.samples(),
+        "threshold_m": a.threshold,
+        "ops": script.ops.len(),
+        "drags": drags_json(&report),
+        "retimes": report.retimes,
+        "retimed_samples": report.retimed_samples,
+        "touched": report.touched.len(),
+        "obstacles": obstacles.as_ref().map(obstacles_json),
+        "avoidance": avoided,
+        "collisions_before": collisions_before.pair_count(),
+        "collisions_after": collisions_after.pair_count(),
+        "min_distance_before_m": collisions_before.min_distance_m(),
+        "min_distance_after_m": collisions_after.min_distance_m(),
+        "speed_ratio": {"min": speed.0, "max": speed.1},
+    });
+    if a.json {
+        outln!("{j}")?;
+        return Ok(());
+    }
+    outln!(
+        "{} → {}: {} people, {} samples",
+        j["file"].as_str().unwrap_or(""),
+        j["output"].as_str().unwrap_or(""),
+        set.tracks.len(),
+        set.samples()
+    )?;
+    for d in &report.drags {
+        outln!(
+            "  line {}: drag of {} by {:.2} m; hull shape error {:.1} % (edges), {:.3} rad (angles); speeds {:.0}–{:.0} % before correction, {:.0}–{:.0} % after",
+            d.line,
+            d.handle,
+            d.distance_m,
+            100.0 * d.shape_edge_rms,
+            d.shape_angle_rms_rad,
+            100.0 * d.speed_ratio_edited.0,
+            100.0 * d.speed_ratio_edited.1,
+            100.0 * d.speed_ratio_corrected.0,
+            100.0 * d.speed_ratio_corrected.1
+        )?;
+    }
+    if report.retimes > 0 {
+        outln!(
+            "  {} retime(s), {} samples re-timed",
+            report.retimes,
+            report.retimed_samples
+        )?;
+    }
+    if let Some(o) = &obstacles {
+        outln!(
+            "  obstacles: {} samples inside before, {} after ({} rounds)",
+            o.samples_inside_before,
+            o.samples_inside_after,
+            o.rounds
+        )?;
+    }
+    if let Some(v) = j["avoidance"].as_object() {
+        outln!(
+            "  collision avoidance: {} pairs before, {} after, {} retimings in {} rounds; times moved {:.2} s in all, speeds changed by at most {:.1} %",
+            v["pairs_before"], v["pairs_after"], v["retimings"], v["iterations"],
+            v["total_abs_dt_s"].as_f64().unwrap_or(f64::NAN),
+            v["max_speed_change_pct"].as_f64().unwrap_or(f64::NAN)
+        )?;
+        for r in v["remaining"].as_array().into_iter().flatten() {
+            outln!(
+                "    still closer than the threshold: {} and {} ({:.3} m at {:.1} s, {})",
+                r["a"],
+                r["b"],
+                r["distance_m"].as_f64().unwrap_or(f64::NAN),
+                r["t_s"].as_f64().unwrap_or(f64::NAN),
+                r["why"].as_str().unwrap_or("")
+            )?;
+        }
+    }
+    outln!(
+        "  pairs closer than {} m: {} before, {} after; speeds {:.0}–{:.0} % of the originals",
+        a.threshold,
+        collisions_before.pair_count(),
+        collisions_after.pair_count(),
+        100.0 * speed.0,
+        100.0 * speed.1
+    )?;
+    Ok(())
+}
+
+fn located_what(i: &crowdtouch::located::Issue) -> String {
+    if i.field.is_empty() {
+        i.message.clone()
+    } else {
+        format!("field `{}`: {}", i.field, i.message)
+    }
+}
+
+/// The tracks' bounding box grown by half its size, and by at least 10 m.
+fn default_world(set: &TrackSet) -> Rect {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in set.tracks.iter().flat_map(|t| &t.points) {
+        lo = [lo[0].min(p.x), lo[1].min(p.y)];
+        hi = [hi[0].max(p.x), hi[1].max(p.y)];
+    }
+    let grow = |a: f64, b: f64| ((b - a) * 0.5).max(10.0);
+    let (gx, gy) = (grow(lo[0], hi[0]), grow(lo[1], hi[1]));
+    Rect {
+        min: [lo[0] - gx, lo[1] - gy],
+        max: [hi[0] + gx, hi[1] + gy],
+    }
+}
+
+fn parse_rect(s: &str) -> Result<Rect, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|w| {
+            w.trim()
+                .parse::<f64>()
+                .map_err(|_| format!("`{w}` is not a number"))
+        })
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [x0, y0, x1, y1] if v.iter().all(|x| x.is_finite()) && x0 < x1 && y0 < y1 => Ok(Rect {
+            min: [x0, y0],
+            max: [x1, y1],
+        }),
+        _ => Err("expected x0,y0,x1,y1 with x0 < x1 and y0 < y1".into()),
+    }
+}
+
+fn output_format(p: &Path) -> Option<Format> {
+    match p.extension()?.to_str()?.to_ascii_lowercase().as_str() {
+        "jsonl" | "json" => Some(Format::Jsonl),
+        "csv" => Some(Format::Csv),
+        "txt" | "eth" => Some(Format::Eth),
+        _ => None,
+    }
+}
+
+/// The cage of every person kept out of the scene's obstacles (section 4.2), then
+/// speeds corrected (eq. 9).
+fn keep_out_of_obstacles(set: &mut TrackSet, scene: &Path, world: Rect) -> Result<ObstacleReport> {
+    let file = super::super::edit_path::scene_file(scene);
+    let scene = load_scene(&file, DEFAULT_AGENT_RADIUS_M).map_err(|e| anyhow!("{e}"))?;
+    let sel = Selection::select(set, &SelectionQuery::default())
+        .map_err(|e| anyhow!("{}: {e}", file.display()))?;
+    let before = set.clone();
+    let params = CageParams {
+        world: Some(world),
+        ..CageParams::default()
+    };
+    let mut cage = Cage::new(set, &sel, &params).map_err(|e| anyhow!("the crowd's cage: {e}"))?;
+    let report = avoid_obstacles(
+        &mut cage,
+        scene.obstacles(),
+        &[],
+        &ObstacleParams::default(),
+    )
+    .map_err(|e| anyhow!("keeping out of the obstacles of {}: {e}", file.display()))?;
+    cage.apply(set).map_err(|e| anyhow!("{e}"))?;
+    let touched: Vec<usize> = (0..set.tracks.len()).collect();
+    correct_speeds(&before, set, &touched).map_err(|e| anyhow!("{e}"))?;
+    Ok(report)
+}
+
+fn avoid_json(r: &AvoidReport) -> Value {
+    json!({
+        "iterations": r.iterations,
+        "pairs_before": r.pairs_before,
+        "pairs_after": r.pairs_after,
+        "retimings": r.retimings,
+        "total_abs_dt_s": r.total_abs_dt_s,
+        "max_speed_change_pct": r.max_speed_change_pct,
+        "remaining": r.remaining.iter().map(|x| json!({
+            "a": x.pair.id_a,
+            "b": x.pair.id_b,
+            "distance_m": x.pair.closest.distance_m,
+            "t_s": x.pair.closest.t_s,
+            "why": x.why.as_str(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+fn obstacles_json(o: &ObstacleReport) -> Value {
+    json!({
+        "rounds": o.rounds,
+        "moved_hull_vertices": o.targets.len(),
+        "samples_inside_before": o.samples_inside_before,
+        "samples_inside_after": o.samples_inside_after,
+        "hull_violations": o.hull_violations,
+    })
+}
+
+fn drags_json(r: &ApplyReport) -> Value {
+    Value::Array(
+        r.drags
+            .iter()
+            .map(|d| {
+                json!({
+                    "line": d.line,
+                    "handle": d.handle,
+                    "distance_m": d.distance_m,
+                    "hull_shape_error": {"edge_length_rms": d.shape_edge_rms, "angle_rms_rad": d.shape_angle_rms_rad},
+                    "speed_ratio_edited": [d.speed_ratio_edited.0, d.speed_ratio_edited.1],
+                    "speed_ratio_corrected": [d.speed_ratio_corrected.0, d.speed_ratio_corrected.1],
+                })
+            })
+            .collect(),
+    )
+}
+
+/// The slowest and fastest linked segment of the result relative to the same
+/// segment of the input (people and samples matched by index; segments that did not
+/// move before are left out). `(1, 1)` when none compares.
+pub fn speed_change(before: &TrackSet, after: &TrackSet) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (b, a) in before.tracks.iter().zip(&after.tracks) {
+        if a.len() != b.len() {
+            continue;
+        }
+        for j in b.segments() {
+            let vb = b.segment_speed(j);
+            if vb > 1e-9 {
+                let r = a.segment_speed(j) / vb;
+                lo = lo.min(r);
+                hi = hi.max(r);
+            }
+        }
+    }
+    if lo > hi {
+        (1.0, 1.0)
+    } else {
+        (lo, hi)
+    }
+}
