@@ -260,3 +260,52 @@ fn retime_moves_time_nodes_and_exit_brings_the_crowd_back() {
         "not in edit mode"
     );
 }
+
+/// Two people walking into each other's path at the same time: the load reports the
+/// collision; a retime ends with them kept apart (section 4.1.2), places kept.
+#[test]
+fn a_retime_keeps_colliding_people_apart() {
+    let times: Vec<f64> = (0..=40).map(|k| k as f64 * 0.25).collect();
+    let east = Track::linked(
+        1,
+        times.iter().map(|t| Vec2::new(2.0 + *t, 4.0)).collect(),
+        times.clone(),
+    );
+    let north = Track::linked(
+        2,
+        times.iter().map(|t| Vec2::new(7.0, -1.0 + *t)).collect(),
+        times.clone(),
+    );
+    let set = TrackSet {
+        tracks: vec![east, north],
+        step_s: 0.25,
+    };
+    assert_eq!(
+        detect(&set, 0.3).unwrap().pairs.len(),
+        1,
+        "they meet at (7, 4) at t = 5 s"
+    );
+    let mut s = Session::new(set.clone());
+    let v = s.views.last().expect("an edit view at load").clone();
+    assert_eq!(v.collisions.len(), 1, "the collision is published at load");
+    s.e.command(
+        &Command::EditRetime {
+            at_s: 2.0,
+            to_s: 2.0,
+        },
+        Micros(s.now),
+    )
+    .unwrap();
+    s.ticks(2);
+    let after = s.set();
+    assert!(
+        detect(&after, 0.3).unwrap().pairs.is_empty(),
+        "kept apart by retiming"
+    );
+    for (a, b) in after.tracks.iter().zip(&set.tracks) {
+        assert_eq!(a.points, b.points, "retiming keeps the places");
+    }
+    let v = s.views.last().unwrap();
+    assert!(v.collisions.is_empty());
+    assert_eq!(v.undo_depth, 1);
+}
