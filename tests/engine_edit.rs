@@ -309,3 +309,91 @@ fn a_retime_keeps_colliding_people_apart() {
     assert!(v.collisions.is_empty());
     assert_eq!(v.undo_depth, 1);
 }
+
+/// A `contract` gesture in open space retimes every person: the next five seconds
+/// play faster (the node nearest play + 5 s comes 1 s sooner), places kept.
+#[test]
+fn a_contract_gesture_in_open_space_plays_the_tracks_faster() {
+    use crowdtouch::gesture::library::MotionClass;
+    use crowdtouch::gesture::synth::{generate, to_frames, GestureStyle};
+    let glass = (1210.0, 680.0);
+    let cfg = Config::embedded_default();
+    let mut e = Engine::new(&cfg, Some(glass), true);
+    e.tick(Micros(TICK_US));
+    let before = parade(2, 3);
+    e.load_tracks(before.clone(), "parade", Micros(TICK_US));
+    e.command(&Command::Pause, Micros(TICK_US)).unwrap();
+    let style = GestureStyle {
+        fingers: vec![3],
+        duration_s: 1.0,
+        size_mm: 150.0,
+        placement: Vec2::new(0.8, 0.75),
+        orientation_rad: 0.0,
+        jitter_mm: 0.3,
+        device_mm: glass,
+        rate_hz: 120.0,
+        stagger_ms: 30.0,
+        early_lifts: 0,
+        bow: 0.0,
+        spacing_mm: 20.0,
+        clockwise: false,
+    };
+    let frames = to_frames(
+        &generate(MotionClass::Contract, &style, 3),
+        glass,
+        Micros(100_000),
+    );
+    let mut now = 0;
+    let mut class = None;
+    for f in &frames {
+        e.push_frame(f);
+        now = f.t.0;
+        let o = e.tick(f.t);
+        for ev in o.events {
+            if let crowdtouch::vocab::Event::GestureEnd {
+                recognition: Some(r),
+                ..
+            } = ev
+            {
+                class = Some(r.class.clone());
+            }
+        }
+        e.clear_events();
+    }
+    for _ in 0..60 {
+        now += TICK_US;
+        let o = e.tick(Micros(now));
+        for ev in o.events {
+            if let crowdtouch::vocab::Event::GestureEnd {
+                recognition: Some(r),
+                ..
+            } = ev
+            {
+                class = Some(r.class.clone());
+            }
+        }
+        e.clear_events();
+    }
+    assert_eq!(class.as_deref(), Some("contract"));
+    let after = Arc::clone(e.edited_tracks().unwrap());
+    let k = 25; // t = 5 s, the node nearest the play time (≈ 0) + 5 s
+    for (a, b) in after
+        .tracks
+        .iter()
+        .zip(&before.tracks)
+        .filter(|(a, _)| a.id != 999)
+    {
+        assert!(
+            (a.times_s[k] - 4.0).abs() < 0.05,
+            "person {}: {} s",
+            a.id,
+            a.times_s[k]
+        );
+        assert_eq!(a.points, b.points);
+        assert_eq!(a.times_s[0], b.times_s[0]);
+        assert!(
+            (a.times_s[50] - b.times_s[50]).abs() < 1e-9,
+            "the last time stays"
+        );
+    }
+}

@@ -13,7 +13,8 @@
 //!      people), `edit` (hull)
 //!  fingers lift ──► EditJob::Release: speeds corrected (eq. 9), collisions
 //!      avoided by retiming (section 4.1.2) ──► `tracks` (full), `edit` (collisions)
-//!  edit.undo / edit.retime / edit.save / edit.exit
+//!  edit.retime, or a contract / expand gesture in open space ──► EditJob::Retime
+//!  edit.undo / edit.save / edit.exit
 //! ```
 //!
 //! The control thread never builds or solves a cage: jobs go to the formation
@@ -33,9 +34,16 @@ use crate::crowd::edit::{
     SampleRef, Selection, TimeDrag, Track, TrackSet,
 };
 use crate::geom::Vec2;
+use crate::gesture::library::MotionClass;
 use crate::gesture::segment::Segment;
 use crate::vocab::{AgentView, CollisionView, EditView, Micros, TrackView, TracksView};
 use std::sync::Arc;
+
+/// How far ahead of the play time a `contract` or `expand` gesture retimes (s).
+pub const GESTURE_RETIME_S: f64 = 5.0;
+/// A `contract` gesture plays that stretch in this fraction of its time (`expand`
+/// in its inverse).
+pub const GESTURE_FASTER: f64 = 0.8;
 
 impl Engine {
     /// Whether the crowd is a loaded track set's people (edit mode).
@@ -222,6 +230,32 @@ impl Engine {
         });
         self.edits.view_dirty = true;
         Ok(())
+    }
+
+    /// A gesture recognised in edit mode (in open space, not on a person): `contract`
+    /// plays the next [`GESTURE_RETIME_S`] of every track faster, `expand` slower
+    /// (a temporal edit, section 3.3, dragging each person's node nearest that
+    /// horizon by the factor; the first and last times stay), then collisions are
+    /// avoided. Other classes do nothing to the tracks.
+    pub(super) fn edit_gesture(&mut self, id: u32, class: MotionClass) {
+        let factor = match class {
+            MotionClass::Contract => GESTURE_FASTER,
+            MotionClass::Expand => 1.0 / GESTURE_FASTER,
+            _ => {
+                log::info!("gesture {id}: {class} does nothing to tracks (contract and expand retime them)");
+                return;
+            }
+        };
+        let Some(play) = self.edits.mode.as_ref().map(|m| m.play_t_s) else {
+            return;
+        };
+        let (at, to) = (play + GESTURE_RETIME_S, play + GESTURE_RETIME_S * factor);
+        match self.edit_retime(at, to) {
+            Ok(()) => {
+                log::info!("gesture {id}: {class} retimes the tracks ({at:.1} s → {to:.1} s)")
+            }
+            Err(e) => log::info!("gesture {id}: {class} cannot retime the tracks: {e}"),
+        }
     }
 
     /// `edit.exit`: the crowd comes back as a hard reset leaves it.

@@ -229,6 +229,11 @@ impl Engine {
         synthesis: crate::crowd::motion::Synthesis,
         now: Micros,
     ) {
+        if self.edits.active() {
+            // Edit mode: the crowd is the tracks' people; a gesture retimes them.
+            self.edit_gesture(id, class);
+            return;
+        }
         if let Some(name) = self.gesture_formation(class) {
             // `formations.gestures` maps this class to a formation: a transform
             // goes there instead of the gesture's motion.
