@@ -5,7 +5,7 @@
 //! |---|---|---|
 //! | [`Format::Jsonl`] | `jsonl.rs` | ours: a header line (`crowdtouch-tracks`, version, frame step), then one sample per line, explicit gaps |
 //! | [`Format::Csv`] | `csv.rs` | `t,id,x,y` per line, an optional header; links from the frame step |
-//! | `format.rs` | [`Format`], [`detect`], [`read`], [`write`]: a format by name, extension or first line, and the reader or writer for it |
+//! | `format.rs` | [`Format`], [`detect`], [`read`](read()), [`write`](write()): a format by name, extension or first line, and the reader or writer for it |
 //! | `file.rs` | [`read_tracks`], [`write_tracks`]: files read capped, written to a temporary file renamed into place |
 //! | [`Format::Eth`] | `eth.rs` | the public pedestrian datasets (ETH/UCY as redistributed by trajectory-prediction projects): `frame id x y` per line, whitespace-separated, metres |
 
