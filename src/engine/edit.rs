@@ -149,7 +149,7 @@ impl Engine {
             hull: Vec::new(),
         }));
         self.edits.outbox = None;
-        self.publish_tracks(None);
+        self.publish_tracks();
         self.edits.view_dirty = true;
     }
 
@@ -170,7 +170,7 @@ impl Engine {
         let threshold = self.edits.avoid.threshold_m;
         let m = self.edits.mode.as_mut().expect("checked above");
         m.collisions = collisions_of(&m.set, threshold);
-        self.publish_tracks(None);
+        self.publish_tracks();
         self.edits.view_dirty = true;
         Ok(())
     }
@@ -218,6 +218,7 @@ impl Engine {
         m.settling = true;
         let base = Arc::clone(&m.set);
         Engine::push_undo(m, Arc::clone(&base));
+        let (version, source) = (m.version + 1, Arc::clone(&m.source));
         self.edits.outbox = Some(EditJob {
             epoch,
             grab: 0,
@@ -226,6 +227,8 @@ impl Engine {
                 at_s,
                 to_s,
                 avoid,
+                version,
+                source,
             },
         });
         self.edits.view_dirty = true;
@@ -405,21 +408,42 @@ impl Engine {
             seeds.push(k);
         }
         // The group: people linked by being within GROUP_LINK_M of each other now
-        // (those on the scene; one off it joins only as a seed).
-        let mut inside = vec![false; shown.len()];
-        let mut stack = seeds.clone();
-        for &s in &seeds {
-            inside[s] = true;
+        // (those on the scene, found on a neighbour grid; one off it joins only as a
+        // seed), joined by union–find.
+        let b = &mut self.edits.buffers;
+        b.on_idx.clear();
+        b.on_pos.clear();
+        for (k, &(q, on)) in shown.iter().enumerate() {
+            if on {
+                b.on_idx.push(k);
+                b.on_pos.push(q);
+            }
         }
-        while let Some(k) = stack.pop() {
-            for (i, (q, on)) in shown.iter().enumerate() {
-                if !inside[i] && *on && (q - shown[k].0).norm() <= GROUP_LINK_M {
-                    inside[i] = true;
-                    stack.push(i);
+        b.parent.clear();
+        b.parent.extend(0..shown.len());
+        b.grid.build(&b.on_pos, GROUP_LINK_M);
+        let (grid, on_idx, parent) = (&b.grid, &b.on_idx, &mut b.parent);
+        grid.for_each_pair_d2(&b.on_pos, GROUP_LINK_M, |i, j, _, _| {
+            let (ri, rj) = (root(parent, on_idx[i]), root(parent, on_idx[j]));
+            if ri != rj {
+                parent[ri.max(rj)] = ri.min(rj);
+            }
+        });
+        let mut inside = vec![false; shown.len()];
+        for &s in &seeds {
+            let r = root(parent, s);
+            inside[s] = true;
+            for (k, f) in inside.iter_mut().enumerate() {
+                if root(parent, k) == r {
+                    *f = true;
                 }
             }
         }
-        let selected: Vec<usize> = (0..shown.len()).filter(|&i| inside[i]).collect();
+        let selected: Arc<[usize]> = (0..shown.len()).filter(|&i| inside[i]).collect();
+        let held: Arc<[SampleRef]> = handles
+            .iter()
+            .map(|h: &(u64, SampleRef, Vec2)| h.1)
+            .collect();
         self.edits.next_grab += 1;
         let hull = Vec::new();
         m.hull = hull;
@@ -433,6 +457,8 @@ impl Engine {
             out: false,
             sent: Vec::new(),
             latest: Vec::new(),
+            held,
+            spare: Vec::new(),
             edited: None,
             released: false,
         });
@@ -445,7 +471,11 @@ impl Engine {
         let epoch = self.edits.epoch;
         let params = self.edits.cage;
         let controls = self.segmenter.controls();
-        let Some(g) = self.edits.mode.as_mut().and_then(|m| m.grab.as_mut()) else {
+        let Some(m) = self.edits.mode.as_mut() else {
+            return;
+        };
+        let (version, source) = (m.version + 1, Arc::clone(&m.source));
+        let Some(g) = m.grab.as_mut() else {
             return;
         };
         if let Some(control) = controls.iter().find(|c| c.id == g.control) {
@@ -470,16 +500,21 @@ impl Engine {
         }
         g.out = true;
         g.sent.clone_from(&g.latest);
+        let mut targets = std::mem::take(&mut g.spare);
+        targets.clear();
+        targets.extend_from_slice(&g.latest);
         self.edits.outbox = Some(EditJob {
             epoch,
             grab: g.id,
             kind: EditJobKind::Drag {
                 base: Arc::clone(&g.base),
-                selected: g.selected.clone(),
+                selected: Arc::clone(&g.selected),
                 cage: g.cage.take(),
                 params,
-                handles: g.handles.iter().map(|h| h.1).collect(),
-                targets: g.latest.clone(),
+                handles: Arc::clone(&g.held),
+                targets,
+                version,
+                source,
             },
         });
     }
@@ -506,6 +541,7 @@ impl Engine {
         };
         m.settling = true;
         Engine::push_undo(m, Arc::clone(&g.base));
+        let (version, source) = (m.version + 1, Arc::clone(&m.source));
         self.edits.outbox = Some(EditJob {
             epoch,
             grab: g.id,
@@ -514,6 +550,8 @@ impl Engine {
                 edited,
                 selected: g.selected,
                 avoid,
+                version,
+                source,
             },
         });
         self.edits.view_dirty = true;
@@ -540,16 +578,15 @@ impl Engine {
                 };
                 g.out = false;
                 g.cage = cage;
+                g.spare = targets;
                 match edited {
-                    Ok(set) => {
-                        let changed = g.selected.clone();
+                    Ok((set, view)) => {
                         g.edited = Some(Arc::clone(&set));
-                        g.sent = targets;
                         m.hull = hull;
                         // Shown as edited while the fingers hold it.
                         m.set = set;
-                        m.version += 1;
-                        self.publish_tracks(Some(&changed));
+                        m.version = view.version;
+                        self.edits.tracks_out = Some(view);
                     }
                     Err(e) => {
                         self.counters.deform_errors += 1;
@@ -566,12 +603,12 @@ impl Engine {
             EditDoneKind::Settled { result, release } => {
                 m.settling = false;
                 match result {
-                    Ok((set, collisions)) => {
+                    Ok((set, collisions, view)) => {
                         m.collisions = collisions;
-                        m.version += 1;
+                        m.version = view.version;
                         self.edits.edits += 1;
                         m.set = set;
-                        self.publish_tracks(None);
+                        self.edits.tracks_out = Some(view);
                     }
                     Err(e) => {
                         // The tracks go back to what they were before the edit.
@@ -582,7 +619,7 @@ impl Engine {
                         if let Some(before) = m.undo.pop() {
                             m.set = before;
                             m.version += 1;
-                            self.publish_tracks(None);
+                            self.publish_tracks();
                         }
                     }
                 }
@@ -651,30 +688,13 @@ impl Engine {
         }))
     }
 
-    /// The `tracks` message: every person, or those in `changed`.
-    fn publish_tracks(&mut self, changed: Option<&[usize]>) {
+    /// The `tracks` message of every person (after a load or an undo: rare, so
+    /// built here; a drag's or a release's is built on the formation thread).
+    fn publish_tracks(&mut self) {
         let Some(m) = &self.edits.mode else {
             return;
         };
-        let view = |k: usize| {
-            let t = &m.set.tracks[k];
-            TrackView {
-                id: t.id,
-                points: t.points.clone(),
-                times_s: t.times_s.clone(),
-            }
-        };
-        let tracks = match changed {
-            Some(ks) => ks.iter().map(|&k| view(k)).collect(),
-            None => (0..m.set.tracks.len()).map(view).collect(),
-        };
-        self.edits.tracks_out = Some(Arc::new(TracksView {
-            version: m.version,
-            source: Arc::clone(&m.source),
-            tracks,
-            full: changed.is_none(),
-            span_s: m.set.span_s(),
-        }));
+        self.edits.tracks_out = Some(Arc::new(tracks_view(&m.set, None, m.version, &m.source)));
     }
 
     /// The `tracks` message of this tick, if the tracks changed.
@@ -704,6 +724,8 @@ impl EditJob {
                 params,
                 handles,
                 targets,
+                version,
+                source,
             } => {
                 let mut cage = match cage {
                     Some(c) => Ok(c),
@@ -722,7 +744,9 @@ impl EditJob {
                         c.drag(&drags, &[])
                             .and_then(|()| {
                                 let mut set = (*base).clone();
-                                c.apply(&mut set).map(|()| Arc::new(set))
+                                c.apply(&mut set)?;
+                                let view = tracks_view(&set, Some(&selected), version, &source);
+                                Ok((Arc::new(set), Arc::new(view)))
                             })
                             .map_err(|e| e.to_string())
                     }
@@ -744,12 +768,17 @@ impl EditJob {
                 edited,
                 selected,
                 avoid,
+                version,
+                source,
             } => {
                 let mut set = (*edited).clone();
                 let result = correct_speeds(&base, &mut set, &selected)
                     .map_err(|e| e.to_string())
                     .and_then(|_| keep_apart(&mut set, avoid))
-                    .map(|c| (Arc::new(set), c));
+                    .map(|c| {
+                        let view = Arc::new(tracks_view(&set, None, version, &source));
+                        (Arc::new(set), c, view)
+                    });
                 EditDoneKind::Settled {
                     result,
                     release: true,
@@ -760,11 +789,16 @@ impl EditJob {
                 at_s,
                 to_s,
                 avoid,
+                version,
+                source,
             } => {
                 let mut set = (*base).clone();
                 let result = retime_all(&mut set, at_s, to_s)
                     .and_then(|()| keep_apart(&mut set, avoid))
-                    .map(|c| (Arc::new(set), c));
+                    .map(|c| {
+                        let view = Arc::new(tracks_view(&set, None, version, &source));
+                        (Arc::new(set), c, view)
+                    });
                 EditDoneKind::Settled {
                     result,
                     release: false,
@@ -772,6 +806,35 @@ impl EditJob {
             }
         };
         EditDone { epoch, grab, kind }
+    }
+}
+
+/// The `tracks` message of `set` at `version`: every person, or the people
+/// `changed` (track indices).
+fn tracks_view(
+    set: &TrackSet,
+    changed: Option<&[usize]>,
+    version: u64,
+    source: &Arc<str>,
+) -> TracksView {
+    let view = |k: usize| {
+        let t = &set.tracks[k];
+        TrackView {
+            id: t.id,
+            points: t.points.clone(),
+            times_s: t.times_s.clone(),
+        }
+    };
+    let tracks = match changed {
+        Some(ks) => ks.iter().map(|&k| view(k)).collect(),
+        None => (0..set.tracks.len()).map(view).collect(),
+    };
+    TracksView {
+        version,
+        source: Arc::clone(source),
+        tracks,
+        full: changed.is_none(),
+        span_s: set.span_s(),
     }
 }
 
@@ -871,6 +934,15 @@ fn collisions_of(set: &TrackSet, threshold_m: f64) -> Vec<CollisionView> {
             Vec::new()
         }
     }
+}
+
+/// The root of `k` in the union–find forest `parent` (paths halved).
+fn root(parent: &mut [usize], mut k: usize) -> usize {
+    while parent[k] != k {
+        parent[k] = parent[parent[k]];
+        k = parent[k];
+    }
+    k
 }
 
 /// Where a person is shown at `t_s`, and whether they are on the scene then: on

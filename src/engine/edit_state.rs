@@ -2,6 +2,7 @@
 //! and its undo stack, the playback clock, the fingers' grab, the jobs out on the
 //! formation thread and what is published about them.
 
+use crate::crowd::agents::NeighbourGrid;
 use crate::crowd::edit::{Cage, CageParams, SampleRef, TrackSet};
 use crate::geom::Vec2;
 use crate::vocab::{CollisionView, TracksView};
@@ -74,19 +75,24 @@ pub(super) enum EditJobKind {
     /// Deform: build the cage first when `cage` is `None`.
     Drag {
         base: Arc<TrackSet>,
-        selected: Vec<usize>,
+        selected: Arc<[usize]>,
         cage: Option<CageBox>,
         params: CageParams,
-        handles: Vec<SampleRef>,
+        handles: Arc<[SampleRef]>,
         targets: Vec<Vec2>,
+        /// The tracks' version the result will have.
+        version: u64,
+        source: Arc<str>,
     },
     /// The fingers lifted: speeds corrected (eq. 9) and collisions avoided by
     /// retiming (section 4.1.2) on the edited tracks.
     Release {
         base: Arc<TrackSet>,
         edited: Arc<TrackSet>,
-        selected: Vec<usize>,
+        selected: Arc<[usize]>,
         avoid: AvoidSettings,
+        version: u64,
+        source: Arc<str>,
     },
     /// A temporal edit of every person (section 3.3).
     Retime {
@@ -94,6 +100,8 @@ pub(super) enum EditJobKind {
         at_s: f64,
         to_s: f64,
         avoid: AvoidSettings,
+        version: u64,
+        source: Arc<str>,
     },
 }
 
@@ -109,16 +117,21 @@ pub struct EditDone {
 pub(super) enum EditDoneKind {
     Dragged {
         cage: Option<CageBox>,
-        edited: Result<Arc<TrackSet>, String>,
+        /// The edited tracks and their `tracks` message (the grabbed people).
+        edited: Result<(Arc<TrackSet>, Arc<TracksView>), String>,
         hull: Vec<Vec2>,
         targets: Vec<Vec2>,
     },
     Settled {
-        result: Result<(Arc<TrackSet>, Vec<CollisionView>), String>,
+        result: Result<Settled, String>,
         /// Whether it was a release (else a retime command).
         release: bool,
     },
 }
+
+/// What a release or retime leaves: the tracks, the collisions that remain, and
+/// the `tracks` message.
+pub(super) type Settled = (Arc<TrackSet>, Vec<CollisionView>, Arc<TracksView>);
 
 /// The fingers holding a selection.
 #[derive(Debug)]
@@ -130,7 +143,7 @@ pub(super) struct Grab {
     /// The tracks as they were when grabbed (the cage's rest).
     pub(super) base: Arc<TrackSet>,
     /// The grabbed people (track indices).
-    pub(super) selected: Vec<usize>,
+    pub(super) selected: Arc<[usize]>,
     /// Per finger (contact id): the sample it holds and where it was when it landed.
     pub(super) handles: Vec<(u64, SampleRef, Vec2)>,
     /// The cage between drags (`None` while a job has it, or before it is built).
@@ -141,6 +154,10 @@ pub(super) struct Grab {
     pub(super) sent: Vec<Vec2>,
     /// The fingers' targets now (kept after a lift).
     pub(super) latest: Vec<Vec2>,
+    /// The samples the fingers hold, in the order of `handles` (shared with jobs).
+    pub(super) held: Arc<[SampleRef]>,
+    /// A targets buffer back from the last job, reused for the next.
+    pub(super) spare: Vec<Vec2>,
     /// The newest edited tracks.
     pub(super) edited: Option<Arc<TrackSet>>,
     /// The fingers lifted; the release follows when the last drag is back.
@@ -180,6 +197,21 @@ pub(super) struct Edits {
     /// The config's tracks as last loaded (a reload loads them again only when
     /// they changed).
     pub(super) from_config: Option<Arc<TrackSet>>,
+    /// Buffers of a grab, kept from grab to grab.
+    pub(super) buffers: GrabBuffers,
+}
+
+/// What finding a grabbed group needs, kept from grab to grab.
+#[derive(Debug, Default)]
+pub(super) struct GrabBuffers {
+    /// The people on the scene at the play time: their track indices.
+    pub(super) on_idx: Vec<usize>,
+    /// Their positions (m).
+    pub(super) on_pos: Vec<Vec2>,
+    /// Union–find parents over all people.
+    pub(super) parent: Vec<usize>,
+    /// Neighbours within [`GROUP_LINK_M`].
+    pub(super) grid: NeighbourGrid,
 }
 
 impl Edits {
@@ -199,6 +231,7 @@ impl Edits {
             },
             edits: 0,
             from_config: None,
+            buffers: GrabBuffers::default(),
         }
     }
 
