@@ -14,9 +14,9 @@
 //!    at right angles, far less for nearly head-on walkers, for whom eq. 22 alone
 //!    needs many rounds), bounded so `dt` is at most [`MAX_DT_FACTOR`] times
 //!    eq. 22's;
-//! 2. the two colliding pieces are retimed (eqs. 18, 19, 23) — see [`retime_pair`];
+//! 2. the two colliding pieces are retimed (eqs. 18, 19, 23) — see `retime_pair`;
 //! 3. each of the two people's whole temporal tracks is re-solved with the retimed
-//!    nodes fixed (eq. 28) — see [`smooth_track`].
+//!    nodes fixed (eq. 28) — see `smooth_track`.
 //!
 //! Rounds repeat until nothing collides or [`AvoidParams::max_iterations`] is
 //! reached. A pair that retiming cannot separate (both standing still, no feasible
@@ -56,7 +56,7 @@ pub struct AvoidParams {
     pub margin_m: f64,
     /// The least scaling `a` of a colliding piece's duration (constraints `g1`,
     /// `g2` of eq. 19), in (0, 1]; `1 / min_scale` is the most (ours, see
-    /// [`retime_pair`]). Default 0.8: a retimed piece's speed changes by at most 25 %.
+    /// `retime_pair`). Default 0.8: a retimed piece's speed changes by at most 25 %.
     pub min_scale: f64,
     /// `α` (eq. 28), weight of the pace smoothness `E_DT` (eq. 24). Default 0.1.
     pub alpha: f64,
@@ -150,7 +150,7 @@ pub struct AvoidReport {
     /// segments at least [`MIN_PACE_LENGTH_M`] long.
     pub max_speed_change_pct: f64,
     /// Track re-solves (eq. 28) that broke strictly increasing times and were
-    /// replaced by the correction of [`smooth_track`].
+    /// replaced by the correction of `smooth_track`.
     pub corrections: usize,
 }
 
@@ -163,7 +163,7 @@ struct PieceNodes {
     times: Vec<f64>,
     /// The piece's duration in the input (seconds; 0 for a sample).
     original_len_s: f64,
-    /// The person's first time (constraints g3/g4, see [`retime_pair`]).
+    /// The person's first time (constraints g3/g4, see `retime_pair`).
     first_s: f64,
     speed_m_s: f64,
 }
@@ -227,7 +227,7 @@ fn piece_nodes(
 /// independent rows, `δ = G_Sᵀ μ` with `(G_S G_Sᵀ) μ = h_S`; the point is kept when
 /// `μ ≥ 0` and every constraint holds, and the best of both signs `σ` wins. g3/g4
 /// are placed on the person's first time rather than the piece's (the paper's), so
-/// carrying the shift to the track's start (the correction of [`smooth_track`])
+/// carrying the shift to the track's start (the correction of `smooth_track`)
 /// never makes a time negative.
 ///
 /// # Units
@@ -429,7 +429,7 @@ fn smooth_track(
     }
 }
 
-/// The correction of [`smooth_track`]: shifts of the fixed nodes carried to the
+/// The correction of `smooth_track`: shifts of the fixed nodes carried to the
 /// ends, linear in the original times between fixed nodes.
 fn anchored(t: &[f64], fixed: &[(usize, f64)]) -> Vec<f64> {
     let mut f = fixed.to_vec();
@@ -612,7 +612,7 @@ fn separate(
 ///
 /// # Formula
 /// Eqs. 20–22 for the separation, eqs. 18, 19 and 23 for the colliding pieces
-/// ([`retime_pair`]), eq. 28 for the whole tracks ([`smooth_track`]).
+/// (`retime_pair`), eq. 28 for the whole tracks (`smooth_track`).
 ///
 /// # Complexity
 /// Per round one [`detect`] and O(n) per retimed person of n samples.
