@@ -358,7 +358,7 @@ pub fn collisions_all_pairs(set: &TrackSet, threshold_m: f64) -> Result<Collisio
 /// Time is cut into slabs of the set's frame step. In each slab every piece present
 /// is boxed (its positions over the slab, grown by half the threshold) and entered
 /// in the cells of a uniform grid the box covers; cells are `threshold + mean box
-/// size` wide. Two pieces closer than the threshold at a common time have
+/// size` wide, and cells are gathered by a counting sort on a hash of their key. Two pieces closer than the threshold at a common time have
 /// overlapping boxes in the slab of that time, so they share a cell; only pieces
 /// sharing a cell with overlapping boxes are compared (eqs. 13–17).
 ///
@@ -431,6 +431,9 @@ pub fn detect(set: &TrackSet, threshold_m: f64) -> Result<Collisions, CollideErr
     let slack = 1e-6 * width + 1e-12 * (t_lo.abs() + t_hi.abs());
     let mut boxes: Vec<(Vec2, Vec2)> = Vec::new();
     let mut entries: Vec<(u64, u32)> = Vec::new();
+    let mut bucket_start: Vec<usize> = Vec::new();
+    let mut bucket_fill: Vec<usize> = Vec::new();
+    let mut sorted: Vec<u32> = Vec::new();
     let mut oversized: Vec<u32> = Vec::new();
     let mut candidates: Vec<u64> = Vec::new();
     for s in 0..n_slabs {
@@ -476,7 +479,28 @@ pub fn detect(set: &TrackSet, threshold_m: f64) -> Result<Collisions, CollideErr
                 }
             }
         }
-        entries.sort_unstable();
+        // Counting sort of the entries into hashed buckets (a bucket may hold
+        // several cells: the box test below drops the extra pairs).
+        let buckets = (2 * entries.len()).next_power_of_two().max(2);
+        let bucket_of =
+            |key: u64| (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & (buckets - 1);
+        bucket_start.clear();
+        bucket_start.resize(buckets + 1, 0);
+        for &(key, _) in &entries {
+            bucket_start[bucket_of(key) + 1] += 1;
+        }
+        for b in 0..buckets {
+            bucket_start[b + 1] += bucket_start[b];
+        }
+        bucket_fill.clear();
+        bucket_fill.extend_from_slice(&bucket_start[..buckets]);
+        sorted.clear();
+        sorted.resize(entries.len(), 0);
+        for &(key, m) in &entries {
+            let b = bucket_of(key);
+            sorted[bucket_fill[b]] = m;
+            bucket_fill[b] += 1;
+        }
         let overlap = |u: usize, v: usize| {
             let (a0, a1) = boxes[u];
             let (b0, b1) = boxes[v];
@@ -489,23 +513,15 @@ pub fn detect(set: &TrackSet, threshold_m: f64) -> Result<Collisions, CollideErr
                 candidates.push(((i as u64) << 32) | j as u64);
             }
         };
-        let mut run = 0;
-        while run < entries.len() {
-            let key = entries[run].0;
-            let mut end = run + 1;
-            while end < entries.len() && entries[end].0 == key {
-                end += 1;
-            }
-            for u in run..end {
-                for v in u + 1..end {
-                    push(
-                        entries[u].1 as usize,
-                        entries[v].1 as usize,
-                        &mut candidates,
-                    );
+        for b in 0..buckets {
+            let bucket = &sorted[bucket_start[b]..bucket_start[b + 1]];
+            for (k, &u) in bucket.iter().enumerate() {
+                for &v in &bucket[k + 1..] {
+                    if u != v {
+                        push(u as usize, v as usize, &mut candidates);
+                    }
                 }
             }
-            run = end;
         }
         for (k, &u) in oversized.iter().enumerate() {
             for v in 0..members.len() {
