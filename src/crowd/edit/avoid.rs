@@ -22,7 +22,7 @@
 //! reached. A pair that retiming cannot separate (both standing still, no feasible
 //! retiming) is reported in [`AvoidReport::remaining`]; nothing panics.
 
-use super::collide::{detect, Approach, CollideError, PairCollision};
+use super::collide::{collisions_involving, detect, Approach, CollideError, PairCollision};
 use super::tracks::{Track, TrackSet};
 use nalgebra::{DMatrix, DVector};
 use std::collections::HashMap;
@@ -626,14 +626,16 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
     let original: Vec<Vec<f64>> = set.tracks.iter().map(|t| t.times_s.clone()).collect();
     let mut collisions = detect(set, params.threshold_m)?;
     let pairs_before = collisions.pair_count();
+    // The colliding pairs as the rounds change them: a round changes only the
+    // people it retimed, so only their pairs are detected again.
+    let mut current: Vec<PairCollision> = collisions.pairs.clone();
     let mut infeasible: Vec<(usize, usize)> = Vec::new();
     let mut iterations = 0;
     let mut retimings = 0;
     let mut corrections = 0;
     let mut orders = HashMap::new();
     while iterations < params.max_iterations {
-        let mut pairs: Vec<PairCollision> = collisions
-            .pairs
+        let mut pairs: Vec<PairCollision> = current
             .iter()
             .filter(|q| !infeasible.contains(&(q.a, q.b)))
             .copied()
@@ -658,8 +660,12 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
                 None => infeasible.push((q.a, q.b)),
             }
         }
-        collisions = detect(set, params.threshold_m)?;
+        let again = collisions_involving(set, params.threshold_m, &touched)?;
+        current.retain(|q| !touched[q.a] && !touched[q.b]);
+        current.extend_from_slice(&again.pairs);
     }
+    // The report's pairs from a full detection.
+    collisions = detect(set, params.threshold_m)?;
     let remaining = collisions
         .pairs
         .iter()

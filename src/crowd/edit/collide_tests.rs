@@ -279,6 +279,17 @@ proptest! {
     }
 
     #[test]
+    fn prop_pairs_involving_marked_people_equal_the_reference(s in crowd(), d in 0.05f64..1.5, mask in any::<u64>()) {
+        // The avoidance loop's incremental detection: the reference's pairs with a
+        // marked person, nothing more.
+        let who: Vec<bool> = (0..s.tracks.len()).map(|k| mask >> (k % 64) & 1 == 1).collect();
+        let part = super::collisions_involving(&s, d, &who).unwrap();
+        let reference = collisions_all_pairs(&s, d).unwrap();
+        let want: Vec<_> = reference.pairs.iter().filter(|p| who[p.a] || who[p.b]).copied().collect();
+        prop_assert_eq!(part.pairs, want);
+    }
+
+    #[test]
     fn prop_minimum_is_no_more_than_any_sampled_distance(s in crowd()) {
         // Every shared sample instant bounds the pair's closest approach from above.
         let c = detect(&s, 10.0).unwrap();
