@@ -312,74 +312,16 @@ fn try_pair(pieces: &[Piece], i: usize, j: usize, d: f64, hits: &mut Vec<Hit>) {
 }
 
 /// The collisions of the people marked in `who` with anyone (pairs in which at
-/// least one is marked), as [`collisions_all_pairs`] finds them, each pair of
-/// people skipped at once when their time spans or their boxes grown by the
-/// threshold do not meet. For the avoidance loop, which changes a few people per
-/// round: the pairs of the others are as they were.
-///
-/// # Complexity
-/// O(m n + the pieces of the candidate pairs) for m marked of n people.
+/// least one is marked), as [`detect`] finds them: the same sweep, candidate
+/// pairs of two unmarked people dropped before their closest approach is
+/// computed. For the avoidance loop, which changes a few people per round: the
+/// pairs of the others are as they were.
 pub(super) fn collisions_involving(
     set: &TrackSet,
     threshold_m: f64,
     who: &[bool],
 ) -> Result<Collisions, CollideError> {
-    check_threshold(threshold_m)?;
-    let (pieces, starts) = pieces(set);
-    let n = set.tracks.len();
-    // Per person: time span and bounding box.
-    let bounds: Vec<(f64, f64, Vec2, Vec2)> = (0..n)
-        .map(|k| {
-            let ps = &pieces[starts[k]..starts[k + 1]];
-            let mut lo = Vec2::repeat(f64::INFINITY);
-            let mut hi = Vec2::repeat(f64::NEG_INFINITY);
-            for p in ps {
-                lo = lo.inf(&p.p0).inf(&p.p1);
-                hi = hi.sup(&p.p0).sup(&p.p1);
-            }
-            let t0 = ps.first().map_or(f64::INFINITY, |p| p.t0);
-            let t1 = ps.iter().map(|p| p.t1).fold(f64::NEG_INFINITY, f64::max);
-            (t0, t1, lo, hi)
-        })
-        .collect();
-    let mut hits = Vec::new();
-    for ka in 0..n {
-        for kb in ka + 1..n {
-            if !(who.get(ka).copied().unwrap_or(false) || who.get(kb).copied().unwrap_or(false)) {
-                continue;
-            }
-            let (a0, a1, alo, ahi) = bounds[ka];
-            let (b0, b1, blo, bhi) = bounds[kb];
-            if a0 > b1 || b0 > a1 {
-                continue;
-            }
-            if alo.x > bhi.x + threshold_m
-                || blo.x > ahi.x + threshold_m
-                || alo.y > bhi.y + threshold_m
-                || blo.y > ahi.y + threshold_m
-            {
-                continue;
-            }
-            let pa = &pieces[starts[ka]..starts[ka + 1]];
-            let pb = &pieces[starts[kb]..starts[kb + 1]];
-            for (ia, a) in pa.iter().enumerate() {
-                let first = pb.partition_point(|b| b.t1 < a.t0);
-                for (ib, b) in pb[first..].iter().enumerate() {
-                    if b.t0 > a.t1 {
-                        break;
-                    }
-                    try_pair(
-                        &pieces,
-                        starts[ka] + ia,
-                        starts[kb] + first + ib,
-                        threshold_m,
-                        &mut hits,
-                    );
-                }
-            }
-        }
-    }
-    Ok(assemble(set, &pieces, hits, threshold_m))
+    detect_among(set, threshold_m, Some(who))
 }
 
 /// Every collision, by comparing every pair of people: for each piece of one, the
@@ -463,6 +405,16 @@ pub fn collisions_all_pairs(set: &TrackSet, threshold_m: f64) -> Result<Collisio
 /// assert!(c.events[0].closest.distance_m < 1e-12);
 /// ```
 pub fn detect(set: &TrackSet, threshold_m: f64) -> Result<Collisions, CollideError> {
+    detect_among(set, threshold_m, None)
+}
+
+/// [`detect`], for pairs with at least one person marked in `who` (every pair
+/// when `None`).
+fn detect_among(
+    set: &TrackSet,
+    threshold_m: f64,
+    who: Option<&[bool]>,
+) -> Result<Collisions, CollideError> {
     check_threshold(threshold_m)?;
     set.validate()?;
     let (pieces, _) = pieces(set);
@@ -577,9 +529,11 @@ pub fn detect(set: &TrackSet, threshold_m: f64) -> Result<Collisions, CollideErr
             let (b0, b1) = boxes[v];
             a0.x <= b1.x && b0.x <= a1.x && a0.y <= b1.y && b0.y <= a1.y
         };
+        let marked = |k: u32| who.is_none_or(|w| w.get(k as usize).copied().unwrap_or(false));
         let push = |u: usize, v: usize, candidates: &mut Vec<u64>| {
             let (i, j) = (members[u], members[v]);
-            if pieces[i as usize].track != pieces[j as usize].track && overlap(u, v) {
+            let (ta, tb) = (pieces[i as usize].track, pieces[j as usize].track);
+            if ta != tb && (marked(ta) || marked(tb)) && overlap(u, v) {
                 let (i, j) = (i.min(j), i.max(j));
                 candidates.push(((i as u64) << 32) | j as u64);
             }
