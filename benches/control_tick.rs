@@ -4,15 +4,23 @@
 //! Also one formation switch (`formation_switch/{prepare,apply}/N`) and one resize
 //! (`resize/{prepare,apply}/N`), each in its two halves.
 //!
+//! In edit mode (`edit_tick/*`), the tick with 200 loaded people × 100 samples
+//! playing: idle, and while a one-finger drag holds their group. The drag's jobs
+//! (cage and deformation), which the daemon runs on the formation thread, are taken
+//! with `take_edit_job`, run and applied outside the measured time.
+//!
 //! Cancellation polls (`crowd::assign::Cancel`) are on in every solve: the
 //! figures include them (`Cancel::NEVER` is polled the same way).
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use crowdtouch::config::Config;
 use crowdtouch::crowd::assign::Cancel;
+use crowdtouch::crowd::edit::{Track, TrackSet};
 use crowdtouch::engine::Engine;
+use crowdtouch::geom::Vec2;
+use crowdtouch::vocab::{Command, FormationMethod, Micros};
 use crowdtouch::vocab::{Contact, ContactFlags, ContactId, TouchFrame};
-use crowdtouch::vocab::{FormationMethod, Micros};
+use std::time::{Duration, Instant};
 
 const PERIOD_US: u64 = 8_333;
 
@@ -153,5 +161,124 @@ fn resize(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, control_tick, formation_switch, resize);
+/// 200 people in a 20 × 10 block 0.6 m apart (one group), walking +x at 0.1 m/s,
+/// 100 samples 0.1 s apart, on the default 16 × 9 m world.
+fn edit_tracks() -> TrackSet {
+    let times: Vec<f64> = (0..100).map(|k| k as f64 * 0.1).collect();
+    let tracks = (0..200u64)
+        .map(|i| {
+            let p0 = edit_person(i);
+            let points = times.iter().map(|t| p0 + Vec2::new(0.1 * t, 0.0)).collect();
+            Track::linked(i, points, times.clone())
+        })
+        .collect();
+    TrackSet {
+        tracks,
+        step_s: 0.1,
+    }
+}
+
+/// Where person `i` of [`edit_tracks`] starts (m).
+fn edit_person(i: u64) -> Vec2 {
+    Vec2::new(2.0 + 0.6 * (i % 20) as f64, 1.5 + 0.6 * (i / 20) as f64)
+}
+
+/// A one-finger frame at world position `p` (default world 16 × 9 m).
+fn edit_frame(k: u64, p: Vec2, flags: ContactFlags) -> TouchFrame {
+    let mut f = TouchFrame::new(Micros(k * PERIOD_US));
+    let _ = f.push(Contact {
+        id: ContactId(1),
+        x: (p.x / 16.0) as f32,
+        y: (p.y / 9.0) as f32,
+        flags,
+        ..Contact::default()
+    });
+    f
+}
+
+/// Runs and applies the engine's pending edit job, as the formation thread would.
+fn run_edit_job(engine: &mut Engine, now: Micros) -> bool {
+    match engine.take_edit_job() {
+        Some(job) => {
+            engine.apply_edit(job.run(), now);
+            true
+        }
+        None => false,
+    }
+}
+
+fn edit_tick(c: &mut Criterion) {
+    let mut g = c.benchmark_group("control_tick");
+    let cfg = Config::embedded_default();
+    let loaded = || {
+        let mut engine = Engine::new(&cfg, None, false);
+        // Edit jobs to the outbox, as for the daemon's formation thread.
+        engine.set_switch_worker(true);
+        drop(engine.tick(Micros(PERIOD_US)));
+        engine.clear_events();
+        engine.load_tracks(edit_tracks(), "bench", Micros(PERIOD_US));
+        drop(engine.tick(Micros(2 * PERIOD_US)));
+        engine.clear_events();
+        engine
+    };
+
+    let mut engine = loaded();
+    let mut k = 2u64;
+    g.bench_function("edit_200_tracks_idle", |b| {
+        b.iter(|| {
+            k += 1;
+            let out = engine.tick(Micros(k * PERIOD_US));
+            black_box(&out.snapshot);
+            drop(out);
+            engine.clear_events();
+        })
+    });
+
+    // Paused at t = 0 so the finger lands on person 105 (middle of the block).
+    let mut engine = loaded();
+    engine
+        .command(&Command::Pause, Micros(3 * PERIOD_US))
+        .expect("pause");
+    let mut k = 3u64;
+    drop(engine.tick(Micros(k * PERIOD_US)));
+    engine.clear_events();
+    let held = edit_person(105);
+    let at = |k: u64| {
+        // Back and forth within ±0.5 m, so the drag keeps moving.
+        let phase = (k % 120) as f64 / 120.0;
+        held + Vec2::new(0.0, 0.5 - (2.0 * phase - 1.0).abs())
+    };
+    k += 1;
+    engine.push_frame(&edit_frame(k, at(k), ContactFlags::DOWN));
+    let mut jobs = 0;
+    for _ in 0..30 {
+        drop(engine.tick(Micros(k * PERIOD_US)));
+        engine.clear_events();
+        jobs += usize::from(run_edit_job(&mut engine, Micros(k * PERIOD_US)));
+        k += 1;
+        engine.push_frame(&edit_frame(k, at(k), ContactFlags::NONE));
+    }
+    assert!(jobs > 1, "the drag grabs the group and makes edit jobs");
+    g.bench_function("edit_200_tracks_dragging", |b| {
+        b.iter_custom(|iters| {
+            let mut timed = Duration::ZERO;
+            for _ in 0..iters {
+                k += 1;
+                let f = edit_frame(k, at(k), ContactFlags::NONE);
+                let t0 = Instant::now();
+                engine.push_frame(black_box(&f));
+                let out = engine.tick(Micros(k * PERIOD_US));
+                black_box(&out.snapshot);
+                drop(out);
+                timed += t0.elapsed();
+                engine.clear_events();
+                run_edit_job(&mut engine, Micros(k * PERIOD_US));
+            }
+            timed
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, control_tick, edit_tick, formation_switch, resize);
 criterion_main!(benches);

@@ -646,6 +646,48 @@ fn formations_lists_and_draws_every_shape_of_the_config() {
 }
 
 #[test]
+fn bench_edit_reports_cage_detection_and_tick_rows() {
+    let out = bin()
+        .args([
+            "bench",
+            "edit",
+            "--people",
+            "40",
+            "--n",
+            "50",
+            "--repeats",
+            "2",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert_success(&out);
+    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rows = rows.as_array().unwrap();
+    let names: Vec<&str> = rows
+        .iter()
+        .map(|r| r["workload"].as_str().unwrap())
+        .collect();
+    for want in [
+        "edit cage new + first drag",
+        "edit drag + apply",
+        "edit detect 50 walkers",
+        "edit detect crowds_zara01",
+        "edit detect students001",
+        "edit tick 40 tracks dragging",
+    ] {
+        assert!(names.contains(&want), "no row {want}: {names:?}");
+    }
+    for r in rows {
+        for key in ["samples", "p50_us", "p99_us", "max_us", "note"] {
+            assert!(r.get(key).is_some(), "{key} missing in {r}");
+        }
+        assert!(r["samples"].as_u64().unwrap() > 0, "{r}");
+        assert!(r["p50_us"].as_f64().unwrap() <= r["max_us"].as_f64().unwrap());
+    }
+}
+
+#[test]
 fn bench_assign_reports_quantiles_and_certificates() {
     let dir = tempfile::tempdir().unwrap();
     let dump = dir.path().join("instances.json");

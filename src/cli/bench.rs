@@ -16,6 +16,7 @@ use std::time::Instant;
 
 mod assign;
 mod e2e;
+mod edit;
 mod gesture;
 mod open_space;
 mod shutdown;
@@ -53,6 +54,13 @@ pub enum Workload {
     /// its pruning counts), their neighbours' motions blended and synthesised for
     /// `--agents` agents (assignment included and alone). Not part of `all`.
     Gesture,
+    /// Crowd motion editing against the budgets: a cage built plus its first
+    /// drag and each later drag on `--people` tracks × 100 samples; collision
+    /// detection on `--n` random walkers × 200 samples and on the UCY files of
+    /// `tests/fixtures/crowd/`; the engine's tick in edit mode with `--people` tracks
+    /// while a finger drags them (`--repeats` of each, ten times as many ticks). Not
+    /// part of `all`.
+    Edit,
 }
 
 /// Arguments of `bench`.
@@ -82,9 +90,13 @@ pub struct BenchArgs {
     /// happen once per row.
     #[arg(long, default_value_t = 60.0)]
     period_seconds: f64,
-    /// Agents and goals of the assignment workload.
+    /// Agents and goals of the assignment workload; random walkers of the edit
+    /// workload's collision detection.
     #[arg(long, default_value_t = 1000)]
     n: usize,
+    /// Edit workload: tracks of the cage and the tick (at least 3).
+    #[arg(long, default_value_t = 200)]
+    people: usize,
     /// Assignment workload: warm solves over a chain of frames in which every goal
     /// moves by up to 2 % of the extent (else cold solves of fresh instances).
     #[arg(long)]
@@ -243,6 +255,14 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             })?);
         }
     }
+    if a.workload == Workload::Edit {
+        anyhow::ensure!(a.people >= 3, "--people must be at least 3");
+        rows.extend(edit::edit(&edit::EditRun {
+            people: a.people,
+            walkers: a.n,
+            repeats: a.repeats,
+        })?);
+    }
     if a.workload == Workload::Fmm {
         rows.push(fmm(a.grid, a.obstacles, a.first_order, a.repeats)?);
     }
@@ -265,7 +285,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         outln!("{}", serde_json::to_string_pretty(&rows)?)?;
     } else {
         outln!(
-            "{:<28} {:>8} {:>10} {:>10} {:>10}  note",
+            "{:<34} {:>8} {:>10} {:>10} {:>10}  note",
             "workload",
             "samples",
             "p50 µs",
@@ -274,7 +294,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         )?;
         for r in &rows {
             outln!(
-                "{:<28} {:>8} {:>10.1} {:>10.1} {:>10.1}  {}",
+                "{:<34} {:>8} {:>10.1} {:>10.1} {:>10.1}  {}",
                 r.workload,
                 r.samples,
                 r.p50_us,

@@ -46,7 +46,7 @@ use super::error::EditError;
 use super::hull::{concave_hull, Hull, HullParams};
 use super::select::{point_in_polygon, SampleRef, Selection};
 use super::tracks::TrackSet;
-use crate::crowd::mesh::mean_value_coordinates;
+use crate::crowd::mesh::{MVC_EDGE_EPS, MVC_VERTEX_EPS};
 use crate::geom::{cross, Rect, Vec2};
 use nalgebra::{DMatrix, Dyn, LU};
 use spade::{DelaunayTriangulation, Point2, Triangulation};
@@ -169,6 +169,91 @@ pub struct Cage {
     b_hull: DMatrix<f64>,
 }
 
+/// Mean value coordinates w.r.t. one polygon, with the per-polygon checks done once:
+/// the same arithmetic as [`crate::crowd::mesh::mean_value_coordinates`] (each `‖v_i − p‖` computed once and
+/// shared by the vertex test and both adjacent edges), so the same coordinates.
+struct HullMvc<'a> {
+    poly: &'a [Vec2],
+    /// `MVC_VERTEX_EPS` × the polygon's bounding-box diagonal.
+    vertex_eps: f64,
+}
+
+impl<'a> HullMvc<'a> {
+    /// `None` when `mean_value_coordinates` would fail for every point: fewer than
+    /// three vertices, a non-finite vertex, or a degenerate bounding box.
+    fn new(poly: &'a [Vec2]) -> Option<HullMvc<'a>> {
+        if poly.len() < 3 || !poly.iter().all(|v| finite(*v)) {
+            return None;
+        }
+        let (mut lo, mut hi) = (poly[0], poly[0]);
+        for v in poly {
+            lo = lo.inf(v);
+            hi = hi.sup(v);
+        }
+        let scale = (hi - lo).norm();
+        if scale.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            return None;
+        }
+        Some(HullMvc {
+            poly,
+            vertex_eps: MVC_VERTEX_EPS * scale,
+        })
+    }
+
+    /// The coordinates of `p` into `out` (`r` is scratch, both of the polygon's
+    /// length); `None` where `mean_value_coordinates` returns an error.
+    fn coordinates(&self, p: Vec2, r: &mut [f64], out: &mut [f64]) -> Option<()> {
+        let poly = self.poly;
+        let n = poly.len();
+        out.fill(0.0);
+        if !finite(p) {
+            return None;
+        }
+        for (ri, v) in r.iter_mut().zip(poly) {
+            *ri = (v - p).norm();
+        }
+        if let Some(i) = r.iter().position(|&ri| ri <= self.vertex_eps) {
+            out[i] = 1.0;
+            return Some(());
+        }
+        let mut tan_prev = 0.0;
+        for i in 0..n {
+            let j = if i + 1 == n { 0 } else { i + 1 };
+            let (di, dj) = (poly[i] - p, poly[j] - p);
+            let (ri, rj) = (r[i], r[j]);
+            let a = cross(di, dj);
+            let d = di.dot(&dj);
+            let rr = ri * rj;
+            if a.abs() <= MVC_EDGE_EPS * rr && d < 0.0 {
+                out.fill(0.0);
+                out[i] = rj / (ri + rj);
+                out[j] = ri / (ri + rj);
+                return Some(());
+            }
+            let t = if d >= 0.0 { a / (rr + d) } else { (rr - d) / a };
+            out[i] = t / ri;
+            if i > 0 {
+                out[i] += tan_prev / ri;
+            }
+            tan_prev = t;
+        }
+        out[0] += tan_prev / r[0];
+        let sum: f64 = out.iter().sum();
+        if !(sum.is_finite() && sum != 0.0) {
+            out.fill(0.0);
+            return None;
+        }
+        for w in out.iter_mut() {
+            *w /= sum;
+        }
+        if !out.iter().all(|w| w.is_finite()) {
+            out.fill(0.0);
+            return None;
+        }
+        Some(())
+    }
+}
+
 fn finite(p: Vec2) -> bool {
     p.x.is_finite() && p.y.is_finite()
 }
@@ -189,16 +274,28 @@ impl Cage {
         let hull = concave_hull(&rest_points, &params.hull)?;
         let n = hull.vertices.len();
         let big_n = rest_points.len();
+        let mvc = HullMvc::new(&hull.vertices).ok_or(EditError::DegenerateHull {
+            reason: "mean value coordinates undefined for a selected sample",
+        })?;
+        // Rows are computed a block of samples at a time into a small row-major buffer
+        // and copied into the column-major matrix column by column.
+        const BLOCK: usize = 32;
         let mut t_all = DMatrix::zeros(big_n, n);
-        let mut row = vec![0.0; n];
-        for (i, p) in rest_points.iter().enumerate() {
-            mean_value_coordinates(&hull.vertices, *p, &mut row).map_err(|_| {
-                EditError::DegenerateHull {
-                    reason: "mean value coordinates undefined for a selected sample",
+        let mut rows = vec![0.0; BLOCK * n];
+        let mut r = vec![0.0; n];
+        for (b, block) in rest_points.chunks(BLOCK).enumerate() {
+            for (p, row) in block.iter().zip(rows.chunks_exact_mut(n)) {
+                mvc.coordinates(*p, &mut r, row)
+                    .ok_or(EditError::DegenerateHull {
+                        reason: "mean value coordinates undefined for a selected sample",
+                    })?;
+            }
+            let i0 = b * BLOCK;
+            for j in 0..n {
+                let col = &mut t_all.column_mut(j);
+                for k in 0..block.len() {
+                    col[i0 + k] = rows[k * n + j];
                 }
-            })?;
-            for (j, w) in row.iter().enumerate() {
-                t_all[(i, j)] = *w;
             }
         }
         // Mesh: hull vertices then the representatives, duplicates skipped.
@@ -852,6 +949,34 @@ mod tests {
         let tm = c.mesh_matrix();
         for i in 0..c.hull().len() {
             assert_eq!(tm[(i, i)], 1.0);
+        }
+    }
+
+    #[test]
+    fn sample_matrix_equals_mean_value_coordinates_exactly() {
+        let set = band(8, 25);
+        let c = cage(&set);
+        let t = c.sample_matrix();
+        let mut row = vec![0.0; c.hull().len()];
+        for i in 0..t.nrows() {
+            crate::crowd::mesh::mean_value_coordinates(c.hull(), c.rest_sample(i), &mut row)
+                .unwrap();
+            for (j, w) in row.iter().enumerate() {
+                assert_eq!(t[(i, j)].to_bits(), w.to_bits(), "row {i} column {j}");
+            }
+        }
+        // On a vertex, on an edge, and outside.
+        let mvc = HullMvc::new(c.hull()).unwrap();
+        let (v0, v1) = (c.hull()[0], c.hull()[1]);
+        let mut r = vec![0.0; c.hull().len()];
+        let mut fast = vec![0.0; c.hull().len()];
+        for p in [v0, (v0 + v1) / 2.0, v0 + (v0 - v1) * 3.0] {
+            let a = crate::crowd::mesh::mean_value_coordinates(c.hull(), p, &mut row);
+            let b = mvc.coordinates(p, &mut r, &mut fast);
+            assert_eq!(a.is_ok(), b.is_some());
+            for (x, y) in row.iter().zip(&fast) {
+                assert_eq!(x.to_bits(), y.to_bits());
+            }
         }
     }
 
