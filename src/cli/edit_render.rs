@@ -1,5 +1,6 @@
 //! `crowdtouch edit render`: what `edit apply` does, drawn as an SVG. The tracks
-//! before (thin, light grey) and after (coloured by time, with the time scale),
+//! before (thin, light grey) and after (coloured by time, with the time scale;
+//! people the edit left as they were faded),
 //! each drag's cage at rest (dashed) and deformed (solid) over its deformation mesh,
 //! the dragged handle's arrow, the fixed places, collisions before (hollow red rings)
 //! and after (filled red), the scene's obstacles, axes in metres, a title and a
@@ -257,7 +258,7 @@ pub fn picture(o: &Outcome, threshold_m: f64, at_s: &[f64], title: &str) -> Stri
     tracks_before(&mut s, o, &w);
     cages(&mut s, o, &w);
     let (t0, t1) = time_range(&o.after);
-    tracks_after(&mut s, &o.after, t0, t1, &w);
+    tracks_after(&mut s, o, t0, t1, &w);
     instants(&mut s, o, at_s, t0, t1, k);
     drags_and_fixes(&mut s, o, k, &w);
     collisions(&mut s, o, k, &w);
@@ -362,12 +363,18 @@ fn tracks_before(s: &mut String, o: &Outcome, w: &impl Fn(f64) -> String) {
     s.push_str("</g>\n");
 }
 
-/// Tracks after, split into bands of the time scale.
-fn tracks_after(s: &mut String, set: &TrackSet, t0: f64, t1: f64, w: &impl Fn(f64) -> String) {
+/// Tracks after, split into bands of the time scale; tracks the edit did not move
+/// in space are faded.
+fn tracks_after(s: &mut String, o: &Outcome, t0: f64, t1: f64, w: &impl Fn(f64) -> String) {
+    let set = &o.after;
     let stride = stride_for(set);
     let band = |t: f64| (((t - t0) / (t1 - t0) * TIME_BANDS as f64) as usize).min(TIME_BANDS - 1);
-    let mut by_band: Vec<String> = vec![String::new(); TIME_BANDS];
-    for t in &set.tracks {
+    let mut moved: Vec<String> = vec![String::new(); TIME_BANDS];
+    let mut still: Vec<String> = vec![String::new(); TIME_BANDS];
+    for (i, t) in set.tracks.iter().enumerate() {
+        let same = o.before.tracks.get(i).map(|b| &b.points) == Some(&t.points)
+            && o.before.tracks[i].times_s == t.times_s;
+        let by_band = if same { &mut still } else { &mut moved };
         for r in runs(t, stride(t)) {
             // Pieces of the run within one band; each starts where the last ended.
             let mut piece: Vec<usize> = Vec::new();
@@ -395,14 +402,20 @@ fn tracks_after(s: &mut String, set: &TrackSet, t0: f64, t1: f64, w: &impl Fn(f6
         r##"<g id="after" fill="none" stroke-width="{}">"##,
         w(1.6)
     );
-    for (b, body) in by_band.iter().enumerate() {
-        if body.is_empty() {
+    for (bands, attrs) in [(&still, r#" opacity="0.3""#), (&moved, "")] {
+        if bands.iter().all(|b| b.is_empty()) {
             continue;
         }
-        let f = (b as f64 + 0.5) / TIME_BANDS as f64;
-        let _ = write!(s, r##"<g stroke="{}">"##, time_colour(f));
-        s.push('\n');
-        s.push_str(body);
+        let _ = writeln!(s, "<g{attrs}>");
+        for (b, body) in bands.iter().enumerate() {
+            if body.is_empty() {
+                continue;
+            }
+            let f = (b as f64 + 0.5) / TIME_BANDS as f64;
+            let _ = writeln!(s, r##"<g stroke="{}">"##, time_colour(f));
+            s.push_str(body);
+            s.push_str("</g>\n");
+        }
         s.push_str("</g>\n");
     }
     s.push_str("</g>\n");
@@ -727,7 +740,7 @@ fn legend(s: &mut String, o: &Outcome, threshold_m: f64, t0: f64, t1: f64, at_s:
             r##"<g transform="translate({at:.1} 0)">{symbol}<text x="24" y="{:.1}" font-size="12">{text}</text></g>"##,
             y + 4.0
         );
-        at += 34.0 + 7.0 * text.chars().count() as f64;
+        at += 32.0 + 6.7 * text.chars().count() as f64;
     };
     let line = |x: f64, attrs: &str| {
         format!(
@@ -815,14 +828,14 @@ fn legend(s: &mut String, o: &Outcome, threshold_m: f64, t0: f64, t1: f64, at_s:
         .as_ref()
         .map(|(_, r)| {
             format!(
-                "; samples inside obstacles {} before, {} after",
+                "; samples in obstacles: {} before, {} after",
                 r.samples_inside_before, r.samples_inside_after
             )
         })
         .unwrap_or_default();
     let _ = writeln!(
         s,
-        r##"<text id="summary" x="{x0:.1}" y="{:.1}">{} people, {} drag(s){retimed}; pairs closer than {} m: {} before, {} after; speeds {:.0}–{:.0} % of the originals{inside}</text>"##,
+        r##"<text id="summary" x="{x0:.1}" y="{:.1}" font-size="12">{} people, {} drag(s){retimed}; pairs closer than {} m: {} before, {} after; speeds {:.0}–{:.0} % of the input{inside}</text>"##,
         top + 56.0,
         o.after.tracks.len(),
         o.report.drags.len(),
