@@ -43,4 +43,4 @@ r crossing.jsonl --avoid-collisions --threshold 0.4 --at 3.5 \
 r corridor-group.jsonl --avoid-obstacles corridor --at 6 \
     --title "(e) a group wider than the passage kept out of the walls (section 4.2)" -o e-avoid-obstacles.svg
 r "$root/tests/fixtures/crowd/crowds_zara01.txt" --ops f-zara.ron \
-    --title "(f) UCY zara01: the people of 100-130 s dragged by (1, 1) m" -o f-zara.svg
+    --title "(f) UCY zara01: the samples of 100-130 s dragged from (5, 6) to (6, 7)" -o f-zara.svg
