@@ -7,6 +7,8 @@
 mod edit_apply;
 #[path = "edit_check.rs"]
 mod edit_check;
+#[path = "edit_render.rs"]
+mod edit_render;
 
 use anyhow::{anyhow, Result};
 use clap::{Subcommand, ValueEnum};
@@ -24,6 +26,10 @@ pub enum EditCmd {
     /// by retiming; write the result to `-o` and report collisions before and
     /// after, the speed change and each drag's hull-shape error.
     Apply(edit_apply::ApplyArgs),
+    /// Draw what `edit apply` does as an SVG: the tracks before and after (coloured
+    /// by time), each drag's cage at rest and deformed with its mesh, the drag
+    /// arrows, fixed places, collisions before and after, the scene's obstacles.
+    Render(edit_render::RenderArgs),
     /// Tracks of a group walking a path through a scene in rows (the paper's test
     /// crowd, section 5.2).
     Path(super::edit_path::PathArgs),
@@ -82,6 +88,7 @@ pub fn edit(cmd: EditCmd) -> Result<()> {
     match cmd {
         EditCmd::Check(a) => check(a),
         EditCmd::Apply(a) => edit_apply::apply(a),
+        EditCmd::Render(a) => edit_render::render(a),
         EditCmd::Path(a) => super::edit_path::path(a),
     }
 }

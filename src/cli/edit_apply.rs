@@ -10,10 +10,10 @@ use anyhow::{anyhow, bail, Context, Result};
 use crowdtouch::crowd::edit::io::{self, EthOptions, Format, ReadOptions};
 use crowdtouch::crowd::edit::{
     avoid, avoid_obstacles, correct_speeds, detect, parse_script, run_script, ApplyParams,
-    ApplyReport, AvoidParams, AvoidReport, Cage, CageParams, ObstacleParams, ObstacleReport,
-    ScriptError, Selection, SelectionQuery, TrackSet,
+    ApplyReport, AvoidParams, AvoidReport, Cage, CageParams, Collisions, ObstacleParams,
+    ObstacleReport, Script, ScriptError, Selection, SelectionQuery, TrackSet,
 };
-use crowdtouch::crowd::environment::{load_scene, DEFAULT_AGENT_RADIUS_M};
+use crowdtouch::crowd::environment::{load_scene, Scene, DEFAULT_AGENT_RADIUS_M};
 use crowdtouch::geom::Rect;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -21,15 +21,17 @@ use std::path::{Path, PathBuf};
 /// The largest edit script read (bytes).
 pub const MAX_SCRIPT_BYTES: u64 = 16 << 20;
 
-/// `edit apply`.
+/// What `edit apply` and `edit render` both run: the tracks, the script and the
+/// optional avoidance steps.
 #[derive(clap::Args, Debug)]
-pub struct ApplyArgs {
+pub struct EditArgs {
     /// The tracks.
     #[command(flatten)]
     pub tracks: TrackFileArgs,
-    /// The edit script (RON: `(ops: [Select(...), Fix(...), Drag(...), Retime(...)])`).
+    /// The edit script (RON: `(ops: [Select(...), Fix(...), Drag(...), Retime(...)])`);
+    /// without it only the avoidance steps asked for run.
     #[arg(long)]
-    pub ops: PathBuf,
+    pub ops: Option<PathBuf>,
     /// After the script, keep the crowd out of this scene's obstacles by adjusting
     /// the cage of every person (section 4.2); a file or a shipped scene's name.
     #[arg(long, value_name = "SCENE")]
@@ -44,6 +46,14 @@ pub struct ApplyArgs {
     /// box grown by half its size and at least 10 m.
     #[arg(long, value_parser = parse_rect)]
     pub world: Option<Rect>,
+}
+
+/// `edit apply`.
+#[derive(clap::Args, Debug)]
+pub struct ApplyArgs {
+    /// The tracks, the script and the avoidance steps.
+    #[command(flatten)]
+    pub edit: EditArgs,
     /// Where to write the edited tracks (format from the extension: `.jsonl`,
     /// `.csv`, `.txt`/`.eth`).
     #[arg(long, short)]
@@ -56,25 +66,58 @@ pub struct ApplyArgs {
     pub json: bool,
 }
 
-/// Runs `edit apply`.
-pub fn apply(a: ApplyArgs) -> Result<()> {
+/// The result of [`run`]: the tracks before and after and what each step did.
+pub struct Outcome {
+    /// The tracks as read.
+    pub before: TrackSet,
+    /// The tracks after the script and the avoidance steps.
+    pub after: TrackSet,
+    /// The input file's format.
+    pub format: Format,
+    /// The script as parsed.
+    pub script: Script,
+    /// What the script did.
+    pub report: ApplyReport,
+    /// The scene of `--avoid-obstacles` and what keeping out of it did.
+    pub obstacles: Option<(Scene, ObstacleReport)>,
+    /// What collision avoidance did.
+    pub avoided: Option<AvoidReport>,
+    /// Collisions of the input.
+    pub collisions_before: Collisions,
+    /// Collisions of the result.
+    pub collisions_after: Collisions,
+    /// Slowest and fastest segment relative to the input ([`speed_change`]).
+    pub speed: (f64, f64),
+}
+
+/// Loads the tracks, runs the script, then obstacle and collision avoidance as
+/// asked; errors in the script name `file:line`.
+pub fn run(a: &EditArgs) -> Result<Outcome> {
     if !(a.threshold.is_finite() && a.threshold > 0.0) {
         bail!(
             "--threshold must be a positive number of metres, not {}",
             a.threshold
         );
     }
-    if a.output.exists() && !a.force {
-        bail!("{} exists; give --force to replace it", a.output.display());
-    }
     let (mut set, format) = load(&a.tracks)?;
-    let shown = a.ops.display().to_string();
-    let text =
-        crowdtouch::located::read_capped(&a.ops, MAX_SCRIPT_BYTES).map_err(|e| anyhow!("{e}"))?;
-    let script = parse_script(&text).map_err(|e| match e {
-        ScriptError::Syntax(i) => anyhow!("{shown}:{}:{}: {}", i.line, i.column, located_what(&i)),
-        ScriptError::Op { line, what } => anyhow!("{shown}:{line}: {what}"),
-    })?;
+    let shown = a
+        .ops
+        .as_ref()
+        .map(|p| p.display().to_string())
+        .unwrap_or_default();
+    let script = match &a.ops {
+        Some(ops) => {
+            let text = crowdtouch::located::read_capped(ops, MAX_SCRIPT_BYTES)
+                .map_err(|e| anyhow!("{e}"))?;
+            parse_script(&text).map_err(|e| match e {
+                ScriptError::Syntax(i) => {
+                    anyhow!("{shown}:{}:{}: {}", i.line, i.column, located_what(&i))
+                }
+                ScriptError::Op { line, what } => anyhow!("{shown}:{line}: {what}"),
+            })?
+        }
+        None => Script { ops: Vec::new() },
+    };
     let before = set.clone();
     let world = a.world.unwrap_or_else(|| default_world(&set));
     let params = ApplyParams {
@@ -95,30 +138,63 @@ pub fn apply(a: ApplyArgs) -> Result<()> {
             threshold_m: a.threshold,
             ..AvoidParams::default()
         };
-        let r = avoid(&mut set, &params).map_err(|e| anyhow!("collision avoidance: {e}"))?;
-        Some(avoid_json(&r))
+        Some(avoid(&mut set, &params).map_err(|e| anyhow!("collision avoidance: {e}"))?)
     } else {
         None
     };
     let collisions_after = detect(&set, a.threshold).map_err(|e| anyhow!("{e}"))?;
+    let speed = speed_change(&before, &set);
+    Ok(Outcome {
+        before,
+        after: set,
+        format,
+        script,
+        report,
+        obstacles,
+        avoided,
+        collisions_before,
+        collisions_after,
+        speed,
+    })
+}
+
+/// Runs `edit apply`.
+pub fn apply(a: ApplyArgs) -> Result<()> {
+    if a.output.exists() && !a.force {
+        bail!("{} exists; give --force to replace it", a.output.display());
+    }
+    let Outcome {
+        before: _,
+        after: set,
+        format,
+        script,
+        report,
+        obstacles,
+        avoided,
+        collisions_before,
+        collisions_after,
+        speed,
+    } = run(&a.edit)?;
+    let obstacles = obstacles.map(|(_, r)| r);
+    let avoided = avoided.as_ref().map(avoid_json);
+    let e = &a.edit;
     let out_format = output_format(&a.output).unwrap_or(format);
     let opts = ReadOptions {
         eth: EthOptions {
-            frame_rate_hz: a.tracks.frame_rate,
-            frame_step: a.tracks.frame_step,
+            frame_rate_hz: e.tracks.frame_rate,
+            frame_step: e.tracks.frame_step,
         },
-        csv_step_s: a.tracks.step,
+        csv_step_s: e.tracks.step,
     };
     io::write_tracks(&set, &a.output, out_format, &opts, a.force)
         .map_err(|e| anyhow!(e))
         .with_context(|| "writing the edited tracks")?;
-    let speed = speed_change(&before, &set);
     let j = json!({
-        "file": a.tracks.file.display().to_string(),
+        "file": e.tracks.file.display().to_string(),
         "output": a.output.display().to_string(),
         "people": set.tracks.len(),
         "samples": set.samples(),
-        "threshold_m": a.threshold,
+        "threshold_m": e.threshold,
         "ops": script.ops.len(),
         "drags": drags_json(&report),
         "retimes": report.retimes,
@@ -192,7 +268,7 @@ pub fn apply(a: ApplyArgs) -> Result<()> {
     }
     outln!(
         "  pairs closer than {} m: {} before, {} after; speeds {:.0}–{:.0} % of the originals",
-        a.threshold,
+        e.threshold,
         collisions_before.pair_count(),
         collisions_after.pair_count(),
         100.0 * speed.0,
@@ -253,7 +329,11 @@ fn output_format(p: &Path) -> Option<Format> {
 
 /// The cage of every person kept out of the scene's obstacles (section 4.2), then
 /// speeds corrected (eq. 9).
-fn keep_out_of_obstacles(set: &mut TrackSet, scene: &Path, world: Rect) -> Result<ObstacleReport> {
+fn keep_out_of_obstacles(
+    set: &mut TrackSet,
+    scene: &Path,
+    world: Rect,
+) -> Result<(Scene, ObstacleReport)> {
     let file = super::super::edit_path::scene_file(scene);
     let scene = load_scene(&file, DEFAULT_AGENT_RADIUS_M).map_err(|e| anyhow!("{e}"))?;
     let sel = Selection::select(set, &SelectionQuery::default())
@@ -274,7 +354,7 @@ fn keep_out_of_obstacles(set: &mut TrackSet, scene: &Path, world: Rect) -> Resul
     cage.apply(set).map_err(|e| anyhow!("{e}"))?;
     let touched: Vec<usize> = (0..set.tracks.len()).collect();
     correct_speeds(&before, set, &touched).map_err(|e| anyhow!("{e}"))?;
-    Ok(report)
+    Ok((scene, report))
 }
 
 fn avoid_json(r: &AvoidReport) -> Value {
