@@ -137,6 +137,12 @@ pub struct BenchArgs {
     /// (the `--gestures` input, recognition off): the latency during transforms.
     #[arg(long)]
     transform: Option<String>,
+    /// End-to-end workload: the daemon in edit mode with this many people (a
+    /// block over the crowd's area walking slowly, 100 samples each) whose tracks
+    /// the shipped recordings' fingers grab, drag and release: the latency while
+    /// tracks are edited.
+    #[arg(long)]
+    edit: Option<usize>,
     /// Fast-marching workload: cells per side of the square grid.
     #[arg(long, default_value_t = 256)]
     grid: usize,
@@ -279,6 +285,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             fields: a.fields,
             gestures: a.gestures,
             transform: a.transform.as_deref(),
+            edit: a.edit,
         })?);
     }
     if a.json {

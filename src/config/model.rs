@@ -424,4 +424,22 @@ impl Config {
     pub fn set_loaded_scene(&mut self, scene: Option<Arc<Scene>>) {
         self.loaded_scene = scene;
     }
+
+    /// Starts in edit mode with `tracks` (tests and tools that build tracks in
+    /// memory; `source` names them in messages); `None` leaves edit mode off.
+    pub fn set_edit_tracks(&mut self, tracks: Option<(Arc<TrackSet>, PathBuf)>, threshold_m: f64) {
+        match tracks {
+            Some((set, source)) => {
+                self.edit = Some(EditConfig {
+                    tracks: source,
+                    threshold_m,
+                });
+                self.loaded_tracks = Some(set);
+            }
+            None => {
+                self.edit = None;
+                self.loaded_tracks = None;
+            }
+        }
+    }
 }

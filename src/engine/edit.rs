@@ -39,6 +39,11 @@ use crate::gesture::segment::Segment;
 use crate::vocab::{AgentView, CollisionView, EditView, Micros, TrackView, TracksView};
 use std::sync::Arc;
 
+/// While fingers hold people, their `tracks` message goes out at most this often
+/// (µs): a drag is solved faster than renderers need it, and each message carries
+/// every sample of the held people.
+pub const HELD_TRACKS_PERIOD_US: u64 = 100_000;
+
 /// How far ahead of the play time a `contract` or `expand` gesture retimes (s).
 pub const GESTURE_RETIME_S: f64 = 5.0;
 /// A `contract` gesture plays that stretch in this fraction of its time (`expand`
@@ -698,7 +703,20 @@ impl Engine {
     }
 
     /// The `tracks` message of this tick, if the tracks changed.
-    pub(super) fn take_tracks(&mut self) -> Option<Arc<TracksView>> {
+    ///
+    /// While fingers hold people the message of their tracks goes out at most every
+    /// [`HELD_TRACKS_PERIOD_US`] (the newest one then); every person's (after a
+    /// load, an undo, a release or a retime) goes out at once.
+    pub(super) fn take_tracks(&mut self, now: Micros) -> Option<Arc<TracksView>> {
+        let full = self.edits.tracks_out.as_ref()?.full;
+        let due = self
+            .edits
+            .tracks_sent_at
+            .is_none_or(|t| now.saturating_since(t).0 >= HELD_TRACKS_PERIOD_US);
+        if !full && !due {
+            return None;
+        }
+        self.edits.tracks_sent_at = Some(now);
         self.edits.tracks_out.take()
     }
 

@@ -5,7 +5,7 @@
 use crate::crowd::agents::NeighbourGrid;
 use crate::crowd::edit::{Cage, CageParams, SampleRef, TrackSet};
 use crate::geom::Vec2;
-use crate::vocab::{CollisionView, TracksView};
+use crate::vocab::{CollisionView, Micros, TracksView};
 use std::sync::Arc;
 
 /// Edits `edit.undo` can take back.
@@ -190,6 +190,8 @@ pub(super) struct Edits {
     pub(super) file_out: Option<EditFileJob>,
     pub(super) outbox: Option<EditJob>,
     pub(super) tracks_out: Option<Arc<TracksView>>,
+    /// When the last `tracks` message went out.
+    pub(super) tracks_sent_at: Option<Micros>,
     pub(super) view_dirty: bool,
     pub(super) cage: CageParams,
     pub(super) avoid: AvoidSettings,
@@ -224,6 +226,7 @@ impl Edits {
             file_out: None,
             outbox: None,
             tracks_out: None,
+            tracks_sent_at: None,
             view_dirty: false,
             cage: CageParams::default(),
             avoid: AvoidSettings {

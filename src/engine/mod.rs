@@ -37,7 +37,7 @@ mod transform_state;
 #[cfg(test)]
 mod tests;
 
-pub use edit::{GESTURE_FASTER, GESTURE_RETIME_S};
+pub use edit::{GESTURE_FASTER, GESTURE_RETIME_S, HELD_TRACKS_PERIOD_US};
 pub use edit_state::{EditDone, EditFileJob, EditJob, EDIT_THRESHOLD_M, GROUP_LINK_M, MAX_UNDO};
 pub use error::{CommandError, SwitchError};
 pub use params::{

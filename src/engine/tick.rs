@@ -297,7 +297,7 @@ impl Engine {
             plan: self.take_plan(),
             transform: self.transforms.view.take(),
             transform_end: self.transforms.ended.take(),
-            tracks: self.take_tracks(),
+            tracks: self.take_tracks(now),
             edit: self.take_edit_view(),
             events: &self.events,
         }

@@ -503,7 +503,8 @@ impl ControlLoop {
             }
         }
         // While a transform drives the agents its pairing is theirs: no solve.
-        if self.worker && !self.engine.transform_running() {
+        // In edit mode the crowd is the tracks' people: nothing to assign.
+        if self.worker && !self.engine.transform_running() && !self.engine.editing() {
             if let Some(mut job) = self.idle_job.take() {
                 job.generation = self.engine.generation();
                 job.seq = self.engine.seq();

@@ -48,6 +48,43 @@ pub struct E2eRun<'a> {
     /// Formation transforms to this formation and back, one after the other,
     /// with the open-space input and recognition off.
     pub transform: Option<&'a str>,
+    /// Edit mode with this many people, edited by the shipped recordings' fingers.
+    pub edit: Option<usize>,
+}
+
+/// `people` standing in a block over the crowd's area (0.5 m apart, rows of 20)
+/// and walking slowly right (0.05 m/s), 100 samples 0.2 s apart: the shipped
+/// recordings' fingers land on them.
+fn edit_block(people: usize, area: crowdtouch::geom::Rect) -> crowdtouch::crowd::edit::TrackSet {
+    use crowdtouch::crowd::edit::{Track, TrackSet};
+    use crowdtouch::geom::Vec2;
+    let cols = 20.min(people.max(1));
+    let rows = people.div_ceil(cols);
+    let c = Vec2::new(
+        (area.min[0] + area.max[0]) / 2.0,
+        (area.min[1] + area.max[1]) / 2.0,
+    );
+    let times: Vec<f64> = (0..100).map(|k| k as f64 * 0.2).collect();
+    let tracks = (0..people)
+        .map(|i| {
+            let p0 = c + Vec2::new(
+                ((i % cols) as f64 - (cols as f64 - 1.0) / 2.0) * 0.5,
+                ((i / cols) as f64 - (rows as f64 - 1.0) / 2.0) * 0.5,
+            );
+            Track::linked(
+                i as u64,
+                times
+                    .iter()
+                    .map(|t| p0 + Vec2::new(0.05 * t, 0.0))
+                    .collect(),
+                times.clone(),
+            )
+        })
+        .collect();
+    TrackSet {
+        tracks,
+        step_s: 0.2,
+    }
 }
 
 /// What the transform commander saw.
@@ -145,13 +182,16 @@ fn command_transforms(stream: UnixStream, name: &str) -> Commanded {
 #[derive(Default)]
 struct ClientRead {
     snapshots: u64,
+    /// `tracks` messages (edit mode): while fingers hold people, and after releases.
+    tracks_partial: u64,
+    tracks_full: u64,
     bytes: u64,
     /// Input event → the snapshot read here (µs): exact in JSON (`input_t_us`),
     /// an upper bound in binary (`latency_us` plus read time − tick time).
     latency_us: Vec<f64>,
 }
 
-fn hello(format: WireFormat, fields: FieldChoice) -> String {
+fn hello(format: WireFormat, fields: FieldChoice, edit: bool) -> String {
     let format = match format {
         WireFormat::Json => "json",
         WireFormat::Binary => "binary",
@@ -163,7 +203,8 @@ fn hello(format: WireFormat, fields: FieldChoice) -> String {
         }
     };
     format!(
-        r#"{{"type":"hello","protocol":1,"format":"{format}","subscribe":["snapshot"],"fields":{fields}}}"#
+        r#"{{"type":"hello","protocol":1,"format":"{format}","subscribe":["snapshot"{}],"fields":{fields}}}"#,
+        if edit { r#","edit""# } else { "" }
     )
 }
 
@@ -204,6 +245,14 @@ fn read_stream(stream: UnixStream, format: WireFormat) -> ClientRead {
                 line.clear();
                 if r.read_until(b'\n', &mut line).map_or(true, |n| n == 0) {
                     return out;
+                }
+                if line.starts_with(b"{\"type\":\"tracks\"") {
+                    const PARTIAL: &[u8] = b"\"full\":false";
+                    if line.windows(PARTIAL.len()).any(|w| w == PARTIAL) {
+                        out.tracks_partial += 1;
+                    } else {
+                        out.tracks_full += 1;
+                    }
                 }
                 if line.starts_with(b"{\"type\":\"snapshot\"") {
                     out.snapshots += 1;
@@ -267,6 +316,16 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
     if !run.realtime {
         cfg.pipeline.realtime = Default::default();
     }
+    if let Some(people) = run.edit {
+        if people == 0 {
+            bail!("--edit must be at least 1 person");
+        }
+        let set = edit_block(people, cfg.crowd.formation);
+        cfg.set_edit_tracks(
+            Some((std::sync::Arc::new(set), "bench-edit-block".into())),
+            0.3,
+        );
+    }
     let recording = std::env::temp_dir().join(format!(
         "crowdtouch-bench-gestures-{}.jsonl",
         std::process::id()
@@ -306,7 +365,7 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
     )?;
     let mut stream = UnixStream::connect(&sock).context("connecting the bench client")?;
     stream
-        .write_all(format!("{}\n", hello(run.format, run.fields)).as_bytes())
+        .write_all(format!("{}\n", hello(run.format, run.fields, run.edit.is_some())).as_bytes())
         .context("sending the bench client's hello")?;
     let format = run.format;
     let reader = std::thread::spawn(move || read_stream(stream, format));
@@ -379,7 +438,13 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
             "{} generated gesture commands in open space, two people, {:.1} s looped; ",
             o.gestures, o.seconds
         ),
-        (None, _) => String::new(),
+        (None, _) => match run.edit {
+            Some(p) => format!(
+                "edit mode: {p} people × 100 samples grabbed, dragged and released by the shipped recordings' fingers ({} tracks messages while held, {} after a release, JSON only); ",
+                read.tracks_partial, read.tracks_full
+            ),
+            None => String::new(),
+        },
     };
     let abandon = find("abandon")
         .map(|s| format!(", {} stale jobs given up", s.count))

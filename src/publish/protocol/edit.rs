@@ -1,6 +1,7 @@
 //! The edit mode's messages (crowd-motion-editing), to clients subscribed to `edit`:
 //! `tracks` when the tracks change (every person after a load, an undo or a
-//! finished edit; only the people a drag changes while fingers hold them) and
+//! finished edit, with their times; only the people a drag changes while fingers
+//! hold them, places only, at most every 100 ms) and
 //! `edit` when the edit's state changes (the selection's cage, the collisions).
 //!
 //! ```text
@@ -8,21 +9,44 @@
 //! {"type":"edit","seq":812,"version":3,"state":"grabbed","play_t_s":12.4,"selected":[1,2,5],"hull":[[0.5,1.0],…],"threshold_m":0.3,"undo_depth":1,"collisions":[{"a":1,"b":5,"t_s":14.2,"x":3.1,"y":4.0,"distance_m":0.21}]}
 //! ```
 //!
-//! Non-finite numbers are written as `null`.
+//! Places are written to the millimetre, times to 0.1 ms; non-finite numbers as `null`.
 
 use crate::vocab::{EditView, TracksView};
 use serde::ser::{SerializeSeq, Serializer};
 use serde::Serialize;
 
+/// Places on the wire: to the millimetre.
 struct Points<'a>(&'a [crate::geom::Vec2]);
 
 impl Serialize for Points<'_> {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         let mut seq = s.serialize_seq(Some(self.0.len()))?;
         for p in self.0 {
-            seq.serialize_element(&[p.x, p.y])?;
+            seq.serialize_element(&[round_to(p.x, 1e3), round_to(p.y, 1e3)])?;
         }
         seq.end()
+    }
+}
+
+/// Times on the wire: to the tenth of a millisecond.
+struct Times<'a>(&'a [f64]);
+
+impl Serialize for Times<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut seq = s.serialize_seq(Some(self.0.len()))?;
+        for t in self.0 {
+            seq.serialize_element(&round_to(*t, 1e4))?;
+        }
+        seq.end()
+    }
+}
+
+/// `v` rounded to `1 / per` (non-finite values are left for the encoder's `null`).
+fn round_to(v: f64, per: f64) -> f64 {
+    if v.is_finite() {
+        (v * per).round() / per
+    } else {
+        v
     }
 }
 
@@ -30,7 +54,12 @@ impl Serialize for Points<'_> {
 struct TrackWire<'a> {
     id: u64,
     points: Points<'a>,
-    times_s: &'a [f64],
+    #[serde(skip_serializing_if = "is_empty")]
+    times_s: Times<'a>,
+}
+
+fn is_empty(t: &Times<'_>) -> bool {
+    t.0.is_empty()
 }
 
 #[derive(Serialize)]
@@ -83,7 +112,7 @@ pub fn encode_tracks_json(v: &TracksView, out: &mut Vec<u8>) {
             .map(|t| TrackWire {
                 id: t.id,
                 points: Points(&t.points),
-                times_s: &t.times_s,
+                times_s: Times(&t.times_s),
             })
             .collect(),
     };
