@@ -8,6 +8,7 @@
 //!
 //! A person with a single sample is kept: present at that instant only.
 
+use super::text::{clip, whole};
 use super::ReadError;
 use crate::crowd::edit::tracks::{Track, TrackSet, MAX_SAMPLES};
 use crate::geom::Vec2;
@@ -160,16 +161,6 @@ pub fn write_eth(set: &TrackSet, opts: EthOptions) -> String {
         let _ = writeln!(out, "{f}.0\t{id}.0\t{}\t{}", p.x, p.y);
     }
     out
-}
-
-/// `v` as a whole number, if it is one in `0..2^53`.
-fn whole(v: f64) -> Option<u64> {
-    (v.is_finite() && v >= 0.0 && v.fract() == 0.0 && v < 9.007_199_254_740_992e15)
-        .then_some(v as u64)
-}
-
-fn clip(s: &str) -> String {
-    s.chars().take(24).collect()
 }
 
 #[cfg(test)]

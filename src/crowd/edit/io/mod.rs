@@ -17,6 +17,7 @@ mod format;
 mod jsonl;
 #[cfg(test)]
 mod tests;
+mod text;
 
 pub use csv::{median_step, read_csv, write_csv, LINK_STEPS, SINGLE_SAMPLE_STEP_S};
 pub use error::ReadError;
