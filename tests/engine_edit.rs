@@ -397,3 +397,94 @@ fn a_contract_gesture_in_open_space_plays_the_tracks_faster() {
         );
     }
 }
+
+/// With the jobs on a worker (as in the daemon): an `edit.load` asked while a drag
+/// is out, whose file then cannot be read, leaves the drag and the tracks as they
+/// were; a load that is read replaces them and drops the old drag's result.
+#[test]
+fn a_load_while_a_drag_is_out_drops_nothing_until_it_is_read() {
+    let cfg = Config::embedded_default();
+    let mut e = Engine::new(&cfg, None, false);
+    e.set_switch_worker(true);
+    e.tick(Micros(TICK_US));
+    e.load_tracks(parade(2, 3), "parade", Micros(TICK_US));
+    let mut now = TICK_US;
+    let mut run_jobs = |e: &mut Engine, now: u64| {
+        while let Some(j) = e.take_edit_job() {
+            let done = j.run();
+            e.apply_edit(done, Micros(now));
+        }
+    };
+    now += TICK_US;
+    e.tick(Micros(now));
+    run_jobs(&mut e, now);
+    e.command(&Command::Pause, Micros(now)).unwrap();
+    let frame = |t: u64, p: Vec2, flags: ContactFlags| {
+        let mut f = TouchFrame::new(Micros(t));
+        f.push(Contact {
+            id: ContactId(1),
+            x: (p.x / 16.0) as f32,
+            y: (p.y / 9.0) as f32,
+            pressure: None,
+            major_mm: None,
+            minor_mm: None,
+            flags,
+        })
+        .unwrap();
+        f
+    };
+    let held = Vec2::new(2.8, 2.8);
+    e.push_frame(&frame(now + 1, held, ContactFlags::DOWN));
+    for k in 1..=20 {
+        now += TICK_US;
+        e.push_frame(&frame(
+            now,
+            held + Vec2::new(0.0, 0.05 * k as f64),
+            ContactFlags::NONE,
+        ));
+        e.tick(Micros(now));
+    }
+    let job = e.take_edit_job().expect("a drag is out");
+    // The load is asked while the drag is out; its file cannot be read.
+    e.command(
+        &Command::EditLoad {
+            path: "/nonexistent.jsonl".into(),
+        },
+        Micros(now),
+    )
+    .unwrap();
+    let file = e.take_edit_file_job().expect("a file job");
+    let epoch = e.edit_epoch();
+    drop(file);
+    e.apply_edit(job.run(), Micros(now));
+    e.edit_load_failed(epoch);
+    let after = Arc::clone(e.edited_tracks().unwrap());
+    let k = after.index_of(4).unwrap();
+    // The drag out was the first (0.05 m): the next waits for it.
+    assert!(
+        (after.tracks[k].points[0].y - 2.85).abs() < 1e-5,
+        "the drag's result was used: {:?}",
+        after.tracks[k].points[0]
+    );
+    // The drag goes on after the failed load.
+    now += TICK_US;
+    e.push_frame(&frame(now, held + Vec2::new(0.0, 1.5), ContactFlags::NONE));
+    e.tick(Micros(now));
+    let next = e.take_edit_job().expect("the next drag is sent");
+    // A load that is read replaces the tracks; the old drag's result is dropped.
+    e.command(
+        &Command::EditLoad {
+            path: "/other.jsonl".into(),
+        },
+        Micros(now),
+    )
+    .unwrap();
+    let _ = e.take_edit_file_job();
+    assert!(e.apply_edit_load(e.edit_epoch(), parade(1, 3), "/other.jsonl", Micros(now)));
+    e.apply_edit(next.run(), Micros(now));
+    assert_eq!(
+        e.edited_tracks().unwrap().tracks.len(),
+        4,
+        "the new tracks stay"
+    );
+}

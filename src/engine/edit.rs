@@ -85,7 +85,7 @@ impl Engine {
         self.edits.from_config = tracks.cloned();
         if let (Some(set), Some(edit)) = (tracks, &cfg.edit) {
             let source = edit.tracks.display().to_string();
-            self.edits.epoch += 1;
+            self.edits.load_epoch += 1;
             self.load_tracks((**set).clone(), &source, now);
         }
     }
@@ -96,11 +96,13 @@ impl Engine {
         if path.is_empty() {
             return Err(CommandError::Edit("edit.load needs a `path`".into()));
         }
-        self.edits.epoch += 1;
+        // A newer load or an exit makes this one stale; the tracks being edited
+        // go on until the file is read (a failed load leaves them as they are).
+        self.edits.load_epoch += 1;
         self.edits.loading = Some(path.to_string());
         self.edits.file_out = Some(EditFileJob::Load {
             path: path.to_string(),
-            epoch: self.edits.epoch,
+            epoch: self.edits.load_epoch,
         });
         Ok(())
     }
@@ -110,9 +112,9 @@ impl Engine {
         self.edits.file_out.take()
     }
 
-    /// The current edit epoch (a load asked before a newer one is stale).
+    /// The current load epoch (a load asked before a newer one is stale).
     pub fn edit_epoch(&self) -> u64 {
-        self.edits.epoch
+        self.edits.load_epoch
     }
 
     /// A track file read for `edit.load` at `epoch`: installed unless a newer load
@@ -124,12 +126,20 @@ impl Engine {
         source: &str,
         now: Micros,
     ) -> bool {
-        if epoch != self.edits.epoch {
+        if epoch != self.edits.load_epoch {
             return false;
         }
         self.edits.loading = None;
         self.load_tracks(set, source, now);
         true
+    }
+
+    /// A track file for `edit.load` at `epoch` could not be read: the daemon stays
+    /// as it was (the client got the reason).
+    pub fn edit_load_failed(&mut self, epoch: u64) {
+        if epoch == self.edits.load_epoch && self.edits.loading.take().is_some() {
+            self.edits.view_dirty = true;
+        }
     }
 
     /// Enters edit mode with `set` (validated by the reader): the crowd's motion,
@@ -139,8 +149,9 @@ impl Engine {
         self.forget_switches();
         self.forget_gestures(now);
         self.drop_transforms(crate::vocab::TransformOutcome::Dropped, now);
+        // Jobs for the tracks before are stale from here.
+        self.edits.epoch += 1;
         let set = Arc::new(set);
-        let collisions = collisions_of(&set, self.edits.avoid.threshold_m);
         let (t0, _) = set.span_s();
         self.edits.mode = Some(Box::new(EditMode {
             set,
@@ -149,13 +160,32 @@ impl Engine {
             undo: Vec::new(),
             play_t_s: t0,
             grab: None,
-            collisions,
+            collisions: Vec::new(),
             settling: false,
             hull: Vec::new(),
         }));
         self.edits.outbox = None;
+        self.check_collisions();
         self.publish_tracks();
         self.edits.view_dirty = true;
+    }
+
+    /// Asks the formation thread for the collisions of the tracks as they are (after
+    /// a load or an undo; an edit's job reports its own).
+    fn check_collisions(&mut self) {
+        let epoch = self.edits.epoch;
+        let threshold_m = self.edits.avoid.threshold_m;
+        if let Some(m) = &self.edits.mode {
+            self.edits.outbox = Some(EditJob {
+                epoch,
+                grab: 0,
+                kind: EditJobKind::Check {
+                    set: Arc::clone(&m.set),
+                    threshold_m,
+                    version: m.version,
+                },
+            });
+        }
     }
 
     /// `edit.undo`.
@@ -172,9 +202,8 @@ impl Engine {
         m.set = prev;
         m.version += 1;
         m.hull.clear();
-        let threshold = self.edits.avoid.threshold_m;
-        let m = self.edits.mode.as_mut().expect("checked above");
-        m.collisions = collisions_of(&m.set, threshold);
+        m.collisions.clear();
+        self.check_collisions();
         self.publish_tracks();
         self.edits.view_dirty = true;
         Ok(())
@@ -272,6 +301,7 @@ impl Engine {
             return Err(CommandError::Edit("not in edit mode".into()));
         }
         self.edits.epoch += 1;
+        self.edits.load_epoch += 1;
         self.edits.mode = None;
         self.edits.loading = None;
         self.edits.outbox = None;
@@ -605,6 +635,15 @@ impl Engine {
                 }
                 self.edits.view_dirty = true;
             }
+            EditDoneKind::Checked {
+                collisions,
+                version,
+            } => {
+                if m.version == version {
+                    m.collisions = collisions;
+                    self.edits.view_dirty = true;
+                }
+            }
             EditDoneKind::Settled { result, release } => {
                 m.settling = false;
                 match result {
@@ -802,6 +841,14 @@ impl EditJob {
                     release: true,
                 }
             }
+            EditJobKind::Check {
+                set,
+                threshold_m,
+                version,
+            } => EditDoneKind::Checked {
+                collisions: collisions_of(&set, threshold_m),
+                version,
+            },
             EditJobKind::Retime {
                 base,
                 at_s,

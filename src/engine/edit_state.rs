@@ -94,6 +94,13 @@ pub(super) enum EditJobKind {
         version: u64,
         source: Arc<str>,
     },
+    /// The collisions of tracks just loaded or brought back by an undo.
+    Check {
+        set: Arc<TrackSet>,
+        threshold_m: f64,
+        /// The tracks' version they are of.
+        version: u64,
+    },
     /// A temporal edit of every person (section 3.3).
     Retime {
         base: Arc<TrackSet>,
@@ -121,6 +128,10 @@ pub(super) enum EditDoneKind {
         edited: Result<(Arc<TrackSet>, Arc<TracksView>), String>,
         hull: Vec<Vec2>,
         targets: Vec<Vec2>,
+    },
+    Checked {
+        collisions: Vec<CollisionView>,
+        version: u64,
     },
     Settled {
         result: Result<Settled, String>,
@@ -184,7 +195,10 @@ pub(super) struct EditMode {
 #[derive(Debug)]
 pub(super) struct Edits {
     pub(super) mode: Option<Box<EditMode>>,
+    /// Bumped by a load installed and an exit: edit jobs of older tracks are stale.
     pub(super) epoch: u64,
+    /// Bumped by `edit.load` and an exit: a file read for an older load is stale.
+    pub(super) load_epoch: u64,
     pub(super) next_grab: u64,
     pub(super) loading: Option<String>,
     pub(super) file_out: Option<EditFileJob>,
@@ -221,6 +235,7 @@ impl Edits {
         Edits {
             mode: None,
             epoch: 0,
+            load_epoch: 0,
             next_grab: 0,
             loading: None,
             file_out: None,

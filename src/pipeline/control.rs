@@ -404,6 +404,9 @@ impl ControlLoop {
                     let result = result.map(|set| {
                         let _ = self.engine.apply_edit_load(epoch, *set, &path, now);
                     });
+                    if result.is_err() {
+                        self.engine.edit_load_failed(epoch);
+                    }
                     self.send(Outgoing::Reply { client, id, result });
                 }
                 FormationDone::EditSaved { result, client, id } => {
