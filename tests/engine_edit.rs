@@ -409,7 +409,7 @@ fn a_load_while_a_drag_is_out_drops_nothing_until_it_is_read() {
     e.tick(Micros(TICK_US));
     e.load_tracks(parade(2, 3), "parade", Micros(TICK_US));
     let mut now = TICK_US;
-    let mut run_jobs = |e: &mut Engine, now: u64| {
+    let run_jobs = |e: &mut Engine, now: u64| {
         while let Some(j) = e.take_edit_job() {
             let done = j.run();
             e.apply_edit(done, Micros(now));
