@@ -343,36 +343,29 @@ fn a_contract_gesture_in_open_space_plays_the_tracks_faster() {
         glass,
         Micros(100_000),
     );
-    let mut now = 0;
     let mut class = None;
+    let mut tick = |e: &mut Engine, t: u64| {
+        for ev in e.tick(Micros(t)).events {
+            if let crowdtouch::vocab::Event::GestureEnd {
+                recognition: Some(r),
+                ..
+            } = ev
+            {
+                class = Some(r.class.clone());
+            }
+        }
+        e.clear_events();
+    };
+    let mut now = 0;
     for f in &frames {
         e.push_frame(f);
         now = f.t.0;
-        let o = e.tick(f.t);
-        for ev in o.events {
-            if let crowdtouch::vocab::Event::GestureEnd {
-                recognition: Some(r),
-                ..
-            } = ev
-            {
-                class = Some(r.class.clone());
-            }
-        }
-        e.clear_events();
+        tick(&mut e, now);
     }
+    // A second more: the recognition comes after the gesture's grace period.
     for _ in 0..60 {
         now += TICK_US;
-        let o = e.tick(Micros(now));
-        for ev in o.events {
-            if let crowdtouch::vocab::Event::GestureEnd {
-                recognition: Some(r),
-                ..
-            } = ev
-            {
-                class = Some(r.class.clone());
-            }
-        }
-        e.clear_events();
+        tick(&mut e, now);
     }
     assert_eq!(class.as_deref(), Some("contract"));
     let after = Arc::clone(e.edited_tracks().unwrap());

@@ -13,13 +13,15 @@
 //! | `resize.rs` | a new crowd size: goal sampling prepared off the tick ([`ResizeRequest`](crate::crowd::control::ResizeRequest)), installed between ticks |
 //! | `switch.rs` | formation switches at checkpoints and on request |
 //! | `transform.rs`, `transform_state.rs` | formation transforms (formation-transform): prepared off the tick, run every tick, direct control after |
-//! | `edit.rs`, `edit_state.rs` | the edit mode (crowd-motion-editing): tracks loaded and played, grabbed and dragged by fingers, retimed, undone, saved |
+//! | `edit.rs`, `edit_grab.rs`, `edit_jobs.rs`, `edit_state.rs` | the edit mode (crowd-motion-editing): tracks loaded and played, grabbed and dragged by fingers, retimed, undone, saved |
 //! | `params.rs` | the config turned into the crowd's and gesture's parameter structs |
 //! | `replay.rs` | replays on a virtual clock |
 //! | `error.rs` | why a command or switch was refused |
 
 mod commands;
 mod edit;
+mod edit_grab;
+mod edit_jobs;
 mod edit_state;
 mod error;
 mod gesture;
