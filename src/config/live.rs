@@ -209,6 +209,10 @@ pub const FIELDS: &[FieldClass] = &[
         "socket.max_clients",
         "checked at each new connection; connected clients stay",
     ),
+    restart(
+        "outputs",
+        "each output binds its address and starts its thread at start",
+    ),
 ];
 
 /// The row of `path`, if the table has one.

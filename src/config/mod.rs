@@ -22,6 +22,7 @@ mod inputs;
 mod live;
 mod load;
 mod model;
+mod outputs;
 mod transform;
 #[cfg(test)]
 mod transform_tests;
@@ -46,6 +47,10 @@ pub use model::{
     AssignmentConfig, AssignmentCost, BudgetsConfig, Config, ControlsConfig, CrowdConfig,
     EditConfig, FormationsConfig, LogLevel, MeshConfig, PipelineConfig, RealtimeConfig,
     SocketConfig, SurfaceConfig, CONFIG_VERSION, DEFAULT_FIELD_STEP_M,
+};
+pub use outputs::{
+    is_loopback, OutputConfig, TuioProfile, TuioVersion, MAX_TUIO_DATAGRAM_BYTES,
+    MIN_TUIO_DATAGRAM_BYTES,
 };
 pub use transform::{
     GestureFormation, SubgroupsConfig, TransformCost, TransformMoveConfig, DEFAULT_METHOD,

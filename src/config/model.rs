@@ -3,6 +3,7 @@
 
 use super::gestures::GesturesConfig;
 use super::inputs::InputConfig;
+use super::outputs::OutputConfig;
 use super::transform::{
     GestureFormation, SubgroupsConfig, TransformCost, TransformMoveConfig, DEFAULT_METHOD,
 };
@@ -378,6 +379,10 @@ pub struct Config {
     pub pipeline: PipelineConfig,
     /// The Unix socket.
     pub socket: SocketConfig,
+    /// Outputs besides the Unix socket: TUIO targets, WebSocket servers (may be
+    /// left out: none).
+    #[serde(default)]
+    pub outputs: Vec<OutputConfig>,
 }
 
 /// `edit`: the edit mode at start.

@@ -361,6 +361,7 @@ impl Config {
         let max_speed = self.crowd.max_speed_m_s;
         let max_speed = (max_speed > 0.0 && max_speed <= 50.0).then_some(max_speed);
         self.gestures.validate_into(max_speed, &mut p);
+        super::outputs::validate_outputs(&self.outputs, &mut p);
 
         p
     }
