@@ -183,6 +183,10 @@ struct DemoArgs {
     /// Stop after this many seconds (default: run until Ctrl-C).
     #[arg(long)]
     seconds: Option<f64>,
+    /// Also send the crowd as TUIO 1.1 over UDP to HOST:PORT (touches, agents and
+    /// controls: a privileged target, as the demo's touches are synthetic).
+    #[arg(long, value_name = "HOST:PORT")]
+    tuio: Option<String>,
 }
 
 #[derive(Args, Debug)]
@@ -521,11 +525,24 @@ fn demo(a: DemoArgs) -> Result<()> {
     let mut cfg = Config::embedded_default();
     init_logging(cfg.log_level);
     set_agents(&mut cfg, a.agents)?;
+    if let Some(target) = &a.tuio {
+        cfg.outputs.push(demo_tuio(target));
+        if let Some((_, why)) = cfg
+            .validate()
+            .into_iter()
+            .find(|(f, _)| f.starts_with("outputs"))
+        {
+            anyhow::bail!("--tuio {target}: {why}");
+        }
+    }
     let daemon = start_daemon(cfg, a.socket)?;
     // From here on, every way out (a line that cannot be written included) stops
     // the daemon and removes its socket.
     let path = daemon.socket_path().display().to_string();
     outln!("crowdtouch demo: serving the crowd on {path}")?;
+    if let Some(target) = &a.tuio {
+        outln!("  TUIO 1.1:   to {target} (/tuio/2Dcur touches, /tuio/2Dobj agents, /tuio/2Dblb controls)")?;
+    }
     outln!("  watch it:   crowdtouch watch --socket {path}   (or: cargo run --release -- watch --socket {path})")?;
     outln!("  raw stream: socat - UNIX-CONNECT:{path}")?;
     outln!("  Ctrl-C stops.")?;
@@ -536,6 +553,23 @@ fn demo(a: DemoArgs) -> Result<()> {
         outln!("{}", status_line(r))?;
         Ok(())
     })
+}
+
+/// The demo's TUIO output (`demo --tuio HOST:PORT`): TUIO 1.1 with every profile.
+fn demo_tuio(target: &str) -> config::OutputConfig {
+    config::OutputConfig::Tuio {
+        target: target.to_string(),
+        version: "1.1".to_string(),
+        profiles: vec![
+            config::TuioProfile::Cursors,
+            config::TuioProfile::Objects,
+            config::TuioProfile::Blobs,
+        ],
+        rate_hz: 60.0,
+        max_datagram_bytes: 1472,
+        source: None,
+        privileged: true,
+    }
 }
 
 /// One status line: agents, controls, last gesture, latency, drops.

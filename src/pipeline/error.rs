@@ -11,6 +11,9 @@ pub enum Error {
     /// The socket could not be set up.
     #[error(transparent)]
     Publish(#[from] crate::publish::Error),
+    /// A TUIO output could not start (its target does not resolve).
+    #[error(transparent)]
+    Tuio(#[from] crate::publish::tuio::Error),
     /// A thread could not be started.
     #[error("cannot start the {name} thread: {source}")]
     Thread {

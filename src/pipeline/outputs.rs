@@ -2,7 +2,9 @@
 //! registered (ARCHITECTURE.md, "Adding an output").
 
 use super::error::Error;
-use crate::config::{Config, SocketConfig};
+use crate::config::{Config, OutputConfig, SocketConfig, TuioProfile, TuioVersion};
+use crate::geom::Rect;
+use crate::publish::tuio::{TuioOptions, TuioOutput, Version};
 use crate::publish::{HelloInfo, OutputSet, PublisherStats, Server, SocketOptions};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -20,12 +22,14 @@ pub(super) struct Registered {
 /// Binds the Unix socket at `socket_path` and registers every output of `cfg`.
 ///
 /// # Errors
-/// [`Error::Publish`] when the socket cannot be set up.
+/// [`Error::Publish`] when the socket cannot be set up, [`Error::Tuio`] when a
+/// TUIO target does not resolve.
 pub(super) fn register_outputs(
     cfg: &Config,
     socket_path: &Path,
     hello: HelloInfo,
 ) -> Result<Registered, Error> {
+    let world = hello.world;
     let server = Server::bind(&socket_options(&cfg.socket), socket_path, hello)?;
     let socket_path = server.path().to_path_buf();
     let publisher = server.stats();
@@ -34,6 +38,17 @@ pub(super) fn register_outputs(
     outputs.add(Box::new(
         server.with_realtime(cfg.pipeline.realtime.priority),
     ));
+    for o in &cfg.outputs {
+        match o {
+            OutputConfig::Tuio { .. } => {
+                if let Some(opts) = tuio_options(o, world) {
+                    outputs.add(Box::new(TuioOutput::new(opts)?));
+                }
+            }
+            // registered by the WebSocket output
+            OutputConfig::WebSocket { .. } => {}
+        }
+    }
     Ok(Registered {
         outputs,
         socket_path,
@@ -49,4 +64,47 @@ pub fn socket_options(cfg: &SocketConfig) -> SocketOptions {
         client_queue: cfg.client_queue,
         max_clients: cfg.max_clients,
     }
+}
+
+/// A TUIO output's options from its `outputs` entry (validated: an unknown
+/// version cannot reach here, and falls back to 1.1 if it did); `None` for
+/// another kind of output.
+pub fn tuio_options(o: &OutputConfig, world: Rect) -> Option<TuioOptions> {
+    let OutputConfig::Tuio {
+        target,
+        version,
+        profiles,
+        rate_hz,
+        max_datagram_bytes,
+        source,
+        privileged,
+    } = o
+    else {
+        return None;
+    };
+    Some(TuioOptions {
+        target: target.clone(),
+        version: match TuioVersion::parse(version) {
+            Some(TuioVersion::V2_0) => Version::V2_0,
+            _ => Version::V1_1,
+        },
+        // Validation refuses Cursors without privileged; checked again here.
+        cursors: *privileged && profiles.contains(&TuioProfile::Cursors),
+        objects: profiles.contains(&TuioProfile::Objects),
+        blobs: profiles.contains(&TuioProfile::Blobs),
+        rate_hz: *rate_hz,
+        max_datagram_bytes: *max_datagram_bytes as usize,
+        source: source.clone().unwrap_or_else(default_source),
+        world,
+    })
+}
+
+/// `crowdtouch@<hostname>`, the `source` a TUIO output names by default.
+fn default_source() -> String {
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .ok()
+        .map(|h| h.trim().to_string())
+        .filter(|h| !h.is_empty())
+        .unwrap_or_else(|| "localhost".to_string());
+    format!("crowdtouch@{host}")
 }

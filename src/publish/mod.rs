@@ -5,11 +5,13 @@
 //! * [`protocol`]: the wire format renderers read (JSON Lines or binary snapshots,
 //!   the hello negotiation, client messages), documented in `docs/protocol.md`.
 //! * [`socket`]: the Unix-socket output, the first [`Output`].
+//! * [`tuio`]: TUIO 1.1 or 2.0 over OSC/UDP to a renderer.
 
 mod outgoing;
 pub mod output;
 pub mod protocol;
 pub mod socket;
+pub mod tuio;
 
 pub use outgoing::Outgoing;
 pub use output::{
