@@ -27,3 +27,6 @@ pub use frame::{Blob, Cursor, Framer, Object, TuioFrame};
 pub use options::{Error, TuioOptions, Version};
 pub use output::{TuioOutput, TuioStats, QUEUE_CAPACITY};
 pub use split::{alive_element_bytes, Datagrams, MIN_ITEMS_PER_BUNDLE};
+
+#[cfg(test)]
+mod tests;
