@@ -261,6 +261,28 @@ fn check_against_decoder(version: &str, port: u16, events: &dyn Drain) {
         .map(|p| normalise(world, p))
         .collect();
     let during = std::mem::take(&mut seen.alive);
+    // `stats` names the TUIO output with its counters.
+    let mut daemon = daemon;
+    let report = daemon
+        .next_report(Duration::from_secs(5))
+        .expect("a stats report");
+    let stats = serde_json::to_value(&*report).unwrap();
+    let tuio = &stats["outputs"][0];
+    assert_eq!(tuio["output"], "tuio", "{stats}");
+    assert_eq!(tuio["address"], format!("127.0.0.1:{port}"));
+    let count = |k: &str| {
+        tuio["counts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c[0] == k)
+            .and_then(|c| c[1].as_u64())
+            .unwrap_or_else(|| panic!("no {k} in {tuio}"))
+    };
+    assert!(count("frames") > 100, "{tuio}");
+    assert!(count("datagrams") > count("frames"), "{tuio}");
+    assert_eq!(count("send_errors"), 0, "{tuio}");
+    assert_eq!(count("left_out"), 0, "{tuio}");
     daemon.shutdown();
     std::thread::sleep(Duration::from_millis(300));
     events.drain_into(&mut seen);

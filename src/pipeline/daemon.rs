@@ -436,6 +436,7 @@ impl Daemon {
             transforms: cs.transforms,
             last_transform: cs.last_transform,
             restart_pending: self.restart_pending.clone(),
+            outputs: self.outputs.iter().filter_map(|o| o.counters()).collect(),
         });
         self.out.send(Outgoing::Stats(Arc::clone(&report)));
         Some(report)

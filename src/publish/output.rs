@@ -17,7 +17,7 @@
 //! builds it, and one [`OutputSet::add`] in `pipeline` (ARCHITECTURE.md shows it).
 
 use super::Outgoing;
-use crate::vocab::CommandRequest;
+use crate::vocab::{CommandRequest, OutputCounters};
 use crossbeam_channel::{bounded, Receiver, Sender, TrySendError};
 use hdrhistogram::Histogram;
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
@@ -55,6 +55,10 @@ pub trait OutputStats: Send + Sync {
     fn take_end_to_end(&self) -> Histogram<u64>;
     /// Serialisation time per snapshot encoding (µs) since the last call; resets it.
     fn take_encode(&self) -> Histogram<u64>;
+    /// The output's own counters for `stats` (`outputs`), if it has any.
+    fn counters(&self) -> Option<OutputCounters> {
+        None
+    }
 }
 
 /// Most clients an output admits at once, changeable while it runs: the output

@@ -27,7 +27,7 @@ pub use event::{ControlKind, DeviceState, Event};
 pub use motion::MotionType;
 pub use plan::{MotionPhase, NeighbourView, PlanOrigin, PlanView, Recognition};
 pub use snapshot::{AgentView, MeshView, Snapshot, TouchView};
-pub use stats::{RestartPending, StageStats, StatsReport};
+pub use stats::{OutputCounters, RestartPending, StageStats, StatsReport};
 pub use time::Micros;
 pub use touch::{Contact, ContactFlags, ContactId, FrameFull, TouchFrame, MAX_CONTACTS};
 pub use transform::{TransformMeasures, TransformOutcome, TransformSummary, TransformView};

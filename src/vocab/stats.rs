@@ -72,6 +72,21 @@ pub struct StatsReport {
     /// running values until it restarts (empty when the file and the daemon agree).
     #[serde(default)]
     pub restart_pending: Vec<RestartPending>,
+    /// Counters of the outputs that report their own (a TUIO target's datagrams,
+    /// bytes, send errors…), one entry per output; absent when none does.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub outputs: Vec<OutputCounters>,
+}
+
+/// One output's own counters in `stats` (since start).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct OutputCounters {
+    /// The output (`tuio`, …).
+    pub output: String,
+    /// Where it sends or listens (`127.0.0.1:3333`).
+    pub address: String,
+    /// Named counts, in the output's order.
+    pub counts: Vec<(String, u64)>,
 }
 
 /// A config field whose new value needs a restart: what runs, and what the file says.

@@ -23,7 +23,7 @@ use super::options::{Error, TuioOptions, Version};
 use super::split::Datagrams;
 use crate::publish::{Outgoing, Output, OutputContext, OutputStats, Overflow, QueuePolicy};
 use crate::rt::monotonic_now;
-use crate::vocab::{Micros, Snapshot};
+use crate::vocab::{Micros, OutputCounters, Snapshot};
 use crossbeam_channel::RecvTimeoutError;
 use hdrhistogram::Histogram;
 use std::net::{SocketAddr, ToSocketAddrs, UdpSocket};
@@ -41,6 +41,8 @@ const POLL_MS: u64 = 100;
 /// A TUIO output's counters, read by `stats` and the tests.
 #[derive(Debug, Default)]
 pub struct TuioStats {
+    /// The configured target, as `stats` names it.
+    target: String,
     frames: AtomicU64,
     datagrams: AtomicU64,
     bytes: AtomicU64,
@@ -99,6 +101,23 @@ impl OutputStats for TuioStats {
     fn take_encode(&self) -> Histogram<u64> {
         empty_histogram()
     }
+    /// Frames, datagrams and bytes sent, send errors, snapshots skipped by the
+    /// rate limit and entities left out for room.
+    fn counters(&self) -> Option<OutputCounters> {
+        let count = |k: &str, v: u64| (k.to_string(), v);
+        Some(OutputCounters {
+            output: "tuio".to_string(),
+            address: self.target.clone(),
+            counts: vec![
+                count("frames", self.frames()),
+                count("datagrams", self.datagrams()),
+                count("bytes", self.bytes()),
+                count("send_errors", self.send_errors()),
+                count("skipped", self.skipped()),
+                count("left_out", self.truncated()),
+            ],
+        })
+    }
 }
 
 fn empty_histogram() -> Histogram<u64> {
@@ -145,11 +164,15 @@ impl TuioOutput {
         let socket = UdpSocket::bind(local).map_err(socket_err)?;
         socket.set_nonblocking(true).map_err(socket_err)?;
         socket.connect(target).map_err(socket_err)?;
+        let stats = Arc::new(TuioStats {
+            target: opts.target.clone(),
+            ..TuioStats::default()
+        });
         Ok(TuioOutput {
             opts,
             target,
             socket,
-            stats: Arc::new(TuioStats::default()),
+            stats,
         })
     }
 
