@@ -235,6 +235,7 @@ impl Daemon {
             Arc::clone(&start.stop),
             Arc::clone(&heartbeat_us),
             Arc::clone(&fresh),
+            Arc::clone(&input_counters),
         );
         let priority = start.priority;
         start.spawn("control", move || {
