@@ -1,7 +1,7 @@
 //! Touches sent by clients (`touch` commands: a viewer page's mouse or fingers),
 //! turned into touch frames on the control thread.
 //!
-//! Each client is a virtual surface covering the table ("client <id>"). A
+//! Each client is a virtual surface covering the table (`client <id>`). A
 //! `touch` command lists the contacts it has down now, in table units: a new id
 //! begins (`DOWN`), a known one moves, one no longer listed is lifted (`UP`). The
 //! frame is stamped at receipt and fed to the engine as a device's frame is.
