@@ -142,6 +142,105 @@ fn input_decode_and_queue_do_not_allocate() {
     assert_eq!(n, 0, "the input path allocated {n} times");
 }
 
+/// A TUIO 1.1 bundle: `alive`, a `set` per cursor, `fseq` last (its value the
+/// last four bytes, rewritten per datagram).
+fn tuio_bundle(cursors: &[(i32, f32, f32)]) -> Vec<u8> {
+    use rosc::{OscBundle, OscMessage, OscPacket, OscTime, OscType};
+    let m = |args: Vec<OscType>| {
+        OscPacket::Message(OscMessage {
+            addr: "/tuio/2Dcur".into(),
+            args,
+        })
+    };
+    let s = |v: &str| OscType::String(v.into());
+    let mut alive = vec![s("alive")];
+    alive.extend(cursors.iter().map(|c| OscType::Int(c.0)));
+    let mut content = vec![m(vec![s("source"), s("bench@localhost")]), m(alive)];
+    for &(id, x, y) in cursors {
+        let mut set = vec![
+            s("set"),
+            OscType::Int(id),
+            OscType::Float(x),
+            OscType::Float(y),
+        ];
+        set.extend([0.0f32; 3].map(OscType::Float));
+        content.push(m(set));
+    }
+    content.push(m(vec![s("fseq"), OscType::Int(0)]));
+    rosc::encoder::encode(&OscPacket::Bundle(OscBundle {
+        timetag: OscTime::from((0, 1)),
+        content,
+    }))
+    .unwrap()
+}
+
+#[test]
+fn tuio_receive_decode_and_queue_do_not_allocate() {
+    use crowdtouch::input::tuio::{TuioCounters, TuioDecoder};
+    use crowdtouch::pipeline::device::{TransformSettings, TransformSink};
+    // Five cursors moving, a sixth that comes and goes every 50 datagrams.
+    let packets: Vec<Vec<u8>> = (0..100)
+        .map(|k| {
+            let mut c: Vec<(i32, f32, f32)> = (0..5)
+                .map(|i| (i, 0.1 + 0.15 * i as f32, 0.2 + 0.006 * k as f32))
+                .collect();
+            if k % 50 < 25 {
+                c.push((99, 0.9, 0.9 - 0.002 * k as f32));
+            }
+            tuio_bundle(&c)
+        })
+        .collect();
+    let rx_sock = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    rx_sock.set_nonblocking(true).unwrap();
+    let to = rx_sock.local_addr().unwrap();
+    let tx_sock = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let (tx, rx) = crossbeam_channel::bounded(64);
+    let q = FrameQueue::new(tx, 0, Arc::new(InputCounters::default()));
+    let settings = TransformSettings {
+        region: Some(crowdtouch::geom::Rect {
+            min: [0.5, 0.0],
+            max: [1.0, 1.0],
+        }),
+        ..TransformSettings::default()
+    };
+    let mut sink = TransformSink::fixed(q, settings, "TUIO input");
+    let mut dec = TuioDecoder::new(Micros(1_000_000), Arc::new(TuioCounters::default()));
+    let mut buf = vec![0u8; 65_536];
+    let mut out = vec![0u8; 4096];
+    let mut step = |k: usize, t: u64, dec: &mut TuioDecoder, sink: &mut TransformSink| {
+        let p = &packets[k % packets.len()];
+        let b = &mut out[..p.len()];
+        b.copy_from_slice(p);
+        b[p.len() - 4..].copy_from_slice(&(k as i32 + 1).to_be_bytes());
+        tx_sock.send_to(b, to).unwrap();
+        let (n, peer) = loop {
+            match rx_sock.recv_from(&mut buf) {
+                Ok(got) => break got,
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => std::thread::yield_now(),
+                Err(e) => panic!("recv: {e}"),
+            }
+        };
+        dec.packet(&buf[..n], peer, Micros(t), sink).unwrap();
+        dec.expire(Micros(t), sink);
+    };
+    // Warm-up: the cursors go down, the sender is learnt.
+    step(0, 0, &mut dec, &mut sink);
+    while rx.try_recv().is_ok() {}
+    let mut t = 0;
+    let n = allocations(|| {
+        for k in 1..10_000 {
+            t += 8_333;
+            step(k, t, &mut dec, &mut sink);
+            if k % 100 < 90 {
+                while rx.try_recv().is_ok() {}
+            }
+        }
+    });
+    assert_eq!(n, 0, "the TUIO input path allocated {n} times");
+    // The last datagram (k = 9999) has the five moving cursors, not the sixth.
+    assert_eq!(dec.active_contacts(), 5, "the cursors are down");
+}
+
 /// Ticks `engine` with `frame_at(k, flags)` for `k` in `0..warm` (the first frame
 /// puts the fingers down), then returns the allocations of the `steady` ticks that
 /// follow (no event expected in them).

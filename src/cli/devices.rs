@@ -23,7 +23,7 @@ pub fn devices(cfg: &Config, json: bool, root: &Path) -> Result<()> {
                 i,
                 select(&found, &selector(sel), preference(*interface)).map_err(|e| e.to_string()),
             )),
-            InputConfig::Replay { .. } => None,
+            InputConfig::Replay { .. } | InputConfig::Tuio { .. } => None,
         })
         .collect();
     let auto = select(

@@ -148,7 +148,7 @@ fn what_to_record(a: &RecordArgs, cfg: &Config) -> Result<(DeviceSelect, DeviceI
             InputConfig::Device {
                 select, interface, ..
             } => Some((i, select, *interface)),
-            InputConfig::Replay { .. } => None,
+            InputConfig::Replay { .. } | InputConfig::Tuio { .. } => None,
         })
         .collect();
     let pick = match a.input {

@@ -52,6 +52,35 @@ pub enum InputConfig {
         #[serde(default)]
         size_mm: Option<(f64, f64)>,
     },
+    /// TUIO cursors over OSC/UDP (camera tables such as reacTIVision, TUIO
+    /// simulators, phone apps): TUIO 1.1 `/tuio/2Dcur` and TUIO 2.0 `ptr`, read on
+    /// an input thread of their own, through the same queue a device uses.
+    Tuio {
+        /// Address to listen on, `ip:port` (3333 is TUIO's port).
+        #[serde(default = "default_tuio_listen")]
+        listen: String,
+        /// The part of the table the TUIO surface covers, in table units; `None`
+        /// is the whole table.
+        #[serde(default)]
+        region: Option<Rect>,
+        /// Rotation and flips (the matrix too) applied to the TUIO coordinates.
+        #[serde(default)]
+        calibration: CalibrationConfig,
+        /// A sender silent this long (ms) has its touches lifted.
+        #[serde(default = "default_tuio_timeout_ms")]
+        timeout_ms: u64,
+    },
+}
+
+/// The default `Tuio.listen`: every interface, TUIO's port.
+pub const DEFAULT_TUIO_LISTEN: &str = "0.0.0.0:3333";
+
+fn default_tuio_listen() -> String {
+    DEFAULT_TUIO_LISTEN.to_string()
+}
+
+fn default_tuio_timeout_ms() -> u64 {
+    1000
 }
 
 fn default_gap_ms() -> u64 {

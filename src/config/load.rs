@@ -156,7 +156,7 @@ impl Config {
                         }
                     }
                 }
-                InputConfig::Device { .. } => {}
+                InputConfig::Device { .. } | InputConfig::Tuio { .. } => {}
             }
         }
     }

@@ -332,6 +332,48 @@ impl Config {
                         );
                     }
                 }
+                InputConfig::Tuio {
+                    listen,
+                    region,
+                    calibration,
+                    timeout_ms,
+                } => {
+                    check(
+                        listen.parse::<std::net::SocketAddr>().is_ok(),
+                        &format!("inputs[{i}].listen"),
+                        format!(
+                            "listen address must be ip:port, like \"0.0.0.0:3333\", got {listen:?}"
+                        ),
+                    );
+                    if let Some(r) = region {
+                        check(
+                            finite_rect(r) && r.min[0] >= 0.0 && r.min[1] >= 0.0 && r.max[0] <= 1.0 && r.max[1] <= 1.0
+                                && r.width() > 0.0 && r.height() > 0.0,
+                            &format!("inputs[{i}].region"),
+                            format!("region must be a rectangle inside the unit square (table units), got {:?} .. {:?}", r.min, r.max),
+                        );
+                    }
+                    check(
+                        matches!(calibration.rotation, 0 | 90 | 180 | 270),
+                        &format!("inputs[{i}].calibration.rotation"),
+                        format!(
+                            "rotation must be 0, 90, 180 or 270 degrees, got {}",
+                            calibration.rotation
+                        ),
+                    );
+                    if let Some(m) = calibration.matrix {
+                        check(
+                            m.iter().all(|v| v.is_finite()),
+                            &format!("inputs[{i}].calibration.matrix"),
+                            "calibration matrix values must be finite".to_string(),
+                        );
+                    }
+                    check(
+                        (100..=60_000).contains(timeout_ms),
+                        &format!("inputs[{i}].timeout_ms"),
+                        format!("timeout must be 100..=60000 ms, got {timeout_ms}"),
+                    );
+                }
             }
         }
         if let Some(cpus) = &pl.realtime.input_cpus {

@@ -52,6 +52,8 @@ impl Engine {
             Command::EditSave { path, overwrite } => self.edit_save(path.as_deref(), *overwrite),
             Command::EditRetime { at_s, to_s } => self.edit_retime(*at_s, *to_s),
             Command::EditExit => self.edit_exit(now),
+            // Turned into touch frames by the control loop before the engine.
+            Command::Touch { .. } => Err(CommandError::NotHere("touch")),
         }
     }
 

@@ -36,6 +36,9 @@ pub enum CommandError {
     /// under way, nothing to undo, bad arguments).
     #[error("{0}")]
     Edit(String),
+    /// A command the control loop handles itself reached the engine (an internal bug).
+    #[error("internal bug: `{0}` reached the engine")]
+    NotHere(&'static str),
     /// The formation could not be laid out for the crowd (without the formation
     /// thread; with it, the failure is logged when the switch arrives).
     #[error("formation `{name}` could not be built: {why}")]

@@ -1,6 +1,6 @@
 //! Touch input: the sources that produce [`TouchFrame`](crate::vocab::TouchFrame)s.
 //!
-//! A source (a recording replayed, an evdev or hidraw device) runs on its own
+//! A source (a recording replayed, an evdev or hidraw device, TUIO over UDP) runs on its own
 //! thread, turns what it reads into `TouchFrame`s in surface coordinates (the unit
 //! square) and hands each to a [`FrameSink`]. The sink is the bounded queue to the
 //! control thread; its full-queue policy lives in `pipeline`.
@@ -13,6 +13,7 @@ pub mod hotplug;
 pub mod recording;
 pub mod replay;
 pub mod synth;
+pub mod tuio;
 pub mod udev;
 
 mod device;

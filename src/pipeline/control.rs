@@ -1,6 +1,8 @@
 //! The control thread: takes frames, commands and reloads, ticks the engine, hands
 //! slow work to the workers and publishes every tick's snapshot to the outputs.
 
+use super::client_touch::ClientTouches;
+use super::queue::InputCounters;
 use super::timing::StageTimer;
 use super::workers::{AssignJob, FormationDone, FormationJob, Freshness};
 use crate::config::Config;
@@ -123,6 +125,8 @@ pub(super) struct ControlLoop {
     last_stats: Micros,
     last_gesture: Option<String>,
     publish_overflow: u64,
+    /// Touches sent by clients (`touch` commands).
+    client_touches: ClientTouches,
 }
 
 impl ControlLoop {
@@ -133,6 +137,7 @@ impl ControlLoop {
         stop: Arc<AtomicBool>,
         heartbeat_us: Arc<AtomicU64>,
         fresh: Arc<Freshness>,
+        input_counters: Arc<InputCounters>,
     ) -> ControlLoop {
         let b = &cfg.pipeline.budgets;
         let n = engine.agent_count();
@@ -170,6 +175,7 @@ impl ControlLoop {
             last_stats: monotonic_now(),
             last_gesture: None,
             publish_overflow: 0,
+            client_touches: ClientTouches::new(input_counters),
         }
     }
 
@@ -206,6 +212,9 @@ impl ControlLoop {
                 self.command(c);
             }
             let now = monotonic_now();
+            let engine = &mut self.engine;
+            self.client_touches
+                .expire(now, &mut |f| engine.push_frame(f));
             if input || now >= next_tick {
                 self.tick(now);
                 next_tick = now + self.period;
@@ -236,6 +245,24 @@ impl ControlLoop {
     }
 
     fn command(&mut self, req: CommandRequest) {
+        if let Command::Touch { contacts } = &req.command {
+            let engine = &mut self.engine;
+            let result =
+                self.client_touches
+                    .touch(req.client, contacts, monotonic_now(), &mut |f| {
+                        engine.push_frame(f)
+                    });
+            // Sent by the socket for a client that left: nobody to answer.
+            if req.id.is_null() {
+                return;
+            }
+            self.send(Outgoing::Reply {
+                client: req.client,
+                id: req.id,
+                result,
+            });
+            return;
+        }
         let resize = matches!(req.command, Command::SetAgentCount { .. });
         if resize && self.resize_waiters.len() >= MAX_RESIZE_WAITERS {
             self.send(Outgoing::Reply {

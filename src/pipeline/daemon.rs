@@ -148,7 +148,9 @@ impl Daemon {
         }
         let glass = sources.iter().find_map(|s| match s {
             SourceSpec::Replay { glass_mm, .. } | SourceSpec::Channel { glass_mm, .. } => *glass_mm,
-            SourceSpec::Device { transform, .. } => transform.size_mm,
+            SourceSpec::Device { transform, .. } | SourceSpec::Tuio { transform, .. } => {
+                transform.size_mm
+            }
         });
         let mut engine = Engine::new(&cfg, glass, !cfg.assignment.worker);
         engine.set_switch_worker(true);
@@ -233,6 +235,7 @@ impl Daemon {
             Arc::clone(&start.stop),
             Arc::clone(&heartbeat_us),
             Arc::clone(&fresh),
+            Arc::clone(&input_counters),
         );
         let priority = start.priority;
         start.spawn("control", move || {
@@ -655,6 +658,26 @@ impl Start {
                         out.send(Outgoing::Event(Arc::new(ev)));
                     };
                     device::supervise(&mut env, &select, interface, &mut sink, &stop, &mut notify);
+                    drain_backlog(sink.queue(), &stop);
+                })
+            }
+            SourceSpec::Tuio {
+                mut source,
+                transform,
+            } => {
+                let cpus = self.input_cpus.clone();
+                let who = match source.local_addr() {
+                    Some(a) => format!("TUIO input on {a}"),
+                    None => "TUIO input".to_string(),
+                };
+                log::info!("{who}: listening");
+                self.spawn("input", move || {
+                    Start::realtime(priority, "input");
+                    if let Some(cpus) = &cpus {
+                        crate::rt::pin_to_cpus(cpus, "input");
+                    }
+                    let mut sink = device::TransformSink::fixed(queue, transform, &who);
+                    source.run(&mut sink, &stop);
                     drain_backlog(sink.queue(), &stop);
                 })
             }

@@ -120,6 +120,21 @@ impl TransformSink {
         }
     }
 
+    /// A sink for a source with no device behind it (TUIO): the settings'
+    /// calibration and region apply from the first frame.
+    pub fn fixed(
+        queue: super::FrameQueue,
+        settings: TransformSettings,
+        who: &str,
+    ) -> TransformSink {
+        let t = transform_of(&settings, None, settings.size_mm, who);
+        TransformSink {
+            queue,
+            settings,
+            transform: Some(t),
+        }
+    }
+
     /// The queue (to flush it at the end).
     pub fn queue(&mut self) -> &mut super::FrameQueue {
         &mut self.queue
@@ -155,6 +170,19 @@ pub fn build_transform(
     s: &TransformSettings,
     info: &DeviceInfo,
 ) -> crate::input::calibrate::DeviceTransform {
+    let size = info.surface.size_mm().or(s.size_mm);
+    let node = info.identity.node.display().to_string();
+    transform_of(s, info.calibration, size, &node)
+}
+
+/// The transform of `s` with udev's matrix `udev` and the glass `size` (mm); a
+/// failure is logged naming `who`.
+fn transform_of(
+    s: &TransformSettings,
+    udev: Option<[f64; 6]>,
+    size: Option<(f64, f64)>,
+    who: &str,
+) -> crate::input::calibrate::DeviceTransform {
     use crate::input::calibrate::{Calibration, DeviceTransform, Region};
     let c = &s.calibration;
     let cal = Calibration {
@@ -172,15 +200,11 @@ pub fn build_transform(
             height: r.height(),
         })
         .unwrap_or_default();
-    let size = info.surface.size_mm().or(s.size_mm);
-    match DeviceTransform::new(&cal, info.calibration, region, size, s.palm_max_mm) {
+    match DeviceTransform::new(&cal, udev, region, size, s.palm_max_mm) {
         Ok(t) => t,
         Err(e) => {
             // The config was validated; a bad udev matrix is the likely cause.
-            log::error!(
-                "{}: calibration not applied: {e}",
-                info.identity.node.display()
-            );
+            log::error!("{who}: calibration not applied: {e}");
             DeviceTransform::identity()
         }
     }

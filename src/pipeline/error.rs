@@ -23,6 +23,12 @@ pub enum Error {
         #[source]
         source: std::io::Error,
     },
+    /// A TUIO input could not bind its port.
+    #[error(transparent)]
+    Tuio(#[from] crate::input::tuio::Error),
+    /// A TUIO input's listen address is not `ip:port` (the config check refuses it first).
+    #[error("TUIO input: listen address must be ip:port, got {0:?}")]
+    BadListen(String),
     /// The config has no input.
     #[error("the config has no inputs: add a Replay(...) input")]
     NoInputs,

@@ -14,6 +14,7 @@
 //!
 //! Every channel states its policy where it is created (`daemon.rs`).
 
+mod client_touch;
 mod control;
 mod daemon;
 pub mod device;
@@ -26,6 +27,7 @@ mod sources;
 pub mod timing;
 mod workers;
 
+pub use client_touch::{CLIENT_TOUCH_TIMEOUT_US, MAX_TOUCHING_CLIENTS};
 pub use control::{ControlStats, INTERNAL_CLIENT};
 pub use daemon::{Daemon, DaemonOptions, COMMAND_CAPACITY, SHUTDOWN_BUDGET_MS};
 pub use error::Error;

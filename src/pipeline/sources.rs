@@ -37,6 +37,13 @@ pub enum SourceSpec {
         /// Calibration, region and palm settings applied to its frames.
         transform: device::TransformSettings,
     },
+    /// TUIO cursors received over UDP (the socket bound at start).
+    Tuio {
+        /// The bound source.
+        source: Box<crate::input::tuio::TuioSource>,
+        /// Calibration and region applied to its frames.
+        transform: device::TransformSettings,
+    },
     /// Frames handed in by the embedding program through a channel: a virtual
     /// device for tests, benchmarks and tools. Frames keep the time stamp they were
     /// given (stamp them with [`monotonic_now`](crate::rt::monotonic_now) when sent to measure latency). The
@@ -53,7 +60,8 @@ pub enum SourceSpec {
 /// warnings are logged.
 ///
 /// # Errors
-/// [`Error::Recording`] naming the file and line; [`Error::NoInputs`].
+/// [`Error::Recording`] naming the file and line; [`Error::Tuio`] when a TUIO
+/// port cannot be bound; [`Error::NoInputs`].
 pub fn sources_from_config(cfg: &Config) -> Result<Vec<SourceSpec>, Error> {
     if cfg.inputs.is_empty() {
         return Err(Error::NoInputs);
@@ -106,6 +114,30 @@ pub fn sources_from_config(cfg: &Config) -> Result<Vec<SourceSpec>, Error> {
                         region: *region,
                         palm_max_mm: *palm_max_mm,
                         size_mm: size_mm.or(cfg.surface.size_mm),
+                    },
+                });
+            }
+            InputConfig::Tuio {
+                listen,
+                region,
+                calibration,
+                timeout_ms,
+            } => {
+                // Validated: `listen` parses.
+                let listen = listen
+                    .parse()
+                    .map_err(|_| Error::BadListen(listen.clone()))?;
+                let settings = crate::input::tuio::TuioSettings {
+                    listen,
+                    timeout: Micros(timeout_ms * 1000),
+                };
+                out.push(SourceSpec::Tuio {
+                    source: Box::new(crate::input::tuio::TuioSource::bind(&settings)?),
+                    transform: device::TransformSettings {
+                        calibration: calibration.clone(),
+                        region: *region,
+                        palm_max_mm: None,
+                        size_mm: cfg.surface.size_mm,
                     },
                 });
             }

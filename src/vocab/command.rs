@@ -67,6 +67,32 @@ pub enum Command {
     /// Leave edit mode: the crowd comes back.
     #[serde(rename = "edit.exit")]
     EditExit,
+    /// Touches from the client itself (a viewer page's mouse or fingers): the
+    /// contacts down now on the client's own virtual surface, covering the table.
+    /// A contact not listed any more is lifted; an empty list lifts them all.
+    Touch {
+        /// The contacts down, at most [`MAX_CLIENT_CONTACTS`].
+        contacts: Vec<ClientContact>,
+    },
+}
+
+/// Most contacts one `touch` command lists.
+pub const MAX_CLIENT_CONTACTS: usize = 10;
+
+/// Largest contact id a client may use in a `touch` command.
+pub const MAX_CLIENT_CONTACT_ID: u32 = 65_535;
+
+/// One contact of a client's `touch` command, in table units.
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClientContact {
+    /// The client's id for the finger, `0..=`[`MAX_CLIENT_CONTACT_ID`], stable
+    /// while it is down.
+    pub id: u32,
+    /// Horizontal position, `[0, 1]` left to right across the table.
+    pub x: f64,
+    /// Vertical position, `[0, 1]` top to bottom.
+    pub y: f64,
 }
 
 /// How the crowd goes into a new formation.
@@ -107,11 +133,12 @@ impl Command {
             Command::EditSave { .. } => "edit.save",
             Command::EditRetime { .. } => "edit.retime",
             Command::EditExit => "edit.exit",
+            Command::Touch { .. } => "touch",
         }
     }
 
     /// Every command name, in the order the protocol doc lists them.
-    pub const NAMES: [&'static str; 10] = [
+    pub const NAMES: [&'static str; 11] = [
         "reset",
         "set_agent_count",
         "set_formation",
@@ -122,6 +149,7 @@ impl Command {
         "edit.save",
         "edit.retime",
         "edit.exit",
+        "touch",
     ];
 }
 

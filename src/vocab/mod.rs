@@ -20,7 +20,10 @@ mod time;
 mod touch;
 mod transform;
 
-pub use command::{ClientId, Command, CommandRequest, FormationMethod};
+pub use command::{
+    ClientContact, ClientId, Command, CommandRequest, FormationMethod, MAX_CLIENT_CONTACTS,
+    MAX_CLIENT_CONTACT_ID,
+};
 pub use device::parse_vendor_product;
 pub use edit::{CollisionView, EditView, TrackView, TracksView};
 pub use event::{ControlKind, DeviceState, Event};

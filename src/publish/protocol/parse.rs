@@ -5,7 +5,7 @@ use super::hello::{
     ClientSettings, FieldSet, Format, Subscriptions, MAX_LINE_BYTES, PROTOCOL_VERSION,
 };
 use crate::located::json_kind;
-use crate::vocab::Command;
+use crate::vocab::{ClientContact, Command, MAX_CLIENT_CONTACTS, MAX_CLIENT_CONTACT_ID};
 use serde_json::{Map, Value};
 
 /// A parsed client line.
@@ -98,7 +98,7 @@ pub enum ProtocolError {
     },
     /// A command name the daemon does not know.
     #[error(
-        "unknown command `{name}` (known: reset, set_agent_count, set_formation, pause, resume, edit.load, edit.undo, edit.save, edit.retime, edit.exit)"
+        "unknown command `{name}` (known: reset, set_agent_count, set_formation, pause, resume, edit.load, edit.undo, edit.save, edit.retime, edit.exit, touch)"
     )]
     UnknownCommand {
         /// The name sent (shortened).
@@ -380,6 +380,18 @@ fn parse_command(mut map: Map<String, Value>) -> Result<ClientMessage, ProtocolE
             },
         ));
     }
+    if name == "touch" {
+        return match touch_contacts(&map) {
+            Ok(contacts) => Ok(ClientMessage::Command {
+                id,
+                command: Command::Touch { contacts },
+            }),
+            Err(reason) => Err(in_command(
+                id,
+                ProtocolError::CommandArguments { name, reason },
+            )),
+        };
+    }
     if name == "set_formation" {
         // serde's message would not name the field.
         type Check = (&'static str, &'static str, fn(&Value) -> bool);
@@ -431,4 +443,79 @@ fn parse_command(mut map: Map<String, Value>) -> Result<ClientMessage, ProtocolE
             },
         )),
     }
+}
+
+/// The contacts of a `touch` command, checked one by one so that the error names
+/// the contact and the key (`contacts[2].x must be a number in [0, 1], got null`).
+fn touch_contacts(map: &Map<String, Value>) -> Result<Vec<ClientContact>, String> {
+    if let Some(k) = map
+        .keys()
+        .find(|k| !matches!(k.as_str(), "name" | "contacts"))
+    {
+        return Err(format!("unknown field `{}`", shorten(k)));
+    }
+    let list = match map.get("contacts") {
+        None => {
+            return Err(
+                "missing `contacts` (a list of {\"id\", \"x\", \"y\"}; [] lifts all)".into(),
+            )
+        }
+        Some(Value::Array(a)) => a,
+        Some(v) => {
+            return Err(format!(
+                "`contacts` must be a list of {{\"id\", \"x\", \"y\"}}, got {}",
+                quote(v)
+            ))
+        }
+    };
+    if list.len() > MAX_CLIENT_CONTACTS {
+        return Err(format!(
+            "{} contacts, more than the {MAX_CLIENT_CONTACTS} a touch may list",
+            list.len()
+        ));
+    }
+    let mut out: Vec<ClientContact> = Vec::with_capacity(list.len());
+    for (k, c) in list.iter().enumerate() {
+        let Value::Object(o) = c else {
+            return Err(format!(
+                "contacts[{k}] must be an object {{\"id\", \"x\", \"y\"}}, got {}",
+                quote(c)
+            ));
+        };
+        if let Some(key) = o
+            .keys()
+            .find(|key| !matches!(key.as_str(), "id" | "x" | "y"))
+        {
+            return Err(format!("contacts[{k}]: unknown field `{}`", shorten(key)));
+        }
+        let got = |key: &str| o.get(key).map_or("nothing".to_string(), quote);
+        let id = o
+            .get("id")
+            .and_then(Value::as_u64)
+            .filter(|&v| v <= u64::from(MAX_CLIENT_CONTACT_ID))
+            .ok_or_else(|| {
+                format!(
+                    "contacts[{k}].id must be an integer in 0..={MAX_CLIENT_CONTACT_ID}, got {}",
+                    got("id")
+                )
+            })?;
+        let coord = |key: &str| {
+            o.get(key)
+                .and_then(Value::as_f64)
+                .filter(|v| (0.0..=1.0).contains(v))
+                .ok_or_else(|| {
+                    format!(
+                        "contacts[{k}].{key} must be a number in [0, 1] (table units), got {}",
+                        got(key)
+                    )
+                })
+        };
+        let (x, y) = (coord("x")?, coord("y")?);
+        let id = id as u32;
+        if out.iter().any(|p| p.id == id) {
+            return Err(format!("contacts[{k}].id {id} is listed twice"));
+        }
+        out.push(ClientContact { id, x, y });
+    }
+    Ok(out)
 }

@@ -79,6 +79,8 @@ pub(crate) struct Conn {
     pub stalled_since: Option<Instant>,
     /// The events its socket is registered for.
     pub interest: EpollFlags,
+    /// It sent a `touch` command: its contacts are lifted when it leaves.
+    pub touched: bool,
 }
 
 impl Conn {
@@ -96,6 +98,7 @@ impl Conn {
             write: Write::Idle,
             stalled_since: None,
             interest: EpollFlags::empty(),
+            touched: false,
         }
     }
 
@@ -295,6 +298,7 @@ impl Conn {
             // The slot is taken before the control thread can answer.
             q.expect_reply(id.clone(), Instant::now());
         }
+        self.touched |= matches!(command, Command::Touch { .. });
         let request = CommandRequest {
             client: self.id(),
             id,

@@ -13,6 +13,7 @@ use super::queue::ClientShared;
 use super::stats::lock;
 use crate::publish::protocol;
 use crate::rt::monotonic_now;
+use crate::vocab::{Command, CommandRequest};
 use nix::sys::epoll::{Epoll, EpollEvent, EpollFlags, EpollTimeout};
 use std::io::ErrorKind;
 use std::net::Shutdown;
@@ -250,6 +251,17 @@ impl IoLoop {
             return;
         };
         self.free.push(slot);
+        if c.touched {
+            // Its contacts are lifted now rather than at the touch timeout; a
+            // null id: no answer. A full queue leaves it to the timeout.
+            let _ = self.hub.commands.try_send(CommandRequest {
+                client: c.id(),
+                id: serde_json::Value::Null,
+                command: Command::Touch {
+                    contacts: Vec::new(),
+                },
+            });
+        }
         c.shared.lock().dead = true;
         let _ = self.epoll.delete(&c.stream);
         let _ = c.stream.shutdown(Shutdown::Both);

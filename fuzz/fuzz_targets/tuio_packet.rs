@@ -1,0 +1,57 @@
+#![no_main]
+//! Arbitrary datagrams through the TUIO decoder. Byte 0 picks the sender's port
+//! and the time step, the rest is a sequence of `len: u16 (LE), bytes[len]`
+//! datagrams. Checks the frames' life cycle (every contact begins once, moves
+//! only while down, ends once) and that nothing is left down after cancel_all.
+use crowdtouch::input::tuio::{TuioCounters, TuioDecoder};
+use crowdtouch::vocab::{ContactFlags, Micros, TouchFrame, MAX_CONTACTS};
+use libfuzzer_sys::fuzz_target;
+use std::collections::HashSet;
+use std::net::SocketAddr;
+use std::sync::Arc;
+
+struct Check {
+    down: HashSet<u32>,
+}
+
+impl crowdtouch::input::FrameSink for Check {
+    fn push(&mut self, f: &TouchFrame) {
+        assert!(f.len() <= MAX_CONTACTS);
+        for c in f.contacts() {
+            assert!((0.0..=1.0).contains(&c.x) && (0.0..=1.0).contains(&c.y));
+            if c.flags.contains(ContactFlags::DOWN) {
+                assert!(self.down.insert(c.id.0), "DOWN twice");
+            } else {
+                assert!(self.down.contains(&c.id.0), "contact without DOWN");
+            }
+            if c.flags.ended() {
+                self.down.remove(&c.id.0);
+            }
+        }
+    }
+}
+
+fuzz_target!(|data: &[u8]| {
+    let Some((&mode, mut rest)) = data.split_first() else {
+        return;
+    };
+    let mut dec = TuioDecoder::new(Micros(1_000), Arc::new(TuioCounters::default()));
+    let mut sink = Check {
+        down: HashSet::new(),
+    };
+    let mut t = 0u64;
+    let mut k = 0u16;
+    while rest.len() >= 2 {
+        let len = usize::from(u16::from_le_bytes([rest[0], rest[1]])).min(rest.len() - 2);
+        let packet = &rest[2..2 + len];
+        rest = &rest[2 + len..];
+        k = k.wrapping_add(1);
+        let peer = SocketAddr::from(([127, 0, 0, 1], 4000 + (k % (1 + u16::from(mode & 3)))));
+        t += u64::from(mode >> 2) * 50;
+        let _ = dec.packet(packet, peer, Micros(t), &mut sink);
+        dec.expire(Micros(t), &mut sink);
+    }
+    dec.cancel_all(Micros(t + 1), &mut sink);
+    assert!(sink.down.is_empty(), "contacts left down after cancel_all");
+    assert_eq!(dec.active_contacts(), 0);
+});
