@@ -1,0 +1,86 @@
+#!/usr/bin/env node
+// A stand-in for the daemon's WebSocket output, for working on the viewer page
+// without it: serves src/publish/websocket/viewer.html at `/` (read from disk on
+// every request, so a reload shows your edit) and bridges each WebSocket on `/ws`
+// to its own connection to a running daemon's Unix socket, one JSON line per text
+// message each way.
+//
+//   cargo run -- demo --agents 5000 --socket /tmp/ct.sock &
+//   node tests/tools/viewer/bridge.js --socket /tmp/ct.sock --listen 127.0.0.1:8090
+//   open http://127.0.0.1:8090/
+//
+// What it cannot do, because the Unix socket does not: touches from the page (the
+// `touch` messages are counted and dropped: the socket would close the connection
+// over an unknown type). `--read-only` answers every command with an `error` itself,
+// to see how the page shows a read-only client's refusal.
+
+"use strict";
+const fs = require("fs");
+const http = require("http");
+const net = require("net");
+const path = require("path");
+const { WebSocketServer } = require("ws");
+
+function arg(name, fallback) {
+  const i = process.argv.indexOf(name);
+  return i > 0 && i + 1 < process.argv.length ? process.argv[i + 1] : fallback;
+}
+const socketPath = arg("--socket", `${process.env.XDG_RUNTIME_DIR || "/tmp"}/crowdtouch.sock`);
+const [host, port] = arg("--listen", "127.0.0.1:8090").split(":");
+const readOnly = process.argv.includes("--read-only");
+const page = path.join(__dirname, "../../../src/publish/websocket/viewer.html");
+
+const server = http.createServer((req, res) => {
+  if (req.method === "GET" && (req.url === "/" || req.url.startsWith("/?"))) {
+    res.writeHead(200, { "content-type": "text/html; charset=utf-8", "cache-control": "no-store" });
+    res.end(fs.readFileSync(page));
+  } else {
+    res.writeHead(404, { "content-type": "text/plain" });
+    res.end("not found\n");
+  }
+});
+
+const wss = new WebSocketServer({ noServer: true });
+server.on("upgrade", (req, sock, head) => {
+  if (!req.url.startsWith("/ws")) return sock.destroy();
+  wss.handleUpgrade(req, sock, head, (ws) => bridge(ws));
+});
+
+let touchMessages = 0;
+
+function bridge(ws) {
+  const unix = net.createConnection(socketPath);
+  let buf = "";
+  unix.setEncoding("utf8");
+  unix.on("data", (chunk) => {
+    buf += chunk;
+    let nl;
+    while ((nl = buf.indexOf("\n")) >= 0) {
+      const line = buf.slice(0, nl);
+      buf = buf.slice(nl + 1);
+      if (line && ws.readyState === ws.OPEN) ws.send(line);
+    }
+  });
+  unix.on("error", (e) => ws.close(1011, `daemon socket ${socketPath}: ${e.code || e.message}`));
+  unix.on("close", () => ws.close(1000));
+  ws.on("message", (data) => {
+    const text = data.toString("utf8");
+    let msg = null;
+    try { msg = JSON.parse(text); } catch (_) { /* the daemon says what is wrong */ }
+    if (msg && msg.type === "touch") {
+      if (++touchMessages % 100 === 1) console.error(`bridge: ${touchMessages} touch messages dropped (the Unix socket takes none)`);
+      return;
+    }
+    if (readOnly && msg && msg.type === "command") {
+      ws.send(JSON.stringify({ type: "error", id: msg.id ?? null,
+        message: "read-only client: commands need a privileged connection (bridge --read-only)", fatal: false }));
+      return;
+    }
+    unix.write(text + "\n");
+  });
+  ws.on("close", () => unix.end());
+}
+
+server.listen(Number(port), host, () => {
+  console.error(`bridge: http://${host}:${port}/ -> ${socketPath}${readOnly ? " (read-only)" : ""}`);
+});
