@@ -12,7 +12,8 @@
 // What it cannot do, because the Unix socket does not: touches from the page (the
 // `touch` messages are counted and dropped: the socket would close the connection
 // over an unknown type). `--read-only` answers every command with an `error` itself,
-// to see how the page shows a read-only client's refusal.
+// to see how the page shows a read-only client's refusal; `--log-touches` prints
+// every touch message the page sends.
 
 "use strict";
 const fs = require("fs");
@@ -28,6 +29,7 @@ function arg(name, fallback) {
 const socketPath = arg("--socket", `${process.env.XDG_RUNTIME_DIR || "/tmp"}/crowdtouch.sock`);
 const [host, port] = arg("--listen", "127.0.0.1:8090").split(":");
 const readOnly = process.argv.includes("--read-only");
+const logTouches = process.argv.includes("--log-touches");
 const page = path.join(__dirname, "../../../src/publish/websocket/viewer.html");
 
 const server = http.createServer((req, res) => {
@@ -68,6 +70,7 @@ function bridge(ws) {
     let msg = null;
     try { msg = JSON.parse(text); } catch (_) { /* the daemon says what is wrong */ }
     if (msg && msg.type === "touch") {
+      if (logTouches) console.error(`bridge: touch ${JSON.stringify(msg.contacts)}`);
       if (++touchMessages % 100 === 1) console.error(`bridge: ${touchMessages} touch messages dropped (the Unix socket takes none)`);
       return;
     }

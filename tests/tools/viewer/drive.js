@@ -8,6 +8,7 @@
 //   {"cmd":"open","url":"http://127.0.0.1:8080/","page":"a"}   opens a page (a name of your choosing)
 //   {"cmd":"wait","page":"a","until":"snapshots","min":5,"timeout_ms":20000}
 //                                                               waits for viewerStats[until] >= min
+//                                                               (without min: until it is set)
 //   {"cmd":"stats","page":"a"}                                  window.viewerStats, #view's rect (CSS px), the page's text
 //   {"cmd":"screenshot","page":"a","path":"/tmp/x.png"}        a PNG of the viewport; answers #view's rect
 //   {"cmd":"drag","page":"a","from":[x,y],"to":[x,y],"steps":30,"ms":1500,"hold_ms":500}
@@ -69,8 +70,10 @@ async function run(req) {
     case "wait": {
       const page = pageOf(req);
       const key = req.until || "snapshots";
-      await page.waitForFunction(([k, min]) => window.viewerStats && window.viewerStats[k] >= min,
-        [key, req.min ?? 1], { timeout: req.timeout_ms ?? 20000, polling: 100 });
+      // With `min`, until the value is at least that; without, until it is set.
+      await page.waitForFunction(([k, min]) => window.viewerStats &&
+        (min === null ? Boolean(window.viewerStats[k]) : window.viewerStats[k] >= min),
+        [key, req.min ?? null], { timeout: req.timeout_ms ?? 20000, polling: 100 });
       return { stats: await page.evaluate(() => window.viewerStats) };
     }
     case "stats": {
@@ -125,7 +128,7 @@ async function run(req) {
     case "close": {
       if (browser) await browser.close();
       browser = null;
-      return {};
+      return { exit: true };
     }
     default:
       throw new Error(`unknown cmd ${JSON.stringify(req.cmd)}`);
@@ -143,6 +146,7 @@ async function serve() {
       answer = { ok: false, error: String(e && e.message ? e.message : e) };
     }
     process.stdout.write(JSON.stringify(answer) + "\n");
+    if (answer.exit) process.exit(0);
   }
   if (browser) await browser.close();
 }
