@@ -14,6 +14,13 @@
 // over an unknown type). `--read-only` answers every command with an `error` itself,
 // to see how the page shows a read-only client's refusal; `--log-touches` prints
 // every touch message the page sends.
+//
+// `--synthetic N` needs no daemon: it plays N agents walking in circles at 60
+// snapshots a second, in the daemon's JSON (3 decimals), to measure what the page
+// costs on its own:
+//
+//   node tests/tools/viewer/bridge.js --synthetic 5000 --listen 127.0.0.1:8090 &
+//   node tests/tools/viewer/drive.js --fps http://127.0.0.1:8090/ 5
 
 "use strict";
 const fs = require("fs");
@@ -30,6 +37,7 @@ const socketPath = arg("--socket", `${process.env.XDG_RUNTIME_DIR || "/tmp"}/cro
 const [host, port] = arg("--listen", "127.0.0.1:8090").split(":");
 const readOnly = process.argv.includes("--read-only");
 const logTouches = process.argv.includes("--log-touches");
+const synthetic = Number(arg("--synthetic", "0"));
 const page = path.join(__dirname, "../../../src/publish/websocket/viewer.html");
 
 const server = http.createServer((req, res) => {
@@ -45,7 +53,7 @@ const server = http.createServer((req, res) => {
 const wss = new WebSocketServer({ noServer: true });
 server.on("upgrade", (req, sock, head) => {
   if (!req.url.startsWith("/ws")) return sock.destroy();
-  wss.handleUpgrade(req, sock, head, (ws) => bridge(ws));
+  wss.handleUpgrade(req, sock, head, (ws) => (synthetic > 0 ? play(ws, synthetic) : bridge(ws)));
 });
 
 let touchMessages = 0;
@@ -84,6 +92,44 @@ function bridge(ws) {
   ws.on("close", () => unix.end());
 }
 
+// The synthetic crowd: agents on a grid in the middle of a 16 x 9 m world, each
+// circling its own place.
+let clients = 0;
+function play(ws, n) {
+  const world = { min: [0.0, 0.0], max: [16.0, 9.0] };
+  const hello = (rate) => JSON.stringify({
+    type: "hello", protocol: 1, server: "bridge.js --synthetic", client: ++clients, formats: ["json"],
+    format: "json", subscriptions: ["snapshot"], fields: ["positions"], max_rate_hz: rate, world,
+    agents: n, agent_radius_m: 0.15, client_queue: 8, max_line_bytes: 65536,
+  });
+  ws.send(hello(null));
+  ws.on("message", (data) => {
+    let msg = null;
+    try { msg = JSON.parse(data.toString("utf8")); } catch (_) { return; }
+    if (msg.type === "hello") ws.send(hello(msg.max_rate_hz ?? null));
+  });
+  const cols = Math.ceil(Math.sqrt(n * 4 / 3)), spacing = 6 / cols;
+  let seq = 0;
+  const timer = setInterval(() => {
+    seq++;
+    const phase = seq / 60;
+    const xy = new Array(2 * n);
+    for (let i = 0; i < n; i++) {
+      const cx = 5 + (i % cols) * spacing, cy = 2.5 + Math.floor(i / cols) * spacing;
+      const a = phase + i * 0.37;
+      xy[2 * i] = (cx + 0.3 * spacing * Math.cos(a)).toFixed(3);
+      xy[2 * i + 1] = (cy + 0.3 * spacing * Math.sin(a)).toFixed(3);
+    }
+    const t_us = Math.round(performance.now() * 1000);
+    if (ws.readyState === ws.OPEN && ws.bufferedAmount < 4 << 20) {
+      ws.send(`{"type":"snapshot","seq":${seq},"t_us":${t_us},"latency_us":2000,"input_t_us":${t_us - 2000},` +
+        `"dropped":0,"agents":${n},"paused":false,"positions":[${xy.join(",")}]}`);
+    }
+  }, 1000 / 60);
+  ws.on("close", () => clearInterval(timer));
+}
+
 server.listen(Number(port), host, () => {
-  console.error(`bridge: http://${host}:${port}/ -> ${socketPath}${readOnly ? " (read-only)" : ""}`);
+  const to = synthetic > 0 ? `${synthetic} synthetic agents` : socketPath;
+  console.error(`bridge: http://${host}:${port}/ -> ${to}${readOnly ? " (read-only)" : ""}`);
 });

@@ -18,7 +18,8 @@
 //   {"cmd":"close"}
 //
 // Standalone: `node drive.js --shot URL OUT.png [seconds]` saves a screenshot after
-// `seconds` (default 3) of drawing (how docs/viewer.png is made).
+// `seconds` (default 3) of drawing (how docs/viewer.png is made); `node drive.js
+// --fps URL [seconds]` prints the page's frame rate over `seconds` (default 5).
 
 "use strict";
 const readline = require("readline");
@@ -160,7 +161,20 @@ async function shot(url, out, seconds) {
   await run({ cmd: "close" });
 }
 
-if (process.argv[2] === "--shot") {
+async function fps(url, seconds) {
+  await run({ cmd: "open", url });
+  await run({ cmd: "wait", until: "agentsDrawn", min: 1 });
+  const m = await run({ cmd: "fps", seconds });
+  console.log(JSON.stringify(m));
+  await run({ cmd: "close" });
+}
+
+if (process.argv[2] === "--fps") {
+  fps(process.argv[3], Number(process.argv[4] || 5)).catch((e) => {
+    console.error(`drive: ${e.message}`);
+    process.exit(1);
+  });
+} else if (process.argv[2] === "--shot") {
   shot(process.argv[3], process.argv[4], Number(process.argv[5] || 3)).catch((e) => {
     console.error(`drive: ${e.message}`);
     process.exit(1);
