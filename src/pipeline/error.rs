@@ -13,7 +13,7 @@ pub enum Error {
     Publish(#[from] crate::publish::Error),
     /// A TUIO output could not start (its target does not resolve).
     #[error(transparent)]
-    Tuio(#[from] crate::publish::tuio::Error),
+    TuioOutput(#[from] crate::publish::tuio::Error),
     /// A thread could not be started.
     #[error("cannot start the {name} thread: {source}")]
     Thread {
@@ -25,7 +25,7 @@ pub enum Error {
     },
     /// A TUIO input could not bind its port.
     #[error(transparent)]
-    Tuio(#[from] crate::input::tuio::Error),
+    TuioInput(#[from] crate::input::tuio::Error),
     /// A TUIO input's listen address is not `ip:port` (the config check refuses it first).
     #[error("TUIO input: listen address must be ip:port, got {0:?}")]
     BadListen(String),

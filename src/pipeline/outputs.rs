@@ -22,7 +22,7 @@ pub(super) struct Registered {
 /// Binds the Unix socket at `socket_path` and registers every output of `cfg`.
 ///
 /// # Errors
-/// [`Error::Publish`] when the socket cannot be set up, [`Error::Tuio`] when a
+/// [`Error::Publish`] when the socket cannot be set up, [`Error::TuioOutput`] when a
 /// TUIO target does not resolve.
 pub(super) fn register_outputs(
     cfg: &Config,

@@ -60,7 +60,7 @@ pub enum SourceSpec {
 /// warnings are logged.
 ///
 /// # Errors
-/// [`Error::Recording`] naming the file and line; [`Error::Tuio`] when a TUIO
+/// [`Error::Recording`] naming the file and line; [`Error::TuioInput`] when a TUIO
 /// port cannot be bound; [`Error::NoInputs`].
 pub fn sources_from_config(cfg: &Config) -> Result<Vec<SourceSpec>, Error> {
     if cfg.inputs.is_empty() {
