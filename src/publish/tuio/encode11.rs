@@ -95,7 +95,7 @@ impl Encoder11 {
 
     /// Appends `frame`'s datagrams (each at most `max_bytes`) to `out`. Returns
     /// how many entities were left out because their alive list would not fit
-    /// ([`super::split`]).
+    /// (`split.rs`).
     pub fn encode(
         &mut self,
         frame: &TuioFrame,

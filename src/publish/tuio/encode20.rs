@@ -20,7 +20,7 @@
 //! speed and acceleration are 0 (boxes are axis-aligned).
 //!
 //! When a frame does not fit one datagram, every bundle repeats `frm` (same
-//! `f_id`) and the full `alv` ([`super::split`]). Components are packed in the
+//! `f_id`) and the full `alv` (`split.rs`). Components are packed in the
 //! order pointers, bounds, tokens, so a frame cut for room loses tokens first.
 
 use super::frame::TuioFrame;
@@ -93,7 +93,7 @@ impl Encoder20 {
 
     /// Appends `frame`'s datagrams (each at most `max_bytes`) to `out`, with
     /// frame id `f_id` and time tag `ttag`. Returns how many components were left
-    /// out because their alive list would not fit ([`super::split`]).
+    /// out because their alive list would not fit (`split.rs`).
     pub fn encode(
         &mut self,
         frame: &TuioFrame,
