@@ -183,6 +183,13 @@ struct DemoArgs {
     /// Stop after this many seconds (default: run until Ctrl-C).
     #[arg(long)]
     seconds: Option<f64>,
+    /// Also serve the live viewer and the WebSocket stream on ADDR (ip:port),
+    /// privileged; beyond loopback only with --token.
+    #[arg(long, value_name = "ADDR")]
+    http: Option<String>,
+    /// The token WebSocket clients must present with --http (16+ characters).
+    #[arg(long, requires = "http")]
+    token: Option<String>,
 }
 
 #[derive(Args, Debug)]
@@ -521,11 +528,22 @@ fn demo(a: DemoArgs) -> Result<()> {
     let mut cfg = Config::embedded_default();
     init_logging(cfg.log_level);
     set_agents(&mut cfg, a.agents)?;
+    if let Some(addr) = &a.http {
+        cfg.outputs.push(demo_websocket(addr, a.token.clone())?);
+    }
     let daemon = start_daemon(cfg, a.socket)?;
     // From here on, every way out (a line that cannot be written included) stops
     // the daemon and removes its socket.
     let path = daemon.socket_path().display().to_string();
     outln!("crowdtouch demo: serving the crowd on {path}")?;
+    if let Some(addr) = &a.http {
+        let query = a
+            .token
+            .as_ref()
+            .map(|t| format!("?token={t}"))
+            .unwrap_or_default();
+        outln!("  viewer: http://{addr}/{query}")?;
+    }
     outln!("  watch it:   crowdtouch watch --socket {path}   (or: cargo run --release -- watch --socket {path})")?;
     outln!("  raw stream: socat - UNIX-CONNECT:{path}")?;
     outln!("  Ctrl-C stops.")?;
@@ -535,6 +553,31 @@ fn demo(a: DemoArgs) -> Result<()> {
     supervise(sig, daemon, None, until, |r| {
         outln!("{}", status_line(r))?;
         Ok(())
+    })
+}
+
+/// `demo --http ADDR [--token T]`: a privileged WebSocket output with the viewer.
+fn demo_websocket(addr: &str, token: Option<String>) -> Result<config::OutputConfig> {
+    let parsed: std::net::SocketAddr = addr
+        .parse()
+        .map_err(|_| anyhow::anyhow!("--http {addr}: not ip:port, like 127.0.0.1:8080"))?;
+    match &token {
+        None if !config::is_loopback(parsed.ip()) => anyhow::bail!(
+            "--http {addr} is reachable from other machines, and its clients may steer the \
+             crowd: give --token SECRET (16+ characters), or listen on 127.0.0.1"
+        ),
+        Some(t) if t.len() < 16 || !t.chars().all(|c| c.is_ascii_graphic()) => {
+            anyhow::bail!("--token: at least 16 printable ASCII characters, no spaces")
+        }
+        _ => {}
+    }
+    Ok(config::OutputConfig::WebSocket {
+        listen: addr.to_string(),
+        token,
+        privileged: true,
+        max_clients: 16,
+        max_message_bytes: 64 * 1024,
+        viewer: true,
     })
 }
 

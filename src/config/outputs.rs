@@ -227,7 +227,7 @@ pub(super) fn validate_outputs(outputs: &[OutputConfig], p: &mut Vec<(String, St
                 );
                 let loopback = addr.as_ref().is_ok_and(|a| is_loopback(a.ip()));
                 check(
-                    !addr.is_ok() || loopback || token.is_some(),
+                    addr.is_err() || loopback || token.is_some(),
                     format!("outputs[{i}].token"),
                     format!(
                         "{listen} is reachable from other machines: set a token clients \

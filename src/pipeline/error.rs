@@ -11,6 +11,9 @@ pub enum Error {
     /// The socket could not be set up.
     #[error(transparent)]
     Publish(#[from] crate::publish::Error),
+    /// A WebSocket output could not be set up.
+    #[error(transparent)]
+    WebSocket(#[from] crate::publish::websocket::Error),
     /// A thread could not be started.
     #[error("cannot start the {name} thread: {source}")]
     Thread {
