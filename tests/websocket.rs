@@ -189,7 +189,10 @@ fn a_websocket_client_gets_hello_and_snapshots_in_json_then_binary() {
     assert_eq!(snap["positions"].as_array().unwrap().len(), 80);
     assert_eq!(snaps, 5, "a privileged client sees the touches of the drag");
     // The binary encoding, negotiated in hello: the reply, then binary snapshots.
-    send(&mut ws, r#"{"type":"hello","protocol":1,"format":"binary"}"#);
+    send(
+        &mut ws,
+        r#"{"type":"hello","protocol":1,"format":"binary"}"#,
+    );
     let mut binaries = 0;
     let got = read_ws(&mut ws, 5.0, |g| {
         binaries += usize::from(matches!(g, Got::Binary(_)));
