@@ -187,6 +187,13 @@ struct DemoArgs {
     /// controls: a privileged target, as the demo's touches are synthetic).
     #[arg(long, value_name = "HOST:PORT")]
     tuio: Option<String>,
+    /// Also serve the live viewer and the WebSocket stream on ADDR (ip:port),
+    /// privileged; beyond loopback only with --token.
+    #[arg(long, value_name = "ADDR")]
+    http: Option<String>,
+    /// The token WebSocket clients must present with --http (16+ characters).
+    #[arg(long, requires = "http")]
+    token: Option<String>,
 }
 
 #[derive(Args, Debug)]
@@ -535,6 +542,9 @@ fn demo(a: DemoArgs) -> Result<()> {
             anyhow::bail!("--tuio {target}: {why}");
         }
     }
+    if let Some(addr) = &a.http {
+        cfg.outputs.push(demo_websocket(addr, a.token.clone())?);
+    }
     let daemon = start_daemon(cfg, a.socket)?;
     // From here on, every way out (a line that cannot be written included) stops
     // the daemon and removes its socket.
@@ -542,6 +552,14 @@ fn demo(a: DemoArgs) -> Result<()> {
     outln!("crowdtouch demo: serving the crowd on {path}")?;
     if let Some(target) = &a.tuio {
         outln!("  TUIO 1.1:   to {target} (/tuio/2Dcur touches, /tuio/2Dobj agents, /tuio/2Dblb controls)")?;
+    }
+    if let Some(addr) = &a.http {
+        let query = a
+            .token
+            .as_ref()
+            .map(|t| format!("?token={t}"))
+            .unwrap_or_default();
+        outln!("  viewer:     http://{addr}/{query}")?;
     }
     outln!("  watch it:   crowdtouch watch --socket {path}   (or: cargo run --release -- watch --socket {path})")?;
     outln!("  raw stream: socat - UNIX-CONNECT:{path}")?;
@@ -570,6 +588,31 @@ fn demo_tuio(target: &str) -> config::OutputConfig {
         source: None,
         privileged: true,
     }
+}
+
+/// `demo --http ADDR [--token T]`: a privileged WebSocket output with the viewer.
+fn demo_websocket(addr: &str, token: Option<String>) -> Result<config::OutputConfig> {
+    let parsed: std::net::SocketAddr = addr
+        .parse()
+        .map_err(|_| anyhow::anyhow!("--http {addr}: not ip:port, like 127.0.0.1:8080"))?;
+    match &token {
+        None if !config::is_loopback(parsed.ip()) => anyhow::bail!(
+            "--http {addr} is reachable from other machines, and its clients may steer the \
+             crowd: give --token SECRET (16+ characters), or listen on 127.0.0.1"
+        ),
+        Some(t) if t.len() < 16 || !t.chars().all(|c| c.is_ascii_graphic()) => {
+            anyhow::bail!("--token: at least 16 printable ASCII characters, no spaces")
+        }
+        _ => {}
+    }
+    Ok(config::OutputConfig::WebSocket {
+        listen: addr.to_string(),
+        token,
+        privileged: true,
+        max_clients: 16,
+        max_message_bytes: 64 * 1024,
+        viewer: true,
+    })
 }
 
 /// One status line: agents, controls, last gesture, latency, drops.

@@ -36,6 +36,7 @@ fn socket_config(client_queue: u32) -> SocketOptions {
         group: None,
         client_queue,
         max_clients: 32,
+        privileged: Default::default(),
     })
 }
 
@@ -1037,6 +1038,7 @@ fn socket_mode_is_applied() {
             group: None,
             client_queue: 8,
             max_clients: 32,
+            privileged: Default::default(),
         });
         let _server = Server::bind(&cfg, &path, hello_info()).unwrap();
         let got = std::fs::metadata(&path).unwrap().permissions().mode() & 0o777;

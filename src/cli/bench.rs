@@ -20,6 +20,7 @@ mod edit;
 mod gesture;
 mod open_space;
 mod shutdown;
+mod websocket;
 
 /// Which workload to run.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
@@ -61,6 +62,10 @@ pub enum Workload {
     /// while a finger drags them (`--repeats` of each, ten times as many ticks). Not
     /// part of `all`.
     Edit,
+    /// The publisher alone fed `--agents`-agent snapshots at 120 Hz for
+    /// `--seconds`, read by `--clients` WebSocket clients in `--format`: end-to-end
+    /// latency, encode time, drops, bandwidth. Not part of `all`.
+    Websocket,
 }
 
 /// Arguments of `bench`.
@@ -268,6 +273,14 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             walkers: a.n,
             repeats: a.repeats,
         })?);
+    }
+    if a.workload == Workload::Websocket {
+        rows.extend(websocket::websocket(
+            a.agents as usize,
+            a.clients as usize,
+            a.seconds,
+            a.format,
+        )?);
     }
     if a.workload == Workload::Fmm {
         rows.push(fmm(a.grid, a.obstacles, a.first_order, a.repeats)?);

@@ -210,6 +210,14 @@ pub const FIELDS: &[FieldClass] = &[
         "checked at each new connection; connected clients stay",
     ),
     restart(
+        "socket.privileged.users",
+        "user names are resolved to ids when the socket starts",
+    ),
+    restart(
+        "socket.privileged.groups",
+        "group names are resolved to ids when the socket starts",
+    ),
+    restart(
         "outputs",
         "each output binds its address and starts its thread at start",
     ),

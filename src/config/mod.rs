@@ -45,8 +45,8 @@ pub use live::{
 pub use load::{load_recogniser, locate_issues, search_path, DEFAULT_CONFIG_RON, MAX_CONFIG_BYTES};
 pub use model::{
     AssignmentConfig, AssignmentCost, BudgetsConfig, Config, ControlsConfig, CrowdConfig,
-    EditConfig, FormationsConfig, LogLevel, MeshConfig, PipelineConfig, RealtimeConfig,
-    SocketConfig, SurfaceConfig, CONFIG_VERSION, DEFAULT_FIELD_STEP_M,
+    EditConfig, FormationsConfig, LogLevel, MeshConfig, PipelineConfig, PrivilegedPeers,
+    RealtimeConfig, SocketConfig, SurfaceConfig, CONFIG_VERSION, DEFAULT_FIELD_STEP_M,
 };
 pub use outputs::{
     is_loopback, OutputConfig, TuioProfile, TuioVersion, MAX_TUIO_DATAGRAM_BYTES,

@@ -291,6 +291,24 @@ pub struct SocketConfig {
     pub client_queue: u32,
     /// Most clients at once.
     pub max_clients: u32,
+    /// Who is privileged besides root and the daemon's own user: their clients
+    /// receive the raw touches and may send commands; everyone else is read-only.
+    #[serde(default)]
+    pub privileged: PrivilegedPeers,
+}
+
+/// The users and groups whose Unix-socket clients are privileged
+/// (`socket.privileged`), by name or numeric id, resolved when the socket starts.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PrivilegedPeers {
+    /// User names or uids (`"kiosk"`, `"1001"`).
+    #[serde(default)]
+    pub users: Vec<String>,
+    /// Group names or gids: a client whose process is in one of them (its group
+    /// or a supplementary group).
+    #[serde(default)]
+    pub groups: Vec<String>,
 }
 
 impl SocketConfig {

@@ -261,6 +261,18 @@ impl Config {
                 "group name is empty".to_string(),
             );
         }
+        for (kind, names) in [
+            ("users", &s.privileged.users),
+            ("groups", &s.privileged.groups),
+        ] {
+            for (i, n) in names.iter().enumerate() {
+                check(
+                    !n.is_empty() && n.len() <= 32 && n.chars().all(|c| c.is_ascii_graphic()),
+                    &format!("socket.privileged.{kind}[{i}]"),
+                    format!("a user or group is a name or a numeric id (1 ..= 32 printable characters), got {n:?}"),
+                );
+            }
+        }
         for (i, input) in self.inputs.iter().enumerate() {
             match input {
                 InputConfig::Replay { files, .. } => check(

@@ -14,6 +14,9 @@ pub enum Error {
     /// A TUIO output could not start (its target does not resolve).
     #[error(transparent)]
     TuioOutput(#[from] crate::publish::tuio::Error),
+    /// A WebSocket output could not be set up.
+    #[error(transparent)]
+    WebSocket(#[from] crate::publish::websocket::Error),
     /// A thread could not be started.
     #[error("cannot start the {name} thread: {source}")]
     Thread {

@@ -2,10 +2,14 @@
 //! registered (ARCHITECTURE.md, "Adding an output").
 
 use super::error::Error;
-use crate::config::{Config, OutputConfig, SocketConfig, TuioProfile, TuioVersion};
+use crate::config::{is_loopback, Config, OutputConfig, SocketConfig, TuioProfile, TuioVersion};
 use crate::geom::Rect;
+use crate::publish::socket::preflight::resolve_peers;
 use crate::publish::tuio::{TuioOptions, TuioOutput, Version};
-use crate::publish::{HelloInfo, OutputSet, PublisherStats, Server, SocketOptions};
+use crate::publish::{
+    HelloInfo, OutputSet, PublisherStats, Server, SocketOptions, WebSocketListener,
+    WebSocketOptions,
+};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -22,18 +26,28 @@ pub(super) struct Registered {
 /// Binds the Unix socket at `socket_path` and registers every output of `cfg`.
 ///
 /// # Errors
-/// [`Error::Publish`] when the socket cannot be set up, [`Error::TuioOutput`] when a
-/// TUIO target does not resolve.
+/// [`Error::Publish`] when the socket cannot be set up, [`Error::WebSocket`] when a
+/// WebSocket address cannot be bound, [`Error::TuioOutput`] when a TUIO target does
+/// not resolve.
 pub(super) fn register_outputs(
     cfg: &Config,
     socket_path: &Path,
     hello: HelloInfo,
 ) -> Result<Registered, Error> {
     let world = hello.world;
-    let server = Server::bind(&socket_options(&cfg.socket), socket_path, hello)?;
+    let peers = &cfg.socket.privileged;
+    let mut server = Server::bind(&socket_options(&cfg.socket), socket_path, hello)?
+        .with_privileged(resolve_peers(&peers.users, &peers.groups)?);
     let socket_path = server.path().to_path_buf();
     let publisher = server.stats();
     let mut outputs = OutputSet::default();
+    for entry in &cfg.outputs {
+        // WebSocket clients are clients of the socket's publisher (one encoding
+        // per format for both transports).
+        if let Some(l) = websocket_listener(entry)? {
+            server = server.with_websocket(l);
+        }
+    }
     // One line per output: the Unix socket (config `socket`) is always there.
     outputs.add(Box::new(
         server.with_realtime(cfg.pipeline.realtime.priority),
@@ -45,7 +59,7 @@ pub(super) fn register_outputs(
                     outputs.add(Box::new(TuioOutput::new(opts)?));
                 }
             }
-            // registered by the WebSocket output
+            // Served by the socket's publisher (above).
             OutputConfig::WebSocket { .. } => {}
         }
     }
@@ -54,6 +68,53 @@ pub(super) fn register_outputs(
         socket_path,
         publisher,
     })
+}
+
+/// A WebSocket entry's listener, bound (its URL logged); `None` for other entries.
+///
+/// # Errors
+/// [`Error::WebSocket`] when the address cannot be bound.
+fn websocket_listener(entry: &OutputConfig) -> Result<Option<WebSocketListener>, Error> {
+    let OutputConfig::WebSocket {
+        listen,
+        token,
+        privileged,
+        max_clients,
+        max_message_bytes,
+        viewer,
+    } = entry
+    else {
+        return Ok(None);
+    };
+    let addr = listen
+        .parse()
+        .map_err(|_| crate::publish::websocket::Error::Address {
+            listen: listen.clone(),
+        })?;
+    let l = WebSocketListener::bind(WebSocketOptions {
+        listen: addr,
+        token: token.clone(),
+        privileged: *privileged,
+        max_clients: *max_clients,
+        max_message_bytes: *max_message_bytes,
+        viewer: *viewer,
+    })?;
+    let who = if *privileged {
+        "privileged"
+    } else {
+        "read-only"
+    };
+    let access = match (is_loopback(addr.ip()), token.is_some()) {
+        (_, true) => "clients must present the token (?token= or Authorization: Bearer)",
+        (true, false) => "this machine only, no token",
+        (false, false) => "reachable from other machines: a token is required",
+    };
+    log::info!(
+        "WebSocket output: {} (stream at ws://{}/ws; {who} clients; {access})",
+        l.url(),
+        l.local_addr()
+    );
+    Ok(Some(l))
 }
 
 /// The socket output's options from the config's `socket` section.

@@ -74,6 +74,24 @@ pub fn preflight(cfg: &Config, what: &Preflight<'_>) -> Vec<Finding> {
             Err(e) => out.push(finding("socket.group", Severity::Error, e.to_string())),
         }
     }
+    for (i, u) in cfg.socket.privileged.users.iter().enumerate() {
+        if let Err(e) = socket::resolve_peers(std::slice::from_ref(u), &[]) {
+            out.push(finding(
+                &format!("socket.privileged.users[{i}]"),
+                Severity::Error,
+                e.to_string(),
+            ));
+        }
+    }
+    for (i, g) in cfg.socket.privileged.groups.iter().enumerate() {
+        if let Err(e) = socket::resolve_peers(&[], std::slice::from_ref(g)) {
+            out.push(finding(
+                &format!("socket.privileged.groups[{i}]"),
+                Severity::Error,
+                e.to_string(),
+            ));
+        }
+    }
     if let Some(path) = what.socket {
         let resolved = if cfg.socket.path.is_none() {
             " (`path: None` resolves to this path here)"

@@ -293,6 +293,9 @@ pub struct ServerHello<'a> {
     pub settings: &'a ClientSettings,
     /// Snapshots queued for this client before the oldest are dropped.
     pub client_queue: u32,
+    /// Whether the client is privileged: it receives the raw touches and may send
+    /// commands. A read-only client gets neither.
+    pub privileged: bool,
 }
 
 /// Static facts sent in the server hello.

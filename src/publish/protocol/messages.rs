@@ -112,6 +112,7 @@ enum Wire<'a> {
         agent_radius_m: f64,
         client_queue: u32,
         max_line_bytes: usize,
+        privileged: bool,
     },
 }
 
@@ -352,6 +353,7 @@ pub fn encode_server_hello(h: &ServerHello<'_>, out: &mut Vec<u8>) {
         agent_radius_m: h.info.agent_radius_m,
         client_queue: h.client_queue,
         max_line_bytes: MAX_LINE_BYTES,
+        privileged: h.privileged,
     };
     push_json_line(out, &v);
 }

@@ -6,35 +6,31 @@
 //! Lines are taken in order, each under [`protocol::MAX_LINE_BYTES`]. A line waits
 //! (unread bytes stay in the socket, so a flooding client is slowed by its own full
 //! buffer) while:
-//! * [`COMMAND_WINDOW`] of the client's replies are owed: commands the control
+//! * `COMMAND_WINDOW` of the client's replies are owed: commands the control
 //!   thread has not answered, and replies waiting behind them;
-//! * the client has used its budget of lines ([`LINES_PER_SECOND`], [`LINE_BURST`]
+//! * the client has used its budget of lines (`LINES_PER_SECOND`, `LINE_BURST`
 //!   at once);
 //! * it is a `hello` and a reply is owed: the hello changes the stream's format,
 //!   so it waits until every reply before it is out.
 //!
-//! So one client has at most [`COMMAND_WINDOW`] commands in the daemon's command
-//! queue, and cannot fill it for the others.
+//! So one client has at most `COMMAND_WINDOW` commands in the daemon's command
+//! queue, and cannot fill it for the others. The limits are the session's
+//! (`session.rs`), shared with the WebSocket transport.
 
-use super::budget::{Budget, LINES_PER_SECOND, LINE_BURST};
 use super::hub::Hub;
 use super::lines::{LineBuf, Next};
 use super::queue::ClientShared;
+use super::session::{Acted, Session};
 use super::stats::PublisherStats;
 use super::wire::Frame;
-use crate::publish::protocol::{self, ClientMessage, ClientSettings};
-use crate::vocab::{Command, CommandRequest, Micros};
-use crossbeam_channel::TrySendError;
+use crate::publish::protocol;
+use crate::vocab::Micros;
 use nix::sys::epoll::EpollFlags;
-use serde_json::Value;
 use std::io::ErrorKind;
 use std::os::unix::net::UnixStream;
 use std::sync::Arc;
 use std::time::Instant;
 
-/// Replies one client may be owed at once (commands sent to the control thread and
-/// not answered, and replies waiting behind them); further lines wait.
-pub const COMMAND_WINDOW: usize = 8;
 /// Bytes read from one client per round of the I/O loop, so a client that sends a
 /// lot does not delay the others.
 const READ_BUDGET_BYTES: usize = 16 * 1024;
@@ -66,9 +62,8 @@ pub(crate) struct Conn {
     pub stream: UnixStream,
     frame: Frame,
     lines: LineBuf,
-    rate: Budget,
-    /// A `hello` waiting for the replies before it to go out.
-    held: Option<ClientSettings>,
+    /// The client's limits and its held `hello`.
+    session: Session,
     /// The client shut its side (half-close) or its input was refused: read no more.
     input_done: bool,
     /// Lines wait (window, rate or a held hello): do not poll for input.
@@ -79,26 +74,22 @@ pub(crate) struct Conn {
     pub stalled_since: Option<Instant>,
     /// The events its socket is registered for.
     pub interest: EpollFlags,
-    /// It sent a `touch` command: its contacts are lifted when it leaves.
-    pub touched: bool,
 }
 
 impl Conn {
     /// A connection for `shared` on `stream` (already non-blocking).
     pub fn new(shared: Arc<ClientShared>, stream: UnixStream, now: Micros) -> Conn {
         Conn {
+            session: Session::new(Arc::clone(&shared), now),
             shared,
             stream,
             frame: Frame::default(),
             lines: LineBuf::default(),
-            rate: Budget::new(LINES_PER_SECOND, LINE_BURST, now),
-            held: None,
             input_done: false,
             paused: false,
             write: Write::Idle,
             stalled_since: None,
             interest: EpollFlags::empty(),
-            touched: false,
         }
     }
 
@@ -161,13 +152,9 @@ impl Conn {
         self.paused = false;
         let mut budget = READ_BUDGET_BYTES;
         loop {
-            if let Some(settings) = self.held {
-                if self.shared.lock().replies_waiting() > 0 {
-                    self.paused = true;
-                    return Fate::Keep;
-                }
-                self.held = None;
-                self.hello(hub, settings);
+            if !self.session.release_held(hub) {
+                self.paused = true;
+                return Fate::Keep;
             }
             if !self.take_lines(hub, now) {
                 return Fate::Keep;
@@ -205,7 +192,8 @@ impl Conn {
                         len,
                         max: protocol::MAX_LINE_BYTES,
                     };
-                    self.fatal(hub, &e);
+                    self.session.fatal(hub, &e.to_string());
+                    self.input_done = true;
                     return false;
                 }
                 Next::Line(r) => r,
@@ -216,107 +204,23 @@ impl Conn {
                 self.lines.consume();
                 continue;
             }
-            if self.shared.lock().replies_waiting() >= COMMAND_WINDOW || !self.rate.take(now) {
+            if !self.session.may_take(now) {
                 self.paused = true;
                 return false;
             }
-            let parsed = protocol::parse_client_message(line);
+            let acted = self.session.act(hub, line);
             self.lines.consume();
-            match parsed {
-                Ok(ClientMessage::Hello(settings)) => {
-                    if self.shared.lock().replies_waiting() > 0 {
-                        self.held = Some(settings);
-                        self.paused = true;
-                        return false;
-                    }
-                    self.hello(hub, settings);
+            match acted {
+                Acted::Done => {}
+                Acted::Held => {
+                    self.paused = true;
+                    return false;
                 }
-                Ok(ClientMessage::Command { id, command }) => self.command(hub, id, command),
-                Err(e) if !e.is_fatal() => {
-                    hub.stats.count_protocol_error();
-                    let mut json = Vec::new();
-                    protocol::encode_error(e.command_id(), &e.to_string(), false, &mut json);
-                    let mut q = self.shared.lock();
-                    if q.accepting() {
-                        if let Err(o) = q.reply(json.into()) {
-                            q.fail(&o.to_string());
-                        }
-                    }
-                }
-                Err(e) => {
-                    self.fatal(hub, &e);
+                Acted::Fatal => {
+                    self.input_done = true;
                     return false;
                 }
             }
-        }
-    }
-
-    /// A fatal protocol error: the client is told and closed; its input is over.
-    fn fatal(&mut self, hub: &Hub, e: &protocol::ProtocolError) {
-        hub.stats.count_protocol_error();
-        log::info!("client {}: protocol error: {e}; disconnecting", self.id());
-        self.shared.lock().fail(&e.to_string());
-        self.input_done = true;
-    }
-
-    /// A client `hello`: the reply in the old format, then the new settings.
-    fn hello(&mut self, hub: &Hub, settings: ClientSettings) {
-        let reply = hub.hello(self.id(), &settings);
-        let mut q = self.shared.lock();
-        if !q.accepting() {
-            return;
-        }
-        // The reply is the last message in the old format.
-        let old = q.settings;
-        let mut result = q.push_message(reply, old.format);
-        q.settings = settings;
-        q.rate_next_due_us = 0;
-        if !settings.subscriptions.mesh {
-            q.mesh_topology = None;
-        } else if !old.subscriptions.mesh {
-            // Read under the queue's lock: a newer mesh the publisher queues after
-            // this sees the subscription and replaces this one.
-            if let Some((json, topology)) = hub.latest_mesh_json() {
-                q.take_queued_mesh();
-                q.mesh_topology = Some(topology);
-                result = result.and(q.push_mesh(json, true));
-            }
-        }
-        if let Err(o) = result {
-            q.fail(&o.to_string());
-        }
-    }
-
-    /// A command: to the control thread (its answer comes back through the
-    /// publisher), or refused on the spot when the command queue is full.
-    fn command(&mut self, hub: &Hub, id: Value, command: Command) {
-        {
-            let mut q = self.shared.lock();
-            if !q.accepting() {
-                return;
-            }
-            // The slot is taken before the control thread can answer.
-            q.expect_reply(id.clone(), Instant::now());
-        }
-        self.touched |= matches!(command, Command::Touch { .. });
-        let request = CommandRequest {
-            client: self.id(),
-            id,
-            command,
-        };
-        let (id, message) = match hub.commands.try_send(request) {
-            Ok(()) => return,
-            Err(TrySendError::Full(r)) => {
-                hub.stats.count_busy();
-                (r.id, "busy: the daemon's command queue is full; try again")
-            }
-            Err(TrySendError::Disconnected(r)) => (r.id, "the daemon is shutting down"),
-        };
-        let mut json = Vec::new();
-        protocol::encode_error(Some(&id), message, false, &mut json);
-        let mut q = self.shared.lock();
-        if let Err(o) = q.refuse_newest(json.into()) {
-            q.fail(&o.to_string());
         }
     }
 }

@@ -65,6 +65,17 @@ pub enum Error {
         #[source]
         source: std::io::Error,
     },
+    /// A user or group listed in `socket.privileged` does not exist (or cannot be
+    /// looked up).
+    #[error("{kind} `{name}` in socket.privileged.{kind}s: {reason}")]
+    UnknownPeer {
+        /// `user` or `group`.
+        kind: &'static str,
+        /// As configured.
+        name: String,
+        /// Why it cannot be resolved.
+        reason: String,
+    },
     /// The configured group does not exist.
     #[error("socket group `{group}` does not exist (config socket.group)")]
     UnknownGroup {

@@ -1,13 +1,14 @@
 //! What the publisher thread and the I/O thread share: the connected clients, the
 //! facts every hello carries, the newest mesh, the command channel and the wake-up.
 
+use super::privilege::PeerPolicy;
 use super::queue::ClientShared;
 use super::stats::{lock, PublisherStats};
 use crate::publish::protocol::{self, ClientSettings, HelloInfo, ServerHello};
 use crate::vocab::{ClientId, CommandRequest, MeshView};
 use crossbeam_channel::Sender;
 use nix::sys::eventfd::{EfdFlags, EventFd};
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// The newest mesh, and its JSON line with triangles once a client needed it.
@@ -42,6 +43,15 @@ pub(crate) struct Hub {
     pub closing: AtomicBool,
     /// Wakes the I/O thread (it polls this eventfd with the sockets).
     wake: EventFd,
+    /// Wakes the WebSocket I/O threads, one eventfd each.
+    extra_wakes: Vec<EventFd>,
+    /// The next client's id (shared by every transport: replies find their client
+    /// by it).
+    next_id: AtomicU64,
+    /// Which Unix-socket peers are privileged.
+    pub peers: PeerPolicy,
+    /// The daemon's own user id (its clients are privileged).
+    pub own_uid: u32,
 }
 
 impl Hub {
@@ -52,6 +62,7 @@ impl Hub {
         commands: Sender<CommandRequest>,
         stats: Arc<PublisherStats>,
         wake: EventFd,
+        peers: PeerPolicy,
     ) -> Hub {
         Hub {
             agents: AtomicU32::new(info.agents),
@@ -63,7 +74,21 @@ impl Hub {
             clients: Mutex::new(Vec::new()),
             closing: AtomicBool::new(false),
             wake,
+            extra_wakes: Vec::new(),
+            next_id: AtomicU64::new(1),
+            peers,
+            own_uid: nix::unistd::getuid().as_raw(),
         }
+    }
+
+    /// The connected clients (the WebSocket transport adds and removes its own).
+    pub fn lock_clients(&self) -> std::sync::MutexGuard<'_, Vec<Arc<ClientShared>>> {
+        lock(&self.clients)
+    }
+
+    /// A new client's id, unique while the daemon runs.
+    pub fn next_client_id(&self) -> ClientId {
+        self.next_id.fetch_add(1, Ordering::Relaxed)
     }
 
     /// A non-blocking eventfd for [`Hub::new`].
@@ -79,10 +104,24 @@ impl Hub {
         &self.wake
     }
 
-    /// Wakes the I/O thread: something was queued for a client, or an answer came.
+    /// The hub with more I/O threads to wake (the WebSocket transports').
+    pub fn with_extra_wakes(mut self, wakes: Vec<EventFd>) -> Hub {
+        self.extra_wakes = wakes;
+        self
+    }
+
+    /// The eventfd extra I/O thread `i` polls.
+    pub fn extra_wake_source(&self, i: usize) -> Option<&EventFd> {
+        self.extra_wakes.get(i)
+    }
+
+    /// Wakes the I/O threads: something was queued for a client, or an answer came.
     pub fn wake(&self) {
         // Only fails when the counter is near u64::MAX (then it is readable anyway).
         let _ = self.wake.write(1);
+        for w in &self.extra_wakes {
+            let _ = w.write(1);
+        }
     }
 
     /// Clears the wake-up (the I/O thread, before it looks at every client).
@@ -95,13 +134,27 @@ impl Hub {
         self.closing.load(Ordering::Acquire)
     }
 
+    /// Lifts the contacts a leaving client sent with `touch`, now rather than at the
+    /// touch timeout: an empty `touch` with a null id (no answer). A full command
+    /// queue leaves it to the timeout.
+    pub fn lift_touches(&self, client: ClientId) {
+        let _ = self.commands.try_send(CommandRequest {
+            client,
+            id: serde_json::Value::Null,
+            command: crate::vocab::Command::Touch {
+                contacts: Vec::new(),
+            },
+        });
+    }
+
     /// The server hello for a client with these settings.
-    pub fn hello(&self, client: ClientId, settings: &ClientSettings) -> Arc<[u8]> {
+    pub fn hello(&self, client: &ClientShared, settings: &ClientSettings) -> Arc<[u8]> {
         let mut out = Vec::with_capacity(512);
         protocol::encode_server_hello(
             &ServerHello {
                 info: &self.info,
-                client,
+                client: client.id,
+                privileged: client.privileged,
                 agents: self.agents.load(Ordering::Relaxed),
                 settings,
                 client_queue: self.client_queue,

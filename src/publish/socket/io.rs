@@ -13,7 +13,6 @@ use super::queue::ClientShared;
 use super::stats::lock;
 use crate::publish::protocol;
 use crate::rt::monotonic_now;
-use crate::vocab::{Command, CommandRequest};
 use nix::sys::epoll::{Epoll, EpollEvent, EpollFlags, EpollTimeout};
 use std::io::ErrorKind;
 use std::net::Shutdown;
@@ -56,7 +55,6 @@ pub(crate) struct IoLoop {
     epoll: Epoll,
     conns: Vec<Option<Conn>>,
     free: Vec<usize>,
-    next_id: u64,
     last_accept_log: Option<Instant>,
     last_housekeeping: Instant,
     shutdown_since: Option<Instant>,
@@ -90,7 +88,6 @@ impl IoLoop {
             epoll,
             conns: Vec::new(),
             free: Vec::new(),
-            next_id: 1,
             last_accept_log: None,
             last_housekeeping: Instant::now(),
             shutdown_since: None,
@@ -251,16 +248,8 @@ impl IoLoop {
             return;
         };
         self.free.push(slot);
-        if c.touched {
-            // Its contacts are lifted now rather than at the touch timeout; a
-            // null id: no answer. A full queue leaves it to the timeout.
-            let _ = self.hub.commands.try_send(CommandRequest {
-                client: c.id(),
-                id: serde_json::Value::Null,
-                command: Command::Touch {
-                    contacts: Vec::new(),
-                },
-            });
+        if c.session.touched {
+            self.hub.lift_touches(c.id());
         }
         c.shared.lock().dead = true;
         let _ = self.epoll.delete(&c.stream);
@@ -326,7 +315,8 @@ impl IoLoop {
             log::warn!("a client: cannot set up the connection: {e}");
             return;
         }
-        let connected = lock(&self.hub.clients).len();
+        // This socket's clients (WebSocket clients have their own limit).
+        let connected = self.conns.iter().flatten().count();
         let max = stats.max_clients() as usize;
         if connected >= max {
             stats.clients_refused.fetch_add(1, Ordering::Relaxed);
@@ -344,8 +334,9 @@ impl IoLoop {
             let _ = stream.shutdown(Shutdown::Both);
             return;
         }
-        let id = self.next_id;
-        self.next_id += 1;
+        let id = self.hub.next_client_id();
+        let privileged = super::privilege::peer_credentials(&stream)
+            .is_some_and(|peer| self.hub.peers.privileged(&peer, self.hub.own_uid));
         // A kernel buffer that holds several large snapshots, so a client that reads a
         // little late does not fill it (the kernel caps this at wmem_max).
         let _ = nix::sys::socket::setsockopt(
@@ -366,13 +357,13 @@ impl IoLoop {
             self.free.push(slot);
             return;
         }
-        let shared = Arc::new(ClientShared::new(id));
+        let shared = Arc::new(ClientShared::with_privilege(id, privileged));
         {
             // Under the list's lock: a mesh the publisher sends next finds this
             // client in the list; one it sent before is the latest mesh read here.
             let mut clients = lock(&self.hub.clients);
             let mut q = shared.lock();
-            let hello = self.hub.hello(id, &q.settings);
+            let hello = self.hub.hello(&shared, &q.settings);
             let _ = q.push_message(hello, protocol::Format::Json);
             if let Some((json, topology)) = self.hub.latest_mesh_json() {
                 q.mesh_topology = Some(topology);
@@ -383,7 +374,14 @@ impl IoLoop {
         }
         stats.clients.fetch_add(1, Ordering::Relaxed);
         stats.clients_accepted.fetch_add(1, Ordering::Relaxed);
-        log::debug!("client {id}: connected");
+        log::debug!(
+            "client {id}: connected ({})",
+            if privileged {
+                "privileged"
+            } else {
+                "read-only"
+            }
+        );
         let mut c = Conn::new(shared, stream, monotonic_now());
         c.interest = want;
         let fate = c.flush(&self.hub.stats, Instant::now());

@@ -60,18 +60,27 @@ mod hub;
 mod io;
 mod lines;
 pub mod preflight;
+mod privilege;
 mod publisher;
 mod queue;
 mod server;
+mod session;
 mod stats;
 mod wire;
 
 pub use budget::{ACCEPTS_PER_SECOND, ACCEPT_BURST, LINES_PER_SECOND, LINE_BURST};
-pub use conn::COMMAND_WINDOW;
 pub use error::Error;
 pub use io::{CLIENT_SNDBUF_BYTES, SHUTDOWN_GRACE, WRITE_STALL_TIMEOUT};
+pub use privilege::{peer_credentials, PeerCredentials, PeerPolicy};
 pub use queue::{CLOSE_GRACE, MAX_BACKLOG_BYTES, MAX_BACKLOG_MESSAGES, REPLY_TIMEOUT};
 pub use server::{
     Server, SocketOptions, FINAL_MESSAGES_WAIT, IO_THREAD_STACK_BYTES, QUEUE_CAPACITY,
 };
+pub use session::COMMAND_WINDOW;
 pub use stats::PublisherStats;
+// For the WebSocket transport (`publish::websocket`): its clients are this
+// publisher's clients.
+pub(crate) use budget::Budget;
+pub(crate) use hub::Hub;
+pub(crate) use queue::{ClientShared, Item};
+pub(crate) use session::{Acted, Session};

@@ -3,6 +3,7 @@
 //! config is refused for the same reasons, in the same words, before start-up.
 
 use super::error::Error;
+use super::privilege::PeerPolicy;
 use std::io::ErrorKind;
 use std::os::unix::fs::FileTypeExt;
 use std::os::unix::net::UnixStream;
@@ -132,6 +133,43 @@ pub fn lookup_group(group: &str) -> Result<nix::unistd::Gid, Error> {
     }
 }
 
+/// The privileged users and groups of `socket.privileged`, names or numeric ids,
+/// resolved to ids.
+///
+/// # Errors
+/// [`Error::UnknownPeer`] naming the first that does not resolve.
+pub fn resolve_peers(users: &[String], groups: &[String]) -> Result<PeerPolicy, Error> {
+    let unknown = |kind: &'static str, name: &str, reason: String| Error::UnknownPeer {
+        kind,
+        name: name.to_string(),
+        reason,
+    };
+    let mut policy = PeerPolicy::default();
+    for u in users {
+        let uid = match u.parse::<u32>() {
+            Ok(id) => id,
+            Err(_) => match nix::unistd::User::from_name(u) {
+                Ok(Some(user)) => user.uid.as_raw(),
+                Ok(None) => return Err(unknown("user", u, "no such user".to_string())),
+                Err(e) => return Err(unknown("user", u, format!("cannot be looked up: {e}"))),
+            },
+        };
+        policy.users.push(uid);
+    }
+    for g in groups {
+        let gid = match g.parse::<u32>() {
+            Ok(id) => id,
+            Err(_) => match nix::unistd::Group::from_name(g) {
+                Ok(Some(group)) => group.gid.as_raw(),
+                Ok(None) => return Err(unknown("group", g, "no such group".to_string())),
+                Err(e) => return Err(unknown("group", g, format!("cannot be looked up: {e}"))),
+            },
+        };
+        policy.groups.push(gid);
+    }
+    Ok(policy)
+}
+
 /// Whether this process may give a file it owns to group `gid` (`chown` to a
 /// group: root, or a member of it).
 pub fn may_use_group(gid: nix::unistd::Gid) -> bool {
@@ -211,5 +249,22 @@ mod tests {
             assert_eq!(lookup_group(&g.name).unwrap(), own);
         }
         assert!(may_use_group(own));
+    }
+
+    #[test]
+    fn privileged_peers_resolve_by_name_or_id() {
+        let p = resolve_peers(
+            &["root".to_string(), "1234".to_string()],
+            &["0".to_string()],
+        )
+        .unwrap();
+        assert_eq!((p.users, p.groups), (vec![0, 1234], vec![0]));
+        let e = resolve_peers(&["no-such-user-crowdtouch".to_string()], &[]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "user `no-such-user-crowdtouch` in socket.privileged.users: no such user"
+        );
+        let e = resolve_peers(&[], &["no-such-group-crowdtouch".to_string()]).unwrap_err();
+        assert!(e.to_string().contains("socket.privileged.groups"), "{e}");
     }
 }

@@ -358,20 +358,38 @@ impl Queue {
     }
 }
 
+/// The settings a client may have: a read-only client never gets the raw touches.
+pub(crate) fn restrict(mut settings: ClientSettings, privileged: bool) -> ClientSettings {
+    settings.fields.touches &= privileged;
+    settings
+}
+
 /// What the publisher and the I/O thread share about one client.
 #[derive(Debug)]
 pub(crate) struct ClientShared {
     /// The client's id.
     pub id: crate::vocab::ClientId,
+    /// Whether the client is privileged (raw touches, commands); fixed at connect.
+    pub privileged: bool,
     queue: Mutex<Queue>,
 }
 
 impl ClientShared {
-    /// A new client with default settings and an empty queue.
+    /// A new privileged client with default settings and an empty queue.
+    #[cfg(test)]
     pub fn new(id: crate::vocab::ClientId) -> ClientShared {
+        ClientShared::with_privilege(id, true)
+    }
+
+    /// A new client with default settings (a read-only client's without the raw
+    /// touches) and an empty queue.
+    pub fn with_privilege(id: crate::vocab::ClientId, privileged: bool) -> ClientShared {
+        let mut q = Queue::new();
+        q.settings = restrict(q.settings, privileged);
         ClientShared {
             id,
-            queue: Mutex::new(Queue::new()),
+            privileged,
+            queue: Mutex::new(q),
         }
     }
 

@@ -5,12 +5,14 @@ use super::error::Error;
 use super::hub::Hub;
 use super::io::IoLoop;
 use super::preflight::{self, PathState};
+use super::privilege::PeerPolicy;
 use super::publisher::Publisher;
 use super::stats::PublisherStats;
 use crate::publish::output::{
     ClientLimit, Output, OutputContext, OutputStats, Overflow, QueuePolicy,
 };
 use crate::publish::protocol::HelloInfo;
+use crate::publish::websocket::{WebSocketListener, WsLoop};
 use crate::publish::Outgoing;
 use crate::vocab::CommandRequest;
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender};
@@ -66,6 +68,10 @@ pub struct Server {
     stats: Arc<PublisherStats>,
     /// SCHED_FIFO priority for the I/O thread (`None`: normal scheduling).
     realtime: Option<u8>,
+    /// Which peers are privileged.
+    peers: PeerPolicy,
+    /// WebSocket listeners whose clients this publisher also serves.
+    websockets: Vec<WebSocketListener>,
 }
 
 #[derive(Debug)]
@@ -167,6 +173,8 @@ impl Server {
             ident,
             client_queue: opts.client_queue,
             realtime: None,
+            peers: PeerPolicy::default(),
+            websockets: Vec::new(),
             hello,
             stats: Arc::new(stats),
         })
@@ -181,6 +189,21 @@ impl Server {
     /// limit ([`PublisherStats::set_max_clients`]).
     pub fn stats(&self) -> Arc<PublisherStats> {
         Arc::clone(&self.stats)
+    }
+
+    /// Makes the peers `peers` lists privileged, besides root and the daemon's
+    /// own user (`socket.privileged`).
+    pub fn with_privileged(mut self, peers: PeerPolicy) -> Server {
+        self.peers = peers;
+        self
+    }
+
+    /// Also serves the WebSocket clients of `listener` (an I/O thread of its own,
+    /// `ct-ws-io`, on this publisher's clients: one encoding per format for both
+    /// transports).
+    pub fn with_websocket(mut self, listener: WebSocketListener) -> Server {
+        self.websockets.push(listener);
+        self
     }
 
     /// Runs the I/O thread under SCHED_FIFO at `priority` (it writes the snapshots:
@@ -215,13 +238,59 @@ impl Server {
         else {
             return;
         };
-        let hub = Arc::new(Hub::new(
-            self.hello.clone(),
-            self.client_queue,
-            commands,
-            Arc::clone(&self.stats),
-            wake,
-        ));
+        let websockets = std::mem::take(&mut self.websockets);
+        let mut extra_wakes = Vec::with_capacity(websockets.len());
+        let mut ws_parts = Vec::with_capacity(websockets.len());
+        for l in websockets {
+            match Hub::wake_fd() {
+                Ok(w) => {
+                    extra_wakes.push(w);
+                    ws_parts.push(l);
+                }
+                Err(e) => log::error!(
+                    "WebSocket {}: cannot create its wake-up ({e}); no client can connect",
+                    l.local_addr()
+                ),
+            }
+        }
+        let hub = Arc::new(
+            Hub::new(
+                self.hello.clone(),
+                self.client_queue,
+                commands,
+                Arc::clone(&self.stats),
+                wake,
+                self.peers.clone(),
+            )
+            .with_extra_wakes(extra_wakes),
+        );
+        let mut ws_threads = Vec::new();
+        for (i, l) in ws_parts.into_iter().enumerate() {
+            let addr = l.local_addr();
+            let ws = match WsLoop::new(Arc::clone(&hub), l, i) {
+                Ok(ws) => ws,
+                Err(e) => {
+                    log::error!("WebSocket {addr}: cannot poll ({e}); no client can connect");
+                    continue;
+                }
+            };
+            let realtime = self.realtime;
+            let spawned = std::thread::Builder::new()
+                .name("ct-ws-io".into())
+                .stack_size(IO_THREAD_STACK_BYTES)
+                .spawn(move || {
+                    if let Some(p) = realtime {
+                        crate::rt::make_realtime(p, "WebSocket I/O");
+                    }
+                    ws.run()
+                });
+            match spawned {
+                Ok(t) => ws_threads.push(t),
+                Err(e) => log::error!(
+                    "WebSocket {addr}: cannot start its I/O thread ({e}); no client can connect"
+                ),
+            }
+        }
         let realtime = self.realtime;
         let io = match IoLoop::new(Arc::clone(&hub), listener, path.clone(), epoll) {
             Ok(io) => io,
@@ -286,6 +355,9 @@ impl Server {
         hub.closing.store(true, Ordering::Release);
         hub.wake();
         let _ = io_thread.join();
+        for t in ws_threads {
+            let _ = t.join();
+        }
         log::info!("{}: closed", path.display());
     }
 }

@@ -40,6 +40,10 @@ pub struct PublisherStats {
     pub(super) bytes_written: AtomicU64,
     pub(super) protocol_errors: AtomicU64,
     pub(super) commands_busy: AtomicU64,
+    pub(super) read_only_refusals: AtomicU64,
+    pub(super) ws_refused: AtomicU64,
+    pub(super) ws_oversize: AtomicU64,
+    pub(super) ws_bad_frames: AtomicU64,
     pub(super) end_to_end: Mutex<Histogram<u64>>,
     pub(super) encode: Mutex<Histogram<u64>>,
 }
@@ -58,6 +62,10 @@ impl Default for PublisherStats {
             bytes_written: AtomicU64::new(0),
             protocol_errors: AtomicU64::new(0),
             commands_busy: AtomicU64::new(0),
+            read_only_refusals: AtomicU64::new(0),
+            ws_refused: AtomicU64::new(0),
+            ws_oversize: AtomicU64::new(0),
+            ws_bad_frames: AtomicU64::new(0),
             end_to_end: Mutex::new(new_histogram()),
             encode: Mutex::new(new_histogram()),
         }
@@ -113,6 +121,24 @@ impl PublisherStats {
     pub fn protocol_errors(&self) -> u64 {
         self.protocol_errors.load(Ordering::Relaxed)
     }
+    /// Commands refused because the client is read-only, since start.
+    pub fn read_only_refusals(&self) -> u64 {
+        self.read_only_refusals.load(Ordering::Relaxed)
+    }
+    /// WebSocket connections refused before the upgrade (a wrong or missing token,
+    /// an unknown path or method, an oversize request head, too many clients).
+    pub fn websocket_refused(&self) -> u64 {
+        self.ws_refused.load(Ordering::Relaxed)
+    }
+    /// WebSocket messages over the output's `max_message_bytes` (each closed its
+    /// connection), since start.
+    pub fn websocket_oversize(&self) -> u64 {
+        self.ws_oversize.load(Ordering::Relaxed)
+    }
+    /// Bad WebSocket frames (text not UTF-8, protocol violations), since start.
+    pub fn websocket_bad_frames(&self) -> u64 {
+        self.ws_bad_frames.load(Ordering::Relaxed)
+    }
     /// Commands refused "busy" because the command queue was full, since start.
     pub fn commands_busy(&self) -> u64 {
         self.commands_busy.load(Ordering::Relaxed)
@@ -155,6 +181,36 @@ impl PublisherStats {
 
     pub(crate) fn count_busy(&self) {
         self.commands_busy.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Counts a client that connected (another transport's).
+    pub(crate) fn count_client_connected(&self) {
+        self.clients.fetch_add(1, Ordering::Relaxed);
+        self.clients_accepted.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Counts a client that left (another transport's).
+    pub(crate) fn count_client_gone(&self) {
+        self.clients.fetch_sub(1, Ordering::Relaxed);
+    }
+
+    pub(crate) fn count_read_only_refusal(&self) {
+        self.read_only_refusals.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Counts a refused WebSocket handshake (401, 404, 405, 431, 400, too many).
+    pub(crate) fn count_ws_refused(&self) {
+        self.ws_refused.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Counts a WebSocket message over the output's `max_message_bytes`.
+    pub(crate) fn count_ws_oversize(&self) {
+        self.ws_oversize.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Counts a bad WebSocket frame (not UTF-8, a protocol violation).
+    pub(crate) fn count_ws_bad_frame(&self) {
+        self.ws_bad_frames.fetch_add(1, Ordering::Relaxed);
     }
 }
 

@@ -147,12 +147,14 @@ fn server_hello_echoes_settings() {
             agents: 12,
             settings: &settings,
             client_queue: 8,
+            privileged: false,
         },
         &mut out,
     );
     assert!(out.starts_with(b"{\"type\":\"hello\",\"protocol\":1,"));
     let v: Value = serde_json::from_slice(&out).unwrap();
     assert_eq!(v["protocol"], 1);
+    assert_eq!(v["privileged"], false, "the client is told it is read-only");
     assert_eq!(v["format"], "binary");
     assert_eq!(
         v["subscriptions"],

@@ -1,0 +1,598 @@
+//! One WebSocket client as the WebSocket I/O thread serves it: first its HTTP
+//! request head (answered with the page, an error status or the upgrade), then the
+//! WebSocket stream, all on a non-blocking `TcpStream`.
+//!
+//! Once upgraded, the client is a client of the publisher like any Unix-socket
+//! client: the same queue ([`ClientShared`]) with the same drop policy, and its text
+//! messages go through the same [`Session`] (parser, command window, budget).
+//! Every queued message is one WebSocket message: JSON as a text message (without
+//! the newline), a binary snapshot as a binary message (the same bytes as on the
+//! Unix socket, its frame header included). A `dropped` notice is a text message
+//! of its own before the snapshot it is told with.
+
+use super::http::{self, HttpError, Request};
+use super::options::WebSocketOptions;
+use crate::publish::protocol::{self, Format};
+use crate::publish::socket::{Acted, ClientShared, Hub, Item, PublisherStats, Session};
+use crate::vocab::Micros;
+use nix::sys::epoll::EpollFlags;
+use std::io::{ErrorKind, Read, Write as _};
+use std::net::{Shutdown, SocketAddr, TcpStream};
+use std::sync::Arc;
+use std::time::Instant;
+use tungstenite::protocol::frame::coding::CloseCode;
+use tungstenite::protocol::frame::CloseFrame;
+use tungstenite::protocol::{Role, WebSocketConfig};
+use tungstenite::{Error as WsError, Message, WebSocket};
+
+/// Messages read from one client per round of the I/O loop.
+const READ_MESSAGES_PER_ROUND: usize = 16;
+
+/// What the I/O thread should do with a connection after serving it.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(crate) enum Fate {
+    /// Keep it.
+    Keep,
+    /// Remove it now.
+    Remove,
+}
+
+/// What the request head asked for, once answered.
+#[derive(Debug)]
+pub(crate) enum Answer {
+    /// Not complete yet.
+    Wait,
+    /// A response that ends the connection (page or error), and whether it is a
+    /// refusal (counted, logged).
+    Respond {
+        bytes: Vec<u8>,
+        refusal: Option<String>,
+    },
+    /// Upgrade: the 101 response, then the WebSocket stream.
+    Upgrade { bytes: Vec<u8>, rest: Vec<u8> },
+}
+
+/// Decides what to answer a complete request head, or [`Answer::Wait`].
+pub(crate) fn answer(buf: &[u8], opts: &WebSocketOptions, page: &str, clients: usize) -> Answer {
+    let refuse = |status: u16, reason: &str, extra: &str, why: String| Answer::Respond {
+        bytes: http::response(status, reason, extra, &format!("{why}\n")),
+        refusal: Some(format!("{status} {reason}: {why}")),
+    };
+    let (req, len): (Request, usize) = match http::parse_request_head(buf) {
+        Ok(Some(r)) => r,
+        Ok(None) => return Answer::Wait,
+        Err(e @ HttpError::TooLarge { .. }) => {
+            return refuse(431, "Request Header Fields Too Large", "", e.to_string())
+        }
+        Err(e) => return refuse(400, "Bad Request", "", e.to_string()),
+    };
+    if req.method != "GET" {
+        return refuse(
+            405,
+            "Method Not Allowed",
+            "Allow: GET\r\n",
+            format!("method {} is not allowed: only GET", req.method),
+        );
+    }
+    if !req.upgrade {
+        return match req.path.as_str() {
+            "/" | "/index.html" if opts.viewer => Answer::Respond {
+                bytes: http::page(page),
+                refusal: None,
+            },
+            "/ws" => refuse(
+                426,
+                "Upgrade Required",
+                "Upgrade: websocket\r\n",
+                "/ws is the WebSocket stream: connect with a WebSocket client".to_string(),
+            ),
+            p => refuse(404, "Not Found", "", format!("no such page: {p}")),
+        };
+    }
+    if let Some(token) = &opts.token {
+        let ok = req
+            .token()
+            .is_some_and(|t| http::constant_time_eq(t.as_bytes(), token.as_bytes()));
+        if !ok {
+            let why = if req.token().is_some() {
+                "wrong token"
+            } else {
+                "a token is required: ?token= on the URL or Authorization: Bearer"
+            };
+            return refuse(
+                401,
+                "Unauthorized",
+                "WWW-Authenticate: Bearer\r\n",
+                why.to_string(),
+            );
+        }
+    }
+    let Some(key) = req.key.as_deref().filter(|k| !k.is_empty()) else {
+        return refuse(
+            400,
+            "Bad Request",
+            "",
+            "a WebSocket upgrade needs Sec-WebSocket-Key".to_string(),
+        );
+    };
+    if req.version.as_deref() != Some("13") {
+        return refuse(
+            426,
+            "Upgrade Required",
+            "Sec-WebSocket-Version: 13\r\n",
+            format!(
+                "WebSocket version {:?} is not spoken: only 13",
+                req.version.as_deref().unwrap_or("")
+            ),
+        );
+    }
+    if clients >= opts.max_clients as usize {
+        return refuse(
+            503,
+            "Service Unavailable",
+            "",
+            format!("too many clients: {clients} connected (max_clients)"),
+        );
+    }
+    Answer::Upgrade {
+        bytes: http::switching_protocols(key),
+        rest: buf[len..].to_vec(),
+    }
+}
+
+/// Where a connection is in its life.
+enum Phase {
+    /// Reading the request head.
+    Head { stream: TcpStream, buf: Vec<u8> },
+    /// Writing a response; then the connection closes, or upgrades with `rest`
+    /// (bytes the client sent after its head).
+    Respond {
+        stream: TcpStream,
+        bytes: Vec<u8>,
+        sent: usize,
+        upgrade: Option<Vec<u8>>,
+    },
+    /// The WebSocket stream.
+    Open(Box<Open>),
+    /// Between two phases (never seen outside a method).
+    Gone,
+}
+
+/// An upgraded client.
+struct Open {
+    ws: WebSocket<TcpStream>,
+    session: Session,
+    /// A text message read and not yet taken (window, budget or a held hello).
+    pending: Option<Vec<u8>>,
+    /// The last write left bytes in tungstenite's buffer: flush when writable.
+    unflushed: bool,
+    /// No more input is taken (the client closed, or was refused).
+    input_done: bool,
+    /// The close frame is queued: the connection ends once it is out.
+    closed: bool,
+}
+
+/// One connection, owned by the WebSocket I/O thread.
+pub(crate) struct WsConn {
+    phase: Phase,
+    /// The peer, for log lines.
+    pub peer: SocketAddr,
+    /// When it connected (a request head must come within the handshake time).
+    pub since: Instant,
+    /// Lines wait (window, rate or a held hello): do not poll for input.
+    pub paused: bool,
+    /// The socket's buffer is full: wait until it is writable.
+    pub blocked: bool,
+    /// Since when the socket has taken no bytes while some were waiting.
+    pub stalled_since: Option<Instant>,
+    /// The events its socket is registered for.
+    pub interest: EpollFlags,
+}
+
+/// The close code and reason a finished queue ends with.
+fn closing_frame(code: CloseCode, reason: &str) -> CloseFrame {
+    // A close reason is at most 123 bytes.
+    let mut end = reason.len().min(123);
+    while !reason.is_char_boundary(end) {
+        end -= 1;
+    }
+    CloseFrame {
+        code,
+        reason: reason[..end].to_string().into(),
+    }
+}
+
+impl WsConn {
+    /// A new connection reading its request head.
+    pub fn new(stream: TcpStream, peer: SocketAddr) -> WsConn {
+        WsConn {
+            phase: Phase::Head {
+                stream,
+                buf: Vec::new(),
+            },
+            peer,
+            since: Instant::now(),
+            paused: false,
+            blocked: false,
+            stalled_since: None,
+            interest: EpollFlags::empty(),
+        }
+    }
+
+    /// The socket.
+    pub fn stream(&self) -> Option<&TcpStream> {
+        match &self.phase {
+            Phase::Head { stream, .. } | Phase::Respond { stream, .. } => Some(stream),
+            Phase::Open(o) => Some(o.ws.get_ref()),
+            Phase::Gone => None,
+        }
+    }
+
+    /// Whether it sent a `touch` command (its contacts are lifted when it leaves).
+    pub fn touched(&self) -> bool {
+        matches!(&self.phase, Phase::Open(o) if o.session.touched)
+    }
+
+    /// The publisher's side of this client, once upgraded.
+    pub fn shared(&self) -> Option<&Arc<ClientShared>> {
+        match &self.phase {
+            Phase::Open(o) => Some(&o.session.shared),
+            _ => None,
+        }
+    }
+
+    /// Whether the upgrade is done.
+    pub fn is_open(&self) -> bool {
+        matches!(self.phase, Phase::Open(_))
+    }
+
+    /// Whether to poll the socket for input.
+    pub fn wants_input(&self) -> bool {
+        match &self.phase {
+            Phase::Head { .. } => true,
+            Phase::Respond { .. } | Phase::Gone => false,
+            Phase::Open(o) => !self.paused && (!o.input_done || o.closed),
+        }
+    }
+
+    /// Reads the request head; once complete, answers it. `answer_head` decides.
+    pub fn head_input(
+        &mut self,
+        decide: impl FnOnce(&[u8]) -> Answer,
+        on_refusal: impl FnOnce(&str),
+    ) -> Fate {
+        let Phase::Head { stream, buf } = &mut self.phase else {
+            return Fate::Keep;
+        };
+        let mut chunk = [0u8; 2048];
+        loop {
+            if buf.len() > http::MAX_REQUEST_HEAD_BYTES {
+                break;
+            }
+            match stream.read(&mut chunk) {
+                Ok(0) => return Fate::Remove,
+                Ok(n) => buf.extend_from_slice(&chunk[..n]),
+                Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(_) => return Fate::Remove,
+            }
+        }
+        let (bytes, upgrade) = match decide(buf) {
+            Answer::Wait => return Fate::Keep,
+            Answer::Respond { bytes, refusal } => {
+                if let Some(why) = refusal {
+                    on_refusal(&why);
+                }
+                (bytes, None)
+            }
+            Answer::Upgrade { bytes, rest } => (bytes, Some(rest)),
+        };
+        let Phase::Head { stream, .. } = std::mem::replace(&mut self.phase, Phase::Gone) else {
+            return Fate::Remove;
+        };
+        self.phase = Phase::Respond {
+            stream,
+            bytes,
+            sent: 0,
+            upgrade,
+        };
+        Fate::Keep
+    }
+
+    /// Whether the response is written and the connection should upgrade now
+    /// (`Some(rest)`), or is done (`None` with [`Fate::Remove`]).
+    pub fn respond(&mut self, now: Instant) -> (Fate, Option<Vec<u8>>) {
+        let Phase::Respond {
+            stream,
+            bytes,
+            sent,
+            upgrade,
+        } = &mut self.phase
+        else {
+            return (Fate::Keep, None);
+        };
+        while *sent < bytes.len() {
+            match stream.write(&bytes[*sent..]) {
+                Ok(0) => return (Fate::Remove, None),
+                Ok(n) => {
+                    *sent += n;
+                    self.stalled_since = None;
+                }
+                Err(e) if e.kind() == ErrorKind::WouldBlock => {
+                    self.blocked = true;
+                    self.stalled_since.get_or_insert(now);
+                    return (Fate::Keep, None);
+                }
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(_) => return (Fate::Remove, None),
+            }
+        }
+        self.blocked = false;
+        match upgrade.take() {
+            Some(rest) => (Fate::Keep, Some(rest)),
+            None => {
+                let _ = stream.shutdown(Shutdown::Write);
+                (Fate::Remove, None)
+            }
+        }
+    }
+
+    /// Turns the written 101 response into the WebSocket stream of `shared`.
+    pub fn upgrade(
+        &mut self,
+        shared: Arc<ClientShared>,
+        rest: Vec<u8>,
+        max_message_bytes: usize,
+        now: Micros,
+    ) {
+        let Phase::Respond { stream, .. } = std::mem::replace(&mut self.phase, Phase::Gone) else {
+            return;
+        };
+        let config = WebSocketConfig::default()
+            .write_buffer_size(0)
+            .max_message_size(Some(max_message_bytes))
+            .max_frame_size(Some(max_message_bytes));
+        let ws = WebSocket::from_partially_read(stream, rest, Role::Server, Some(config));
+        self.phase = Phase::Open(Box::new(Open {
+            ws,
+            session: Session::new(shared, now),
+            pending: None,
+            unflushed: false,
+            input_done: false,
+            closed: false,
+        }));
+    }
+
+    /// Writes queued messages until the queue is empty or the socket is full.
+    pub fn flush(&mut self, stats: &PublisherStats, now: Instant) -> Fate {
+        let Phase::Open(o) = &mut self.phase else {
+            return Fate::Keep;
+        };
+        loop {
+            if o.unflushed || o.closed {
+                match o.ws.flush() {
+                    Ok(()) => o.unflushed = false,
+                    Err(WsError::Io(e)) if e.kind() == ErrorKind::WouldBlock => {
+                        self.blocked = true;
+                        self.stalled_since.get_or_insert(now);
+                        return Fate::Keep;
+                    }
+                    Err(WsError::ConnectionClosed) => return Fate::Remove,
+                    Err(_) => return Fate::Remove,
+                }
+                self.stalled_since = None;
+                if o.closed {
+                    // Our close frame is out: wait for the client's (read), or
+                    // until the close grace ends.
+                    self.blocked = false;
+                    return Fate::Keep;
+                }
+            }
+            let mut q = o.session.shared.lock();
+            if q.dead {
+                return Fate::Remove;
+            }
+            let Some((item, unnotified, total)) = q.pop() else {
+                self.blocked = false;
+                self.stalled_since = None;
+                if q.closing_since.is_some() {
+                    drop(q);
+                    let frame = if o.input_done {
+                        closing_frame(CloseCode::Policy, "protocol error: see the error message")
+                    } else {
+                        closing_frame(CloseCode::Away, "closing: see the last message")
+                    };
+                    o.closed = true;
+                    o.input_done = true;
+                    let _ = o.ws.close(Some(frame));
+                    continue;
+                }
+                return Fate::Keep;
+            };
+            drop(q);
+            let mut messages: [Option<Message>; 2] = [None, None];
+            if unnotified > 0 {
+                let mut notice = Vec::with_capacity(64);
+                protocol::encode_dropped(unnotified, total, &mut notice);
+                messages[0] = Some(text(notice));
+            }
+            let (message, len, snapshot) = ws_message(item, total);
+            messages[1] = Some(message);
+            for m in messages.into_iter().flatten() {
+                match o.ws.write(m) {
+                    Ok(()) => {}
+                    Err(WsError::Io(e)) if e.kind() == ErrorKind::WouldBlock => {
+                        // Kept in tungstenite's buffer; flushed when writable.
+                        o.unflushed = true;
+                    }
+                    Err(_) => return Fate::Remove,
+                }
+            }
+            stats.record_write(len, snapshot.is_some(), snapshot.flatten());
+            if o.unflushed {
+                self.blocked = true;
+                self.stalled_since.get_or_insert(now);
+                return Fate::Keep;
+            }
+        }
+    }
+
+    /// Reads what the client sent and acts on its messages, as far as its window,
+    /// its budget and the read budget allow.
+    pub fn input(&mut self, hub: &Hub, now: Micros) -> Fate {
+        let peer = self.peer;
+        let Phase::Open(o) = &mut self.phase else {
+            return Fate::Keep;
+        };
+        self.paused = false;
+        for _ in 0..READ_MESSAGES_PER_ROUND {
+            if !o.session.release_held(hub) {
+                self.paused = true;
+                return Fate::Keep;
+            }
+            if let Some(message) = o.pending.take() {
+                if !o.session.may_take(now) {
+                    o.pending = Some(message);
+                    self.paused = true;
+                    return Fate::Keep;
+                }
+                match o.session.act(hub, &message) {
+                    Acted::Done => {}
+                    Acted::Held => {
+                        self.paused = true;
+                        return Fate::Keep;
+                    }
+                    Acted::Fatal => o.input_done = true,
+                }
+            }
+            match o.ws.read() {
+                Ok(Message::Close(_)) => {
+                    // tungstenite answers the close; what is queued no longer matters.
+                    begin_close(o, None);
+                    return Fate::Keep;
+                }
+                Ok(_) if o.input_done => {}
+                Ok(Message::Text(t)) => o.pending = Some(t.as_bytes().to_vec()),
+                Ok(Message::Binary(_)) => {
+                    hub.stats.count_ws_bad_frame();
+                    o.session.answer(
+                        None,
+                        "binary messages are not read: send protocol messages as JSON text",
+                    );
+                }
+                Ok(_) => {} // ping (the pong is queued), pong
+                Err(WsError::Io(e)) if e.kind() == ErrorKind::WouldBlock => return Fate::Keep,
+                Err(WsError::Io(e)) if e.kind() == ErrorKind::Interrupted => {}
+                Err(WsError::Capacity(e)) => {
+                    hub.stats.count_ws_oversize();
+                    log::info!("WebSocket client {} ({peer}): {e}; closing", o.session.id());
+                    let limit = o.ws.get_config().max_message_size.unwrap_or(0);
+                    let reason = format!("message too big: the limit is {limit} bytes");
+                    begin_close(o, Some(closing_frame(CloseCode::Size, &reason)));
+                    return Fate::Keep;
+                }
+                Err(WsError::Utf8(_)) => {
+                    hub.stats.count_ws_bad_frame();
+                    log::info!(
+                        "WebSocket client {} ({peer}): a text message is not UTF-8; closing",
+                        o.session.id()
+                    );
+                    o.session
+                        .fatal(hub, "a text message is not valid UTF-8 (RFC 6455 §8.1)");
+                    o.input_done = true;
+                    return Fate::Keep;
+                }
+                Err(WsError::ConnectionClosed | WsError::AlreadyClosed) => return Fate::Remove,
+                Err(WsError::Protocol(e)) => {
+                    hub.stats.count_ws_bad_frame();
+                    log::info!(
+                        "WebSocket client {} ({peer}): protocol violation: {e}; closing",
+                        o.session.id()
+                    );
+                    return Fate::Remove;
+                }
+                Err(e) => {
+                    log::debug!("WebSocket client {} ({peer}): {e}", o.session.id());
+                    return Fate::Remove;
+                }
+            }
+        }
+        Fate::Keep
+    }
+
+    /// Whether the close handshake is under way (the connection ends soon).
+    pub fn closing(&self) -> bool {
+        matches!(&self.phase, Phase::Open(o) if o.closed)
+    }
+
+    /// Ends the connection: our side shut.
+    pub fn shut_down(&self) {
+        if let Some(s) = self.stream() {
+            let _ = s.shutdown(Shutdown::Both);
+        }
+    }
+}
+
+/// Stops the client's stream and input, and starts the close handshake (with
+/// `frame`, or as an answer to the client's close): the connection ends when the
+/// client answers, or after the close grace.
+fn begin_close(o: &mut Open, frame: Option<CloseFrame>) {
+    {
+        let mut q = o.session.shared.lock();
+        q.dead = true;
+        q.closing_since.get_or_insert_with(Instant::now);
+    }
+    o.input_done = true;
+    o.closed = true;
+    if frame.is_some() {
+        let _ = o.ws.close(frame);
+    }
+}
+
+/// A JSON message as a text message (newline removed).
+fn text(mut json: Vec<u8>) -> Message {
+    if json.last() == Some(&b'\n') {
+        json.pop();
+    }
+    match String::from_utf8(json) {
+        Ok(s) => Message::Text(s.into()),
+        // Our encoders write UTF-8; should one not, the bytes still go out.
+        Err(e) => Message::Binary(e.into_bytes().into()),
+    }
+}
+
+/// A queued item as one WebSocket message, its length, and for a snapshot its
+/// input time. `dropped_total` goes into a snapshot's `dropped`.
+fn ws_message(item: Item, dropped_total: u64) -> (Message, usize, Option<Option<Micros>>) {
+    match item {
+        Item::Snapshot(enc) => {
+            let at = enc.dropped_at.min(enc.bytes.len());
+            let m = match enc.format {
+                Format::Json => {
+                    let mut digits = itoa::Buffer::new();
+                    let d = digits.format(dropped_total).as_bytes();
+                    let mut v = Vec::with_capacity(enc.bytes.len() + d.len());
+                    v.extend_from_slice(&enc.bytes[..at]);
+                    v.extend_from_slice(d);
+                    v.extend_from_slice(&enc.bytes[at..]);
+                    text(v)
+                }
+                Format::Binary => {
+                    let mut v = enc.bytes.clone();
+                    let at = protocol::BINARY_DROPPED_OFFSET;
+                    if let Some(slot) = v.get_mut(at..at + 8) {
+                        slot.copy_from_slice(&dropped_total.to_le_bytes());
+                    }
+                    Message::Binary(v.into())
+                }
+            };
+            let len = m.len();
+            (m, len, Some(enc.input_t))
+        }
+        Item::Mesh { json, .. } | Item::Message { json, .. } => {
+            let m = text(json.to_vec());
+            let len = m.len();
+            (m, len, None)
+        }
+    }
+}
