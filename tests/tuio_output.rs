@@ -485,3 +485,101 @@ fn python_tuio_sees_touches_and_agents_in_tuio_1_1() {
         );
     }
 }
+
+/// The output alone, fed by hand: a touch lifted while the rate limit holds frames
+/// back still leaves the alive list, and the snapshots in between are counted as
+/// skipped, not lost.
+#[test]
+fn a_lift_between_rate_limited_frames_still_reaches_the_renderer() {
+    use crowdtouch::publish::tuio::{TuioOptions, TuioOutput, Version};
+    use crowdtouch::publish::{Outgoing, OutputContext, OutputSet};
+    use crowdtouch::vocab::{Snapshot, TouchView};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    let renderer = UdpSocket::bind((Ipv4Addr::LOCALHOST, 0)).unwrap();
+    renderer
+        .set_read_timeout(Some(Duration::from_millis(200)))
+        .unwrap();
+    let output = TuioOutput::new(TuioOptions {
+        target: renderer.local_addr().unwrap().to_string(),
+        version: Version::V1_1,
+        cursors: true,
+        objects: false,
+        blobs: false,
+        rate_hz: 2.0,
+        max_datagram_bytes: 1472,
+        source: "test".to_string(),
+        world: Rect {
+            min: [0.0, 0.0],
+            max: [1.0, 1.0],
+        },
+    })
+    .unwrap();
+    let stats = output.tuio_stats();
+    let mut set = OutputSet::default();
+    set.add(Box::new(output));
+    let (outputs, mut running) = set.connect();
+    let (output, rx) = running.pop().unwrap();
+    let (commands, _keep) = crossbeam_channel::bounded(1);
+    let stop = Arc::new(AtomicBool::new(false));
+    let ctx = OutputContext {
+        messages: rx,
+        commands,
+        stop: Arc::clone(&stop),
+    };
+    let thread = std::thread::spawn(move || output.run(ctx));
+    let snap = |seq: u64, touch: bool| {
+        Outgoing::Snapshot(Arc::new(Snapshot {
+            seq,
+            t: Micros(seq * 1000),
+            touches: if touch {
+                vec![TouchView {
+                    id: 1,
+                    pos: Vec2::new(0.25, 0.5),
+                    control: None,
+                }]
+            } else {
+                vec![]
+            },
+            ..Snapshot::default()
+        }))
+    };
+    // The alive list of the next bundle the renderer gets.
+    let next_alive = || -> Option<Vec<i32>> {
+        let end = Instant::now() + Duration::from_secs(10);
+        let mut buf = [0u8; 2048];
+        while Instant::now() < end {
+            let Ok(n) = renderer.recv(&mut buf) else {
+                continue;
+            };
+            let (_, packet) = rosc::decoder::decode_udp(&buf[..n]).unwrap();
+            let rosc::OscPacket::Bundle(b) = packet else {
+                panic!("not a bundle")
+            };
+            for p in b.content {
+                if let rosc::OscPacket::Message(m) = p {
+                    if m.args.first() == Some(&rosc::OscType::String("alive".into())) {
+                        return Some(m.args[1..].iter().filter_map(|a| a.clone().int()).collect());
+                    }
+                }
+            }
+        }
+        None
+    };
+    // The first goes out at once.
+    outputs.send(snap(1, true));
+    let mut alive_lists = vec![next_alive().expect("the first frame")];
+    // The next two wait for the rate limit, the second (the lift) replacing the
+    // first; nothing comes after them.
+    outputs.send(snap(2, true));
+    outputs.send(snap(3, false));
+    alive_lists.push(next_alive().expect("the lift's frame"));
+    stop.store(true, Ordering::Relaxed);
+    thread.join().unwrap();
+    assert_eq!(alive_lists.len(), 2, "{alive_lists:?}");
+    assert_eq!(alive_lists[0].len(), 1, "the touch, first");
+    assert!(alive_lists[1].is_empty(), "then the lift");
+    assert_eq!(stats.skipped(), 1, "snapshot 2 was replaced by 3");
+    assert_eq!(stats.frames(), 3, "two frames and the goodbye");
+}
