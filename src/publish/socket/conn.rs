@@ -77,6 +77,11 @@ pub(crate) struct Conn {
 }
 
 impl Conn {
+    /// Whether it sent a `touch` command (its contacts are lifted when it leaves).
+    pub fn touched(&self) -> bool {
+        self.session.touched
+    }
+
     /// A connection for `shared` on `stream` (already non-blocking).
     pub fn new(shared: Arc<ClientShared>, stream: UnixStream, now: Micros) -> Conn {
         Conn {

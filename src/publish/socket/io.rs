@@ -248,7 +248,7 @@ impl IoLoop {
             return;
         };
         self.free.push(slot);
-        if c.session.touched {
+        if c.touched() {
             self.hub.lift_touches(c.id());
         }
         c.shared.lock().dead = true;
