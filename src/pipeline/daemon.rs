@@ -57,6 +57,8 @@ pub struct Daemon {
     /// Every output's counters (the socket's among them).
     outputs: Vec<Arc<dyn OutputStats>>,
     input_counters: Arc<InputCounters>,
+    /// Every TUIO input's counters, with the address it listens on (`stats`).
+    tuio_inputs: Vec<(String, Arc<crate::input::tuio::TuioCounters>)>,
     heartbeat_us: Arc<AtomicU64>,
     control_stats: Receiver<ControlStats>,
     out: Outputs,
@@ -242,6 +244,19 @@ impl Daemon {
             Start::realtime(priority, "control");
             ctl.run()
         })?;
+        let tuio_inputs: Vec<_> = sources
+            .iter()
+            .filter_map(|s| match s {
+                SourceSpec::Tuio { source, .. } => Some((
+                    source
+                        .local_addr()
+                        .map(|a| a.to_string())
+                        .unwrap_or_default(),
+                    source.counters(),
+                )),
+                _ => None,
+            })
+            .collect();
         for (i, source) in sources.into_iter().enumerate() {
             let queue = FrameQueue::new(frame_tx.clone(), i as u16, Arc::clone(&input_counters));
             start.spawn_input(source, queue, &cmd_tx, &out)?;
@@ -265,6 +280,7 @@ impl Daemon {
             publisher,
             outputs: output_stats,
             input_counters,
+            tuio_inputs,
             heartbeat_us,
             control_stats: cstats_rx,
             out,
@@ -439,7 +455,12 @@ impl Daemon {
             transforms: cs.transforms,
             last_transform: cs.last_transform,
             restart_pending: self.restart_pending.clone(),
-            outputs: self.outputs.iter().filter_map(|o| o.counters()).collect(),
+            outputs: self
+                .outputs
+                .iter()
+                .filter_map(|o| o.counters())
+                .chain(self.tuio_inputs.iter().map(|(a, c)| c.report(a)))
+                .collect(),
         });
         self.out.send(Outgoing::Stats(Arc::clone(&report)));
         Some(report)

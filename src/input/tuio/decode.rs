@@ -82,6 +82,33 @@ pub struct TuioCounters {
     pub flood_dropped: AtomicU64,
 }
 
+impl TuioCounters {
+    /// The counts for `stats` (its `outputs` list, as `tuio-input` at `address`).
+    pub fn report(&self, address: &str) -> crate::vocab::OutputCounters {
+        let counts = [
+            ("packets", &self.packets),
+            ("frames", &self.frames),
+            ("malformed", &self.malformed),
+            ("stale_frames", &self.stale_frames),
+            ("without_fseq", &self.without_fseq),
+            ("ignored", &self.ignored),
+            ("unknown", &self.unknown),
+            ("senders_refused", &self.senders_refused),
+            ("sessions_refused", &self.sessions_refused),
+            ("timeouts", &self.timeouts),
+            ("flood_dropped", &self.flood_dropped),
+        ];
+        crate::vocab::OutputCounters {
+            output: "tuio-input".to_string(),
+            address: address.to_string(),
+            counts: counts
+                .iter()
+                .map(|(k, v)| (k.to_string(), v.load(Ordering::Relaxed)))
+                .collect(),
+        }
+    }
+}
+
 fn bump(c: &AtomicU64) -> u64 {
     c.fetch_add(1, Ordering::Relaxed) + 1
 }

@@ -244,4 +244,23 @@ impl crate::publish::output::OutputStats for PublisherStats {
     fn take_encode(&self) -> Histogram<u64> {
         PublisherStats::take_encode(self)
     }
+    /// What went wrong with clients of either transport, since start: in `stats`
+    /// as the output `socket`.
+    fn counters(&self) -> Option<crate::vocab::OutputCounters> {
+        let count = |k: &str, v: u64| (k.to_string(), v);
+        Some(crate::vocab::OutputCounters {
+            output: "socket".to_string(),
+            address: String::new(),
+            counts: vec![
+                count("clients_accepted", self.clients_accepted()),
+                count("clients_refused", self.clients_refused()),
+                count("protocol_errors", self.protocol_errors()),
+                count("read_only_refusals", self.read_only_refusals()),
+                count("commands_busy", self.commands_busy()),
+                count("websocket_refused", self.websocket_refused()),
+                count("websocket_oversize", self.websocket_oversize()),
+                count("websocket_bad_frames", self.websocket_bad_frames()),
+            ],
+        })
+    }
 }
