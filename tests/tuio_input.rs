@@ -245,21 +245,8 @@ fn a_silent_sender_is_lifted_and_garbage_changes_nothing() {
         touches(msgs.last().unwrap()).is_empty(),
         "a silent sender's touches stayed"
     );
-    let stats = serde_json::to_value(&*report).unwrap();
-    let input = stats["outputs"]
-        .as_array()
-        .and_then(|o| o.iter().find(|e| e["output"] == "tuio-input"))
-        .unwrap_or_else(|| panic!("no tuio-input in {stats}"));
+    let (input, count) = output_counts(&report, "tuio-input");
     assert_eq!(input["address"], format!("127.0.0.1:{port}"));
-    let count = |k: &str| {
-        input["counts"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|c| c[0] == k)
-            .and_then(|c| c[1].as_u64())
-            .unwrap_or_else(|| panic!("no {k} in {input}"))
-    };
     assert_eq!(count("malformed"), 2, "{input}");
     assert_eq!(count("timeouts"), 1, "{input}");
     assert!(count("packets") >= 4, "{input}");

@@ -266,21 +266,8 @@ fn check_against_decoder(version: &str, port: u16, events: &dyn Drain) {
     let report = daemon
         .next_report(Duration::from_secs(5))
         .expect("a stats report");
-    let stats = serde_json::to_value(&*report).unwrap();
-    let tuio = stats["outputs"]
-        .as_array()
-        .and_then(|o| o.iter().find(|e| e["output"] == "tuio"))
-        .unwrap_or_else(|| panic!("no tuio output in {stats}"));
+    let (tuio, count) = output_counts(&report, "tuio");
     assert_eq!(tuio["address"], format!("127.0.0.1:{port}"));
-    let count = |k: &str| {
-        tuio["counts"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|c| c[0] == k)
-            .and_then(|c| c[1].as_u64())
-            .unwrap_or_else(|| panic!("no {k} in {tuio}"))
-    };
     assert!(count("frames") > 100, "{tuio}");
     assert!(count("datagrams") > count("frames"), "{tuio}");
     assert_eq!(count("send_errors"), 0, "{tuio}");

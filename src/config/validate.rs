@@ -306,28 +306,8 @@ impl Config {
                         ),
                         DeviceSelect::Auto => {}
                     }
-                    if let Some(r) = region {
-                        check(
-                            finite_rect(r) && r.min[0] >= 0.0 && r.min[1] >= 0.0 && r.max[0] <= 1.0 && r.max[1] <= 1.0
-                                && r.width() > 0.0 && r.height() > 0.0,
-                            &format!("inputs[{i}].region"),
-                            format!("region must be a rectangle inside the unit square (table units), got {:?} .. {:?}", r.min, r.max),
-                        );
-                    }
-                    check(
-                        matches!(calibration.rotation, 0 | 90 | 180 | 270),
-                        &format!("inputs[{i}].calibration.rotation"),
-                        format!(
-                            "rotation must be 0, 90, 180 or 270 degrees, got {}",
-                            calibration.rotation
-                        ),
-                    );
-                    if let Some(m) = calibration.matrix {
-                        check(
-                            m.iter().all(|v| v.is_finite()),
-                            &format!("inputs[{i}].calibration.matrix"),
-                            "calibration matrix values must be finite".to_string(),
-                        );
+                    for (field, msg) in surface_problems(region.as_ref(), calibration) {
+                        check(false, &format!("inputs[{i}].{field}"), msg);
                     }
                     if let Some(p) = palm_max_mm {
                         check(
@@ -357,28 +337,8 @@ impl Config {
                             "listen address must be ip:port, like \"0.0.0.0:3333\", got {listen:?}"
                         ),
                     );
-                    if let Some(r) = region {
-                        check(
-                            finite_rect(r) && r.min[0] >= 0.0 && r.min[1] >= 0.0 && r.max[0] <= 1.0 && r.max[1] <= 1.0
-                                && r.width() > 0.0 && r.height() > 0.0,
-                            &format!("inputs[{i}].region"),
-                            format!("region must be a rectangle inside the unit square (table units), got {:?} .. {:?}", r.min, r.max),
-                        );
-                    }
-                    check(
-                        matches!(calibration.rotation, 0 | 90 | 180 | 270),
-                        &format!("inputs[{i}].calibration.rotation"),
-                        format!(
-                            "rotation must be 0, 90, 180 or 270 degrees, got {}",
-                            calibration.rotation
-                        ),
-                    );
-                    if let Some(m) = calibration.matrix {
-                        check(
-                            m.iter().all(|v| v.is_finite()),
-                            &format!("inputs[{i}].calibration.matrix"),
-                            "calibration matrix values must be finite".to_string(),
-                        );
+                    for (field, msg) in surface_problems(region.as_ref(), calibration) {
+                        check(false, &format!("inputs[{i}].{field}"), msg);
                     }
                     check(
                         (100..=60_000).contains(timeout_ms),
@@ -419,6 +379,46 @@ impl Config {
 
         p
     }
+}
+
+/// The problems of a device's or a TUIO input's `region` and `calibration`, as
+/// `(field under the input, message)`.
+fn surface_problems(
+    region: Option<&Rect>,
+    calibration: &super::inputs::CalibrationConfig,
+) -> Vec<(&'static str, String)> {
+    let mut p = Vec::new();
+    if let Some(r) = region {
+        let inside = r.min[0] >= 0.0 && r.min[1] >= 0.0 && r.max[0] <= 1.0 && r.max[1] <= 1.0;
+        if !(finite_rect(r) && inside && r.width() > 0.0 && r.height() > 0.0) {
+            p.push((
+                "region",
+                format!(
+                    "region must be a rectangle inside the unit square (table units), got {:?} .. {:?}",
+                    r.min, r.max
+                ),
+            ));
+        }
+    }
+    if !matches!(calibration.rotation, 0 | 90 | 180 | 270) {
+        p.push((
+            "calibration.rotation",
+            format!(
+                "rotation must be 0, 90, 180 or 270 degrees, got {}",
+                calibration.rotation
+            ),
+        ));
+    }
+    if calibration
+        .matrix
+        .is_some_and(|m| !m.iter().all(|v| v.is_finite()))
+    {
+        p.push((
+            "calibration.matrix",
+            "calibration matrix values must be finite".to_string(),
+        ));
+    }
+    p
 }
 
 /// CPU numbers a CPU affinity set holds (`CPU_SETSIZE`).

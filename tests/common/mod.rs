@@ -199,3 +199,27 @@ pub const BLOCK_IN_THE_CROWD: &str = "(
 pub fn in_crowd_block(p: Vec2, margin_m: f64) -> bool {
     p.x > 7.4 + margin_m && p.x < 8.6 - margin_m && p.y > 3.9 + margin_m && p.y < 5.1 - margin_m
 }
+
+/// The `outputs` entry named `output` of a `stats` report, and a reader of its
+/// counts by name (panics naming what is missing).
+pub fn output_counts(
+    report: &crowdtouch::vocab::StatsReport,
+    output: &str,
+) -> (serde_json::Value, impl Fn(&str) -> u64) {
+    let stats = serde_json::to_value(report).unwrap();
+    let entry = stats["outputs"]
+        .as_array()
+        .and_then(|o| o.iter().find(|e| e["output"] == output))
+        .unwrap_or_else(|| panic!("no {output} in the stats' outputs: {stats}"))
+        .clone();
+    let counts = entry.clone();
+    (entry, move |k: &str| {
+        counts["counts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c[0] == k)
+            .and_then(|c| c[1].as_u64())
+            .unwrap_or_else(|| panic!("no {k} in {counts}"))
+    })
+}
