@@ -175,6 +175,14 @@ pub struct BenchArgs {
     /// End-to-end workload: the arrays the client asks for.
     #[arg(long, value_enum, default_value_t = e2e::FieldChoice::All)]
     fields: e2e::FieldChoice,
+    /// End-to-end workload: also this many WebSocket clients (a privileged
+    /// WebSocket output on a free port) reading what the Unix client reads.
+    #[arg(long, default_value_t = 0)]
+    websocket_clients: u32,
+    /// End-to-end workload: also a TUIO 1.1 output (objects and blobs, 120 Hz,
+    /// 64 KiB datagrams) to a UDP reader counting its frames.
+    #[arg(long)]
+    tuio: bool,
 }
 
 #[derive(Serialize, Debug)]
@@ -299,6 +307,8 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             gestures: a.gestures,
             transform: a.transform.as_deref(),
             edit: a.edit,
+            websocket_clients: a.websocket_clients,
+            tuio: a.tuio,
         })?);
     }
     if a.json {

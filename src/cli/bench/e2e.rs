@@ -5,17 +5,26 @@
 //! recognised and their motions synthesised on the formation thread; with
 //! `--transform NAME`, the same open-space touches (recognition off) while a
 //! second client keeps formation transforms running (to `NAME`, back to `start`).
+//! With `--websocket-clients N` the daemon also has a WebSocket output read by `N`
+//! clients (tungstenite, each on its own thread), and with `--tuio` a TUIO 1.1
+//! output whose datagrams a UDP reader counts: what each received, every drop and
+//! every gap in the sequence numbers, next to the Unix client's latency.
 
 use super::{row_from_samples, row_from_stage, Row};
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use crowdtouch::config::Config;
+use crowdtouch::config::{OutputConfig, TuioProfile};
 use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
 use crowdtouch::rt::monotonic_now;
 use crowdtouch::vocab::Micros;
 use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{TcpListener, TcpStream, UdpSocket};
 use std::os::unix::net::UnixStream;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Duration;
+use tungstenite::Message;
 
 /// Snapshot format of the bench client.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
@@ -50,6 +59,12 @@ pub struct E2eRun<'a> {
     pub transform: Option<&'a str>,
     /// Edit mode with this many people, edited by the shipped recordings' fingers.
     pub edit: Option<usize>,
+    /// WebSocket clients reading the same stream as the Unix client, on a
+    /// privileged WebSocket output (none: no WebSocket output).
+    pub websocket_clients: u32,
+    /// A TUIO 1.1 output (objects and blobs, 120 Hz, 64 KiB datagrams) to a UDP
+    /// reader.
+    pub tuio: bool,
 }
 
 /// `people` standing in a block over the crowd's area (0.5 m apart, rows of 20)
@@ -178,7 +193,7 @@ fn command_transforms(stream: UnixStream, name: &str) -> Commanded {
     }
 }
 
-/// What the client read.
+/// What a client read.
 #[derive(Default)]
 struct ClientRead {
     snapshots: u64,
@@ -189,6 +204,100 @@ struct ClientRead {
     /// Input event → the snapshot read here (µs): exact in JSON (`input_t_us`),
     /// an upper bound in binary (`latency_us` plus read time − tick time).
     latency_us: Vec<f64>,
+    /// The highest cumulative `dropped` a snapshot carried.
+    dropped: u64,
+    /// The counts of the `dropped` notices, summed.
+    noticed: u64,
+    /// Sequence numbers missing between snapshots read.
+    seq_gaps: u64,
+    last_seq: Option<u64>,
+    /// When the first and the last snapshot were read (µs, monotonic).
+    first_us: u64,
+    last_us: u64,
+}
+
+impl ClientRead {
+    /// Counts one snapshot of `bytes` bytes read now.
+    fn snapshot(&mut self, s: Seen, bytes: u64) {
+        let now = monotonic_now().0;
+        if self.snapshots == 0 {
+            self.first_us = now;
+        }
+        self.last_us = now;
+        self.snapshots += 1;
+        self.bytes += bytes;
+        if let Some(l) = s.latency_us {
+            self.latency_us.push(l);
+        }
+        self.dropped = self.dropped.max(s.dropped.unwrap_or(0));
+        if let Some(seq) = s.seq {
+            if let Some(last) = self.last_seq {
+                self.seq_gaps += seq.saturating_sub(last + 1);
+            }
+            self.last_seq = Some(seq);
+        }
+    }
+
+    /// Snapshots and megabytes per second between the first snapshot read and
+    /// the last (the daemon's start and shutdown left out).
+    fn rates(&self) -> (f64, f64) {
+        let s = self.last_us.saturating_sub(self.first_us) as f64 / 1e6;
+        if self.snapshots < 2 || s <= 0.0 {
+            return (0.0, 0.0);
+        }
+        (
+            (self.snapshots - 1) as f64 / s,
+            self.bytes as f64 * (self.snapshots - 1) as f64 / self.snapshots as f64 / s / 1e6,
+        )
+    }
+
+    /// Counts a JSON message other than a snapshot.
+    fn message(&mut self, m: &[u8]) {
+        if m.starts_with(b"{\"type\":\"dropped\"") {
+            self.noticed += scalar(m, "count").unwrap_or(0);
+        }
+    }
+}
+
+/// What a snapshot said about itself.
+struct Seen {
+    seq: Option<u64>,
+    dropped: Option<u64>,
+    latency_us: Option<f64>,
+}
+
+/// A JSON snapshot line or message read now.
+fn seen_json(m: &[u8]) -> Seen {
+    Seen {
+        seq: scalar(m, "seq"),
+        dropped: scalar(m, "dropped"),
+        latency_us: scalar(m, "input_t_us").map(|t| monotonic_now().0.saturating_sub(t) as f64),
+    }
+}
+
+/// A binary snapshot frame read now, without its length field; `None` when it
+/// is not one.
+fn seen_binary(body: &[u8]) -> Option<Seen> {
+    // Offsets count from the frame start, length field included.
+    let u64_at = |o: usize| -> Option<u64> {
+        Some(u64::from_le_bytes(body.get(o - 4..o + 4)?.try_into().ok()?))
+    };
+    if body.first() != Some(&2) || body.len() < 60 {
+        return None;
+    }
+    let now = monotonic_now().0;
+    let flags = u16::from_le_bytes([body[2], body[3]]);
+    let latency_us = if flags & 0x40 != 0 {
+        let (t, latency) = (u64_at(16)?, u64_at(24)?);
+        Some((now.saturating_sub(t) + latency) as f64)
+    } else {
+        None
+    };
+    Some(Seen {
+        seq: u64_at(8),
+        dropped: u64_at(32),
+        latency_us,
+    })
 }
 
 fn hello(format: WireFormat, fields: FieldChoice, edit: bool) -> String {
@@ -255,12 +364,9 @@ fn read_stream(stream: UnixStream, format: WireFormat) -> ClientRead {
                     }
                 }
                 if line.starts_with(b"{\"type\":\"snapshot\"") {
-                    out.snapshots += 1;
-                    out.bytes += line.len() as u64;
-                    if let Some(t) = scalar(&line, "input_t_us") {
-                        let now = monotonic_now().0;
-                        out.latency_us.push(now.saturating_sub(t) as f64);
-                    }
+                    out.snapshot(seen_json(&line), line.len() as u64);
+                } else {
+                    out.message(&line);
                 }
             }
             WireFormat::Binary => {
@@ -273,24 +379,150 @@ fn read_stream(stream: UnixStream, format: WireFormat) -> ClientRead {
                 if r.read_exact(&mut line).is_err() {
                     return out;
                 }
-                // Offsets count from the frame start, length field included.
-                if line.first() == Some(&2) && n >= 60 {
-                    let now = monotonic_now().0;
-                    out.snapshots += 1;
-                    out.bytes += 4 + n as u64;
-                    let u64_at = |o: usize| {
-                        u64::from_le_bytes(line[o - 4..o + 4].try_into().expect("8 bytes"))
-                    };
-                    let flags = u16::from_le_bytes([line[2], line[3]]);
-                    if flags & 0x40 != 0 {
-                        let (t, latency) = (u64_at(16), u64_at(24));
-                        out.latency_us
-                            .push((now.saturating_sub(t) + latency) as f64);
-                    }
+                match seen_binary(&line) {
+                    Some(s) => out.snapshot(s, 4 + n as u64),
+                    // A kind-1 frame: one JSON message.
+                    None => out.message(line.get(4..).unwrap_or_default()),
                 }
             }
         }
     }
+}
+
+/// A port on 127.0.0.1 that was free a moment ago.
+fn free_tcp_port() -> Result<u16> {
+    Ok(TcpListener::bind("127.0.0.1:0")
+        .context("finding a free port for the WebSocket output")?
+        .local_addr()?
+        .port())
+}
+
+/// One WebSocket client: connects, sends the same hello as the Unix client and
+/// reads every message until the daemon closes the connection (or `done`).
+fn read_websocket(
+    addr: std::net::SocketAddr,
+    hello: String,
+    done: Arc<AtomicBool>,
+) -> Result<ClientRead> {
+    let stream = TcpStream::connect(addr).context("connecting a WebSocket client")?;
+    stream.set_read_timeout(Some(Duration::from_millis(200)))?;
+    let (mut ws, _) = tungstenite::client(format!("ws://{addr}/ws"), stream)
+        .map_err(|e| anyhow::anyhow!("WebSocket handshake: {e}"))?;
+    ws.send(Message::Text(hello.into()))?;
+    let mut out = ClientRead::default();
+    loop {
+        match ws.read() {
+            Ok(Message::Text(t)) => {
+                let t = t.as_bytes();
+                if t.starts_with(b"{\"type\":\"snapshot\"") {
+                    out.snapshot(seen_json(t), t.len() as u64);
+                } else {
+                    out.message(t);
+                }
+            }
+            Ok(Message::Binary(b)) => {
+                if let Some(s) = b.get(4..).and_then(seen_binary) {
+                    out.snapshot(s, b.len() as u64);
+                }
+            }
+            Ok(_) => {}
+            Err(tungstenite::Error::Io(e))
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
+            {
+                if done.load(Ordering::Relaxed) {
+                    return Ok(out);
+                }
+            }
+            Err(_) => return Ok(out),
+        }
+    }
+}
+
+/// What the TUIO reader received.
+#[derive(Default)]
+struct TuioRead {
+    datagrams: u64,
+    bytes: u64,
+    /// Distinct `fseq` frame numbers seen.
+    frames: std::collections::HashSet<i32>,
+    /// Datagrams that are not an OSC bundle holding an `fseq`.
+    unreadable: u64,
+    /// When the first and the last datagram arrived (µs, monotonic).
+    first_us: u64,
+    last_us: u64,
+}
+
+impl TuioRead {
+    /// Seconds between the first datagram and the last.
+    fn span_s(&self) -> f64 {
+        (self.last_us.saturating_sub(self.first_us) as f64 / 1e6).max(1e-6)
+    }
+}
+
+/// Reads datagrams on `socket` until `done`.
+fn read_tuio(socket: UdpSocket, done: Arc<AtomicBool>) -> TuioRead {
+    let mut out = TuioRead::default();
+    let mut buf = vec![0u8; 65536];
+    while !done.load(Ordering::Relaxed) {
+        let Ok(n) = socket.recv(&mut buf) else {
+            continue;
+        };
+        let now = monotonic_now().0;
+        if out.datagrams == 0 {
+            out.first_us = now;
+        }
+        out.last_us = now;
+        out.datagrams += 1;
+        out.bytes += n as u64;
+        match bundle_fseq(&buf[..n]) {
+            Some(f) => {
+                out.frames.insert(f);
+            }
+            None => out.unreadable += 1,
+        }
+    }
+    out
+}
+
+/// An OSC string at `at`: its bytes and the offset after its padding.
+fn osc_str(b: &[u8], at: usize) -> Option<(&[u8], usize)> {
+    let len = b.get(at..)?.iter().position(|&c| c == 0)?;
+    Some((&b[at..at + len], at + (len + 4) / 4 * 4))
+}
+
+/// The frame number of a TUIO bundle: the int after `"fseq"` in the first
+/// message whose arguments start with the string `fseq` (a small OSC walk over
+/// the bundle's elements, not a full decoder). `None` for anything else.
+fn bundle_fseq(b: &[u8]) -> Option<i32> {
+    const HEAD: &[u8] = b"#bundle\0";
+    if !b.starts_with(HEAD) {
+        return None;
+    }
+    let mut at = HEAD.len() + 8;
+    while at < b.len() {
+        let size = u32::from_be_bytes(b.get(at..at + 4)?.try_into().ok()?) as usize;
+        let el = b.get(at + 4..(at + 4).checked_add(size)?)?;
+        at += 4 + size;
+        let Some((_addr, t)) = osc_str(el, 0) else {
+            continue;
+        };
+        let Some((tags, a)) = osc_str(el, t) else {
+            continue;
+        };
+        if !tags.starts_with(b",si") {
+            continue;
+        }
+        let Some((first, i)) = osc_str(el, a) else {
+            continue;
+        };
+        if first == b"fseq" {
+            return Some(i32::from_be_bytes(el.get(i..i + 4)?.try_into().ok()?));
+        }
+    }
+    None
 }
 
 /// The full daemon replaying the shipped recordings at 120 Hz to one socket
@@ -350,6 +582,39 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
         cfg.gestures.all_touches_are_gestures = true;
     }
     cfg.log_level = crowdtouch::config::LogLevel::Error;
+    let ws_addr = if run.websocket_clients > 0 {
+        let listen = format!("127.0.0.1:{}", free_tcp_port()?);
+        cfg.outputs.push(OutputConfig::WebSocket {
+            listen: listen.clone(),
+            token: None,
+            privileged: true,
+            max_clients: run.websocket_clients.max(16),
+            max_message_bytes: 64 * 1024,
+            viewer: false,
+        });
+        Some(listen.parse::<std::net::SocketAddr>()?)
+    } else {
+        None
+    };
+    let tuio_socket = if run.tuio {
+        let socket = UdpSocket::bind("127.0.0.1:0").context("binding the TUIO reader")?;
+        // Room for a few 10,000-agent frames: the reader is not what drops.
+        let _ =
+            nix::sys::socket::setsockopt(&socket, nix::sys::socket::sockopt::RcvBuf, &(4 << 20));
+        socket.set_read_timeout(Some(Duration::from_millis(100)))?;
+        cfg.outputs.push(OutputConfig::Tuio {
+            target: socket.local_addr()?.to_string(),
+            version: "1.1".into(),
+            profiles: vec![TuioProfile::Objects, TuioProfile::Blobs],
+            rate_hz: 120.0,
+            max_datagram_bytes: 65507,
+            source: None,
+            privileged: false,
+        });
+        Some(socket)
+    } else {
+        None
+    };
     let sock = std::env::temp_dir().join(format!("crowdtouch-bench-{}.sock", std::process::id()));
     let sources = sources_from_config(&cfg);
     if open_space.is_some() {
@@ -369,6 +634,21 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
         .context("sending the bench client's hello")?;
     let format = run.format;
     let reader = std::thread::spawn(move || read_stream(stream, format));
+    let done = Arc::new(AtomicBool::new(false));
+    let mut websockets = Vec::new();
+    if let Some(addr) = ws_addr {
+        for _ in 0..run.websocket_clients {
+            let hello = hello(run.format, run.fields, run.edit.is_some());
+            let done = Arc::clone(&done);
+            websockets.push(std::thread::spawn(move || {
+                read_websocket(addr, hello, done)
+            }));
+        }
+    }
+    let tuio_reader = tuio_socket.map(|socket| {
+        let done = Arc::clone(&done);
+        std::thread::spawn(move || read_tuio(socket, done))
+    });
     let commander = match run.transform {
         Some(name) => {
             let s = UnixStream::connect(&sock).context("connecting the transform commander")?;
@@ -379,8 +659,11 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
     };
     let start = monotonic_now();
     let until = start + Micros::from_secs_f64(run.seconds);
+    let mut report = None;
     while monotonic_now() < until {
-        let _ = daemon.next_report(Duration::from_millis(200));
+        if let Some(r) = daemon.next_report(Duration::from_millis(200)) {
+            report = Some(r);
+        }
     }
     let elapsed = monotonic_now().saturating_since(start).as_secs_f64();
     let totals = daemon.totals();
@@ -392,7 +675,16 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
     let dropped = daemon.publisher_stats().snapshots_dropped();
     let rss = crowdtouch::pipeline::timing::rss_bytes().unwrap_or(0);
     daemon.shutdown();
+    done.store(true, Ordering::Relaxed);
     let read = reader.join().unwrap_or_default();
+    let websockets = websockets
+        .into_iter()
+        .map(|w| {
+            w.join()
+                .unwrap_or_else(|_| Err(anyhow::anyhow!("a WebSocket client panicked")))
+        })
+        .collect::<Result<Vec<ClientRead>>>()?;
+    let tuio_read = tuio_reader.map(|t| t.join().unwrap_or_default());
     let commanded = commander.map(|c| c.join().unwrap_or_default());
     if let Some(why) = commanded.as_ref().and_then(|c| c.refused.as_ref()) {
         bail!("set_formation was refused: {why}");
@@ -449,6 +741,15 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
     let abandon = find("abandon")
         .map(|s| format!(", {} stale jobs given up", s.count))
         .unwrap_or_default();
+    let unix_note = format!(
+        "; Unix client: {} snapshots ({:.1}/s, {:.1} MB/s), dropped {} ({} in notices), seq gaps {}",
+        read.snapshots,
+        read.rates().0,
+        read.rates().1,
+        read.dropped,
+        read.noticed,
+        read.seq_gaps
+    );
     let mut rows = vec![
         row_from_stage(
             &format!("end_to_end {agents} agents"),
@@ -457,8 +758,8 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
                 "{input_note}input timestamp -> bytes written ({wire}){beyond}; SCHED_FIFO {}; {} snapshots read ({:.1}/s, {:.1} MB/s), {dropped} dropped, touch transitions lost {lost}, motion frames coalesced {coalesced}, RSS {:.1} MB",
                 if crowdtouch::rt::realtime_granted() { "on" } else { "off" },
                 read.snapshots,
-                read.snapshots as f64 / elapsed,
-                read.bytes as f64 / elapsed / 1e6,
+                read.rates().0,
+                read.rates().1,
                 rss as f64 / 1e6
             ),
         ),
@@ -486,6 +787,62 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
         ),
         row_from_stage("queue", find("queue"), "frame on the queue -> control thread takes it".into()),
     ];
+    rows[1].note.push_str(&unix_note);
+    for (i, w) in websockets.into_iter().enumerate() {
+        let note = format!(
+            "WebSocket client {}/{}, input timestamp -> snapshot read ({wire}{}): {} snapshots ({:.1}/s, {:.1} MB/s), dropped {} ({} in notices), seq gaps {}",
+            i + 1,
+            run.websocket_clients,
+            if run.format == WireFormat::Binary { ", upper bound" } else { "" },
+            w.snapshots,
+            w.rates().0,
+            w.rates().1,
+            w.dropped,
+            w.noticed,
+            w.seq_gaps
+        );
+        rows.push(row_from_samples(
+            &format!("websocket client {} {agents} agents", i + 1),
+            w.latency_us,
+            note,
+        ));
+    }
+    if let Some(t) = tuio_read {
+        let counters = report
+            .as_ref()
+            .and_then(|r| r.outputs.iter().find(|o| o.output == "tuio"));
+        let sent = |k: &str| {
+            counters
+                .and_then(|c| c.counts.iter().find(|(n, _)| n == k))
+                .map_or(0, |(_, v)| *v)
+        };
+        let (lo, hi) = (
+            t.frames.iter().min().copied().unwrap_or(0),
+            t.frames.iter().max().copied().unwrap_or(-1),
+        );
+        let missing = (i64::from(hi) - i64::from(lo) + 1).max(0) as u64 - t.frames.len() as u64;
+        let all_dropped = report.as_ref().map_or(0, |r| r.snapshots_dropped);
+        let mut row = row_from_samples(
+            &format!("tuio {agents} agents"),
+            Vec::new(),
+            format!(
+                "TUIO 1.1 objects+blobs at most 120 Hz, 64 KiB datagrams: {} frames received ({:.1}/s), {} missing between the first and last fseq; {} datagrams ({:.1} MB/s), {} unreadable; the output's own counters at its last stats report: {} frames, {} datagrams, {} send errors, {} skipped by the rate limit, {} entities left out; snapshots dropped by all outputs {all_dropped}",
+                t.frames.len(),
+                t.frames.len().saturating_sub(1) as f64 / t.span_s(),
+                missing,
+                t.datagrams,
+                t.bytes as f64 / t.span_s() / 1e6,
+                t.unreadable,
+                sent("frames"),
+                sent("datagrams"),
+                sent("send_errors"),
+                sent("skipped"),
+                sent("left_out"),
+            ),
+        );
+        row.samples = t.frames.len() as u64;
+        rows.push(row);
+    }
     if let Some(g) = find("gesture").filter(|g| g.count > 0 || open_space.is_some()) {
         rows.push(row_from_stage(
             &format!("gesture {agents} agents"),
@@ -501,4 +858,67 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
         ));
     }
     Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A TUIO 1.1 bundle as the output sends it: `alive`, then `fseq`.
+    fn bundle(fseq: i32) -> Vec<u8> {
+        use rosc::{OscBundle, OscMessage, OscPacket, OscTime, OscType};
+        let msg = |args: Vec<OscType>| {
+            OscPacket::Message(OscMessage {
+                addr: "/tuio/2Dobj".into(),
+                args,
+            })
+        };
+        rosc::encoder::encode(&OscPacket::Bundle(OscBundle {
+            timetag: OscTime::from((0, 1)),
+            content: vec![
+                msg(vec![OscType::String("alive".into()), OscType::Int(3)]),
+                msg(vec![OscType::String("fseq".into()), OscType::Int(fseq)]),
+            ],
+        }))
+        .unwrap()
+    }
+
+    #[test]
+    fn the_tuio_reader_finds_the_frame_number_and_refuses_the_rest() {
+        assert_eq!(bundle_fseq(&bundle(4812)), Some(4812));
+        let b = bundle(7);
+        assert_eq!(bundle_fseq(&b[..b.len() - 2]), None);
+        assert_eq!(bundle_fseq(b"/tuio/2Dobj\0,s\0\0fseq\0\0\0\0"), None);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn the_tuio_reader_never_panics(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..200), cut in 0usize..200) {
+            let _ = bundle_fseq(&bytes);
+            let mut b = bundle(1);
+            b.truncate(cut.min(b.len()));
+            b.extend_from_slice(&bytes);
+            let _ = bundle_fseq(&b);
+        }
+    }
+
+    #[test]
+    fn a_client_counts_gaps_and_the_highest_dropped() {
+        let mut c = ClientRead::default();
+        for (seq, dropped) in [(1, 0), (2, 0), (5, 2), (6, 2)] {
+            c.snapshot(
+                Seen {
+                    seq: Some(seq),
+                    dropped: Some(dropped),
+                    latency_us: None,
+                },
+                10,
+            );
+        }
+        c.message(br#"{"type":"dropped","count":2,"total":2}"#);
+        assert_eq!(
+            (c.snapshots, c.seq_gaps, c.dropped, c.noticed),
+            (4, 2, 2, 2)
+        );
+    }
 }
