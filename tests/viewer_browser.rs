@@ -495,25 +495,35 @@ impl Shot {
     }
 }
 
+/// The daemon with `agents` agents (the `inputs` entry, if any) and one
+/// WebSocket output on a free port, privileged or not; the port.
+fn daemon_with_websocket(agents: u32, inputs: Option<&str>, privileged: bool) -> (Running, u16) {
+    let port = free_port();
+    let outs = [WsOut { port, privileged }];
+    let daemon = start_daemon(&config_text(agents, inputs, &outs), &outs);
+    (daemon, port)
+}
+
+/// Headless Chromium with the viewer page of the output on `port` open.
+fn open_viewer(port: u16) -> Browser {
+    let mut browser = Browser::start();
+    browser.call(json!({"cmd": "open", "url": format!("http://127.0.0.1:{port}/")}));
+    browser
+}
+
 // ---- The tests -----------------------------------------------------------------------
 
 #[test]
 fn the_page_draws_the_crowd_and_a_mouse_drag_moves_it() {
     in_browser("the_page_draws_the_crowd_and_a_mouse_drag_moves_it", || {
-        let port = free_port();
-        let outs = [WsOut {
-            port,
-            privileged: true,
-        }];
-        let daemon = start_daemon(&config_text(100, Some(POINT_DRAG), &outs), &outs);
+        let (daemon, port) = daemon_with_websocket(100, Some(POINT_DRAG), true);
         let watcher = Watcher::connect(&daemon.socket);
         let hello = watcher.hello();
         // The recording drags the crowd; then it stands still.
         let rest = watcher.at_rest();
         let agents = points(&rest["positions"]);
 
-        let mut browser = Browser::start();
-        browser.call(json!({"cmd": "open", "url": format!("http://127.0.0.1:{port}/")}));
+        let mut browser = open_viewer(port);
         browser.call(json!({"cmd": "wait", "until": "snapshots", "min": 10}));
         let dir = tempfile::tempdir().unwrap();
         let png = dir.path().join("viewer.png");
@@ -623,19 +633,13 @@ fn the_page_draws_the_crowd_and_a_mouse_drag_moves_it() {
 #[test]
 fn a_read_only_page_cannot_pause_nor_move_the_crowd() {
     in_browser("a_read_only_page_cannot_pause_nor_move_the_crowd", || {
-        let port = free_port();
-        let outs = [WsOut {
-            port,
-            privileged: false,
-        }];
-        let daemon = start_daemon(&config_text(60, Some(POINT_DRAG), &outs), &outs);
+        let (daemon, port) = daemon_with_websocket(60, Some(POINT_DRAG), false);
         let watcher = Watcher::connect(&daemon.socket);
         let hello = watcher.hello();
         let rest = watcher.at_rest();
         let agents = points(&rest["positions"]);
 
-        let mut browser = Browser::start();
-        browser.call(json!({"cmd": "open", "url": format!("http://127.0.0.1:{port}/")}));
+        let mut browser = open_viewer(port);
         browser.call(json!({"cmd": "wait", "until": "snapshots", "min": 5}));
         let mark = watcher.len();
         browser.call(json!({"cmd": "click", "selector": "#btn-pause"}));
@@ -684,14 +688,8 @@ fn a_read_only_page_cannot_pause_nor_move_the_crowd() {
 #[ignore]
 fn measure_the_page_frame_rate_with_5000_agents() {
     in_browser("measure_the_page_frame_rate_with_5000_agents", || {
-        let port = free_port();
-        let outs = [WsOut {
-            port,
-            privileged: true,
-        }];
-        let daemon = start_daemon(&config_text(5000, None, &outs), &outs);
-        let mut browser = Browser::start();
-        browser.call(json!({"cmd": "open", "url": format!("http://127.0.0.1:{port}/")}));
+        let (daemon, port) = daemon_with_websocket(5000, None, true);
+        let mut browser = open_viewer(port);
         browser
             .call(json!({"cmd": "wait", "until": "agentsDrawn", "min": 5000, "timeout_ms": 60000}));
         let m = browser.call(json!({"cmd": "fps", "seconds": 5}));
