@@ -9,6 +9,7 @@
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use crowdtouch::geom::{Rect, Vec2};
 use crowdtouch::publish::tuio::{Datagrams, Encoder11, Encoder20, Framer, Profiles};
+use crowdtouch::rng::SplitMix64;
 use crowdtouch::vocab::{AgentView, Micros, Snapshot, TouchView};
 
 const WORLD: Rect = Rect {
@@ -16,20 +17,8 @@ const WORLD: Rect = Rect {
     max: [8.0, 5.0],
 };
 
-/// A small deterministic generator (xorshift64*), so inputs are the same every run.
-struct Rng(u64);
-
-impl Rng {
-    fn unit(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 fn snapshot(n: usize, seed: u64) -> Snapshot {
-    let mut r = Rng(seed);
+    let mut r = SplitMix64::new(seed);
     let mut v = || Vec2::new(r.unit() * 8.0, r.unit() * 5.0);
     Snapshot {
         seq: 1,
