@@ -94,6 +94,21 @@ fn a_client_sees_a_transform_run_end_and_the_formation_arrive() {
         && v["I_d"].is_number()
         && v["sigma_min_dis"].is_number()));
     assert_eq!(progress.last().unwrap()["progress"], 1.0);
+    // Each agent's subgroup, one per agent, the same all through the run.
+    let groups = &progress[0]["agent_subgroups"];
+    let count = progress[0]["subgroups"].as_u64().unwrap();
+    let ids: Vec<u64> = groups
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| g.as_u64().unwrap())
+        .collect();
+    assert_eq!(ids.len(), 60);
+    assert!(ids.iter().all(|&g| g < count), "{ids:?} of {count}");
+    for g in 0..count {
+        assert!(ids.contains(&g), "subgroup {g} has no agent: {ids:?}");
+    }
+    assert!(progress.iter().all(|v| &v["agent_subgroups"] == groups));
     let end = msgs
         .iter()
         .position(|v| v["type"] == "transform_end")

@@ -14,6 +14,7 @@
 //! | `switch.rs` | formation switches at checkpoints and on request |
 //! | `transform.rs`, `transform_state.rs` | formation transforms (formation-transform): prepared off the tick, run every tick, direct control after |
 //! | `edit.rs`, `edit_grab.rs`, `edit_jobs.rs`, `edit_state.rs` | the edit mode (crowd-motion-editing): tracks loaded and played, grabbed and dragged by fingers, retimed, undone, saved |
+//! | `scene_view.rs`, `scene_state.rs` | the scene as published: its parts when it changes, its moving things' poses every tick |
 //! | `params.rs` | the config turned into the crowd's and gesture's parameter structs |
 //! | `replay.rs` | replays on a virtual clock |
 //! | `error.rs` | why a command or switch was refused |
@@ -30,6 +31,8 @@ mod params;
 mod pool;
 mod replay;
 mod resize;
+mod scene_state;
+mod scene_view;
 mod state;
 mod switch;
 mod tick;

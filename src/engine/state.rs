@@ -126,6 +126,8 @@ pub struct Engine {
     pub(super) transforms: super::transform_state::Transforms,
     /// Edit mode: the tracks, the grab, the jobs out (`edit.rs`).
     pub(super) edits: super::edit_state::Edits,
+    /// The scene to publish: whether it changed, the poses' pool (`scene_state.rs`).
+    pub(super) scene_out: super::scene_state::SceneOut,
 }
 
 impl Engine {
@@ -200,6 +202,7 @@ impl Engine {
             gestures: super::gesture_state::Gestures::new(cfg, inline_assignment),
             transforms: super::transform_state::Transforms::new(cfg, cfg.crowd.agent_radius_m),
             edits: super::edit_state::Edits::new(),
+            scene_out: super::scene_state::SceneOut::new(),
         };
         e.segmenter
             .set_all_touches_are_gestures(cfg.gestures.all_touches_are_gestures);
@@ -329,6 +332,7 @@ impl Engine {
     /// Swaps the scene (see [`Engine::reconfigure_with`]).
     pub(super) fn set_scene(&mut self, scene: Option<Arc<Scene>>) {
         self.scene = scene;
+        self.scene_out.changed = true;
         self.prev_centroid = None;
         if self.scene.is_none() {
             self.motions.clear();

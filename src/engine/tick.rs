@@ -7,7 +7,8 @@ use crate::geom::Vec2;
 use crate::gesture::segment::{control_kind, Segment, TouchPoint};
 use crate::vocab::{AgentView, ContactFlags, ContactId, Event, MeshView, Micros, Snapshot};
 use crate::vocab::{
-    EditView, PlanView, TouchFrame, TouchView, TracksView, TransformSummary, TransformView,
+    EditView, PlanView, ScenePoses, SceneView, TouchFrame, TouchView, TracksView, TransformSummary,
+    TransformView,
 };
 use std::sync::Arc;
 
@@ -29,6 +30,10 @@ pub struct TickOutput<'a> {
     pub tracks: Option<Arc<TracksView>>,
     /// Edit mode: its state, when it changed this tick.
     pub edit: Option<Arc<EditView>>,
+    /// The scene, when it changed (and at the first tick).
+    pub scene: Option<Arc<SceneView>>,
+    /// Where the scene's moving things are, when it has any.
+    pub scene_poses: Option<Arc<ScenePoses>>,
 }
 
 impl Engine {
@@ -299,6 +304,8 @@ impl Engine {
             transform_end: self.transforms.ended.take(),
             tracks: self.take_tracks(now),
             edit: self.take_edit_view(),
+            scene: self.take_scene_view(),
+            scene_poses: self.take_scene_poses(),
             events: &self.events,
         }
     }

@@ -340,6 +340,7 @@ impl Engine {
             checkpoint: pending.checkpoint,
             run,
             subgroups: plan.subgroups.count() as u32,
+            agent_subgroups: Arc::new(plan.subgroups.group_of.clone()),
             cost_name: s.cost_name,
             speed_m_s: params.desired_speed_m_s,
             last: StepReport::default(),
@@ -404,6 +405,7 @@ impl Engine {
             v.min_distance_m = r.last.min_distance_m;
             v.overlapping_pairs = r.last.overlapping_pairs as u32;
             v.subgroups = r.subgroups;
+            v.agent_subgroups = Arc::clone(&r.agent_subgroups);
             v.speed_m_s = r.speed_m_s;
         }
         self.transforms.views.keep(&view);

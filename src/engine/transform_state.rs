@@ -71,6 +71,8 @@ pub(super) struct RunningTransform {
     pub(super) run: TransformRun,
     /// Subgroups of the plan.
     pub(super) subgroups: u32,
+    /// Each agent's subgroup (published with every progress message).
+    pub(super) agent_subgroups: Arc<Vec<u32>>,
     /// The pairing cost's wire name.
     pub(super) cost_name: &'static str,
     /// The desired speed it runs at (m/s).

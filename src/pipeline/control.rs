@@ -452,6 +452,8 @@ impl ControlLoop {
         let transform_end = out.transform_end;
         let out_tracks = out.tracks;
         let out_edit = out.edit;
+        let scene = out.scene;
+        let scene_poses = out.scene_poses;
         let mut describe = None;
         let events: Vec<Arc<Event>> = out.events.iter().cloned().map(Arc::new).collect();
         for e in &events {
@@ -483,6 +485,12 @@ impl ControlLoop {
         }
         if let Some(e) = out_edit {
             self.send(Outgoing::Edit(e));
+        }
+        if let Some(s) = scene {
+            self.send(Outgoing::Scene(s));
+        }
+        if let Some(p) = scene_poses {
+            self.send(Outgoing::ScenePoses(p));
         }
         self.send(Outgoing::Snapshot(snapshot));
         // What is current goes out before any job does: a worker that takes a job

@@ -1,8 +1,8 @@
 //! What the control thread hands to the outputs.
 
 use crate::vocab::{
-    ClientId, EditView, Event, MeshView, PlanView, Snapshot, StatsReport, TracksView,
-    TransformSummary, TransformView,
+    ClientId, EditView, Event, MeshView, PlanView, ScenePoses, SceneView, Snapshot, StatsReport,
+    TracksView, TransformSummary, TransformView,
 };
 use std::sync::Arc;
 
@@ -28,6 +28,12 @@ pub enum Outgoing {
     Tracks(Arc<TracksView>),
     /// The edit mode's state changed: to clients subscribed to `edit` only.
     Edit(Arc<EditView>),
+    /// The scene changed (or the daemon started): to clients subscribed to
+    /// `scene` only, and to each such client when it subscribes.
+    Scene(Arc<SceneView>),
+    /// Where the scene's moving things are this tick: to clients subscribed to
+    /// `scene` only.
+    ScenePoses(Arc<ScenePoses>),
     /// Periodic stats.
     Stats(Arc<StatsReport>),
     /// The answer to a command: `Ok` becomes `ack`, `Err` becomes `error`.

@@ -4,7 +4,8 @@
 //! types, and what the control thread publishes (snapshots, meshes, events, stats) or
 //! takes from clients (commands), and what a recognised gesture makes the crowd do
 //! (recognitions, planned trajectories), and a formation transform's progress and
-//! summary, and the edit mode's tracks and state. Nothing here does work: `input` fills touch frames,
+//! summary, and the edit mode's tracks and state, and the scene and where its moving
+//! things are. Nothing here does work: `input` fills touch frames,
 //! `gesture` and `crowd` read them, `engine` fills snapshots, `publish` encodes them.
 //! It depends on [`geom`](crate::geom) only, so every other module may use it.
 
@@ -14,6 +15,7 @@ mod edit;
 mod event;
 mod motion;
 mod plan;
+mod scene;
 mod snapshot;
 mod stats;
 mod time;
@@ -29,6 +31,7 @@ pub use edit::{CollisionView, EditView, TrackView, TracksView};
 pub use event::{ControlKind, DeviceState, Event};
 pub use motion::MotionType;
 pub use plan::{MotionPhase, NeighbourView, PlanOrigin, PlanView, Recognition};
+pub use scene::{CheckpointView, SceneItemView, ScenePoses, SceneView, ShapeView, TerrainView};
 pub use snapshot::{AgentView, MeshView, Snapshot, TouchView};
 pub use stats::{OutputCounters, RestartPending, StageStats, StatsReport};
 pub use time::Micros;

@@ -39,6 +39,9 @@ pub struct TransformView {
     pub overlapping_pairs: u32,
     /// Subgroups the crowd was clustered into.
     pub subgroups: u32,
+    /// Each agent's subgroup, `0..subgroups`, in the snapshot's agent order
+    /// (formation-transform section 3.4's affinity propagation; shared for the run).
+    pub agent_subgroups: Arc<Vec<u32>>,
     /// The desired walking speed it runs at (m/s).
     pub speed_m_s: f64,
 }

@@ -31,7 +31,7 @@ impl Format {
 }
 
 /// Which message streams a client receives. Replies (`hello`, `ack`, `error`,
-/// `dropped`, `bye`) are always sent. `plan`, `transform` and `edit` are off unless a client
+/// `dropped`, `bye`) are always sent. `plan`, `transform`, `edit` and `scene` are off unless a client
 /// names them, so a client written before they existed gets none of their message
 /// types.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
@@ -52,6 +52,9 @@ pub struct Subscriptions {
     pub transform: bool,
     /// `tracks` and `edit` messages: the edit mode's tracks and its state.
     pub edit: bool,
+    /// `scene` and `scene_poses` messages: the scene's obstacles, patches and
+    /// checkpoints, and where its moving things are.
+    pub scene: bool,
 }
 
 impl Subscriptions {
@@ -64,13 +67,15 @@ impl Subscriptions {
         plan: true,
         transform: true,
         edit: true,
+        scene: true,
     };
     /// What a client that names no stream gets: every stream but `plan`,
-    /// `transform` and `edit`.
+    /// `transform`, `edit` and `scene`.
     pub const DEFAULT: Subscriptions = Subscriptions {
         plan: false,
         transform: false,
         edit: false,
+        scene: false,
         ..Subscriptions::ALL
     };
     /// No stream.
@@ -82,9 +87,10 @@ impl Subscriptions {
         plan: false,
         transform: false,
         edit: false,
+        scene: false,
     };
     /// Wire names known to the parser, in wire order.
-    pub const NAMES: [&'static str; 7] = [
+    pub const NAMES: [&'static str; 8] = [
         "snapshot",
         "mesh",
         "events",
@@ -92,6 +98,7 @@ impl Subscriptions {
         "plan",
         "transform",
         "edit",
+        "scene",
     ];
 
     /// The names of the streams switched on, in wire order.
@@ -104,6 +111,7 @@ impl Subscriptions {
             self.plan,
             self.transform,
             self.edit,
+            self.scene,
         ];
         Self::NAMES
             .iter()
@@ -122,6 +130,7 @@ impl Subscriptions {
             "plan" => self.plan = true,
             "transform" => self.transform = true,
             "edit" => self.edit = true,
+            "scene" => self.scene = true,
             _ => return false,
         }
         true

@@ -29,6 +29,7 @@
 //! * `plan`: the hand-written `plan` and `demo_motion` messages.
 //! * `transform`: a formation transform's `transform` and `transform_end` messages.
 //! * `edit`: the edit mode's `tracks` and `edit` messages.
+//! * `scene`: the scene's `scene` and `scene_poses` messages.
 //! * `numbers`: fixed-point and integer writing shared by the hand-written encoders.
 
 mod binary;
@@ -40,6 +41,7 @@ mod messages;
 mod numbers;
 mod parse;
 mod plan;
+mod scene;
 mod transform;
 
 pub use binary::{
@@ -66,6 +68,7 @@ pub use messages::{
 pub use numbers::MAX_COORD_ABS;
 pub use parse::{parse_client_message, ClientMessage, ProtocolError};
 pub use plan::encode_plan_json;
+pub use scene::{encode_scene_json, encode_scene_poses_json};
 pub use transform::{encode_transform_end_json, encode_transform_json};
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 //! `transform` only.
 //!
 //! ```text
-//! {"type":"transform","seq":812,"formation":"ring","method":"transform","cost":"least_effort","progress":0.42,"elapsed_s":3.1,"I_d":1.73,"sigma_min_dis":0.021,"sigma_curr_eft":0.35,"min_distance_m":0.29,"overlapping_pairs":0,"subgroups":7,"speed_m_s":1.3}
+//! {"type":"transform","seq":812,"formation":"ring","method":"transform","cost":"least_effort","progress":0.42,"elapsed_s":3.1,"I_d":1.73,"sigma_min_dis":0.021,"sigma_curr_eft":0.35,"min_distance_m":0.29,"overlapping_pairs":0,"subgroups":7,"agent_subgroups":[0,0,3,…],"speed_m_s":1.3}
 //! {"type":"transform_end","formation":"ring","cost":"least_effort","outcome":"arrived","agents":200,…}
 //! ```
 //!
@@ -29,6 +29,7 @@ struct ProgressWire<'a> {
     min_distance_m: f64,
     overlapping_pairs: u32,
     subgroups: u32,
+    agent_subgroups: &'a [u32],
     speed_m_s: f64,
 }
 
@@ -72,6 +73,7 @@ pub fn encode_transform_json(v: &TransformView, out: &mut Vec<u8>) {
         min_distance_m: v.min_distance_m,
         overlapping_pairs: v.overlapping_pairs,
         subgroups: v.subgroups,
+        agent_subgroups: &v.agent_subgroups,
         speed_m_s: v.speed_m_s,
     };
     // Writing plain numbers and strings to a `Vec` cannot fail.
@@ -129,6 +131,7 @@ mod tests {
             min_distance_m: 0.29,
             overlapping_pairs: 2,
             subgroups: 5,
+            agent_subgroups: Arc::new(vec![0, 4, 4, 1]),
             speed_m_s: 1.3,
         };
         let mut out = Vec::new();
@@ -142,6 +145,7 @@ mod tests {
         assert_eq!(j["sigma_min_dis"], 0.02);
         assert_eq!(j["overlapping_pairs"], 2);
         assert_eq!(j["subgroups"], 5);
+        assert_eq!(j["agent_subgroups"], serde_json::json!([0, 4, 4, 1]));
     }
 
     #[test]

@@ -20,7 +20,8 @@ struct LatestMesh {
 
 /// Shared by the publisher thread and the I/O thread.
 ///
-/// Lock order: `clients`, then a client's queue, then `latest_mesh`.
+/// Lock order: `clients`, then a client's queue, then `latest_mesh` or
+/// `latest_scene`.
 #[derive(Debug)]
 pub(crate) struct Hub {
     /// Static hello facts.
@@ -31,6 +32,8 @@ pub(crate) struct Hub {
     pub client_queue: u32,
     /// Newest mesh, sent to clients that connect or subscribe later.
     latest_mesh: Mutex<LatestMesh>,
+    /// The newest `scene` line, sent to clients when they subscribe to `scene`.
+    latest_scene: Mutex<Option<Arc<[u8]>>>,
     /// Commands to the control thread (bounded; `try_send` only).
     pub commands: Sender<CommandRequest>,
     /// Counters, and the live client limit.
@@ -69,6 +72,7 @@ impl Hub {
             info,
             client_queue,
             latest_mesh: Mutex::new(LatestMesh::default()),
+            latest_scene: Mutex::new(None),
             commands,
             stats,
             clients: Mutex::new(Vec::new()),
@@ -183,5 +187,15 @@ impl Hub {
             latest.json = Some(out.into());
         }
         Some((Arc::clone(latest.json.as_ref()?), topology))
+    }
+
+    /// Makes `json` (a `scene` line) the newest scene.
+    pub fn set_latest_scene(&self, json: Arc<[u8]>) {
+        *lock(&self.latest_scene) = Some(json);
+    }
+
+    /// The newest `scene` line, if the control thread sent one.
+    pub fn latest_scene_json(&self) -> Option<Arc<[u8]>> {
+        lock(&self.latest_scene).clone()
     }
 }

@@ -14,7 +14,7 @@ use super::stats::{lock, PublisherStats};
 use crate::publish::protocol::{self, FieldSet, Format};
 use crate::publish::Outgoing;
 use crate::rt::monotonic_now;
-use crate::vocab::{ClientId, Event, MeshView, Snapshot};
+use crate::vocab::{ClientId, Event, MeshView, ScenePoses, SceneView, Snapshot};
 use serde_json::Value;
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
@@ -34,6 +34,8 @@ pub(crate) struct Publisher {
     wanted: Vec<(usize, EncodeKey)>,
     /// The current snapshot's encodings.
     cache: Vec<(EncodeKey, Arc<EncodedSnapshot>)>,
+    /// Scratch for `scene_poses` lines.
+    poses: Vec<[f64; 3]>,
 }
 
 impl Publisher {
@@ -46,6 +48,7 @@ impl Publisher {
             targets: Vec::new(),
             wanted: Vec::new(),
             cache: Vec::new(),
+            poses: Vec::new(),
         }
     }
 
@@ -84,6 +87,8 @@ impl Publisher {
             Outgoing::Edit(e) => {
                 self.broadcast(|s| s.edit, |out| protocol::encode_edit_json(&e, out))
             }
+            Outgoing::Scene(sc) => self.scene(&sc),
+            Outgoing::ScenePoses(p) => self.poses(&p),
             Outgoing::Stats(r) => {
                 self.broadcast(|s| s.stats, |out| protocol::encode_stats(&r, out))
             }
@@ -184,6 +189,39 @@ impl Publisher {
                 q.fail(&o.to_string());
             }
         }
+    }
+
+    /// Poses replace a queued older one (a slow reader is not buried in them).
+    fn poses(&mut self, p: &ScenePoses) {
+        self.load_targets();
+        let mut json: Option<Arc<[u8]>> = None;
+        for c in &self.targets {
+            let mut q = c.lock();
+            if !q.accepting() || !q.settings.subscriptions.scene {
+                continue;
+            }
+            let bytes = Arc::clone(json.get_or_insert_with(|| {
+                let mut out = Vec::new();
+                protocol::encode_scene_poses_json(p, &mut self.poses, &mut out);
+                out.into()
+            }));
+            if let Err(o) = q.push_poses(bytes) {
+                log::info!("client {}: {o}", c.id);
+                q.fail(&o.to_string());
+            }
+        }
+        self.targets.clear();
+    }
+
+    fn scene(&mut self, sc: &SceneView) {
+        let mut out = Vec::new();
+        protocol::encode_scene_json(sc, &mut out);
+        let json: Arc<[u8]> = out.into();
+        // Latest first, then the broadcast: a client subscribing meanwhile (under its
+        // queue's lock, session.rs `hello`) reads this scene as the latest or is
+        // subscribed when the broadcast reaches it (at worst it gets it twice).
+        self.hub.set_latest_scene(Arc::clone(&json));
+        self.broadcast(|s| s.scene, |o| o.extend_from_slice(&json));
     }
 
     /// Queues one JSON message, encoded at most once, for every client `wants` it.

@@ -57,6 +57,13 @@ pub(crate) enum Item {
         /// Whether `json` carries the triangles.
         with_triangles: bool,
     },
+    /// Where the scene's moving things are (replaced by newer poses while queued).
+    Poses {
+        /// JSON line.
+        json: Arc<[u8]>,
+        /// Framing at its place in the stream.
+        framing: Format,
+    },
     /// Anything else (events, stats, replies, hello, bye): never dropped.
     Message {
         /// JSON line.
@@ -70,7 +77,9 @@ impl Item {
     fn backlog_bytes(&self) -> usize {
         match self {
             Item::Snapshot(_) => 0,
-            Item::Mesh { json, .. } | Item::Message { json, .. } => json.len(),
+            Item::Mesh { json, .. } | Item::Poses { json, .. } | Item::Message { json, .. } => {
+                json.len()
+            }
         }
     }
 }
@@ -204,6 +213,25 @@ impl Queue {
             framing,
             with_triangles,
         })
+    }
+
+    /// Queues a `scene_poses` line, in the place of one still queued: a client that
+    /// reads slowly gets the newest poses, never a growing backlog of them.
+    ///
+    /// # Errors
+    /// As [`Queue::push_message`].
+    pub fn push_poses(&mut self, json: Arc<[u8]>) -> Result<(), Overflow> {
+        let framing = self.settings.format;
+        if let Some(at) = self
+            .items
+            .iter()
+            .position(|i| matches!(i, Item::Poses { .. }))
+        {
+            if let Some(old) = self.items.remove(at) {
+                self.uncount(&old);
+            }
+        }
+        self.push_counted(Item::Poses { json, framing })
     }
 
     fn push_counted(&mut self, item: Item) -> Result<(), Overflow> {
@@ -462,6 +490,26 @@ mod tests {
         assert_eq!(q.take_queued_mesh(), Some(true));
         assert_eq!(q.take_queued_mesh(), None);
         assert_eq!((q.backlog_messages, q.backlog_bytes), (0, 0));
+    }
+
+    #[test]
+    fn queued_poses_are_replaced_by_newer_ones() {
+        let s = ClientShared::new(1);
+        let mut q = s.lock();
+        q.push_poses(Arc::from(&b"p1\n"[..])).unwrap();
+        q.push_message(Arc::from(&b"m\n"[..]), Format::Json)
+            .unwrap();
+        for _ in 0..10_000 {
+            q.push_poses(Arc::from(&b"p2\n"[..])).unwrap();
+        }
+        assert_eq!((q.backlog_messages, q.backlog_bytes), (2, 5));
+        let first = q.pop().unwrap().0;
+        assert!(matches!(first, Item::Message { .. }));
+        match q.pop().unwrap().0 {
+            Item::Poses { json, .. } => assert_eq!(&json[..], b"p2\n"),
+            other => panic!("{other:?}"),
+        }
+        assert!(q.pop().is_none());
     }
 
     #[test]

@@ -167,6 +167,11 @@ impl Session {
                 result = result.and(q.push_mesh(json, true));
             }
         }
+        if settings.subscriptions.scene && !old.subscriptions.scene {
+            if let Some(json) = hub.latest_scene_json() {
+                result = result.and(q.push_message(json, settings.format));
+            }
+        }
         if let Err(o) = result {
             q.fail(&o.to_string());
         }

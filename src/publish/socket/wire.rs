@@ -74,7 +74,9 @@ impl Frame {
         self.snapshot = None;
         let framing = match &item {
             Item::Snapshot(e) => e.format,
-            Item::Mesh { framing, .. } | Item::Message { framing, .. } => *framing,
+            Item::Mesh { framing, .. }
+            | Item::Poses { framing, .. }
+            | Item::Message { framing, .. } => *framing,
         };
         if unnotified > 0 {
             let mut notice = Vec::with_capacity(64);
@@ -107,7 +109,9 @@ impl Frame {
                 }
                 self.body = Body::Snapshot(enc);
             }
-            Item::Mesh { json, framing, .. } | Item::Message { json, framing } => {
+            Item::Mesh { json, framing, .. }
+            | Item::Poses { json, framing }
+            | Item::Message { json, framing } => {
                 self.end = json.len();
                 if framing == Format::Binary {
                     // protocol::frame_json's header: length of kind + JSON, the kind.

@@ -589,7 +589,7 @@ fn ws_message(item: Item, dropped_total: u64) -> (Message, usize, Option<Option<
             let len = m.len();
             (m, len, Some(enc.input_t))
         }
-        Item::Mesh { json, .. } | Item::Message { json, .. } => {
+        Item::Mesh { json, .. } | Item::Poses { json, .. } | Item::Message { json, .. } => {
             let m = text(json.to_vec());
             let len = m.len();
             (m, len, None)

@@ -92,6 +92,11 @@ impl Placement {
         }
     }
 
+    /// The rotation (rad, counter-clockwise, in `(-π, π]`).
+    pub fn heading_rad(&self) -> f64 {
+        self.sin.atan2(self.cos)
+    }
+
     /// World point → part frame.
     pub fn to_local(&self, p: Vec2) -> Vec2 {
         let d = p - self.position;
