@@ -8,7 +8,11 @@
 //!   colours on a screenshot, inside the crowd's area and at every agent);
 //! * a mouse drag on the page moves the crowd (seen in the socket's stream);
 //! * a page on a non-privileged output cannot pause the crowd nor move it, and shows
-//!   the daemon's error.
+//!   the daemon's error;
+//! * the page draws the scene (an obstacle, a patch, a checkpoint, a moving cart
+//!   where the daemon's poses put it, those poses where the scene's path puts the
+//!   cart) and, while a formation transform runs, colours each agent by the subgroup
+//!   a socket client is told it belongs to.
 //!
 //! What it needs is installed by `tests/tools/install-chromium.sh` (apt-get, as root)
 //! and `npm ci` in `tests/tools/viewer/`; where that cannot be done (not root, no
@@ -39,6 +43,41 @@ const AGENT_RGB: [[u8; 3]; 2] = [[0xf2, 0xb8, 0x4b], [0x7e, 0xe0, 0xd2]];
 
 /// The input of the tests: one finger drags the crowd for 2 s, then nothing.
 const POINT_DRAG: &str = "Replay(files: [\"recordings/01-point-drag.jsonl\"], looped: false)";
+
+/// The scene of the scene test (16 m × 9 m like the shipped config; the crowd
+/// starts in (6, 3)..(10, 6)): a block, a pool, a cart driving along the south
+/// edge, a checkpoint, all away from the crowd.
+const TEST_SCENE: &str = r#"(
+    version: 1,
+    name: "viewer test",
+    bounds_m: (min: (0.0, 0.0), max: (16.0, 9.0)),
+    obstacles: [(name: "block", parts: [Polygon(vertices_m: [(0.8, 0.6), (2.8, 0.6), (2.8, 2.0), (0.8, 2.0)])])],
+    patches: [(name: "pool", motion: swim, parts: [Polygon(vertices_m: [(12.8, 0.6), (15.2, 0.6), (15.2, 2.0), (12.8, 2.0)])])],
+    dynamic: [(name: "cart", kind: Obstacle,
+               parts: [Polygon(vertices_m: [(-0.6, -0.35), (0.6, -0.35), (0.6, 0.35), (-0.6, 0.35)])],
+               path: (waypoints_m: [(2.0, 8.3), (14.0, 8.3)], speed_m_s: 1.0, mode: ping_pong))],
+    checkpoints: [(name: "gate", region: Circle(centre_m: (1.6, 4.5), radius_m: 0.6), formation: "ring")],
+)"#;
+
+/// The page's colours for the scene (viewer.html): OBSTACLE_COLOUR, MOVING_COLOUR,
+/// the `swim` motion colour, SUBGROUP_COLOURS.
+const OBSTACLE_RGB: [u8; 3] = [0x5a, 0x64, 0x73];
+const MOVING_RGB: [u8; 3] = [0x8c, 0x96, 0xa8];
+const SWIM_RGB: [u8; 3] = [0x2e, 0xc4, 0xb6];
+const SUBGROUP_RGB: [[u8; 3]; 12] = [
+    [0xe6, 0x19, 0x4b],
+    [0x3c, 0xb4, 0x4b],
+    [0xff, 0xe1, 0x19],
+    [0x43, 0x63, 0xd8],
+    [0xf5, 0x82, 0x31],
+    [0x91, 0x1e, 0xb4],
+    [0x46, 0xf0, 0xf0],
+    [0xf0, 0x32, 0xe6],
+    [0xbc, 0xf6, 0x0c],
+    [0xfa, 0xbe, 0xbe],
+    [0x00, 0x80, 0x80],
+    [0xe6, 0xbe, 0xff],
+];
 
 /// Generous bound for waits (a debug daemon and a browser on a loaded machine).
 const WAIT: Duration = Duration::from_secs(60);
@@ -264,6 +303,7 @@ fn start_daemon(text: &str, outputs: &[WsOut]) -> Running {
 /// that stops reading for 10 s is disconnected).
 struct Watcher {
     msgs: Arc<Mutex<Vec<Value>>>,
+    writer: UnixStream,
 }
 
 impl Watcher {
@@ -271,9 +311,10 @@ impl Watcher {
         let mut stream = UnixStream::connect(socket).unwrap();
         stream
             .write_all(
-                b"{\"type\":\"hello\",\"protocol\":1,\"subscribe\":[\"snapshot\",\"events\"],\"fields\":[\"positions\",\"touches\"],\"max_rate_hz\":30}\n",
+                b"{\"type\":\"hello\",\"protocol\":1,\"subscribe\":[\"snapshot\",\"events\",\"transform\"],\"fields\":[\"positions\",\"touches\"],\"max_rate_hz\":30}\n",
             )
             .unwrap();
+        let writer = stream.try_clone().unwrap();
         let msgs = Arc::new(Mutex::new(Vec::new()));
         let sink = Arc::clone(&msgs);
         std::thread::spawn(move || {
@@ -284,7 +325,13 @@ impl Watcher {
                 }
             }
         });
-        Watcher { msgs }
+        Watcher { msgs, writer }
+    }
+
+    /// Sends one line (a command) to the daemon.
+    fn send(&mut self, line: &str) {
+        self.writer.write_all(line.as_bytes()).unwrap();
+        self.writer.write_all(b"\n").unwrap();
     }
 
     fn len(&self) -> usize {
@@ -679,6 +726,160 @@ fn a_read_only_page_cannot_pause_nor_move_the_crowd() {
         let now = centroid(&points(&newest["positions"]));
         assert!(dist(now, c) < 0.05, "the crowd moved from {c:?} to {now:?}");
     });
+}
+
+fn near(a: &Value, b: [u8; 3], tolerance: i64) -> bool {
+    (0..3).all(|k| (a[k].as_i64().unwrap() - b[k] as i64).abs() <= tolerance)
+}
+
+#[test]
+fn the_page_draws_the_scene_and_colours_agents_by_subgroup() {
+    in_browser(
+        "the_page_draws_the_scene_and_colours_agents_by_subgroup",
+        || {
+            let port = free_port();
+            let outs = [WsOut {
+                port,
+                privileged: true,
+            }];
+            // No touches: a TUIO input nobody sends to.
+            let quiet = format!("Tuio(listen: \"127.0.0.1:{}\")", free_port());
+            let dir = tempfile::tempdir().unwrap();
+            let scene_file = dir.path().join("viewer-test.ron");
+            std::fs::write(&scene_file, TEST_SCENE).unwrap();
+            let text = config_text(80, Some(&quiet), &outs).replacen(
+                "    scene: None,",
+                &format!("    scene: Some(\"{}\"),", scene_file.display()),
+                1,
+            );
+            let daemon = start_daemon(&text, &outs);
+            let mut watcher = Watcher::connect(&daemon.socket);
+            watcher.hello();
+            let scene = crowdtouch::crowd::environment::load_scene(&scene_file, 0.15)
+                .expect("the scene loads");
+
+            let mut browser = open_viewer(port);
+            browser.call(json!({"cmd": "wait", "until": "agentsDrawn", "min": 80}));
+            let page = browser.call(json!({"cmd": "wait", "until": "scene"}));
+            let counts = &page["stats"]["scene"];
+            assert_eq!(counts["name"], "viewer test");
+            assert_eq!(
+                (
+                    &counts["obstacles"],
+                    &counts["patches"],
+                    &counts["dynamic"],
+                    &counts["checkpoints"]
+                ),
+                (&json!(1), &json!(1), &json!(1), &json!(1))
+            );
+            browser.call(json!({"cmd": "wait", "until": "scene.posesSeq"}));
+            // block, pool, checkpoint, and open ground away from everything (none on a
+            // grid line: the 1 m grid is drawn under the scene).
+            let p = browser.call(json!({"cmd": "probe",
+            "points": [[1.8, 1.3], [14.3, 1.3], [1.6, 4.5], [4.5, 4.5]]}));
+            let px = p["points"].as_array().unwrap();
+            assert!(near(&px[0], OBSTACLE_RGB, 3), "block drawn {}", px[0]);
+            let ground = &px[3];
+            // The pool: the swim colour over the ground, see-through.
+            let pool = &px[1];
+            for k in 0..3 {
+                let (g, c, v) = (
+                    ground[k].as_f64().unwrap(),
+                    SWIM_RGB[k] as f64,
+                    pool[k].as_f64().unwrap(),
+                );
+                let want = g + (c - g) * 0.3;
+                assert!(
+                    (v - want).abs() <= 4.0,
+                    "pool drawn {pool}, ground {ground}"
+                );
+            }
+            assert_ne!(&px[2], ground, "the checkpoint is not drawn");
+            // The cart where the page's newest poses put it, and those poses where the
+            // scene's path puts the cart at their scene time.
+            let t = p["poses_t_s"].as_f64().expect("poses drawn");
+            let pose = &p["poses"][0];
+            let want = scene.dynamic()[0].placement_at(t);
+            assert!(
+                (pose[0].as_f64().unwrap() - want.position.x).abs() < 1e-6
+                    && (pose[1].as_f64().unwrap() - want.position.y).abs() < 1e-6,
+                "cart at {pose} at t = {t}, the scene says {:?}",
+                want.position
+            );
+            assert!(
+                near(&p["moving"][0], MOVING_RGB, 3),
+                "cart drawn {}",
+                p["moving"][0]
+            );
+            // It moves: a second probe a second later has it elsewhere.
+            std::thread::sleep(Duration::from_secs(1));
+            let q = browser.call(json!({"cmd": "probe"}));
+            let moved = (q["poses"][0][0].as_f64().unwrap() - pose[0].as_f64().unwrap()).abs();
+            assert!(moved > 0.5, "the cart moved {moved} m in 1 s");
+            assert!(near(&q["moving"][0], MOVING_RGB, 3));
+
+            // A formation transform: agents coloured by the subgroup the daemon sends.
+            let mark = watcher.len();
+            watcher.send(
+            r#"{"type":"command","id":1,"name":"set_formation","formation":"two_groups","method":"transform","duration":20}"#,
+        );
+            let progress = watcher.wait_for(mark, |v| v["type"] == "transform");
+            let told: Vec<u64> = progress["agent_subgroups"]
+                .as_array()
+                .expect("agent_subgroups")
+                .iter()
+                .map(|g| g.as_u64().unwrap())
+                .collect();
+            assert_eq!(told.len(), 80);
+            browser.call(json!({"cmd": "wait", "until": "subgroups", "min": 1}));
+            let p = browser.call(json!({"cmd": "probe"}));
+            assert_eq!(p["stats"]["colouring"], "subgroup");
+            let drawn: Vec<u64> = p["subgroups"]
+                .as_array()
+                .expect("the page's subgroups")
+                .iter()
+                .map(|g| g.as_u64().unwrap())
+                .collect();
+            assert_eq!(drawn, told, "the page's subgroups are not the socket's");
+            // Each agent's centre pixel: nearest to its subgroup's colour (discs may
+            // overlap, so most, not all; the mesh is not drawn during a transform).
+            let nearest = |rgb: &Value| -> usize {
+                (0..SUBGROUP_RGB.len())
+                    .min_by_key(|&i| {
+                        (0..3)
+                            .map(|k| (rgb[k].as_i64().unwrap() - SUBGROUP_RGB[i][k] as i64).pow(2))
+                            .sum::<i64>()
+                    })
+                    .unwrap()
+            };
+            let agents = p["agents"].as_array().unwrap();
+            assert_eq!(agents.len(), 80);
+            let right = agents
+                .iter()
+                .zip(&drawn)
+                .filter(|(a, g)| nearest(&a["rgb"]) == **g as usize % SUBGROUP_RGB.len())
+                .count();
+            let wrong: Vec<String> = agents
+                .iter()
+                .zip(&drawn)
+                .filter(|(a, g)| nearest(&a["rgb"]) != **g as usize % SUBGROUP_RGB.len())
+                .take(8)
+                .map(|(a, g)| format!("{a} in subgroup {g}"))
+                .collect();
+            assert!(
+                right * 10 >= agents.len() * 9,
+                "{right} of {} agents drawn in their subgroup's colour; e.g. {wrong:?}",
+                agents.len()
+            );
+            let page = browser.call(json!({"cmd": "stats"}));
+            assert!(
+                page["text"].as_str().unwrap().contains("subgroup 1"),
+                "no subgroup legend: {}",
+                page["text"]
+            );
+            assert_eq!(page["stats"]["lastError"], Value::Null);
+        },
+    );
 }
 
 /// The page's frame rate with 5,000 agents (the issue: 60 fps in headless

@@ -8,13 +8,18 @@
 //   {"cmd":"open","url":"http://127.0.0.1:8080/","page":"a"}   opens a page (a name of your choosing)
 //   {"cmd":"wait","page":"a","until":"snapshots","min":5,"timeout_ms":20000}
 //                                                               waits for viewerStats[until] >= min
-//                                                               (without min: until it is set)
+//                                                               (without min: until it is set;
+//                                                               "scene.posesSeq": a nested value)
 //   {"cmd":"stats","page":"a"}                                  window.viewerStats, #view's rect (CSS px), the page's text
 //   {"cmd":"screenshot","page":"a","path":"/tmp/x.png"}        a PNG of the viewport; answers #view's rect
 //   {"cmd":"drag","page":"a","from":[x,y],"to":[x,y],"steps":30,"ms":1500,"hold_ms":500}
 //                                                               a mouse drag in CSS px of the viewport
 //   {"cmd":"click","page":"a","selector":"#btn-pause"}
 //   {"cmd":"fps","page":"a","seconds":5}                        viewerStats.fps sampled once a second
+//   {"cmd":"probe","page":"a","points":[[x,y],…]}              right after the page draws a frame: the
+//                                                               canvas's RGB at each world point (m), at
+//                                                               each moving thing's pose and at each
+//                                                               agent, with the poses and subgroups drawn
 //   {"cmd":"close"}
 //
 // Standalone: `node drive.js --shot URL OUT.png [seconds]` saves a screenshot after
@@ -72,8 +77,11 @@ async function run(req) {
       const page = pageOf(req);
       const key = req.until || "snapshots";
       // With `min`, until the value is at least that; without, until it is set.
-      await page.waitForFunction(([k, min]) => window.viewerStats &&
-        (min === null ? Boolean(window.viewerStats[k]) : window.viewerStats[k] >= min),
+      // A dotted key ("scene.posesSeq") reads a nested value.
+      await page.waitForFunction(([k, min]) => {
+        const v = k.split(".").reduce((o, part) => (o == null ? o : o[part]), window.viewerStats);
+        return min === null ? Boolean(v) : v >= min;
+      },
         [key, req.min ?? null], { timeout: req.timeout_ms ?? 20000, polling: 100 });
       return { stats: await page.evaluate(() => window.viewerStats) };
     }
@@ -125,6 +133,35 @@ async function run(req) {
         mean_fps: ((f1 - f0) * 1000) / (Date.now() - t0),
         stats: await page.evaluate(() => window.viewerStats),
       };
+    }
+    case "probe": {
+      // In the animation frame's callbacks the page's own `frame` (registered at
+      // the end of the frame before) runs first, so what is read here is what it
+      // has just drawn, before any message can change its state.
+      return pageOf(req).evaluate((points) => new Promise((resolve) => {
+        requestAnimationFrame(() => {
+          /* global view, world, ctx, positions, scenePoses, agentSubgroups */
+          const at = (x, y) => {
+            const X = Math.round(((x - world.minX) * view.scale + view.ox) * view.dpr);
+            const Y = Math.round(((y - world.minY) * view.scale + view.oy) * view.dpr);
+            return Array.from(ctx.getImageData(X, Y, 1, 1).data.slice(0, 3));
+          };
+          const poses = scenePoses ? scenePoses.poses : [];
+          const agents = [];
+          for (let i = 0; positions && i < positions.length >> 1; i++) {
+            agents.push({ x: positions[2 * i], y: positions[2 * i + 1], rgb: at(positions[2 * i], positions[2 * i + 1]) });
+          }
+          resolve({
+            stats: window.viewerStats,
+            points: points.map(([x, y]) => at(x, y)),
+            poses_t_s: scenePoses ? scenePoses.t_s : null,
+            poses,
+            moving: poses.map(([x, y]) => at(x, y)),
+            agents,
+            subgroups: agentSubgroups,
+          });
+        });
+      }), req.points || []);
     }
     case "close": {
       if (browser) await browser.close();
