@@ -871,12 +871,20 @@ fn the_page_draws_the_scene_and_colours_agents_by_subgroup() {
                 "{right} of {} agents drawn in their subgroup's colour; e.g. {wrong:?}",
                 agents.len()
             );
-            let page = browser.call(json!({"cmd": "stats"}));
-            assert!(
-                page["text"].as_str().unwrap().contains("subgroup 1"),
-                "no subgroup legend: {}",
-                page["text"]
-            );
+            // The legend follows (the side panel is refreshed every 250 ms).
+            let t0 = Instant::now();
+            let page = loop {
+                let page = browser.call(json!({"cmd": "stats"}));
+                if page["text"].as_str().unwrap().contains("subgroup 1") {
+                    break page;
+                }
+                assert!(
+                    t0.elapsed() < Duration::from_secs(5),
+                    "no subgroup legend: {}",
+                    page["text"]
+                );
+                std::thread::sleep(Duration::from_millis(100));
+            };
             assert_eq!(page["stats"]["lastError"], Value::Null);
         },
     );
