@@ -7,7 +7,7 @@ mod common;
 use common::*;
 use crowdtouch::config::Config;
 use crowdtouch::geom::Vec2;
-use crowdtouch::pipeline::{Daemon, DaemonOptions, SourceSpec};
+use crowdtouch::pipeline::Daemon;
 use crowdtouch::vocab::TouchFrame;
 use serde_json::{json, Value};
 use std::io::{BufReader, Write};
@@ -44,15 +44,7 @@ fn start() -> Rig {
     cfg.crowd.agents = 30;
     cfg.pipeline.realtime = Default::default();
     // A source that never sends: the only touches are the client's.
-    let (tx, rx) = crossbeam_channel::bounded(1);
-    let daemon = Daemon::start(
-        cfg,
-        vec![SourceSpec::Channel { rx, glass_mm: None }],
-        DaemonOptions {
-            socket_path: path.clone(),
-        },
-    )
-    .unwrap();
+    let (daemon, tx) = daemon_on_channel(cfg, &path, 1);
     let w = UnixStream::connect(&path).unwrap();
     let mut r = BufReader::new(w.try_clone().unwrap());
     let hello = read_until(&mut r, 5.0, |v| v["type"] == "hello");

@@ -4,9 +4,10 @@
 //! a second used to broadcast ~72k `paused` and ~73k `reset` events and disconnect
 //! a reader taking 50 lines a second).
 
+mod common;
+
+use common::daemon_on_channel;
 use crowdtouch::config::Config;
-use crowdtouch::pipeline::{Daemon, DaemonOptions, SourceSpec};
-use crowdtouch::vocab::TouchFrame;
 use serde_json::Value;
 use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::os::unix::net::UnixStream;
@@ -95,15 +96,7 @@ fn a_command_flood_reaches_other_clients_as_a_few_state_events() {
     cfg.crowd.agents = 40;
     cfg.pipeline.tick_hz = TICK_HZ;
     cfg.pipeline.realtime = Default::default();
-    let (_frames, rx) = crossbeam_channel::bounded::<TouchFrame>(1);
-    let daemon = Daemon::start(
-        cfg,
-        vec![SourceSpec::Channel { rx, glass_mm: None }],
-        DaemonOptions {
-            socket_path: path.clone(),
-        },
-    )
-    .expect("daemon starts");
+    let (daemon, _frames) = daemon_on_channel(cfg, &path, 1);
 
     // The slow reader: the default stream, 50 lines a second.
     let until_seq = Arc::new(AtomicU64::new(0));

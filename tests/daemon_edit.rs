@@ -9,13 +9,12 @@
 
 mod common;
 
-use common::{read_until, shipped};
+use common::{daemon_on_channel, read_until, shipped};
 use crowdtouch::config::Config;
 use crowdtouch::crowd::edit::io::{read_tracks, write_tracks, Format, ReadOptions};
 use crowdtouch::crowd::edit::{Track, TrackSet};
 use crowdtouch::geom::Vec2;
 use crowdtouch::input::recording::{read_recording, OnBadFrame};
-use crowdtouch::pipeline::{Daemon, DaemonOptions, SourceSpec};
 use crowdtouch::vocab::{Micros, TouchFrame};
 use serde_json::Value;
 use std::io::{BufReader, Write};
@@ -89,15 +88,7 @@ fn a_recorded_drag_through_the_daemon_changes_the_tracks_a_client_receives() {
     .expect("config with an edit section");
     cfg.pipeline.realtime = Default::default();
     assert!(cfg.loaded_tracks().is_some());
-    let (tx, rx) = crossbeam_channel::bounded::<TouchFrame>(64);
-    let daemon = Daemon::start(
-        cfg,
-        vec![SourceSpec::Channel { rx, glass_mm: None }],
-        DaemonOptions {
-            socket_path: socket.clone(),
-        },
-    )
-    .expect("daemon starts");
+    let (daemon, tx) = daemon_on_channel(cfg, &socket, 64);
     let stream = UnixStream::connect(&socket).unwrap();
     let mut w = stream.try_clone().unwrap();
     let mut r = BufReader::new(stream);

@@ -6,11 +6,9 @@
 
 mod common;
 
-use common::read_until;
+use common::{daemon_on_channel, read_until};
 use crowdtouch::config::Config;
 use crowdtouch::crowd::environment::{load_scene, Scene};
-use crowdtouch::pipeline::{Daemon, DaemonOptions, SourceSpec};
-use crowdtouch::vocab::TouchFrame;
 use serde_json::Value;
 use std::io::{BufReader, Write};
 use std::os::unix::net::UnixStream;
@@ -28,19 +26,6 @@ fn config(scene: Option<Arc<Scene>>) -> Config {
     cfg.pipeline.realtime = Default::default();
     cfg.set_loaded_scene(scene);
     cfg
-}
-
-fn start(cfg: Config, path: &Path) -> (Daemon, crossbeam_channel::Sender<TouchFrame>) {
-    let (tx, rx) = crossbeam_channel::bounded(16);
-    let d = Daemon::start(
-        cfg,
-        vec![SourceSpec::Channel { rx, glass_mm: None }],
-        DaemonOptions {
-            socket_path: path.to_path_buf(),
-        },
-    )
-    .expect("daemon starts");
-    (d, tx)
 }
 
 fn subscribe(path: &Path, streams: &str) -> (BufReader<UnixStream>, UnixStream) {
@@ -67,7 +52,7 @@ fn a_subscriber_gets_the_scene_its_moving_things_and_the_scene_after_a_reload() 
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("ct.sock");
     let scene = street();
-    let (mut daemon, _frames) = start(config(Some(Arc::clone(&scene))), &path);
+    let (mut daemon, _frames) = daemon_on_channel(config(Some(Arc::clone(&scene))), &path, 16);
     let (mut plain, _pw) = subscribe(&path, r#""snapshot","events""#);
     let (mut r, _w) = subscribe(&path, r#""snapshot","scene""#);
 
@@ -117,13 +102,9 @@ fn a_subscriber_gets_the_scene_its_moving_things_and_the_scene_after_a_reload() 
     // Poses every tick, where the scene's paths put the cars at the scene time.
     let msgs = read_until(&mut r, 5.0, |_| false);
     let poses: Vec<&Value> = msgs.iter().filter(|v| v["type"] == "scene_poses").collect();
-    let snapshots = msgs.iter().filter(|v| v["type"] == "snapshot").count();
+    // Every tick; a reader that falls behind gets the newest instead of a backlog,
+    // so there may be fewer of them than of snapshots.
     assert!(poses.len() > 100, "{} scene_poses in 5 s", poses.len());
-    assert!(
-        poses.len() + 5 >= snapshots,
-        "{} poses, {snapshots} snapshots",
-        poses.len()
-    );
     let mut seqs = poses.iter().map(|v| v["seq"].as_u64().unwrap());
     let mut last = seqs.next().unwrap();
     for s in seqs {

@@ -6,9 +6,9 @@
 
 mod common;
 
-use common::read_until;
+use common::{daemon_on_channel, read_until};
 use crowdtouch::config::Config;
-use crowdtouch::pipeline::{Daemon, DaemonOptions, SourceSpec};
+use crowdtouch::pipeline::Daemon;
 use crowdtouch::vocab::TouchFrame;
 use serde_json::Value;
 use std::io::{BufReader, Write};
@@ -19,16 +19,7 @@ fn start(agents: u32, path: &Path) -> (Daemon, crossbeam_channel::Sender<TouchFr
     let mut cfg = Config::embedded_default();
     cfg.crowd.agents = agents;
     cfg.pipeline.realtime = Default::default();
-    let (tx, rx) = crossbeam_channel::bounded(16);
-    let d = Daemon::start(
-        cfg,
-        vec![SourceSpec::Channel { rx, glass_mm: None }],
-        DaemonOptions {
-            socket_path: path.to_path_buf(),
-        },
-    )
-    .expect("daemon starts");
-    (d, tx)
+    daemon_on_channel(cfg, path, 16)
 }
 
 #[test]

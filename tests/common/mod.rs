@@ -223,3 +223,27 @@ pub fn output_counts(
             .unwrap_or_else(|| panic!("no {k} in {counts}"))
     })
 }
+
+/// The daemon on `cfg` serving its socket at `socket`, with one channel source of
+/// `capacity` frames: the touch frames the test sends (keep the sender: dropping it
+/// ends the source).
+pub fn daemon_on_channel(
+    cfg: Config,
+    socket: &Path,
+    capacity: usize,
+) -> (
+    crowdtouch::pipeline::Daemon,
+    crossbeam_channel::Sender<crowdtouch::vocab::TouchFrame>,
+) {
+    use crowdtouch::pipeline::{Daemon, DaemonOptions, SourceSpec};
+    let (tx, rx) = crossbeam_channel::bounded(capacity);
+    let daemon = Daemon::start(
+        cfg,
+        vec![SourceSpec::Channel { rx, glass_mm: None }],
+        DaemonOptions {
+            socket_path: socket.to_path_buf(),
+        },
+    )
+    .expect("daemon starts");
+    (daemon, tx)
+}
