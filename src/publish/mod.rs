@@ -18,7 +18,8 @@ pub mod websocket;
 
 pub use outgoing::Outgoing;
 pub use output::{
-    ClientLimit, Output, OutputContext, OutputSet, OutputStats, Outputs, Overflow, QueuePolicy,
+    every_message, ClientLimit, Output, OutputContext, OutputSet, OutputStats, Outputs, Overflow,
+    QueuePolicy,
 };
 pub use protocol::HelloInfo;
 pub use socket::{Error, PeerPolicy, PublisherStats, Server, SocketOptions};

@@ -101,6 +101,12 @@ pub trait Output: Send {
     fn name(&self) -> &'static str;
     /// Its queue's size and drop policy.
     fn queue(&self) -> QueuePolicy;
+    /// Which messages go on its queue at all (the default: every one). An output
+    /// that uses only some kinds says so, so that the others never take room in its
+    /// queue (nor, with [`Overflow::DropOldest`], push out a message it wants).
+    fn wants(&self) -> fn(&Outgoing) -> bool {
+        every_message
+    }
     /// Its counters, shared with the stats reporter.
     fn stats(&self) -> Arc<dyn OutputStats>;
     /// Its client limit, shared with the daemon so a reload can change it
@@ -111,6 +117,11 @@ pub trait Output: Send {
     /// The output's thread body: consumes `ctx.messages` until `ctx.stop` is set or
     /// the queue disconnects. Never blocks the control thread.
     fn run(self: Box<Self>, ctx: OutputContext);
+}
+
+/// [`Output::wants`]'s default.
+pub fn every_message(_: &Outgoing) -> bool {
+    true
 }
 
 /// An output with the receiving end of its queue, ready for its thread.
@@ -153,6 +164,7 @@ impl OutputSet {
             // thread blocks on its own end. A full queue drops by policy.overflow.
             let (tx, rx) = bounded::<Outgoing>(policy.capacity.max(1));
             queues.push(OutputQueue {
+                wants: o.wants(),
                 tx,
                 oldest: (policy.overflow == Overflow::DropOldest).then(|| rx.clone()),
             });
@@ -168,6 +180,8 @@ impl OutputSet {
 }
 
 struct OutputQueue {
+    /// Which messages the output takes ([`Output::wants`]).
+    wants: fn(&Outgoing) -> bool,
     tx: Sender<Outgoing>,
     /// With [`Overflow::DropOldest`]: a receiving end to take the oldest message off.
     oldest: Option<Receiver<Outgoing>>,
@@ -192,9 +206,13 @@ impl Outputs {
             return 0;
         };
         for q in rest {
-            dropped += usize::from(!q.push(m.clone()));
+            if (q.wants)(&m) {
+                dropped += usize::from(!q.push(m.clone()));
+            }
         }
-        dropped += usize::from(!last.push(m));
+        if (last.wants)(&m) {
+            dropped += usize::from(!last.push(m));
+        }
         dropped
     }
 }
@@ -229,6 +247,7 @@ mod tests {
     struct Probe {
         name: &'static str,
         policy: QueuePolicy,
+        wants: fn(&Outgoing) -> bool,
     }
 
     struct NoStats;
@@ -254,6 +273,9 @@ mod tests {
         }
         fn queue(&self) -> QueuePolicy {
             self.policy
+        }
+        fn wants(&self) -> fn(&Outgoing) -> bool {
+            self.wants
         }
         fn stats(&self) -> Arc<dyn OutputStats> {
             Arc::new(NoStats)
@@ -283,6 +305,7 @@ mod tests {
             s.add(Box::new(Probe {
                 name,
                 policy: QueuePolicy { capacity, overflow },
+                wants: every_message,
             }));
         }
         s
@@ -372,5 +395,28 @@ mod tests {
                 ("b", "reply")
             ]
         );
+    }
+
+    #[test]
+    fn an_output_that_wants_snapshots_only_keeps_them_however_much_else_is_sent() {
+        let mut s = OutputSet::default();
+        s.add(Box::new(Probe {
+            name: "frames",
+            policy: QueuePolicy {
+                capacity: 2,
+                overflow: Overflow::DropOldest,
+            },
+            wants: |m| matches!(m, Outgoing::Snapshot(_)),
+        }));
+        let (out, running) = s.connect();
+        assert_eq!(out.send(snapshot(1)), 0);
+        for _ in 0..10 {
+            assert_eq!(
+                out.send(Outgoing::Stats(Arc::new(StatsReport::default()))),
+                0
+            );
+        }
+        assert_eq!(out.send(snapshot(2)), 0);
+        assert_eq!(seqs(&running[0].1), vec![1, 2]);
     }
 }

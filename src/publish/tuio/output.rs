@@ -327,6 +327,12 @@ impl Output for TuioOutput {
         }
     }
 
+    /// Snapshots only: events, replies, transforms and the scene's poses would take
+    /// room in the drop-oldest queue and push snapshots out.
+    fn wants(&self) -> fn(&Outgoing) -> bool {
+        |m| matches!(m, Outgoing::Snapshot(_))
+    }
+
     fn stats(&self) -> Arc<dyn OutputStats> {
         self.stats.clone()
     }
