@@ -2,7 +2,7 @@
 //! every tick while the scene has moving things, their [`ScenePoses`].
 
 use super::state::Engine;
-use crate::crowd::environment::{DynamicKind, Part};
+use crate::crowd::environment::{DynamicKind, Part, Terrain};
 use crate::vocab::{CheckpointView, SceneItemView, ScenePoses, SceneView, ShapeView, TerrainView};
 use std::sync::Arc;
 
@@ -16,8 +16,16 @@ fn shape(p: &Part) -> ShapeView {
     }
 }
 
-fn shapes(parts: &[Part]) -> Vec<ShapeView> {
-    parts.iter().map(shape).collect()
+/// An obstacle (no terrain) or a patch as published.
+fn item(name: &str, terrain: Option<Terrain>, parts: &[Part]) -> SceneItemView {
+    SceneItemView {
+        name: name.to_owned(),
+        terrain: terrain.map(|t| TerrainView {
+            motion: t.motion,
+            speed_factor: t.speed_factor,
+        }),
+        parts: parts.iter().map(shape).collect(),
+    }
 }
 
 impl Engine {
@@ -41,37 +49,22 @@ impl Engine {
             obstacles: s
                 .obstacles()
                 .iter()
-                .map(|o| SceneItemView {
-                    name: o.name.clone(),
-                    terrain: None,
-                    parts: shapes(&o.parts),
-                })
+                .map(|o| item(&o.name, None, &o.parts))
                 .collect(),
             patches: s
                 .patches()
                 .iter()
-                .map(|p| SceneItemView {
-                    name: p.name.clone(),
-                    terrain: Some(TerrainView {
-                        motion: p.terrain.motion,
-                        speed_factor: p.terrain.speed_factor,
-                    }),
-                    parts: shapes(&p.parts),
-                })
+                .map(|p| item(&p.name, Some(p.terrain), &p.parts))
                 .collect(),
             dynamic: s
                 .dynamic()
                 .iter()
-                .map(|d| SceneItemView {
-                    name: d.name.clone(),
-                    terrain: match d.kind {
+                .map(|d| {
+                    let terrain = match d.kind {
                         DynamicKind::Obstacle => None,
-                        DynamicKind::Patch(t) => Some(TerrainView {
-                            motion: t.motion,
-                            speed_factor: t.speed_factor,
-                        }),
-                    },
-                    parts: shapes(&d.parts),
+                        DynamicKind::Patch(t) => Some(t),
+                    };
+                    item(&d.name, terrain, &d.parts)
                 })
                 .collect(),
             checkpoints: s
