@@ -14,7 +14,7 @@ use crowdtouch::pipeline::{Daemon, DaemonOptions, SourceSpec};
 use crowdtouch::vocab::{Micros, TouchFrame};
 use serde_json::Value;
 use std::collections::HashMap;
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Write};
 use std::net::{Ipv4Addr, UdpSocket};
 use std::os::unix::net::UnixStream;
 use std::path::Path;
@@ -365,14 +365,19 @@ fn python_tuio_sees_touches_and_agents_in_tuio_1_1() {
     match install {
         Ok(o) if o.status.success() => {}
         Ok(o) => {
-            println!(
-                "SKIP python_tuio_sees_touches_and_agents_in_tuio_1_1: python-tuio unavailable: {}",
+            // Straight to stderr: the test harness captures print! and eprintln!.
+            let _ = writeln!(
+                std::io::stderr(),
+                "SKIPPED python_tuio_sees_touches_and_agents_in_tuio_1_1: python-tuio unavailable: {}",
                 String::from_utf8_lossy(&o.stderr).trim()
             );
             return;
         }
         Err(e) => {
-            println!("SKIP python_tuio_sees_touches_and_agents_in_tuio_1_1: cannot run the installer: {e}");
+            let _ = writeln!(
+                std::io::stderr(),
+                "SKIPPED python_tuio_sees_touches_and_agents_in_tuio_1_1: cannot run the installer: {e}"
+            );
             return;
         }
     }

@@ -23,10 +23,13 @@ if [ "$(id -u)" != 0 ]; then
     exit 2
 fi
 export DEBIAN_FRONTEND=noninteractive
+# Another apt-get (another test binary, the machine's own updates) may hold dpkg's
+# lock: wait for it rather than fail.
+APT="apt-get -o DPkg::Lock::Timeout=600"
 # The package lists may be missing (a fresh container) or stale.
-if ! apt-get install -y --no-install-recommends chromium >/tmp/install-chromium.log 2>&1; then
-    apt-get update >>/tmp/install-chromium.log 2>&1 || true
-    if ! apt-get install -y --no-install-recommends chromium >>/tmp/install-chromium.log 2>&1; then
+if ! $APT install -y --no-install-recommends chromium >/tmp/install-chromium.log 2>&1; then
+    $APT update >>/tmp/install-chromium.log 2>&1 || true
+    if ! $APT install -y --no-install-recommends chromium >>/tmp/install-chromium.log 2>&1; then
         echo "cannot install chromium: apt-get install failed (no network?); see /tmp/install-chromium.log:" >&2
         tail -n 5 /tmp/install-chromium.log >&2
         exit 2
