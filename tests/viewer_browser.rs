@@ -90,17 +90,16 @@ fn tools_dir() -> PathBuf {
     manifest().join("tests/tools/viewer")
 }
 
-/// Why the browser tests cannot run here, or `None` when they can. Installs what is
-/// missing first.
-/// Why the browser tests cannot run here, if they cannot. Worked out once per test
-/// binary: the tests run in parallel, and one `apt-get` or `npm ci` at a time can
-/// install (a second would find dpkg's lock taken, or a half-written
+/// Why the browser tests cannot run here, or `None` when they can. Worked out once
+/// per test binary: the tests run in parallel, and one `apt-get` or `npm ci` at a
+/// time can install (a second would find dpkg's lock taken, or a half-written
 /// `node_modules`); the others wait for its outcome.
 fn cannot_run() -> Option<String> {
     static OUTCOME: std::sync::OnceLock<Option<String>> = std::sync::OnceLock::new();
     OUTCOME.get_or_init(prepare).clone()
 }
 
+/// Installs what is missing, then says why the tests cannot run, if they cannot.
 fn prepare() -> Option<String> {
     let has_server = std::fs::read_dir(manifest().join("src/publish/websocket"))
         .map(|d| {
