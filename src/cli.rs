@@ -612,6 +612,11 @@ fn demo_websocket(addr: &str, token: Option<String>) -> Result<config::OutputCon
         max_clients: 16,
         max_message_bytes: 64 * 1024,
         viewer: true,
+        // The viewer is served by this output: its own origin is privileged, as
+        // are clients that send no Origin; pages of other sites are refused.
+        origins: vec![],
+        privileged_origins: vec![],
+        hosts: vec![],
     })
 }
 

@@ -41,6 +41,9 @@ fn websocket(addr: SocketAddr, privileged: bool, token: Option<&str>) -> OutputC
         max_clients: 8,
         max_message_bytes: 4096,
         viewer: true,
+        origins: vec![],
+        privileged_origins: vec![],
+        hosts: vec![],
     }
 }
 
@@ -141,6 +144,11 @@ fn read_ws(ws: &mut Ws, secs: f64, mut until: impl FnMut(&Got) -> bool) -> Vec<G
 
 fn send(ws: &mut Ws, text: &str) {
     ws.send(Message::Text(text.to_string().into())).unwrap();
+}
+
+/// A plain `GET path` with `Host: addr`.
+fn get(path: &str, addr: SocketAddr) -> String {
+    format!("GET {path} HTTP/1.1\r\nHost: {addr}\r\n\r\n")
 }
 
 /// A plain HTTP request: the status code and the whole response.
@@ -285,7 +293,7 @@ fn a_token_protected_output_refuses_a_wrong_token_and_accepts_the_right_one() {
         assert_eq!(got[0].json().unwrap()["type"], "hello");
     }
     // The page needs no token (it passes its own URL's token on).
-    let (status, _) = http(addr, b"GET / HTTP/1.1\r\nHost: x\r\n\r\n");
+    let (status, _) = http(addr, get("/", addr).as_bytes());
     daemon.shutdown();
     assert_eq!(status, 200);
 }
@@ -330,16 +338,14 @@ fn the_page_is_served_and_bad_requests_get_their_status() {
     cfg.crowd.agents = 20;
     cfg.outputs = vec![websocket(addr, false, None)];
     let daemon = start(cfg, &dir.path().join("ct.sock"));
-    let (status, page) = http(addr, b"GET / HTTP/1.1\r\nHost: x\r\n\r\n");
+    let (status, page) = http(addr, get("/", addr).as_bytes());
     assert_eq!(status, 200);
     assert!(page.contains("Content-Type: text/html"), "{page}");
     assert!(page.ends_with(VIEWER_PAGE), "the embedded page, whole");
-    assert_eq!(http(addr, b"GET /nope HTTP/1.1\r\n\r\n").0, 404);
-    assert_eq!(
-        http(addr, b"POST / HTTP/1.1\r\nContent-Length: 0\r\n\r\n").0,
-        405
-    );
-    let mut huge = b"GET / HTTP/1.1\r\nX-Pad: ".to_vec();
+    assert_eq!(http(addr, get("/nope", addr).as_bytes()).0, 404);
+    let post = format!("POST / HTTP/1.1\r\nHost: {addr}\r\nContent-Length: 0\r\n\r\n");
+    assert_eq!(http(addr, post.as_bytes()).0, 405);
+    let mut huge = format!("GET / HTTP/1.1\r\nHost: {addr}\r\nX-Pad: ").into_bytes();
     huge.resize(10_000, b'a');
     huge.extend_from_slice(b"\r\n\r\n");
     assert_eq!(http(addr, &huge).0, 431);
@@ -502,4 +508,422 @@ fn unix_socket_peers_are_privileged_by_their_credentials() {
         .unwrap()
         .starts_with("read-only client"));
     assert!(text.contains("TOUCHES false"), "{text}");
+}
+
+// ---- Issue 27: who may connect, the handshake, close codes, ping floods ----------
+
+/// A WebSocket upgrade of `/ws` on `addr` by hand: `version` (`"1.1"`), `host`,
+/// the extra header lines `extra` (each ending in CRLF), `key`, `ws_version`.
+fn upgrade_request(version: &str, host: &str, extra: &str, key: &str, ws_version: &str) -> String {
+    format!(
+        "GET /ws HTTP/{version}\r\nHost: {host}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
+         Sec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: {ws_version}\r\n{extra}\r\n"
+    )
+}
+
+const KEY: &str = "dGhlIHNhbXBsZSBub25jZQ==";
+
+/// A tungstenite client of `addr` whose upgrade carries `Origin: origin`.
+fn connect_from(addr: SocketAddr, query: &str, origin: &str) -> Result<Ws, tungstenite::Error> {
+    use tungstenite::client::IntoClientRequest;
+    let mut req = format!("ws://{addr}/ws{query}").into_client_request()?;
+    req.headers_mut()
+        .insert("Origin", origin.parse().unwrap());
+    let stream = TcpStream::connect(addr).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_millis(200)))
+        .unwrap();
+    match tungstenite::client(req, stream) {
+        Ok((ws, _)) => Ok(ws),
+        Err(tungstenite::HandshakeError::Failure(e)) => Err(e),
+        Err(tungstenite::HandshakeError::Interrupted(_)) => panic!("handshake interrupted"),
+    }
+}
+
+fn status_of(r: Result<Ws, tungstenite::Error>) -> u16 {
+    match r {
+        Err(tungstenite::Error::Http(resp)) => resp.status().as_u16(),
+        Ok(_) => 101,
+        Err(e) => panic!("expected an HTTP status, got {e}"),
+    }
+}
+
+#[test]
+fn a_page_of_another_origin_is_refused_403_on_loopback_and_with_a_token() {
+    let dir = tempfile::tempdir().unwrap();
+    let open = free_addr();
+    // Listening on every address (with its token); the test connects over loopback.
+    let port = free_addr().port();
+    let wide: SocketAddr = format!("0.0.0.0:{port}").parse().unwrap();
+    let wide_local: SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = 20;
+    cfg.outputs = vec![websocket(open, true, None), websocket(wide, true, Some(TOKEN))];
+    let daemon = start(cfg, &dir.path().join("ct.sock"));
+    let stats = daemon.publisher_stats().clone();
+    assert_eq!(status_of(connect_from(open, "", "http://evil.example")), 403);
+    assert_eq!(
+        status_of(connect_from(wide_local, &format!("?token={TOKEN}"), "http://evil.example")),
+        403
+    );
+    // The raw answer says why.
+    let (status, text) = http(
+        open,
+        upgrade_request("1.1", &open.to_string(), "Origin: https://evil.example\r\n", KEY, "13")
+            .as_bytes(),
+    );
+    assert_eq!(status, 403);
+    assert!(text.contains("origin \"https://evil.example\" may not connect"), "{text}");
+    // Its own origin (the page it serves) still connects, privileged.
+    let mut own = connect_from(open, "", &format!("http://{open}")).expect("its own origin");
+    let got = read_ws(&mut own, 5.0, |_| true);
+    let refused = stats.websocket_refused();
+    daemon.shutdown();
+    assert_eq!(got[0].json().unwrap()["privileged"], true);
+    assert_eq!(refused, 3, "each refusal counted");
+}
+
+#[test]
+fn a_request_for_another_host_is_refused_421() {
+    let dir = tempfile::tempdir().unwrap();
+    let addr = free_addr();
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = 20;
+    let mut out = websocket(addr, true, None);
+    if let OutputConfig::WebSocket { hosts, .. } = &mut out {
+        hosts.push("kiosk.local".to_string());
+    }
+    cfg.outputs = vec![out];
+    let daemon = start(cfg, &dir.path().join("ct.sock"));
+    let port = addr.port();
+    let page = |host: &str| http(addr, format!("GET / HTTP/1.1\r\nHost: {host}\r\n\r\n").as_bytes());
+    // A rebound name (the attacker's page, its DNS now saying 127.0.0.1).
+    let (status, text) = page(&format!("evil.example:{port}"));
+    assert_eq!(status, 421, "{text}");
+    assert!(text.contains("does not answer for host \"evil.example:"), "{text}");
+    assert_eq!(page(&format!("127.0.0.2:{port}")).0, 421);
+    assert_eq!(page(&format!("localhost:{}", port.wrapping_add(1))).0, 421);
+    assert_eq!(page("localhost").0, 421, "port 80 is not this one");
+    assert_eq!(http(addr, b"GET / HTTP/1.1\r\n\r\n").0, 400, "no Host");
+    // The names it answers for.
+    assert_eq!(page(&format!("127.0.0.1:{port}")).0, 200);
+    assert_eq!(page(&format!("LOCALHOST:{port}")).0, 200);
+    assert_eq!(page(&format!("kiosk.local:{port}")).0, 200);
+    // An upgrade for another host is refused the same way.
+    let (status, _) = http(
+        addr,
+        upgrade_request("1.1", &format!("evil.example:{port}"), "", KEY, "13").as_bytes(),
+    );
+    let refused = daemon.publisher_stats().websocket_refused();
+    daemon.shutdown();
+    assert_eq!(status, 421);
+    assert_eq!(refused, 6);
+}
+
+#[test]
+fn another_allowed_origin_is_read_only_unless_privileged_and_no_origin_is_as_configured() {
+    let dir = tempfile::tempdir().unwrap();
+    let addr = free_addr();
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = 20;
+    let mut out = websocket(addr, true, None);
+    if let OutputConfig::WebSocket {
+        origins,
+        privileged_origins,
+        ..
+    } = &mut out
+    {
+        origins.push("http://allowed.example".to_string());
+        privileged_origins.push("https://trusted.example:8443".to_string());
+    }
+    cfg.outputs = vec![out];
+    let daemon = start(cfg, &dir.path().join("ct.sock"));
+    let mut allowed = connect_from(addr, "", "http://allowed.example").expect("an allowed origin");
+    send(&mut allowed, r#"{"type":"command","id":9,"name":"pause"}"#);
+    let got = read_ws(&mut allowed, 5.0, |g| {
+        g.json().is_some_and(|v| v["type"] == "error")
+    });
+    let mut trusted =
+        connect_from(addr, "", "https://trusted.example:8443").expect("a privileged origin");
+    let trusted_hello = read_ws(&mut trusted, 5.0, |_| true);
+    let mut engine = connect(addr, "", None).expect("no Origin: not a browser");
+    let engine_hello = read_ws(&mut engine, 5.0, |_| true);
+    daemon.shutdown();
+    let got: Vec<&Value> = got.iter().filter_map(Got::json).collect();
+    assert_eq!(got[0]["type"], "hello");
+    assert_eq!(got[0]["privileged"], false, "another origin is read-only");
+    let err = got.last().unwrap();
+    assert_eq!((&err["type"], &err["id"]), (&"error".into(), &9.into()));
+    assert!(err["message"].as_str().unwrap().starts_with("read-only client"), "{err}");
+    assert_eq!(trusted_hello[0].json().unwrap()["privileged"], true);
+    assert_eq!(engine_hello[0].json().unwrap()["privileged"], true);
+}
+
+#[test]
+fn the_handshake_follows_rfc_6455() {
+    let dir = tempfile::tempdir().unwrap();
+    let addr = free_addr();
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = 20;
+    cfg.outputs = vec![websocket(addr, true, None)];
+    let daemon = start(cfg, &dir.path().join("ct.sock"));
+    let host = addr.to_string();
+    let try_it = |version: &str, key: &str, ws_version: &str| {
+        http(addr, upgrade_request(version, &host, "", key, ws_version).as_bytes())
+    };
+    let (http10, text10) = try_it("1.0", KEY, "13");
+    let (not_b64, text_b64) = try_it("1.1", "not base64 at all", "13");
+    let (short, _) = try_it("1.1", "AAAAAAAAAAAAAAAAAAAA", "13"); // 15 bytes
+    let (long, _) = try_it("1.1", "AAAAAAAAAAAAAAAAAAAAAAAA", "13"); // 18 bytes
+    let (v12, text12) = try_it("1.1", KEY, "12");
+    let (good, _) = try_it("1.1", KEY, "13");
+    daemon.shutdown();
+    assert_eq!(http10, 400, "{text10}");
+    assert!(text10.contains("HTTP/1.1"), "{text10}");
+    assert_eq!(not_b64, 400, "{text_b64}");
+    assert!(text_b64.contains("base64 of 16 bytes"), "{text_b64}");
+    assert_eq!((short, long), (400, 400));
+    assert_eq!(v12, 426, "{text12}");
+    assert!(text12.contains("Sec-WebSocket-Version: 13\r\n"), "{text12}");
+    assert_eq!(good, 101);
+}
+
+/// A raw upgraded connection (no Origin), the 101 read.
+fn raw_upgrade(addr: SocketAddr) -> TcpStream {
+    let mut s = TcpStream::connect(addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    s.write_all(upgrade_request("1.1", &addr.to_string(), "", KEY, "13").as_bytes())
+        .unwrap();
+    let mut head = Vec::new();
+    let mut b = [0u8; 1];
+    while !head.ends_with(b"\r\n\r\n") {
+        s.read_exact(&mut b).unwrap();
+        head.push(b[0]);
+    }
+    assert!(head.starts_with(b"HTTP/1.1 101"), "{}", String::from_utf8_lossy(&head));
+    s
+}
+
+/// A client frame: FIN, `rsv` bits (0..=7), `opcode`, masked or not.
+fn frame(fin: bool, rsv: u8, opcode: u8, payload: &[u8], masked: bool) -> Vec<u8> {
+    let mut f = vec![(u8::from(fin) << 7) | (rsv << 4) | opcode];
+    let m = if masked { 0x80 } else { 0 };
+    match payload.len() {
+        n if n < 126 => f.push(m | n as u8),
+        n if n < 65536 => {
+            f.push(m | 126);
+            f.extend_from_slice(&(n as u16).to_be_bytes());
+        }
+        n => {
+            f.push(m | 127);
+            f.extend_from_slice(&(n as u64).to_be_bytes());
+        }
+    }
+    if masked {
+        let key = [0x12, 0x34, 0x56, 0x78];
+        f.extend_from_slice(&key);
+        f.extend(payload.iter().enumerate().map(|(i, b)| b ^ key[i % 4]));
+    } else {
+        f.extend_from_slice(payload);
+    }
+    f
+}
+
+/// Reads the server's frames until its close frame: its code and reason; `None`
+/// when the connection ends (or 5 s pass) without one.
+fn close_code(s: &mut TcpStream) -> Option<(u16, String)> {
+    let end = Instant::now() + Duration::from_secs(5);
+    while Instant::now() < end {
+        let mut h = [0u8; 2];
+        s.read_exact(&mut h).ok()?;
+        let len = match h[1] & 0x7f {
+            126 => {
+                let mut l = [0u8; 2];
+                s.read_exact(&mut l).ok()?;
+                u16::from_be_bytes(l) as usize
+            }
+            127 => {
+                let mut l = [0u8; 8];
+                s.read_exact(&mut l).ok()?;
+                u64::from_be_bytes(l) as usize
+            }
+            n => n as usize,
+        };
+        let mut payload = vec![0u8; len];
+        s.read_exact(&mut payload).ok()?;
+        if h[0] & 0x0f == 0x8 {
+            let code = u16::from_be_bytes([payload[0], payload[1]]);
+            return Some((code, String::from_utf8_lossy(&payload[2..]).into_owned()));
+        }
+    }
+    None
+}
+
+#[test]
+fn protocol_errors_close_with_1002_1007_and_1009() {
+    let dir = tempfile::tempdir().unwrap();
+    let addr = free_addr();
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = 20;
+    cfg.outputs = vec![websocket(addr, true, None)];
+    let daemon = start(cfg, &dir.path().join("ct.sock"));
+    let cases: Vec<(&str, Vec<u8>, u16)> = vec![
+        ("unmasked frame", frame(true, 0, 0x1, b"{}", false), 1002),
+        ("RSV1 without an extension", frame(true, 4, 0x1, b"{}", true), 1002),
+        ("unknown data opcode", frame(true, 0, 0x3, b"x", true), 1002),
+        ("unknown control opcode", frame(true, 0, 0xb, b"x", true), 1002),
+        ("fragmented ping", frame(false, 0, 0x9, b"x", true), 1002),
+        ("continuation first", frame(true, 0, 0x0, b"x", true), 1002),
+        ("text not UTF-8", frame(true, 0, 0x1, &[0x22, 0xff, 0xfe, 0x22], true), 1007),
+        ("close reason not UTF-8", frame(true, 0, 0x8, &[0x03, 0xe8, 0xff, 0xfe], true), 1007),
+        ("too large", frame(true, 0, 0x1, &vec![b' '; 5000], true), 1009),
+    ];
+    let mut got = Vec::new();
+    for (what, bytes, _) in &cases {
+        let mut s = raw_upgrade(addr);
+        s.write_all(bytes).unwrap();
+        got.push((what.to_string(), close_code(&mut s)));
+    }
+    let bad = daemon.publisher_stats().websocket_bad_frames();
+    daemon.shutdown();
+    for ((what, _, want), (_, got)) in cases.iter().zip(&got) {
+        let (code, reason) = got.clone().unwrap_or_else(|| panic!("{what}: no close frame"));
+        assert_eq!(code, *want, "{what}: closed {code} {reason:?}");
+    }
+    assert!(bad >= 8, "bad frames counted: {bad}");
+}
+
+/// The daemon's resident memory (kB), from /proc.
+fn rss_kb(pid: u32) -> Option<u64> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmRSS:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
+}
+
+/// Issue 27 finding 5: 16 clients send 125-byte pings for 10 s and read nothing,
+/// while a well-behaved client reads. The daemon (`demo --http`, its own process)
+/// stays within 100 MB of its idle RSS and the good client misses no snapshot.
+/// The flood stops early once the limit is passed (the old daemon grew ~240 MB/s
+/// per client), so a failure costs the machine little.
+#[test]
+fn a_ping_flood_grows_no_memory_and_starves_no_reader() {
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+    use std::sync::Arc;
+    const FLOODERS: usize = 16;
+    const FLOOD: Duration = Duration::from_secs(10);
+    const LIMIT_KB: u64 = 100 * 1024;
+    let dir = tempfile::tempdir().unwrap();
+    let addr = free_addr();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_crowdtouch"))
+        .args(["demo", "--agents", "200", "--seconds", "60", "--http"])
+        .arg(addr.to_string())
+        .arg("--socket")
+        .arg(dir.path().join("ct.sock"))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("the built binary runs");
+    let pid = child.id();
+    let t0 = Instant::now();
+    while TcpStream::connect(addr).is_err() {
+        assert!(t0.elapsed() < Duration::from_secs(20), "demo --http never listened");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    // The good client: every snapshot's seq, and any dropped notice.
+    let stop = Arc::new(AtomicBool::new(false));
+    let (snaps, gaps, drops) = (
+        Arc::new(AtomicU64::new(0)),
+        Arc::new(AtomicU64::new(0)),
+        Arc::new(AtomicU64::new(0)),
+    );
+    let mut good = connect(addr, "", None).expect("the good client connects");
+    let reader = {
+        let (stop, snaps, gaps, drops) = (stop.clone(), snaps.clone(), gaps.clone(), drops.clone());
+        std::thread::spawn(move || {
+            let mut last: Option<u64> = None;
+            while !stop.load(Ordering::Relaxed) {
+                read_ws(&mut good, 0.2, |g| {
+                    let Some(v) = g.json() else { return false };
+                    if v["type"] == "dropped" {
+                        drops.fetch_add(1, Ordering::Relaxed);
+                    }
+                    if v["type"] == "snapshot" {
+                        let seq = v["seq"].as_u64().unwrap();
+                        if last.is_some_and(|l| seq != l + 1) {
+                            gaps.fetch_add(1, Ordering::Relaxed);
+                        }
+                        if v["dropped"].as_u64().unwrap_or(0) > 0 {
+                            drops.fetch_add(1, Ordering::Relaxed);
+                        }
+                        last = Some(seq);
+                        snaps.fetch_add(1, Ordering::Relaxed);
+                    }
+                    false
+                });
+            }
+        })
+    };
+    std::thread::sleep(Duration::from_secs(2));
+    let idle = rss_kb(pid).expect("the daemon's RSS");
+    let before = snaps.load(Ordering::Relaxed);
+    let ping = frame(true, 0, 0x9, &[b'p'; 125], true);
+    let flooders: Vec<_> = (0..FLOODERS)
+        .map(|_| {
+            let (stop, ping) = (stop.clone(), ping.clone());
+            let mut s = raw_upgrade(addr);
+            s.set_write_timeout(Some(Duration::from_millis(50))).unwrap();
+            std::thread::spawn(move || {
+                let (mut sent, start) = (0u64, Instant::now());
+                while !stop.load(Ordering::Relaxed) && start.elapsed() < FLOOD {
+                    match s.write_all(&ping) {
+                        Ok(()) => sent += 1,
+                        Err(e)
+                            if matches!(
+                                e.kind(),
+                                std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                            ) => {}
+                        Err(_) => break, // the daemon dropped it
+                    }
+                }
+                sent
+            })
+        })
+        .collect();
+    let (mut peak, start) = (idle, Instant::now());
+    while start.elapsed() < FLOOD + Duration::from_millis(500) {
+        let now = rss_kb(pid).unwrap_or(0);
+        peak = peak.max(now);
+        if now > idle + LIMIT_KB {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    stop.store(true, Ordering::Relaxed);
+    let sent: u64 = flooders.into_iter().map(|t| t.join().unwrap()).sum();
+    reader.join().unwrap();
+    let _ = nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(pid as i32),
+        nix::sys::signal::Signal::SIGTERM,
+    );
+    let _ = child.wait();
+    let (snaps, gaps, drops) = (
+        snaps.load(Ordering::Relaxed) - before,
+        gaps.load(Ordering::Relaxed),
+        drops.load(Ordering::Relaxed),
+    );
+    println!(
+        "ping flood: {FLOODERS} clients sent {sent} pings in {:.1} s; daemon RSS idle {idle} kB, \
+         peak {peak} kB (+{} kB); the good client got {snaps} snapshots, {gaps} seq gaps, \
+         {drops} drop notices",
+        start.elapsed().as_secs_f64(),
+        peak - idle
+    );
+    assert!(
+        peak <= idle + LIMIT_KB,
+        "RSS grew from {idle} kB to {peak} kB under the ping flood"
+    );
+    assert!(snaps > 100, "the good client kept reading: {snaps} snapshots");
+    assert_eq!((gaps, drops), (0, 0), "the good client missed snapshots");
 }

@@ -2,7 +2,9 @@
 //! Bytes a WebSocket client sends, read by tungstenite in the server role (as the
 //! WebSocket output configures it: a message size cap) from a memory stream; each
 //! text message then goes through the protocol parser. Nothing panics; a message
-//! over the cap is refused as a capacity error.
+//! over the cap is refused as a capacity error. Writes block (a client that reads
+//! nothing), with the write buffer capped at one control frame as the output caps
+//! it: pongs wait in place instead of piling up.
 use crowdtouch::publish::protocol::parse_client_message;
 use libfuzzer_sys::fuzz_target;
 use std::io::{Cursor, Read, Write};
@@ -21,8 +23,8 @@ impl Read for Memory {
 }
 
 impl Write for Memory {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        Ok(buf.len())
+    fn write(&mut self, _: &[u8]) -> std::io::Result<usize> {
+        Err(std::io::ErrorKind::WouldBlock.into())
     }
     fn flush(&mut self) -> std::io::Result<()> {
         Ok(())
@@ -32,6 +34,7 @@ impl Write for Memory {
 fuzz_target!(|data: &[u8]| {
     let config = WebSocketConfig::default()
         .write_buffer_size(0)
+        .max_write_buffer_size(2 + 125)
         .max_message_size(Some(MAX_MESSAGE_BYTES))
         .max_frame_size(Some(MAX_MESSAGE_BYTES));
     let mut ws = WebSocket::from_raw_socket(
@@ -48,6 +51,7 @@ fuzz_target!(|data: &[u8]| {
             Ok(Message::Binary(b)) => assert!(b.len() <= MAX_MESSAGE_BYTES),
             Ok(_) => {}
             Err(Error::Capacity(_) | Error::Utf8(_) | Error::Protocol(_)) => break,
+            Err(Error::Io(e)) if e.kind() == std::io::ErrorKind::WouldBlock => {}
             Err(_) => break,
         }
     }

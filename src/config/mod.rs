@@ -49,8 +49,8 @@ pub use model::{
     RealtimeConfig, SocketConfig, SurfaceConfig, CONFIG_VERSION, DEFAULT_FIELD_STEP_M,
 };
 pub use outputs::{
-    is_loopback, OutputConfig, TuioProfile, TuioVersion, MAX_TUIO_DATAGRAM_BYTES,
-    MIN_TUIO_DATAGRAM_BYTES,
+    is_loopback, normalize_host, normalize_origin, OutputConfig, TuioProfile, TuioVersion,
+    MAX_TUIO_DATAGRAM_BYTES, MIN_TUIO_DATAGRAM_BYTES,
 };
 pub use transform::{
     GestureFormation, SubgroupsConfig, TransformCost, TransformMoveConfig, DEFAULT_METHOD,

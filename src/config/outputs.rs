@@ -66,6 +66,21 @@ pub enum OutputConfig {
         /// Serve the live viewer page at `/`.
         #[serde(default = "default_true")]
         viewer: bool,
+        /// Web origins besides the server's own (`scheme://host[:port]`, like
+        /// `"https://kiosk.example"`) whose pages may connect, read-only unless
+        /// also in `privileged_origins`. A browser upgrade from any other origin is
+        /// refused 403 (a page of any site can open `ws://127.0.0.1:…`).
+        #[serde(default)]
+        origins: Vec<String>,
+        /// Web origins whose pages get the privilege of `privileged: true` clients
+        /// (raw touches, commands), whatever `privileged` says.
+        #[serde(default)]
+        privileged_origins: Vec<String>,
+        /// Host names (`name` or `name:port`) requests may name in their `Host`
+        /// header besides the address they reached (and `localhost` on a loopback
+        /// address); any other is refused 421, which defeats DNS rebinding.
+        #[serde(default)]
+        hosts: Vec<String>,
     },
 }
 
@@ -215,8 +230,23 @@ pub(super) fn validate_outputs(outputs: &[OutputConfig], p: &mut Vec<(String, St
                 token,
                 max_clients,
                 max_message_bytes,
+                origins,
+                privileged_origins,
+                hosts,
                 ..
             } => {
+                for (name, list) in [("origins", origins), ("privileged_origins", privileged_origins)] {
+                    for (k, o) in list.iter().enumerate() {
+                        if let Err(why) = normalize_origin(o) {
+                            check(false, format!("outputs[{i}].{name}[{k}]"), format!("{o:?}: {why}"));
+                        }
+                    }
+                }
+                for (k, h) in hosts.iter().enumerate() {
+                    if let Err(why) = normalize_host(h) {
+                        check(false, format!("outputs[{i}].hosts[{k}]"), format!("{h:?}: {why}"));
+                    }
+                }
                 let addr = listen.parse::<SocketAddr>();
                 check(
                     addr.is_ok(),
@@ -271,6 +301,82 @@ pub(super) fn validate_outputs(outputs: &[OutputConfig], p: &mut Vec<(String, St
     }
 }
 
+/// A web origin as browsers send it in `Origin`: `scheme://host[:port]`, scheme
+/// `http` or `https`, lowercase, without the scheme's default port (80, 443);
+/// `Err` says what is wrong (a path, a query, user info, an empty host, a bad port).
+pub fn normalize_origin(s: &str) -> Result<String, String> {
+    let lower = s.to_ascii_lowercase();
+    let (scheme, rest) = lower
+        .split_once("://")
+        .ok_or_else(|| "an origin is scheme://host[:port], like \"https://kiosk.example\"".to_string())?;
+    let default_port = match scheme {
+        "http" => 80,
+        "https" => 443,
+        _ => return Err(format!("scheme {scheme:?} is not http or https")),
+    };
+    if rest.contains(['/', '?', '#', '@']) {
+        return Err("an origin has no path, query, fragment or user info".to_string());
+    }
+    let (host, port) = split_host_port(rest)?;
+    Ok(match port {
+        Some(p) if p != default_port => format!("{scheme}://{host}:{p}"),
+        _ => format!("{scheme}://{host}"),
+    })
+}
+
+/// A `hosts` entry, lowercase: `name` or `name:port` (`[v6]` or `[v6]:port`).
+pub fn normalize_host(s: &str) -> Result<String, String> {
+    if s.contains(['/', '?', '#', '@']) || s.contains("://") {
+        return Err("a host is name or name:port, without scheme or path".to_string());
+    }
+    let lower = s.to_ascii_lowercase();
+    let (host, port) = split_host_port(&lower)?;
+    Ok(match port {
+        Some(p) => format!("{host}:{p}"),
+        None => host.to_string(),
+    })
+}
+
+/// `host[:port]` split, the host checked (letters, digits, `.`, `-`, `_`, or a
+/// bracketed IPv6 address), the port 1..=65535.
+fn split_host_port(s: &str) -> Result<(&str, Option<u16>), String> {
+    let (host, port) = if let Some(v6) = s.strip_prefix('[') {
+        let (addr, after) = v6
+            .split_once(']')
+            .ok_or_else(|| "an IPv6 host has its closing ]".to_string())?;
+        addr.parse::<std::net::Ipv6Addr>()
+            .map_err(|_| format!("[{addr}] is not an IPv6 address"))?;
+        let port = match after {
+            "" => None,
+            p => Some(p.strip_prefix(':').ok_or("text after ]")?),
+        };
+        (&s[..addr.len() + 2], port)
+    } else {
+        match s.rsplit_once(':') {
+            Some((h, p)) => (h, Some(p)),
+            None => (s, None),
+        }
+    };
+    let name_ok = host.starts_with('[')
+        || (!host.is_empty()
+            && host
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_')));
+    if !name_ok {
+        return Err(format!("host {host:?} is not a host name or address"));
+    }
+    let port = match port {
+        None => None,
+        Some(p) => Some(
+            p.parse::<u16>()
+                .ok()
+                .filter(|&p| p > 0)
+                .ok_or_else(|| format!("port {p:?} is not 1..=65535"))?,
+        ),
+    };
+    Ok((host, port))
+}
+
 /// Whether `ip` only reaches this machine.
 pub fn is_loopback(ip: IpAddr) -> bool {
     match ip {
@@ -303,6 +409,9 @@ mod tests {
             max_clients: 4,
             max_message_bytes: 65536,
             viewer: true,
+            origins: vec![],
+            privileged_origins: vec![],
+            hosts: vec![],
         }
     }
 
@@ -355,6 +464,37 @@ mod tests {
         );
         let p = problems(websocket("0.0.0.0:8080", Some("short")));
         assert_eq!(p[0].0, "outputs[0].token");
+    }
+
+    #[test]
+    fn origins_and_hosts_are_checked_and_named() {
+        let o: OutputConfig = ron::from_str(
+            "WebSocket(origins: [\"https://Kiosk.example:443\", \"http://x/path\"], \
+             privileged_origins: [\"ftp://x\"], hosts: [\"kiosk.local:8080\", \"a b\"])",
+        )
+        .expect("parses");
+        let fields: Vec<String> = problems(o).into_iter().map(|(f, _)| f).collect();
+        assert_eq!(
+            fields,
+            vec![
+                "outputs[0].origins[1]",
+                "outputs[0].privileged_origins[0]",
+                "outputs[0].hosts[1]"
+            ]
+        );
+        assert_eq!(
+            normalize_origin("https://Kiosk.example:443").as_deref(),
+            Ok("https://kiosk.example")
+        );
+        assert_eq!(
+            normalize_origin("http://[::1]:8080").as_deref(),
+            Ok("http://[::1]:8080")
+        );
+        assert!(normalize_origin("http://x:0").is_err());
+        assert!(normalize_origin("http://").is_err());
+        assert!(normalize_origin("null").is_err());
+        assert_eq!(normalize_host("Kiosk.Local").as_deref(), Ok("kiosk.local"));
+        assert!(normalize_host("http://kiosk").is_err());
     }
 
     #[test]

@@ -87,12 +87,8 @@ pub fn websocket(
         },
     )?;
     let listener = WebSocketListener::bind(WebSocketOptions {
-        listen: "127.0.0.1:0".parse()?,
-        token: None,
-        privileged: true,
-        max_clients: clients as u32,
-        max_message_bytes: 64 * 1024,
         viewer: false,
+        ..WebSocketOptions::on("127.0.0.1:0".parse()?, true, clients as u32)
     })?;
     let addr = listener.local_addr();
     let server = server.with_websocket(listener);

@@ -126,7 +126,8 @@ impl PublisherStats {
         self.read_only_refusals.load(Ordering::Relaxed)
     }
     /// WebSocket connections refused before the upgrade (a wrong or missing token,
-    /// an unknown path or method, an oversize request head, too many clients).
+    /// a foreign `Origin` or `Host`, a handshake RFC 6455 refuses, an unknown path
+    /// or method, an oversize request head, too many clients).
     pub fn websocket_refused(&self) -> u64 {
         self.ws_refused.load(Ordering::Relaxed)
     }

@@ -9,6 +9,40 @@
 //! the newline), a binary snapshot as a binary message (the same bytes as on the
 //! Unix socket, its frame header included). A `dropped` notice is a text message
 //! of its own before the snapshot it is told with.
+//!
+//! # Who may connect (issue 27)
+//! * `Host` must name the address the request reached (`127.0.0.1:PORT`,
+//!   `[::1]:PORT`, and `localhost:PORT` on a loopback address) or one of the
+//!   output's `hosts`; any other is refused **421 Misdirected Request** (RFC 9110
+//!   §15.5.20: this server does not answer for that name), a missing one 400. A
+//!   page that rebinds its own name to 127.0.0.1 (DNS rebinding) sends its own name.
+//! * A WebSocket upgrade's `Origin` must be absent (not a browser: game engines,
+//!   tools), the server's own origin (`http://` + the accepted `Host`: the viewer
+//!   page it serves), or one of `origins` / `privileged_origins`; any other is
+//!   refused **403 Forbidden**. Browsers send `Origin` on every upgrade and a page
+//!   cannot forge it.
+//! * Privilege: no `Origin` and the own origin get the output's `privileged`; an
+//!   origin in `privileged_origins` is privileged; one only in `origins` is read-only.
+//!
+//! # Handshake and close codes (RFC 6455)
+//! An upgrade must be HTTP/1.1 or later (§4.1 item 2), carry a `Sec-WebSocket-Key`
+//! that is base64 of 16 bytes (§4.2.1 item 5), else 400; and version 13, else 426
+//! with `Sec-WebSocket-Version: 13` (§4.2.2 item 4). Once open, a frame that breaks
+//! the protocol (unmasked, RSV bits, unknown opcode, fragmented or oversize control
+//! frame, a continuation out of place) closes with 1002, text or a close reason that
+//! is not UTF-8 with 1007, a message over `max_message_bytes` with 1009 (§7.4.1):
+//! the close frame goes out, then our side of the TCP connection is shut and
+//! whatever else the client sends is discarded unread (§7.1.7, "Fail the WebSocket
+//! Connection").
+//!
+//! # Pings and the write buffer
+//! A ping is answered in place with one pong; while tungstenite's write buffer
+//! holds anything, a newer ping's pong replaces the one waiting (its
+//! `max_write_buffer_size` is [`MAX_CONTROL_FRAME_BYTES`] except while one of our
+//! messages is being written), so a client that pings without reading holds at most
+//! one of our messages and one pong in memory. Pings and pongs take from the same
+//! budget as text messages ([`LINES_PER_SECOND`](crate::publish::socket::LINES_PER_SECOND)):
+//! past it the client is not read until the budget refills.
 
 use super::http::{self, HttpError, Request};
 use super::options::WebSocketOptions;
@@ -23,10 +57,18 @@ use std::time::Instant;
 use tungstenite::protocol::frame::coding::CloseCode;
 use tungstenite::protocol::frame::CloseFrame;
 use tungstenite::protocol::{Role, WebSocketConfig};
+use tungstenite::error::ProtocolError;
 use tungstenite::{Error as WsError, Message, WebSocket};
 
 /// Messages read from one client per round of the I/O loop.
 const READ_MESSAGES_PER_ROUND: usize = 16;
+/// Largest control frame a server writes (bytes): 2 header bytes and at most 125
+/// of payload (RFC 6455 §5.5). tungstenite's write buffer is capped at this while
+/// none of our messages is being written: one pong fits in an empty buffer, and
+/// no pong piles up behind a message the client does not read.
+pub(crate) const MAX_CONTROL_FRAME_BYTES: usize = 2 + 125;
+/// Bytes discarded per round from a client whose connection has failed.
+const DRAIN_BYTES_PER_ROUND: usize = 64 * 1024;
 
 /// What the I/O thread should do with a connection after serving it.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -49,11 +91,104 @@ pub(crate) enum Answer {
         refusal: Option<String>,
     },
     /// Upgrade: the 101 response, then the WebSocket stream.
-    Upgrade { bytes: Vec<u8>, rest: Vec<u8> },
+    Upgrade { bytes: Vec<u8>, upgrade: Upgrade },
 }
 
-/// Decides what to answer a complete request head, or [`Answer::Wait`].
-pub(crate) fn answer(buf: &[u8], opts: &WebSocketOptions, page: &str, clients: usize) -> Answer {
+/// What an accepted upgrade carries to the WebSocket stream.
+#[derive(Debug)]
+pub(crate) struct Upgrade {
+    /// Bytes the client sent after its head.
+    pub rest: Vec<u8>,
+    /// Whether the client is privileged (by its origin).
+    pub privileged: bool,
+}
+
+/// `host` split into its lowercase name (an IPv6 address keeps its brackets) and
+/// port (80 when absent, as browsers omit it); `None` when it is not `name[:port]`.
+fn split_host(host: &str) -> Option<(String, u16)> {
+    let host = host.to_ascii_lowercase();
+    let (name, port) = if host.starts_with('[') {
+        let end = host.find(']')?;
+        match &host[end + 1..] {
+            "" => (host[..=end].to_string(), None),
+            p => (host[..=end].to_string(), Some(p.strip_prefix(':')?)),
+        }
+    } else {
+        match host.rsplit_once(':') {
+            Some((n, p)) => (n.to_string(), Some(p)),
+            None => (host.clone(), None),
+        }
+    };
+    let port = match port {
+        Some(p) => p.parse().ok()?,
+        None => 80,
+    };
+    (!name.is_empty()).then_some((name, port))
+}
+
+/// Whether a request's `Host` names this server: the address the connection
+/// reached (`local`), `localhost` when that is a loopback address, or a configured
+/// name (`name` on `local`'s port, `name:port` on that port).
+pub(crate) fn host_accepted(host: &str, local: SocketAddr, hosts: &[String]) -> bool {
+    let Some((name, port)) = split_host(host) else {
+        return false;
+    };
+    if port != local.port() {
+        return false;
+    }
+    let local_ip = local.ip().to_canonical();
+    let bare = name.trim_start_matches('[').trim_end_matches(']');
+    if bare
+        .parse::<std::net::IpAddr>()
+        .is_ok_and(|ip| ip.to_canonical() == local_ip)
+    {
+        return true;
+    }
+    if name == "localhost" && local_ip.is_loopback() {
+        return true;
+    }
+    hosts.iter().any(|h| match h.rsplit_once(':') {
+        Some((n, p)) if !h.ends_with(']') => n == name && p.parse() == Ok(port),
+        _ => *h == name,
+    })
+}
+
+/// Whether an upgrade from `origin` (its `Origin` header) may connect, and then
+/// whether it is privileged; `Err` says why not. `host` is the accepted `Host`.
+pub(crate) fn origin_privilege(
+    origin: Option<&str>,
+    host: &str,
+    opts: &WebSocketOptions,
+) -> Result<bool, String> {
+    let Some(origin) = origin else {
+        return Ok(opts.privileged);
+    };
+    let origin = origin.to_ascii_lowercase();
+    if origin == format!("http://{}", host.to_ascii_lowercase()) {
+        return Ok(opts.privileged);
+    }
+    if opts.privileged_origins.contains(&origin) {
+        return Ok(true);
+    }
+    if opts.origins.contains(&origin) {
+        return Ok(false);
+    }
+    Err(format!(
+        "origin {:?} may not connect: only this server's own pages, and the output's \
+         origins and privileged_origins",
+        http::clip(&origin, 80)
+    ))
+}
+
+/// Decides what to answer a complete request head that reached `local`, or
+/// [`Answer::Wait`].
+pub(crate) fn answer(
+    buf: &[u8],
+    opts: &WebSocketOptions,
+    page: &str,
+    clients: usize,
+    local: SocketAddr,
+) -> Answer {
     let refuse = |status: u16, reason: &str, extra: &str, why: String| Answer::Respond {
         bytes: http::response(status, reason, extra, &format!("{why}\n")),
         refusal: Some(format!("{status} {reason}: {why}")),
@@ -66,6 +201,26 @@ pub(crate) fn answer(buf: &[u8], opts: &WebSocketOptions, page: &str, clients: u
         }
         Err(e) => return refuse(400, "Bad Request", "", e.to_string()),
     };
+    let Some(host) = req.host.clone() else {
+        return refuse(
+            400,
+            "Bad Request",
+            "",
+            "a Host header is required".to_string(),
+        );
+    };
+    if !host_accepted(&host, local, &opts.hosts) {
+        return refuse(
+            421,
+            "Misdirected Request",
+            "",
+            format!(
+                "this server does not answer for host {:?}: name {local} (or a name in the \
+                 output's hosts)",
+                http::clip(&host, 80)
+            ),
+        );
+    }
     if req.method != "GET" {
         return refuse(
             405,
@@ -89,6 +244,18 @@ pub(crate) fn answer(buf: &[u8], opts: &WebSocketOptions, page: &str, clients: u
             p => refuse(404, "Not Found", "", format!("no such page: {p}")),
         };
     }
+    if req.http_minor < 1 {
+        return refuse(
+            400,
+            "Bad Request",
+            "",
+            "a WebSocket upgrade needs HTTP/1.1 or later (RFC 6455 §4.1)".to_string(),
+        );
+    }
+    let privileged = match origin_privilege(req.origin.as_deref(), &host, opts) {
+        Ok(p) => p,
+        Err(why) => return refuse(403, "Forbidden", "", why),
+    };
     if let Some(token) = &opts.token {
         let ok = req
             .token()
@@ -115,6 +282,14 @@ pub(crate) fn answer(buf: &[u8], opts: &WebSocketOptions, page: &str, clients: u
             "a WebSocket upgrade needs Sec-WebSocket-Key".to_string(),
         );
     };
+    if !http::valid_websocket_key(key) {
+        return refuse(
+            400,
+            "Bad Request",
+            "",
+            "Sec-WebSocket-Key must be the base64 of 16 bytes (RFC 6455 §4.2.1)".to_string(),
+        );
+    }
     if req.version.as_deref() != Some("13") {
         return refuse(
             426,
@@ -136,7 +311,10 @@ pub(crate) fn answer(buf: &[u8], opts: &WebSocketOptions, page: &str, clients: u
     }
     Answer::Upgrade {
         bytes: http::switching_protocols(key),
-        rest: buf[len..].to_vec(),
+        upgrade: Upgrade {
+            rest: buf[len..].to_vec(),
+            privileged,
+        },
     }
 }
 
@@ -144,13 +322,12 @@ pub(crate) fn answer(buf: &[u8], opts: &WebSocketOptions, page: &str, clients: u
 enum Phase {
     /// Reading the request head.
     Head { stream: TcpStream, buf: Vec<u8> },
-    /// Writing a response; then the connection closes, or upgrades with `rest`
-    /// (bytes the client sent after its head).
+    /// Writing a response; then the connection closes, or upgrades.
     Respond {
         stream: TcpStream,
         bytes: Vec<u8>,
         sent: usize,
-        upgrade: Option<Vec<u8>>,
+        upgrade: Option<Upgrade>,
     },
     /// The WebSocket stream.
     Open(Box<Open>),
@@ -170,6 +347,33 @@ struct Open {
     input_done: bool,
     /// The close frame is queued: the connection ends once it is out.
     closed: bool,
+    /// The close frame to send when the queue closes (the protocol error's code),
+    /// instead of 1008 after an error message or 1001.
+    close_frame: Option<CloseFrame>,
+    /// The client broke the protocol: nothing more it sends is parsed; once our
+    /// close frame is out our side is shut and its bytes are discarded.
+    failed: bool,
+}
+
+impl Open {
+    /// Runs `f` with tungstenite's write buffer uncapped (one of our messages, or a
+    /// close frame, goes in whole), then caps it at [`MAX_CONTROL_FRAME_BYTES`] again.
+    fn uncapped<T>(&mut self, f: impl FnOnce(&mut WebSocket<TcpStream>) -> T) -> T {
+        self.ws.set_config(|c| c.max_write_buffer_size = usize::MAX);
+        let out = f(&mut self.ws);
+        self.ws
+            .set_config(|c| c.max_write_buffer_size = MAX_CONTROL_FRAME_BYTES);
+        out
+    }
+
+    /// Fails the connection with `code` (RFC 6455 §7.1.7): the client is told
+    /// `message` as an error, then gets the close frame; nothing more is parsed.
+    fn fail(&mut self, hub: &Hub, code: CloseCode, message: &str) {
+        self.close_frame = Some(closing_frame(code, message));
+        self.session.fatal(hub, message);
+        self.input_done = true;
+        self.failed = true;
+    }
 }
 
 /// One connection, owned by the WebSocket I/O thread.
@@ -177,6 +381,8 @@ pub(crate) struct WsConn {
     phase: Phase,
     /// The peer, for log lines.
     pub peer: SocketAddr,
+    /// The address the connection reached (what its `Host` must name).
+    pub local: SocketAddr,
     /// When it connected (a request head must come within the handshake time).
     pub since: Instant,
     /// Lines wait (window, rate or a held hello): do not poll for input.
@@ -204,13 +410,14 @@ fn closing_frame(code: CloseCode, reason: &str) -> CloseFrame {
 
 impl WsConn {
     /// A new connection reading its request head.
-    pub fn new(stream: TcpStream, peer: SocketAddr) -> WsConn {
+    pub fn new(stream: TcpStream, peer: SocketAddr, local: SocketAddr) -> WsConn {
         WsConn {
             phase: Phase::Head {
                 stream,
                 buf: Vec::new(),
             },
             peer,
+            local,
             since: Instant::now(),
             paused: false,
             blocked: false,
@@ -251,7 +458,7 @@ impl WsConn {
         match &self.phase {
             Phase::Head { .. } => true,
             Phase::Respond { .. } | Phase::Gone => false,
-            Phase::Open(o) => !self.paused && (!o.input_done || o.closed),
+            Phase::Open(o) => !self.paused && (!o.input_done || o.closed || o.failed),
         }
     }
 
@@ -285,7 +492,7 @@ impl WsConn {
                 }
                 (bytes, None)
             }
-            Answer::Upgrade { bytes, rest } => (bytes, Some(rest)),
+            Answer::Upgrade { bytes, upgrade } => (bytes, Some(upgrade)),
         };
         let Phase::Head { stream, .. } = std::mem::replace(&mut self.phase, Phase::Gone) else {
             return Fate::Remove;
@@ -300,8 +507,8 @@ impl WsConn {
     }
 
     /// Whether the response is written and the connection should upgrade now
-    /// (`Some(rest)`), or is done (`None` with [`Fate::Remove`]).
-    pub fn respond(&mut self, now: Instant) -> (Fate, Option<Vec<u8>>) {
+    /// (`Some`), or is done (`None` with [`Fate::Remove`]).
+    pub fn respond(&mut self, now: Instant) -> (Fate, Option<Upgrade>) {
         let Phase::Respond {
             stream,
             bytes,
@@ -329,7 +536,7 @@ impl WsConn {
         }
         self.blocked = false;
         match upgrade.take() {
-            Some(rest) => (Fate::Keep, Some(rest)),
+            Some(u) => (Fate::Keep, Some(u)),
             None => {
                 let _ = stream.shutdown(Shutdown::Write);
                 (Fate::Remove, None)
@@ -350,6 +557,7 @@ impl WsConn {
         };
         let config = WebSocketConfig::default()
             .write_buffer_size(0)
+            .max_write_buffer_size(MAX_CONTROL_FRAME_BYTES)
             .max_message_size(Some(max_message_bytes))
             .max_frame_size(Some(max_message_bytes));
         let ws = WebSocket::from_partially_read(stream, rest, Role::Server, Some(config));
@@ -360,6 +568,8 @@ impl WsConn {
             unflushed: false,
             input_done: false,
             closed: false,
+            close_frame: None,
+            failed: false,
         }));
     }
 
@@ -383,7 +593,11 @@ impl WsConn {
                 self.stalled_since = None;
                 if o.closed {
                     // Our close frame is out: wait for the client's (read), or
-                    // until the close grace ends.
+                    // until the close grace ends. A failed connection is not
+                    // waited for: our side is shut (what it sends is discarded).
+                    if o.failed {
+                        let _ = o.ws.get_ref().shutdown(Shutdown::Write);
+                    }
                     self.blocked = false;
                     return Fate::Keep;
                 }
@@ -397,14 +611,16 @@ impl WsConn {
                 self.stalled_since = None;
                 if q.closing_since.is_some() {
                     drop(q);
-                    let frame = if o.input_done {
+                    let frame = if let Some(f) = o.close_frame.take() {
+                        f
+                    } else if o.input_done {
                         closing_frame(CloseCode::Policy, "protocol error: see the error message")
                     } else {
                         closing_frame(CloseCode::Away, "closing: see the last message")
                     };
                     o.closed = true;
                     o.input_done = true;
-                    let _ = o.ws.close(Some(frame));
+                    let _ = o.uncapped(|ws| ws.close(Some(frame)));
                     continue;
                 }
                 return Fate::Keep;
@@ -419,7 +635,7 @@ impl WsConn {
             let (message, len, snapshot) = ws_message(item, total);
             messages[1] = Some(message);
             for m in messages.into_iter().flatten() {
-                match o.ws.write(m) {
+                match o.uncapped(|ws| ws.write(m)) {
                     Ok(()) => {}
                     Err(WsError::Io(e)) if e.kind() == ErrorKind::WouldBlock => {
                         // Kept in tungstenite's buffer; flushed when writable.
@@ -445,6 +661,9 @@ impl WsConn {
             return Fate::Keep;
         };
         self.paused = false;
+        if o.failed {
+            return drain(o.ws.get_mut());
+        }
         for _ in 0..READ_MESSAGES_PER_ROUND {
             if !o.session.release_held(hub) {
                 self.paused = true;
@@ -480,7 +699,14 @@ impl WsConn {
                         "binary messages are not read: send protocol messages as JSON text",
                     );
                 }
-                Ok(_) => {} // ping (the pong is queued), pong
+                Ok(_) => {
+                    // A ping (its pong waits in tungstenite, one at most) or a
+                    // pong: each takes from the message budget.
+                    if !o.session.may_take(now) {
+                        self.paused = true;
+                        return Fate::Keep;
+                    }
+                }
                 Err(WsError::Io(e)) if e.kind() == ErrorKind::WouldBlock => return Fate::Keep,
                 Err(WsError::Io(e)) if e.kind() == ErrorKind::Interrupted => {}
                 Err(WsError::Capacity(e)) => {
@@ -488,28 +714,38 @@ impl WsConn {
                     log::info!("WebSocket client {} ({peer}): {e}; closing", o.session.id());
                     let limit = o.ws.get_config().max_message_size.unwrap_or(0);
                     let reason = format!("message too big: the limit is {limit} bytes");
-                    begin_close(o, Some(closing_frame(CloseCode::Size, &reason)));
+                    let frame = closing_frame(CloseCode::Size, &reason);
+                    begin_close(o, None);
+                    let _ = o.uncapped(|ws| ws.close(Some(frame)));
+                    o.failed = true;
                     return Fate::Keep;
                 }
                 Err(WsError::Utf8(_)) => {
                     hub.stats.count_ws_bad_frame();
                     log::info!(
-                        "WebSocket client {} ({peer}): a text message is not UTF-8; closing",
+                        "WebSocket client {} ({peer}): text or a close reason is not UTF-8; closing",
                         o.session.id()
                     );
-                    o.session
-                        .fatal(hub, "a text message is not valid UTF-8 (RFC 6455 §8.1)");
-                    o.input_done = true;
+                    o.fail(
+                        hub,
+                        CloseCode::Invalid,
+                        "a text message or close reason is not valid UTF-8 (RFC 6455 §8.1)",
+                    );
                     return Fate::Keep;
                 }
                 Err(WsError::ConnectionClosed | WsError::AlreadyClosed) => return Fate::Remove,
+                Err(WsError::Protocol(ProtocolError::ResetWithoutClosingHandshake)) => {
+                    return Fate::Remove
+                }
                 Err(WsError::Protocol(e)) => {
                     hub.stats.count_ws_bad_frame();
                     log::info!(
                         "WebSocket client {} ({peer}): protocol violation: {e}; closing",
                         o.session.id()
                     );
-                    return Fate::Remove;
+                    let message = format!("WebSocket protocol error: {e} (RFC 6455 §5)");
+                    o.fail(hub, CloseCode::Protocol, &message);
+                    return Fate::Keep;
                 }
                 Err(e) => {
                     log::debug!("WebSocket client {} ({peer}): {e}", o.session.id());
@@ -531,6 +767,23 @@ impl WsConn {
             let _ = s.shutdown(Shutdown::Both);
         }
     }
+}
+
+/// Discards what a failed connection's client still sends; [`Fate::Remove`] at its
+/// end of stream (the close grace removes it otherwise).
+fn drain(stream: &mut TcpStream) -> Fate {
+    let mut sink = [0u8; 4096];
+    let mut taken = 0;
+    while taken < DRAIN_BYTES_PER_ROUND {
+        match stream.read(&mut sink) {
+            Ok(0) => return Fate::Remove,
+            Ok(n) => taken += n,
+            Err(e) if e.kind() == ErrorKind::WouldBlock => return Fate::Keep,
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(_) => return Fate::Remove,
+        }
+    }
+    Fate::Keep
 }
 
 /// Stops the client's stream and input, and starts the close handshake (with

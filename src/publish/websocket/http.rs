@@ -3,7 +3,10 @@
 //! responses the server gives.
 //!
 //! Only what the server acts on is kept: the method, the path and its `token`
-//! query parameter, the `Authorization: Bearer` token, and the upgrade headers.
+//! query parameter, the HTTP version, `Host` and `Origin`, the `Authorization:
+//! Bearer` token, and the upgrade headers. A second `Host` or `Origin` line makes
+//! the head malformed (RFC 9112 §3.2: a request with more than one `Host` is
+//! answered 400).
 
 use thiserror::Error;
 
@@ -48,6 +51,12 @@ pub struct Request {
     pub key: Option<String>,
     /// `Sec-WebSocket-Version`.
     pub version: Option<String>,
+    /// The HTTP minor version: 0 for HTTP/1.0, 1 for HTTP/1.1.
+    pub http_minor: u8,
+    /// The `Host` header, trimmed.
+    pub host: Option<String>,
+    /// The `Origin` header, trimmed (browsers send it with every WebSocket upgrade).
+    pub origin: Option<String>,
 }
 
 impl Request {
@@ -99,6 +108,7 @@ pub fn parse_request_head(buf: &[u8]) -> Result<Option<(Request, usize)>, HttpEr
     }
     let (path, query) = target.split_once('?').unwrap_or((target, ""));
     let mut out = Request {
+        http_minor: req.version.unwrap_or(1),
         method,
         path: path.to_string(),
         query_token: query_param(query, "token"),
@@ -120,6 +130,21 @@ pub fn parse_request_head(buf: &[u8]) -> Result<Option<(Request, usize)>, HttpEr
             out.key = Some(value.to_string());
         } else if h.name.eq_ignore_ascii_case("sec-websocket-version") {
             out.version = Some(value.to_string());
+        } else if h.name.eq_ignore_ascii_case("host")
+            || h.name.eq_ignore_ascii_case("origin")
+        {
+            let slot = if h.name.eq_ignore_ascii_case("host") {
+                &mut out.host
+            } else {
+                &mut out.origin
+            };
+            if slot.is_some() {
+                return Err(HttpError::Malformed {
+                    at: len,
+                    reason: format!("more than one {} header", h.name),
+                });
+            }
+            *slot = Some(value.to_string());
         } else if h.name.eq_ignore_ascii_case("authorization") {
             if let Some((scheme, token)) = value.split_once(' ') {
                 if scheme.eq_ignore_ascii_case("bearer") {
@@ -130,6 +155,27 @@ pub fn parse_request_head(buf: &[u8]) -> Result<Option<(Request, usize)>, HttpEr
     }
     out.upgrade = upgrade_ws && connection_upgrade;
     Ok(Some((out, len)))
+}
+
+/// Whether `key` is a `Sec-WebSocket-Key` as RFC 6455 §4.2.1 item 5 wants it: the
+/// base64 encoding (RFC 4648 §4, padded, canonical) of exactly 16 bytes, that is
+/// 22 alphabet characters then `==`, the last one carrying no stray bits.
+pub fn valid_websocket_key(key: &str) -> bool {
+    let b = key.as_bytes();
+    let value = |c: u8| match c {
+        b'A'..=b'Z' => Some(c - b'A'),
+        b'a'..=b'z' => Some(c - b'a' + 26),
+        b'0'..=b'9' => Some(c - b'0' + 52),
+        b'+' => Some(62),
+        b'/' => Some(63),
+        _ => None,
+    };
+    // 16 bytes = 5 groups of 3 (20 characters) + 1 byte (2 characters + "==");
+    // that last byte's 8 bits fill 6 + 2 bits, so the 22nd character's low 4 bits are 0.
+    b.len() == 24
+        && &b[22..] == b"=="
+        && b[..22].iter().all(|&c| value(c).is_some())
+        && value(b[21]).is_some_and(|v| v & 0x0f == 0)
 }
 
 /// The percent-decoded value of `name` in a query string.
@@ -173,6 +219,17 @@ fn percent_decode(s: &str) -> String {
         }
     }
     String::from_utf8_lossy(&out).into_owned()
+}
+
+/// At most the first `max` bytes of `s` (cut at a character boundary), for quoting
+/// a client's header in a response or a log line; quote it with `{:?}`, which
+/// escapes control characters.
+pub fn clip(s: &str, max: usize) -> &str {
+    let mut end = s.len().min(max);
+    while !s.is_char_boundary(end) {
+        end -= 1;
+    }
+    &s[..end]
 }
 
 /// Whether `a` and `b` are equal, in a time that depends on their lengths only
@@ -278,6 +335,41 @@ mod tests {
         assert!(e.to_string().starts_with("malformed HTTP request"), "{e}");
         let e = parse_request_head(b"GET http://x/ HTTP/1.1\r\n\r\n").unwrap_err();
         assert!(e.to_string().contains("not a path"), "{e}");
+    }
+
+    #[test]
+    fn the_version_host_and_origin_are_read_and_kept_single() {
+        let head = b"GET /ws HTTP/1.0\r\nHost: 127.0.0.1:8080\r\nOrigin: http://evil.example\r\n\r\n";
+        let (r, _) = parse_request_head(head).unwrap().unwrap();
+        assert_eq!(r.http_minor, 0);
+        assert_eq!(r.host.as_deref(), Some("127.0.0.1:8080"));
+        assert_eq!(r.origin.as_deref(), Some("http://evil.example"));
+        let (r, _) = parse_request_head(UPGRADE).unwrap().unwrap();
+        assert_eq!((r.http_minor, r.origin), (1, None));
+        let two = b"GET / HTTP/1.1\r\nHost: a\r\nHost: b\r\n\r\n";
+        let e = parse_request_head(two).unwrap_err();
+        assert!(e.to_string().contains("more than one Host"), "{e}");
+        let two = b"GET / HTTP/1.1\r\nHost: a\r\nOrigin: http://a\r\norigin: http://b\r\n\r\n";
+        assert!(parse_request_head(two).is_err());
+    }
+
+    #[test]
+    fn a_websocket_key_is_16_bytes_of_base64() {
+        assert!(valid_websocket_key("dGhlIHNhbXBsZSBub25jZQ=="));
+        assert!(valid_websocket_key("AAAAAAAAAAAAAAAAAAAAAA=="));
+        assert!(valid_websocket_key("/+/+/+/+/+/+/+/+/+/+/w=="));
+        for bad in [
+            "",
+            "not base64 at all!!!!!!=",
+            "dGhlIHNhbXBsZSBub25jZQ",     // no padding
+            "dGhlIHNhbXBsZSBub25jZR==",   // stray bits in the last character
+            "dGhlIHNhbXBsZSBub25jZQ==AA", // 17+ bytes
+            "dGhlIHNhbXBsZSBub25j",       // 15 bytes
+            "dGhlIHNhbXBsZSBub25jZQ=A",
+            "dGhlIHNhbXBsZS Bub25jZQ=",
+        ] {
+            assert!(!valid_websocket_key(bad), "{bad:?}");
+        }
     }
 
     #[test]

@@ -17,4 +17,30 @@ pub struct WebSocketOptions {
     pub max_message_bytes: u32,
     /// Serve the viewer page at `/`.
     pub viewer: bool,
+    /// Other web origins whose pages may connect, read-only: `scheme://host[:port]`,
+    /// lowercase, without the scheme's default port (as browsers send `Origin`).
+    pub origins: Vec<String>,
+    /// Other web origins whose pages are privileged (same form as `origins`).
+    pub privileged_origins: Vec<String>,
+    /// Host names a request's `Host` may name besides the address it reached:
+    /// lowercase `name` (on the listen port) or `name:port`.
+    pub hosts: Vec<String>,
+}
+
+impl WebSocketOptions {
+    /// Settings for `listen` with no token, no other origin or host name, the
+    /// viewer on: what tools and benches start from.
+    pub fn on(listen: SocketAddr, privileged: bool, max_clients: u32) -> WebSocketOptions {
+        WebSocketOptions {
+            listen,
+            token: None,
+            privileged,
+            max_clients,
+            max_message_bytes: 64 * 1024,
+            viewer: true,
+            origins: Vec::new(),
+            privileged_origins: Vec::new(),
+            hosts: Vec::new(),
+        }
+    }
 }

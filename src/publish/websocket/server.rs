@@ -232,9 +232,10 @@ impl WsLoop {
             return c.input(&self.hub, monotonic_now());
         }
         let opts = &self.opts;
+        let local = c.local;
         let mut refused: Option<String> = None;
         let fate = c.head_input(
-            |buf| conn::answer(buf, opts, VIEWER_PAGE, clients),
+            |buf| conn::answer(buf, opts, VIEWER_PAGE, clients, local),
             |why| refused = Some(why.to_string()),
         );
         if let Some(why) = refused {
@@ -254,12 +255,12 @@ impl WsLoop {
             return c.flush(&self.hub.stats, Instant::now());
         }
         let (fate, upgrade) = c.respond(Instant::now());
-        let Some(rest) = upgrade else {
+        let Some(conn::Upgrade { rest, privileged }) = upgrade else {
             return fate;
         };
         // The 101 is out: the client joins the publisher's clients.
         let id = self.hub.next_client_id();
-        let shared = Arc::new(ClientShared::with_privilege(id, self.opts.privileged));
+        let shared = Arc::new(ClientShared::with_privilege(id, privileged));
         {
             let mut clients = self.hub.lock_clients();
             let mut q = shared.lock();
@@ -277,7 +278,7 @@ impl WsLoop {
         log::info!(
             "WebSocket client {id} ({}): connected ({})",
             c.peer,
-            if self.opts.privileged {
+            if privileged {
                 "privileged"
             } else {
                 "read-only"
@@ -457,6 +458,9 @@ impl WsLoop {
         if stream.set_nonblocking(true).is_err() {
             return;
         }
+        let Ok(local) = stream.local_addr() else {
+            return;
+        };
         let _ = stream.set_nodelay(true);
         let connections = self.conns.iter().flatten().count();
         if connections >= self.opts.max_clients as usize + HANDSHAKE_SLOTS {
@@ -484,7 +488,7 @@ impl WsLoop {
             self.free.push(slot);
             return;
         }
-        let mut c = WsConn::new(stream, peer);
+        let mut c = WsConn::new(stream, peer, local);
         c.interest = want;
         self.conns[slot] = Some((serial, c));
     }
