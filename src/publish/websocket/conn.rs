@@ -849,3 +849,148 @@ fn ws_message(item: Item, dropped_total: u64) -> (Message, usize, Option<Option<
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn opts(privileged: bool) -> WebSocketOptions {
+        WebSocketOptions {
+            origins: vec!["https://kiosk.example".into()],
+            privileged_origins: vec!["http://trusted.example:8081".into()],
+            hosts: vec!["kiosk.local".into(), "proxy.local:9000".into()],
+            ..WebSocketOptions::on("127.0.0.1:8080".parse().unwrap(), privileged, 4)
+        }
+    }
+
+    fn local(s: &str) -> SocketAddr {
+        s.parse().unwrap()
+    }
+
+    #[test]
+    fn a_host_names_the_address_reached_localhost_or_a_configured_name() {
+        let hosts = &opts(true).hosts;
+        let v4 = local("127.0.0.1:8080");
+        for ok in [
+            "127.0.0.1:8080",
+            "localhost:8080",
+            "LocalHost:8080",
+            "kiosk.local:8080",
+        ] {
+            assert!(host_accepted(ok, v4, hosts), "{ok}");
+        }
+        for bad in [
+            "evil.example:8080",
+            "127.0.0.1:8081",
+            "127.0.0.1",
+            "localhost",
+            "kiosk.local:9000",
+            "proxy.local:8080",
+            "[::1]:8080",
+            "127.0.0.1:80:80",
+            ":8080",
+            "",
+        ] {
+            assert!(!host_accepted(bad, v4, hosts), "{bad}");
+        }
+        // `name:port` entries name their own port (a proxy's).
+        assert!(host_accepted("proxy.local:9000", local("127.0.0.1:9000"), hosts));
+        let v6 = local("[::1]:8080");
+        assert!(host_accepted("[::1]:8080", v6, hosts));
+        assert!(host_accepted("[0:0:0:0:0:0:0:1]:8080", v6, hosts));
+        assert!(host_accepted("localhost:8080", v6, hosts));
+        assert!(!host_accepted("127.0.0.1:8080", v6, hosts));
+        // A public address: itself, never localhost.
+        let public = local("192.0.2.7:8080");
+        assert!(host_accepted("192.0.2.7:8080", public, hosts));
+        assert!(!host_accepted("localhost:8080", public, hosts));
+        assert!(host_accepted("192.0.2.7", local("192.0.2.7:80"), hosts));
+    }
+
+    #[test]
+    fn an_origin_is_own_listed_privileged_or_refused() {
+        let host = "127.0.0.1:8080";
+        for privileged in [true, false] {
+            let o = opts(privileged);
+            assert_eq!(origin_privilege(None, host, &o), Ok(privileged));
+            assert_eq!(
+                origin_privilege(Some("http://127.0.0.1:8080"), host, &o),
+                Ok(privileged)
+            );
+            assert_eq!(
+                origin_privilege(Some("HTTPS://Kiosk.Example"), host, &o),
+                Ok(false)
+            );
+            assert_eq!(
+                origin_privilege(Some("http://trusted.example:8081"), host, &o),
+                Ok(true)
+            );
+        }
+        let o = opts(true);
+        for bad in [
+            "http://evil.example",
+            "https://127.0.0.1:8080",
+            "http://localhost:8080",
+            "null",
+            "http://kiosk.example",
+        ] {
+            let e = origin_privilege(Some(bad), host, &o).unwrap_err();
+            assert!(e.contains("may not connect"), "{bad}: {e}");
+        }
+        // The viewer opened as localhost: its own origin is that name.
+        assert_eq!(
+            origin_privilege(Some("http://localhost:8080"), "localhost:8080", &o),
+            Ok(true)
+        );
+    }
+
+    fn status(a: &Answer) -> u16 {
+        match a {
+            Answer::Upgrade { .. } => 101,
+            Answer::Wait => 0,
+            Answer::Respond { bytes, .. } => String::from_utf8_lossy(&bytes[9..12]).parse().unwrap(),
+        }
+    }
+
+    #[test]
+    fn answers_in_order_host_origin_version_key() {
+        let o = opts(true);
+        let at = local("127.0.0.1:8080");
+        let ask = |head: &str| status(&answer(head.as_bytes(), &o, "page", 0, at));
+        let up = |version: &str, host: &str, extra: &str, key: &str, v: &str| {
+            format!(
+                "GET /ws HTTP/{version}\r\nHost: {host}\r\nUpgrade: websocket\r\n\
+                 Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n\
+                 Sec-WebSocket-Version: {v}\r\n{extra}\r\n"
+            )
+        };
+        let key = "dGhlIHNhbXBsZSBub25jZQ==";
+        let h = "127.0.0.1:8080";
+        assert_eq!(ask("GET / HTTP/1.1\r\n\r\n"), 400);
+        assert_eq!(ask("GET / HTTP/1.1\r\nHost: evil:8080\r\n\r\n"), 421);
+        assert_eq!(ask("GET / HTTP/1.1\r\nHost: 127.0.0.1:8080\r\n\r\n"), 200);
+        assert_eq!(ask(&up("1.1", h, "", key, "13")), 101);
+        assert_eq!(ask(&up("1.1", "evil:8080", "", key, "13")), 421);
+        assert_eq!(ask(&up("1.0", h, "", key, "13")), 400);
+        assert_eq!(ask(&up("1.1", h, "Origin: http://evil\r\n", key, "13")), 403);
+        assert_eq!(ask(&up("1.1", h, "", "abc", "13")), 400);
+        assert_eq!(ask(&up("1.1", h, "", key, "8")), 426);
+        let a = answer(
+            up("1.1", h, "Origin: https://kiosk.example\r\n", key, "13").as_bytes(),
+            &o,
+            "page",
+            0,
+            at,
+        );
+        assert!(matches!(
+            a,
+            Answer::Upgrade {
+                upgrade: Upgrade {
+                    privileged: false,
+                    ..
+                },
+                ..
+            }
+        ));
+    }
+}
