@@ -154,10 +154,25 @@ fn get(path: &str, addr: SocketAddr) -> String {
 /// A plain HTTP request: the status code and the whole response.
 fn http(addr: SocketAddr, request: &[u8]) -> (u16, String) {
     let mut s = TcpStream::connect(addr).unwrap();
-    s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    s.set_read_timeout(Some(Duration::from_millis(500)))
+        .unwrap();
     s.write_all(request).unwrap();
-    let mut out = Vec::new();
-    let _ = s.read_to_end(&mut out);
+    // Until the server closes, or 5 s (an upgraded connection streams on).
+    let (mut out, end) = (Vec::new(), Instant::now() + Duration::from_secs(5));
+    let mut chunk = [0u8; 4096];
+    while Instant::now() < end {
+        match s.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(n) => out.extend_from_slice(&chunk[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) => {}
+            Err(_) => break,
+        }
+    }
     let text = String::from_utf8_lossy(&out).into_owned();
     let status = text
         .split_whitespace()
@@ -527,8 +542,7 @@ const KEY: &str = "dGhlIHNhbXBsZSBub25jZQ==";
 fn connect_from(addr: SocketAddr, query: &str, origin: &str) -> Result<Ws, tungstenite::Error> {
     use tungstenite::client::IntoClientRequest;
     let mut req = format!("ws://{addr}/ws{query}").into_client_request()?;
-    req.headers_mut()
-        .insert("Origin", origin.parse().unwrap());
+    req.headers_mut().insert("Origin", origin.parse().unwrap());
     let stream = TcpStream::connect(addr).unwrap();
     stream
         .set_read_timeout(Some(Duration::from_millis(200)))
@@ -558,22 +572,41 @@ fn a_page_of_another_origin_is_refused_403_on_loopback_and_with_a_token() {
     let wide_local: SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
     let mut cfg = Config::embedded_default();
     cfg.crowd.agents = 20;
-    cfg.outputs = vec![websocket(open, true, None), websocket(wide, true, Some(TOKEN))];
+    cfg.outputs = vec![
+        websocket(open, true, None),
+        websocket(wide, true, Some(TOKEN)),
+    ];
     let daemon = start(cfg, &dir.path().join("ct.sock"));
     let stats = daemon.publisher_stats().clone();
-    assert_eq!(status_of(connect_from(open, "", "http://evil.example")), 403);
     assert_eq!(
-        status_of(connect_from(wide_local, &format!("?token={TOKEN}"), "http://evil.example")),
+        status_of(connect_from(open, "", "http://evil.example")),
+        403
+    );
+    assert_eq!(
+        status_of(connect_from(
+            wide_local,
+            &format!("?token={TOKEN}"),
+            "http://evil.example"
+        )),
         403
     );
     // The raw answer says why.
     let (status, text) = http(
         open,
-        upgrade_request("1.1", &open.to_string(), "Origin: https://evil.example\r\n", KEY, "13")
-            .as_bytes(),
+        upgrade_request(
+            "1.1",
+            &open.to_string(),
+            "Origin: https://evil.example\r\n",
+            KEY,
+            "13",
+        )
+        .as_bytes(),
     );
     assert_eq!(status, 403);
-    assert!(text.contains("origin \"https://evil.example\" may not connect"), "{text}");
+    assert!(
+        text.contains("origin \"https://evil.example\" may not connect"),
+        "{text}"
+    );
     // Its own origin (the page it serves) still connects, privileged.
     let mut own = connect_from(open, "", &format!("http://{open}")).expect("its own origin");
     let got = read_ws(&mut own, 5.0, |_| true);
@@ -596,11 +629,19 @@ fn a_request_for_another_host_is_refused_421() {
     cfg.outputs = vec![out];
     let daemon = start(cfg, &dir.path().join("ct.sock"));
     let port = addr.port();
-    let page = |host: &str| http(addr, format!("GET / HTTP/1.1\r\nHost: {host}\r\n\r\n").as_bytes());
+    let page = |host: &str| {
+        http(
+            addr,
+            format!("GET / HTTP/1.1\r\nHost: {host}\r\n\r\n").as_bytes(),
+        )
+    };
     // A rebound name (the attacker's page, its DNS now saying 127.0.0.1).
     let (status, text) = page(&format!("evil.example:{port}"));
     assert_eq!(status, 421, "{text}");
-    assert!(text.contains("does not answer for host \"evil.example:"), "{text}");
+    assert!(
+        text.contains("does not answer for host \"evil.example:"),
+        "{text}"
+    );
     assert_eq!(page(&format!("127.0.0.2:{port}")).0, 421);
     assert_eq!(page(&format!("localhost:{}", port.wrapping_add(1))).0, 421);
     assert_eq!(page("localhost").0, 421, "port 80 is not this one");
@@ -654,7 +695,13 @@ fn another_allowed_origin_is_read_only_unless_privileged_and_no_origin_is_as_con
     assert_eq!(got[0]["privileged"], false, "another origin is read-only");
     let err = got.last().unwrap();
     assert_eq!((&err["type"], &err["id"]), (&"error".into(), &9.into()));
-    assert!(err["message"].as_str().unwrap().starts_with("read-only client"), "{err}");
+    assert!(
+        err["message"]
+            .as_str()
+            .unwrap()
+            .starts_with("read-only client"),
+        "{err}"
+    );
     assert_eq!(trusted_hello[0].json().unwrap()["privileged"], true);
     assert_eq!(engine_hello[0].json().unwrap()["privileged"], true);
 }
@@ -669,7 +716,10 @@ fn the_handshake_follows_rfc_6455() {
     let daemon = start(cfg, &dir.path().join("ct.sock"));
     let host = addr.to_string();
     let try_it = |version: &str, key: &str, ws_version: &str| {
-        http(addr, upgrade_request(version, &host, "", key, ws_version).as_bytes())
+        http(
+            addr,
+            upgrade_request(version, &host, "", key, ws_version).as_bytes(),
+        )
     };
     let (http10, text10) = try_it("1.0", KEY, "13");
     let (not_b64, text_b64) = try_it("1.1", "not base64 at all", "13");
@@ -699,7 +749,11 @@ fn raw_upgrade(addr: SocketAddr) -> TcpStream {
         s.read_exact(&mut b).unwrap();
         head.push(b[0]);
     }
-    assert!(head.starts_with(b"HTTP/1.1 101"), "{}", String::from_utf8_lossy(&head));
+    assert!(
+        head.starts_with(b"HTTP/1.1 101"),
+        "{}",
+        String::from_utf8_lossy(&head)
+    );
     s
 }
 
@@ -768,14 +822,34 @@ fn protocol_errors_close_with_1002_1007_and_1009() {
     let daemon = start(cfg, &dir.path().join("ct.sock"));
     let cases: Vec<(&str, Vec<u8>, u16)> = vec![
         ("unmasked frame", frame(true, 0, 0x1, b"{}", false), 1002),
-        ("RSV1 without an extension", frame(true, 4, 0x1, b"{}", true), 1002),
+        (
+            "RSV1 without an extension",
+            frame(true, 4, 0x1, b"{}", true),
+            1002,
+        ),
         ("unknown data opcode", frame(true, 0, 0x3, b"x", true), 1002),
-        ("unknown control opcode", frame(true, 0, 0xb, b"x", true), 1002),
+        (
+            "unknown control opcode",
+            frame(true, 0, 0xb, b"x", true),
+            1002,
+        ),
         ("fragmented ping", frame(false, 0, 0x9, b"x", true), 1002),
         ("continuation first", frame(true, 0, 0x0, b"x", true), 1002),
-        ("text not UTF-8", frame(true, 0, 0x1, &[0x22, 0xff, 0xfe, 0x22], true), 1007),
-        ("close reason not UTF-8", frame(true, 0, 0x8, &[0x03, 0xe8, 0xff, 0xfe], true), 1007),
-        ("too large", frame(true, 0, 0x1, &vec![b' '; 5000], true), 1009),
+        (
+            "text not UTF-8",
+            frame(true, 0, 0x1, &[0x22, 0xff, 0xfe, 0x22], true),
+            1007,
+        ),
+        (
+            "close reason not UTF-8",
+            frame(true, 0, 0x8, &[0x03, 0xe8, 0xff, 0xfe], true),
+            1007,
+        ),
+        (
+            "too large",
+            frame(true, 0, 0x1, &vec![b' '; 5000], true),
+            1009,
+        ),
     ];
     let mut got = Vec::new();
     for (what, bytes, _) in &cases {
@@ -786,7 +860,9 @@ fn protocol_errors_close_with_1002_1007_and_1009() {
     let bad = daemon.publisher_stats().websocket_bad_frames();
     daemon.shutdown();
     for ((what, _, want), (_, got)) in cases.iter().zip(&got) {
-        let (code, reason) = got.clone().unwrap_or_else(|| panic!("{what}: no close frame"));
+        let (code, reason) = got
+            .clone()
+            .unwrap_or_else(|| panic!("{what}: no close frame"));
         assert_eq!(code, *want, "{what}: closed {code} {reason:?}");
     }
     assert!(bad >= 8, "bad frames counted: {bad}");
@@ -846,7 +922,10 @@ fn a_ping_flood_grows_no_memory_and_starves_no_reader() {
     let pid = child.id();
     let t0 = Instant::now();
     while TcpStream::connect(addr).is_err() {
-        assert!(t0.elapsed() < Duration::from_secs(20), "the daemon never listened");
+        assert!(
+            t0.elapsed() < Duration::from_secs(20),
+            "the daemon never listened"
+        );
         std::thread::sleep(Duration::from_millis(50));
     }
     // The good client: every snapshot's seq, and any dropped notice.
@@ -891,7 +970,8 @@ fn a_ping_flood_grows_no_memory_and_starves_no_reader() {
         .map(|_| {
             let (stop, ping) = (stop.clone(), ping.clone());
             let mut s = raw_upgrade(addr);
-            s.set_write_timeout(Some(Duration::from_millis(50))).unwrap();
+            s.set_write_timeout(Some(Duration::from_millis(50)))
+                .unwrap();
             std::thread::spawn(move || {
                 let (mut sent, start) = (0u64, Instant::now());
                 while !stop.load(Ordering::Relaxed) && start.elapsed() < FLOOD {
@@ -942,6 +1022,9 @@ fn a_ping_flood_grows_no_memory_and_starves_no_reader() {
         peak <= idle + LIMIT_KB,
         "RSS grew from {idle} kB to {peak} kB under the ping flood"
     );
-    assert!(snaps > 100, "the good client kept reading: {snaps} snapshots");
+    assert!(
+        snaps > 100,
+        "the good client kept reading: {snaps} snapshots"
+    );
     assert_eq!((gaps, drops), (0, 0), "the good client missed snapshots");
 }

@@ -235,16 +235,27 @@ pub(super) fn validate_outputs(outputs: &[OutputConfig], p: &mut Vec<(String, St
                 hosts,
                 ..
             } => {
-                for (name, list) in [("origins", origins), ("privileged_origins", privileged_origins)] {
+                for (name, list) in [
+                    ("origins", origins),
+                    ("privileged_origins", privileged_origins),
+                ] {
                     for (k, o) in list.iter().enumerate() {
                         if let Err(why) = normalize_origin(o) {
-                            check(false, format!("outputs[{i}].{name}[{k}]"), format!("{o:?}: {why}"));
+                            check(
+                                false,
+                                format!("outputs[{i}].{name}[{k}]"),
+                                format!("{o:?}: {why}"),
+                            );
                         }
                     }
                 }
                 for (k, h) in hosts.iter().enumerate() {
                     if let Err(why) = normalize_host(h) {
-                        check(false, format!("outputs[{i}].hosts[{k}]"), format!("{h:?}: {why}"));
+                        check(
+                            false,
+                            format!("outputs[{i}].hosts[{k}]"),
+                            format!("{h:?}: {why}"),
+                        );
                     }
                 }
                 let addr = listen.parse::<SocketAddr>();
@@ -306,9 +317,9 @@ pub(super) fn validate_outputs(outputs: &[OutputConfig], p: &mut Vec<(String, St
 /// `Err` says what is wrong (a path, a query, user info, an empty host, a bad port).
 pub fn normalize_origin(s: &str) -> Result<String, String> {
     let lower = s.to_ascii_lowercase();
-    let (scheme, rest) = lower
-        .split_once("://")
-        .ok_or_else(|| "an origin is scheme://host[:port], like \"https://kiosk.example\"".to_string())?;
+    let (scheme, rest) = lower.split_once("://").ok_or_else(|| {
+        "an origin is scheme://host[:port], like \"https://kiosk.example\"".to_string()
+    })?;
     let default_port = match scheme {
         "http" => 80,
         "https" => 443,

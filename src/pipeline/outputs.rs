@@ -2,7 +2,10 @@
 //! registered (ARCHITECTURE.md, "Adding an output").
 
 use super::error::Error;
-use crate::config::{is_loopback, normalize_host, normalize_origin, Config, OutputConfig, SocketConfig, TuioProfile, TuioVersion};
+use crate::config::{
+    is_loopback, normalize_host, normalize_origin, Config, OutputConfig, SocketConfig, TuioProfile,
+    TuioVersion,
+};
 use crate::geom::Rect;
 use crate::publish::socket::preflight::resolve_peers;
 use crate::publish::tuio::{TuioOptions, TuioOutput, Version};
@@ -102,12 +105,18 @@ fn websocket_listener(entry: &OutputConfig) -> Result<Option<WebSocketListener>,
         max_message_bytes: *max_message_bytes,
         viewer: *viewer,
         // Validated with the config: what fails to normalise is not there.
-        origins: origins.iter().filter_map(|o| normalize_origin(o).ok()).collect(),
+        origins: origins
+            .iter()
+            .filter_map(|o| normalize_origin(o).ok())
+            .collect(),
         privileged_origins: privileged_origins
             .iter()
             .filter_map(|o| normalize_origin(o).ok())
             .collect(),
-        hosts: hosts.iter().filter_map(|h| normalize_host(h).ok()).collect(),
+        hosts: hosts
+            .iter()
+            .filter_map(|h| normalize_host(h).ok())
+            .collect(),
     })?;
     let who = if *privileged {
         "privileged"

@@ -54,10 +54,10 @@ use std::io::{ErrorKind, Read, Write as _};
 use std::net::{Shutdown, SocketAddr, TcpStream};
 use std::sync::Arc;
 use std::time::Instant;
+use tungstenite::error::ProtocolError;
 use tungstenite::protocol::frame::coding::CloseCode;
 use tungstenite::protocol::frame::CloseFrame;
 use tungstenite::protocol::{Role, WebSocketConfig};
-use tungstenite::error::ProtocolError;
 use tungstenite::{Error as WsError, Message, WebSocket};
 
 /// Messages read from one client per round of the I/O loop.
@@ -894,7 +894,11 @@ mod tests {
             assert!(!host_accepted(bad, v4, hosts), "{bad}");
         }
         // `name:port` entries name their own port (a proxy's).
-        assert!(host_accepted("proxy.local:9000", local("127.0.0.1:9000"), hosts));
+        assert!(host_accepted(
+            "proxy.local:9000",
+            local("127.0.0.1:9000"),
+            hosts
+        ));
         let v6 = local("[::1]:8080");
         assert!(host_accepted("[::1]:8080", v6, hosts));
         assert!(host_accepted("[0:0:0:0:0:0:0:1]:8080", v6, hosts));
@@ -948,7 +952,9 @@ mod tests {
         match a {
             Answer::Upgrade { .. } => 101,
             Answer::Wait => 0,
-            Answer::Respond { bytes, .. } => String::from_utf8_lossy(&bytes[9..12]).parse().unwrap(),
+            Answer::Respond { bytes, .. } => {
+                String::from_utf8_lossy(&bytes[9..12]).parse().unwrap()
+            }
         }
     }
 
@@ -972,7 +978,10 @@ mod tests {
         assert_eq!(ask(&up("1.1", h, "", key, "13")), 101);
         assert_eq!(ask(&up("1.1", "evil:8080", "", key, "13")), 421);
         assert_eq!(ask(&up("1.0", h, "", key, "13")), 400);
-        assert_eq!(ask(&up("1.1", h, "Origin: http://evil\r\n", key, "13")), 403);
+        assert_eq!(
+            ask(&up("1.1", h, "Origin: http://evil\r\n", key, "13")),
+            403
+        );
         assert_eq!(ask(&up("1.1", h, "", "abc", "13")), 400);
         assert_eq!(ask(&up("1.1", h, "", key, "8")), 426);
         let a = answer(

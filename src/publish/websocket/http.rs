@@ -130,9 +130,7 @@ pub fn parse_request_head(buf: &[u8]) -> Result<Option<(Request, usize)>, HttpEr
             out.key = Some(value.to_string());
         } else if h.name.eq_ignore_ascii_case("sec-websocket-version") {
             out.version = Some(value.to_string());
-        } else if h.name.eq_ignore_ascii_case("host")
-            || h.name.eq_ignore_ascii_case("origin")
-        {
+        } else if h.name.eq_ignore_ascii_case("host") || h.name.eq_ignore_ascii_case("origin") {
             let slot = if h.name.eq_ignore_ascii_case("host") {
                 &mut out.host
             } else {
@@ -339,7 +337,8 @@ mod tests {
 
     #[test]
     fn the_version_host_and_origin_are_read_and_kept_single() {
-        let head = b"GET /ws HTTP/1.0\r\nHost: 127.0.0.1:8080\r\nOrigin: http://evil.example\r\n\r\n";
+        let head =
+            b"GET /ws HTTP/1.0\r\nHost: 127.0.0.1:8080\r\nOrigin: http://evil.example\r\n\r\n";
         let (r, _) = parse_request_head(head).unwrap().unwrap();
         assert_eq!(r.http_minor, 0);
         assert_eq!(r.host.as_deref(), Some("127.0.0.1:8080"));
