@@ -9,6 +9,8 @@
 //! * a mouse drag on the page moves the crowd (seen in the socket's stream);
 //! * a page on a non-privileged output cannot pause the crowd nor move it, and shows
 //!   the daemon's error;
+//! * a page of another origin (served from another loopback port) cannot open the
+//!   WebSocket at all: no hello, no message, the daemon logs the 403 (issue 27);
 //! * the page draws the scene (an obstacle, a patch, a checkpoint, a moving cart
 //!   where the daemon's poses put it, those poses where the scene's path puts the
 //!   cart) and, while a formation transform runs, colours each agent by the subgroup
@@ -733,6 +735,90 @@ fn a_read_only_page_cannot_pause_nor_move_the_crowd() {
         assert_eq!(newest["paused"], false);
         let now = centroid(&points(&newest["positions"]));
         assert!(dist(now, c) < 0.05, "the crowd moved from {c:?} to {now:?}");
+    });
+}
+
+/// A page of another site: opens `ws://127.0.0.1:PORT/ws` and records in
+/// `window.viewerStats` what it saw (`opened`, `messages`, `hello`, `closeCode`,
+/// `done` once the socket closed or failed); `#view` is there for drive.js's `stats`.
+const FOREIGN_PAGE: &str = r#"<!doctype html><meta charset="utf-8"><title>another site</title>
+<div id="view"></div><pre id="log"></pre><script>
+window.viewerStats = { opened: false, messages: 0, hello: null, closeCode: null, error: false, done: 0 };
+const s = window.viewerStats, log = (t) => { document.getElementById("log").textContent += t + "\n"; };
+const ws = new WebSocket("ws://127.0.0.1:PORT/ws");
+ws.onopen = () => { s.opened = true; log("open"); ws.send('{"type":"command","id":1,"name":"pause"}'); };
+ws.onmessage = (e) => { s.messages += 1; try { const m = JSON.parse(e.data); if (m.type === "hello") s.hello = m; } catch (_) {} };
+ws.onerror = () => { s.error = true; log("error"); };
+ws.onclose = (e) => { s.closeCode = e.code; s.done = 1; log("close " + e.code); };
+</script>"#;
+
+/// Serves `html` to every request on a loopback port of its own (another origin
+/// than the daemon's): the port.
+fn serve_foreign_page(html: String) -> u16 {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    std::thread::spawn(move || {
+        for stream in listener.incoming().map_while(Result::ok) {
+            let mut stream = stream;
+            let mut head = Vec::new();
+            let mut buf = [0u8; 1024];
+            while !head.windows(4).any(|w| w == b"\r\n\r\n") {
+                match std::io::Read::read(&mut stream, &mut buf) {
+                    Ok(0) | Err(_) => break,
+                    Ok(n) => head.extend_from_slice(&buf[..n]),
+                }
+            }
+            let _ = write!(
+                stream,
+                "HTTP/1.1 200 OK\r\nContent-Type: text/html; charset=utf-8\r\n\
+                 Content-Length: {}\r\nConnection: close\r\n\r\n{html}",
+                html.len()
+            );
+        }
+    });
+    port
+}
+
+#[test]
+fn a_page_of_another_origin_cannot_connect() {
+    in_browser("a_page_of_another_origin_cannot_connect", || {
+        if bridged() {
+            let _ = writeln!(
+                std::io::stderr(),
+                "SKIPPED a_page_of_another_origin_cannot_connect: bridge.js checks no origin"
+            );
+            return;
+        }
+        let (daemon, port) = daemon_with_websocket(40, Some(POINT_DRAG), true);
+        let watcher = Watcher::connect(&daemon.socket);
+        let mark = watcher.len();
+        let foreign = serve_foreign_page(FOREIGN_PAGE.replace("PORT", &port.to_string()));
+        let mut browser = Browser::start();
+        browser.call(json!({"cmd": "open", "url": format!("http://127.0.0.1:{foreign}/")}));
+        let seen = browser.call(json!({"cmd": "wait", "until": "done", "timeout_ms": 20000}));
+        let page = browser.call(json!({"cmd": "stats"}));
+        println!(
+            "the page of http://127.0.0.1:{foreign} saw: {} (its text: {:?})",
+            seen["stats"], page["text"]
+        );
+        let stats = &page["stats"];
+        assert_eq!(stats["opened"], false, "the socket opened: {stats}");
+        assert_eq!(stats["messages"], 0, "{stats}");
+        assert!(stats["hello"].is_null(), "the page got a hello: {stats}");
+        assert_eq!(stats["closeCode"], 1006, "a refused handshake: {stats}");
+        std::thread::sleep(Duration::from_secs(1));
+        let since = watcher.since(mark);
+        assert!(
+            !since.iter().any(|v| v["type"] == "paused"),
+            "the foreign page paused the crowd"
+        );
+        let log = daemon.log.lock().unwrap().join("\n");
+        assert!(
+            log.contains(&format!(
+                "origin \"http://127.0.0.1:{foreign}\" may not connect"
+            )),
+            "the daemon logs the refusal: {log}"
+        );
     });
 }
 
