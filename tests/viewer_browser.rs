@@ -740,7 +740,8 @@ fn a_read_only_page_cannot_pause_nor_move_the_crowd() {
 
 /// A page of another site: opens `ws://127.0.0.1:PORT/ws` and records in
 /// `window.viewerStats` what it saw (`opened`, `messages`, `hello`, `closeCode`,
-/// `done` once the socket closed or failed); `#view` is there for drive.js's `stats`.
+/// `done` once the socket closed or failed, or after 5 s); `#view` is there for
+/// drive.js's `stats`.
 const FOREIGN_PAGE: &str = r#"<!doctype html><meta charset="utf-8"><title>another site</title>
 <div id="view"></div><pre id="log"></pre><script>
 window.viewerStats = { opened: false, messages: 0, hello: null, closeCode: null, error: false, done: 0 };
@@ -750,6 +751,7 @@ ws.onopen = () => { s.opened = true; log("open"); ws.send('{"type":"command","id
 ws.onmessage = (e) => { s.messages += 1; try { const m = JSON.parse(e.data); if (m.type === "hello") s.hello = m; } catch (_) {} };
 ws.onerror = () => { s.error = true; log("error"); };
 ws.onclose = (e) => { s.closeCode = e.code; s.done = 1; log("close " + e.code); };
+setTimeout(() => { s.done = 1; }, 5000); // an open socket is recorded too
 </script>"#;
 
 /// Serves `html` to every request on a loopback port of its own (another origin
