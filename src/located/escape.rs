@@ -13,7 +13,9 @@
 //!   U+202A–U+202E, U+2060–U+2069, U+FEFF: `\u{202e}`;
 //! * (bytes only) a byte that is not part of valid UTF-8: `\xff`.
 //!
-//! Everything else, backslashes included, is written as it is. Neither allocates.
+//! [`EscapedLines`] does the same to whatever a `Display` writes, except line feeds:
+//! for messages of several lines that quote input (a config's list of problems).
+//! Everything else, backslashes included, is written as it is. None allocates.
 
 use std::fmt;
 
@@ -67,10 +69,37 @@ pub fn escape_bytes(bytes: &[u8]) -> String {
     EscapedBytes(bytes).to_string()
 }
 
+/// What a `Display` writes, with control characters escaped except `\n` (which
+/// separates the lines of a message).
+///
+/// ```
+/// use crowdtouch::located::EscapedLines;
+/// let text = EscapedLines(format_args!("a:1: `{}`\nb:2: ok", "\u{1b}[2J")).to_string();
+/// assert_eq!(text, "a:1: `\\u{1b}[2J`\nb:2: ok");
+/// ```
+#[derive(Copy, Clone, Debug)]
+pub struct EscapedLines<T>(pub T);
+
+impl<T: fmt::Display> fmt::Display for EscapedLines<T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        struct Lines<'a, 'b>(&'a mut fmt::Formatter<'b>);
+        impl fmt::Write for Lines<'_, '_> {
+            fn write_str(&mut self, s: &str) -> fmt::Result {
+                write_escaped_but(self.0, s, Some('\n'))
+            }
+        }
+        fmt::write(&mut Lines(f), format_args!("{}", self.0))
+    }
+}
+
 fn write_escaped(f: &mut fmt::Formatter<'_>, s: &str) -> fmt::Result {
+    write_escaped_but(f, s, None)
+}
+
+fn write_escaped_but(f: &mut fmt::Formatter<'_>, s: &str, keep: Option<char>) -> fmt::Result {
     let mut start = 0;
     for (i, c) in s.char_indices() {
-        if !needs_escape(c) {
+        if !needs_escape(c) || Some(c) == keep {
             continue;
         }
         f.write_str(&s[start..i])?;
@@ -129,6 +158,12 @@ mod tests {
             assert_eq!(escape(s), s);
             assert_eq!(escape_bytes(s.as_bytes()), s);
         }
+    }
+
+    #[test]
+    fn lines_keep_their_line_feeds_only() {
+        let out = EscapedLines(format_args!("{}\n{}", "x\u{1b}", "y\r\n")).to_string();
+        assert_eq!(out, "x\\u{1b}\ny\\r\n");
     }
 
     #[test]

@@ -11,7 +11,7 @@ mod read;
 mod ron_words;
 mod strict_ron;
 
-pub use escape::{escape, escape_bytes, needs_escape, Escaped, EscapedBytes};
+pub use escape::{escape, escape_bytes, needs_escape, Escaped, EscapedBytes, EscapedLines};
 pub use issue::{format_issues, Issue, Located};
 pub use json::json_kind;
 pub use read::{read_capped, ReadError};
