@@ -100,3 +100,13 @@ fn a_socket_client_s_duplicate_key_and_control_characters_get_clear_errors() {
     assert_eq!(reply(&mut r, 3)["type"], "ack");
     daemon.shutdown();
 }
+
+#[test]
+fn a_bad_hex_byte_of_a_hid_recording_is_quoted_escaped() {
+    let text = "R: 2 05 \u{1b}[2J\nE: 0.000001 1 01\n";
+    let e = parse_recording(text, Path::new("x.hid"), OnBadFrame::Stop)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("`\\u{1b}[2J` is not a hex byte"), "{e}");
+    assert!(!e.chars().any(needs_escape), "{e:?}");
+}
