@@ -64,7 +64,7 @@ const RULES: &[Rule] = &[
     // The edges, and the core that drives the crowd.
     Rule { module: "input", may_use: &["vocab", "geom", "rng", "sys", "rt", "located"] },
     Rule { module: "config", may_use: &["crowd", "gesture", "vocab", "geom", "located"] },
-    Rule { module: "engine", may_use: &["config", "crowd", "gesture", "vocab", "geom"] },
+    Rule { module: "engine", may_use: &["config", "crowd", "gesture", "vocab", "geom", "located"] },
     Rule { module: "publish", may_use: &["vocab", "geom", "rt", "located"] },
     // The wiring.
     Rule {

@@ -176,7 +176,7 @@ fn tuio_bundle(cursors: &[(i32, f32, f32)]) -> Vec<u8> {
 
 #[test]
 fn tuio_receive_decode_and_queue_do_not_allocate() {
-    use crowdtouch::input::tuio::{TuioCounters, TuioDecoder};
+    use crowdtouch::input::tuio::{Admit, FloodGate, TuioCounters, TuioDecoder};
     use crowdtouch::pipeline::device::{TransformSettings, TransformSink};
     // Five cursors moving, a sixth that comes and goes every 50 datagrams.
     let packets: Vec<Vec<u8>> = (0..100)
@@ -205,6 +205,8 @@ fn tuio_receive_decode_and_queue_do_not_allocate() {
     };
     let mut sink = TransformSink::fixed(q, settings, "TUIO input");
     let mut dec = TuioDecoder::new(Micros(1_000_000), Arc::new(TuioCounters::default()));
+    // The source's per-peer flood cap, as it runs before the decoder.
+    let mut gate = FloodGate::new(4_000, 8);
     let mut buf = vec![0u8; 65_536];
     let mut out = vec![0u8; 4096];
     let mut step = |k: usize, t: u64, dec: &mut TuioDecoder, sink: &mut TransformSink| {
@@ -220,6 +222,7 @@ fn tuio_receive_decode_and_queue_do_not_allocate() {
                 Err(e) => panic!("recv: {e}"),
             }
         };
+        assert_eq!(gate.admit(peer, Micros(t)), Admit::Take);
         dec.packet(&buf[..n], peer, Micros(t), sink).unwrap();
         dec.expire(Micros(t), sink);
     };

@@ -91,6 +91,9 @@ fn tuio_cursors_drag_the_crowd_and_lift_when_they_leave_alive() {
         region: None,
         calibration: Default::default(),
         timeout_ms: 1000,
+        max_sessions_per_frame: 64,
+        max_senders: 8,
+        max_packets_per_s: 4000,
     }];
     assert_eq!(cfg.validate(), vec![], "the config is valid");
     let sources = sources_from_config(&cfg).expect("the TUIO port binds");
@@ -195,6 +198,9 @@ fn a_silent_sender_is_lifted_and_garbage_changes_nothing() {
         region: None,
         calibration: Default::default(),
         timeout_ms: 300,
+        max_sessions_per_frame: 64,
+        max_senders: 8,
+        max_packets_per_s: 4000,
     }];
     let daemon = Daemon::start(
         cfg.clone(),
@@ -250,4 +256,251 @@ fn a_silent_sender_is_lifted_and_garbage_changes_nothing() {
     assert_eq!(count("malformed"), 2, "{input}");
     assert_eq!(count("timeouts"), 1, "{input}");
     assert!(count("packets") >= 4, "{input}");
+}
+
+/// The daemon on one TUIO input written as the config writes it (`Tuio(...)`, the
+/// listen address filled in), its socket client past the first snapshot, and the
+/// port it listens on.
+fn daemon_on_tuio(
+    input: &str,
+    agents: u32,
+) -> (Daemon, BufReader<UnixStream>, u16, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ct.sock");
+    let port = free_udp_port();
+    let text = input.replace("LISTEN", &format!("\"127.0.0.1:{port}\""));
+    let input: InputConfig = ron::from_str(&text).unwrap_or_else(|e| panic!("{text}: {e}"));
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = agents;
+    cfg.pipeline.realtime = Default::default();
+    cfg.inputs = vec![input];
+    assert_eq!(cfg.validate(), vec![], "the config is valid");
+    let daemon = Daemon::start(
+        cfg.clone(),
+        sources_from_config(&cfg).expect("the TUIO port binds"),
+        DaemonOptions {
+            socket_path: path.clone(),
+        },
+    )
+    .expect("daemon starts");
+    let mut r = BufReader::new(UnixStream::connect(&path).unwrap());
+    read_until(&mut r, 5.0, |v| v["type"] == "snapshot");
+    (daemon, r, port, dir)
+}
+
+/// `n` cursors with ids from `first`, spread over the table.
+fn cursors(first: i32, n: i32) -> Vec<(i32, f32, f32)> {
+    (0..n)
+        .map(|k| {
+            let (col, row) = (k % 10, k / 10);
+            (
+                first + k,
+                0.05 + 0.09 * col as f32,
+                0.05 + 0.09 * row as f32,
+            )
+        })
+        .collect()
+}
+
+/// One TUIO 1.1 frame from the sender named `source`.
+fn frame_from(source: &str, cursors: &[(i32, f32, f32)], fseq: i32) -> Vec<u8> {
+    let mut p = rosc::decoder::decode_udp(&frame(cursors, fseq)).unwrap().1;
+    if let OscPacket::Bundle(b) = &mut p {
+        if let OscPacket::Message(m) = &mut b.content[0] {
+            m.args[1] = OscType::String(source.into());
+        }
+    }
+    rosc::encoder::encode(&p).unwrap()
+}
+
+#[test]
+fn a_frame_of_100_sessions_gives_the_default_limit_and_counts_the_rest() {
+    // The shipped limit: 64 sessions a frame (a touch frame's capacity).
+    let (mut daemon, mut r, port, _dir) = daemon_on_tuio("Tuio(listen: LISTEN)", 20);
+    let sender = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let packet = frame(&cursors(1, 100), 1);
+    assert!(
+        packet.len() < 65_000,
+        "one datagram: {} bytes",
+        packet.len()
+    );
+    sender.send_to(&packet, ("127.0.0.1", port)).unwrap();
+    let msgs = read_until(&mut r, 5.0, |v| {
+        v["type"] == "snapshot" && !touches(v).is_empty()
+    });
+    let report = daemon
+        .next_report(Duration::from_secs(5))
+        .expect("a stats report");
+    daemon.shutdown();
+    assert_eq!(
+        touches(msgs.last().unwrap()).len(),
+        64,
+        "the limit of touches"
+    );
+    let (input, count) = output_counts(&report, "tuio-input");
+    assert_eq!(
+        count("sessions_refused"),
+        36,
+        "the 36 over the limit: {input}"
+    );
+    assert_eq!(count("frames"), 1, "{input}");
+}
+
+/// Sends `frames(k)` to `port` every 16 ms (60 Hz) for `ms` on a thread of its own;
+/// the thread returns how many it sent.
+fn send_steadily(
+    port: u16,
+    ms: u64,
+    frames: impl Fn(i32) -> Vec<Vec<u8>> + Send + 'static,
+) -> std::thread::JoinHandle<i32> {
+    std::thread::spawn(move || {
+        let s = UdpSocket::bind("127.0.0.1:0").unwrap();
+        let end = Instant::now() + Duration::from_millis(ms);
+        let mut k = 0;
+        while Instant::now() < end {
+            k += 1;
+            for f in frames(k) {
+                s.send_to(&f, ("127.0.0.1", port)).unwrap();
+            }
+            std::thread::sleep(Duration::from_millis(16));
+        }
+        k
+    })
+}
+
+#[test]
+fn the_configured_limits_of_sessions_and_senders_hold_and_are_counted() {
+    let (mut daemon, mut r, port, _dir) = daemon_on_tuio(
+        "Tuio(listen: LISTEN, max_sessions_per_frame: 10, max_senders: 2)",
+        20,
+    );
+    // Sender a: 20 cursors, 10 kept. Sender b: one. Sender c, a third over the
+    // limit of 2 senders, sends once while a and b hold touches down: refused.
+    let steady = send_steadily(port, 1500, |k| {
+        vec![
+            frame_from("a@host", &cursors(1, 20), k),
+            frame_from("b@host", &[(1, 0.5, 0.95)], k),
+        ]
+    });
+    let msgs = read_until(&mut r, 5.0, |v| {
+        v["type"] == "snapshot" && touches(v).len() == 11
+    });
+    assert_eq!(touches(msgs.last().unwrap()).len(), 11, "10 of a, 1 of b");
+    UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .send_to(
+            &frame_from("c@host", &[(1, 0.95, 0.5)], 1),
+            ("127.0.0.1", port),
+        )
+        .unwrap();
+    let seen = read_until(&mut r, 0.5, |_| false);
+    let sent = steady.join().unwrap();
+    std::thread::sleep(Duration::from_millis(50));
+    let report = daemon
+        .next_report(Duration::from_secs(5))
+        .expect("a stats report");
+    daemon.shutdown();
+    for v in seen.iter().filter(|v| v["type"] == "snapshot") {
+        assert_eq!(touches(v).len(), 11, "not the limits' touches: {v}");
+    }
+    let (input, count) = output_counts(&report, "tuio-input");
+    assert_eq!(count("senders_refused"), 1, "c's one frame: {input}");
+    // 10 of a's 20 in each of its frames.
+    assert_eq!(
+        count("sessions_refused"),
+        10 * sent as u64,
+        "{sent} frames of a: {input}"
+    );
+}
+
+#[test]
+fn a_flooding_sender_does_not_starve_a_steady_one() {
+    let (mut daemon, mut r, port, _dir) =
+        daemon_on_tuio("Tuio(listen: LISTEN, timeout_ms: 500)", 20);
+    let at = (0.25f32, 0.5f32);
+    let steady = send_steadily(port, 3500, move |k| {
+        vec![frame_from("good@host", &[(1, at.0, at.1)], k)]
+    });
+    read_until(&mut r, 5.0, |v| {
+        v["type"] == "snapshot" && touches(v).len() == 1
+    });
+    // Another sender floods with empty frames for 2.5 s, as fast as it can
+    // (loopback only), while the good one sends its touch at 60 Hz.
+    let flood = std::thread::spawn(move || {
+        let s = UdpSocket::bind("127.0.0.1:0").unwrap();
+        let end = Instant::now() + Duration::from_millis(2500);
+        let mut sent = 0u64;
+        while Instant::now() < end {
+            for _ in 0..100 {
+                let f = frame_from("flood@host", &[], (sent % 1_000_000) as i32);
+                let _ = s.send_to(&f, ("127.0.0.1", port));
+                sent += 1;
+            }
+        }
+        sent
+    });
+    let snapshots: Vec<Value> = read_until(&mut r, 2.5, |_| false)
+        .into_iter()
+        .filter(|v| v["type"] == "snapshot")
+        .collect();
+    let sent = flood.join().unwrap();
+    steady.join().unwrap();
+    let report = daemon
+        .next_report(Duration::from_secs(5))
+        .expect("a stats report");
+    daemon.shutdown();
+    let (input, count) = output_counts(&report, "tuio-input");
+    assert!(count("flood_dropped") > 0, "no flood: {sent} sent, {input}");
+    assert!(snapshots.len() > 20, "{} snapshots read", snapshots.len());
+    let missing = snapshots.iter().filter(|v| touches(v).len() != 1).count();
+    eprintln!(
+        "flood: {sent} datagrams sent, {} dropped, {} taken; {} snapshots read",
+        count("flood_dropped"),
+        count("packets"),
+        snapshots.len()
+    );
+    assert_eq!(
+        missing,
+        0,
+        "the steady touch missing from {missing} of {} snapshots ({sent} flood datagrams, {input})",
+        snapshots.len()
+    );
+}
+
+#[test]
+fn the_limits_are_checked_with_their_place_in_the_config() {
+    let text = crowdtouch::config::DEFAULT_CONFIG_RON.replacen(
+        "inputs: [",
+        "inputs: [\n        Tuio(listen: \"127.0.0.1:3333\", max_sessions_per_frame: 65, max_senders: 0, max_packets_per_s: 5),",
+        1,
+    );
+    let err = Config::from_str(&text, std::path::Path::new("t.ron"))
+        .unwrap_err()
+        .to_string();
+    for field in ["max_sessions_per_frame", "max_senders", "max_packets_per_s"] {
+        assert!(
+            err.lines()
+                .any(|l| l.starts_with("t.ron:") && l.contains(&format!("inputs[0].{field}"))),
+            "{field} not named: {err}"
+        );
+    }
+    // The shipped defaults are the decoder's.
+    let InputConfig::Tuio {
+        max_sessions_per_frame,
+        max_senders,
+        max_packets_per_s,
+        ..
+    } = ron::from_str("Tuio()").unwrap()
+    else {
+        unreachable!()
+    };
+    let d = crowdtouch::input::tuio::TuioLimits::default();
+    assert_eq!(
+        (
+            max_sessions_per_frame as usize,
+            max_senders as usize,
+            max_packets_per_s
+        ),
+        (d.sessions_per_frame, d.senders, d.packets_per_s)
+    );
 }

@@ -69,7 +69,44 @@ pub enum InputConfig {
         /// A sender silent this long (ms) has its touches lifted.
         #[serde(default = "default_tuio_timeout_ms")]
         timeout_ms: u64,
+        /// Sessions (cursors) one sender may have down, that is in one of its
+        /// frames; further ones are refused and counted (`sessions_refused`).
+        /// 1 ..= [`TUIO_MOST_SESSIONS_PER_FRAME`].
+        #[serde(default = "default_tuio_sessions")]
+        max_sessions_per_frame: u32,
+        /// Senders (peer address and source name) followed at once; a frame of
+        /// another is refused and counted (`senders_refused`) while these hold
+        /// touches down. 1 ..= [`TUIO_MOST_SENDERS`].
+        #[serde(default = "default_tuio_senders")]
+        max_senders: u32,
+        /// Datagrams taken from one peer address (ip:port) per second (a token
+        /// bucket of one second's worth each); the rest are dropped and counted
+        /// (`flood_dropped`). Each peer has its own: one flooding cannot starve
+        /// another. [`TUIO_PACKETS_PER_S`].
+        #[serde(default = "default_tuio_packets_per_s")]
+        max_packets_per_s: u32,
     },
+}
+
+/// The most `Tuio.max_sessions_per_frame`: a touch frame's capacity.
+pub const TUIO_MOST_SESSIONS_PER_FRAME: u32 = crate::vocab::MAX_CONTACTS as u32;
+
+/// The most `Tuio.max_senders`.
+pub const TUIO_MOST_SENDERS: u32 = 64;
+
+/// The allowed `Tuio.max_packets_per_s` (per peer address).
+pub const TUIO_PACKETS_PER_S: std::ops::RangeInclusive<u32> = 10..=100_000;
+
+fn default_tuio_sessions() -> u32 {
+    TUIO_MOST_SESSIONS_PER_FRAME
+}
+
+fn default_tuio_senders() -> u32 {
+    8
+}
+
+fn default_tuio_packets_per_s() -> u32 {
+    4_000
 }
 
 /// The default `Tuio.listen`: every interface, TUIO's port.

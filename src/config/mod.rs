@@ -37,6 +37,7 @@ pub use gestures::{
 };
 pub use inputs::{
     CalibrationConfig, DeviceInterface, DeviceSelect, InputConfig, DEFAULT_PALM_MAX_MM,
+    TUIO_MOST_SENDERS, TUIO_MOST_SESSIONS_PER_FRAME, TUIO_PACKETS_PER_S,
 };
 pub use live::{
     field_class, plan_reload, show_value, unclassified_fields, FieldChange, FieldClass,

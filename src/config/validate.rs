@@ -329,6 +329,9 @@ impl Config {
                     region,
                     calibration,
                     timeout_ms,
+                    max_sessions_per_frame,
+                    max_senders,
+                    max_packets_per_s,
                 } => {
                     check(
                         listen.parse::<std::net::SocketAddr>().is_ok(),
@@ -344,6 +347,31 @@ impl Config {
                         (100..=60_000).contains(timeout_ms),
                         &format!("inputs[{i}].timeout_ms"),
                         format!("timeout must be 100..=60000 ms, got {timeout_ms}"),
+                    );
+                    use super::inputs::{
+                        TUIO_MOST_SENDERS, TUIO_MOST_SESSIONS_PER_FRAME, TUIO_PACKETS_PER_S,
+                    };
+                    check(
+                        (1..=TUIO_MOST_SESSIONS_PER_FRAME).contains(max_sessions_per_frame),
+                        &format!("inputs[{i}].max_sessions_per_frame"),
+                        format!(
+                            "sessions per frame must be 1..={TUIO_MOST_SESSIONS_PER_FRAME} \
+                             (a touch frame's capacity), got {max_sessions_per_frame}"
+                        ),
+                    );
+                    check(
+                        (1..=TUIO_MOST_SENDERS).contains(max_senders),
+                        &format!("inputs[{i}].max_senders"),
+                        format!("senders must be 1..={TUIO_MOST_SENDERS}, got {max_senders}"),
+                    );
+                    check(
+                        TUIO_PACKETS_PER_S.contains(max_packets_per_s),
+                        &format!("inputs[{i}].max_packets_per_s"),
+                        format!(
+                            "datagrams a second per peer must be {}..={}, got {max_packets_per_s}",
+                            TUIO_PACKETS_PER_S.start(),
+                            TUIO_PACKETS_PER_S.end()
+                        ),
                     );
                 }
             }

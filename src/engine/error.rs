@@ -34,14 +34,14 @@ pub enum CommandError {
     },
     /// An edit-mode command that cannot be applied now (no tracks loaded, an edit
     /// under way, nothing to undo, bad arguments).
-    #[error("{0}")]
+    #[error("{}", crate::located::EscapedLines(.0))]
     Edit(String),
     /// A command the control loop handles itself reached the engine (an internal bug).
     #[error("internal bug: `{0}` reached the engine")]
     NotHere(&'static str),
     /// The formation could not be laid out for the crowd (without the formation
     /// thread; with it, the failure is logged when the switch arrives).
-    #[error("formation `{name}` could not be built: {why}")]
+    #[error("formation `{}` could not be built: {why}", shorten(.name))]
     FormationNotBuilt {
         /// The formation.
         name: String,
@@ -64,9 +64,10 @@ pub enum SwitchError {
     Transform(#[from] TransformError),
 }
 
-/// A client-given name as shown in a message: at most 64 characters, `…` when cut.
+/// A client-given name as shown in a message: at most 64 characters, `…` when cut,
+/// control characters escaped.
 fn shorten(name: &str) -> String {
     let shown: String = name.chars().take(64).collect();
     let cut = if shown.len() < name.len() { "…" } else { "" };
-    format!("{shown}{cut}")
+    format!("{}{cut}", crate::located::Escaped(&shown))
 }

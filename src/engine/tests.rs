@@ -47,6 +47,22 @@ fn refused_commands_say_why_in_the_words_clients_read() {
             "x".repeat(64)
         )
     );
+    // A name with control characters is quoted escaped (the message is logged).
+    let err = e
+        .command(
+            &Command::SetFormation {
+                formation: "ring\u{1b}[2J\u{9b}\u{202e}".into(),
+                method: None,
+                duration: None,
+            },
+            Micros(0),
+        )
+        .unwrap_err();
+    assert!(
+        err.to_string()
+            .starts_with("no formation is called `ring\\u{1b}[2J\\u{9b}\\u{202e}`"),
+        "{err}"
+    );
     // A refused command changes nothing.
     assert_eq!(e.agent_count(), 20);
     assert_eq!(e.formation(), "start");

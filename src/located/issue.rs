@@ -1,6 +1,7 @@
 //! A problem at a place in a text file, and the `file:line:col: what` lines people
 //! read.
 
+use super::escape::{Escaped, EscapedLines};
 use std::fmt;
 use std::path::Path;
 
@@ -18,11 +19,16 @@ pub struct Issue {
 }
 
 impl fmt::Display for Issue {
+    /// `line:col: field `f`: message`, with the control characters of the field
+    /// and the message (which may quote the file) escaped, line feeds kept.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
             "{}:{}: field `{}`: {}",
-            self.line, self.column, self.field, self.message
+            self.line,
+            self.column,
+            Escaped(&self.field),
+            EscapedLines(&self.message)
         )
     }
 }
@@ -46,14 +52,21 @@ impl Located for Issue {
     }
     fn fmt_what(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if self.field.is_empty() {
-            write!(f, "{}", self.message)
+            write!(f, "{}", EscapedLines(&self.message))
         } else {
-            write!(f, "field `{}`: {}", self.field, self.message)
+            write!(
+                f,
+                "field `{}`: {}",
+                Escaped(&self.field),
+                EscapedLines(&self.message)
+            )
         }
     }
 }
 
-/// One `file:line:col: what` line per issue, in the order given.
+/// One `file:line:col: what` line per issue, in the order given; the control
+/// characters of each `what` (which may quote the file) are escaped, line feeds
+/// kept.
 pub fn format_issues<T: Located>(path: &Path, issues: &[T]) -> String {
     struct What<'a, T>(&'a T);
     impl<T: Located> fmt::Display for What<'_, T> {
@@ -71,8 +84,29 @@ pub fn format_issues<T: Located>(path: &Path, issues: &[T]) -> String {
             path.display(),
             is.line(),
             is.column(),
-            What(is)
+            EscapedLines(What(is))
         ));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn issues_quoting_control_characters_print_them_escaped() {
+        let is = Issue {
+            field: "crowd.formation\u{1b}".to_string(),
+            line: 3,
+            column: 7,
+            message: "no formation is called `\u{1b}[2J\u{9b}`\nnext line".to_string(),
+        };
+        let text = format_issues(Path::new("c.ron"), std::slice::from_ref(&is));
+        assert_eq!(
+            text,
+            "c.ron:3:7: field `crowd.formation\\u{1b}`: no formation is called `\\u{1b}[2J\\u{9b}`\nnext line"
+        );
+        assert!(!is.to_string().contains('\u{1b}'));
+    }
 }

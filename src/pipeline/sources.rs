@@ -122,6 +122,9 @@ pub fn sources_from_config(cfg: &Config) -> Result<Vec<SourceSpec>, Error> {
                 region,
                 calibration,
                 timeout_ms,
+                max_sessions_per_frame,
+                max_senders,
+                max_packets_per_s,
             } => {
                 // Validated: `listen` parses.
                 let listen = listen
@@ -130,6 +133,12 @@ pub fn sources_from_config(cfg: &Config) -> Result<Vec<SourceSpec>, Error> {
                 let settings = crate::input::tuio::TuioSettings {
                     listen,
                     timeout: Micros(timeout_ms * 1000),
+                    // Validated: within the decoder's bounds (it clamps them too).
+                    limits: crate::input::tuio::TuioLimits {
+                        sessions_per_frame: *max_sessions_per_frame as usize,
+                        senders: *max_senders as usize,
+                        packets_per_s: *max_packets_per_s,
+                    },
                 };
                 out.push(SourceSpec::Tuio {
                     source: Box::new(crate::input::tuio::TuioSource::bind(&settings)?),

@@ -235,9 +235,11 @@ fn class_list(classes: &[MotionClass]) -> String {
 /// Displays as `library.ctgl: offset 1234: gesture 17: finger 3: sample 0: x is NaN`
 /// (no offset for a library checked in memory).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{file}{}: {item}: {problem}", match .offset { Some(o) => format!(": offset {o}"), None => String::new() })]
+#[error("{}{}: {item}: {problem}", crate::located::Escaped(.file), match .offset { Some(o) => format!(": offset {o}"), None => String::new() })]
 pub struct LibraryError {
-    /// The file's name, as given to the reader (`(in memory)` for [`validate`](fn@super::validate)).
+    /// The file's name, as given to the reader (`(in memory)` for [`validate`](fn@super::validate));
+    /// the message escapes its control characters. The problems quote no byte of
+    /// the file but as hex (the magic) and numbers.
     pub file: String,
     /// The byte offset of the value or record at fault, when read from bytes.
     pub offset: Option<usize>,

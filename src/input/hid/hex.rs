@@ -7,10 +7,11 @@ pub(crate) fn parse_hex_bytes<'a>(
 ) -> Result<usize, String> {
     let mut n = 0;
     for tok in tokens {
+        let bad = || format!("`{}` is not a hex byte", crate::located::Escaped(tok));
         if tok.is_empty() || tok.len() > 2 {
-            return Err(format!("`{tok}` is not a hex byte"));
+            return Err(bad());
         }
-        let b = u8::from_str_radix(tok, 16).map_err(|_| format!("`{tok}` is not a hex byte"))?;
+        let b = u8::from_str_radix(tok, 16).map_err(|_| bad())?;
         out.push(b);
         n += 1;
     }

@@ -65,24 +65,27 @@ pub enum RecordingError {
         limit: u64,
     },
     /// Malformed content.
-    #[error("{}:{line}: {message}", path.display())]
+    #[error("{}:{line}: {}", path.display(), crate::located::Escaped(message))]
     Parse {
         /// File.
         path: PathBuf,
         /// 1-based line.
         line: usize,
-        /// What is wrong, and in which field.
+        /// What is wrong, and in which field; it may quote the file (the message
+        /// escapes control characters).
         message: String,
     },
     /// Not a format this module reads.
     #[error(
-        "{}: unknown recording format (starts with `{found}`); expected crowdtouch JSON \
-         Lines, evemu, libinput record YAML or hid-recorder", path.display()
+        "{}: unknown recording format (starts with `{}`); expected crowdtouch JSON \
+         Lines, evemu, libinput record YAML or hid-recorder",
+        path.display(), crate::located::Escaped(found)
     )]
     UnknownFormat {
         /// File.
         path: PathBuf,
-        /// The start of the first meaningful line.
+        /// The start of the first meaningful line, as read (the message escapes its
+        /// control characters: a file must not drive the terminal).
         found: String,
     },
     /// Well-formed, but describes something not supported.

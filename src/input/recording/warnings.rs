@@ -17,11 +17,14 @@ pub struct RecordingIssue {
 }
 
 impl fmt::Display for RecordingIssue {
+    /// `line N: message`, the control characters the message quotes from the file
+    /// escaped.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let message = crate::located::Escaped(&self.message);
         if self.line == 0 {
-            write!(f, "{}", self.message)
+            write!(f, "{message}")
         } else {
-            write!(f, "line {}: {}", self.line, self.message)
+            write!(f, "line {}: {message}", self.line)
         }
     }
 }

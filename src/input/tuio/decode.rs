@@ -22,7 +22,10 @@
 //! or one tracker sending from two ports, stay apart. Each sender's frame ids are
 //! ordered on their own: a frame older than the last one applied (UDP reorders)
 //! is dropped, unless it is more than [`REORDER_WINDOW`] older, which is a sender
-//! that started again. At most [`MAX_SENDERS`] senders are followed; one that is
+//! that started again. At most [`TuioLimits::senders`] senders are followed (the
+//! config's `max_senders`, [`DEFAULT_MAX_SENDERS`] unless set); a frame of another
+//! sender is refused, counted in `senders_refused` and logged at a falling rate,
+//! unless a followed sender has nothing down, whose place it then takes. A sender
 //! silent for the timeout has its sessions ended (`CANCELLED`) and its place freed.
 //!
 //! # Sessions
@@ -34,6 +37,17 @@
 //! unit square ((0,0) top-left), clamped. Frames are stamped with `now`, the
 //! receipt time. Each sender's frame lists all its sessions down, plus those
 //! that ended.
+//!
+//! A sender has at most [`TuioLimits::sessions_per_frame`] sessions down (the
+//! config's `max_sessions_per_frame`, at most a touch frame's [`MAX_CONTACTS`]);
+//! every further session in each of its frames is refused, counted in
+//! `sessions_refused` and logged at a falling rate. A frame lists at most
+//! [`MAX_ALIVE`] sessions; the `set`/`ptr` messages past that many are refused too.
+//!
+//! # Memory
+//!
+//! Every buffer is sized when the decoder is made (the sender table from the
+//! limits); reading a datagram allocates nothing.
 
 use super::osc::{walk, Message, OscError};
 use crate::input::FrameSink;
@@ -41,16 +55,48 @@ use crate::vocab::{Contact, ContactFlags, ContactId, Micros, TouchFrame, MAX_CON
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// Most senders followed at once.
-pub const MAX_SENDERS: usize = 8;
+/// Senders followed at once unless the config says otherwise (`max_senders`).
+pub const DEFAULT_MAX_SENDERS: usize = 8;
+
+/// The most senders a decoder may be told to follow (each holds a touch frame's
+/// worth of sessions, about 2 KiB).
+pub const MOST_SENDERS: usize = 64;
+
+/// The limits of a TUIO input, from its config entry (`Tuio(max_sessions_per_frame:
+/// …, max_senders: …, max_packets_per_s: …)`).
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct TuioLimits {
+    /// Sessions one sender may have down, that is cursors in one of its frames;
+    /// 1 ..= [`MAX_CONTACTS`].
+    pub sessions_per_frame: usize,
+    /// Senders followed at once; 1 ..= [`MOST_SENDERS`].
+    pub senders: usize,
+    /// Datagrams taken from one peer address (ip:port) per second, in a token
+    /// bucket holding one second's worth; further ones are dropped and counted in
+    /// `flood_dropped` (see the source).
+    pub packets_per_s: u32,
+}
+
+impl Default for TuioLimits {
+    /// 64 sessions a frame (a touch frame's capacity), 8 senders, 4,000 datagrams
+    /// a second from each peer.
+    fn default() -> Self {
+        TuioLimits {
+            sessions_per_frame: MAX_CONTACTS,
+            senders: DEFAULT_MAX_SENDERS,
+            packets_per_s: super::flood::DEFAULT_MAX_PACKETS_PER_S,
+        }
+    }
+}
 
 /// A frame id this much older than the last one applied is a sender that started
 /// again, not a reordered datagram.
 pub const REORDER_WINDOW: i64 = 256;
 
 /// Sessions listed in one alive message that are kept (TUIO 2.0 lists tokens and
-/// bounds too); further ones are ignored and counted as malformed.
-const MAX_ALIVE: usize = 256;
+/// bounds too); further ones are ignored and counted as malformed. Also the most
+/// `set`/`ptr` messages kept from one frame.
+pub const MAX_ALIVE: usize = 256;
 
 /// Bytes of a source name kept (longer names are cut).
 const NAME_BYTES: usize = 64;
@@ -72,13 +118,17 @@ pub struct TuioCounters {
     pub ignored: AtomicU64,
     /// Messages outside TUIO, or unknown 2Dcur commands.
     pub unknown: AtomicU64,
-    /// Frames of a new sender refused because [`MAX_SENDERS`] were followed.
+    /// Frames of a new sender refused because [`TuioLimits::senders`] were
+    /// followed, each with something down.
     pub senders_refused: AtomicU64,
-    /// Sessions not begun because their sender already had [`MAX_CONTACTS`].
+    /// Sessions not begun because their sender already had
+    /// [`TuioLimits::sessions_per_frame`] down (counted in every frame that lists
+    /// them), or because the frame listed more than [`MAX_ALIVE`].
     pub sessions_refused: AtomicU64,
     /// Senders that went silent with sessions down.
     pub timeouts: AtomicU64,
-    /// Datagrams dropped because too many came in one second (see the source).
+    /// Datagrams dropped because their peer sent more than
+    /// [`TuioLimits::packets_per_s`] (see the source).
     pub flood_dropped: AtomicU64,
 }
 
@@ -113,8 +163,19 @@ fn bump(c: &AtomicU64) -> u64 {
     c.fetch_add(1, Ordering::Relaxed) + 1
 }
 
+/// Adds `n` to `c`; the new count when a power of two lies in the counts passed
+/// (time to log, as [`log_rare`] would for one at a time).
+fn bump_by(c: &AtomicU64, n: u64) -> Option<u64> {
+    if n == 0 {
+        return None;
+    }
+    let old = c.fetch_add(n, Ordering::Relaxed);
+    let new = old.saturating_add(n);
+    (1u64 << new.ilog2() > old).then_some(new)
+}
+
 /// Logs a problem with a sender at a falling rate: the 1st, 2nd, 4th, 8th … time.
-fn log_rare(count: u64, peer: SocketAddr, what: &dyn std::fmt::Display) {
+pub(super) fn log_rare(count: u64, peer: SocketAddr, what: &dyn std::fmt::Display) {
     if count.is_power_of_two() {
         log::warn!("tuio from {peer}: {what} (seen {count} times)");
     }
@@ -173,8 +234,11 @@ struct Pending {
     alive: [i64; MAX_ALIVE],
     alive_len: usize,
     alive_seen: bool,
-    sets: [(i64, f32, f32); MAX_CONTACTS],
+    sets: [(i64, f32, f32); MAX_ALIVE],
     sets_len: usize,
+    /// `set`/`ptr` messages past the first [`MAX_ALIVE`] sessions of the frame (not
+    /// kept: refused at the commit).
+    sets_over: usize,
     /// TUIO 2.0: the `frm` frame id.
     frame: Option<i64>,
 }
@@ -188,8 +252,9 @@ impl Default for Pending {
             alive: [0; MAX_ALIVE],
             alive_len: 0,
             alive_seen: false,
-            sets: [(0, 0.0, 0.0); MAX_CONTACTS],
+            sets: [(0, 0.0, 0.0); MAX_ALIVE],
             sets_len: 0,
+            sets_over: 0,
             frame: None,
         }
     }
@@ -202,6 +267,7 @@ impl Pending {
         self.alive_len = 0;
         self.alive_seen = false;
         self.sets_len = 0;
+        self.sets_over = 0;
         self.frame = None;
     }
 
@@ -227,7 +293,9 @@ enum Problem {
 /// Every TUIO sender's sessions, fed datagrams; see the module doc.
 #[derive(Debug)]
 pub struct TuioDecoder {
-    senders: [Sender; MAX_SENDERS],
+    /// [`TuioLimits::senders`] places, made at construction.
+    senders: Box<[Sender]>,
+    limits: TuioLimits,
     pending: Pending,
     out: TouchFrame,
     next_local: u32,
@@ -236,16 +304,39 @@ pub struct TuioDecoder {
 }
 
 impl TuioDecoder {
-    /// A decoder ending the sessions of a sender silent for `timeout`.
+    /// A decoder with the default [`TuioLimits`], ending the sessions of a sender
+    /// silent for `timeout`.
     pub fn new(timeout: Micros, counters: std::sync::Arc<TuioCounters>) -> TuioDecoder {
+        TuioDecoder::with_limits(TuioLimits::default(), timeout, counters)
+    }
+
+    /// A decoder holding to `limits` (sessions per frame clamped to 1 ..=
+    /// [`MAX_CONTACTS`], senders to 1 ..= [`MOST_SENDERS`]), ending the sessions of
+    /// a sender silent for `timeout`. Allocates its sender table here, once.
+    pub fn with_limits(
+        limits: TuioLimits,
+        timeout: Micros,
+        counters: std::sync::Arc<TuioCounters>,
+    ) -> TuioDecoder {
+        let limits = TuioLimits {
+            sessions_per_frame: limits.sessions_per_frame.clamp(1, MAX_CONTACTS),
+            senders: limits.senders.clamp(1, MOST_SENDERS),
+            packets_per_s: limits.packets_per_s,
+        };
         TuioDecoder {
-            senders: std::array::from_fn(|_| Sender::default()),
+            senders: (0..limits.senders).map(|_| Sender::default()).collect(),
+            limits,
             pending: Pending::default(),
             out: TouchFrame::default(),
             next_local: 1,
             timeout,
             counters,
         }
+    }
+
+    /// The limits it holds to.
+    pub fn limits(&self) -> TuioLimits {
+        self.limits
     }
 
     /// The counters.
@@ -281,9 +372,10 @@ impl TuioDecoder {
         self.pending.clear();
         let r = walk(bytes, &mut |m| {
             if let Err(p) = self.message(&m, peer, now, sink) {
+                let address = crate::located::Escaped(m.address);
                 let (counter, what): (&AtomicU64, &dyn std::fmt::Display) = match p {
-                    Problem::BadArgs(what) => (&self.counters.malformed, &Bad(m.address, what)),
-                    Problem::Unknown => (&self.counters.unknown, &Unknown(m.address)),
+                    Problem::BadArgs(what) => (&self.counters.malformed, &Bad(address, what)),
+                    Problem::Unknown => (&self.counters.unknown, &Unknown(address)),
                     Problem::Ignored => {
                         bump(&self.counters.ignored);
                         return;
@@ -400,7 +492,7 @@ impl TuioDecoder {
             None => {
                 // A free place, else one whose sender has nothing down.
                 let free = self.senders.iter().position(|s| !s.used).or_else(|| {
-                    (0..MAX_SENDERS)
+                    (0..self.senders.len())
                         .filter(|&i| self.senders[i].len == 0)
                         .min_by_key(|&i| self.senders[i].last_heard)
                 });
@@ -408,7 +500,10 @@ impl TuioDecoder {
                     log_rare(
                         bump(&self.counters.senders_refused),
                         peer,
-                        &"too many TUIO senders: frame ignored",
+                        &format_args!(
+                            "a new sender while {} (max_senders) hold touches down: its frame is refused",
+                            self.senders.len()
+                        ),
                     );
                     self.pending.clear();
                     return;
@@ -452,6 +547,8 @@ impl TuioDecoder {
             s.len -= 1;
             s.sessions[i] = s.sessions[s.len];
         }
+        let limit = self.limits.sessions_per_frame;
+        let mut refused = p.sets_over as u64;
         for &(id, x, y) in &p.sets[..p.sets_len] {
             if !p.alive(id) {
                 continue;
@@ -459,7 +556,7 @@ impl TuioDecoder {
             if let Some(sess) = s.sessions[..s.len].iter_mut().find(|v| v.tuio == id) {
                 sess.x = x;
                 sess.y = y;
-            } else if s.len < MAX_CONTACTS && out.len() + s.len < MAX_CONTACTS {
+            } else if s.len < limit && out.len() + s.len < MAX_CONTACTS {
                 s.sessions[s.len] = Session {
                     tuio: id,
                     local: self.next_local,
@@ -470,12 +567,14 @@ impl TuioDecoder {
                 s.len += 1;
                 self.next_local = self.next_local.wrapping_add(1).max(1);
             } else {
-                log_rare(
-                    bump(&self.counters.sessions_refused),
-                    peer,
-                    &"more sessions than a frame holds: one ignored",
-                );
+                refused += 1;
             }
+        }
+        if let Some(n) = bump_by(&self.counters.sessions_refused, refused) {
+            log::warn!(
+                "tuio from {peer}: a frame with more sessions than {limit} (max_sessions_per_frame): \
+                 {refused} refused (seen {n} times)"
+            );
         }
         for sess in &s.sessions[..s.len] {
             let flags = if sess.new {
@@ -494,7 +593,7 @@ impl TuioDecoder {
     /// Ends (`CANCELLED`) the sessions of every sender silent for longer than the
     /// timeout at `now`, and forgets those senders.
     pub fn expire(&mut self, now: Micros, sink: &mut dyn FrameSink) {
-        for i in 0..MAX_SENDERS {
+        for i in 0..self.senders.len() {
             let s = &self.senders[i];
             if s.used && now.saturating_since(s.last_heard) > self.timeout {
                 if s.len > 0 {
@@ -510,7 +609,7 @@ impl TuioDecoder {
 
     /// Ends (`CANCELLED`) every session of every sender (the source stops).
     pub fn cancel_all(&mut self, now: Micros, sink: &mut dyn FrameSink) {
-        for i in 0..MAX_SENDERS {
+        for i in 0..self.senders.len() {
             if self.senders[i].used {
                 self.end_sender(i, now, sink);
             }
@@ -569,21 +668,24 @@ fn push_set(p: &mut Pending, id: i64, x: f64, y: f64) -> Result<(), Problem> {
     let (x, y) = (x.clamp(0.0, 1.0) as f32, y.clamp(0.0, 1.0) as f32);
     if let Some(s) = p.sets[..p.sets_len].iter_mut().find(|s| s.0 == id) {
         *s = (id, x, y);
-    } else if p.sets_len < MAX_CONTACTS {
+    } else if p.sets_len < MAX_ALIVE {
         p.sets[p.sets_len] = (id, x, y);
         p.sets_len += 1;
+    } else {
+        // Refused at the commit (counted in `sessions_refused`).
+        p.sets_over += 1;
     }
     Ok(())
 }
 
-struct Bad<'a>(&'a str, &'static str);
+struct Bad<'a>(crate::located::Escaped<'a>, &'static str);
 impl std::fmt::Display for Bad<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "{}: {}: ignored", self.0, self.1)
     }
 }
 
-struct Unknown<'a>(&'a str);
+struct Unknown<'a>(crate::located::Escaped<'a>);
 impl std::fmt::Display for Unknown<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(

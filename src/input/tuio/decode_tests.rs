@@ -305,7 +305,7 @@ fn positions_are_clamped_and_a_full_sender_table_refuses_more() {
     let mut r = Rig::new();
     r.feed(&cur(None, &[(1, 1.5, -0.5)], 1), 1, 0);
     assert_eq!(r.last(), vec![(1, 1.0, 0.0, ContactFlags::DOWN)]);
-    for p in 2..=MAX_SENDERS as u16 {
+    for p in 2..=DEFAULT_MAX_SENDERS as u16 {
         r.feed(&cur(None, &[(1, 0.5, 0.5)], 1), p, 0);
     }
     let n = r.out.len();
@@ -335,4 +335,98 @@ fn cancel_all_ends_every_session() {
         .sum();
     assert_eq!(ended, 2);
     assert_eq!(r.dec.active_contacts(), 0);
+}
+
+#[test]
+fn sessions_over_the_limit_are_refused_and_counted_in_every_frame() {
+    let limits = TuioLimits {
+        sessions_per_frame: 10,
+        ..TuioLimits::default()
+    };
+    let mut r = Rig::new();
+    r.dec = TuioDecoder::with_limits(limits, Micros(1_000_000), Arc::new(TuioCounters::default()));
+    let many: Vec<(i32, f32, f32)> = (1..=25).map(|i| (i, 0.5, 0.5)).collect();
+    r.feed(&cur(None, &many, 1), 1, 0);
+    assert_eq!(r.last().len(), 10);
+    assert_eq!(r.count(|c| &c.sessions_refused), 15);
+    // The same frame again: the 10 move, the 15 are refused again.
+    r.feed(&cur(None, &many, 2), 1, 1);
+    assert_eq!(r.last().len(), 10);
+    assert!(r.last().iter().all(|c| c.3 == ContactFlags::NONE));
+    assert_eq!(r.count(|c| &c.sessions_refused), 30);
+    // One lifts: a place for one more.
+    r.feed(&cur(None, &many[1..], 3), 1, 2);
+    assert_eq!(r.dec.active_contacts(), 10);
+    assert_eq!(r.count(|c| &c.sessions_refused), 44);
+}
+
+#[test]
+fn a_frame_of_many_sessions_keeps_the_limit_and_one_too_long_is_refused() {
+    let mut r = Rig::new();
+    // TUIO 2.0 with 250 pointers: the 64 first begin, 186 are refused.
+    let ptrs: Vec<(i32, f32, f32)> = (1..=250).map(|i| (i, 0.5, 0.5)).collect();
+    r.feed(&tuio2(1, &ptrs, &[]), 1, 0);
+    assert_eq!(r.dec.active_contacts(), MAX_CONTACTS);
+    assert_eq!(r.count(|c| &c.sessions_refused), 186);
+    // An alive list longer than MAX_ALIVE: the frame is malformed, not applied.
+    let ptrs: Vec<(i32, f32, f32)> = (1..=300).map(|i| (i, 0.5, 0.5)).collect();
+    let n = r.out.len();
+    r.feed(&tuio2(2, &ptrs, &[]), 1, 1);
+    assert_eq!(r.out.len(), n);
+    assert_eq!(r.count(|c| &c.malformed), 1);
+    // TUIO 1.1 without an alive list: the sets past MAX_ALIVE are refused too.
+    let mut c = Vec::new();
+    for id in 1..=300 {
+        let mut set = vec![
+            s("set"),
+            OscType::Int(id),
+            OscType::Float(0.5),
+            OscType::Float(0.5),
+        ];
+        set.extend([0.0f32, 0.0, 0.0].map(OscType::Float));
+        c.push(m("/tuio/2Dcur", set));
+    }
+    c.push(m("/tuio/2Dcur", vec![s("fseq"), OscType::Int(1)]));
+    r.feed(&bundle(c), 2, 2);
+    assert_eq!(r.dec.active_contacts(), 2 * MAX_CONTACTS);
+    assert_eq!(
+        r.count(|c| &c.sessions_refused),
+        186 + 300 - MAX_CONTACTS as u64
+    );
+}
+
+#[test]
+fn the_sender_table_is_as_large_as_the_limit() {
+    let limits = TuioLimits {
+        senders: 2,
+        ..TuioLimits::default()
+    };
+    let mut r = Rig::new();
+    r.dec = TuioDecoder::with_limits(limits, Micros(1_000_000), Arc::new(TuioCounters::default()));
+    r.feed(&cur(None, &[(1, 0.5, 0.5)], 1), 1, 0);
+    r.feed(&cur(Some("b@h"), &[(1, 0.5, 0.5)], 1), 1, 0);
+    r.feed(&cur(None, &[(1, 0.5, 0.5)], 1), 3, 0);
+    r.feed(&cur(None, &[(1, 0.5, 0.5)], 2), 3, 0);
+    assert_eq!(r.dec.senders(), 2);
+    assert_eq!(r.dec.active_contacts(), 2);
+    assert_eq!(r.count(|c| &c.senders_refused), 2);
+    // Out-of-range limits are clamped.
+    let d = TuioDecoder::with_limits(
+        TuioLimits {
+            sessions_per_frame: 0,
+            senders: 1_000,
+            packets_per_s: 1,
+        },
+        Micros(1),
+        Arc::new(TuioCounters::default()),
+    );
+    assert_eq!(d.limits().sessions_per_frame, 1);
+    assert_eq!(d.limits().senders, MOST_SENDERS);
+}
+
+#[test]
+fn an_address_with_control_characters_is_logged_escaped() {
+    let text = Unknown(crate::located::Escaped("/x\u{1b}[2J")).to_string();
+    assert!(!text.contains('\u{1b}'), "{text:?}");
+    assert!(text.starts_with("/x\\u{1b}[2J"), "{text:?}");
 }

@@ -1,7 +1,9 @@
 //! The TUIO input's thread shell: a UDP socket read with a timeout, its buffer
-//! reused, datagrams handed to the [`TuioDecoder`].
+//! reused, each datagram let through the [`FloodGate`] of its peer and handed to
+//! the [`TuioDecoder`].
 
-use super::decode::{TuioCounters, TuioDecoder};
+use super::decode::{log_rare, TuioCounters, TuioDecoder, TuioLimits};
+use super::flood::{Admit, FloodGate};
 use crate::input::{reader_timeout_ms, FrameSink};
 use crate::rt::monotonic_now;
 use crate::vocab::Micros;
@@ -12,11 +14,7 @@ use std::time::Duration;
 
 /// Largest datagram read (the UDP maximum); longer ones are cut by the kernel and
 /// then refused by the OSC reader.
-const BUFFER_BYTES: usize = 65_536;
-
-/// Most datagrams taken in one second; further ones that second are dropped and
-/// counted (a flood, not a tracker: reacTIVision sends one per camera frame).
-pub const MAX_PACKETS_PER_S: u64 = 4_000;
+pub const BUFFER_BYTES: usize = 65_536;
 
 /// What the TUIO input is told by the config.
 #[derive(Clone, Debug, PartialEq)]
@@ -25,6 +23,8 @@ pub struct TuioSettings {
     pub listen: SocketAddr,
     /// A sender silent this long has its touches lifted.
     pub timeout: Micros,
+    /// Sessions per frame, senders, datagrams a second per peer.
+    pub limits: TuioLimits,
 }
 
 /// Why the TUIO input could not start.
@@ -46,6 +46,7 @@ pub enum Error {
 pub struct TuioSource {
     socket: UdpSocket,
     decoder: Box<TuioDecoder>,
+    gate: FloodGate,
     buf: Vec<u8>,
     counters: Arc<TuioCounters>,
 }
@@ -65,7 +66,12 @@ impl TuioSource {
         let counters = Arc::new(TuioCounters::default());
         Ok(TuioSource {
             socket,
-            decoder: Box::new(TuioDecoder::new(settings.timeout, Arc::clone(&counters))),
+            decoder: Box::new(TuioDecoder::with_limits(
+                settings.limits,
+                settings.timeout,
+                Arc::clone(&counters),
+            )),
+            gate: FloodGate::new(settings.limits.packets_per_s, settings.limits.senders),
             buf: vec![0; BUFFER_BYTES],
             counters,
         })
@@ -86,8 +92,7 @@ impl TuioSource {
     /// down. Allocates nothing per datagram.
     pub fn run(&mut self, sink: &mut dyn FrameSink, stop: &AtomicBool) {
         let mut timeout_ms = 0;
-        let mut second = monotonic_now();
-        let mut in_second = 0u64;
+        let rate = self.decoder.limits().packets_per_s;
         while !stop.load(Ordering::Relaxed) {
             let want = reader_timeout_ms(sink).max(1);
             if want != timeout_ms {
@@ -101,22 +106,22 @@ impl TuioSource {
             let got = self.socket.recv_from(&mut self.buf);
             let now = monotonic_now();
             match got {
-                Ok((n, peer)) => {
-                    if now.saturating_since(second).0 >= 1_000_000 {
-                        second = now;
-                        in_second = 0;
-                    }
-                    in_second += 1;
-                    if in_second > MAX_PACKETS_PER_S {
-                        let c = self.counters.flood_dropped.fetch_add(1, Ordering::Relaxed) + 1;
-                        if c.is_power_of_two() {
-                            log::warn!("tuio from {peer}: more than {MAX_PACKETS_PER_S} datagrams a second: dropped (seen {c} times)");
-                        }
-                    } else {
+                Ok((n, peer)) => match self.gate.admit(peer, now) {
+                    Admit::Take => {
                         // Errors are counted and logged by the decoder.
                         let _ = self.decoder.packet(&self.buf[..n], peer, now, sink);
                     }
-                }
+                    Admit::Drop => {
+                        let c = self.counters.flood_dropped.fetch_add(1, Ordering::Relaxed) + 1;
+                        log_rare(
+                            c,
+                            peer,
+                            &format_args!(
+                                "more than {rate} datagrams a second (max_packets_per_s): dropped"
+                            ),
+                        );
+                    }
+                },
                 Err(e)
                     if matches!(
                         e.kind(),

@@ -21,7 +21,8 @@
 //! # Files
 //! * `hello`: the version, what a client negotiates ([`ClientSettings`]) and the
 //!   server hello's facts.
-//! * `parse`: client lines ([`parse_client_message`]).
+//! * `parse`: client lines ([`parse_client_message`]); `unique_keys` reads them,
+//!   refusing a key repeated in one object.
 //! * `json`: the hand-written JSON snapshot and mesh.
 //! * `messages`: events, stats, replies and the server hello.
 //! * `frame`: frame kinds, the binary layout's constants and motion codes.
@@ -43,6 +44,7 @@ mod parse;
 mod plan;
 mod scene;
 mod transform;
+mod unique_keys;
 
 pub use binary::{
     decode_snapshot_binary, encode_snapshot_binary, BinarySnapshot, BinaryTouch, DecodeError,

@@ -4,6 +4,7 @@
 use super::hello::{
     ClientSettings, FieldSet, Format, Subscriptions, MAX_LINE_BYTES, PROTOCOL_VERSION,
 };
+use super::unique_keys::{from_slice_unique, ReadError};
 use crate::located::json_kind;
 use crate::vocab::{ClientContact, Command, MAX_CLIENT_CONTACTS, MAX_CLIENT_CONTACT_ID};
 use serde_json::{Map, Value};
@@ -44,6 +45,15 @@ pub enum ProtocolError {
         column: usize,
         /// What the JSON parser expected.
         reason: String,
+    },
+    /// A key appears twice in one object (at any depth): refused rather than
+    /// reading one of the two values.
+    #[error("duplicate key `{key}` at column {column}: a key may appear once in an object")]
+    DuplicateKey {
+        /// The key (shortened, control characters escaped).
+        key: String,
+        /// 1-based column (byte) just past its second occurrence.
+        column: usize,
     },
     /// The line is JSON but not an object.
     #[error("message is {found}, not a JSON object")]
@@ -140,8 +150,11 @@ impl ProtocolError {
 /// Longest JSON rendering of a bad value quoted back in an error message.
 const MAX_QUOTED_CHARS: usize = 40;
 
+/// `v` as JSON, shortened, with every control character escaped: JSON escapes
+/// U+0000–U+001F but not DEL, the C1 controls or the bidirectional overrides, and
+/// the error may be logged or shown on a terminal.
 fn quote(v: &Value) -> String {
-    let s = v.to_string();
+    let s = crate::located::escape(&v.to_string());
     if s.chars().count() <= MAX_QUOTED_CHARS {
         s
     } else {
@@ -174,18 +187,24 @@ pub fn parse_client_message(line: &[u8]) -> Result<ClientMessage, ProtocolError>
             max: MAX_LINE_BYTES,
         });
     }
-    let value: Value = serde_json::from_slice(line).map_err(|e| {
-        let full = e.to_string();
-        // serde_json appends " at line L column C"; the line is always 1 here.
-        let reason = match full.rfind(" at line ") {
-            Some(i) => full[..i].to_string(),
-            None => full,
-        };
-        ProtocolError::NotJson {
-            column: e.column().max(1),
-            reason,
+    let value: Value = match from_slice_unique(line) {
+        Ok(v) => v,
+        Err(ReadError::Duplicate { key, column }) => {
+            return Err(duplicate_key(line, shorten(&key), column))
         }
-    })?;
+        Err(ReadError::Json(e)) => {
+            let full = e.to_string();
+            // serde_json appends " at line L column C"; the line is always 1 here.
+            let reason = match full.rfind(" at line ") {
+                Some(i) => full[..i].to_string(),
+                None => full,
+            };
+            return Err(ProtocolError::NotJson {
+                column: e.column().max(1),
+                reason: crate::located::escape(&reason),
+            });
+        }
+    };
     let mut map = match value {
         Value::Object(m) => m,
         other => {
@@ -199,6 +218,27 @@ pub fn parse_client_message(line: &[u8]) -> Result<ClientMessage, ProtocolError>
         Some("hello") => parse_hello(map).map(ClientMessage::Hello),
         Some("command") => parse_command(map),
         _ => Err(ProtocolError::UnknownType { found: quote(&ty) }),
+    }
+}
+
+/// The error for a duplicate key: answered like any other problem of a command
+/// (not fatal, with its id) when the line is a `command` with a usable id (read
+/// again without the check, on this error path only), else fatal.
+fn duplicate_key(line: &[u8], key: String, column: usize) -> ProtocolError {
+    let detail = ProtocolError::DuplicateKey { key, column };
+    let lenient: Option<Value> = serde_json::from_slice(line).ok();
+    match lenient.as_ref().and_then(Value::as_object) {
+        Some(m) if m.get("type").and_then(Value::as_str) == Some("command") => {
+            let id = match m.get("id") {
+                Some(v @ (Value::Number(_) | Value::String(_))) => v.clone(),
+                _ => Value::Null,
+            };
+            ProtocolError::InCommand {
+                id,
+                detail: Box::new(detail),
+            }
+        }
+        _ => detail,
     }
 }
 
@@ -439,7 +479,8 @@ fn parse_command(mut map: Map<String, Value>) -> Result<ClientMessage, ProtocolE
             id,
             ProtocolError::CommandArguments {
                 name,
-                reason: e.to_string(),
+                // serde quotes the value or key it did not expect as it was sent.
+                reason: crate::located::escape(&e.to_string()),
             },
         )),
     }

@@ -196,6 +196,14 @@ mod tests {
     }
 
     #[test]
+    fn a_word_with_control_characters_is_quoted_escaped() {
+        let e = read_csv("t,id,x,y\n0,1,\u{1b}[2J,0\n", None).unwrap_err();
+        let text = e.to_string();
+        assert!(text.contains("`\\u{1b}[2J`"), "{text}");
+        assert!(!text.contains('\u{1b}'), "{text:?}");
+    }
+
+    #[test]
     fn a_given_step_decides_the_links() {
         let text = "0,1,0,0\n1,1,1,0\n2.6,1,2,0\n";
         let set = read_csv(text, Some(1.0)).unwrap();

@@ -265,8 +265,11 @@ fn json_error(e: &serde_json::Error) -> String {
     }
 }
 
+/// A value of the input as a message shows it: its first 40 characters, control
+/// characters escaped.
 fn clip(s: &str) -> String {
-    s.chars().take(40).collect()
+    let shown: String = s.chars().take(40).collect();
+    crate::located::escape(&shown)
 }
 
 #[cfg(test)]

@@ -7,7 +7,9 @@ pub(super) fn whole(v: f64) -> Option<u64> {
         .then_some(v as u64)
 }
 
-/// A word of the input as a message shows it: its first 24 characters.
+/// A word of the input as a message shows it: its first 24 characters, control
+/// characters escaped.
 pub(super) fn clip(s: &str) -> String {
-    s.chars().take(24).collect()
+    let shown: String = s.chars().take(24).collect();
+    crate::located::escape(&shown)
 }

@@ -116,6 +116,7 @@ fn parse_hex_dump(text: &str) -> Option<Result<Vec<u8>, (usize, String)>> {
                 .unwrap_or(tok);
             if hex.is_empty() || hex.len() > 2 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
                 if any {
+                    let tok = crate::located::Escaped(tok);
                     return Some(Err((i + 1, format!("`{tok}` is not a hex byte"))));
                 }
                 return None;

@@ -236,3 +236,73 @@ proptest! {
         let _ = parse_client_message(s.as_bytes());
     }
 }
+
+#[test]
+fn a_key_twice_is_refused_and_named() {
+    // In a touch's contact: answered with the command's id, the client stays.
+    let e = err(
+        r#"{"type":"command","id":7,"name":"touch","contacts":[{"id":1,"x":0.5,"x":0.9,"y":0.5}]}"#,
+    );
+    assert_eq!(e.command_id(), Some(&Value::from(7)));
+    assert!(!e.is_fatal());
+    let ProtocolError::InCommand { detail, .. } = &e else {
+        panic!("{e:?}")
+    };
+    assert!(
+        matches!(&**detail, ProtocolError::DuplicateKey { key, .. } if key == "x"),
+        "{e:?}"
+    );
+    assert!(
+        e.to_string().starts_with("duplicate key `x` at column "),
+        "{e}"
+    );
+    // At the top of a command, and in a hello (fatal: no command to answer).
+    let e = err(
+        r#"{"type":"command","id":"a","name":"set_formation","formation":"arrow","formation":"ring"}"#,
+    );
+    assert_eq!(e.command_id(), Some(&Value::from("a")));
+    assert!(e.to_string().contains("`formation`"), "{e}");
+    let e = err(r#"{"type":"hello","protocol":1,"protocol":2}"#);
+    assert!(e.is_fatal());
+    assert!(
+        matches!(&e, ProtocolError::DuplicateKey { key, .. } if key == "protocol"),
+        "{e:?}"
+    );
+    // A repeated `type`: which message is it? Fatal.
+    let e = err(r#"{"type":"command","id":1,"type":"hello","protocol":1}"#);
+    assert!(e.is_fatal(), "{e:?}");
+    // The same key in two contacts is not a duplicate.
+    assert!(parse_client_message(
+        br#"{"type":"command","id":1,"name":"touch","contacts":[{"id":1,"x":0.5,"y":0.5},{"id":2,"x":0.1,"y":0.5}]}"#
+    )
+    .is_ok());
+}
+
+#[test]
+fn control_characters_sent_are_escaped_in_every_error() {
+    use crate::located::needs_escape;
+    let nasty = r"\u001b[2J\u009b31m\u202e\u007f";
+    let lines = [
+        format!(r#"{{"type":"command","id":1,"name":"pa{nasty}use"}}"#),
+        format!(r#"{{"type":"command","id":1,"name":"reset","hard":"{nasty}"}}"#),
+        format!(r#"{{"type":"command","id":1,"name":"reset","{nasty}":true}}"#),
+        format!(r#"{{"type":"command","id":1,"name":"pause","{nasty}":true}}"#),
+        format!(
+            r#"{{"type":"command","id":1,"name":"touch","contacts":[{{"id":1,"x":"{nasty}","y":0}}]}}"#
+        ),
+        format!(r#"{{"type":"hello","protocol":1,"format":"{nasty}"}}"#),
+        format!(r#"{{"type":"{nasty}"}}"#),
+        format!(r#"{{"type":"hello","protocol":1,"{nasty}":1}}"#),
+        format!(r#"{{"type":"command","id":1,"name":"touch","{nasty}":1,"{nasty}":2}}"#),
+        format!(
+            r#"{{"type":"command","id":1,"name":"set_formation","formation":"{nasty}","method":"{nasty}"}}"#
+        ),
+    ];
+    for line in &lines {
+        let text = err(line).to_string();
+        assert!(
+            !text.chars().any(needs_escape),
+            "{line}: a control character in {text:?}"
+        );
+    }
+}
