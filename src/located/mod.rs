@@ -1,7 +1,9 @@
 //! Located errors: problems in the text files people hand the daemon (config, scenes,
 //! formation shapes), named by file, line, column and field, and the strict-RON
-//! reading those files share, and the words parsers use for what they found. A
-//! bottom module: it knows no file kind.
+//! reading those files share, the words parsers use for what they found, and the
+//! one reader of named files (regular files only, capped while reading) with the
+//! entry names clients give instead of paths. A bottom module: it knows no file
+//! kind.
 
 mod issue;
 mod json;
@@ -11,5 +13,8 @@ mod strict_ron;
 
 pub use issue::{format_issues, Issue, Located};
 pub use json::json_kind;
-pub use read::{read_capped, ReadError};
+pub use read::{
+    check_entry_name, entry_path, open_regular, read_bytes, read_entry_text, read_text,
+    read_text_stoppable, EntryError, NameError, ReadError, MAX_ENTRY_NAME_BYTES, READ_CHUNK_BYTES,
+};
 pub use strict_ron::{field_positions, locate_field, parse_strict};
