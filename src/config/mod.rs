@@ -47,6 +47,7 @@ pub use model::{
     AssignmentConfig, AssignmentCost, BudgetsConfig, Config, ControlsConfig, CrowdConfig,
     EditConfig, FormationsConfig, LogLevel, MeshConfig, PipelineConfig, PrivilegedPeers,
     RealtimeConfig, SocketConfig, SurfaceConfig, CONFIG_VERSION, DEFAULT_FIELD_STEP_M,
+    EDIT_DIR_NAME,
 };
 pub use outputs::{
     is_loopback, OutputConfig, TuioProfile, TuioVersion, MAX_TUIO_DATAGRAM_BYTES,

@@ -445,10 +445,18 @@ impl EditConfig {
     /// else `$HOME/.local/state/crowdtouch/tracks`; `None` when none of those is
     /// set (clients' `edit.load` and `edit.save` are then refused).
     pub fn resolved_dir(cfg: Option<&EditConfig>) -> Option<PathBuf> {
+        EditConfig::dir_in(cfg, &|k| std::env::var_os(k))
+    }
+
+    /// [`EditConfig::resolved_dir`] with the environment variables of `var`.
+    fn dir_in(
+        cfg: Option<&EditConfig>,
+        var: &dyn Fn(&str) -> Option<std::ffi::OsString>,
+    ) -> Option<PathBuf> {
         if let Some(d) = cfg.and_then(|c| c.dir.as_ref()) {
             return Some(d.clone());
         }
-        let env = |k: &str| std::env::var_os(k).filter(|v| !v.is_empty());
+        let env = |k: &str| var(k).filter(|v| !v.is_empty());
         if let Some(dir) = env("STATE_DIRECTORY") {
             // systemd may list several directories separated by ':'.
             let first = dir
@@ -524,5 +532,56 @@ impl Config {
                 self.loaded_tracks = None;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod edit_dir_tests {
+    use super::*;
+    use std::ffi::OsString;
+
+    fn with<'a>(vars: &'a [(&'a str, &'a str)]) -> impl Fn(&str) -> Option<OsString> + 'a {
+        move |k| {
+            vars.iter()
+                .find(|(n, _)| *n == k)
+                .map(|(_, v)| OsString::from(v))
+        }
+    }
+
+    /// `edit.dir` when set; else under systemd's state directory (the first of
+    /// several), else the XDG state directory, else `~/.local/state`; else none.
+    #[test]
+    fn the_edit_directory_defaults_to_the_state_directory() {
+        let all = [
+            (
+                "STATE_DIRECTORY",
+                "/var/lib/crowdtouch:/var/lib/crowdtouch/tracks",
+            ),
+            ("XDG_STATE_HOME", "/home/k/.state"),
+            ("HOME", "/home/k"),
+        ];
+        let set = EditConfig {
+            tracks: PathBuf::new(),
+            threshold_m: 0.3,
+            dir: Some(PathBuf::from("/srv/tracks")),
+            allow_overwrite: false,
+        };
+        assert_eq!(
+            EditConfig::dir_in(Some(&set), &with(&all)),
+            Some(PathBuf::from("/srv/tracks"))
+        );
+        assert_eq!(
+            EditConfig::dir_in(None, &with(&all)),
+            Some(PathBuf::from("/var/lib/crowdtouch/tracks"))
+        );
+        assert_eq!(
+            EditConfig::dir_in(None, &with(&all[1..])),
+            Some(PathBuf::from("/home/k/.state/crowdtouch/tracks"))
+        );
+        assert_eq!(
+            EditConfig::dir_in(None, &with(&all[2..])),
+            Some(PathBuf::from("/home/k/.local/state/crowdtouch/tracks"))
+        );
+        assert_eq!(EditConfig::dir_in(None, &with(&[])), None);
     }
 }
