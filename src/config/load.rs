@@ -7,7 +7,7 @@ use super::model::Config;
 use crate::crowd::edit::io::{read_tracks, ReadOptions};
 use crate::crowd::formation::FormationLibrary;
 use crate::gesture::recognise::Recogniser;
-use crate::located::{locate_field, parse_strict, read_bytes, read_text};
+use crate::located::{locate_field, parse_strict, read_bytes, read_text, ReadError};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 
@@ -175,7 +175,10 @@ pub const MAX_IMAGE_BYTES: u64 = 16 << 20;
 /// A formation bitmap's bytes (`formations.shapes[i].bitmap.path`, relative to the
 /// config file's directory), at most [`MAX_IMAGE_BYTES`].
 fn read_image(path: &Path) -> Result<Vec<u8>, String> {
-    read_bytes(path, MAX_IMAGE_BYTES).map_err(|e| e.to_string())
+    read_bytes(path, MAX_IMAGE_BYTES).map_err(|e| match e {
+        ReadError::Io { source, .. } => format!("cannot read {}: {source}", path.display()),
+        e => format!("cannot read {e}"),
+    })
 }
 
 /// The gesture library at `path` (the shipped one for `None`), indexed for
