@@ -420,6 +420,51 @@ mod tests {
         })
     }
 
+    /// An `edit.load` read is given up when the daemon stops (the formation thread
+    /// passes `Freshness::stopping` as the stop check), and reads its entry
+    /// otherwise; a FIFO in the edit directory is refused, not waited on.
+    #[test]
+    fn an_edit_load_read_stops_with_the_daemon_and_refuses_a_fifo() {
+        use crate::crowd::edit::io::{write_tracks, Format};
+        use crate::crowd::edit::Track;
+        let dir = tempfile::tempdir().unwrap();
+        let set = TrackSet {
+            tracks: vec![Track::linked(
+                1,
+                vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0)],
+                vec![0.0, 0.5],
+            )],
+            step_s: 0.5,
+        };
+        let o = ReadOptions::default();
+        write_tracks(&set, &dir.path().join("a.jsonl"), Format::Jsonl, &o, false).unwrap();
+        assert!(std::process::Command::new("mkfifo")
+            .arg(dir.path().join("p.csv"))
+            .status()
+            .unwrap()
+            .success());
+        let load = |entry: &str, stopping: bool| {
+            let job = EditFileJob::Load {
+                dir: Arc::from(dir.path()),
+                entry: entry.into(),
+                epoch: 1,
+            };
+            match edit_file(job, 7, serde_json::Value::from(1), &|| stopping) {
+                FormationDone::EditLoaded { result, .. } => result.map(|s| s.tracks.len()),
+                _ => panic!("not a load"),
+            }
+        };
+        assert_eq!(load("a.jsonl", false), Ok(1));
+        assert_eq!(
+            load("a.jsonl", true),
+            Err("a.jsonl: reading stopped (the daemon is stopping)".into())
+        );
+        assert_eq!(
+            load("p.csv", false),
+            Err("p.csv: is a FIFO, not a regular file".into())
+        );
+    }
+
     /// A job of the current generation is solved; one made stale before it was
     /// picked up is given up and said so (not counted as a failure), with the time
     /// since the change; after `stop` the worker ends.
