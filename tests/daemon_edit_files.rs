@@ -212,6 +212,17 @@ fn a_fifo_in_the_edit_directory_is_refused_at_once_and_later_commands_are_answer
     // And the same again: nothing was left busy.
     let (reply, _) = c.command(r#""name":"edit.load","entry":"pipe.csv""#, 3.0);
     assert_eq!(reply["type"], "error", "{reply}");
+    // A 10 GB sparse file: refused by the size it reports, before a byte is read.
+    std::fs::File::create(dir.join("big.jsonl"))
+        .unwrap()
+        .set_len(10_000_000_000)
+        .unwrap();
+    let (reply, took) = c.command(r#""name":"edit.load","entry":"big.jsonl""#, 3.0);
+    assert_eq!(
+        reply["message"], "big.jsonl: 10000000000 bytes, more than the 268435456 byte limit",
+        "{reply}"
+    );
+    assert!(took < Duration::from_secs(1), "refused in {took:?}");
     daemon.shutdown();
 }
 

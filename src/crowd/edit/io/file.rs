@@ -142,6 +142,18 @@ pub fn write_track_entry(
 ) -> Result<(), String> {
     check_entry_name(entry).map_err(|n| format!("not an entry name: {n}"))?;
     let text = io::write(set, Format::Jsonl, opts);
+    // What `edit.load` would take the entry for: a `.csv` or `.txt` name would not
+    // read back.
+    let read_as = io::detect(Path::new(entry), &text);
+    if read_as != Format::Jsonl {
+        return Err(format!(
+            "{entry}: edit.save writes JSON Lines, which a name ending in .{} would not read back as; name it .jsonl",
+            Path::new(entry)
+                .extension()
+                .map(|e| e.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        ));
+    }
     place(&text, &dir.join(entry), overwrite).map_err(|e| match e {
         Placed::Exists => format!("{entry} exists; saving does not replace it"),
         Placed::Io(e) => format!("{entry}: cannot write: {e}"),
@@ -280,6 +292,8 @@ mod entry_tests {
         write_track_entry(&other, dir.path(), "a.jsonl", &o, true).unwrap();
         let back = read_track_entry(dir.path(), "a.jsonl", &o, &|| false).unwrap();
         assert_eq!(back.tracks[0].id, 7);
+        let e = write_track_entry(&set(), dir.path(), "out.csv", &o, false).unwrap_err();
+        assert!(e.starts_with("out.csv: edit.save writes JSON Lines"), "{e}");
         let e = write_track_entry(&set(), dir.path(), "../out.jsonl", &o, true).unwrap_err();
         assert!(e.starts_with("not an entry name"), "{e}");
         assert!(!dir.path().parent().unwrap().join("out.jsonl").exists());
