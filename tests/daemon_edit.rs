@@ -79,8 +79,9 @@ fn a_recorded_drag_through_the_daemon_changes_the_tracks_a_client_receives() {
         &crowdtouch::config::DEFAULT_CONFIG_RON.replace(
             "    pipeline: (",
             &format!(
-                "    edit: Some((tracks: {:?}, threshold_m: 0.3)),\n    pipeline: (",
-                tracks_path.display().to_string()
+                "    edit: Some((tracks: {:?}, threshold_m: 0.3, dir: Some({:?}))),\n    pipeline: (",
+                tracks_path.display().to_string(),
+                dir.path().display().to_string()
             ),
         ),
         Path::new("<test>"),
@@ -110,7 +111,7 @@ fn a_recorded_drag_through_the_daemon_changes_the_tracks_a_client_receives() {
         .contains("nothing to undo"));
     writeln!(
         w,
-        r#"{{"type":"command","id":2,"name":"edit.load","path":"/nonexistent/tracks.jsonl"}}"#
+        r#"{{"type":"command","id":2,"name":"edit.load","entry":"nonexistent.jsonl"}}"#
     )
     .unwrap();
     let e = read_until(&mut r, 3.0, |v| v["type"] == "error");
@@ -118,7 +119,7 @@ fn a_recorded_drag_through_the_daemon_changes_the_tracks_a_client_receives() {
         e.last().unwrap()["message"]
             .as_str()
             .unwrap()
-            .contains("/nonexistent/tracks.jsonl"),
+            .contains("nonexistent.jsonl: no such entry in the edit directory"),
         "{:?}",
         e.last()
     );
@@ -185,8 +186,7 @@ fn a_recorded_drag_through_the_daemon_changes_the_tracks_a_client_receives() {
     let saved = dir.path().join("saved.jsonl");
     writeln!(
         w,
-        r#"{{"type":"command","id":4,"name":"edit.save","path":{:?}}}"#,
-        saved.display().to_string()
+        r#"{{"type":"command","id":4,"name":"edit.save","entry":"saved.jsonl"}}"#
     )
     .unwrap();
     let ack = read_until(&mut r, 5.0, |v| {
@@ -198,8 +198,7 @@ fn a_recorded_drag_through_the_daemon_changes_the_tracks_a_client_receives() {
     // The existing file is not overwritten unless asked.
     writeln!(
         w,
-        r#"{{"type":"command","id":5,"name":"edit.save","path":{:?}}}"#,
-        saved.display().to_string()
+        r#"{{"type":"command","id":5,"name":"edit.save","entry":"saved.jsonl","overwrite":true}}"#
     )
     .unwrap();
     let e = read_until(&mut r, 5.0, |v| {

@@ -240,7 +240,7 @@ fn retime_moves_time_nodes_and_exit_brings_the_crowd_back() {
         .e
         .command(
             &Command::EditSave {
-                path: None,
+                entry: None,
                 overwrite: false
             },
             Micros(s.now)
@@ -441,7 +441,7 @@ fn a_load_while_a_drag_is_out_drops_nothing_until_it_is_read() {
     // The load is asked while the drag is out; its file cannot be read.
     e.command(
         &Command::EditLoad {
-            path: "/nonexistent.jsonl".into(),
+            entry: "nonexistent.jsonl".into(),
         },
         Micros(now),
     )
@@ -467,13 +467,13 @@ fn a_load_while_a_drag_is_out_drops_nothing_until_it_is_read() {
     // A load that is read replaces the tracks; the old drag's result is dropped.
     e.command(
         &Command::EditLoad {
-            path: "/other.jsonl".into(),
+            entry: "other.jsonl".into(),
         },
         Micros(now),
     )
     .unwrap();
     let _ = e.take_edit_file_job();
-    assert!(e.apply_edit_load(e.edit_epoch(), parade(1, 3), "/other.jsonl", Micros(now)));
+    assert!(e.apply_edit_load(e.edit_epoch(), parade(1, 3), "other.jsonl", Micros(now)));
     e.apply_edit(next.run(), Micros(now));
     assert_eq!(
         e.edited_tracks().unwrap().tracks.len(),

@@ -74,6 +74,19 @@ fn unit_sysusers_and_udev_agree() {
         rule_groups.len() >= 2 && rule_groups.iter().all(|g| *g == group),
         "{rule_groups:?}"
     );
+    // The unit's state directory holds the edit directory clients' edit.load and
+    // edit.save use (`edit.dir`'s default: the first one's `tracks`).
+    let state: Vec<&str> = unit_values(&unit, "StateDirectory")[0]
+        .split_whitespace()
+        .collect();
+    assert_eq!(
+        state,
+        [
+            "crowdtouch".to_string(),
+            format!("crowdtouch/{}", crowdtouch::config::EDIT_DIR_NAME)
+        ],
+        "{state:?}"
+    );
     // The unit's runtime directory is where the daemon puts its socket.
     let rundir = unit_values(&unit, "RuntimeDirectory")[0];
     let exec = unit_values(&unit, "ExecStart")[0];

@@ -276,7 +276,7 @@ pub fn calibrate(
     )?;
     match (write, path) {
         (true, Some(p)) => {
-            let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+            let text = crowdtouch::located::read_text(p, crowdtouch::config::MAX_CONFIG_BYTES).map_err(|e| anyhow!("{e}"))?;
             let edited = crowdtouch::config::set_calibration_matrix(&text, index, m).map_err(|e| anyhow!("{}: {e}", p.display()))?;
             let backup = PathBuf::from(format!("{}.bak", p.display()));
             std::fs::write(&backup, &text).with_context(|| format!("writing {}", backup.display()))?;

@@ -107,7 +107,7 @@ pub fn run(a: &EditArgs) -> Result<Outcome> {
         .unwrap_or_default();
     let script = match &a.ops {
         Some(ops) => {
-            let text = crowdtouch::located::read_capped(ops, MAX_SCRIPT_BYTES)
+            let text = crowdtouch::located::read_text(ops, MAX_SCRIPT_BYTES)
                 .map_err(|e| anyhow!("{e}"))?;
             parse_script(&text).map_err(|e| match e {
                 ScriptError::Syntax(i) => {

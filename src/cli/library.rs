@@ -4,7 +4,7 @@
 
 use super::gesture::gestures_in;
 use super::output::outln;
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use crowdtouch::config::Config;
 use crowdtouch::crowd::motion::{build_library, BuildParams, FeatureParams, SHIPPED_SEED};
 use crowdtouch::engine::search_params;
@@ -157,14 +157,8 @@ fn load_with(path: Option<&Path>, policy: LoadPolicy) -> Result<Library> {
     match path {
         None => Ok(shipped()?),
         Some(p) => {
-            let len = std::fs::metadata(p)
-                .with_context(|| format!("{}: cannot read library", p.display()))?
-                .len();
-            if len > MAX_LIBRARY_BYTES as u64 {
-                bail!("{}: {len} bytes, more than a library may have", p.display());
-            }
-            let bytes = std::fs::read(p)
-                .with_context(|| format!("{}: cannot read library", p.display()))?;
+            let bytes = crowdtouch::located::read_bytes(p, MAX_LIBRARY_BYTES as u64)
+                .map_err(|e| anyhow!("cannot read library: {e}"))?;
             Ok(read_library_with(&bytes, &p.display().to_string(), policy)?)
         }
     }

@@ -11,7 +11,7 @@ use crowdtouch::crowd::formation::{
 };
 use crowdtouch::crowd::transform::{ApParams, MoveParams, PairCost, TransformRequest};
 use crowdtouch::geom::Vec2;
-use crowdtouch::located::{format_issues, locate_field, parse_strict, Issue};
+use crowdtouch::located::{format_issues, locate_field, parse_strict, read_bytes, Issue};
 use std::path::Path;
 /// Share of the area the agents' hexagonal cells may fill before the area is
 /// scaled up (a crowd packed tighter has no room to pass through itself).
@@ -244,14 +244,7 @@ pub fn resolve(cfg: &Config, arg: &str) -> Result<Formation> {
 /// The file named, with what is wrong (and where, for RON).
 pub fn load_file(path: &Path) -> Result<Formation> {
     let shown = path.display();
-    let meta = std::fs::metadata(path).with_context(|| format!("{shown}: cannot read"))?;
-    if meta.len() > MAX_FORMATION_FILE_BYTES {
-        bail!(
-            "{shown}: {} bytes, more than the {MAX_FORMATION_FILE_BYTES} byte limit",
-            meta.len()
-        );
-    }
-    let bytes = std::fs::read(path).with_context(|| format!("{shown}: cannot read"))?;
+    let bytes = read_bytes(path, MAX_FORMATION_FILE_BYTES).map_err(|e| anyhow!("{e}"))?;
     if bytes.starts_with(b"\x89PNG") || bytes.starts_with(b"P2") || bytes.starts_with(b"P5") {
         let name = path
             .file_stem()
@@ -274,17 +267,7 @@ pub fn load_file(path: &Path) -> Result<Formation> {
         parse_strict(&text).map_err(|issue| anyhow!("{}", format_issues(path, &[issue])))?;
     let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let read = move |p: &str| -> Result<Vec<u8>, String> {
-        let file = base.join(p);
-        let meta =
-            std::fs::metadata(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))?;
-        if meta.len() > MAX_FORMATION_FILE_BYTES {
-            return Err(format!(
-                "{} is {} bytes, more than the {MAX_FORMATION_FILE_BYTES} byte limit",
-                file.display(),
-                meta.len()
-            ));
-        }
-        std::fs::read(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))
+        read_bytes(&base.join(p), MAX_FORMATION_FILE_BYTES).map_err(|e| e.to_string())
     };
     Formation::from_def(&def, &read).map_err(|e| {
         let field = e.field();

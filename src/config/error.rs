@@ -26,6 +26,10 @@ pub enum Error {
         /// The limit.
         max: u64,
     },
+    /// The file is not a regular file, grew past the cap, is not UTF-8 text, or its
+    /// read was stopped.
+    #[error("cannot read config: {0}")]
+    Unreadable(ReadError),
     /// The text is not a valid config; every problem found is listed.
     #[error("{}", format_issues(.path, .issues))]
     Invalid {
@@ -41,6 +45,7 @@ impl From<ReadError> for Error {
         match e {
             ReadError::Io { path, source } => Error::Io { path, source },
             ReadError::TooLarge { path, size, max } => Error::TooLarge { path, size, max },
+            e => Error::Unreadable(e),
         }
     }
 }

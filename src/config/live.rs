@@ -120,7 +120,7 @@ pub const FIELDS: &[FieldClass] = &[
     ),
     live(
         "edit",
-        "the track file is read again; tracks that changed are loaded (unsaved edits are dropped), the threshold applies from the next edit",
+        "the track file is read again; tracks that changed are loaded (unsaved edits are dropped), the threshold applies from the next edit, `dir` and `allow_overwrite` from the next edit.load or edit.save",
     ),
     live("formations.lambda", "from the next switch"),
     live("formations.shapes", "from the next switch"),
@@ -417,6 +417,8 @@ mod tests {
         c.edit = Some(crate::config::EditConfig {
             tracks: PathBuf::from("/nonexistent/parade.jsonl"),
             threshold_m: 0.4,
+            dir: Some(PathBuf::from("/nonexistent/tracks")),
+            allow_overwrite: true,
         });
         c.pipeline.realtime.priority = Some(30);
         c.pipeline.realtime.input_cpus = Some(vec![0]);

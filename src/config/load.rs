@@ -7,7 +7,7 @@ use super::model::Config;
 use crate::crowd::edit::io::{read_tracks, ReadOptions};
 use crate::crowd::formation::FormationLibrary;
 use crate::gesture::recognise::Recogniser;
-use crate::located::{locate_field, parse_strict, read_capped};
+use crate::located::{locate_field, parse_strict, read_bytes, read_text, ReadError};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 
@@ -42,7 +42,7 @@ impl Config {
     /// # Errors
     /// As [`Config::load`].
     pub fn load_with_text(path: &Path) -> Result<(Config, String), Error> {
-        let text = read_capped(path, MAX_CONFIG_BYTES).map_err(Error::from)?;
+        let text = read_text(path, MAX_CONFIG_BYTES).map_err(Error::from)?;
         let base = path.parent().unwrap_or(Path::new("."));
         Config::from_str_at(&text, path, base).map(|cfg| (cfg, text))
     }
@@ -99,10 +99,12 @@ impl Config {
                         format!("must be in (0, 10] m, got {}", edit.threshold_m),
                     ));
                 }
-                match read_tracks(&edit.tracks, None, &ReadOptions::default()) {
-                    Ok((set, _)) => cfg.loaded_tracks = Some(Arc::new(set)),
-                    Err(e) => problems
-                        .push(("edit.tracks".to_string(), format!("tracks not usable: {e}"))),
+                if !edit.tracks.as_os_str().is_empty() {
+                    match read_tracks(&edit.tracks, None, &ReadOptions::default()) {
+                        Ok((set, _)) => cfg.loaded_tracks = Some(Arc::new(set)),
+                        Err(e) => problems
+                            .push(("edit.tracks".to_string(), format!("tracks not usable: {e}"))),
+                    }
                 }
             }
         }
@@ -138,8 +140,13 @@ impl Config {
             }
         }
         if let Some(e) = &mut self.edit {
-            if e.tracks.is_relative() {
+            if e.tracks.is_relative() && !e.tracks.as_os_str().is_empty() {
                 e.tracks = base.join(&e.tracks);
+            }
+            if let Some(d) = &mut e.dir {
+                if d.is_relative() {
+                    *d = base.join(&*d);
+                }
             }
         }
         if let Some(l) = &mut self.gestures.library {
@@ -168,15 +175,10 @@ pub const MAX_IMAGE_BYTES: u64 = 16 << 20;
 /// A formation bitmap's bytes (`formations.shapes[i].bitmap.path`, relative to the
 /// config file's directory), at most [`MAX_IMAGE_BYTES`].
 fn read_image(path: &Path) -> Result<Vec<u8>, String> {
-    let shown = path.display();
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read {shown}: {e}"))?;
-    if meta.len() > MAX_IMAGE_BYTES {
-        return Err(format!(
-            "{shown} is {} bytes, more than the {MAX_IMAGE_BYTES} byte limit",
-            meta.len()
-        ));
-    }
-    std::fs::read(path).map_err(|e| format!("cannot read {shown}: {e}"))
+    read_bytes(path, MAX_IMAGE_BYTES).map_err(|e| match e {
+        ReadError::Io { source, .. } => format!("cannot read {}: {source}", path.display()),
+        e => format!("cannot read {e}"),
+    })
 }
 
 /// The gesture library at `path` (the shipped one for `None`), indexed for
@@ -210,17 +212,7 @@ pub fn load_recogniser(path: Option<&Path>, band: Option<u32>) -> Result<Arc<Rec
                 .map_err(|e| e.to_string())
         }
         Some(p) => {
-            let len = std::fs::metadata(p)
-                .map_err(|e| format!("{}: cannot read: {e}", p.display()))?
-                .len();
-            if len > MAX_LIBRARY_BYTES as u64 {
-                return Err(format!(
-                    "{}: {len} bytes, more than a library may have ({MAX_LIBRARY_BYTES})",
-                    p.display()
-                ));
-            }
-            let bytes =
-                std::fs::read(p).map_err(|e| format!("{}: cannot read: {e}", p.display()))?;
+            let bytes = read_bytes(p, MAX_LIBRARY_BYTES as u64).map_err(|e| e.to_string())?;
             let name = p.display().to_string();
             let lib = read_library(&bytes, &name).map_err(|e| e.to_string())?;
             Recogniser::new(lib, name, band)

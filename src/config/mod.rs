@@ -48,6 +48,7 @@ pub use model::{
     AssignmentConfig, AssignmentCost, BudgetsConfig, Config, ControlsConfig, CrowdConfig,
     EditConfig, FormationsConfig, LogLevel, MeshConfig, PipelineConfig, PrivilegedPeers,
     RealtimeConfig, SocketConfig, SurfaceConfig, CONFIG_VERSION, DEFAULT_FIELD_STEP_M,
+    EDIT_DIR_NAME,
 };
 pub use outputs::{
     is_loopback, normalize_host, normalize_origin, OutputConfig, TuioProfile, TuioVersion,

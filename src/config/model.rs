@@ -385,9 +385,10 @@ pub struct Config {
     /// indexed with the config.
     #[serde(skip)]
     pub(super) recogniser: Option<Arc<Recogniser>>,
-    /// Edit mode at start (crowd-motion-editing): a track file whose people play as
-    /// the crowd and whose tracks fingers edit. `None`: the crowd; a client can
-    /// still enter edit mode with `edit.load`.
+    /// Edit mode (crowd-motion-editing): a track file at start whose people play
+    /// as the crowd and whose tracks fingers edit, and the directory whose entries
+    /// clients load and save. `None`: the crowd at start, the default directory
+    /// ([`EditConfig::resolved_dir`]), saving never replaces a file.
     #[serde(default)]
     pub edit: Option<EditConfig>,
     /// The tracks of `edit.tracks`, read and validated with the config.
@@ -403,13 +404,26 @@ pub struct Config {
     pub outputs: Vec<OutputConfig>,
 }
 
-/// `edit`: the edit mode at start.
+/// `edit`: the edit mode at start, and where clients' `edit.load` and `edit.save`
+/// read and write.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EditConfig {
-    /// The track file (JSON Lines, CSV `t,id,x,y`, ETH/UCY `frame id x y`),
-    /// relative to the config file.
+    /// The track file to start with (JSON Lines, CSV `t,id,x,y`, ETH/UCY
+    /// `frame id x y`), relative to the config file; empty (the default): start
+    /// with the crowd. Set by the operator: a path, unlike what clients give.
+    #[serde(default)]
     pub tracks: PathBuf,
+    /// The directory whose entries clients name in `edit.load` and `edit.save`
+    /// (names only, never paths), relative to the config file; `None`:
+    /// [`EditConfig::resolved_dir`]'s default under the state directory. The
+    /// daemon creates nothing outside it and does not create it.
+    #[serde(default)]
+    pub dir: Option<PathBuf>,
+    /// Whether `edit.save` with `overwrite: true` may replace an existing entry
+    /// (default false: saving only ever creates new files).
+    #[serde(default)]
+    pub allow_overwrite: bool,
     /// Two people closer than this collide; avoidance after an edit keeps them
     /// apart (m).
     #[serde(default = "default_edit_threshold_m")]
@@ -418,6 +432,52 @@ pub struct EditConfig {
 
 fn default_edit_threshold_m() -> f64 {
     0.3
+}
+
+/// The edit directory's name under the state directory.
+pub const EDIT_DIR_NAME: &str = "tracks";
+
+impl EditConfig {
+    /// The edit directory this config resolves to in the current environment:
+    /// `dir` when set, else `tracks` under the state directory —
+    /// `$STATE_DIRECTORY/tracks` under systemd (`StateDirectory=crowdtouch`:
+    /// `/var/lib/crowdtouch/tracks`), else `$XDG_STATE_HOME/crowdtouch/tracks`,
+    /// else `$HOME/.local/state/crowdtouch/tracks`; `None` when none of those is
+    /// set (clients' `edit.load` and `edit.save` are then refused).
+    pub fn resolved_dir(cfg: Option<&EditConfig>) -> Option<PathBuf> {
+        EditConfig::dir_in(cfg, &|k| std::env::var_os(k))
+    }
+
+    /// [`EditConfig::resolved_dir`] with the environment variables of `var`.
+    fn dir_in(
+        cfg: Option<&EditConfig>,
+        var: &dyn Fn(&str) -> Option<std::ffi::OsString>,
+    ) -> Option<PathBuf> {
+        if let Some(d) = cfg.and_then(|c| c.dir.as_ref()) {
+            return Some(d.clone());
+        }
+        let env = |k: &str| var(k).filter(|v| !v.is_empty());
+        if let Some(dir) = env("STATE_DIRECTORY") {
+            // systemd may list several directories separated by ':'.
+            let first = dir
+                .to_string_lossy()
+                .split(':')
+                .next()
+                .unwrap_or("")
+                .to_string();
+            if !first.is_empty() {
+                return Some(PathBuf::from(first).join(EDIT_DIR_NAME));
+            }
+        }
+        if let Some(d) = env("XDG_STATE_HOME") {
+            return Some(PathBuf::from(d).join("crowdtouch").join(EDIT_DIR_NAME));
+        }
+        env("HOME").map(|h| {
+            PathBuf::from(h)
+                .join(".local/state/crowdtouch")
+                .join(EDIT_DIR_NAME)
+        })
+    }
 }
 
 impl Config {
@@ -453,16 +513,75 @@ impl Config {
     pub fn set_edit_tracks(&mut self, tracks: Option<(Arc<TrackSet>, PathBuf)>, threshold_m: f64) {
         match tracks {
             Some((set, source)) => {
+                let (dir, allow_overwrite) = self
+                    .edit
+                    .as_ref()
+                    .map_or((None, false), |e| (e.dir.clone(), e.allow_overwrite));
                 self.edit = Some(EditConfig {
                     tracks: source,
                     threshold_m,
+                    dir,
+                    allow_overwrite,
                 });
                 self.loaded_tracks = Some(set);
             }
             None => {
-                self.edit = None;
+                if let Some(e) = &mut self.edit {
+                    e.tracks = PathBuf::new();
+                }
                 self.loaded_tracks = None;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod edit_dir_tests {
+    use super::*;
+    use std::ffi::OsString;
+
+    fn with<'a>(vars: &'a [(&'a str, &'a str)]) -> impl Fn(&str) -> Option<OsString> + 'a {
+        move |k| {
+            vars.iter()
+                .find(|(n, _)| *n == k)
+                .map(|(_, v)| OsString::from(v))
+        }
+    }
+
+    /// `edit.dir` when set; else under systemd's state directory (the first of
+    /// several), else the XDG state directory, else `~/.local/state`; else none.
+    #[test]
+    fn the_edit_directory_defaults_to_the_state_directory() {
+        let all = [
+            (
+                "STATE_DIRECTORY",
+                "/var/lib/crowdtouch:/var/lib/crowdtouch/tracks",
+            ),
+            ("XDG_STATE_HOME", "/home/k/.state"),
+            ("HOME", "/home/k"),
+        ];
+        let set = EditConfig {
+            tracks: PathBuf::new(),
+            threshold_m: 0.3,
+            dir: Some(PathBuf::from("/srv/tracks")),
+            allow_overwrite: false,
+        };
+        assert_eq!(
+            EditConfig::dir_in(Some(&set), &with(&all)),
+            Some(PathBuf::from("/srv/tracks"))
+        );
+        assert_eq!(
+            EditConfig::dir_in(None, &with(&all)),
+            Some(PathBuf::from("/var/lib/crowdtouch/tracks"))
+        );
+        assert_eq!(
+            EditConfig::dir_in(None, &with(&all[1..])),
+            Some(PathBuf::from("/home/k/.state/crowdtouch/tracks"))
+        );
+        assert_eq!(
+            EditConfig::dir_in(None, &with(&all[2..])),
+            Some(PathBuf::from("/home/k/.local/state/crowdtouch/tracks"))
+        );
+        assert_eq!(EditConfig::dir_in(None, &with(&[])), None);
     }
 }

@@ -47,9 +47,9 @@ impl Engine {
                 self.set_paused(false, now);
                 Ok(())
             }
-            Command::EditLoad { path } => self.edit_load(path),
+            Command::EditLoad { entry } => self.edit_load(entry),
             Command::EditUndo => self.edit_undo(),
-            Command::EditSave { path, overwrite } => self.edit_save(path.as_deref(), *overwrite),
+            Command::EditSave { entry, overwrite } => self.edit_save(entry.as_deref(), *overwrite),
             Command::EditRetime { at_s, to_s } => self.edit_retime(*at_s, *to_s),
             Command::EditExit => self.edit_exit(now),
             // Turned into touch frames by the control loop before the engine.

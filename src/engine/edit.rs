@@ -71,6 +71,8 @@ impl Engine {
     /// The config's `edit` section: the threshold, and its tracks loaded when they
     /// are not the ones it loaded last (at start, or a reload that changed them).
     pub(super) fn configure_edit(&mut self, cfg: &crate::config::Config, now: Micros) {
+        self.edits.dir = crate::config::EditConfig::resolved_dir(cfg.edit.as_ref()).map(Arc::from);
+        self.edits.allow_overwrite = cfg.edit.as_ref().is_some_and(|e| e.allow_overwrite);
         self.edits.avoid.threshold_m = cfg
             .edit
             .as_ref()
@@ -92,18 +94,32 @@ impl Engine {
         }
     }
 
-    /// `edit.load`: the file is read off the control thread
-    /// ([`take_edit_file_job`](Self::take_edit_file_job)).
-    pub(super) fn edit_load(&mut self, path: &str) -> Result<(), CommandError> {
-        if path.is_empty() {
-            return Err(CommandError::Edit("edit.load needs a `path`".into()));
+    /// The edit directory, or why `edit.load` and `edit.save` cannot be served.
+    fn edit_dir(&self, command: &str) -> Result<Arc<std::path::Path>, CommandError> {
+        self.edits.dir.clone().ok_or_else(|| {
+            CommandError::Edit(format!(
+                "{command}: the daemon has no edit directory (set `edit.dir` in its config)"
+            ))
+        })
+    }
+
+    /// `edit.load`: entry `entry` of the edit directory is read off the control
+    /// thread ([`take_edit_file_job`](Self::take_edit_file_job)); the reader checks
+    /// the name and refuses anything but a regular file.
+    pub(super) fn edit_load(&mut self, entry: &str) -> Result<(), CommandError> {
+        if entry.is_empty() {
+            return Err(CommandError::Edit(
+                "edit.load needs an `entry` (a file of the edit directory)".into(),
+            ));
         }
+        let dir = self.edit_dir("edit.load")?;
         // A newer load or an exit makes this one stale; the tracks being edited
         // go on until the file is read (a failed load leaves them as they are).
         self.edits.load_epoch += 1;
-        self.edits.loading = Some(path.to_string());
+        self.edits.loading = Some(entry.to_string());
         self.edits.file_out = Some(EditFileJob::Load {
-            path: path.to_string(),
+            dir,
+            entry: entry.to_string(),
             epoch: self.edits.load_epoch,
         });
         Ok(())
@@ -121,18 +137,13 @@ impl Engine {
 
     /// A track file read for `edit.load` at `epoch`: installed unless a newer load
     /// or an `edit.exit` came since. Returns whether it was installed.
-    pub fn apply_edit_load(
-        &mut self,
-        epoch: u64,
-        set: TrackSet,
-        source: &str,
-        now: Micros,
-    ) -> bool {
+    pub fn apply_edit_load(&mut self, epoch: u64, set: TrackSet, entry: &str, now: Micros) -> bool {
         if epoch != self.edits.load_epoch {
             return false;
         }
         self.edits.loading = None;
-        self.load_tracks(set, source, now);
+        self.load_tracks(set, entry, now);
+        self.edits.loaded_entry = Some(entry.to_string());
         true
     }
 
@@ -153,6 +164,7 @@ impl Engine {
         self.drop_transforms(crate::vocab::TransformOutcome::Dropped, now);
         // Jobs for the tracks before are stale from here.
         self.edits.epoch += 1;
+        self.edits.loaded_entry = None;
         let set = Arc::new(set);
         let (t0, _) = set.span_s();
         self.edits.mode = Some(Box::new(EditMode {
@@ -211,26 +223,41 @@ impl Engine {
         Ok(())
     }
 
-    /// `edit.save`: written off the control thread; without a path, back to the
-    /// source (only with `overwrite`).
+    /// `edit.save`: written off the control thread into entry `entry` of the edit
+    /// directory; without an entry, back to the entry the tracks were loaded from.
+    /// An existing entry is replaced only with `overwrite` and when the config's
+    /// `edit.allow_overwrite` is on.
     pub(super) fn edit_save(
         &mut self,
-        path: Option<&str>,
+        entry: Option<&str>,
         overwrite: bool,
     ) -> Result<(), CommandError> {
+        if overwrite && !self.edits.allow_overwrite {
+            return Err(CommandError::Edit(
+                "edit.save may not replace a file: the daemon's `edit.allow_overwrite` is off"
+                    .into(),
+            ));
+        }
+        let dir = self.edit_dir("edit.save")?;
+        let loaded = self.edits.loaded_entry.clone();
         let m = self.edit_mode_mut()?;
-        let path = match path {
-            Some(p) if !p.is_empty() => p.to_string(),
-            _ if overwrite => m.source.to_string(),
+        let entry = match (entry, loaded) {
+            (Some(e), _) if !e.is_empty() => e.to_string(),
+            (_, Some(l)) if overwrite => l,
+            (_, None) if overwrite => return Err(CommandError::Edit(
+                "edit.save needs an `entry`: the tracks did not come from the edit directory"
+                    .into(),
+            )),
             _ => return Err(CommandError::Edit(
-                "edit.save needs a `path`, or `overwrite: true` to write back to the loaded file"
+                "edit.save needs an `entry`, or `overwrite: true` to write back to the loaded entry"
                     .into(),
             )),
         };
         let set = Arc::clone(&m.set);
         self.edits.file_out = Some(EditFileJob::Save {
             set,
-            path,
+            dir,
+            entry,
             overwrite,
         });
         Ok(())

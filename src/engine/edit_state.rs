@@ -6,6 +6,7 @@ use crate::crowd::agents::NeighbourGrid;
 use crate::crowd::edit::{Cage, CageParams, SampleRef, TrackSet};
 use crate::geom::Vec2;
 use crate::vocab::{CollisionView, Micros, TracksView};
+use std::path::Path;
 use std::sync::Arc;
 
 /// Edits `edit.undo` can take back.
@@ -45,8 +46,10 @@ pub(super) struct AvoidSettings {
 pub enum EditFileJob {
     /// Read a track file; the result goes to [`Engine::apply_edit_load`](super::Engine::apply_edit_load).
     Load {
-        /// The file.
-        path: String,
+        /// The edit directory (the config's `edit.dir`, resolved).
+        dir: Arc<Path>,
+        /// The entry's name, as the client gave it (checked by the reader).
+        entry: String,
         /// The edit epoch asked at.
         epoch: u64,
     },
@@ -54,9 +57,11 @@ pub enum EditFileJob {
     Save {
         /// The tracks.
         set: Arc<TrackSet>,
-        /// Where.
-        path: String,
-        /// Replace an existing file.
+        /// The edit directory.
+        dir: Arc<Path>,
+        /// The entry's name (checked by the writer).
+        entry: String,
+        /// Replace an existing entry (asked by the client and allowed by the config).
         overwrite: bool,
     },
 }
@@ -201,6 +206,14 @@ pub(super) struct Edits {
     pub(super) load_epoch: u64,
     pub(super) next_grab: u64,
     pub(super) loading: Option<String>,
+    /// The edit directory clients' entries are in (`None`: none configured, and
+    /// no state directory to default to).
+    pub(super) dir: Option<Arc<Path>>,
+    /// Whether `edit.save` may replace an existing entry (`edit.allow_overwrite`).
+    pub(super) allow_overwrite: bool,
+    /// The entry of the edit directory the tracks being edited came from (`None`
+    /// for the config's track file).
+    pub(super) loaded_entry: Option<String>,
     pub(super) file_out: Option<EditFileJob>,
     pub(super) outbox: Option<EditJob>,
     pub(super) tracks_out: Option<Arc<TracksView>>,
@@ -238,6 +251,9 @@ impl Edits {
             load_epoch: 0,
             next_grab: 0,
             loading: None,
+            dir: None,
+            allow_overwrite: false,
+            loaded_entry: None,
             file_out: None,
             outbox: None,
             tracks_out: None,

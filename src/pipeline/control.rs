@@ -424,12 +424,12 @@ impl ControlLoop {
                 FormationDone::EditLoaded {
                     epoch,
                     result,
-                    path,
+                    entry,
                     client,
                     id,
                 } => {
                     let result = result.map(|set| {
-                        let _ = self.engine.apply_edit_load(epoch, *set, &path, now);
+                        let _ = self.engine.apply_edit_load(epoch, *set, &entry, now);
                     });
                     if result.is_err() {
                         self.engine.edit_load_failed(epoch);

@@ -8,7 +8,7 @@
 
 use crate::crowd::assign::{Assigner, Cancel, PointMetric};
 use crate::crowd::control::{PreparedResize, PreparedSwitch, ResizeRequest, SwitchRequest};
-use crate::crowd::edit::io::{read_tracks, write_tracks, Format, ReadOptions};
+use crate::crowd::edit::io::{read_track_entry, write_track_entry, ReadOptions};
 use crate::crowd::edit::TrackSet;
 use crate::crowd::environment::{Planner, PlannerParams, Scene};
 use crate::crowd::motion::{
@@ -23,7 +23,6 @@ use crate::rt::monotonic_now;
 use crate::vocab::ClientId;
 use crate::vocab::Micros;
 use crossbeam_channel::{Receiver, Sender};
-use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 
@@ -261,8 +260,8 @@ pub(super) enum FormationDone {
         epoch: u64,
         /// The tracks, or why not.
         result: Result<Box<TrackSet>, String>,
-        /// The file.
-        path: String,
+        /// The entry of the edit directory.
+        entry: String,
         /// Who asked.
         client: ClientId,
         /// Their id for the command.
@@ -340,7 +339,11 @@ pub(super) fn formation_worker(
             }
             // Edit work: a stale result is told apart by the engine's edit epoch.
             FormationJob::Edit(job) => Some(FormationDone::Edit(Box::new(job.run()))),
-            FormationJob::EditFile { job, client, id } => Some(edit_file(job, client, id)),
+            // A regular file of the edit directory, capped: a FIFO or a device is
+            // refused at the open, and the read gives up when the daemon stops.
+            FormationJob::EditFile { job, client, id } => {
+                Some(edit_file(job, client, id, &|| fresh.stopping()))
+            }
             // Gesture work is short (milliseconds) and not cancelled; a result
             // made stale meanwhile is told apart by the engine's gesture epoch.
             FormationJob::Gesture(job) => match *job {
@@ -366,23 +369,30 @@ pub(super) fn formation_worker(
     }
 }
 
-/// Reads or writes a track file for the edit mode's `edit.load` and `edit.save`.
-fn edit_file(job: EditFileJob, client: ClientId, id: serde_json::Value) -> FormationDone {
+/// Reads or writes an entry of the edit directory for the edit mode's `edit.load`
+/// and `edit.save`; a read polls `stop` every MiB.
+fn edit_file(
+    job: EditFileJob,
+    client: ClientId,
+    id: serde_json::Value,
+    stop: &dyn Fn() -> bool,
+) -> FormationDone {
     let opts = ReadOptions::default();
     match job {
-        EditFileJob::Load { path, epoch } => FormationDone::EditLoaded {
+        EditFileJob::Load { dir, entry, epoch } => FormationDone::EditLoaded {
             epoch,
-            result: read_tracks(Path::new(&path), None, &opts).map(|(set, _)| Box::new(set)),
-            path,
+            result: read_track_entry(&dir, &entry, &opts, stop).map(Box::new),
+            entry,
             client,
             id,
         },
         EditFileJob::Save {
             set,
-            path,
+            dir,
+            entry,
             overwrite,
         } => FormationDone::EditSaved {
-            result: write_tracks(&set, Path::new(&path), Format::Jsonl, &opts, overwrite),
+            result: write_track_entry(&set, &dir, &entry, &opts, overwrite),
             client,
             id,
         },
@@ -408,6 +418,51 @@ mod tests {
             goals: pts(6.0),
             ..AssignJob::default()
         })
+    }
+
+    /// An `edit.load` read is given up when the daemon stops (the formation thread
+    /// passes `Freshness::stopping` as the stop check), and reads its entry
+    /// otherwise; a FIFO in the edit directory is refused, not waited on.
+    #[test]
+    fn an_edit_load_read_stops_with_the_daemon_and_refuses_a_fifo() {
+        use crate::crowd::edit::io::{write_tracks, Format};
+        use crate::crowd::edit::Track;
+        let dir = tempfile::tempdir().unwrap();
+        let set = TrackSet {
+            tracks: vec![Track::linked(
+                1,
+                vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0)],
+                vec![0.0, 0.5],
+            )],
+            step_s: 0.5,
+        };
+        let o = ReadOptions::default();
+        write_tracks(&set, &dir.path().join("a.jsonl"), Format::Jsonl, &o, false).unwrap();
+        assert!(std::process::Command::new("mkfifo")
+            .arg(dir.path().join("p.csv"))
+            .status()
+            .unwrap()
+            .success());
+        let load = |entry: &str, stopping: bool| {
+            let job = EditFileJob::Load {
+                dir: Arc::from(dir.path()),
+                entry: entry.into(),
+                epoch: 1,
+            };
+            match edit_file(job, 7, serde_json::Value::from(1), &|| stopping) {
+                FormationDone::EditLoaded { result, .. } => result.map(|s| s.tracks.len()),
+                _ => panic!("not a load"),
+            }
+        };
+        assert_eq!(load("a.jsonl", false), Ok(1));
+        assert_eq!(
+            load("a.jsonl", true),
+            Err("a.jsonl: reading stopped (the daemon is stopping)".into())
+        );
+        assert_eq!(
+            load("p.csv", false),
+            Err("p.csv: is a FIFO, not a regular file".into())
+        );
     }
 
     /// A job of the current generation is solved; one made stale before it was

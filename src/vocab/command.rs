@@ -34,24 +34,28 @@ pub enum Command {
     Pause,
     /// Unfreeze agents.
     Resume,
-    /// Edit mode (crowd-motion-editing): load a track file from the daemon's
-    /// machine; the crowd plays its people and fingers edit their tracks.
+    /// Edit mode (crowd-motion-editing): load a track file of the daemon's edit
+    /// directory (the config's `edit.dir`); the crowd plays its people and
+    /// fingers edit their tracks. A client names an entry, never a path.
     #[serde(rename = "edit.load")]
     EditLoad {
-        /// The file (JSON Lines, CSV `t,id,x,y` or ETH/UCY `frame id x y`).
-        path: String,
+        /// The entry's name (JSON Lines, CSV `t,id,x,y` or ETH/UCY `frame id x
+        /// y`): `A-Z a-z 0-9 . _ -`, no `/`, not starting with `.`. (The
+        /// message's `name` is the command's.)
+        entry: String,
     },
     /// Take back the last edit.
     #[serde(rename = "edit.undo")]
     EditUndo,
-    /// Write the edited tracks (JSON Lines) to `path`, or back to the file they
-    /// came from when it is a `.jsonl` file and `overwrite` is given.
+    /// Write the edited tracks (JSON Lines) to entry `entry` of the edit
+    /// directory, or back to the entry they were loaded from (`overwrite` and the
+    /// config's `edit.allow_overwrite` both needed to replace a file).
     #[serde(rename = "edit.save")]
     EditSave {
-        /// Where (a new file unless `overwrite`).
+        /// The entry (a new file unless `overwrite`); `None`: the loaded entry.
         #[serde(default)]
-        path: Option<String>,
-        /// Replace an existing file.
+        entry: Option<String>,
+        /// Replace an existing entry (only when the config allows it).
         #[serde(default)]
         overwrite: bool,
     },

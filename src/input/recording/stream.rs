@@ -12,6 +12,7 @@ use super::lines::{LineFault, LineReader, Source};
 use super::shipped::RECORDINGS;
 use super::warnings::{RecordingIssue, Warnings};
 use crate::input::SurfaceInfo;
+use crate::located::ReadError;
 use crate::vocab::{Micros, TouchFrame};
 use std::io::{BufReader, Cursor};
 use std::path::{Path, PathBuf};
@@ -93,9 +94,21 @@ impl RecordingStream {
     /// format (gzip data included), a device that is not supported, no frame
     /// to come ([`RecordingError::Empty`], for the formats that know it then).
     pub fn open(path: &Path, on_bad: OnBadFrame) -> Result<RecordingStream, RecordingError> {
-        let file = std::fs::File::open(path).map_err(|source| RecordingError::Io {
-            path: path.to_path_buf(),
-            source,
+        // A regular file only: a FIFO or a device is refused at the open, never
+        // waited on (its lines would be capped, its open would not).
+        let file = crate::located::open_regular(path).map_err(|e| match e {
+            ReadError::Io { path, source } => RecordingError::Io { path, source },
+            ReadError::NotRegular { path, kind } => RecordingError::Io {
+                path,
+                source: std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    format!("{kind}, not a regular file"),
+                ),
+            },
+            e => RecordingError::Io {
+                path: path.to_path_buf(),
+                source: std::io::Error::other(e.to_string()),
+            },
         })?;
         let src = BufReader::with_capacity(FILE_BUFFER_BYTES, file);
         RecordingStream::from_source(Box::new(src), path, on_bad)

@@ -5,7 +5,7 @@ use super::hello::{
     ClientSettings, FieldSet, Format, Subscriptions, MAX_LINE_BYTES, PROTOCOL_VERSION,
 };
 use super::unique_keys::{from_slice_unique, ReadError};
-use crate::located::json_kind;
+use crate::located::{check_entry_name, json_kind};
 use crate::vocab::{ClientContact, Command, MAX_CLIENT_CONTACTS, MAX_CLIENT_CONTACT_ID};
 use serde_json::{Map, Value};
 
@@ -458,6 +458,14 @@ fn parse_command(mut map: Map<String, Value>) -> Result<ClientMessage, ProtocolE
             }
         }
     }
+    if name == "edit.load" || name == "edit.save" {
+        if let Err(reason) = edit_entry(&name, &map) {
+            return Err(in_command(
+                id,
+                ProtocolError::CommandArguments { name, reason },
+            ));
+        }
+    }
     let keys: Vec<String> = map.keys().cloned().collect();
     match serde_json::from_value::<Command>(Value::Object(map)) {
         Ok(command) => {
@@ -482,6 +490,29 @@ fn parse_command(mut map: Map<String, Value>) -> Result<ClientMessage, ProtocolE
                 // serde quotes the value or key it did not expect as it was sent.
                 reason: crate::located::escape(&e.to_string()),
             },
+        )),
+    }
+}
+
+/// Checks the file arguments of `edit.load` and `edit.save`: a client names an
+/// `entry` of the daemon's edit directory, never a path. The old `path` is refused
+/// saying so; an entry that is not a name ([`check_entry_name`]) is refused
+/// without touching anything.
+fn edit_entry(name: &str, map: &Map<String, Value>) -> Result<(), String> {
+    if map.contains_key("path") {
+        return Err(format!(
+            "`path` is not taken: clients name files of the daemon's edit directory \
+             (`edit.dir` in its config) with `entry`, e.g. {{\"name\":\"{name}\",\"entry\":\"group.jsonl\"}}"
+        ));
+    }
+    match map.get("entry") {
+        Some(Value::String(e)) => {
+            check_entry_name(e).map_err(|e| format!("`entry` is not a file name: {e}"))
+        }
+        Some(Value::Null) | None => Ok(()),
+        Some(v) => Err(format!(
+            "`entry` must be a file name (a string), got {}",
+            quote(v)
         )),
     }
 }

@@ -1,4 +1,4 @@
-//! Loading: a scene file read (size-capped) and parsed strictly, every problem
+//! Loading: a scene file read (a regular file, capped while read) and parsed strictly, every problem
 //! located in the text, and checkpoint formations checked against the config's.
 
 use super::file::SceneFile;
@@ -16,9 +16,10 @@ impl Scene {
     /// [`SceneError::Io`], [`SceneError::TooLarge`] or [`SceneError::Invalid`] with
     /// every problem.
     pub fn load(path: &Path, agent_radius_m: f64) -> Result<Scene, SceneError> {
-        let text = located::read_capped(path, MAX_SCENE_BYTES).map_err(|e| match e {
+        let text = located::read_text(path, MAX_SCENE_BYTES).map_err(|e| match e {
             ReadError::TooLarge { path, size, max } => SceneError::TooLarge { path, size, max },
             ReadError::Io { path, source } => SceneError::Io { path, source },
+            e => SceneError::Unreadable(e),
         })?;
         Scene::from_str(&text, path, agent_radius_m)
     }

@@ -175,6 +175,10 @@ pub enum SceneError {
         /// The limit.
         max: u64,
     },
+    /// The file is not a regular file, grew past the cap, is not UTF-8 text, or its
+    /// read was stopped.
+    #[error("cannot read scene: {0}")]
+    Unreadable(crate::located::ReadError),
     /// The scene is invalid; every problem found is listed, one per line, as
     /// `file:line:col: field: what`.
     #[error("{}", format_issues(.path, .issues))]

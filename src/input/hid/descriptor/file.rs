@@ -57,7 +57,16 @@ pub fn read_descriptor_file(path: &Path) -> Result<Vec<u8>, DescriptorFileError>
         path: path.to_path_buf(),
         source,
     };
-    let file = std::fs::File::open(path).map_err(io)?;
+    // A regular file only (sysfs' report_descriptor is one): a FIFO or a device
+    // is refused at the open.
+    let file = crate::located::open_regular(path).map_err(|e| match e {
+        crate::located::ReadError::Io { source, .. } => io(source),
+        crate::located::ReadError::NotRegular { kind, .. } => io(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("{kind}, not a regular file"),
+        )),
+        e => io(std::io::Error::other(e.to_string())),
+    })?;
     let mut bytes = Vec::new();
     file.take(MAX_DESCRIPTOR_FILE_BYTES + 1)
         .read_to_end(&mut bytes)

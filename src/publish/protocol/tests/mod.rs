@@ -2,6 +2,7 @@
 //! decoder, parser), with the snapshots they share in `fixtures`.
 
 mod binary;
+mod edit_commands;
 mod fixtures;
 mod gesture;
 mod json;
