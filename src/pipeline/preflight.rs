@@ -166,12 +166,39 @@ pub fn preflight(cfg: &Config, what: &Preflight<'_>) -> Vec<Finding> {
             }
         }
     }
+    if let Some(f) = edit_dir_finding(cfg) {
+        out.push(f);
+    }
     if let Some(cpus) = &cfg.pipeline.realtime.input_cpus {
         if let Some(online) = online_cpus() {
             out.extend(cpu_findings(cpus, &online));
         }
     }
     out
+}
+
+/// A warning when the config names an edit directory that is not there: the
+/// daemon starts, but clients' `edit.load` and `edit.save` are refused until it
+/// exists (the daemon creates nothing outside it, and not it either). The default
+/// directory under `$STATE_DIRECTORY` is the unit's to create, so only a `dir` the
+/// config sets is checked.
+fn edit_dir_finding(cfg: &Config) -> Option<Finding> {
+    let dir = cfg.edit.as_ref()?.dir.as_ref()?;
+    let what = match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => return None,
+        Ok(_) => "is not a directory",
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => "does not exist",
+        Err(_) => "cannot be read by this user",
+    };
+    Some(finding(
+        "edit.dir",
+        Severity::Warning,
+        format!(
+            "{} {what}: clients' edit.load and edit.save are refused until it is a directory \
+             the daemon's user may read (and write, to save)",
+            dir.display()
+        ),
+    ))
 }
 
 fn finding(field: &str, severity: Severity, message: String) -> Finding {
@@ -290,5 +317,39 @@ mod tests {
         let f = cpu_findings(&[99], &[0, 1]);
         assert!(f[0].message.ends_with("none of the listed CPUs is, so the input thread is not pinned (it runs on any CPU)"), "{}", f[0].message);
         assert!(cpu_findings(&[0, 1], &[0, 1]).is_empty());
+    }
+
+    #[test]
+    fn an_edit_directory_the_config_sets_is_warned_about_unless_it_is_one() {
+        use crate::config::{EditConfig, DEFAULT_CONFIG_RON};
+        let mut cfg = Config::from_str(DEFAULT_CONFIG_RON, Path::new("c")).expect("default");
+        assert!(
+            edit_dir_finding(&cfg).is_none(),
+            "no edit entry: nothing said"
+        );
+        let tmp = std::env::temp_dir().join(format!("ct-preflight-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&tmp);
+        let mut edit = |dir: &Path| {
+            cfg.edit = Some(EditConfig {
+                tracks: Default::default(),
+                dir: Some(dir.to_path_buf()),
+                allow_overwrite: false,
+                threshold_m: 0.3,
+            });
+            edit_dir_finding(&cfg)
+        };
+        let f = edit(&tmp).expect("a missing directory is warned about");
+        assert_eq!(
+            (f.field.as_str(), f.severity),
+            ("edit.dir", Severity::Warning)
+        );
+        assert!(f.message.contains("does not exist"), "{}", f.message);
+        std::fs::write(&tmp, b"").unwrap();
+        let f = edit(&tmp).expect("a file is warned about");
+        assert!(f.message.contains("is not a directory"), "{}", f.message);
+        std::fs::remove_file(&tmp).unwrap();
+        std::fs::create_dir(&tmp).unwrap();
+        assert!(edit(&tmp).is_none());
+        std::fs::remove_dir(&tmp).unwrap();
     }
 }
