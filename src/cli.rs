@@ -194,6 +194,11 @@ struct DemoArgs {
     /// The token WebSocket clients must present with --http (16+ characters).
     #[arg(long, requires = "http")]
     token: Option<String>,
+    /// A host name the viewer is opened by (`kiosk-7` or `kiosk-7:8080`), besides
+    /// the listen address (and `localhost` on loopback); repeatable. Requests
+    /// naming any other host are refused (421): the guard against DNS rebinding.
+    #[arg(long = "host", value_name = "NAME", requires = "http")]
+    hosts: Vec<String>,
 }
 
 #[derive(Args, Debug)]
@@ -543,7 +548,8 @@ fn demo(a: DemoArgs) -> Result<()> {
         }
     }
     if let Some(addr) = &a.http {
-        cfg.outputs.push(demo_websocket(addr, a.token.clone())?);
+        cfg.outputs
+            .push(demo_websocket(addr, a.token.clone(), &a.hosts)?);
     }
     let daemon = start_daemon(cfg, a.socket)?;
     // From here on, every way out (a line that cannot be written included) stops
@@ -560,6 +566,15 @@ fn demo(a: DemoArgs) -> Result<()> {
             .map(|t| format!("?token={t}"))
             .unwrap_or_default();
         outln!("  viewer:     http://{addr}/{query}")?;
+        for h in &a.hosts {
+            let port = addr.rsplit_once(':').map_or("", |(_, p)| p);
+            let shown = if h.contains(':') && !h.ends_with(']') {
+                h.clone()
+            } else {
+                format!("{h}:{port}")
+            };
+            outln!("              http://{shown}/{query}")?;
+        }
     }
     outln!("  watch it:   crowdtouch watch --socket {path}   (or: cargo run --release -- watch --socket {path})")?;
     outln!("  raw stream: socat - UNIX-CONNECT:{path}")?;
@@ -590,8 +605,17 @@ fn demo_tuio(target: &str) -> config::OutputConfig {
     }
 }
 
-/// `demo --http ADDR [--token T]`: a privileged WebSocket output with the viewer.
-fn demo_websocket(addr: &str, token: Option<String>) -> Result<config::OutputConfig> {
+/// `demo --http ADDR [--token T] [--host NAME]...`: a privileged WebSocket output
+/// with the viewer.
+fn demo_websocket(
+    addr: &str,
+    token: Option<String>,
+    hosts: &[String],
+) -> Result<config::OutputConfig> {
+    let hosts = hosts
+        .iter()
+        .map(|h| config::normalize_host(h).map_err(|why| anyhow::anyhow!("--host {h}: {why}")))
+        .collect::<Result<Vec<_>>>()?;
     let parsed: std::net::SocketAddr = addr
         .parse()
         .map_err(|_| anyhow::anyhow!("--http {addr}: not ip:port, like 127.0.0.1:8080"))?;
@@ -616,7 +640,7 @@ fn demo_websocket(addr: &str, token: Option<String>) -> Result<config::OutputCon
         // are clients that send no Origin; pages of other sites are refused.
         origins: vec![],
         privileged_origins: vec![],
-        hosts: vec![],
+        hosts,
     })
 }
 

@@ -867,3 +867,49 @@ fn protocol_errors_close_with_1002_1007_and_1009() {
     }
     assert!(bad >= 8, "bad frames counted: {bad}");
 }
+
+/// `demo --http ADDR --host NAME`: the viewer answers for the name given and the
+/// listen address, and refuses any other host (421).
+#[test]
+fn demo_answers_for_the_hosts_it_is_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let addr = free_addr();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_crowdtouch"))
+        .args(["demo", "--agents", "20", "--seconds", "30", "--socket"])
+        .arg(dir.path().join("ct.sock"))
+        .args(["--http", &addr.to_string(), "--host", "kiosk-7"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let up = Instant::now() + Duration::from_secs(20);
+    while TcpStream::connect(addr).is_err() && Instant::now() < up {
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let port = addr.port();
+    let page = |host: &str| {
+        http(
+            addr,
+            format!("GET / HTTP/1.1\r\nHost: {host}\r\n\r\n").as_bytes(),
+        )
+        .0
+    };
+    let (named, listen, other) = (
+        page(&format!("kiosk-7:{port}")),
+        page(&format!("127.0.0.1:{port}")),
+        page(&format!("evil.example:{port}")),
+    );
+    let _ = child.kill();
+    let _ = child.wait();
+    assert_eq!((named, listen, other), (200, 200, 421));
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_crowdtouch"))
+        .args(["demo", "--http", "127.0.0.1:0", "--host", "http://kiosk-7/"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--host http://kiosk-7/: a host is name or name:port"),
+        "{err}"
+    );
+}
