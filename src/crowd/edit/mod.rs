@@ -46,7 +46,8 @@ pub use cage::{
     PAPER_ALPHA, PAPER_BETA, PAPER_K,
 };
 pub use collide::{
-    collisions_all_pairs, detect, Approach, CollideError, CollisionEvent, Collisions, PairCollision,
+    collisions_all_pairs, detect, detect_keeping, Approach, Cluster, CollideError, CollisionEvent,
+    Collisions, PairCollision, DEFAULT_KEEP,
 };
 pub use error::EditError;
 pub use hull::{
