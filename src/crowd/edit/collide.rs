@@ -839,6 +839,11 @@ fn cell_key(x: i64, y: i64) -> u64 {
     ((x as u32 as u64) << 32) | (y as u32 as u64)
 }
 
+/// The bucket of a cell key among `nb` (a power of two).
+fn bucket_of(key: u64, nb: usize) -> usize {
+    (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & (nb - 1)
+}
+
 fn overlap(a: &(Vec2, Vec2), b: &(Vec2, Vec2)) -> bool {
     a.0.x <= b.1.x && b.0.x <= a.1.x && a.0.y <= b.1.y && b.0.y <= a.1.y
 }
@@ -900,7 +905,9 @@ fn detect_among(
     }
     drop(fill);
 
-    // Each slab's grid: cell size, entries sorted by cell, oversized pieces.
+    // Each slab's grid: cell size, entries gathered by a counting sort into
+    // buckets hashed from their cell (a bucket may hold several cells: the box
+    // test drops the extra pieces), oversized pieces apart.
     let half = 0.5 * d + BOX_MARGIN_M;
     let slack = 1e-6 * width + 1e-12 * (t_lo.abs() + t_hi.abs());
     let slab_t = |s: usize| {
@@ -908,16 +915,21 @@ fn detect_among(
         (s0, s0 + width)
     };
     let mut cell_of_slab = vec![d; n_slabs];
-    let mut grid_start = vec![0usize; n_slabs + 1];
+    // Slab s: its pieces from grid_base[s], its buckets' starts (relative to that)
+    // at bucket_base[s]..=bucket_base[s] + buckets[s].
+    let mut grid_base = vec![0usize; n_slabs];
+    let mut bucket_base = vec![0usize; n_slabs];
+    let mut buckets = vec![0usize; n_slabs];
     let mut over_start = vec![0usize; n_slabs + 1];
-    let mut grid_keys: Vec<u64> = Vec::new();
+    let mut bucket_start: Vec<u32> = Vec::new();
     let mut grid_pieces: Vec<u32> = Vec::new();
     let mut over: Vec<u32> = Vec::new();
     let mut entries: Vec<(u64, u32)> = Vec::new();
     for s in 0..n_slabs {
         let members = &in_slab[count[s]..count[s + 1]];
-        grid_start[s] = grid_keys.len();
         over_start[s] = over.len();
+        grid_base[s] = grid_pieces.len();
+        bucket_base[s] = bucket_start.len();
         if members.len() < 2 {
             continue;
         }
@@ -945,17 +957,39 @@ fn detect_among(
                 }
             }
         }
-        entries.sort_unstable();
-        grid_keys.extend(entries.iter().map(|e| e.0));
-        grid_pieces.extend(entries.iter().map(|e| e.1));
+        let nb = entries.len().next_power_of_two().max(2);
+        buckets[s] = nb;
+        let first = bucket_start.len();
+        bucket_start.resize(first + nb + 1, 0);
+        let starts_of = &mut bucket_start[first..];
+        for &(key, _) in &entries {
+            starts_of[bucket_of(key, nb) + 1] += 1;
+        }
+        for b in 0..nb {
+            starts_of[b + 1] += starts_of[b];
+        }
+        let base = grid_pieces.len();
+        grid_pieces.resize(base + entries.len(), 0);
+        // Members come in piece order, so each bucket's pieces ascend.
+        for &(key, i) in &entries {
+            let b = bucket_of(key, nb);
+            let at = starts_of[b] as usize;
+            grid_pieces[base + at] = i;
+            starts_of[b] += 1;
+        }
+        // The fill moved every start to its bucket's end: shift back.
+        for b in (1..=nb).rev() {
+            starts_of[b] = starts_of[b - 1];
+        }
+        starts_of[0] = 0;
     }
-    grid_start[n_slabs] = grid_keys.len();
     over_start[n_slabs] = over.len();
     drop(entries);
 
     // Person by person: the later (or unmarked) people's pieces near each piece.
     // A pair (q, r) is looked up from q when q is a querying person and r is not, or
-    // both are and q < r.
+    // both are and q < r. In a slab, a pair of pieces entered in cells is taken only
+    // in the cell holding the low corner of their boxes' overlap, so once.
     let queries = |k: usize| mult[k] > 0 && marked(k);
     let mut candidates: Vec<(u32, u32, u32)> = Vec::new();
     let mut hits: Vec<Hit> = Vec::new();
@@ -966,6 +1000,12 @@ fn detect_among(
         }
         candidates.clear();
         let accept = |r: usize| r != q && (!queries(r) || r > q);
+        // Without marks only later people are partners: their pieces come after q's.
+        let first_partner = if who.is_none() {
+            starts[q + 1] as u32
+        } else {
+            0
+        };
         for i in starts[q]..starts[q + 1] {
             let p = &pieces[i];
             for s in slab_of(p.t0)..=slab_of(p.t1) {
@@ -975,36 +1015,48 @@ fn detect_among(
                 }
                 let (s0, s1) = slab_t(s);
                 let bi = slab_box(p, s0, s1, slack, half);
-                let consider = |j: u32, candidates: &mut Vec<(u32, u32, u32)>| {
-                    let pj = &pieces[j as usize];
-                    if accept(pj.track as usize) && overlap(&bi, &slab_box(pj, s0, s1, slack, half))
-                    {
-                        candidates.push((pj.track, i as u32, j));
-                    }
-                };
-                match cell_range(&bi, cell_of_slab[s]) {
+                let cell = cell_of_slab[s];
+                let consider =
+                    |j: u32, in_cell: Option<(i64, i64)>, out: &mut Vec<(u32, u32, u32)>| {
+                        let pj = &pieces[j as usize];
+                        if !accept(pj.track as usize) {
+                            return;
+                        }
+                        let bj = slab_box(pj, s0, s1, slack, half);
+                        if !overlap(&bi, &bj) {
+                            return;
+                        }
+                        if let Some((x, y)) = in_cell {
+                            let cx = (bi.0.x.max(bj.0.x) / cell).floor() as i64;
+                            let cy = (bi.0.y.max(bj.0.y) / cell).floor() as i64;
+                            if (cx, cy) != (x, y) {
+                                return;
+                            }
+                        }
+                        out.push((pj.track, i as u32, j));
+                    };
+                match cell_range(&bi, cell) {
                     None => {
                         for &j in members {
-                            consider(j, &mut candidates);
+                            consider(j, None, &mut candidates);
                         }
                     }
                     Some((x0, x1, y0, y1)) => {
-                        let keys = &grid_keys[grid_start[s]..grid_start[s + 1]];
-                        let ids = &grid_pieces[grid_start[s]..grid_start[s + 1]];
+                        let nb = buckets[s];
+                        let bs = &bucket_start[bucket_base[s]..=bucket_base[s] + nb];
+                        let ids = &grid_pieces[grid_base[s]..];
                         for x in x0..=x1 {
                             for y in y0..=y1 {
-                                let key = cell_key(x, y);
-                                let from = keys.partition_point(|&k| k < key);
-                                for (&k, &j) in keys[from..].iter().zip(&ids[from..]) {
-                                    if k != key {
-                                        break;
-                                    }
-                                    consider(j, &mut candidates);
+                                let b = bucket_of(cell_key(x, y), nb);
+                                let bucket = &ids[bs[b] as usize..bs[b + 1] as usize];
+                                let from = bucket.partition_point(|&j| j < first_partner);
+                                for &j in &bucket[from..] {
+                                    consider(j, Some((x, y)), &mut candidates);
                                 }
                             }
                         }
                         for &j in &over[over_start[s]..over_start[s + 1]] {
-                            consider(j, &mut candidates);
+                            consider(j, None, &mut candidates);
                         }
                     }
                 }

@@ -198,6 +198,18 @@ fn bad_threshold_and_tracks_are_errors() {
     let mut bad = s.clone();
     bad.tracks[0].times_s[1] = 0.0;
     assert!(matches!(detect(&bad, 0.3), Err(CollideError::Tracks(_))));
+    // Near 1e308 m a place printed as (inf, -inf); beyond ±1e6 m is refused.
+    let far = set(vec![
+        line(1, v(1e308, -1e308), v(1e308, -1e308), 0.0, 1.0),
+        line(2, v(1e308, -1e308), v(-1e308, 1e308), 0.0, 1.0),
+    ]);
+    assert!(matches!(
+        detect(&far, 0.3),
+        Err(CollideError::Tracks(TrackError::OutOfRange {
+            id: 1,
+            sample: 0
+        }))
+    ));
     assert_eq!(detect(&set(vec![]), 0.3).unwrap().pair_count(), 0);
 }
 

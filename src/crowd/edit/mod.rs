@@ -60,4 +60,7 @@ pub use record::{RecordError, TrackRecorder};
 pub use script::{parse_script, Op, OpDef, Script, ScriptError, SelectSpec, MAX_LIST, MAX_OPS};
 pub use select::{point_in_polygon, SampleRef, Selection, SelectionQuery};
 pub use temporal::{retime, RetimeParams, RetimeReport, TimeDrag};
-pub use tracks::{Track, TrackError, TrackSet, MAX_SAMPLES};
+pub use tracks::{
+    coordinate_problem, time_problem, Track, TrackError, TrackSet, MAX_COORDINATE_M, MAX_SAMPLES,
+    MAX_TIME_S, MIN_SAMPLE_STEP_S,
+};
