@@ -443,12 +443,19 @@ impl Piece {
 }
 
 /// The pieces of the tracks `include` keeps (every track when `None`), grouped by
-/// track and in time order; `starts[k]..starts[k+1]` are track `k`'s (empty for a
-/// track left out).
-fn pieces(set: &TrackSet, include: Option<&[u32]>) -> (Vec<Piece>, Vec<usize>) {
+/// track, the tracks in `order` (by index when `None`), each track's in time order;
+/// `starts[r]..starts[r+1]` are the pieces of the `r`-th track of `order` (empty
+/// for a track left out).
+fn pieces(
+    set: &TrackSet,
+    include: Option<&[u32]>,
+    order: Option<&[u32]>,
+) -> (Vec<Piece>, Vec<usize>) {
     let mut out = Vec::with_capacity(set.samples());
     let mut starts = Vec::with_capacity(set.tracks.len() + 1);
-    for (k, tr) in set.tracks.iter().enumerate() {
+    for pos in 0..set.tracks.len() {
+        let k = order.map_or(pos, |o| o[pos] as usize);
+        let tr = &set.tracks[k];
         starts.push(out.len());
         if include.is_some_and(|m| m[k] == 0) {
             continue;
@@ -642,7 +649,7 @@ pub(super) fn collisions_involving(
 pub fn collisions_all_pairs(set: &TrackSet, threshold_m: f64) -> Result<Collisions, CollideError> {
     check_threshold(threshold_m)?;
     set.validate()?;
-    let (pieces, starts) = pieces(set, None);
+    let (pieces, starts) = pieces(set, None, None);
     let mut tally = Tally::new(DEFAULT_KEEP);
     let mut hits = Vec::new();
     let mut events = Vec::new();
@@ -809,6 +816,40 @@ fn classes(set: &TrackSet) -> (Vec<u32>, Vec<Cluster>) {
     (mult, clusters)
 }
 
+/// The people in Z (Morton) order of their first place, quantised to 2^16 steps
+/// each way across the box of all first places (ties by index).
+fn spatial_order(set: &TrackSet) -> Vec<u32> {
+    let mut lo = Vec2::repeat(f64::INFINITY);
+    let mut hi = Vec2::repeat(f64::NEG_INFINITY);
+    for t in &set.tracks {
+        lo = lo.inf(&t.points[0]);
+        hi = hi.sup(&t.points[0]);
+    }
+    let span = (hi - lo).max().max(f64::MIN_POSITIVE);
+    let spread = |v: u32| {
+        let mut v = v as u64 & 0xffff;
+        v = (v | (v << 8)) & 0x00ff_00ff;
+        v = (v | (v << 4)) & 0x0f0f_0f0f;
+        v = (v | (v << 2)) & 0x3333_3333;
+        (v | (v << 1)) & 0x5555_5555
+    };
+    let mut keyed: Vec<(u64, u32)> = set
+        .tracks
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            let q = (t.points[0] - lo) / span * 65535.0;
+            let (x, y) = (
+                q.x.clamp(0.0, 65535.0) as u32,
+                q.y.clamp(0.0, 65535.0) as u32,
+            );
+            (spread(x) | (spread(y) << 1), k as u32)
+        })
+        .collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, k)| k).collect()
+}
+
 /// A piece's box over a slab `[s0, s1]` (its positions then, widened in time by
 /// `slack` against rounding), grown by `half` on every side.
 fn slab_box(p: &Piece, s0: f64, s1: f64, slack: f64, half: f64) -> (Vec2, Vec2) {
@@ -844,6 +885,58 @@ fn bucket_of(key: u64, nb: usize) -> usize {
     (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & (nb - 1)
 }
 
+/// How one slab's cells map to buckets: row by row over the cells' bounding box
+/// when it holds no more than [`DENSE_CELLS_PER_ENTRY`] cells per entry (neighbouring
+/// cells in neighbouring buckets: people near each other read memory near each
+/// other), else hashed into a power of two of buckets (a bucket may then hold
+/// several cells: the box test drops the extra pieces).
+#[derive(Copy, Clone, Debug, Default)]
+struct SlabGrid {
+    cell: f64,
+    x0: i64,
+    y0: i64,
+    w: i64,
+    h: i64,
+    buckets: usize,
+    dense: bool,
+}
+
+/// See [`SlabGrid`].
+const DENSE_CELLS_PER_ENTRY: i64 = 4;
+
+impl SlabGrid {
+    fn new(cell: f64, (x0, x1, y0, y1): (i64, i64, i64, i64), entries: usize) -> SlabGrid {
+        let w = x1.saturating_sub(x0).saturating_add(1).max(1);
+        let h = y1.saturating_sub(y0).saturating_add(1).max(1);
+        let limit = (entries as i64)
+            .max(16)
+            .saturating_mul(DENSE_CELLS_PER_ENTRY);
+        let dense = entries > 0 && w.checked_mul(h).is_some_and(|c| c <= limit);
+        SlabGrid {
+            cell,
+            x0,
+            y0,
+            w,
+            h,
+            buckets: if dense {
+                (w * h) as usize
+            } else {
+                entries.next_power_of_two().max(2)
+            },
+            dense,
+        }
+    }
+
+    fn bucket(&self, x: i64, y: i64) -> Option<usize> {
+        if self.dense {
+            let (dx, dy) = (x - self.x0, y - self.y0);
+            (dx >= 0 && dy >= 0 && dx < self.w && dy < self.h).then(|| (dy * self.w + dx) as usize)
+        } else {
+            Some(bucket_of(cell_key(x, y), self.buckets))
+        }
+    }
+}
+
 fn overlap(a: &(Vec2, Vec2), b: &(Vec2, Vec2)) -> bool {
     a.0.x <= b.1.x && b.0.x <= a.1.x && a.0.y <= b.1.y && b.0.y <= a.1.y
 }
@@ -872,7 +965,14 @@ fn detect_among(
             mult
         }
     };
-    let (pieces, starts) = pieces(set, Some(&mult));
+    // People in Z order of their first place, so that people near each other look
+    // up the same cells and their pieces lie together in memory.
+    let order = spatial_order(set);
+    let mut rank_of = vec![0u32; n];
+    for (r, &k) in order.iter().enumerate() {
+        rank_of[k as usize] = r as u32;
+    }
+    let (pieces, starts) = pieces(set, Some(&mult), Some(&order));
     if pieces.is_empty() {
         return Ok(tally.finish(d));
     }
@@ -914,17 +1014,16 @@ fn detect_among(
         let s0 = t_lo + s as f64 * width;
         (s0, s0 + width)
     };
-    let mut cell_of_slab = vec![d; n_slabs];
+    let mut grids = vec![SlabGrid::default(); n_slabs];
     // Slab s: its pieces from grid_base[s], its buckets' starts (relative to that)
-    // at bucket_base[s]..=bucket_base[s] + buckets[s].
+    // at bucket_base[s]..=bucket_base[s] + grids[s].buckets.
     let mut grid_base = vec![0usize; n_slabs];
     let mut bucket_base = vec![0usize; n_slabs];
-    let mut buckets = vec![0usize; n_slabs];
     let mut over_start = vec![0usize; n_slabs + 1];
     let mut bucket_start: Vec<u32> = Vec::new();
     let mut grid_pieces: Vec<u32> = Vec::new();
     let mut over: Vec<u32> = Vec::new();
-    let mut entries: Vec<(u64, u32)> = Vec::new();
+    let mut entries: Vec<(u32, u32)> = Vec::new();
     for s in 0..n_slabs {
         let members = &in_slab[count[s]..count[s + 1]];
         over_start[s] = over.len();
@@ -934,36 +1033,47 @@ fn detect_among(
             continue;
         }
         let (s0, s1) = slab_t(s);
+        let boxed = |i: u32| slab_box(&pieces[i as usize], s0, s1, slack, half);
         let extent: f64 = members
             .iter()
             .map(|&i| {
-                let b = slab_box(&pieces[i as usize], s0, s1, slack, half);
+                let b = boxed(i);
                 (b.1 - b.0).max()
             })
             .sum();
         let cell = (extent / members.len() as f64).max(d);
-        cell_of_slab[s] = cell;
+        // The cells' bounds and number of entries, then the layout of the buckets.
+        let (mut x_lo, mut x_hi, mut y_lo, mut y_hi) = (i64::MAX, i64::MIN, i64::MAX, i64::MIN);
+        let mut n_entries = 0usize;
+        for &i in members {
+            if let Some((x0, x1, y0, y1)) = cell_range(&boxed(i), cell) {
+                (x_lo, x_hi, y_lo, y_hi) = (x_lo.min(x0), x_hi.max(x1), y_lo.min(y0), y_hi.max(y1));
+                n_entries += ((x1 - x0 + 1) * (y1 - y0 + 1)) as usize;
+            }
+        }
+        let grid = SlabGrid::new(cell, (x_lo, x_hi, y_lo, y_hi), n_entries);
+        grids[s] = grid;
         entries.clear();
         for &i in members {
-            let b = slab_box(&pieces[i as usize], s0, s1, slack, half);
-            match cell_range(&b, cell) {
+            match cell_range(&boxed(i), cell) {
                 None => over.push(i),
                 Some((x0, x1, y0, y1)) => {
-                    for x in x0..=x1 {
-                        for y in y0..=y1 {
-                            entries.push((cell_key(x, y), i));
+                    for y in y0..=y1 {
+                        for x in x0..=x1 {
+                            if let Some(b) = grid.bucket(x, y) {
+                                entries.push((b as u32, i));
+                            }
                         }
                     }
                 }
             }
         }
-        let nb = entries.len().next_power_of_two().max(2);
-        buckets[s] = nb;
+        let nb = grid.buckets;
         let first = bucket_start.len();
         bucket_start.resize(first + nb + 1, 0);
         let starts_of = &mut bucket_start[first..];
-        for &(key, _) in &entries {
-            starts_of[bucket_of(key, nb) + 1] += 1;
+        for &(b, _) in &entries {
+            starts_of[b as usize + 1] += 1;
         }
         for b in 0..nb {
             starts_of[b + 1] += starts_of[b];
@@ -971,11 +1081,10 @@ fn detect_among(
         let base = grid_pieces.len();
         grid_pieces.resize(base + entries.len(), 0);
         // Members come in piece order, so each bucket's pieces ascend.
-        for &(key, i) in &entries {
-            let b = bucket_of(key, nb);
-            let at = starts_of[b] as usize;
+        for &(b, i) in &entries {
+            let at = starts_of[b as usize] as usize;
             grid_pieces[base + at] = i;
-            starts_of[b] += 1;
+            starts_of[b as usize] += 1;
         }
         // The fill moved every start to its bucket's end: shift back.
         for b in (1..=nb).rev() {
@@ -988,25 +1097,26 @@ fn detect_among(
 
     // Person by person: the later (or unmarked) people's pieces near each piece.
     // A pair (q, r) is looked up from q when q is a querying person and r is not, or
-    // both are and q < r. In a slab, a pair of pieces entered in cells is taken only
+    // both are and q comes first in the Z order. In a slab, a pair of pieces entered in cells is taken only
     // in the cell holding the low corner of their boxes' overlap, so once.
     let queries = |k: usize| mult[k] > 0 && marked(k);
     let mut candidates: Vec<(u32, u32, u32)> = Vec::new();
     let mut hits: Vec<Hit> = Vec::new();
     let mut events: Vec<CollisionEvent> = Vec::new();
-    for q in 0..n {
+    for (rank, &q) in order.iter().enumerate() {
+        let q = q as usize;
         if !queries(q) {
             continue;
         }
         candidates.clear();
-        let accept = |r: usize| r != q && (!queries(r) || r > q);
+        let accept = |r: usize| r != q && (!queries(r) || rank_of[r] as usize > rank);
         // Without marks only later people are partners: their pieces come after q's.
         let first_partner = if who.is_none() {
-            starts[q + 1] as u32
+            starts[rank + 1] as u32
         } else {
             0
         };
-        for i in starts[q]..starts[q + 1] {
+        for i in starts[rank]..starts[rank + 1] {
             let p = &pieces[i];
             for s in slab_of(p.t0)..=slab_of(p.t1) {
                 let members = &in_slab[count[s]..count[s + 1]];
@@ -1015,7 +1125,8 @@ fn detect_among(
                 }
                 let (s0, s1) = slab_t(s);
                 let bi = slab_box(p, s0, s1, slack, half);
-                let cell = cell_of_slab[s];
+                let grid = grids[s];
+                let cell = grid.cell;
                 let consider =
                     |j: u32, in_cell: Option<(i64, i64)>, out: &mut Vec<(u32, u32, u32)>| {
                         let pj = &pieces[j as usize];
@@ -1042,12 +1153,13 @@ fn detect_among(
                         }
                     }
                     Some((x0, x1, y0, y1)) => {
-                        let nb = buckets[s];
-                        let bs = &bucket_start[bucket_base[s]..=bucket_base[s] + nb];
+                        let bs = &bucket_start[bucket_base[s]..=bucket_base[s] + grid.buckets];
                         let ids = &grid_pieces[grid_base[s]..];
-                        for x in x0..=x1 {
-                            for y in y0..=y1 {
-                                let b = bucket_of(cell_key(x, y), nb);
+                        for y in y0..=y1 {
+                            for x in x0..=x1 {
+                                let Some(b) = grid.bucket(x, y) else {
+                                    continue;
+                                };
                                 let bucket = &ids[bs[b] as usize..bs[b + 1] as usize];
                                 let from = bucket.partition_point(|&j| j < first_partner);
                                 for &j in &bucket[from..] {
