@@ -689,13 +689,15 @@ pub fn collisions_all_pairs(set: &TrackSet, threshold_m: f64) -> Result<Collisio
 ///
 /// Time is cut into slabs of the set's frame step. In each slab every piece present
 /// is boxed (its positions over the slab, grown by half the threshold) and entered
-/// in the cells of a uniform grid the box covers; cells are `threshold + mean box
-/// size` wide and each slab's entries are sorted by cell. Two pieces closer than the
-/// threshold at a common time have overlapping boxes in the slab of that time, so
-/// they share a cell. Then person by person, each piece looks up the cells its
-/// boxes cover and compares itself (eqs. 13–17) with the later people's pieces
-/// there whose boxes overlap its own; the person's pairs are assembled, counted and
-/// dropped before the next person's.
+/// in the cells of a uniform grid the box covers; cells are `max(threshold, mean box
+/// size)` wide, gathered into buckets by a counting sort (row by row, or hashed when
+/// the cells' bounding box is sparse). Two pieces closer than the threshold at a
+/// common time have overlapping boxes in the slab of that time, so they share a
+/// cell. Then person by person, in Z order of their first places, each piece looks
+/// up the cells its boxes cover and compares itself (eqs. 13–17) with the later
+/// people's pieces there whose boxes overlap its own (once per slab: in the cell of
+/// the overlap's low corner); the person's pairs are assembled, counted and dropped
+/// before the next person's.
 ///
 /// # Formula
 /// Eqs. 13–17 per piece pair, as [`collisions_all_pairs`].
