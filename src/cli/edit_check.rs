@@ -83,6 +83,7 @@ fn report_json(set: &TrackSet, c: &Collisions) -> serde_json::Value {
                 .map(|&m| set.tracks[m].id)
                 .collect();
             json!({
+                "kind": if k.identical { "identical" } else { "standing" },
                 "size": k.size(),
                 "pairs": k.pairs(),
                 "ids": ids,
@@ -136,7 +137,7 @@ fn report_text(set: &TrackSet, file: &str, c: &Collisions) -> Result<()> {
         }
     )?;
     if !c.clusters.is_empty() {
-        outln!("  clusters (people on one identical track: every two collide)")?;
+        outln!("  clusters (people on one track or standing together: every two collide)")?;
         for k in c.clusters.iter().take(EVENTS_SHOWN) {
             outln!(
                 "    {:>7} people, {} pairs, {:.2} – {:.2} s at ({:.2}, {:.2}), first {}",

@@ -8,9 +8,10 @@ in docs/motion-editing.md come from these files.
                                           of side sqrt(N) m (one person per m²), at
                                           t = 1 s up to 1.4 m away in a uniform
                                           direction; seed 27
-    edit_inputs.py jitter N OUT.csv       N people standing within 0.1 m of (5, 5)
-                                          at t = 0 s and 1 s (not one identical
-                                          track: every pair is evaluated); seed 27
+    edit_inputs.py jitter N OUT.csv       N people standing within 0.05 m each way
+                                          of (5, 5) at t = 0 s and 1 s, places to
+                                          0.1 mm (mostly not one identical track);
+                                          seed 27
     edit_inputs.py script N OUT.ron       N Select+Drag pairs for the 20 people of
                                           `edit_inputs.py group`
     edit_inputs.py group OUT.csv          20 people walking +x for 10 s, 0.5 s steps

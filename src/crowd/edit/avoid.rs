@@ -24,9 +24,10 @@
 //!
 //! The work is bounded whatever the input: each round looks at no more than the
 //! [`DEFAULT_KEEP`] closest pairs detection keeps (when more collide, the next
-//! round detects again and takes the next closest), and people on one identical
-//! track (a [`Cluster`](super::Cluster) of detection, for instance standing at one
-//! point) are left as they are: their pairs, and their pairs with anyone else, are
+//! round detects again and takes the next closest), and the people of a
+//! [`Cluster`](super::Cluster) of detection (on one identical track, for instance
+//! standing at one point, or standing together within the threshold) are left as
+//! they are: their pairs, and their pairs with anyone else, are
 //! not retimed, and each cluster is one [`Remaining`] ([`Stuck::Cluster`]) for its
 //! first two members.
 

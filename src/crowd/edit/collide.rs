@@ -22,13 +22,17 @@
 //! Detection *streams*: it counts every colliding pair and event, keeps the closest
 //! approach, and keeps only the [`DEFAULT_KEEP`] closest pairs and earliest events
 //! (or as many as [`detect_keeping`] is told), so its memory is O(people + pieces +
-//! kept), whatever the number of colliding pairs. People on one identical track
-//! (same positions, times and links: for instance standing at one point for the
-//! same span) are a [`Cluster`]: one report with its size, its `size (size − 1) / 2`
-//! pairs counted in closed form, never enumerated. Their pairs with anyone else are
-//! evaluated once, for the cluster's first member, and counted for every member.
-//! People close together but not on one identical track are still evaluated pair by
-//! pair: O(k²) time for k of them in one grid cell, O(k) memory.
+//! kept), whatever the number of colliding pairs. Two kinds of crowd are a
+//! [`Cluster`], one report with its size, its pairs counted in closed form and never
+//! enumerated: people on one identical track (same positions, times and links:
+//! for instance standing at one point for the same span), and at least
+//! [`MIN_STANDING_CLUSTER`] people standing still at the same times within half the
+//! threshold of one of them (so every two are closer than the threshold whenever
+//! present; their closest two are found by a sweep over their places). An
+//! identical track's pairs with anyone else are evaluated once, for its first
+//! person, and counted for every one. People close together who move, or stand at
+//! different times, are still evaluated pair by pair: O(k²) time for k of them in
+//! one grid cell, O(k) memory.
 //!
 //! On the two UCY fixtures (`tests/fixtures/crowd/`, 25 fps, step 10) the counts of
 //! pairs below 0.2/0.3/0.5/1.0 m equal the README's *continuous* counts with this
@@ -140,13 +144,23 @@ pub struct PairCollision {
     pub events: usize,
 }
 
-/// People on one identical track (the same positions, times and links, ids aside):
-/// every two of them collide, at distance 0 whenever they are present. One report
-/// instead of `size (size − 1) / 2` pairs.
+/// People every two of whom collide, reported once instead of pair by pair: either
+/// on one identical track (the same positions, times and links, ids aside; at
+/// distance 0 whenever present), or standing still at the same times within half
+/// the threshold of one of them (so within the threshold of each other throughout).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Cluster {
-    /// The members' indices in the track set, ascending (all of them).
+    /// The members' indices in the track set, ascending. A standing cluster lists
+    /// one person of each identical track among it (that track is a cluster of its
+    /// own).
     pub members: Vec<usize>,
+    /// Whether the members are on one identical track (else standing within the
+    /// threshold).
+    pub identical: bool,
+    /// The colliding pairs this cluster stands for (`size (size − 1) / 2` for an
+    /// identical track; for a standing cluster, the pairs of its people not on one
+    /// identical track).
+    pub pair_count: u64,
     /// The first member's id.
     pub first_id: u64,
     /// The track's first and last time (seconds).
@@ -163,10 +177,9 @@ impl Cluster {
         self.members.len()
     }
 
-    /// The colliding pairs among them: `size (size − 1) / 2`.
+    /// The colliding pairs this cluster stands for.
     pub fn pairs(&self) -> u64 {
-        let n = self.members.len() as u64;
-        n * n.saturating_sub(1) / 2
+        self.pair_count
     }
 }
 
@@ -346,39 +359,42 @@ impl Tally {
         }
     }
 
-    fn cluster(&mut self, set: &TrackSet, c: Cluster) {
+    /// A cluster; `closest` its closest pair (`a < b`) and their distance, the
+    /// distance 0 of its first two members for an identical track.
+    fn cluster(&mut self, set: &TrackSet, c: Cluster, closest: Option<(usize, usize, f64)>) {
         let tr = &set.tracks[c.members[0]];
         // Every two members collide in each stretch of the track between gaps.
         let events = 1 + tr.linked.iter().filter(|l| !**l).count();
         self.pair_total += c.pairs();
         self.event_total += c.pairs() * events as u64;
         self.cluster_total += 1;
-        let (a, b) = (c.members[0], c.members[1]);
-        let moving = tr.linked.first().copied().unwrap_or(false);
+        let (a, b, distance_m) = closest.unwrap_or((c.members[0], c.members[1], 0.0));
+        let (ta, tb) = (&set.tracks[a], &set.tracks[b]);
         self.consider_closest(&PairCollision {
             a,
             b,
-            id_a: tr.id,
-            id_b: set.tracks[b].id,
+            id_a: ta.id,
+            id_b: tb.id,
             closest: Approach {
-                t_s: tr.times_s[0],
-                distance_m: 0.0,
-                at_a: tr.points[0],
-                at_b: tr.points[0],
+                t_s: ta.times_s[0],
+                distance_m,
+                at_a: ta.points[0],
+                at_b: tb.points[0],
                 sample_a: 0,
                 sample_b: 0,
-                moving_a: moving,
-                moving_b: moving,
+                moving_a: ta.linked.first().copied().unwrap_or(false),
+                moving_b: tb.linked.first().copied().unwrap_or(false),
             },
             events,
         });
         let keep = self.keep;
+        let first = c.members[0];
         push_bounded(
             &mut self.clusters,
             keep,
             Keyed {
                 // Largest first, then by first member.
-                key: (-(c.members.len() as f64), a, 0, 0.0),
+                key: (-(c.members.len() as f64), first, 0, 0.0),
                 item: c,
             },
         );
@@ -706,9 +722,9 @@ pub fn collisions_all_pairs(set: &TrackSet, threshold_m: f64) -> Result<Collisio
 /// Metres and seconds.
 ///
 /// # Complexity
-/// O(P log P) time for P pieces when people are spread; people on one identical
-/// track cost O(their samples) (a [`Cluster`]); k other people crowded into one
-/// cell cost O(k²) time. Memory O(n + E + keep) for n people and E grid entries
+/// O(P log P) time for P pieces when people are spread; a [`Cluster`] costs
+/// O(k log k) for its k people; k other people crowded into one cell cost O(k²)
+/// time. Memory O(n + E + keep) for n people and E grid entries
 /// (O(P) when pieces are short against the cells), however many pairs collide.
 ///
 /// # Errors
@@ -806,21 +822,152 @@ fn classes(set: &TrackSet) -> (Vec<u32>, Vec<Cluster>) {
         if g.len() >= 2 {
             let t = &set.tracks[g[0]];
             let (start_s, end_s) = t.span_s();
+            let n = g.len() as u64;
             clusters.push(Cluster {
                 first_id: t.id,
                 start_s,
                 end_s,
                 place: t.points[0],
                 members: g,
+                identical: true,
+                pair_count: n * (n - 1) / 2,
             });
         }
     }
     (mult, clusters)
 }
 
+/// No standing cluster.
+const NO_GROUP: u32 = u32::MAX;
+
+/// The fewest people a standing cluster holds; fewer are looked up pair by pair
+/// (and listed) as before.
+pub const MIN_STANDING_CLUSTER: usize = 32;
+
+/// The most leaders of standing clusters a person is compared with.
+const MAX_LEADERS_CHECKED: usize = 16;
+
+/// Standing clusters among the people `mult` keeps: people standing still (every
+/// position equal) at the same times with the same links, each within half the
+/// threshold (less 1e-9 of it, against rounding) of the cluster's first person, its
+/// leader, so every two are closer than the threshold whenever present. Greedy:
+/// each person joins the first of at most [`MAX_LEADERS_CHECKED`] leaders near
+/// it that fits, else leads a new one; clusters of fewer than
+/// [`MIN_STANDING_CLUSTER`] are dropped. O(n log n).
+fn standing_groups(set: &TrackSet, mult: &[u32], d: f64) -> Vec<Vec<usize>> {
+    let r = 0.5 * d * (1.0 - 1e-9);
+    let stands = |t: &super::tracks::Track| {
+        let p = t.points[0];
+        t.points
+            .iter()
+            .all(|q| q.x.to_bits() == p.x.to_bits() && q.y.to_bits() == p.y.to_bits())
+    };
+    let mut cand: Vec<(u64, u32)> = set
+        .tracks
+        .iter()
+        .enumerate()
+        .filter(|(k, t)| mult[*k] > 0 && stands(t))
+        .map(|(k, t)| {
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            for ts in &t.times_s {
+                ts.to_bits().hash(&mut h);
+            }
+            t.linked.hash(&mut h);
+            (h.finish(), k as u32)
+        })
+        .collect();
+    cand.sort_unstable();
+    let same_times = |a: usize, b: usize| {
+        let (x, y) = (&set.tracks[a], &set.tracks[b]);
+        x.linked == y.linked
+            && x.times_s.len() == y.times_s.len()
+            && x.times_s
+                .iter()
+                .zip(&y.times_s)
+                .all(|(u, v)| u.to_bits() == v.to_bits())
+    };
+    let cell_of = |p: Vec2| ((p.x / r).floor() as i64, (p.y / r).floor() as i64);
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut leaders: std::collections::HashMap<(i64, i64), Vec<usize>> = Default::default();
+    let mut i = 0;
+    while i < cand.len() {
+        let mut j = i;
+        while j < cand.len() && cand[j].0 == cand[i].0 {
+            j += 1;
+        }
+        leaders.clear();
+        for &(_, k) in &cand[i..j] {
+            let k = k as usize;
+            let p = set.tracks[k].points[0];
+            let (cx, cy) = cell_of(p);
+            let mut joined = None;
+            let mut checked = 0;
+            'search: for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for &g in leaders.get(&(cx + dx, cy + dy)).into_iter().flatten() {
+                        checked += 1;
+                        if checked > MAX_LEADERS_CHECKED {
+                            break 'search;
+                        }
+                        let l = groups[g][0];
+                        if (set.tracks[l].points[0] - p).norm() < r && same_times(l, k) {
+                            joined = Some(g);
+                            break 'search;
+                        }
+                    }
+                }
+            }
+            match joined {
+                Some(g) => groups[g].push(k),
+                None => {
+                    leaders.entry((cx, cy)).or_default().push(groups.len());
+                    groups.push(vec![k]);
+                }
+            }
+        }
+        i = j;
+    }
+    groups.retain(|g| g.len() >= MIN_STANDING_CLUSTER);
+    for g in &mut groups {
+        g.sort_unstable();
+    }
+    groups
+}
+
+/// The closest two of a standing cluster `(a, b, distance)` with `a < b`, least
+/// `(distance, a, b)`: a sweep over the places sorted by x, a pair skipped only
+/// when its x distance alone exceeds the best.
+fn closest_standing(set: &TrackSet, members: &[usize]) -> (usize, usize, f64) {
+    let mut pts: Vec<(f64, usize)> = members
+        .iter()
+        .map(|&k| (set.tracks[k].points[0].x, k))
+        .collect();
+    pts.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    let mut best = (f64::INFINITY, usize::MAX, usize::MAX);
+    for i in 0..pts.len() {
+        for j in i + 1..pts.len() {
+            if pts[j].0 - pts[i].0 > best.0 {
+                break;
+            }
+            let (a, b) = (pts[i].1.min(pts[j].1), pts[i].1.max(pts[j].1));
+            // As the pair's closest approach computes it: first minus second.
+            let dist = (set.tracks[a].points[0] - set.tracks[b].points[0]).norm();
+            let better = dist
+                .total_cmp(&best.0)
+                .then((a, b).cmp(&(best.1, best.2)))
+                .is_lt();
+            if better {
+                best = (dist, a, b);
+            }
+        }
+    }
+    (best.1, best.2, best.0)
+}
+
 /// The people in Z (Morton) order of their first place, quantised to 2^16 steps
-/// each way across the box of all first places (ties by index).
-fn spatial_order(set: &TrackSet) -> Vec<u32> {
+/// each way across the box of all first places; a standing cluster's people
+/// together at its leader's place (ties by cluster, then index).
+fn spatial_order(set: &TrackSet, group: &[u32]) -> Vec<u32> {
     let mut lo = Vec2::repeat(f64::INFINITY);
     let mut hi = Vec2::repeat(f64::NEG_INFINITY);
     for t in &set.tracks {
@@ -835,21 +982,34 @@ fn spatial_order(set: &TrackSet) -> Vec<u32> {
         v = (v | (v << 2)) & 0x3333_3333;
         (v | (v << 1)) & 0x5555_5555
     };
-    let mut keyed: Vec<(u64, u32)> = set
+    // Each standing cluster's leader (its first person in index order).
+    let mut leader: std::collections::HashMap<u32, usize> = Default::default();
+    for (k, &g) in group.iter().enumerate() {
+        if g != NO_GROUP {
+            leader.entry(g).or_insert(k);
+        }
+    }
+    let mut keyed: Vec<(u64, u32, u32)> = set
         .tracks
         .iter()
         .enumerate()
         .map(|(k, t)| {
-            let q = (t.points[0] - lo) / span * 65535.0;
+            let g = group[k];
+            let at = if g == NO_GROUP {
+                t.points[0]
+            } else {
+                set.tracks[leader[&g]].points[0]
+            };
+            let q = (at - lo) / span * 65535.0;
             let (x, y) = (
                 q.x.clamp(0.0, 65535.0) as u32,
                 q.y.clamp(0.0, 65535.0) as u32,
             );
-            (spread(x) | (spread(y) << 1), k as u32)
+            (spread(x) | (spread(y) << 1), g, k as u32)
         })
         .collect();
     keyed.sort_unstable();
-    keyed.into_iter().map(|(_, k)| k).collect()
+    keyed.into_iter().map(|(_, _, k)| k).collect()
 }
 
 /// A piece's box over a slab `[s0, s1]` (its positions then, widened in time by
@@ -957,22 +1117,57 @@ fn detect_among(
     let mut tally = Tally::new(keep);
     let n = set.tracks.len();
     // Identical tracks: only each class's first member takes part below.
+    // Standing clusters: their pairs are counted, never looked up.
+    let mut group = vec![NO_GROUP; n];
     let mult: Vec<u32> = match who {
         Some(_) => vec![1; n],
         None => {
             let (mult, clusters) = classes(set);
+            let standing = standing_groups(set, &mult, d);
+            for g in &standing {
+                let m: Vec<u64> = g.iter().map(|&k| u64::from(mult[k])).collect();
+                let total: u64 = m.iter().sum();
+                let same: u64 = m.iter().map(|x| x * x).sum();
+                let t = &set.tracks[g[0]];
+                let (start_s, end_s) = t.span_s();
+                let c = Cluster {
+                    members: g.clone(),
+                    identical: false,
+                    pair_count: (total * total - same) / 2,
+                    first_id: t.id,
+                    start_s,
+                    end_s,
+                    place: t.points[0],
+                };
+                tally.cluster(set, c, Some(closest_standing(set, g)));
+            }
             for c in clusters {
-                tally.cluster(set, c);
+                tally.cluster(set, c, None);
+            }
+            for (k, g) in standing.iter().enumerate() {
+                for &m in g {
+                    group[m] = k as u32;
+                }
             }
             mult
         }
     };
     // People in Z order of their first place, so that people near each other look
-    // up the same cells and their pieces lie together in memory.
-    let order = spatial_order(set);
+    // up the same cells and their pieces lie together in memory; a standing
+    // cluster's people one after the other.
+    let order = spatial_order(set, &group);
     let mut rank_of = vec![0u32; n];
+    // For each standing cluster, the rank after its last person.
+    let mut group_end: Vec<usize> = Vec::new();
     for (r, &k) in order.iter().enumerate() {
         rank_of[k as usize] = r as u32;
+        let g = group[k as usize];
+        if g != NO_GROUP {
+            if group_end.len() <= g as usize {
+                group_end.resize(g as usize + 1, 0);
+            }
+            group_end[g as usize] = r + 1;
+        }
     }
     let (pieces, starts) = pieces(set, Some(&mult), Some(&order));
     if pieces.is_empty() {
@@ -1111,12 +1306,20 @@ fn detect_among(
             continue;
         }
         candidates.clear();
-        let accept = |r: usize| r != q && (!queries(r) || rank_of[r] as usize > rank);
-        // Without marks only later people are partners: their pieces come after q's.
-        let first_partner = if who.is_none() {
-            starts[rank + 1] as u32
-        } else {
+        let gq = group[q];
+        let accept = |r: usize| {
+            r != q
+                && (gq == NO_GROUP || group[r] != gq)
+                && (!queries(r) || rank_of[r] as usize > rank)
+        };
+        // Without marks only later people are partners: their pieces come after q's
+        // (and after q's standing cluster's).
+        let first_partner = if who.is_some() {
             0
+        } else if gq != NO_GROUP {
+            starts[group_end[gq as usize]] as u32
+        } else {
+            starts[rank + 1] as u32
         };
         for i in starts[rank]..starts[rank + 1] {
             let p = &pieces[i];

@@ -468,3 +468,74 @@ proptest! {
         prop_assert!(fast.pairs.len() <= keep && fast.events.len() <= keep && fast.clusters.len() <= keep);
     }
 }
+
+#[test]
+fn people_standing_within_the_threshold_are_one_cluster() {
+    // 3,000 people standing within 0.1 m of (5, 5) for 1 s (not on one identical
+    // track: before, every pair was evaluated, O(n²)), and walkers through them.
+    let mut rng = crate::rng::SplitMix64::new(4);
+    let mut tracks: Vec<Track> = (0..3_000)
+        .map(|id| {
+            let p = v(
+                5.0 + rng.uniform(-0.05, 0.05),
+                5.0 + rng.uniform(-0.05, 0.05),
+            );
+            Track::linked(id, vec![p, p], vec![0.0, 1.0])
+        })
+        .collect();
+    for k in 0..5 {
+        let y = 4.9 + k as f64 * 0.05;
+        tracks.push(line(10_000 + k, v(0.0, y), v(10.0, y), 0.0, 1.0));
+    }
+    let s = set(tracks);
+    let c = detect(&s, 0.3).unwrap();
+    let n = 3_000u64;
+    assert_eq!(c.clusters.len(), 1);
+    assert!(!c.clusters[0].identical);
+    assert_eq!(c.clusters[0].pairs(), n * (n - 1) / 2);
+    // The walkers' pairs (with each other and with everyone standing) are listed.
+    assert_eq!(c.pair_total, n * (n - 1) / 2 + 10 + 5 * n);
+    let reference = collisions_all_pairs(&s, 0.3).unwrap();
+    assert_eq!(c.pair_total, reference.pair_total);
+    assert_eq!(c.event_total, reference.event_total);
+    assert_eq!(c.closest, reference.closest);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 128,
+        rng_seed: RngSeed::Fixed(0x7374_616e),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn prop_standing_people_count_as_the_reference(
+        places in prop::collection::vec((0.0f64..0.4, 0.0f64..0.4, 0u8..4), 2..150),
+        s in crowd(),
+        d in 0.05f64..1.5,
+    ) {
+        // People standing at random places at one of four sets of times (some
+        // copied, so identical tracks inside standing clusters), among walkers.
+        let mut s = s;
+        let times = [vec![0.0, 1.0], vec![0.0, 1.0, 3.0], vec![0.5], vec![0.0, 1.0]];
+        for (k, &(x, y, which)) in places.iter().enumerate() {
+            let t = times[which as usize].clone();
+            let mut tr = Track::linked(5_000 + k as u64, vec![v(x, y); t.len()], t);
+            if which == 3 {
+                tr.linked = vec![false];
+            }
+            if k % 7 == 6 {
+                let mut copy = tr.clone();
+                copy.id += 10_000;
+                s.tracks.push(copy);
+            }
+            s.tracks.push(tr);
+        }
+        let fast = detect_keeping(&s, d, 3).unwrap();
+        let reference = collisions_all_pairs(&s, d).unwrap();
+        prop_assert_eq!(fast.pair_total, reference.pair_total);
+        prop_assert_eq!(fast.event_total, reference.event_total);
+        prop_assert_eq!(fast.closest, reference.closest);
+    }
+}

@@ -47,7 +47,7 @@ pub use cage::{
 };
 pub use collide::{
     collisions_all_pairs, detect, detect_keeping, Approach, Cluster, CollideError, CollisionEvent,
-    Collisions, PairCollision, DEFAULT_KEEP,
+    Collisions, PairCollision, DEFAULT_KEEP, MIN_STANDING_CLUSTER,
 };
 pub use error::EditError;
 pub use hull::{
