@@ -481,3 +481,44 @@ fn a_load_while_a_drag_is_out_drops_nothing_until_it_is_read() {
         "the new tracks stay"
     );
 }
+
+/// 5,000 people at one point (issue 27, finding 4: the load stored their 12.5
+/// million pairs and published every one in each `edit` message): the load
+/// publishes one collision for the crowd; with 300 walkers crossing it (45,150
+/// more pairs), at most 256.
+#[test]
+fn a_crowd_at_one_point_is_published_as_one_collision() {
+    let mut tracks: Vec<Track> = (0..5_000)
+        .map(|id| Track::linked(id, vec![Vec2::new(5.0, 5.0); 2], vec![0.0, 1.0]))
+        .collect();
+    let s = Session::new(TrackSet {
+        tracks: tracks.clone(),
+        step_s: 1.0,
+    });
+    let v = s.views.last().expect("an edit view at load");
+    assert_eq!(
+        v.collisions.len(),
+        1,
+        "{:?}",
+        &v.collisions[..3.min(v.collisions.len())]
+    );
+    let c = &v.collisions[0];
+    assert_eq!((c.a, c.b, c.distance_m), (0, 1, 0.0));
+    assert_eq!(c.place, Vec2::new(5.0, 5.0));
+    // Many distinct collisions: the list is bounded.
+    for k in 0..300u64 {
+        let y = 5.0 + k as f64 * 0.0005;
+        tracks.push(Track::linked(
+            10_000 + k,
+            vec![Vec2::new(0.0, y), Vec2::new(10.0, y)],
+            vec![0.0, 1.0],
+        ));
+    }
+    let s = Session::new(TrackSet {
+        tracks,
+        step_s: 1.0,
+    });
+    let v = s.views.last().expect("an edit view at load");
+    assert_eq!(v.collisions.len(), 256);
+    assert_eq!(v.collisions[0].distance_m, 0.0, "the crowd first");
+}

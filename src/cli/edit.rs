@@ -78,6 +78,10 @@ pub struct CheckArgs {
     /// error: the exit status is 0 either way.
     #[arg(long, default_value_t = 0.3)]
     pub threshold: f64,
+    /// Pairs, events and clusters listed (the closest pairs, the earliest events,
+    /// the largest clusters; all are counted). Default 1000.
+    #[arg(long)]
+    pub keep: Option<usize>,
     /// One JSON object on stdout.
     #[arg(long)]
     pub json: bool,
@@ -100,6 +104,7 @@ fn check(a: CheckArgs) -> Result<()> {
         &set,
         &a.tracks.file.display().to_string(),
         a.threshold,
+        a.keep,
         a.json,
     )
 }

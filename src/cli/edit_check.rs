@@ -4,18 +4,34 @@
 //! Collisions are a finding, not a failure: the command exits 0 whether or not
 //! there are any (1 only for an unreadable file or bad arguments). Scripts read
 //! `pairs` from `--json`.
+//!
+//! Every colliding pair and event is counted; `--keep N` (default
+//! [`DEFAULT_KEEP`]) bounds what is listed: the N closest pairs, the N earliest
+//! events and the N largest clusters (people on one identical track, such as a
+//! crowd standing at one point, one entry with its size instead of its pairs).
 
 use crate::cli::output::outln;
 use anyhow::{anyhow, Result};
-use crowdtouch::crowd::edit::{detect, Collisions, TrackSet};
+use crowdtouch::crowd::edit::{detect_keeping, Collisions, TrackSet, DEFAULT_KEEP};
 use serde_json::json;
 
 /// Events listed in the text report.
 const EVENTS_SHOWN: usize = 10;
 
-/// Runs detection on a loaded track set and prints the report.
-pub fn run(set: &TrackSet, file: &str, threshold_m: f64, as_json: bool) -> Result<()> {
-    let c = detect(set, threshold_m).map_err(|e| anyhow!("{file}: {e}"))?;
+/// Cluster members listed by id in the reports (the size counts them all).
+const CLUSTER_IDS_SHOWN: usize = 16;
+
+/// Runs detection on a loaded track set, keeping `keep` pairs, events and
+/// clusters (`None`: [`DEFAULT_KEEP`]), and prints the report.
+pub fn run(
+    set: &TrackSet,
+    file: &str,
+    threshold_m: f64,
+    keep: Option<usize>,
+    as_json: bool,
+) -> Result<()> {
+    let c = detect_keeping(set, threshold_m, keep.unwrap_or(DEFAULT_KEEP))
+        .map_err(|e| anyhow!("{file}: {e}"))?;
     if as_json {
         outln!("{}", report_json(set, &c))?;
     } else {
@@ -56,6 +72,28 @@ fn report_json(set: &TrackSet, c: &Collisions) -> serde_json::Value {
             })
         })
         .collect();
+    let clusters: Vec<_> = c
+        .clusters
+        .iter()
+        .map(|k| {
+            let ids: Vec<u64> = k
+                .members
+                .iter()
+                .take(CLUSTER_IDS_SHOWN)
+                .map(|&m| set.tracks[m].id)
+                .collect();
+            json!({
+                "kind": if k.identical { "identical" } else { "standing" },
+                "size": k.size(),
+                "pairs": k.pairs(),
+                "ids": ids,
+                "start_s": k.start_s,
+                "end_s": k.end_s,
+                "x": k.place.x,
+                "y": k.place.y,
+            })
+        })
+        .collect();
     json!({
         "people": set.tracks.len(),
         "samples": set.samples(),
@@ -63,10 +101,14 @@ fn report_json(set: &TrackSet, c: &Collisions) -> serde_json::Value {
         "end_s": t1,
         "step_s": set.step_s,
         "threshold_m": c.threshold_m,
-        "pairs": c.pair_count(),
+        "pairs": c.pair_total,
+        "events_total": c.event_total,
+        "clusters_total": c.cluster_total,
+        "keep": c.keep,
         "min_distance_m": c.min_distance_m(),
         "events": events,
         "pair_list": pair_list,
+        "clusters": clusters,
     })
 }
 
@@ -84,11 +126,34 @@ fn report_text(set: &TrackSet, file: &str, c: &Collisions) -> Result<()> {
         t1 - t0
     )?;
     outln!(
-        "  pairs in collision  {} closer than {} m ({} events)",
-        c.pair_count(),
+        "  pairs in collision  {} closer than {} m ({} events{})",
+        c.pair_total,
         c.threshold_m,
-        c.events.len()
+        c.event_total,
+        if c.cluster_total > 0 {
+            format!(", {} clusters", c.cluster_total)
+        } else {
+            String::new()
+        }
     )?;
+    if !c.clusters.is_empty() {
+        outln!("  clusters (people on one track or standing together: every two collide)")?;
+        for k in c.clusters.iter().take(EVENTS_SHOWN) {
+            outln!(
+                "    {:>7} people, {} pairs, {:.2} – {:.2} s at ({:.2}, {:.2}), first {}",
+                k.size(),
+                k.pairs(),
+                k.start_s,
+                k.end_s,
+                k.place.x,
+                k.place.y,
+                k.first_id
+            )?;
+        }
+        if c.cluster_total > EVENTS_SHOWN {
+            outln!("    … {} more", c.cluster_total - EVENTS_SHOWN)?;
+        }
+    }
     match c.closest() {
         Some(p) => {
             let a = &p.closest;
@@ -123,10 +188,11 @@ fn report_text(set: &TrackSet, file: &str, c: &Collisions) -> Result<()> {
                 e.closest.distance_m
             )?;
         }
-        if events.len() > EVENTS_SHOWN {
+        if c.event_total > EVENTS_SHOWN as u64 {
             outln!(
-                "    … {} more (--json lists all)",
-                events.len() - EVENTS_SHOWN
+                "    … {} more (--json lists the first {})",
+                c.event_total - EVENTS_SHOWN as u64,
+                c.events.len()
             )?;
         }
     }

@@ -5,8 +5,8 @@
 
 use super::edit_state::{AvoidSettings, CageBox, EditDone, EditDoneKind, EditJob, EditJobKind};
 use crate::crowd::edit::{
-    avoid, correct_speeds, detect, retime, AvoidParams, Cage, Collisions, Handle, RetimeParams,
-    SampleRef, Selection, TimeDrag, Track, TrackSet,
+    avoid, correct_speeds, detect_keeping, retime, AvoidParams, Cage, Collisions, Handle,
+    RetimeParams, SampleRef, Selection, TimeDrag, Track, TrackSet,
 };
 use crate::geom::Vec2;
 use crate::vocab::{CollisionView, TrackView, TracksView};
@@ -234,9 +234,17 @@ fn keep_apart(set: &mut TrackSet, settings: AvoidSettings) -> Result<Vec<Collisi
     Ok(collisions_of(set, settings.threshold_m))
 }
 
+/// The most collisions an `edit` message lists: each cluster of people on one
+/// identical track as one (its first two people, distance 0), then the earliest
+/// events. Detection keeps no more than this, so a load of people at one point
+/// costs memory and time in their number, not in their pairs.
+pub const COLLISIONS_PUBLISHED: usize = 256;
+
+/// The collisions of `set` as an `edit` message lists them (at most
+/// [`COLLISIONS_PUBLISHED`]).
 pub(super) fn collisions_of(set: &TrackSet, threshold_m: f64) -> Vec<CollisionView> {
-    match detect(set, threshold_m) {
-        Ok(c) => collision_views(&c),
+    match detect_keeping(set, threshold_m, COLLISIONS_PUBLISHED) {
+        Ok(c) => collision_views(set, &c),
         Err(e) => {
             log::warn!("edit: collisions could not be checked: {e}");
             Vec::new()
@@ -262,15 +270,20 @@ pub(super) fn velocity_at(t: &Track, t_s: f64) -> Vec2 {
     (t.points[j] - t.points[j - 1]) / (t.times_s[j] - t.times_s[j - 1])
 }
 
-fn collision_views(c: &Collisions) -> Vec<CollisionView> {
-    c.events
-        .iter()
-        .map(|e| CollisionView {
-            a: e.id_a,
-            b: e.id_b,
-            t_s: e.closest.t_s,
-            place: e.closest.place(),
-            distance_m: e.closest.distance_m,
-        })
-        .collect()
+fn collision_views(set: &TrackSet, c: &Collisions) -> Vec<CollisionView> {
+    let clusters = c.clusters.iter().map(|k| CollisionView {
+        a: k.first_id,
+        b: set.tracks[k.members[1]].id,
+        t_s: k.start_s,
+        place: k.place,
+        distance_m: 0.0,
+    });
+    let events = c.events_by_time().into_iter().map(|e| CollisionView {
+        a: e.id_a,
+        b: e.id_b,
+        t_s: e.closest.t_s,
+        place: e.closest.place(),
+        distance_m: e.closest.distance_m,
+    });
+    clusters.chain(events).take(COLLISIONS_PUBLISHED).collect()
 }

@@ -21,8 +21,19 @@
 //! Rounds repeat until nothing collides or [`AvoidParams::max_iterations`] is
 //! reached. A pair that retiming cannot separate (both standing still, no feasible
 //! retiming) is reported in [`AvoidReport::remaining`]; nothing panics.
+//!
+//! The work is bounded whatever the input: each round looks at no more than the
+//! [`DEFAULT_KEEP`] closest pairs detection keeps (when more collide, the next
+//! round detects again and takes the next closest), and the people of a
+//! [`Cluster`](super::Cluster) of detection (on one identical track, for instance
+//! standing at one point, or standing together within the threshold) are left as
+//! they are: their pairs, and their pairs with anyone else, are
+//! not retimed, and each cluster is one [`Remaining`] ([`Stuck::Cluster`]) for its
+//! first two members.
 
-use super::collide::{collisions_involving, detect, Approach, CollideError, PairCollision};
+use super::collide::{
+    collisions_involving, detect, Approach, CollideError, Collisions, PairCollision, DEFAULT_KEEP,
+};
 use super::tracks::{Track, TrackSet};
 use nalgebra::{DMatrix, DVector};
 use std::collections::HashMap;
@@ -110,6 +121,9 @@ pub enum Stuck {
     Infeasible,
     /// They still collided when the rounds ran out.
     IterationLimit,
+    /// They are (or one is) in a cluster of people on one identical track, which
+    /// avoidance leaves as it is.
+    Cluster,
 }
 
 impl Stuck {
@@ -118,6 +132,7 @@ impl Stuck {
         match self {
             Stuck::Infeasible => "infeasible",
             Stuck::IterationLimit => "iteration-limit",
+            Stuck::Cluster => "cluster",
         }
     }
 }
@@ -136,13 +151,14 @@ pub struct Remaining {
 pub struct AvoidReport {
     /// Detection-and-retiming rounds run.
     pub iterations: usize,
-    /// Colliding pairs before.
+    /// Colliding pairs before (all of them, clusters' pairs included).
     pub pairs_before: usize,
-    /// Colliding pairs after.
+    /// Colliding pairs after (likewise).
     pub pairs_after: usize,
     /// Pair retimings applied (eq. 19 solves whose result was kept).
     pub retimings: usize,
-    /// The pairs that still collide.
+    /// The pairs that still collide: at most [`DEFAULT_KEEP`] of them (the closest)
+    /// and one per cluster; `pairs_after` counts them all.
     pub remaining: Vec<Remaining>,
     /// Sum over all samples of `|t̄ − t|` (seconds).
     pub total_abs_dt_s: f64,
@@ -624,17 +640,34 @@ fn separate(
 pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, AvoidError> {
     check_params(params)?;
     let original: Vec<Vec<f64>> = set.tracks.iter().map(|t| t.times_s.clone()).collect();
-    let mut collisions = detect(set, params.threshold_m)?;
+    let collisions = detect(set, params.threshold_m)?;
     let pairs_before = collisions.pair_count();
+    // People in clusters are left as they are (their tracks are never retimed, so
+    // the clusters stay what they were).
+    let mut in_cluster = vec![false; set.tracks.len()];
+    for c in &collisions.clusters {
+        for &k in &c.members {
+            in_cluster[k] = true;
+        }
+    }
+    let workable = |q: &PairCollision| !in_cluster[q.a] && !in_cluster[q.b];
     // The colliding pairs as the rounds change them: a round changes only the
-    // people it retimed, so only their pairs are detected again.
-    let mut current: Vec<PairCollision> = collisions.pairs.clone();
-    let mut infeasible: Vec<(usize, usize)> = Vec::new();
+    // people it retimed, so only their pairs are detected again, as long as every
+    // pair is known (`complete`); else the round detects everything again.
+    let mut complete = collisions.is_complete();
+    let mut current: Vec<PairCollision> =
+        collisions.pairs.iter().copied().filter(workable).collect();
+    let mut infeasible: std::collections::HashSet<(usize, usize)> = Default::default();
     let mut iterations = 0;
     let mut retimings = 0;
     let mut corrections = 0;
     let mut orders = HashMap::new();
     while iterations < params.max_iterations {
+        if !complete {
+            let again = detect(set, params.threshold_m)?;
+            complete = again.is_complete();
+            current = again.pairs.iter().copied().filter(workable).collect();
+        }
         let mut pairs: Vec<PairCollision> = current
             .iter()
             .filter(|q| !infeasible.contains(&(q.a, q.b)))
@@ -657,27 +690,21 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
                     touched[q.a] = true;
                     touched[q.b] = true;
                 }
-                None => infeasible.push((q.a, q.b)),
+                None => {
+                    infeasible.insert((q.a, q.b));
+                }
             }
         }
-        let again = collisions_involving(set, params.threshold_m, &touched)?;
-        current.retain(|q| !touched[q.a] && !touched[q.b]);
-        current.extend_from_slice(&again.pairs);
+        if complete {
+            let again = collisions_involving(set, params.threshold_m, &touched, DEFAULT_KEEP)?;
+            complete = again.is_complete();
+            current.retain(|q| !touched[q.a] && !touched[q.b]);
+            current.extend(again.pairs.iter().copied().filter(workable));
+        }
     }
     // The report's pairs from a full detection.
-    collisions = detect(set, params.threshold_m)?;
-    let remaining = collisions
-        .pairs
-        .iter()
-        .map(|q| Remaining {
-            pair: *q,
-            why: if infeasible.contains(&(q.a, q.b)) {
-                Stuck::Infeasible
-            } else {
-                Stuck::IterationLimit
-            },
-        })
-        .collect();
+    let after = detect(set, params.threshold_m)?;
+    let remaining = remaining_of(set, &after, &in_cluster, &infeasible);
     let mut total_abs_dt_s = 0.0;
     let mut max_speed_change_pct: f64 = 0.0;
     for (tr, t0) in set.tracks.iter().zip(&original) {
@@ -698,13 +725,58 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
     Ok(AvoidReport {
         iterations,
         pairs_before,
-        pairs_after: collisions.pair_count(),
+        pairs_after: after.pair_count(),
         retimings,
         remaining,
         total_abs_dt_s,
         max_speed_change_pct,
         corrections,
     })
+}
+
+/// The pairs that still collide, and why: each cluster once (its first two
+/// members), then the kept pairs.
+fn remaining_of(
+    set: &TrackSet,
+    after: &Collisions,
+    in_cluster: &[bool],
+    infeasible: &std::collections::HashSet<(usize, usize)>,
+) -> Vec<Remaining> {
+    let mut out: Vec<Remaining> = after
+        .clusters
+        .iter()
+        .map(|c| Remaining {
+            pair: PairCollision {
+                a: c.members[0],
+                b: c.members[1],
+                id_a: c.first_id,
+                id_b: set.tracks[c.members[1]].id,
+                closest: Approach {
+                    t_s: c.start_s,
+                    distance_m: 0.0,
+                    at_a: c.place,
+                    at_b: c.place,
+                    sample_a: 0,
+                    sample_b: 0,
+                    moving_a: false,
+                    moving_b: false,
+                },
+                events: 1,
+            },
+            why: Stuck::Cluster,
+        })
+        .collect();
+    out.extend(after.pairs.iter().map(|q| Remaining {
+        pair: *q,
+        why: if in_cluster[q.a] || in_cluster[q.b] {
+            Stuck::Cluster
+        } else if infeasible.contains(&(q.a, q.b)) {
+            Stuck::Infeasible
+        } else {
+            Stuck::IterationLimit
+        },
+    }));
+    out
 }
 
 #[cfg(test)]

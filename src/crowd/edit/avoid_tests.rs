@@ -271,3 +271,28 @@ fn zara_fixture_at_0_3_m() {
     assert_eq!(detect(&set, 0.3).unwrap().pair_count(), r.pairs_after);
     assert!(r.pairs_after <= r.pairs_before, "{r:?}");
 }
+
+#[test]
+fn a_crowd_at_one_point_is_left_as_one_cluster() {
+    // 2,000 people standing at one point (issue 27, finding 4: before, avoidance
+    // took every one of their 2 million pairs each round) and two walkers
+    // crossing elsewhere, whom avoidance still separates.
+    let mut tracks: Vec<Track> = (0..2_000)
+        .map(|id| Track::linked(id, vec![v(5.0, 5.0); 2], vec![0.0, 10.0]))
+        .collect();
+    tracks.push(walker(5_000, v(-5.0, 0.0), v(1.0, 0.0), 1.0, 101, 0.1));
+    tracks.push(walker(5_001, v(0.0, -5.0), v(0.0, 1.0), 1.0, 101, 0.1));
+    let mut set = TrackSet {
+        tracks,
+        step_s: 0.1,
+    };
+    let before = set.clone();
+    let r = avoid(&mut set, &AvoidParams::default()).unwrap();
+    let cluster_pairs = 2_000 * 1_999 / 2;
+    assert_eq!(r.pairs_before, cluster_pairs + 1);
+    assert_eq!(r.pairs_after, cluster_pairs, "{r:?}");
+    assert_eq!(r.remaining.len(), 1);
+    assert_eq!(r.remaining[0].why, Stuck::Cluster);
+    assert_eq!(set.tracks[..2_000], before.tracks[..2_000]);
+    assert_points_unchanged(&before, &set);
+}

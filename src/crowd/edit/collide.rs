@@ -18,6 +18,22 @@
 //! pieces that overlap in time) the tests and benches compare it with. Both evaluate
 //! the same piece pairs with the same arithmetic, so they agree exactly.
 //!
+//! # Bounded results
+//! Detection *streams*: it counts every colliding pair and event, keeps the closest
+//! approach, and keeps only the [`DEFAULT_KEEP`] closest pairs and earliest events
+//! (or as many as [`detect_keeping`] is told), so its memory is O(people + pieces +
+//! kept), whatever the number of colliding pairs. Two kinds of crowd are a
+//! [`Cluster`], one report with its size, its pairs counted in closed form and never
+//! enumerated: people on one identical track (same positions, times and links:
+//! for instance standing at one point for the same span), and at least
+//! [`MIN_STANDING_CLUSTER`] people standing still at the same times within half the
+//! threshold of one of them (so every two are closer than the threshold whenever
+//! present; their closest two are found by a sweep over their places). An
+//! identical track's pairs with anyone else are evaluated once, for its first
+//! person, and counted for every one. People close together who move, or stand at
+//! different times, are still evaluated pair by pair: O(k²) time for k of them in
+//! one grid cell, O(k) memory.
+//!
 //! On the two UCY fixtures (`tests/fixtures/crowd/`, 25 fps, step 10) the counts of
 //! pairs below 0.2/0.3/0.5/1.0 m equal the README's *continuous* counts with this
 //! reading, in which single shared instants count (zara01 0/3/27/160, students001
@@ -27,6 +43,9 @@
 
 use super::tracks::{TrackError, TrackSet};
 use crate::geom::Vec2;
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::hash::{Hash, Hasher};
 use thiserror::Error;
 
 /// Margin added to the bounding boxes the grid compares (metres), so rounding in
@@ -39,6 +58,10 @@ const MAX_CELLS_PER_PIECE: i64 = 64;
 
 /// The most time slabs a sweep uses; longer spans get wider slabs.
 const MAX_SLABS: usize = 1 << 20;
+
+/// The pairs and events a detection keeps by default ([`Collisions::pairs`],
+/// [`Collisions::events`], [`Collisions::clusters`]); every one is counted.
+pub const DEFAULT_KEEP: usize = 1_000;
 
 /// Bad input to collision detection.
 #[derive(Debug, Error, PartialEq)]
@@ -121,28 +144,84 @@ pub struct PairCollision {
     pub events: usize,
 }
 
-/// Every collision of a track set at one threshold.
+/// People every two of whom collide, reported once instead of pair by pair: either
+/// on one identical track (the same positions, times and links, ids aside; at
+/// distance 0 whenever present), or standing still at the same times within half
+/// the threshold of one of them (so within the threshold of each other throughout).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cluster {
+    /// The members' indices in the track set, ascending. A standing cluster lists
+    /// one person of each identical track among it (that track is a cluster of its
+    /// own).
+    pub members: Vec<usize>,
+    /// Whether the members are on one identical track (else standing within the
+    /// threshold).
+    pub identical: bool,
+    /// The colliding pairs this cluster stands for (`size (size − 1) / 2` for an
+    /// identical track; for a standing cluster, the pairs of its people not on one
+    /// identical track).
+    pub pair_count: u64,
+    /// The first member's id.
+    pub first_id: u64,
+    /// The track's first and last time (seconds).
+    pub start_s: f64,
+    /// See `start_s`.
+    pub end_s: f64,
+    /// Where they are at `start_s` (metres).
+    pub place: Vec2,
+}
+
+impl Cluster {
+    /// The number of people.
+    pub fn size(&self) -> usize {
+        self.members.len()
+    }
+
+    /// The colliding pairs this cluster stands for.
+    pub fn pairs(&self) -> u64 {
+        self.pair_count
+    }
+}
+
+/// The collisions of a track set at one threshold: every one counted, a bounded
+/// number kept.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Collisions {
     /// The threshold (metres): pairs closer than this collide.
     pub threshold_m: f64,
-    /// The distinct colliding pairs, ordered by `(a, b)`.
+    /// How many pairs, events and clusters were kept at most.
+    pub keep: usize,
+    /// Every colliding pair of people, clusters' pairs included (a pair with a
+    /// cluster's first member counts once per member).
+    pub pair_total: u64,
+    /// Every [`CollisionEvent`] (counted per member, as `pair_total`; two members of
+    /// a cluster have one per stretch of their track between gaps).
+    pub event_total: u64,
+    /// Every cluster.
+    pub cluster_total: usize,
+    /// The pair that comes closest of all (a cluster's first two members when there
+    /// is a cluster), if any: least `(distance, a, b)`.
+    pub closest: Option<PairCollision>,
+    /// The `keep` closest pairs (least `(distance, a, b)`), ordered by `(a, b)`.
+    /// Pairs inside a cluster are not listed; a pair with a cluster member is
+    /// listed for the cluster's first member.
     pub pairs: Vec<PairCollision>,
-    /// The collisions, ordered by pair, then time.
+    /// The `keep` earliest events (least `(closest.t_s, a, b, start_s)`), ordered by
+    /// pair, then time.
     pub events: Vec<CollisionEvent>,
+    /// The `keep` clusters of most people (ties: by first member), ordered by first member.
+    pub clusters: Vec<Cluster>,
 }
 
 impl Collisions {
     /// The number of distinct colliding pairs: the primary measure.
     pub fn pair_count(&self) -> usize {
-        self.pairs.len()
+        usize::try_from(self.pair_total).unwrap_or(usize::MAX)
     }
 
     /// The colliding pair that comes closest, if any.
     pub fn closest(&self) -> Option<&PairCollision> {
-        self.pairs
-            .iter()
-            .min_by(|x, y| x.closest.distance_m.total_cmp(&y.closest.distance_m))
+        self.closest.as_ref()
     }
 
     /// The closest approach of any colliding pair (metres), if any.
@@ -150,7 +229,14 @@ impl Collisions {
         self.closest().map(|p| p.closest.distance_m)
     }
 
-    /// Events in time order (of their closest approach).
+    /// Whether every pair and event is listed (nothing left out, no cluster).
+    pub fn is_complete(&self) -> bool {
+        self.pairs.len() as u64 == self.pair_total
+            && self.events.len() as u64 == self.event_total
+            && self.cluster_total == 0
+    }
+
+    /// The kept events in time order (of their closest approach).
     pub fn events_by_time(&self) -> Vec<CollisionEvent> {
         let mut e = self.events.clone();
         e.sort_by(|x, y| {
@@ -160,6 +246,182 @@ impl Collisions {
                 .then((x.a, x.b).cmp(&(y.a, y.b)))
         });
         e
+    }
+}
+
+/// A value ordered by a key of a float and two indices and a float, compared with
+/// `total_cmp` (for the bounded heaps of [`Tally`]).
+#[derive(Copy, Clone, Debug)]
+struct Keyed<T> {
+    key: (f64, usize, usize, f64),
+    item: T,
+}
+
+impl<T> Keyed<T> {
+    fn order(&self, other: &Self) -> Ordering {
+        let (a, b) = (&self.key, &other.key);
+        a.0.total_cmp(&b.0)
+            .then(a.1.cmp(&b.1))
+            .then(a.2.cmp(&b.2))
+            .then(a.3.total_cmp(&b.3))
+    }
+}
+
+impl<T> PartialEq for Keyed<T> {
+    fn eq(&self, other: &Self) -> bool {
+        self.order(other) == Ordering::Equal
+    }
+}
+impl<T> Eq for Keyed<T> {}
+impl<T> PartialOrd for Keyed<T> {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl<T> Ord for Keyed<T> {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.order(other)
+    }
+}
+
+/// Pushes into a max-heap holding the `keep` least items.
+fn push_bounded<T>(heap: &mut BinaryHeap<Keyed<T>>, keep: usize, x: Keyed<T>) {
+    if heap.len() < keep {
+        heap.push(x);
+    } else if let Some(mut top) = heap.peek_mut() {
+        if x < *top {
+            *top = x;
+        }
+    }
+}
+
+/// Counts every pair and event and keeps the closest pairs and earliest events:
+/// O(keep) memory however many collide.
+struct Tally {
+    keep: usize,
+    pair_total: u64,
+    event_total: u64,
+    closest: Option<PairCollision>,
+    pairs: BinaryHeap<Keyed<PairCollision>>,
+    events: BinaryHeap<Keyed<CollisionEvent>>,
+    clusters: BinaryHeap<Keyed<Cluster>>,
+    cluster_total: usize,
+}
+
+impl Tally {
+    fn new(keep: usize) -> Tally {
+        Tally {
+            keep,
+            pair_total: 0,
+            event_total: 0,
+            closest: None,
+            pairs: BinaryHeap::new(),
+            events: BinaryHeap::new(),
+            clusters: BinaryHeap::new(),
+            cluster_total: 0,
+        }
+    }
+
+    fn consider_closest(&mut self, p: &PairCollision) {
+        let key = |q: &PairCollision| (q.closest.distance_m, q.a, q.b);
+        let better = self.closest.as_ref().is_none_or(|c| {
+            let (x, y) = (key(p), key(c));
+            x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))) == Ordering::Less
+        });
+        if better {
+            self.closest = Some(*p);
+        }
+    }
+
+    /// A colliding pair with its events, standing for `multiplicity` pairs.
+    fn pair(&mut self, pair: PairCollision, events: &[CollisionEvent], multiplicity: u64) {
+        self.pair_total += multiplicity;
+        self.event_total += events.len() as u64 * multiplicity;
+        self.consider_closest(&pair);
+        let keep = self.keep;
+        push_bounded(
+            &mut self.pairs,
+            keep,
+            Keyed {
+                key: (pair.closest.distance_m, pair.a, pair.b, 0.0),
+                item: pair,
+            },
+        );
+        for e in events {
+            push_bounded(
+                &mut self.events,
+                keep,
+                Keyed {
+                    key: (e.closest.t_s, e.a, e.b, e.start_s),
+                    item: *e,
+                },
+            );
+        }
+    }
+
+    /// A cluster; `closest` its closest pair (`a < b`) and their distance, the
+    /// distance 0 of its first two members for an identical track.
+    fn cluster(&mut self, set: &TrackSet, c: Cluster, closest: Option<(usize, usize, f64)>) {
+        let tr = &set.tracks[c.members[0]];
+        // Every two members collide in each stretch of the track between gaps.
+        let events = 1 + tr.linked.iter().filter(|l| !**l).count();
+        self.pair_total += c.pairs();
+        self.event_total += c.pairs() * events as u64;
+        self.cluster_total += 1;
+        let (a, b, distance_m) = closest.unwrap_or((c.members[0], c.members[1], 0.0));
+        let (ta, tb) = (&set.tracks[a], &set.tracks[b]);
+        self.consider_closest(&PairCollision {
+            a,
+            b,
+            id_a: ta.id,
+            id_b: tb.id,
+            closest: Approach {
+                t_s: ta.times_s[0],
+                distance_m,
+                at_a: ta.points[0],
+                at_b: tb.points[0],
+                sample_a: 0,
+                sample_b: 0,
+                moving_a: ta.linked.first().copied().unwrap_or(false),
+                moving_b: tb.linked.first().copied().unwrap_or(false),
+            },
+            events,
+        });
+        let keep = self.keep;
+        let first = c.members[0];
+        push_bounded(
+            &mut self.clusters,
+            keep,
+            Keyed {
+                // Largest first, then by first member.
+                key: (-(c.members.len() as f64), first, 0, 0.0),
+                item: c,
+            },
+        );
+    }
+
+    fn finish(self, threshold_m: f64) -> Collisions {
+        let mut pairs: Vec<PairCollision> = self.pairs.into_iter().map(|k| k.item).collect();
+        pairs.sort_by_key(|p| (p.a, p.b));
+        let mut events: Vec<CollisionEvent> = self.events.into_iter().map(|k| k.item).collect();
+        events.sort_by(|x, y| {
+            (x.a, x.b)
+                .cmp(&(y.a, y.b))
+                .then(x.start_s.total_cmp(&y.start_s))
+        });
+        let mut clusters: Vec<Cluster> = self.clusters.into_iter().map(|k| k.item).collect();
+        clusters.sort_by_key(|c| c.members[0]);
+        Collisions {
+            threshold_m,
+            keep: self.keep,
+            pair_total: self.pair_total,
+            event_total: self.event_total,
+            cluster_total: self.cluster_total,
+            closest: self.closest,
+            pairs,
+            events,
+            clusters,
+        }
     }
 }
 
@@ -196,13 +458,24 @@ impl Piece {
     }
 }
 
-/// The pieces of every track, grouped by track and in time order; `starts[k]..starts[k+1]`
-/// are track `k`'s.
-fn pieces(set: &TrackSet) -> (Vec<Piece>, Vec<usize>) {
+/// The pieces of the tracks `include` keeps (every track when `None`), grouped by
+/// track, the tracks in `order` (by index when `None`), each track's in time order;
+/// `starts[r]..starts[r+1]` are the pieces of the `r`-th track of `order` (empty
+/// for a track left out).
+fn pieces(
+    set: &TrackSet,
+    include: Option<&[u32]>,
+    order: Option<&[u32]>,
+) -> (Vec<Piece>, Vec<usize>) {
     let mut out = Vec::with_capacity(set.samples());
     let mut starts = Vec::with_capacity(set.tracks.len() + 1);
-    for (k, tr) in set.tracks.iter().enumerate() {
+    for pos in 0..set.tracks.len() {
+        let k = order.map_or(pos, |o| o[pos] as usize);
+        let tr = &set.tracks[k];
         starts.push(out.len());
+        if include.is_some_and(|m| m[k] == 0) {
+            continue;
+        }
         let n = tr.len();
         for j in 0..n {
             let next = j + 1 < n && tr.linked[j];
@@ -231,6 +504,7 @@ fn pieces(set: &TrackSet) -> (Vec<Piece>, Vec<usize>) {
         }
     }
     starts.push(out.len());
+    out.shrink_to_fit();
     (out, starts)
 }
 
@@ -311,25 +585,79 @@ fn try_pair(pieces: &[Piece], i: usize, j: usize, d: f64, hits: &mut Vec<Hit>) {
     }
 }
 
+/// The pair and its events from the hits of one pair of people (`a < b`), in
+/// `events` (cleared first); `None` without hits.
+fn assemble_pair(
+    set: &TrackSet,
+    a: usize,
+    b: usize,
+    hits: &mut [Hit],
+    events: &mut Vec<CollisionEvent>,
+) -> Option<PairCollision> {
+    events.clear();
+    hits.sort_by(|x, y| {
+        x.lo.total_cmp(&y.lo)
+            .then(x.hi.total_cmp(&y.hi))
+            .then((x.pa, x.pb).cmp(&(y.pa, y.pb)))
+    });
+    let first = hits.first()?;
+    let mut pair = PairCollision {
+        a,
+        b,
+        id_a: set.tracks[a].id,
+        id_b: set.tracks[b].id,
+        closest: first.approach,
+        events: 0,
+    };
+    for h in hits.iter() {
+        if h.approach.distance_m < pair.closest.distance_m {
+            pair.closest = h.approach;
+        }
+        match events.last_mut() {
+            Some(e) if h.lo <= e.end_s => {
+                e.end_s = e.end_s.max(h.hi);
+                if h.approach.distance_m < e.closest.distance_m {
+                    e.closest = h.approach;
+                }
+            }
+            _ => {
+                pair.events += 1;
+                events.push(CollisionEvent {
+                    a,
+                    b,
+                    id_a: pair.id_a,
+                    id_b: pair.id_b,
+                    start_s: h.lo,
+                    end_s: h.hi,
+                    closest: h.approach,
+                });
+            }
+        }
+    }
+    Some(pair)
+}
+
 /// The collisions of the people marked in `who` with anyone (pairs in which at
-/// least one is marked), as [`detect`] finds them: the same sweep, candidate
-/// pairs of two unmarked people dropped before their closest approach is
-/// computed. For the avoidance loop, which changes a few people per round: the
-/// pairs of the others are as they were.
+/// least one is marked), as [`detect`] finds them: the same sweep, only the marked
+/// people's pieces looked up; no clusters (every pair of identical tracks with a
+/// marked person is a pair). For the avoidance loop, which changes a few people per
+/// round: the pairs of the others are as they were.
 pub(super) fn collisions_involving(
     set: &TrackSet,
     threshold_m: f64,
     who: &[bool],
+    keep: usize,
 ) -> Result<Collisions, CollideError> {
-    detect_among(set, threshold_m, Some(who))
+    detect_among(set, threshold_m, Some(who), keep)
 }
 
 /// Every collision, by comparing every pair of people: for each piece of one, the
 /// pieces of the other whose time intervals meet it (found by binary search).
-/// The reference for [`detect`].
+/// The reference for [`detect`]: the same counts, the same kept pairs and events,
+/// but no clusters (identical tracks are pairs like any other).
 ///
 /// # Complexity
-/// O(n² + P log P) for n people and P pieces.
+/// O(n² + P log P) time for n people and P pieces; O(P + [`DEFAULT_KEEP`]) memory.
 ///
 /// # Errors
 /// [`CollideError`]: a threshold that is not positive and finite, or a track set
@@ -337,13 +665,16 @@ pub(super) fn collisions_involving(
 pub fn collisions_all_pairs(set: &TrackSet, threshold_m: f64) -> Result<Collisions, CollideError> {
     check_threshold(threshold_m)?;
     set.validate()?;
-    let (pieces, starts) = pieces(set);
+    let (pieces, starts) = pieces(set, None, None);
+    let mut tally = Tally::new(DEFAULT_KEEP);
     let mut hits = Vec::new();
+    let mut events = Vec::new();
     let n = set.tracks.len();
     for ka in 0..n {
         let pa = &pieces[starts[ka]..starts[ka + 1]];
         for kb in ka + 1..n {
             let pb = &pieces[starts[kb]..starts[kb + 1]];
+            hits.clear();
             for (ia, a) in pa.iter().enumerate() {
                 // Pieces of a track are in time order with non-decreasing ends.
                 let first = pb.partition_point(|b| b.t1 < a.t0);
@@ -360,20 +691,29 @@ pub fn collisions_all_pairs(set: &TrackSet, threshold_m: f64) -> Result<Collisio
                     );
                 }
             }
+            if let Some(p) = assemble_pair(set, ka, kb, &mut hits, &mut events) {
+                tally.pair(p, &events, 1);
+            }
         }
     }
-    Ok(assemble(set, &pieces, hits, threshold_m))
+    Ok(tally.finish(threshold_m))
 }
 
 /// Every collision of a track set at `threshold_m` (section 4.1.1, Algorithm 2),
-/// found without comparing all pairs.
+/// found without comparing all pairs, keeping [`DEFAULT_KEEP`] pairs, events and
+/// clusters (see [`detect_keeping`]).
 ///
 /// Time is cut into slabs of the set's frame step. In each slab every piece present
 /// is boxed (its positions over the slab, grown by half the threshold) and entered
-/// in the cells of a uniform grid the box covers; cells are `threshold + mean box
-/// size` wide, and cells are gathered by a counting sort on a hash of their key. Two pieces closer than the threshold at a common time have
-/// overlapping boxes in the slab of that time, so they share a cell; only pieces
-/// sharing a cell with overlapping boxes are compared (eqs. 13–17).
+/// in the cells of a uniform grid the box covers; cells are `max(threshold, mean box
+/// size)` wide, gathered into buckets by a counting sort (row by row, or hashed when
+/// the cells' bounding box is sparse). Two pieces closer than the threshold at a
+/// common time have overlapping boxes in the slab of that time, so they share a
+/// cell. Then person by person, in Z order of their first places, each piece looks
+/// up the cells its boxes cover and compares itself (eqs. 13–17) with the later
+/// people's pieces there whose boxes overlap its own (once per slab: in the cell of
+/// the overlap's low corner); the person's pairs are assembled, counted and dropped
+/// before the next person's.
 ///
 /// # Formula
 /// Eqs. 13–17 per piece pair, as [`collisions_all_pairs`].
@@ -382,8 +722,10 @@ pub fn collisions_all_pairs(set: &TrackSet, threshold_m: f64) -> Result<Collisio
 /// Metres and seconds.
 ///
 /// # Complexity
-/// O(P log P) for P pieces when people are spread (each slab's grid is sorted);
-/// all people crowded into one cell degrade it towards comparing all pairs present.
+/// O(P log P) time for P pieces when people are spread; a [`Cluster`] costs
+/// O(k log k) for its k people; k other people crowded into one cell cost O(k²)
+/// time. Memory O(n + E + keep) for n people and E grid entries
+/// (O(P) when pieces are short against the cells), however many pairs collide.
 ///
 /// # Errors
 /// As [`collisions_all_pairs`].
@@ -405,24 +747,433 @@ pub fn collisions_all_pairs(set: &TrackSet, threshold_m: f64) -> Result<Collisio
 /// assert!(c.events[0].closest.distance_m < 1e-12);
 /// ```
 pub fn detect(set: &TrackSet, threshold_m: f64) -> Result<Collisions, CollideError> {
-    detect_among(set, threshold_m, None)
+    detect_among(set, threshold_m, None, DEFAULT_KEEP)
 }
 
-/// [`detect`], for pairs with at least one person marked in `who` (every pair
-/// when `None`).
+/// [`detect`], keeping the `keep` closest pairs, `keep` earliest events and `keep`
+/// largest clusters (everything is counted whatever `keep` is).
+///
+/// # Errors
+/// As [`detect`].
+pub fn detect_keeping(
+    set: &TrackSet,
+    threshold_m: f64,
+    keep: usize,
+) -> Result<Collisions, CollideError> {
+    detect_among(set, threshold_m, None, keep)
+}
+
+/// The classes of identical tracks (positions, times and links equal bit for bit,
+/// ids aside): `mult[k]` is the size of the class whose first member is `k`, 0 for
+/// its other members; and the classes of two or more, as clusters.
+fn classes(set: &TrackSet) -> (Vec<u32>, Vec<Cluster>) {
+    let n = set.tracks.len();
+    let mut hashed: Vec<(u64, u32)> = set
+        .tracks
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            for (p, ts) in t.points.iter().zip(&t.times_s) {
+                (p.x.to_bits(), p.y.to_bits(), ts.to_bits()).hash(&mut h);
+            }
+            t.linked.hash(&mut h);
+            (h.finish(), k as u32)
+        })
+        .collect();
+    hashed.sort_unstable();
+    let same = |a: usize, b: usize| {
+        let (x, y) = (&set.tracks[a], &set.tracks[b]);
+        x.linked == y.linked
+            && x.times_s.len() == y.times_s.len()
+            && x.times_s
+                .iter()
+                .zip(&y.times_s)
+                .all(|(u, v)| u.to_bits() == v.to_bits())
+            && x.points
+                .iter()
+                .zip(&y.points)
+                .all(|(u, v)| u.x.to_bits() == v.x.to_bits() && u.y.to_bits() == v.y.to_bits())
+    };
+    let mut mult = vec![0u32; n];
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut i = 0;
+    while i < hashed.len() {
+        let mut j = i;
+        while j < hashed.len() && hashed[j].0 == hashed[i].0 {
+            j += 1;
+        }
+        // One hash: usually one class; split by comparing with each class's first.
+        let mut local: Vec<Vec<usize>> = Vec::new();
+        for &(_, k) in &hashed[i..j] {
+            let k = k as usize;
+            match local.iter_mut().find(|c| same(c[0], k)) {
+                Some(c) => c.push(k),
+                None => local.push(vec![k]),
+            }
+        }
+        groups.extend(local);
+        i = j;
+    }
+    let mut clusters = Vec::new();
+    for mut g in groups {
+        g.sort_unstable();
+        mult[g[0]] = g.len() as u32;
+        if g.len() >= 2 {
+            let t = &set.tracks[g[0]];
+            let (start_s, end_s) = t.span_s();
+            let n = g.len() as u64;
+            clusters.push(Cluster {
+                first_id: t.id,
+                start_s,
+                end_s,
+                place: t.points[0],
+                members: g,
+                identical: true,
+                pair_count: n * (n - 1) / 2,
+            });
+        }
+    }
+    (mult, clusters)
+}
+
+/// No standing cluster.
+const NO_GROUP: u32 = u32::MAX;
+
+/// The fewest people a standing cluster holds; fewer are looked up pair by pair
+/// (and listed) as before.
+pub const MIN_STANDING_CLUSTER: usize = 32;
+
+/// The most leaders of standing clusters a person is compared with.
+const MAX_LEADERS_CHECKED: usize = 16;
+
+/// Standing clusters among the people `mult` keeps: people standing still (every
+/// position equal) at the same times with the same links, each within half the
+/// threshold (less 1e-9 of it, against rounding) of the cluster's first person, its
+/// leader, so every two are closer than the threshold whenever present. Greedy:
+/// each person joins the first of at most [`MAX_LEADERS_CHECKED`] leaders near
+/// it that fits, else leads a new one; clusters of fewer than
+/// [`MIN_STANDING_CLUSTER`] are dropped. O(n log n).
+fn standing_groups(set: &TrackSet, mult: &[u32], d: f64) -> Vec<Vec<usize>> {
+    let r = 0.5 * d * (1.0 - 1e-9);
+    let stands = |t: &super::tracks::Track| {
+        let p = t.points[0];
+        t.points
+            .iter()
+            .all(|q| q.x.to_bits() == p.x.to_bits() && q.y.to_bits() == p.y.to_bits())
+    };
+    let mut cand: Vec<(u64, u32)> = set
+        .tracks
+        .iter()
+        .enumerate()
+        .filter(|(k, t)| mult[*k] > 0 && stands(t))
+        .map(|(k, t)| {
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            for ts in &t.times_s {
+                ts.to_bits().hash(&mut h);
+            }
+            t.linked.hash(&mut h);
+            (h.finish(), k as u32)
+        })
+        .collect();
+    cand.sort_unstable();
+    let same_times = |a: usize, b: usize| {
+        let (x, y) = (&set.tracks[a], &set.tracks[b]);
+        x.linked == y.linked
+            && x.times_s.len() == y.times_s.len()
+            && x.times_s
+                .iter()
+                .zip(&y.times_s)
+                .all(|(u, v)| u.to_bits() == v.to_bits())
+    };
+    let cell_of = |p: Vec2| ((p.x / r).floor() as i64, (p.y / r).floor() as i64);
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut leaders: std::collections::HashMap<(i64, i64), Vec<usize>> = Default::default();
+    let mut i = 0;
+    while i < cand.len() {
+        let mut j = i;
+        while j < cand.len() && cand[j].0 == cand[i].0 {
+            j += 1;
+        }
+        leaders.clear();
+        for &(_, k) in &cand[i..j] {
+            let k = k as usize;
+            let p = set.tracks[k].points[0];
+            let (cx, cy) = cell_of(p);
+            let mut joined = None;
+            let mut checked = 0;
+            'search: for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for &g in leaders.get(&(cx + dx, cy + dy)).into_iter().flatten() {
+                        checked += 1;
+                        if checked > MAX_LEADERS_CHECKED {
+                            break 'search;
+                        }
+                        let l = groups[g][0];
+                        if (set.tracks[l].points[0] - p).norm() < r && same_times(l, k) {
+                            joined = Some(g);
+                            break 'search;
+                        }
+                    }
+                }
+            }
+            match joined {
+                Some(g) => groups[g].push(k),
+                None => {
+                    leaders.entry((cx, cy)).or_default().push(groups.len());
+                    groups.push(vec![k]);
+                }
+            }
+        }
+        i = j;
+    }
+    groups.retain(|g| g.len() >= MIN_STANDING_CLUSTER);
+    for g in &mut groups {
+        g.sort_unstable();
+    }
+    groups
+}
+
+/// The closest two of a standing cluster `(a, b, distance)` with `a < b`, least
+/// `(distance, a, b)`: a sweep over the places sorted by x, a pair skipped only
+/// when its x distance alone exceeds the best.
+fn closest_standing(set: &TrackSet, members: &[usize]) -> (usize, usize, f64) {
+    let mut pts: Vec<(f64, usize)> = members
+        .iter()
+        .map(|&k| (set.tracks[k].points[0].x, k))
+        .collect();
+    pts.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    let mut best = (f64::INFINITY, usize::MAX, usize::MAX);
+    for i in 0..pts.len() {
+        for j in i + 1..pts.len() {
+            if pts[j].0 - pts[i].0 > best.0 {
+                break;
+            }
+            let (a, b) = (pts[i].1.min(pts[j].1), pts[i].1.max(pts[j].1));
+            // As the pair's closest approach computes it: first minus second.
+            let dist = (set.tracks[a].points[0] - set.tracks[b].points[0]).norm();
+            let better = dist
+                .total_cmp(&best.0)
+                .then((a, b).cmp(&(best.1, best.2)))
+                .is_lt();
+            if better {
+                best = (dist, a, b);
+            }
+        }
+    }
+    (best.1, best.2, best.0)
+}
+
+/// The people in Z (Morton) order of their first place, quantised to 2^16 steps
+/// each way across the box of all first places; a standing cluster's people
+/// together at its leader's place (ties by cluster, then index).
+fn spatial_order(set: &TrackSet, group: &[u32]) -> Vec<u32> {
+    let mut lo = Vec2::repeat(f64::INFINITY);
+    let mut hi = Vec2::repeat(f64::NEG_INFINITY);
+    for t in &set.tracks {
+        lo = lo.inf(&t.points[0]);
+        hi = hi.sup(&t.points[0]);
+    }
+    let span = (hi - lo).max().max(f64::MIN_POSITIVE);
+    let spread = |v: u32| {
+        let mut v = v as u64 & 0xffff;
+        v = (v | (v << 8)) & 0x00ff_00ff;
+        v = (v | (v << 4)) & 0x0f0f_0f0f;
+        v = (v | (v << 2)) & 0x3333_3333;
+        (v | (v << 1)) & 0x5555_5555
+    };
+    // Each standing cluster's leader (its first person in index order).
+    let mut leader: std::collections::HashMap<u32, usize> = Default::default();
+    for (k, &g) in group.iter().enumerate() {
+        if g != NO_GROUP {
+            leader.entry(g).or_insert(k);
+        }
+    }
+    let mut keyed: Vec<(u64, u32, u32)> = set
+        .tracks
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            let g = group[k];
+            let at = if g == NO_GROUP {
+                t.points[0]
+            } else {
+                set.tracks[leader[&g]].points[0]
+            };
+            let q = (at - lo) / span * 65535.0;
+            let (x, y) = (
+                q.x.clamp(0.0, 65535.0) as u32,
+                q.y.clamp(0.0, 65535.0) as u32,
+            );
+            (spread(x) | (spread(y) << 1), g, k as u32)
+        })
+        .collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, _, k)| k).collect()
+}
+
+/// A piece's box over a slab `[s0, s1]` (its positions then, widened in time by
+/// `slack` against rounding), grown by `half` on every side.
+fn slab_box(p: &Piece, s0: f64, s1: f64, slack: f64, half: f64) -> (Vec2, Vec2) {
+    let ta = p.t0.max(s0 - slack);
+    let tb = p.t1.min(s1 + slack);
+    let (qa, qb) = if ta <= tb {
+        (p.at(ta), p.at(tb))
+    } else {
+        (p.p0, p.p1)
+    };
+    (
+        qa.inf(&qb) - Vec2::repeat(half),
+        qa.sup(&qb) + Vec2::repeat(half),
+    )
+}
+
+/// The cells a box covers, `None` when more than [`MAX_CELLS_PER_PIECE`].
+fn cell_range(b: &(Vec2, Vec2), cell: f64) -> Option<(i64, i64, i64, i64)> {
+    let x0 = (b.0.x / cell).floor() as i64;
+    let x1 = (b.1.x / cell).floor() as i64;
+    let y0 = (b.0.y / cell).floor() as i64;
+    let y1 = (b.1.y / cell).floor() as i64;
+    let cells = (x1 - x0 + 1).saturating_mul(y1 - y0 + 1);
+    (cells <= MAX_CELLS_PER_PIECE).then_some((x0, x1, y0, y1))
+}
+
+fn cell_key(x: i64, y: i64) -> u64 {
+    ((x as u32 as u64) << 32) | (y as u32 as u64)
+}
+
+/// The bucket of a cell key among `nb` (a power of two).
+fn bucket_of(key: u64, nb: usize) -> usize {
+    (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & (nb - 1)
+}
+
+/// How one slab's cells map to buckets: row by row over the cells' bounding box
+/// when it holds no more than [`DENSE_CELLS_PER_ENTRY`] cells per entry (neighbouring
+/// cells in neighbouring buckets: people near each other read memory near each
+/// other), else hashed into a power of two of buckets (a bucket may then hold
+/// several cells: the box test drops the extra pieces).
+#[derive(Copy, Clone, Debug, Default)]
+struct SlabGrid {
+    cell: f64,
+    x0: i64,
+    y0: i64,
+    w: i64,
+    h: i64,
+    buckets: usize,
+    dense: bool,
+}
+
+/// See [`SlabGrid`].
+const DENSE_CELLS_PER_ENTRY: i64 = 4;
+
+impl SlabGrid {
+    fn new(cell: f64, (x0, x1, y0, y1): (i64, i64, i64, i64), entries: usize) -> SlabGrid {
+        let w = x1.saturating_sub(x0).saturating_add(1).max(1);
+        let h = y1.saturating_sub(y0).saturating_add(1).max(1);
+        let limit = (entries as i64)
+            .max(16)
+            .saturating_mul(DENSE_CELLS_PER_ENTRY);
+        let dense = entries > 0 && w.checked_mul(h).is_some_and(|c| c <= limit);
+        SlabGrid {
+            cell,
+            x0,
+            y0,
+            w,
+            h,
+            buckets: if dense {
+                (w * h) as usize
+            } else {
+                entries.next_power_of_two().max(2)
+            },
+            dense,
+        }
+    }
+
+    fn bucket(&self, x: i64, y: i64) -> Option<usize> {
+        if self.dense {
+            let (dx, dy) = (x - self.x0, y - self.y0);
+            (dx >= 0 && dy >= 0 && dx < self.w && dy < self.h).then(|| (dy * self.w + dx) as usize)
+        } else {
+            Some(bucket_of(cell_key(x, y), self.buckets))
+        }
+    }
+}
+
+fn overlap(a: &(Vec2, Vec2), b: &(Vec2, Vec2)) -> bool {
+    a.0.x <= b.1.x && b.0.x <= a.1.x && a.0.y <= b.1.y && b.0.y <= a.1.y
+}
+
+/// [`detect`], for pairs with at least one person marked in `who` (every pair,
+/// and clusters, when `None`), keeping `keep`.
 fn detect_among(
     set: &TrackSet,
     threshold_m: f64,
     who: Option<&[bool]>,
+    keep: usize,
 ) -> Result<Collisions, CollideError> {
     check_threshold(threshold_m)?;
     set.validate()?;
-    let (pieces, _) = pieces(set);
     let d = threshold_m;
-    let mut hits = Vec::new();
-    if pieces.is_empty() {
-        return Ok(assemble(set, &pieces, hits, d));
+    let mut tally = Tally::new(keep);
+    let n = set.tracks.len();
+    // Identical tracks: only each class's first member takes part below.
+    // Standing clusters: their pairs are counted, never looked up.
+    let mut group = vec![NO_GROUP; n];
+    let mult: Vec<u32> = match who {
+        Some(_) => vec![1; n],
+        None => {
+            let (mult, clusters) = classes(set);
+            let standing = standing_groups(set, &mult, d);
+            for g in &standing {
+                let m: Vec<u64> = g.iter().map(|&k| u64::from(mult[k])).collect();
+                let total: u64 = m.iter().sum();
+                let same: u64 = m.iter().map(|x| x * x).sum();
+                let t = &set.tracks[g[0]];
+                let (start_s, end_s) = t.span_s();
+                let c = Cluster {
+                    members: g.clone(),
+                    identical: false,
+                    pair_count: (total * total - same) / 2,
+                    first_id: t.id,
+                    start_s,
+                    end_s,
+                    place: t.points[0],
+                };
+                tally.cluster(set, c, Some(closest_standing(set, g)));
+            }
+            for c in clusters {
+                tally.cluster(set, c, None);
+            }
+            for (k, g) in standing.iter().enumerate() {
+                for &m in g {
+                    group[m] = k as u32;
+                }
+            }
+            mult
+        }
+    };
+    // People in Z order of their first place, so that people near each other look
+    // up the same cells and their pieces lie together in memory; a standing
+    // cluster's people one after the other.
+    let order = spatial_order(set, &group);
+    let mut rank_of = vec![0u32; n];
+    // For each standing cluster, the rank after its last person.
+    let mut group_end: Vec<usize> = Vec::new();
+    for (r, &k) in order.iter().enumerate() {
+        rank_of[k as usize] = r as u32;
+        let g = group[k as usize];
+        if g != NO_GROUP {
+            if group_end.len() <= g as usize {
+                group_end.resize(g as usize + 1, 0);
+            }
+            group_end[g as usize] = r + 1;
+        }
     }
+    let (pieces, starts) = pieces(set, Some(&mult), Some(&order));
+    if pieces.is_empty() {
+        return Ok(tally.finish(d));
+    }
+    let marked = |k: usize| who.is_none_or(|w| w.get(k).copied().unwrap_or(false));
     let (t_lo, t_hi) = set.span_s();
     let mut width = set.step_s;
     if ((t_hi - t_lo) / width) as usize >= MAX_SLABS {
@@ -449,185 +1200,204 @@ fn detect_among(
             fill[s] += 1;
         }
     }
+    drop(fill);
 
+    // Each slab's grid: cell size, entries gathered by a counting sort into
+    // buckets hashed from their cell (a bucket may hold several cells: the box
+    // test drops the extra pieces), oversized pieces apart.
     let half = 0.5 * d + BOX_MARGIN_M;
     let slack = 1e-6 * width + 1e-12 * (t_lo.abs() + t_hi.abs());
-    let mut boxes: Vec<(Vec2, Vec2)> = Vec::new();
-    let mut entries: Vec<(u64, u32)> = Vec::new();
-    let mut bucket_start: Vec<usize> = Vec::new();
-    let mut bucket_fill: Vec<usize> = Vec::new();
-    let mut sorted: Vec<u32> = Vec::new();
-    let mut oversized: Vec<u32> = Vec::new();
-    let mut candidates: Vec<u64> = Vec::new();
+    let slab_t = |s: usize| {
+        let s0 = t_lo + s as f64 * width;
+        (s0, s0 + width)
+    };
+    let mut grids = vec![SlabGrid::default(); n_slabs];
+    // Slab s: its pieces from grid_base[s], its buckets' starts (relative to that)
+    // at bucket_base[s]..=bucket_base[s] + grids[s].buckets.
+    let mut grid_base = vec![0usize; n_slabs];
+    let mut bucket_base = vec![0usize; n_slabs];
+    let mut over_start = vec![0usize; n_slabs + 1];
+    let mut bucket_start: Vec<u32> = Vec::new();
+    let mut grid_pieces: Vec<u32> = Vec::new();
+    let mut over: Vec<u32> = Vec::new();
+    let mut entries: Vec<(u32, u32)> = Vec::new();
     for s in 0..n_slabs {
         let members = &in_slab[count[s]..count[s + 1]];
+        over_start[s] = over.len();
+        grid_base[s] = grid_pieces.len();
+        bucket_base[s] = bucket_start.len();
         if members.len() < 2 {
             continue;
         }
-        let s0 = t_lo + s as f64 * width;
-        let s1 = s0 + width;
-        boxes.clear();
-        let mut extent = 0.0;
-        for &i in members {
-            let p = &pieces[i as usize];
-            // Positions over the slab (widened in time against rounding).
-            let ta = p.t0.max(s0 - slack);
-            let tb = p.t1.min(s1 + slack);
-            let (qa, qb) = if ta <= tb {
-                (p.at(ta), p.at(tb))
-            } else {
-                (p.p0, p.p1)
-            };
-            let lo = qa.inf(&qb) - Vec2::repeat(half);
-            let hi = qa.sup(&qb) + Vec2::repeat(half);
-            extent += (hi - lo).max();
-            boxes.push((lo, hi));
-        }
+        let (s0, s1) = slab_t(s);
+        let boxed = |i: u32| slab_box(&pieces[i as usize], s0, s1, slack, half);
+        let extent: f64 = members
+            .iter()
+            .map(|&i| {
+                let b = boxed(i);
+                (b.1 - b.0).max()
+            })
+            .sum();
         let cell = (extent / members.len() as f64).max(d);
+        // The cells' bounds and number of entries, then the layout of the buckets.
+        let (mut x_lo, mut x_hi, mut y_lo, mut y_hi) = (i64::MAX, i64::MIN, i64::MAX, i64::MIN);
+        let mut n_entries = 0usize;
+        for &i in members {
+            if let Some((x0, x1, y0, y1)) = cell_range(&boxed(i), cell) {
+                (x_lo, x_hi, y_lo, y_hi) = (x_lo.min(x0), x_hi.max(x1), y_lo.min(y0), y_hi.max(y1));
+                n_entries += ((x1 - x0 + 1) * (y1 - y0 + 1)) as usize;
+            }
+        }
+        let grid = SlabGrid::new(cell, (x_lo, x_hi, y_lo, y_hi), n_entries);
+        grids[s] = grid;
         entries.clear();
-        oversized.clear();
-        for (m, (lo, hi)) in boxes.iter().enumerate() {
-            let x0 = (lo.x / cell).floor() as i64;
-            let x1 = (hi.x / cell).floor() as i64;
-            let y0 = (lo.y / cell).floor() as i64;
-            let y1 = (hi.y / cell).floor() as i64;
-            if (x1 - x0 + 1) * (y1 - y0 + 1) > MAX_CELLS_PER_PIECE {
-                oversized.push(m as u32);
-                continue;
-            }
-            for x in x0..=x1 {
-                for y in y0..=y1 {
-                    let key = ((x as u32 as u64) << 32) | (y as u32 as u64);
-                    entries.push((key, m as u32));
-                }
-            }
-        }
-        // Counting sort of the entries into hashed buckets (a bucket may hold
-        // several cells: the box test below drops the extra pairs).
-        let buckets = (2 * entries.len()).next_power_of_two().max(2);
-        let bucket_of =
-            |key: u64| (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & (buckets - 1);
-        bucket_start.clear();
-        bucket_start.resize(buckets + 1, 0);
-        for &(key, _) in &entries {
-            bucket_start[bucket_of(key) + 1] += 1;
-        }
-        for b in 0..buckets {
-            bucket_start[b + 1] += bucket_start[b];
-        }
-        bucket_fill.clear();
-        bucket_fill.extend_from_slice(&bucket_start[..buckets]);
-        sorted.clear();
-        sorted.resize(entries.len(), 0);
-        for &(key, m) in &entries {
-            let b = bucket_of(key);
-            sorted[bucket_fill[b]] = m;
-            bucket_fill[b] += 1;
-        }
-        let overlap = |u: usize, v: usize| {
-            let (a0, a1) = boxes[u];
-            let (b0, b1) = boxes[v];
-            a0.x <= b1.x && b0.x <= a1.x && a0.y <= b1.y && b0.y <= a1.y
-        };
-        let marked = |k: u32| who.is_none_or(|w| w.get(k as usize).copied().unwrap_or(false));
-        let push = |u: usize, v: usize, candidates: &mut Vec<u64>| {
-            let (i, j) = (members[u], members[v]);
-            let (ta, tb) = (pieces[i as usize].track, pieces[j as usize].track);
-            if ta != tb && (marked(ta) || marked(tb)) && overlap(u, v) {
-                let (i, j) = (i.min(j), i.max(j));
-                candidates.push(((i as u64) << 32) | j as u64);
-            }
-        };
-        for b in 0..buckets {
-            let bucket = &sorted[bucket_start[b]..bucket_start[b + 1]];
-            for (k, &u) in bucket.iter().enumerate() {
-                for &v in &bucket[k + 1..] {
-                    if u != v {
-                        push(u as usize, v as usize, &mut candidates);
+        for &i in members {
+            match cell_range(&boxed(i), cell) {
+                None => over.push(i),
+                Some((x0, x1, y0, y1)) => {
+                    for y in y0..=y1 {
+                        for x in x0..=x1 {
+                            if let Some(b) = grid.bucket(x, y) {
+                                entries.push((b as u32, i));
+                            }
+                        }
                     }
                 }
             }
         }
-        for (k, &u) in oversized.iter().enumerate() {
-            for v in 0..members.len() {
-                // Pairs of two oversized pieces once.
-                if oversized[..k].contains(&(v as u32)) || v == u as usize {
+        let nb = grid.buckets;
+        let first = bucket_start.len();
+        bucket_start.resize(first + nb + 1, 0);
+        let starts_of = &mut bucket_start[first..];
+        for &(b, _) in &entries {
+            starts_of[b as usize + 1] += 1;
+        }
+        for b in 0..nb {
+            starts_of[b + 1] += starts_of[b];
+        }
+        let base = grid_pieces.len();
+        grid_pieces.resize(base + entries.len(), 0);
+        // Members come in piece order, so each bucket's pieces ascend.
+        for &(b, i) in &entries {
+            let at = starts_of[b as usize] as usize;
+            grid_pieces[base + at] = i;
+            starts_of[b as usize] += 1;
+        }
+        // The fill moved every start to its bucket's end: shift back.
+        for b in (1..=nb).rev() {
+            starts_of[b] = starts_of[b - 1];
+        }
+        starts_of[0] = 0;
+    }
+    over_start[n_slabs] = over.len();
+    drop(entries);
+
+    // Person by person: the later (or unmarked) people's pieces near each piece.
+    // A pair (q, r) is looked up from q when q is a querying person and r is not, or
+    // both are and q comes first in the Z order. In a slab, a pair of pieces entered in cells is taken only
+    // in the cell holding the low corner of their boxes' overlap, so once.
+    let queries = |k: usize| mult[k] > 0 && marked(k);
+    let mut candidates: Vec<(u32, u32, u32)> = Vec::new();
+    let mut hits: Vec<Hit> = Vec::new();
+    let mut events: Vec<CollisionEvent> = Vec::new();
+    for (rank, &q) in order.iter().enumerate() {
+        let q = q as usize;
+        if !queries(q) {
+            continue;
+        }
+        candidates.clear();
+        let gq = group[q];
+        let accept = |r: usize| {
+            r != q
+                && (gq == NO_GROUP || group[r] != gq)
+                && (!queries(r) || rank_of[r] as usize > rank)
+        };
+        // Without marks only later people are partners: their pieces come after q's
+        // (and after q's standing cluster's).
+        let first_partner = if who.is_some() {
+            0
+        } else if gq != NO_GROUP {
+            starts[group_end[gq as usize]] as u32
+        } else {
+            starts[rank + 1] as u32
+        };
+        for i in starts[rank]..starts[rank + 1] {
+            let p = &pieces[i];
+            for s in slab_of(p.t0)..=slab_of(p.t1) {
+                let members = &in_slab[count[s]..count[s + 1]];
+                if members.len() < 2 {
                     continue;
                 }
-                push(u as usize, v, &mut candidates);
-            }
-        }
-    }
-    candidates.sort_unstable();
-    candidates.dedup();
-    for c in candidates {
-        try_pair(
-            &pieces,
-            (c >> 32) as usize,
-            (c & 0xffff_ffff) as usize,
-            d,
-            &mut hits,
-        );
-    }
-    Ok(assemble(set, &pieces, hits, d))
-}
-
-/// Groups piece hits into pairs and events.
-fn assemble(set: &TrackSet, pieces: &[Piece], mut hits: Vec<Hit>, d: f64) -> Collisions {
-    let key = |h: &Hit| (pieces[h.pa as usize].track, pieces[h.pb as usize].track);
-    hits.sort_by(|x, y| {
-        key(x)
-            .cmp(&key(y))
-            .then(x.lo.total_cmp(&y.lo))
-            .then(x.hi.total_cmp(&y.hi))
-            .then((x.pa, x.pb).cmp(&(y.pa, y.pb)))
-    });
-    let mut pairs: Vec<PairCollision> = Vec::new();
-    let mut events: Vec<CollisionEvent> = Vec::new();
-    for h in &hits {
-        let (a, b) = key(h);
-        let (a, b) = (a as usize, b as usize);
-        let same_pair = pairs.last().is_some_and(|p| (p.a, p.b) == (a, b));
-        if !same_pair {
-            pairs.push(PairCollision {
-                a,
-                b,
-                id_a: set.tracks[a].id,
-                id_b: set.tracks[b].id,
-                closest: h.approach,
-                events: 0,
-            });
-        }
-        let pair = pairs.last_mut().expect("pushed above");
-        if h.approach.distance_m < pair.closest.distance_m {
-            pair.closest = h.approach;
-        }
-        match events.last_mut() {
-            Some(e) if same_pair && h.lo <= e.end_s => {
-                e.end_s = e.end_s.max(h.hi);
-                if h.approach.distance_m < e.closest.distance_m {
-                    e.closest = h.approach;
+                let (s0, s1) = slab_t(s);
+                let bi = slab_box(p, s0, s1, slack, half);
+                let grid = grids[s];
+                let cell = grid.cell;
+                let consider =
+                    |j: u32, in_cell: Option<(i64, i64)>, out: &mut Vec<(u32, u32, u32)>| {
+                        let pj = &pieces[j as usize];
+                        if !accept(pj.track as usize) {
+                            return;
+                        }
+                        let bj = slab_box(pj, s0, s1, slack, half);
+                        if !overlap(&bi, &bj) {
+                            return;
+                        }
+                        if let Some((x, y)) = in_cell {
+                            let cx = (bi.0.x.max(bj.0.x) / cell).floor() as i64;
+                            let cy = (bi.0.y.max(bj.0.y) / cell).floor() as i64;
+                            if (cx, cy) != (x, y) {
+                                return;
+                            }
+                        }
+                        out.push((pj.track, i as u32, j));
+                    };
+                match cell_range(&bi, cell) {
+                    None => {
+                        for &j in members {
+                            consider(j, None, &mut candidates);
+                        }
+                    }
+                    Some((x0, x1, y0, y1)) => {
+                        let bs = &bucket_start[bucket_base[s]..=bucket_base[s] + grid.buckets];
+                        let ids = &grid_pieces[grid_base[s]..];
+                        for y in y0..=y1 {
+                            for x in x0..=x1 {
+                                let Some(b) = grid.bucket(x, y) else {
+                                    continue;
+                                };
+                                let bucket = &ids[bs[b] as usize..bs[b + 1] as usize];
+                                let from = bucket.partition_point(|&j| j < first_partner);
+                                for &j in &bucket[from..] {
+                                    consider(j, Some((x, y)), &mut candidates);
+                                }
+                            }
+                        }
+                        for &j in &over[over_start[s]..over_start[s + 1]] {
+                            consider(j, None, &mut candidates);
+                        }
+                    }
                 }
             }
-            _ => {
-                pair.events += 1;
-                events.push(CollisionEvent {
-                    a,
-                    b,
-                    id_a: pair.id_a,
-                    id_b: pair.id_b,
-                    start_s: h.lo,
-                    end_s: h.hi,
-                    closest: h.approach,
-                });
+        }
+        candidates.sort_unstable();
+        candidates.dedup();
+        let mut g = 0;
+        while g < candidates.len() {
+            let r = candidates[g].0;
+            hits.clear();
+            while g < candidates.len() && candidates[g].0 == r {
+                let (_, i, j) = candidates[g];
+                try_pair(&pieces, i as usize, j as usize, d, &mut hits);
+                g += 1;
+            }
+            let r = r as usize;
+            let (a, b) = (q.min(r), q.max(r));
+            if let Some(p) = assemble_pair(set, a, b, &mut hits, &mut events) {
+                tally.pair(p, &events, u64::from(mult[a]) * u64::from(mult[b]));
             }
         }
     }
-    Collisions {
-        threshold_m: d,
-        pairs,
-        events,
-    }
+    Ok(tally.finish(d))
 }
 
 #[cfg(test)]

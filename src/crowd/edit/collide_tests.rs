@@ -198,6 +198,18 @@ fn bad_threshold_and_tracks_are_errors() {
     let mut bad = s.clone();
     bad.tracks[0].times_s[1] = 0.0;
     assert!(matches!(detect(&bad, 0.3), Err(CollideError::Tracks(_))));
+    // Near 1e308 m a place printed as (inf, -inf); beyond ±1e6 m is refused.
+    let far = set(vec![
+        line(1, v(1e308, -1e308), v(1e308, -1e308), 0.0, 1.0),
+        line(2, v(1e308, -1e308), v(-1e308, 1e308), 0.0, 1.0),
+    ]);
+    assert!(matches!(
+        detect(&far, 0.3),
+        Err(CollideError::Tracks(TrackError::OutOfRange {
+            id: 1,
+            sample: 0
+        }))
+    ));
     assert_eq!(detect(&set(vec![]), 0.3).unwrap().pair_count(), 0);
 }
 
@@ -283,7 +295,7 @@ proptest! {
         // The avoidance loop's incremental detection: the reference's pairs with a
         // marked person, nothing more.
         let who: Vec<bool> = (0..s.tracks.len()).map(|k| mask >> (k % 64) & 1 == 1).collect();
-        let part = super::collisions_involving(&s, d, &who).unwrap();
+        let part = super::collisions_involving(&s, d, &who, DEFAULT_KEEP).unwrap();
         let reference = collisions_all_pairs(&s, d).unwrap();
         let want: Vec<_> = reference.pairs.iter().filter(|p| who[p.a] || who[p.b]).copied().collect();
         prop_assert_eq!(part.pairs, want);
@@ -332,5 +344,198 @@ fn random_walkers_grid_equals_all_pairs() {
     for d in [0.2, 0.5, 1.0] {
         let c = both(&s, d);
         assert!(c.pair_count() > 0);
+    }
+}
+
+/// `n` people at one point for one second, as the CSV `t,id,x,y` with `0,i,5,5`
+/// and `1,i,5,5` (issue 27, finding 4).
+fn at_one_point(n: usize) -> TrackSet {
+    let mut text = String::from("t,id,x,y\n");
+    for i in 0..n {
+        text.push_str(&format!("0,{i},5,5\n1,{i},5,5\n"));
+    }
+    crate::crowd::edit::io::read_csv(&text, None).unwrap()
+}
+
+#[test]
+fn people_at_one_point_are_one_cluster_with_bounded_lists() {
+    // Before: every pair stored (5,000 people: 12.5 million pairs and events,
+    // 4.3 GB); now one cluster, the pairs counted in closed form.
+    for n in [300usize, 5_000, 20_000] {
+        let c = detect(&at_one_point(n), 0.3).unwrap();
+        let pairs = (n * (n - 1) / 2) as u64;
+        assert_eq!(c.pair_count() as u64, pairs, "{n}");
+        assert!(c.pairs.len() <= 1000 && c.events.len() <= 1000, "{n}");
+        assert_eq!(c.clusters.len(), 1, "{n}");
+        assert_eq!(c.clusters[0].size(), n);
+        assert_eq!(c.clusters[0].pairs(), pairs);
+        assert_eq!(c.event_total, pairs, "one event per pair: no gap");
+        assert_eq!(c.min_distance_m(), Some(0.0));
+        assert_eq!(c.clusters[0].place, v(5.0, 5.0));
+    }
+}
+
+#[test]
+fn a_cluster_counts_as_the_reference_does() {
+    // 30 people on one track (standing, with a gap), a walker through them, 40
+    // random walkers nearby and a second cluster of 3 walking.
+    let mut rng = crate::rng::SplitMix64::new(27);
+    let mut tracks = Vec::new();
+    for id in 0..30 {
+        tracks.push(Track {
+            id,
+            points: vec![v(1.0, 1.0); 4],
+            times_s: vec![0.0, 1.0, 3.0, 4.0],
+            linked: vec![true, false, true],
+        });
+    }
+    tracks.push(line(100, v(-1.0, 1.1), v(3.0, 1.1), 0.0, 4.0));
+    for id in 200..240 {
+        let from = v(rng.uniform(0.0, 2.0), rng.uniform(0.0, 2.0));
+        let to = v(rng.uniform(0.0, 2.0), rng.uniform(0.0, 2.0));
+        tracks.push(line(id, from, to, 0.0, 4.0));
+    }
+    for id in 300..303 {
+        tracks.push(line(id, v(0.0, 0.5), v(2.0, 1.5), 0.0, 4.0));
+    }
+    let s = set(tracks);
+    let fast = detect(&s, 0.3).unwrap();
+    let reference = collisions_all_pairs(&s, 0.3).unwrap();
+    assert_eq!(fast.clusters.len(), 2);
+    assert_eq!(fast.cluster_total, 2);
+    assert_eq!(fast.pair_total, reference.pair_total);
+    assert_eq!(fast.event_total, reference.event_total);
+    assert_eq!(fast.closest, reference.closest);
+    assert!(
+        reference.pair_total > 435 + 3 + 30,
+        "{}",
+        reference.pair_total
+    );
+}
+
+#[test]
+fn kept_pairs_are_the_closest_and_everything_is_counted() {
+    let s = fixture("students001.txt");
+    let all = detect(&s, 1.0).unwrap();
+    let few = detect_keeping(&s, 1.0, 10).unwrap();
+    assert_eq!((all.pair_count(), few.pair_count()), (1840, 1840));
+    assert_eq!(few.event_total, all.event_total);
+    assert_eq!((few.pairs.len(), few.events.len()), (10, 10));
+    assert_eq!(all.pairs.len(), 1000, "DEFAULT_KEEP");
+    let mut by_distance = all.pairs.clone();
+    by_distance.sort_by(|x, y| x.closest.distance_m.total_cmp(&y.closest.distance_m));
+    let mut want: Vec<_> = by_distance[..10].to_vec();
+    want.sort_by_key(|p| (p.a, p.b));
+    assert_eq!(few.pairs, want);
+    let earliest: Vec<f64> = all.events_by_time()[..10]
+        .iter()
+        .map(|e| e.closest.t_s)
+        .collect();
+    let kept: Vec<f64> = few.events_by_time().iter().map(|e| e.closest.t_s).collect();
+    assert_eq!(kept, earliest);
+    assert_eq!(few.closest, all.closest);
+    assert!(!few.is_complete());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 128,
+        rng_seed: RngSeed::Fixed(0x636c_7573),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn prop_copies_of_tracks_count_as_the_reference(s in crowd(), copies in prop::collection::vec((0usize..9, 1usize..5), 0..4), d in 0.05f64..1.5, keep in 1usize..6) {
+        // Some people copied (new ids, one identical track): clusters counted in
+        // closed form must count what comparing every pair counts.
+        let mut s = s;
+        let mut id = 10_000;
+        for (who, k) in copies {
+            let src = s.tracks[who % s.tracks.len()].clone();
+            for _ in 0..k {
+                let mut t = src.clone();
+                t.id = id;
+                id += 1;
+                s.tracks.push(t);
+            }
+        }
+        let fast = detect_keeping(&s, d, keep).unwrap();
+        let reference = collisions_all_pairs(&s, d).unwrap();
+        prop_assert_eq!(fast.pair_total, reference.pair_total);
+        prop_assert_eq!(fast.event_total, reference.event_total);
+        prop_assert_eq!(fast.closest, reference.closest);
+        prop_assert!(fast.pairs.len() <= keep && fast.events.len() <= keep && fast.clusters.len() <= keep);
+    }
+}
+
+#[test]
+fn people_standing_within_the_threshold_are_one_cluster() {
+    // 3,000 people standing within 0.1 m of (5, 5) for 1 s (not on one identical
+    // track: before, every pair was evaluated, O(n²)), and walkers through them.
+    let mut rng = crate::rng::SplitMix64::new(4);
+    let mut tracks: Vec<Track> = (0..3_000)
+        .map(|id| {
+            let p = v(
+                5.0 + rng.uniform(-0.05, 0.05),
+                5.0 + rng.uniform(-0.05, 0.05),
+            );
+            Track::linked(id, vec![p, p], vec![0.0, 1.0])
+        })
+        .collect();
+    for k in 0..5 {
+        let y = 4.9 + k as f64 * 0.05;
+        tracks.push(line(10_000 + k, v(0.0, y), v(10.0, y), 0.0, 1.0));
+    }
+    let s = set(tracks);
+    let c = detect(&s, 0.3).unwrap();
+    let n = 3_000u64;
+    assert_eq!(c.clusters.len(), 1);
+    assert!(!c.clusters[0].identical);
+    assert_eq!(c.clusters[0].pairs(), n * (n - 1) / 2);
+    // The walkers' pairs (with each other and with everyone standing) are listed.
+    assert_eq!(c.pair_total, n * (n - 1) / 2 + 10 + 5 * n);
+    let reference = collisions_all_pairs(&s, 0.3).unwrap();
+    assert_eq!(c.pair_total, reference.pair_total);
+    assert_eq!(c.event_total, reference.event_total);
+    assert_eq!(c.closest, reference.closest);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 128,
+        rng_seed: RngSeed::Fixed(0x7374_616e),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn prop_standing_people_count_as_the_reference(
+        places in prop::collection::vec((0.0f64..0.4, 0.0f64..0.4, 0u8..4), 2..150),
+        s in crowd(),
+        d in 0.05f64..1.5,
+    ) {
+        // People standing at random places at one of four sets of times (some
+        // copied, so identical tracks inside standing clusters), among walkers.
+        let mut s = s;
+        let times = [vec![0.0, 1.0], vec![0.0, 1.0, 3.0], vec![0.5], vec![0.0, 1.0]];
+        for (k, &(x, y, which)) in places.iter().enumerate() {
+            let t = times[which as usize].clone();
+            let mut tr = Track::linked(5_000 + k as u64, vec![v(x, y); t.len()], t);
+            if which == 3 {
+                tr.linked = vec![false];
+            }
+            if k % 7 == 6 {
+                let mut copy = tr.clone();
+                copy.id += 10_000;
+                s.tracks.push(copy);
+            }
+            s.tracks.push(tr);
+        }
+        let fast = detect_keeping(&s, d, 3).unwrap();
+        let reference = collisions_all_pairs(&s, d).unwrap();
+        prop_assert_eq!(fast.pair_total, reference.pair_total);
+        prop_assert_eq!(fast.event_total, reference.event_total);
+        prop_assert_eq!(fast.closest, reference.closest);
     }
 }

@@ -46,7 +46,8 @@ pub use cage::{
     PAPER_ALPHA, PAPER_BETA, PAPER_K,
 };
 pub use collide::{
-    collisions_all_pairs, detect, Approach, CollideError, CollisionEvent, Collisions, PairCollision,
+    collisions_all_pairs, detect, detect_keeping, Approach, Cluster, CollideError, CollisionEvent,
+    Collisions, PairCollision, DEFAULT_KEEP, MIN_STANDING_CLUSTER,
 };
 pub use error::EditError;
 pub use hull::{
@@ -59,4 +60,7 @@ pub use record::{RecordError, TrackRecorder};
 pub use script::{parse_script, Op, OpDef, Script, ScriptError, SelectSpec, MAX_LIST, MAX_OPS};
 pub use select::{point_in_polygon, SampleRef, Selection, SelectionQuery};
 pub use temporal::{retime, RetimeParams, RetimeReport, TimeDrag};
-pub use tracks::{Track, TrackError, TrackSet, MAX_SAMPLES};
+pub use tracks::{
+    coordinate_problem, time_problem, Track, TrackError, TrackSet, MAX_COORDINATE_M, MAX_SAMPLES,
+    MAX_TIME_S, MIN_SAMPLE_STEP_S,
+};

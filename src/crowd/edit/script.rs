@@ -23,11 +23,12 @@
 //! operation's line.
 
 use crate::geom::Vec2;
-use crate::located::{locate_field, parse_strict, Issue};
+use crate::located::{field_positions, parse_strict, Issue};
 use serde::Deserialize;
 use thiserror::Error;
 
-/// The most operations a script may hold.
+/// The most operations a script may hold (a longer one is refused before it is
+/// deserialised, naming the line of the first operation over the cap).
 pub const MAX_OPS: usize = 10_000;
 /// The most ids, lasso points or places in one operation.
 pub const MAX_LIST: usize = 100_000;
@@ -162,18 +163,34 @@ pub enum ScriptError {
 /// [`ScriptError::Syntax`] with line, column and field for a file that is not a
 /// script; [`ScriptError::Op`] with the operation's line for a number that is not
 /// finite, a time window or rectangle given backwards, a lasso of fewer than three
-/// points, too many operations or list items.
+/// points, more than [`MAX_OPS`] operations or [`MAX_LIST`] list items.
+///
+/// # Complexity
+/// Linear in the text: the operations' lines come from one scan of it.
 pub fn parse_script(text: &str) -> Result<Script, ScriptError> {
+    let lines = op_lines(text);
+    if lines.len() > MAX_OPS {
+        return Err(ScriptError::Op {
+            line: lines[MAX_OPS],
+            what: format!(
+                "a script holds at most {MAX_OPS} operations; this one has {}",
+                lines.len()
+            ),
+        });
+    }
     let file: ScriptFile = parse_strict(text).map_err(ScriptError::Syntax)?;
     if file.ops.len() > MAX_OPS {
         return Err(ScriptError::Op {
             line: 0,
-            what: format!("{} operations, more than {MAX_OPS}", file.ops.len()),
+            what: format!(
+                "a script holds at most {MAX_OPS} operations; this one has {}",
+                file.ops.len()
+            ),
         });
     }
     let mut ops = Vec::with_capacity(file.ops.len());
     for (i, def) in file.ops.into_iter().enumerate() {
-        let line = op_line(text, i);
+        let line = lines.get(i).copied().unwrap_or(0);
         let bad = |what: String| ScriptError::Op { line, what };
         let op = match def {
             OpDef::Select {
@@ -282,8 +299,23 @@ fn finite(v: &[f64], what: &str) -> Result<(), String> {
     }
 }
 
-fn op_line(text: &str, i: usize) -> usize {
-    locate_field(text, &format!("ops[{i}]")).map_or(0, |(l, _)| l)
+/// The line of every operation (`ops[i]`), in order, from one scan of the text
+/// (before, each operation's line was searched for from the start: quadratic).
+fn op_lines(text: &str) -> Vec<usize> {
+    let mut lines = Vec::new();
+    for (path, line, _) in field_positions(text) {
+        let Some(i) = path
+            .strip_prefix("ops[")
+            .and_then(|r| r.strip_suffix(']'))
+            .and_then(|r| r.parse::<usize>().ok())
+        else {
+            continue;
+        };
+        if i == lines.len() {
+            lines.push(line);
+        }
+    }
+    lines
 }
 
 #[cfg(test)]
@@ -357,6 +389,28 @@ mod tests {
                 other => panic!("{text}: {other:?}"),
             }
         }
+    }
+
+    #[test]
+    fn a_script_over_the_cap_is_refused_at_its_first_extra_operation() {
+        let mut text = String::from("(ops: [\n");
+        for _ in 0..=MAX_OPS {
+            text.push_str(" Unfix,\n");
+        }
+        text.push_str("])\n");
+        match parse_script(&text) {
+            Err(ScriptError::Op { line, what }) => {
+                assert_eq!(line, MAX_OPS + 2, "{what}");
+                assert!(what.contains("at most 10000 operations"), "{what}");
+                assert!(what.contains("10001"), "{what}");
+            }
+            other => panic!("{other:?}"),
+        }
+        // At the cap it is read, every operation with its line.
+        let at_cap = text.replacen(" Unfix,\n", "", 1);
+        let s = parse_script(&at_cap).unwrap();
+        assert_eq!(s.ops.len(), MAX_OPS);
+        assert_eq!(s.ops[MAX_OPS - 1].1, MAX_OPS + 1);
     }
 
     #[test]

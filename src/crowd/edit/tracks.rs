@@ -15,6 +15,48 @@ use thiserror::Error;
 /// this is refused rather than exhausting memory.
 pub const MAX_SAMPLES: usize = 5_000_000;
 
+/// The largest coordinate a track may hold, in metres either way of the origin
+/// (1,000 km). Within it every quantity detection and editing derive (differences,
+/// midpoints, squared distances, velocities over [`MIN_SAMPLE_STEP_S`]) is finite;
+/// a place near 1e308 m would print as `(inf, -inf)`.
+pub const MAX_COORDINATE_M: f64 = 1e6;
+
+/// The largest time a track may hold, in seconds either way of 0 (about 31.7 years).
+pub const MAX_TIME_S: f64 = 1e9;
+
+/// The least time between a person's consecutive samples the track readers accept
+/// (seconds): 1 µs, well above the spacing of doubles near [`MAX_TIME_S`] (0.12 µs),
+/// so speeds stay below 2e12 m/s.
+pub const MIN_SAMPLE_STEP_S: f64 = 1e-6;
+
+/// What is wrong with a coordinate (metres), if anything: not finite, or beyond
+/// [`MAX_COORDINATE_M`].
+pub fn coordinate_problem(v: f64) -> Option<String> {
+    if !v.is_finite() {
+        Some(format!("{v} is not a finite number"))
+    } else if v.abs() > MAX_COORDINATE_M {
+        Some(format!(
+            "{v:e} m is beyond the coordinate bound of ±{MAX_COORDINATE_M:e} m"
+        ))
+    } else {
+        None
+    }
+}
+
+/// What is wrong with a time (seconds), if anything: not finite, or beyond
+/// [`MAX_TIME_S`].
+pub fn time_problem(v: f64) -> Option<String> {
+    if !v.is_finite() {
+        Some(format!("{v} is not a finite number"))
+    } else if v.abs() > MAX_TIME_S {
+        Some(format!(
+            "{v:e} s is beyond the time bound of ±{MAX_TIME_S:e} s"
+        ))
+    } else {
+        None
+    }
+}
+
 /// One person's tracks.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Track {
@@ -108,6 +150,10 @@ impl Track {
             if !p.x.is_finite() || !p.y.is_finite() || !t.is_finite() {
                 return Err(TrackError::NotFinite { id, sample: j });
             }
+            if p.x.abs() > MAX_COORDINATE_M || p.y.abs() > MAX_COORDINATE_M || t.abs() > MAX_TIME_S
+            {
+                return Err(TrackError::OutOfRange { id, sample: j });
+            }
             if j > 0 && *t <= self.times_s[j - 1] {
                 return Err(TrackError::NotIncreasing {
                     id,
@@ -159,7 +205,7 @@ impl TrackSet {
     }
 
     /// Checks that ids are unique, every track is non-empty with finite positions and
-    /// strictly increasing times, `linked` has one entry per consecutive pair, and
+    /// strictly increasing times within [`MAX_COORDINATE_M`] and [`MAX_TIME_S`], `linked` has one entry per consecutive pair, and
     /// the step is positive and finite.
     pub fn validate(&self) -> Result<(), TrackError> {
         if !(self.step_s.is_finite() && self.step_s > 0.0) {
@@ -209,6 +255,14 @@ pub enum TrackError {
     /// A position or time is NaN or infinite.
     #[error("person {id}, sample {sample}: position or time is not a finite number")]
     NotFinite {
+        /// The id.
+        id: u64,
+        /// The sample's index.
+        sample: usize,
+    },
+    /// A position or time is beyond [`MAX_COORDINATE_M`] or [`MAX_TIME_S`].
+    #[error("person {id}, sample {sample}: position beyond ±{MAX_COORDINATE_M:e} m or time beyond ±{MAX_TIME_S:e} s")]
+    OutOfRange {
         /// The id.
         id: u64,
         /// The sample's index.

@@ -10,7 +10,9 @@
 
 use super::text::{clip, whole};
 use super::ReadError;
-use crate::crowd::edit::tracks::{Track, TrackSet, MAX_SAMPLES};
+use crate::crowd::edit::tracks::{
+    coordinate_problem, time_problem, Track, TrackSet, MAX_SAMPLES, MIN_SAMPLE_STEP_S,
+};
 use crate::geom::Vec2;
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -94,18 +96,31 @@ pub fn read_eth(text: &str, opts: EthOptions) -> Result<TrackSet, ReadError> {
                 format!("id {} is not a non-negative whole number", f[1]),
             )
         })?;
-        if !f[2].is_finite() || !f[3].is_finite() {
-            return Err(ReadError::at(
-                line,
-                format!("person {id}: position ({}, {}) is not finite", f[2], f[3]),
-            ));
+        let t = frame as f64 / opts.frame_rate_hz;
+        // `col: field: what`, so the file's error reads `file:line:col: field: what`.
+        let col = |k: usize| {
+            let mut words = s.split_whitespace();
+            let word = words.nth(k).unwrap_or("");
+            let lead = raw.len() - raw.trim_start().len();
+            lead + (word.as_ptr() as usize - s.as_ptr() as usize) + 1
+        };
+        for (k, name, problem) in [
+            (0, "frame", time_problem(t)),
+            (2, "x", coordinate_problem(f[2])),
+            (3, "y", coordinate_problem(f[3])),
+        ] {
+            if let Some(what) = problem {
+                return Err(ReadError::at(
+                    line,
+                    format!("{}: {name}: person {id}: {what}", col(k)),
+                ));
+            }
         }
         rows += 1;
         if rows > MAX_SAMPLES {
             return Err(ReadError::at(line, format!("more than {MAX_SAMPLES} rows")));
         }
         let p = Vec2::new(f[2], f[3]);
-        let t = frame as f64 / opts.frame_rate_hz;
         match people.get_mut(&id) {
             None => {
                 people.insert(id, (tracks.len(), frame, line));
@@ -132,6 +147,13 @@ pub fn read_eth(text: &str, opts: EthOptions) -> Result<TrackSet, ReadError> {
                     ));
                 }
                 let tr = &mut tracks[*k];
+                let last_s = *tr.times_s.last().unwrap_or(&f64::NEG_INFINITY);
+                if t - last_s < MIN_SAMPLE_STEP_S {
+                    return Err(ReadError::at(
+                        line,
+                        format!("person {id}: frame {frame} is less than {MIN_SAMPLE_STEP_S:e} s after frame {last} (line {last_line}) at {} frames/s", opts.frame_rate_hz),
+                    ));
+                }
                 tr.linked.push(frame - *last <= u64::from(opts.frame_step));
                 tr.points.push(p);
                 tr.times_s.push(t);
@@ -189,7 +211,17 @@ mod tests {
             ("0 1 2 x\n", 1, "y `x` is not a number"),
             ("0.5 1 2 3\n", 1, "frame 0.5"),
             ("0 -1 2 3\n", 1, "id -1"),
-            ("0 1 2 NaN\n", 1, "not finite"),
+            (
+                "0 1 2 NaN\n",
+                1,
+                "7: y: person 1: NaN is not a finite number",
+            ),
+            ("0 1 2e6 0\n", 1, "5: x: person 1: 2e6 m is beyond"),
+            (
+                "99999999999 1 0 0\n",
+                1,
+                "1: frame: person 1: 3.99999999996e9 s is beyond",
+            ),
             ("0 1 2 3\n0 1 2 3\n", 2, "twice in frame 0 (also line 1)"),
             ("10 1 2 3\n0 1 2 3\n", 2, "frame 0 comes after frame 10"),
         ];

@@ -20,7 +20,9 @@
 //! finite and more than [`MAX_SAMPLES`] samples are errors.
 
 use super::ReadError;
-use crate::crowd::edit::tracks::{Track, TrackSet, MAX_SAMPLES};
+use crate::crowd::edit::tracks::{
+    coordinate_problem, time_problem, Track, TrackSet, MAX_SAMPLES, MIN_SAMPLE_STEP_S,
+};
 use crate::geom::Vec2;
 use serde::Deserialize;
 use std::collections::HashMap;
@@ -121,20 +123,19 @@ pub fn read_jsonl(text: &str) -> Result<TrackSet, ReadError> {
             )
         })?;
         let id = sample.id;
-        if !sample.t_s.is_finite() {
-            return Err(ReadError::at(
-                line,
-                format!("person {id}: time {} is not finite", sample.t_s),
-            ));
-        }
-        if !sample.x.is_finite() || !sample.y.is_finite() {
-            return Err(ReadError::at(
-                line,
-                format!(
-                    "person {id}: position ({}, {}) is not finite",
-                    sample.x, sample.y
-                ),
-            ));
+        // `col: field: what`, so the file's error reads `file:line:col: field: what`.
+        let col = |key: &str| s.find(&format!("\"{key}\"")).map_or(1, |c| c + 1);
+        for (key, problem) in [
+            ("t_s", time_problem(sample.t_s)),
+            ("x", coordinate_problem(sample.x)),
+            ("y", coordinate_problem(sample.y)),
+        ] {
+            if let Some(what) = problem {
+                return Err(ReadError::at(
+                    line,
+                    format!("{}: {key}: person {id}: {what}", col(key)),
+                ));
+            }
         }
         samples += 1;
         if samples > MAX_SAMPLES {
@@ -189,6 +190,11 @@ pub(super) fn check_order(
         Err(ReadError::at(
             line,
             format!("person {id}: time {t_s} s comes after {last_s} s (line {last_line}); a person's samples must go forward in time"),
+        ))
+    } else if t_s - last_s < MIN_SAMPLE_STEP_S {
+        Err(ReadError::at(
+            line,
+            format!("person {id}: time {t_s} s is less than {MIN_SAMPLE_STEP_S:e} s after {last_s} s (line {last_line})"),
         ))
     } else {
         Ok(())
@@ -327,6 +333,13 @@ mod tests {
             (s("{\"id\":-1,\"t_s\":0,\"x\":1,\"y\":2}"), 2, "column"),
             (s("{\"id\":1,\"t_s\":0,\"x\":NaN,\"y\":2}"), 2, "column"),
             (s("{\"id\":1,\"t_s\":0,\"x\":1e999,\"y\":2}"), 2, "column"),
+            (s("{\"id\":1,\"t_s\":0,\"x\":1e308,\"y\":-1e308}"), 2, "17: x: person 1: 1e308 m is beyond the coordinate bound of ±1e6 m"),
+            (s("{\"id\":1,\"t_s\":-5e9,\"x\":1,\"y\":2}"), 2, "9: t_s: person 1: -5e9 s is beyond the time bound"),
+            (
+                s("{\"id\":1,\"t_s\":1,\"x\":1,\"y\":2}\n{\"id\":1,\"t_s\":1.0000001,\"x\":1,\"y\":2}"),
+                3,
+                "less than 1e-6 s after 1 s (line 2)",
+            ),
             (s("{\"id\":1,\"t_s\":\"0\",\"x\":1,\"y\":2}"), 2, "invalid type"),
             (s("[1,0,1,2]"), 2, "expected a JSON object"),
             (s("not json"), 2, "expected a JSON object"),

@@ -14,9 +14,12 @@ use proptest::test_runner::{Config as ProptestConfig, RngSeed};
 type People = Vec<(u64, u32, Vec<(u32, f64, f64)>, (f64, f64))>;
 
 fn people() -> impl Strategy<Value = People> {
+    // Any bit pattern within the readers' coordinate bound (±1e6 m).
     let coord = prop_oneof![
         -50.0f64..50.0,
-        any::<f64>().prop_filter("finite", |v| v.is_finite())
+        any::<f64>()
+            .prop_filter("finite", |v| v.is_finite())
+            .prop_map(|v| v % crate::crowd::edit::tracks::MAX_COORDINATE_M)
     ];
     let sample = (
         prop_oneof![3 => Just(1u32), 1 => 2u32..6],
