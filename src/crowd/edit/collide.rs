@@ -425,12 +425,13 @@ impl Tally {
     }
 }
 
-/// A piece of a track: a linked segment or an isolated sample.
+/// A piece of a track: a linked segment (`t0 < t1`, the times of a valid set
+/// strictly increase) or an isolated sample (`t0 == t1`). 56 bytes: detection
+/// holds one per segment or lone sample of every person.
 #[derive(Copy, Clone, Debug)]
 struct Piece {
     track: u32,
     sample: u32,
-    moving: bool,
     t0: f64,
     t1: f64,
     p0: Vec2,
@@ -449,8 +450,13 @@ impl Piece {
         }
     }
 
+    /// Whether the piece is a segment (else a lone sample, standing).
+    fn moving(&self) -> bool {
+        self.t1 > self.t0
+    }
+
     fn velocity(&self) -> Vec2 {
-        if self.moving {
+        if self.moving() {
             (self.p1 - self.p0) / (self.t1 - self.t0)
         } else {
             Vec2::zeros()
@@ -484,7 +490,6 @@ fn pieces(
                 out.push(Piece {
                     track: k as u32,
                     sample: j as u32,
-                    moving: true,
                     t0: tr.times_s[j],
                     t1: tr.times_s[j + 1],
                     p0: tr.points[j],
@@ -494,7 +499,6 @@ fn pieces(
                 out.push(Piece {
                     track: k as u32,
                     sample: j as u32,
-                    moving: false,
                     t0: tr.times_s[j],
                     t1: tr.times_s[j],
                     p0: tr.points[j],
@@ -552,8 +556,8 @@ fn closest(a: &Piece, b: &Piece) -> Option<(f64, f64, Approach)> {
             at_b,
             sample_a: a.sample as usize,
             sample_b: b.sample as usize,
-            moving_a: a.moving,
-            moving_b: b.moving,
+            moving_a: a.moving(),
+            moving_b: b.moving(),
         },
     ))
 }
@@ -1220,7 +1224,6 @@ fn detect_among(
     let mut bucket_start: Vec<u32> = Vec::new();
     let mut grid_pieces: Vec<u32> = Vec::new();
     let mut over: Vec<u32> = Vec::new();
-    let mut entries: Vec<(u32, u32)> = Vec::new();
     for s in 0..n_slabs {
         let members = &in_slab[count[s]..count[s + 1]];
         over_start[s] = over.len();
@@ -1250,39 +1253,43 @@ fn detect_among(
         }
         let grid = SlabGrid::new(cell, (x_lo, x_hi, y_lo, y_hi), n_entries);
         grids[s] = grid;
-        entries.clear();
-        for &i in members {
-            match cell_range(&boxed(i), cell) {
-                None => over.push(i),
-                Some((x0, x1, y0, y1)) => {
+        // Every (bucket, piece) entry of the slab, in piece order; walked twice
+        // (count, then place) rather than stored: a million people's entries
+        // would be 32 MB more.
+        let each_entry = |f: &mut dyn FnMut(usize, u32)| {
+            for &i in members {
+                if let Some((x0, x1, y0, y1)) = cell_range(&boxed(i), cell) {
                     for y in y0..=y1 {
                         for x in x0..=x1 {
                             if let Some(b) = grid.bucket(x, y) {
-                                entries.push((b as u32, i));
+                                f(b, i);
                             }
                         }
                     }
                 }
             }
-        }
+        };
+        over.extend(
+            members
+                .iter()
+                .filter(|&&i| cell_range(&boxed(i), cell).is_none()),
+        );
         let nb = grid.buckets;
         let first = bucket_start.len();
         bucket_start.resize(first + nb + 1, 0);
         let starts_of = &mut bucket_start[first..];
-        for &(b, _) in &entries {
-            starts_of[b as usize + 1] += 1;
-        }
+        each_entry(&mut |b, _| starts_of[b + 1] += 1);
         for b in 0..nb {
             starts_of[b + 1] += starts_of[b];
         }
         let base = grid_pieces.len();
-        grid_pieces.resize(base + entries.len(), 0);
+        grid_pieces.resize(base + starts_of[nb] as usize, 0);
         // Members come in piece order, so each bucket's pieces ascend.
-        for &(b, i) in &entries {
-            let at = starts_of[b as usize] as usize;
+        each_entry(&mut |b, i| {
+            let at = starts_of[b] as usize;
             grid_pieces[base + at] = i;
-            starts_of[b as usize] += 1;
-        }
+            starts_of[b] += 1;
+        });
         // The fill moved every start to its bucket's end: shift back.
         for b in (1..=nb).rev() {
             starts_of[b] = starts_of[b - 1];
@@ -1290,7 +1297,6 @@ fn detect_among(
         starts_of[0] = 0;
     }
     over_start[n_slabs] = over.len();
-    drop(entries);
 
     // Person by person: the later (or unmarked) people's pieces near each piece.
     // A pair (q, r) is looked up from q when q is a querying person and r is not, or

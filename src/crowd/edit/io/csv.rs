@@ -148,6 +148,7 @@ pub fn read_csv(text: &str, step_s: Option<f64>) -> Result<TrackSet, ReadError> 
         tr.points.shrink_to_fit();
         tr.times_s.shrink_to_fit();
     }
+    tracks.shrink_to_fit();
     Ok(TrackSet { tracks, step_s })
 }
 
