@@ -1055,7 +1055,8 @@ fn bucket_of(key: u64, nb: usize) -> usize {
 /// when it holds no more than [`DENSE_CELLS_PER_ENTRY`] cells per entry (neighbouring
 /// cells in neighbouring buckets: people near each other read memory near each
 /// other), else hashed into a power of two of buckets (a bucket may then hold
-/// several cells: the box test drops the extra pieces).
+/// several cells: the box test drops the extra pieces). Either way at most two
+/// buckets (4 bytes each) per entry, or 32 for a slab of fewer than 16 entries.
 #[derive(Copy, Clone, Debug, Default)]
 struct SlabGrid {
     cell: f64,
@@ -1068,7 +1069,7 @@ struct SlabGrid {
 }
 
 /// See [`SlabGrid`].
-const DENSE_CELLS_PER_ENTRY: i64 = 4;
+const DENSE_CELLS_PER_ENTRY: i64 = 2;
 
 impl SlabGrid {
     fn new(cell: f64, (x0, x1, y0, y1): (i64, i64, i64, i64), entries: usize) -> SlabGrid {
