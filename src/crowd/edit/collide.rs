@@ -1184,7 +1184,10 @@ fn detect_among(
     if ((t_hi - t_lo) / width) as usize >= MAX_SLABS {
         width = (t_hi - t_lo) / (MAX_SLABS - 1) as f64;
     }
-    let n_slabs = (((t_hi - t_lo) / width) as usize + 1).min(MAX_SLABS);
+    // Slabs cover [t_lo, t_lo + n_slabs * width], the last one closed: the last
+    // sample time is in it, not alone in a slab of its own (a file sampled on whole
+    // steps would otherwise enter every piece ending there twice).
+    let n_slabs = (((t_hi - t_lo) / width).ceil() as usize).clamp(1, MAX_SLABS);
     let slab_of = |t: f64| (((t - t_lo) / width) as usize).min(n_slabs - 1);
 
     // Pieces per slab (counting sort): a piece is in every slab its interval meets.
