@@ -425,12 +425,13 @@ impl Tally {
     }
 }
 
-/// A piece of a track: a linked segment or an isolated sample.
+/// A piece of a track: a linked segment (`t0 < t1`, the times of a valid set
+/// strictly increase) or an isolated sample (`t0 == t1`). 56 bytes: detection
+/// holds one per segment or lone sample of every person.
 #[derive(Copy, Clone, Debug)]
 struct Piece {
     track: u32,
     sample: u32,
-    moving: bool,
     t0: f64,
     t1: f64,
     p0: Vec2,
@@ -449,8 +450,13 @@ impl Piece {
         }
     }
 
+    /// Whether the piece is a segment (else a lone sample, standing).
+    fn moving(&self) -> bool {
+        self.t1 > self.t0
+    }
+
     fn velocity(&self) -> Vec2 {
-        if self.moving {
+        if self.moving() {
             (self.p1 - self.p0) / (self.t1 - self.t0)
         } else {
             Vec2::zeros()
@@ -484,7 +490,6 @@ fn pieces(
                 out.push(Piece {
                     track: k as u32,
                     sample: j as u32,
-                    moving: true,
                     t0: tr.times_s[j],
                     t1: tr.times_s[j + 1],
                     p0: tr.points[j],
@@ -494,7 +499,6 @@ fn pieces(
                 out.push(Piece {
                     track: k as u32,
                     sample: j as u32,
-                    moving: false,
                     t0: tr.times_s[j],
                     t1: tr.times_s[j],
                     p0: tr.points[j],
@@ -552,8 +556,8 @@ fn closest(a: &Piece, b: &Piece) -> Option<(f64, f64, Approach)> {
             at_b,
             sample_a: a.sample as usize,
             sample_b: b.sample as usize,
-            moving_a: a.moving,
-            moving_b: b.moving,
+            moving_a: a.moving(),
+            moving_b: b.moving(),
         },
     ))
 }
@@ -1051,7 +1055,8 @@ fn bucket_of(key: u64, nb: usize) -> usize {
 /// when it holds no more than [`DENSE_CELLS_PER_ENTRY`] cells per entry (neighbouring
 /// cells in neighbouring buckets: people near each other read memory near each
 /// other), else hashed into a power of two of buckets (a bucket may then hold
-/// several cells: the box test drops the extra pieces).
+/// several cells: the box test drops the extra pieces). Either way at most two
+/// buckets (4 bytes each) per entry, or 32 for a slab of fewer than 16 entries.
 #[derive(Copy, Clone, Debug, Default)]
 struct SlabGrid {
     cell: f64,
@@ -1064,7 +1069,7 @@ struct SlabGrid {
 }
 
 /// See [`SlabGrid`].
-const DENSE_CELLS_PER_ENTRY: i64 = 4;
+const DENSE_CELLS_PER_ENTRY: i64 = 2;
 
 impl SlabGrid {
     fn new(cell: f64, (x0, x1, y0, y1): (i64, i64, i64, i64), entries: usize) -> SlabGrid {
@@ -1179,7 +1184,10 @@ fn detect_among(
     if ((t_hi - t_lo) / width) as usize >= MAX_SLABS {
         width = (t_hi - t_lo) / (MAX_SLABS - 1) as f64;
     }
-    let n_slabs = (((t_hi - t_lo) / width) as usize + 1).min(MAX_SLABS);
+    // Slabs cover [t_lo, t_lo + n_slabs * width], the last one closed: the last
+    // sample time is in it, not alone in a slab of its own (a file sampled on whole
+    // steps would otherwise enter every piece ending there twice).
+    let n_slabs = (((t_hi - t_lo) / width).ceil() as usize).clamp(1, MAX_SLABS);
     let slab_of = |t: f64| (((t - t_lo) / width) as usize).min(n_slabs - 1);
 
     // Pieces per slab (counting sort): a piece is in every slab its interval meets.
@@ -1220,7 +1228,6 @@ fn detect_among(
     let mut bucket_start: Vec<u32> = Vec::new();
     let mut grid_pieces: Vec<u32> = Vec::new();
     let mut over: Vec<u32> = Vec::new();
-    let mut entries: Vec<(u32, u32)> = Vec::new();
     for s in 0..n_slabs {
         let members = &in_slab[count[s]..count[s + 1]];
         over_start[s] = over.len();
@@ -1250,39 +1257,43 @@ fn detect_among(
         }
         let grid = SlabGrid::new(cell, (x_lo, x_hi, y_lo, y_hi), n_entries);
         grids[s] = grid;
-        entries.clear();
-        for &i in members {
-            match cell_range(&boxed(i), cell) {
-                None => over.push(i),
-                Some((x0, x1, y0, y1)) => {
+        // Every (bucket, piece) entry of the slab, in piece order; walked twice
+        // (count, then place) rather than stored: a million people's entries
+        // would be 32 MB more.
+        let each_entry = |f: &mut dyn FnMut(usize, u32)| {
+            for &i in members {
+                if let Some((x0, x1, y0, y1)) = cell_range(&boxed(i), cell) {
                     for y in y0..=y1 {
                         for x in x0..=x1 {
                             if let Some(b) = grid.bucket(x, y) {
-                                entries.push((b as u32, i));
+                                f(b, i);
                             }
                         }
                     }
                 }
             }
-        }
+        };
+        over.extend(
+            members
+                .iter()
+                .filter(|&&i| cell_range(&boxed(i), cell).is_none()),
+        );
         let nb = grid.buckets;
         let first = bucket_start.len();
         bucket_start.resize(first + nb + 1, 0);
         let starts_of = &mut bucket_start[first..];
-        for &(b, _) in &entries {
-            starts_of[b as usize + 1] += 1;
-        }
+        each_entry(&mut |b, _| starts_of[b + 1] += 1);
         for b in 0..nb {
             starts_of[b + 1] += starts_of[b];
         }
         let base = grid_pieces.len();
-        grid_pieces.resize(base + entries.len(), 0);
+        grid_pieces.resize(base + starts_of[nb] as usize, 0);
         // Members come in piece order, so each bucket's pieces ascend.
-        for &(b, i) in &entries {
-            let at = starts_of[b as usize] as usize;
+        each_entry(&mut |b, i| {
+            let at = starts_of[b] as usize;
             grid_pieces[base + at] = i;
-            starts_of[b as usize] += 1;
-        }
+            starts_of[b] += 1;
+        });
         // The fill moved every start to its bucket's end: shift back.
         for b in (1..=nb).rev() {
             starts_of[b] = starts_of[b - 1];
@@ -1290,7 +1301,6 @@ fn detect_among(
         starts_of[0] = 0;
     }
     over_start[n_slabs] = over.len();
-    drop(entries);
 
     // Person by person: the later (or unmarked) people's pieces near each piece.
     // A pair (q, r) is looked up from q when q is a querying person and r is not, or

@@ -129,6 +129,18 @@ fn single_shared_instants_count() {
     let c = both(&s, 0.2);
     assert_eq!(c.pair_count(), 1);
     assert_eq!((c.pairs[0].id_a, c.pairs[0].id_b), (1, 2));
+    // At the set's last instant, on a slab's edge (span one step) and inside the
+    // last slab (span 2.5 steps): the last slab is closed.
+    for (t0, far_t) in [(0.0, 0.0), (1.5, 0.0)] {
+        let s = set(vec![
+            line(1, v(0.0, 0.0), v(1.0, 0.0), t0, t0 + 1.0),
+            Track::linked(2, vec![v(1.1, 0.0)], vec![t0 + 1.0]),
+            Track::linked(3, vec![v(50.0, 50.0)], vec![far_t]),
+        ]);
+        let c = both(&s, 0.2);
+        assert_eq!(c.pair_count(), 1, "ending at {}", t0 + 1.0);
+        assert_eq!(c.events[0].closest.t_s, t0 + 1.0);
+    }
 }
 
 #[test]
