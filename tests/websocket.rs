@@ -76,11 +76,23 @@ fn start(mut cfg: Config, sock: &Path) -> Daemon {
 
 /// A WebSocket client of `addr` with `query` (`?token=...`) and extra headers.
 fn connect(addr: SocketAddr, query: &str, bearer: Option<&str>) -> Result<Ws, tungstenite::Error> {
+    let auth = bearer.map(|t| format!("Bearer {t}"));
+    connect_with(addr, query, &[("Authorization", auth.as_deref())])
+}
+
+/// A tungstenite client of `addr` with `query` whose upgrade carries `headers`
+/// (those given `None` are left out).
+fn connect_with(
+    addr: SocketAddr,
+    query: &str,
+    headers: &[(&'static str, Option<&str>)],
+) -> Result<Ws, tungstenite::Error> {
     use tungstenite::client::IntoClientRequest;
     let mut req = format!("ws://{addr}/ws{query}").into_client_request()?;
-    if let Some(t) = bearer {
-        req.headers_mut()
-            .insert("Authorization", format!("Bearer {t}").parse().unwrap());
+    for (name, value) in headers {
+        if let Some(v) = value {
+            req.headers_mut().insert(*name, v.parse().unwrap());
+        }
     }
     let stream = TcpStream::connect(addr).unwrap();
     stream
@@ -540,18 +552,7 @@ const KEY: &str = "dGhlIHNhbXBsZSBub25jZQ==";
 
 /// A tungstenite client of `addr` whose upgrade carries `Origin: origin`.
 fn connect_from(addr: SocketAddr, query: &str, origin: &str) -> Result<Ws, tungstenite::Error> {
-    use tungstenite::client::IntoClientRequest;
-    let mut req = format!("ws://{addr}/ws{query}").into_client_request()?;
-    req.headers_mut().insert("Origin", origin.parse().unwrap());
-    let stream = TcpStream::connect(addr).unwrap();
-    stream
-        .set_read_timeout(Some(Duration::from_millis(200)))
-        .unwrap();
-    match tungstenite::client(req, stream) {
-        Ok((ws, _)) => Ok(ws),
-        Err(tungstenite::HandshakeError::Failure(e)) => Err(e),
-        Err(tungstenite::HandshakeError::Interrupted(_)) => panic!("handshake interrupted"),
-    }
+    connect_with(addr, query, &[("Origin", Some(origin))])
 }
 
 fn status_of(r: Result<Ws, tungstenite::Error>) -> u16 {

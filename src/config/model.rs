@@ -322,17 +322,8 @@ impl SocketConfig {
         if let Some(p) = &self.path {
             return p.clone();
         }
-        if let Some(dir) = std::env::var_os("RUNTIME_DIRECTORY") {
-            // systemd may list several directories separated by ':'.
-            let first = dir
-                .to_string_lossy()
-                .split(':')
-                .next()
-                .unwrap_or("")
-                .to_string();
-            if !first.is_empty() {
-                return PathBuf::from(first).join("crowdtouch.sock");
-            }
+        if let Some(first) = std::env::var_os("RUNTIME_DIRECTORY").and_then(first_systemd_dir) {
+            return first.join("crowdtouch.sock");
         }
         if let Some(dir) = std::env::var_os("XDG_RUNTIME_DIR") {
             return PathBuf::from(dir).join("crowdtouch.sock");
@@ -434,6 +425,15 @@ fn default_edit_threshold_m() -> f64 {
     0.3
 }
 
+/// The first directory of a systemd directory variable (`$RUNTIME_DIRECTORY`,
+/// `$STATE_DIRECTORY`), which lists one per `RuntimeDirectory=`/`StateDirectory=`
+/// entry separated by ':'; `None` when it is empty.
+fn first_systemd_dir(list: std::ffi::OsString) -> Option<PathBuf> {
+    let list = list.to_string_lossy();
+    let first = list.split(':').next().unwrap_or("");
+    (!first.is_empty()).then(|| PathBuf::from(first))
+}
+
 /// The edit directory's name under the state directory.
 pub const EDIT_DIR_NAME: &str = "tracks";
 
@@ -457,17 +457,8 @@ impl EditConfig {
             return Some(d.clone());
         }
         let env = |k: &str| var(k).filter(|v| !v.is_empty());
-        if let Some(dir) = env("STATE_DIRECTORY") {
-            // systemd may list several directories separated by ':'.
-            let first = dir
-                .to_string_lossy()
-                .split(':')
-                .next()
-                .unwrap_or("")
-                .to_string();
-            if !first.is_empty() {
-                return Some(PathBuf::from(first).join(EDIT_DIR_NAME));
-            }
+        if let Some(first) = env("STATE_DIRECTORY").and_then(first_systemd_dir) {
+            return Some(first.join(EDIT_DIR_NAME));
         }
         if let Some(d) = env("XDG_STATE_HOME") {
             return Some(PathBuf::from(d).join("crowdtouch").join(EDIT_DIR_NAME));
