@@ -26,7 +26,7 @@
 //! [`Cluster`], one report with its size, its pairs counted in closed form and never
 //! enumerated: people on one identical track (same positions, times and links:
 //! for instance standing at one point for the same span), and at least
-//! [`MIN_STANDING_CLUSTER`] people standing still at the same times within half the
+//! [`MIN_STANDING_CLUSTER`](super::MIN_STANDING_CLUSTER) people standing still at the same times within half the
 //! threshold of one of them (so every two are closer than the threshold whenever
 //! present; their closest two are found by a sweep over their places). An
 //! identical track's pairs with anyone else are evaluated once, for its first
@@ -41,20 +41,19 @@
 //! zara01 0/3/27/159 and students001 48/166/600/1828, which disagrees; distances at
 //! shared annotated frames alone give the README's *sampled* counts.
 
+use super::clusters::{
+    classes, closest_standing, spatial_order, standing_groups, Cluster, NO_GROUP,
+};
+use super::slab_grid::{cell_range, overlap, SlabGrid};
 use super::tracks::{TrackError, TrackSet};
 use crate::geom::Vec2;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
-use std::hash::{Hash, Hasher};
 use thiserror::Error;
 
 /// Margin added to the bounding boxes the grid compares (metres), so rounding in
 /// the box corners never drops a pair the exact test would keep.
 const BOX_MARGIN_M: f64 = 1e-9;
-
-/// The most grid cells one piece is entered into; a piece covering more is compared
-/// with every piece of its slab instead.
-const MAX_CELLS_PER_PIECE: i64 = 64;
 
 /// The most time slabs a sweep uses; longer spans get wider slabs.
 const MAX_SLABS: usize = 1 << 20;
@@ -142,45 +141,6 @@ pub struct PairCollision {
     pub closest: Approach,
     /// Number of [`CollisionEvent`]s of the pair.
     pub events: usize,
-}
-
-/// People every two of whom collide, reported once instead of pair by pair: either
-/// on one identical track (the same positions, times and links, ids aside; at
-/// distance 0 whenever present), or standing still at the same times within half
-/// the threshold of one of them (so within the threshold of each other throughout).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Cluster {
-    /// The members' indices in the track set, ascending. A standing cluster lists
-    /// one person of each identical track among it (that track is a cluster of its
-    /// own).
-    pub members: Vec<usize>,
-    /// Whether the members are on one identical track (else standing within the
-    /// threshold).
-    pub identical: bool,
-    /// The colliding pairs this cluster stands for (`size (size − 1) / 2` for an
-    /// identical track; for a standing cluster, the pairs of its people not on one
-    /// identical track).
-    pub pair_count: u64,
-    /// The first member's id.
-    pub first_id: u64,
-    /// The track's first and last time (seconds).
-    pub start_s: f64,
-    /// See `start_s`.
-    pub end_s: f64,
-    /// Where they are at `start_s` (metres).
-    pub place: Vec2,
-}
-
-impl Cluster {
-    /// The number of people.
-    pub fn size(&self) -> usize {
-        self.members.len()
-    }
-
-    /// The colliding pairs this cluster stands for.
-    pub fn pairs(&self) -> u64 {
-        self.pair_count
-    }
 }
 
 /// The collisions of a track set at one threshold: every one counted, a bounded
@@ -767,255 +727,6 @@ pub fn detect_keeping(
     detect_among(set, threshold_m, None, keep)
 }
 
-/// The classes of identical tracks (positions, times and links equal bit for bit,
-/// ids aside): `mult[k]` is the size of the class whose first member is `k`, 0 for
-/// its other members; and the classes of two or more, as clusters.
-fn classes(set: &TrackSet) -> (Vec<u32>, Vec<Cluster>) {
-    let n = set.tracks.len();
-    let mut hashed: Vec<(u64, u32)> = set
-        .tracks
-        .iter()
-        .enumerate()
-        .map(|(k, t)| {
-            let mut h = std::collections::hash_map::DefaultHasher::new();
-            for (p, ts) in t.points.iter().zip(&t.times_s) {
-                (p.x.to_bits(), p.y.to_bits(), ts.to_bits()).hash(&mut h);
-            }
-            t.linked.hash(&mut h);
-            (h.finish(), k as u32)
-        })
-        .collect();
-    hashed.sort_unstable();
-    let same = |a: usize, b: usize| {
-        let (x, y) = (&set.tracks[a], &set.tracks[b]);
-        x.linked == y.linked
-            && x.times_s.len() == y.times_s.len()
-            && x.times_s
-                .iter()
-                .zip(&y.times_s)
-                .all(|(u, v)| u.to_bits() == v.to_bits())
-            && x.points
-                .iter()
-                .zip(&y.points)
-                .all(|(u, v)| u.x.to_bits() == v.x.to_bits() && u.y.to_bits() == v.y.to_bits())
-    };
-    let mut mult = vec![0u32; n];
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    let mut i = 0;
-    while i < hashed.len() {
-        let mut j = i;
-        while j < hashed.len() && hashed[j].0 == hashed[i].0 {
-            j += 1;
-        }
-        // One hash: usually one class; split by comparing with each class's first.
-        let mut local: Vec<Vec<usize>> = Vec::new();
-        for &(_, k) in &hashed[i..j] {
-            let k = k as usize;
-            match local.iter_mut().find(|c| same(c[0], k)) {
-                Some(c) => c.push(k),
-                None => local.push(vec![k]),
-            }
-        }
-        groups.extend(local);
-        i = j;
-    }
-    let mut clusters = Vec::new();
-    for mut g in groups {
-        g.sort_unstable();
-        mult[g[0]] = g.len() as u32;
-        if g.len() >= 2 {
-            let t = &set.tracks[g[0]];
-            let (start_s, end_s) = t.span_s();
-            let n = g.len() as u64;
-            clusters.push(Cluster {
-                first_id: t.id,
-                start_s,
-                end_s,
-                place: t.points[0],
-                members: g,
-                identical: true,
-                pair_count: n * (n - 1) / 2,
-            });
-        }
-    }
-    (mult, clusters)
-}
-
-/// No standing cluster.
-const NO_GROUP: u32 = u32::MAX;
-
-/// The fewest people a standing cluster holds; fewer are looked up pair by pair
-/// (and listed) as before.
-pub const MIN_STANDING_CLUSTER: usize = 32;
-
-/// The most leaders of standing clusters a person is compared with.
-const MAX_LEADERS_CHECKED: usize = 16;
-
-/// Standing clusters among the people `mult` keeps: people standing still (every
-/// position equal) at the same times with the same links, each within half the
-/// threshold (less 1e-9 of it, against rounding) of the cluster's first person, its
-/// leader, so every two are closer than the threshold whenever present. Greedy:
-/// each person joins the first of at most [`MAX_LEADERS_CHECKED`] leaders near
-/// it that fits, else leads a new one; clusters of fewer than
-/// [`MIN_STANDING_CLUSTER`] are dropped. O(n log n).
-fn standing_groups(set: &TrackSet, mult: &[u32], d: f64) -> Vec<Vec<usize>> {
-    let r = 0.5 * d * (1.0 - 1e-9);
-    let stands = |t: &super::tracks::Track| {
-        let p = t.points[0];
-        t.points
-            .iter()
-            .all(|q| q.x.to_bits() == p.x.to_bits() && q.y.to_bits() == p.y.to_bits())
-    };
-    let mut cand: Vec<(u64, u32)> = set
-        .tracks
-        .iter()
-        .enumerate()
-        .filter(|(k, t)| mult[*k] > 0 && stands(t))
-        .map(|(k, t)| {
-            let mut h = std::collections::hash_map::DefaultHasher::new();
-            for ts in &t.times_s {
-                ts.to_bits().hash(&mut h);
-            }
-            t.linked.hash(&mut h);
-            (h.finish(), k as u32)
-        })
-        .collect();
-    cand.sort_unstable();
-    let same_times = |a: usize, b: usize| {
-        let (x, y) = (&set.tracks[a], &set.tracks[b]);
-        x.linked == y.linked
-            && x.times_s.len() == y.times_s.len()
-            && x.times_s
-                .iter()
-                .zip(&y.times_s)
-                .all(|(u, v)| u.to_bits() == v.to_bits())
-    };
-    let cell_of = |p: Vec2| ((p.x / r).floor() as i64, (p.y / r).floor() as i64);
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    let mut leaders: std::collections::HashMap<(i64, i64), Vec<usize>> = Default::default();
-    let mut i = 0;
-    while i < cand.len() {
-        let mut j = i;
-        while j < cand.len() && cand[j].0 == cand[i].0 {
-            j += 1;
-        }
-        leaders.clear();
-        for &(_, k) in &cand[i..j] {
-            let k = k as usize;
-            let p = set.tracks[k].points[0];
-            let (cx, cy) = cell_of(p);
-            let mut joined = None;
-            let mut checked = 0;
-            'search: for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for &g in leaders.get(&(cx + dx, cy + dy)).into_iter().flatten() {
-                        checked += 1;
-                        if checked > MAX_LEADERS_CHECKED {
-                            break 'search;
-                        }
-                        let l = groups[g][0];
-                        if (set.tracks[l].points[0] - p).norm() < r && same_times(l, k) {
-                            joined = Some(g);
-                            break 'search;
-                        }
-                    }
-                }
-            }
-            match joined {
-                Some(g) => groups[g].push(k),
-                None => {
-                    leaders.entry((cx, cy)).or_default().push(groups.len());
-                    groups.push(vec![k]);
-                }
-            }
-        }
-        i = j;
-    }
-    groups.retain(|g| g.len() >= MIN_STANDING_CLUSTER);
-    for g in &mut groups {
-        g.sort_unstable();
-    }
-    groups
-}
-
-/// The closest two of a standing cluster `(a, b, distance)` with `a < b`, least
-/// `(distance, a, b)`: a sweep over the places sorted by x, a pair skipped only
-/// when its x distance alone exceeds the best.
-fn closest_standing(set: &TrackSet, members: &[usize]) -> (usize, usize, f64) {
-    let mut pts: Vec<(f64, usize)> = members
-        .iter()
-        .map(|&k| (set.tracks[k].points[0].x, k))
-        .collect();
-    pts.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-    let mut best = (f64::INFINITY, usize::MAX, usize::MAX);
-    for i in 0..pts.len() {
-        for j in i + 1..pts.len() {
-            if pts[j].0 - pts[i].0 > best.0 {
-                break;
-            }
-            let (a, b) = (pts[i].1.min(pts[j].1), pts[i].1.max(pts[j].1));
-            // As the pair's closest approach computes it: first minus second.
-            let dist = (set.tracks[a].points[0] - set.tracks[b].points[0]).norm();
-            let better = dist
-                .total_cmp(&best.0)
-                .then((a, b).cmp(&(best.1, best.2)))
-                .is_lt();
-            if better {
-                best = (dist, a, b);
-            }
-        }
-    }
-    (best.1, best.2, best.0)
-}
-
-/// The people in Z (Morton) order of their first place, quantised to 2^16 steps
-/// each way across the box of all first places; a standing cluster's people
-/// together at its leader's place (ties by cluster, then index).
-fn spatial_order(set: &TrackSet, group: &[u32]) -> Vec<u32> {
-    let mut lo = Vec2::repeat(f64::INFINITY);
-    let mut hi = Vec2::repeat(f64::NEG_INFINITY);
-    for t in &set.tracks {
-        lo = lo.inf(&t.points[0]);
-        hi = hi.sup(&t.points[0]);
-    }
-    let span = (hi - lo).max().max(f64::MIN_POSITIVE);
-    let spread = |v: u32| {
-        let mut v = v as u64 & 0xffff;
-        v = (v | (v << 8)) & 0x00ff_00ff;
-        v = (v | (v << 4)) & 0x0f0f_0f0f;
-        v = (v | (v << 2)) & 0x3333_3333;
-        (v | (v << 1)) & 0x5555_5555
-    };
-    // Each standing cluster's leader (its first person in index order).
-    let mut leader: std::collections::HashMap<u32, usize> = Default::default();
-    for (k, &g) in group.iter().enumerate() {
-        if g != NO_GROUP {
-            leader.entry(g).or_insert(k);
-        }
-    }
-    let mut keyed: Vec<(u64, u32, u32)> = set
-        .tracks
-        .iter()
-        .enumerate()
-        .map(|(k, t)| {
-            let g = group[k];
-            let at = if g == NO_GROUP {
-                t.points[0]
-            } else {
-                set.tracks[leader[&g]].points[0]
-            };
-            let q = (at - lo) / span * 65535.0;
-            let (x, y) = (
-                q.x.clamp(0.0, 65535.0) as u32,
-                q.y.clamp(0.0, 65535.0) as u32,
-            );
-            (spread(x) | (spread(y) << 1), g, k as u32)
-        })
-        .collect();
-    keyed.sort_unstable();
-    keyed.into_iter().map(|(_, _, k)| k).collect()
-}
-
 /// A piece's box over a slab `[s0, s1]` (its positions then, widened in time by
 /// `slack` against rounding), grown by `half` on every side.
 fn slab_box(p: &Piece, s0: f64, s1: f64, slack: f64, half: f64) -> (Vec2, Vec2) {
@@ -1030,82 +741,6 @@ fn slab_box(p: &Piece, s0: f64, s1: f64, slack: f64, half: f64) -> (Vec2, Vec2) 
         qa.inf(&qb) - Vec2::repeat(half),
         qa.sup(&qb) + Vec2::repeat(half),
     )
-}
-
-/// The cells a box covers, `None` when more than [`MAX_CELLS_PER_PIECE`].
-fn cell_range(b: &(Vec2, Vec2), cell: f64) -> Option<(i64, i64, i64, i64)> {
-    let x0 = (b.0.x / cell).floor() as i64;
-    let x1 = (b.1.x / cell).floor() as i64;
-    let y0 = (b.0.y / cell).floor() as i64;
-    let y1 = (b.1.y / cell).floor() as i64;
-    let cells = (x1 - x0 + 1).saturating_mul(y1 - y0 + 1);
-    (cells <= MAX_CELLS_PER_PIECE).then_some((x0, x1, y0, y1))
-}
-
-fn cell_key(x: i64, y: i64) -> u64 {
-    ((x as u32 as u64) << 32) | (y as u32 as u64)
-}
-
-/// The bucket of a cell key among `nb` (a power of two).
-fn bucket_of(key: u64, nb: usize) -> usize {
-    (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & (nb - 1)
-}
-
-/// How one slab's cells map to buckets: row by row over the cells' bounding box
-/// when it holds no more than [`DENSE_CELLS_PER_ENTRY`] cells per entry (neighbouring
-/// cells in neighbouring buckets: people near each other read memory near each
-/// other), else hashed into a power of two of buckets (a bucket may then hold
-/// several cells: the box test drops the extra pieces). Either way at most two
-/// buckets (4 bytes each) per entry, or 32 for a slab of fewer than 16 entries.
-#[derive(Copy, Clone, Debug, Default)]
-struct SlabGrid {
-    cell: f64,
-    x0: i64,
-    y0: i64,
-    w: i64,
-    h: i64,
-    buckets: usize,
-    dense: bool,
-}
-
-/// See [`SlabGrid`].
-const DENSE_CELLS_PER_ENTRY: i64 = 2;
-
-impl SlabGrid {
-    fn new(cell: f64, (x0, x1, y0, y1): (i64, i64, i64, i64), entries: usize) -> SlabGrid {
-        let w = x1.saturating_sub(x0).saturating_add(1).max(1);
-        let h = y1.saturating_sub(y0).saturating_add(1).max(1);
-        let limit = (entries as i64)
-            .max(16)
-            .saturating_mul(DENSE_CELLS_PER_ENTRY);
-        let dense = entries > 0 && w.checked_mul(h).is_some_and(|c| c <= limit);
-        SlabGrid {
-            cell,
-            x0,
-            y0,
-            w,
-            h,
-            buckets: if dense {
-                (w * h) as usize
-            } else {
-                entries.next_power_of_two().max(2)
-            },
-            dense,
-        }
-    }
-
-    fn bucket(&self, x: i64, y: i64) -> Option<usize> {
-        if self.dense {
-            let (dx, dy) = (x - self.x0, y - self.y0);
-            (dx >= 0 && dy >= 0 && dx < self.w && dy < self.h).then(|| (dy * self.w + dx) as usize)
-        } else {
-            Some(bucket_of(cell_key(x, y), self.buckets))
-        }
-    }
-}
-
-fn overlap(a: &(Vec2, Vec2), b: &(Vec2, Vec2)) -> bool {
-    a.0.x <= b.1.x && b.0.x <= a.1.x && a.0.y <= b.1.y && b.0.y <= a.1.y
 }
 
 /// [`detect`], for pairs with at least one person marked in `who` (every pair,

@@ -18,12 +18,15 @@
 //! | `cage.rs` | [`Cage`]: the spatial editor (MVC cage, ARAP mesh, locality and hull-edge energies, exact handle constraints); [`correct_speeds`] | 3.2, eqs. 1–9 |
 //! | `temporal.rs` | [`retime`]: dragging time nodes, intervals kept, locality, times increasing | 3.3, eqs. 10–12 |
 //! | `collide.rs` | [`detect`]: people closer than a threshold in space-time (and the all-pairs reference) | 4.1.1 |
+//! | `clusters.rs` | [`Cluster`]s: identical tracks and people standing together, counted in closed form; the order detection visits people in | 4.1.1 |
+//! | `slab_grid.rs` | the uniform grid detection lays over each time slab | 4.1.1 |
 //! | `avoid.rs` | [`avoid`]: retiming people apart, positions kept | 4.1.2, eqs. 18–28 |
 //! | `obstacles.rs` | [`avoid_obstacles`]: hull vertices mapped out of obstacles, then eq. 1; [`crowd_width`] | 4.2, eq. 29 |
 
 mod apply;
 mod avoid;
 mod cage;
+mod clusters;
 mod collide;
 mod error;
 mod hull;
@@ -33,6 +36,7 @@ mod paths;
 mod record;
 mod script;
 mod select;
+mod slab_grid;
 mod temporal;
 mod tracks;
 
@@ -45,9 +49,10 @@ pub use cage::{
     correct_speeds, Cage, CageParams, Handle, ShapeError, SpeedReport, MIN_INTERVAL_FRACTION,
     PAPER_ALPHA, PAPER_BETA, PAPER_K,
 };
+pub use clusters::{Cluster, MIN_STANDING_CLUSTER};
 pub use collide::{
-    collisions_all_pairs, detect, detect_keeping, Approach, Cluster, CollideError, CollisionEvent,
-    Collisions, PairCollision, DEFAULT_KEEP, MIN_STANDING_CLUSTER,
+    collisions_all_pairs, detect, detect_keeping, Approach, CollideError, CollisionEvent,
+    Collisions, PairCollision, DEFAULT_KEEP,
 };
 pub use error::EditError;
 pub use hull::{
