@@ -13,7 +13,7 @@ use crowdtouch::publish::websocket::VIEWER_PAGE;
 use crowdtouch::vocab::{Micros, TouchFrame};
 use serde_json::Value;
 use std::io::{BufReader, Read, Write};
-use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::net::{SocketAddr, TcpStream};
 use std::os::unix::net::UnixStream;
 use std::os::unix::process::CommandExt;
 use std::path::Path;
@@ -24,14 +24,6 @@ use tungstenite::{Message, WebSocket};
 type Ws = WebSocket<TcpStream>;
 
 const TOKEN: &str = "0123456789abcdef-test";
-
-/// A port free a moment ago on loopback.
-fn free_addr() -> SocketAddr {
-    TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-}
 
 fn websocket(addr: SocketAddr, privileged: bool, token: Option<&str>) -> OutputConfig {
     OutputConfig::WebSocket {
@@ -736,26 +728,6 @@ fn the_handshake_follows_rfc_6455() {
     assert_eq!((short, long), (400, 400));
     assert_eq!(v12, 426, "{text12}");
     assert!(text12.contains("Sec-WebSocket-Version: 13\r\n"), "{text12}");
-}
-
-/// A raw upgraded connection (no Origin), the 101 read.
-fn raw_upgrade(addr: SocketAddr) -> TcpStream {
-    let mut s = TcpStream::connect(addr).unwrap();
-    s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
-    s.write_all(upgrade_request("1.1", &addr.to_string(), "", KEY, "13").as_bytes())
-        .unwrap();
-    let mut head = Vec::new();
-    let mut b = [0u8; 1];
-    while !head.ends_with(b"\r\n\r\n") {
-        s.read_exact(&mut b).unwrap();
-        head.push(b[0]);
-    }
-    assert!(
-        head.starts_with(b"HTTP/1.1 101"),
-        "{}",
-        String::from_utf8_lossy(&head)
-    );
-    s
 }
 
 /// A client frame: FIN, `rsv` bits (0..=7), `opcode`, masked or not.
