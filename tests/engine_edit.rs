@@ -200,7 +200,7 @@ fn a_drag_moves_the_held_person_with_the_finger_and_the_group_with_them() {
         }
     }
     assert!(
-        detect(&after, 0.3).unwrap().pairs.is_empty(),
+        detect(after.as_ref(), 0.3).unwrap().pairs.is_empty(),
         "no one closer than 0.3 m after the release"
     );
     s.e.command(&Command::EditUndo, Micros(s.now)).unwrap();
@@ -299,7 +299,7 @@ fn a_retime_keeps_colliding_people_apart() {
     s.ticks(2);
     let after = s.set();
     assert!(
-        detect(&after, 0.3).unwrap().pairs.is_empty(),
+        detect(after.as_ref(), 0.3).unwrap().pairs.is_empty(),
         "kept apart by retiming"
     );
     for (a, b) in after.tracks.iter().zip(&set.tracks) {

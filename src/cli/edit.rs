@@ -13,7 +13,7 @@ mod edit_render;
 use anyhow::{anyhow, Result};
 use clap::{Subcommand, ValueEnum};
 use crowdtouch::crowd::edit::io::{self, EthOptions, Format, ReadOptions};
-use crowdtouch::crowd::edit::TrackSet;
+use crowdtouch::crowd::edit::{FlatTracks, TrackSet};
 use std::path::PathBuf;
 
 /// Subcommands of `edit`.
@@ -99,7 +99,7 @@ pub fn edit(cmd: EditCmd) -> Result<()> {
 
 /// `edit check`: exits 0 whether or not people collide (`edit_check`).
 fn check(a: CheckArgs) -> Result<()> {
-    let (set, _) = load(&a.tracks)?;
+    let (set, _) = load_flat(&a.tracks)?;
     edit_check::run(
         &set,
         &a.tracks.file.display().to_string(),
@@ -111,6 +111,18 @@ fn check(a: CheckArgs) -> Result<()> {
 
 /// Reads a track file as the arguments say; errors name `file:line`.
 pub fn load(a: &TrackFileArgs) -> Result<(TrackSet, Format)> {
+    let (format, opts) = read_options(a);
+    io::read_tracks(&a.file, format, &opts).map_err(|e| anyhow!(e))
+}
+
+/// [`load`] into the compact store, for commands that only read the tracks.
+pub fn load_flat(a: &TrackFileArgs) -> Result<(FlatTracks, Format)> {
+    let (format, opts) = read_options(a);
+    io::read_tracks_flat(&a.file, format, &opts).map_err(|e| anyhow!(e))
+}
+
+/// The format (`None`: detect it) and reading options the arguments give.
+fn read_options(a: &TrackFileArgs) -> (Option<Format>, ReadOptions) {
     let format = match a.format {
         FormatArg::Auto => None,
         FormatArg::Jsonl => Some(Format::Jsonl),
@@ -124,5 +136,5 @@ pub fn load(a: &TrackFileArgs) -> Result<(TrackSet, Format)> {
         },
         csv_step_s: a.step,
     };
-    io::read_tracks(&a.file, format, &opts).map_err(|e| anyhow!(e))
+    (format, opts)
 }

@@ -12,7 +12,7 @@
 
 use crate::cli::output::outln;
 use anyhow::{anyhow, Result};
-use crowdtouch::crowd::edit::{detect_keeping, Collisions, TrackSet, DEFAULT_KEEP};
+use crowdtouch::crowd::edit::{detect_keeping, Collisions, Tracks, DEFAULT_KEEP};
 use serde_json::json;
 
 /// Events listed in the text report.
@@ -24,7 +24,7 @@ const CLUSTER_IDS_SHOWN: usize = 16;
 /// Runs detection on a loaded track set, keeping `keep` pairs, events and
 /// clusters (`None`: [`DEFAULT_KEEP`]), and prints the report.
 pub fn run(
-    set: &TrackSet,
+    set: &impl Tracks,
     file: &str,
     threshold_m: f64,
     keep: Option<usize>,
@@ -40,7 +40,7 @@ pub fn run(
     Ok(())
 }
 
-fn report_json(set: &TrackSet, c: &Collisions) -> serde_json::Value {
+fn report_json(set: &impl Tracks, c: &Collisions) -> serde_json::Value {
     let (t0, t1) = set.span_s();
     let events: Vec<_> = c
         .events_by_time()
@@ -80,7 +80,7 @@ fn report_json(set: &TrackSet, c: &Collisions) -> serde_json::Value {
                 .members
                 .iter()
                 .take(CLUSTER_IDS_SHOWN)
-                .map(|&m| set.tracks[m].id)
+                .map(|&m| set.track(m).id)
                 .collect();
             json!({
                 "kind": if k.identical { "identical" } else { "standing" },
@@ -95,11 +95,11 @@ fn report_json(set: &TrackSet, c: &Collisions) -> serde_json::Value {
         })
         .collect();
     json!({
-        "people": set.tracks.len(),
+        "people": set.people(),
         "samples": set.samples(),
         "start_s": t0,
         "end_s": t1,
-        "step_s": set.step_s,
+        "step_s": set.step_s(),
         "threshold_m": c.threshold_m,
         "pairs": c.pair_total,
         "events_total": c.event_total,
@@ -112,14 +112,14 @@ fn report_json(set: &TrackSet, c: &Collisions) -> serde_json::Value {
     })
 }
 
-fn report_text(set: &TrackSet, file: &str, c: &Collisions) -> Result<()> {
+fn report_text(set: &impl Tracks, file: &str, c: &Collisions) -> Result<()> {
     let (t0, t1) = set.span_s();
     outln!("{file}")?;
-    outln!("  people              {}", set.tracks.len())?;
+    outln!("  people              {}", set.people())?;
     outln!(
         "  samples             {} (step {} s)",
         set.samples(),
-        set.step_s
+        set.step_s()
     )?;
     outln!(
         "  time                {t0:.2} – {t1:.2} s ({:.1} s)",

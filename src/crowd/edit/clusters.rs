@@ -4,7 +4,7 @@
 //! pairs are counted in closed form, never enumerated. Also the order detection
 //! visits people in (Z order of their first place, a standing cluster together).
 
-use super::tracks::{Track, TrackSet};
+use super::flat::{TrackRef, Tracks};
 use crate::geom::Vec2;
 use std::hash::{Hash, Hasher};
 
@@ -50,15 +50,13 @@ impl Cluster {
 /// The classes of identical tracks (positions, times and links equal bit for bit,
 /// ids aside): `mult[k]` is the size of the class whose first member is `k`, 0 for
 /// its other members; and the classes of two or more, as clusters.
-pub(super) fn classes(set: &TrackSet) -> (Vec<u32>, Vec<Cluster>) {
-    let n = set.tracks.len();
-    let mut hashed: Vec<(u64, u32)> = set
-        .tracks
-        .iter()
-        .enumerate()
-        .map(|(k, t)| {
+pub(super) fn classes<S: Tracks + ?Sized>(set: &S) -> (Vec<u32>, Vec<Cluster>) {
+    let n = set.people();
+    let mut hashed: Vec<(u64, u32)> = (0..n)
+        .map(|k| {
+            let t = set.track(k);
             let mut h = std::collections::hash_map::DefaultHasher::new();
-            for (p, ts) in t.points.iter().zip(&t.times_s) {
+            for (p, ts) in t.points.iter().zip(t.times_s) {
                 (p.x.to_bits(), p.y.to_bits(), ts.to_bits()).hash(&mut h);
             }
             t.linked.hash(&mut h);
@@ -67,23 +65,31 @@ pub(super) fn classes(set: &TrackSet) -> (Vec<u32>, Vec<Cluster>) {
         .collect();
     hashed.sort_unstable();
     let same = |a: usize, b: usize| {
-        let (x, y) = (&set.tracks[a], &set.tracks[b]);
+        let (x, y) = (set.track(a), set.track(b));
         same_times(x, y)
             && x.points
                 .iter()
-                .zip(&y.points)
+                .zip(y.points)
                 .all(|(u, v)| u.x.to_bits() == v.x.to_bits() && u.y.to_bits() == v.y.to_bits())
     };
     let mut mult = vec![0u32; n];
-    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut clusters = Vec::new();
+    let mut local: Vec<Vec<usize>> = Vec::new();
     let mut i = 0;
     while i < hashed.len() {
         let mut j = i;
         while j < hashed.len() && hashed[j].0 == hashed[i].0 {
             j += 1;
         }
+        if j == i + 1 {
+            // A hash of its own: a class of one, no list kept (a million people
+            // of distinct tracks would otherwise hold a million small vectors).
+            mult[hashed[i].1 as usize] = 1;
+            i = j;
+            continue;
+        }
         // One hash: usually one class; split by comparing with each class's first.
-        let mut local: Vec<Vec<usize>> = Vec::new();
+        local.clear();
         for &(_, k) in &hashed[i..j] {
             let k = k as usize;
             match local.iter_mut().find(|c| same(c[0], k)) {
@@ -91,28 +97,28 @@ pub(super) fn classes(set: &TrackSet) -> (Vec<u32>, Vec<Cluster>) {
                 None => local.push(vec![k]),
             }
         }
-        groups.extend(local);
+        for mut g in local.drain(..) {
+            g.sort_unstable();
+            mult[g[0]] = g.len() as u32;
+            if g.len() >= 2 {
+                let t = set.track(g[0]);
+                let (start_s, end_s) = t.span_s();
+                let n = g.len() as u64;
+                clusters.push(Cluster {
+                    first_id: t.id,
+                    start_s,
+                    end_s,
+                    place: t.points[0],
+                    members: g,
+                    identical: true,
+                    pair_count: n * (n - 1) / 2,
+                });
+            }
+        }
         i = j;
     }
-    let mut clusters = Vec::new();
-    for mut g in groups {
-        g.sort_unstable();
-        mult[g[0]] = g.len() as u32;
-        if g.len() >= 2 {
-            let t = &set.tracks[g[0]];
-            let (start_s, end_s) = t.span_s();
-            let n = g.len() as u64;
-            clusters.push(Cluster {
-                first_id: t.id,
-                start_s,
-                end_s,
-                place: t.points[0],
-                members: g,
-                identical: true,
-                pair_count: n * (n - 1) / 2,
-            });
-        }
-    }
+    // In order of first member, as the classes were before.
+    clusters.sort_unstable_by_key(|c| c.members[0]);
     (mult, clusters)
 }
 
@@ -133,22 +139,24 @@ const MAX_LEADERS_CHECKED: usize = 16;
 /// each person joins the first of at most [`MAX_LEADERS_CHECKED`] leaders near
 /// it that fits, else leads a new one; clusters of fewer than
 /// [`MIN_STANDING_CLUSTER`] are dropped. O(n log n).
-pub(super) fn standing_groups(set: &TrackSet, mult: &[u32], d: f64) -> Vec<Vec<usize>> {
+pub(super) fn standing_groups<S: Tracks + ?Sized>(
+    set: &S,
+    mult: &[u32],
+    d: f64,
+) -> Vec<Vec<usize>> {
     let r = 0.5 * d * (1.0 - 1e-9);
-    let stands = |t: &Track| {
+    let stands = |t: TrackRef| {
         let p = t.points[0];
         t.points
             .iter()
             .all(|q| q.x.to_bits() == p.x.to_bits() && q.y.to_bits() == p.y.to_bits())
     };
-    let mut cand: Vec<(u64, u32)> = set
-        .tracks
-        .iter()
-        .enumerate()
-        .filter(|(k, t)| mult[*k] > 0 && stands(t))
+    let mut cand: Vec<(u64, u32)> = (0..set.people())
+        .map(|k| (k, set.track(k)))
+        .filter(|(k, t)| mult[*k] > 0 && stands(*t))
         .map(|(k, t)| {
             let mut h = std::collections::hash_map::DefaultHasher::new();
-            for ts in &t.times_s {
+            for ts in t.times_s {
                 ts.to_bits().hash(&mut h);
             }
             t.linked.hash(&mut h);
@@ -168,7 +176,7 @@ pub(super) fn standing_groups(set: &TrackSet, mult: &[u32], d: f64) -> Vec<Vec<u
         leaders.clear();
         for &(_, k) in &cand[i..j] {
             let k = k as usize;
-            let p = set.tracks[k].points[0];
+            let p = set.track(k).points[0];
             let (cx, cy) = cell_of(p);
             let mut joined = None;
             let mut checked = 0;
@@ -180,8 +188,8 @@ pub(super) fn standing_groups(set: &TrackSet, mult: &[u32], d: f64) -> Vec<Vec<u
                             break 'search;
                         }
                         let l = groups[g][0];
-                        if (set.tracks[l].points[0] - p).norm() < r
-                            && same_times(&set.tracks[l], &set.tracks[k])
+                        if (set.track(l).points[0] - p).norm() < r
+                            && same_times(set.track(l), set.track(k))
                         {
                             joined = Some(g);
                             break 'search;
@@ -209,10 +217,13 @@ pub(super) fn standing_groups(set: &TrackSet, mult: &[u32], d: f64) -> Vec<Vec<u
 /// The closest two of a standing cluster `(a, b, distance)` with `a < b`, least
 /// `(distance, a, b)`: a sweep over the places sorted by x, a pair skipped only
 /// when its x distance alone exceeds the best.
-pub(super) fn closest_standing(set: &TrackSet, members: &[usize]) -> (usize, usize, f64) {
+pub(super) fn closest_standing<S: Tracks + ?Sized>(
+    set: &S,
+    members: &[usize],
+) -> (usize, usize, f64) {
     let mut pts: Vec<(f64, usize)> = members
         .iter()
-        .map(|&k| (set.tracks[k].points[0].x, k))
+        .map(|&k| (set.track(k).points[0].x, k))
         .collect();
     pts.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
     let mut best = (f64::INFINITY, usize::MAX, usize::MAX);
@@ -223,7 +234,7 @@ pub(super) fn closest_standing(set: &TrackSet, members: &[usize]) -> (usize, usi
             }
             let (a, b) = (pts[i].1.min(pts[j].1), pts[i].1.max(pts[j].1));
             // As the pair's closest approach computes it: first minus second.
-            let dist = (set.tracks[a].points[0] - set.tracks[b].points[0]).norm();
+            let dist = (set.track(a).points[0] - set.track(b).points[0]).norm();
             let better = dist
                 .total_cmp(&best.0)
                 .then((a, b).cmp(&(best.1, best.2)))
@@ -239,10 +250,11 @@ pub(super) fn closest_standing(set: &TrackSet, members: &[usize]) -> (usize, usi
 /// The people in Z (Morton) order of their first place, quantised to 2^16 steps
 /// each way across the box of all first places; a standing cluster's people
 /// together at its leader's place (ties by cluster, then index).
-pub(super) fn spatial_order(set: &TrackSet, group: &[u32]) -> Vec<u32> {
+pub(super) fn spatial_order<S: Tracks + ?Sized>(set: &S, group: &[u32]) -> Vec<u32> {
     let mut lo = Vec2::repeat(f64::INFINITY);
     let mut hi = Vec2::repeat(f64::NEG_INFINITY);
-    for t in &set.tracks {
+    for k in 0..set.people() {
+        let t = set.track(k);
         lo = lo.inf(&t.points[0]);
         hi = hi.sup(&t.points[0]);
     }
@@ -261,16 +273,13 @@ pub(super) fn spatial_order(set: &TrackSet, group: &[u32]) -> Vec<u32> {
             leader.entry(g).or_insert(k);
         }
     }
-    let mut keyed: Vec<(u64, u32, u32)> = set
-        .tracks
-        .iter()
-        .enumerate()
-        .map(|(k, t)| {
+    let mut keyed: Vec<(u64, u32, u32)> = (0..set.people())
+        .map(|k| {
             let g = group[k];
             let at = if g == NO_GROUP {
-                t.points[0]
+                set.track(k).points[0]
             } else {
-                set.tracks[leader[&g]].points[0]
+                set.track(leader[&g]).points[0]
             };
             let q = (at - lo) / span * 65535.0;
             let (x, y) = (
@@ -285,11 +294,11 @@ pub(super) fn spatial_order(set: &TrackSet, group: &[u32]) -> Vec<u32> {
 }
 
 /// Whether two tracks have the same times and links, bit for bit.
-fn same_times(x: &Track, y: &Track) -> bool {
+fn same_times(x: TrackRef, y: TrackRef) -> bool {
     x.linked == y.linked
         && x.times_s.len() == y.times_s.len()
         && x.times_s
             .iter()
-            .zip(&y.times_s)
+            .zip(y.times_s)
             .all(|(u, v)| u.to_bits() == v.to_bits())
 }

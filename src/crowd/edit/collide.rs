@@ -44,8 +44,8 @@
 use super::clusters::{
     classes, closest_standing, spatial_order, standing_groups, Cluster, NO_GROUP,
 };
+use super::flat::{TrackError, Tracks};
 use super::slab_grid::{cell_range, overlap, SlabGrid};
-use super::tracks::{TrackError, TrackSet};
 use crate::geom::Vec2;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -321,15 +321,20 @@ impl Tally {
 
     /// A cluster; `closest` its closest pair (`a < b`) and their distance, the
     /// distance 0 of its first two members for an identical track.
-    fn cluster(&mut self, set: &TrackSet, c: Cluster, closest: Option<(usize, usize, f64)>) {
-        let tr = &set.tracks[c.members[0]];
+    fn cluster<S: Tracks + ?Sized>(
+        &mut self,
+        set: &S,
+        c: Cluster,
+        closest: Option<(usize, usize, f64)>,
+    ) {
+        let tr = set.track(c.members[0]);
         // Every two members collide in each stretch of the track between gaps.
         let events = 1 + tr.linked.iter().filter(|l| !**l).count();
         self.pair_total += c.pairs();
         self.event_total += c.pairs() * events as u64;
         self.cluster_total += 1;
         let (a, b, distance_m) = closest.unwrap_or((c.members[0], c.members[1], 0.0));
-        let (ta, tb) = (&set.tracks[a], &set.tracks[b]);
+        let (ta, tb) = (set.track(a), set.track(b));
         self.consider_closest(&PairCollision {
             a,
             b,
@@ -428,16 +433,16 @@ impl Piece {
 /// track, the tracks in `order` (by index when `None`), each track's in time order;
 /// `starts[r]..starts[r+1]` are the pieces of the `r`-th track of `order` (empty
 /// for a track left out).
-fn pieces(
-    set: &TrackSet,
+fn pieces<S: Tracks + ?Sized>(
+    set: &S,
     include: Option<&[u32]>,
     order: Option<&[u32]>,
 ) -> (Vec<Piece>, Vec<usize>) {
     let mut out = Vec::with_capacity(set.samples());
-    let mut starts = Vec::with_capacity(set.tracks.len() + 1);
-    for pos in 0..set.tracks.len() {
+    let mut starts = Vec::with_capacity(set.people() + 1);
+    for pos in 0..set.people() {
         let k = order.map_or(pos, |o| o[pos] as usize);
-        let tr = &set.tracks[k];
+        let tr = set.track(k);
         starts.push(out.len());
         if include.is_some_and(|m| m[k] == 0) {
             continue;
@@ -551,8 +556,8 @@ fn try_pair(pieces: &[Piece], i: usize, j: usize, d: f64, hits: &mut Vec<Hit>) {
 
 /// The pair and its events from the hits of one pair of people (`a < b`), in
 /// `events` (cleared first); `None` without hits.
-fn assemble_pair(
-    set: &TrackSet,
+fn assemble_pair<S: Tracks + ?Sized>(
+    set: &S,
     a: usize,
     b: usize,
     hits: &mut [Hit],
@@ -568,8 +573,8 @@ fn assemble_pair(
     let mut pair = PairCollision {
         a,
         b,
-        id_a: set.tracks[a].id,
-        id_b: set.tracks[b].id,
+        id_a: set.track(a).id,
+        id_b: set.track(b).id,
         closest: first.approach,
         events: 0,
     };
@@ -606,8 +611,8 @@ fn assemble_pair(
 /// people's pieces looked up; no clusters (every pair of identical tracks with a
 /// marked person is a pair). For the avoidance loop, which changes a few people per
 /// round: the pairs of the others are as they were.
-pub(super) fn collisions_involving(
-    set: &TrackSet,
+pub(super) fn collisions_involving<S: Tracks + ?Sized>(
+    set: &S,
     threshold_m: f64,
     who: &[bool],
     keep: usize,
@@ -626,14 +631,17 @@ pub(super) fn collisions_involving(
 /// # Errors
 /// [`CollideError`]: a threshold that is not positive and finite, or a track set
 /// breaking [`TrackSet::validate`].
-pub fn collisions_all_pairs(set: &TrackSet, threshold_m: f64) -> Result<Collisions, CollideError> {
+pub fn collisions_all_pairs<S: Tracks + ?Sized>(
+    set: &S,
+    threshold_m: f64,
+) -> Result<Collisions, CollideError> {
     check_threshold(threshold_m)?;
     set.validate()?;
     let (pieces, starts) = pieces(set, None, None);
     let mut tally = Tally::new(DEFAULT_KEEP);
     let mut hits = Vec::new();
     let mut events = Vec::new();
-    let n = set.tracks.len();
+    let n = set.people();
     for ka in 0..n {
         let pa = &pieces[starts[ka]..starts[ka + 1]];
         for kb in ka + 1..n {
@@ -710,7 +718,7 @@ pub fn collisions_all_pairs(set: &TrackSet, threshold_m: f64) -> Result<Collisio
 /// assert!((c.events[0].closest.t_s - 1.0).abs() < 1e-12);
 /// assert!(c.events[0].closest.distance_m < 1e-12);
 /// ```
-pub fn detect(set: &TrackSet, threshold_m: f64) -> Result<Collisions, CollideError> {
+pub fn detect<S: Tracks + ?Sized>(set: &S, threshold_m: f64) -> Result<Collisions, CollideError> {
     detect_among(set, threshold_m, None, DEFAULT_KEEP)
 }
 
@@ -719,8 +727,8 @@ pub fn detect(set: &TrackSet, threshold_m: f64) -> Result<Collisions, CollideErr
 ///
 /// # Errors
 /// As [`detect`].
-pub fn detect_keeping(
-    set: &TrackSet,
+pub fn detect_keeping<S: Tracks + ?Sized>(
+    set: &S,
     threshold_m: f64,
     keep: usize,
 ) -> Result<Collisions, CollideError> {
@@ -745,8 +753,8 @@ fn slab_box(p: &Piece, s0: f64, s1: f64, slack: f64, half: f64) -> (Vec2, Vec2) 
 
 /// [`detect`], for pairs with at least one person marked in `who` (every pair,
 /// and clusters, when `None`), keeping `keep`.
-fn detect_among(
-    set: &TrackSet,
+fn detect_among<S: Tracks + ?Sized>(
+    set: &S,
     threshold_m: f64,
     who: Option<&[bool]>,
     keep: usize,
@@ -755,7 +763,7 @@ fn detect_among(
     set.validate()?;
     let d = threshold_m;
     let mut tally = Tally::new(keep);
-    let n = set.tracks.len();
+    let n = set.people();
     // Identical tracks: only each class's first member takes part below.
     // Standing clusters: their pairs are counted, never looked up.
     let mut group = vec![NO_GROUP; n];
@@ -768,7 +776,7 @@ fn detect_among(
                 let m: Vec<u64> = g.iter().map(|&k| u64::from(mult[k])).collect();
                 let total: u64 = m.iter().sum();
                 let same: u64 = m.iter().map(|x| x * x).sum();
-                let t = &set.tracks[g[0]];
+                let t = set.track(g[0]);
                 let (start_s, end_s) = t.span_s();
                 let c = Cluster {
                     members: g.clone(),
@@ -815,7 +823,7 @@ fn detect_among(
     }
     let marked = |k: usize| who.is_none_or(|w| w.get(k).copied().unwrap_or(false));
     let (t_lo, t_hi) = set.span_s();
-    let mut width = set.step_s;
+    let mut width = set.step_s();
     if ((t_hi - t_lo) / width) as usize >= MAX_SLABS {
         width = (t_hi - t_lo) / (MAX_SLABS - 1) as f64;
     }

@@ -1,6 +1,6 @@
 use super::*;
 use crate::crowd::edit::io::{read_eth, EthOptions};
-use crate::crowd::edit::Track;
+use crate::crowd::edit::{FlatTracks, Track, TrackSet};
 use proptest::prelude::*;
 use proptest::test_runner::{Config as ProptestConfig, RngSeed};
 
@@ -27,6 +27,14 @@ fn fixtures_agree_with_the_readme_continuous_counts() {
             .map(|&d| detect(&set, d).unwrap().pair_count())
             .collect();
         let m = detect(&set, 1.0).unwrap().min_distance_m().unwrap();
+        let flat = FlatTracks::from(&set);
+        for d in [0.3, 1.0] {
+            assert_eq!(
+                detect(&flat, d).unwrap(),
+                detect(&set, d).unwrap(),
+                "{name}"
+            );
+        }
         eprintln!("{name}: {got:?} min {m}");
         assert_eq!(got, want, "{name}");
         assert!((m - min).abs() < 5e-4, "{name}: {m}");
@@ -44,10 +52,13 @@ fn line(id: u64, from: Vec2, to: Vec2, t0: f64, t1: f64) -> Track {
     Track::linked(id, vec![from, to], vec![t0, t1])
 }
 
+/// Detection, checked against the all-pairs reference and against detection on
+/// the same people in the flat store.
 fn both(s: &TrackSet, d: f64) -> Collisions {
     let fast = detect(s, d).unwrap();
     let reference = collisions_all_pairs(s, d).unwrap();
     assert_eq!(fast, reference);
+    assert_eq!(detect(&FlatTracks::from(s), d).unwrap(), fast, "flat store");
     fast
 }
 

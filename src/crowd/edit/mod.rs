@@ -6,7 +6,8 @@
 //!
 //! | file | what | paper |
 //! |---|---|---|
-//! | `tracks.rs` | [`TrackSet`]: per person a spatial and a temporal track, linked samples and gaps | 3.1 |
+//! | `flat.rs` | the bounds every track keeps and [`TrackError`]; [`TrackRef`] (one person's track, borrowed), [`Tracks`] (what detection reads), [`FlatTracks`] (every person's samples in three arrays: a million people in 62 MB) | 3.1 |
+//! | `tracks.rs` | [`TrackSet`]: per person a spatial and a temporal track, linked samples and gaps, editable; conversions to and from [`FlatTracks`] | 3.1 |
 //! | [`io`] | readers and writers: our JSON Lines, CSV `t,id,x,y`, the pedestrian datasets' raw format; files read capped and written safely | 3.1 |
 //! | `paths.rs` | [`group_tracks`]: a group walking the standard path through a scene (fast-marching route around obstacles), in rows | 5.2 |
 //! | `record.rs` | [`TrackRecorder`]: a running crowd's positions, tick by tick, into tracks on a time grid | 3.1 |
@@ -29,6 +30,7 @@ mod cage;
 mod clusters;
 mod collide;
 mod error;
+mod flat;
 mod hull;
 pub mod io;
 mod obstacles;
@@ -55,6 +57,10 @@ pub use collide::{
     Collisions, PairCollision, DEFAULT_KEEP,
 };
 pub use error::EditError;
+pub use flat::{
+    coordinate_problem, time_problem, FlatTracks, TrackError, TrackRef, Tracks, MAX_COORDINATE_M,
+    MAX_SAMPLES, MAX_TIME_S, MIN_SAMPLE_STEP_S,
+};
 pub use hull::{
     concave_hull, grid_cell, grid_subsample, is_simple, Hull, HullParams, DEFAULT_CONCAVITY,
     DEFAULT_MAX_EDGE_CELLS, DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M,
@@ -65,7 +71,4 @@ pub use record::{RecordError, TrackRecorder};
 pub use script::{parse_script, Op, OpDef, Script, ScriptError, SelectSpec, MAX_LIST, MAX_OPS};
 pub use select::{point_in_polygon, SampleRef, Selection, SelectionQuery};
 pub use temporal::{retime, RetimeParams, RetimeReport, TimeDrag};
-pub use tracks::{
-    coordinate_problem, time_problem, Track, TrackError, TrackSet, MAX_COORDINATE_M, MAX_SAMPLES,
-    MAX_TIME_S, MIN_SAMPLE_STEP_S,
-};
+pub use tracks::{Track, TrackSet};

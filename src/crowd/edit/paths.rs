@@ -26,7 +26,8 @@
 //! Samples fall on the grid `k · step_s` (time 0 the front row's start), plus a
 //! last sample at each person's arrival.
 
-use super::tracks::{Track, TrackSet, MAX_SAMPLES};
+use super::flat::MAX_SAMPLES;
+use super::tracks::{Track, TrackSet};
 use crate::crowd::environment::{PlanError, Planner, PlannerParams, Scene};
 use crate::geom::Vec2;
 use std::sync::Arc;

@@ -7,7 +7,8 @@
 //! the `i`-th position of every tick (an agent's index in the crowd); a person
 //! first seen at a later tick starts there. Every person's samples are linked.
 
-use super::tracks::{Track, TrackSet, MAX_SAMPLES};
+use super::flat::MAX_SAMPLES;
+use super::tracks::{Track, TrackSet};
 use crate::geom::Vec2;
 use thiserror::Error;
 

@@ -8,54 +8,8 @@
 //! distances between people (collision detection, avoidance) follows these links,
 //! so a person present in two stretches is one [`Track`] with a gap, not two people.
 
+use super::flat::{FlatTracks, TrackError, TrackRef, Tracks};
 use crate::geom::Vec2;
-use thiserror::Error;
-
-/// The most samples a track set may hold (all people together): a file larger than
-/// this is refused rather than exhausting memory.
-pub const MAX_SAMPLES: usize = 5_000_000;
-
-/// The largest coordinate a track may hold, in metres either way of the origin
-/// (1,000 km). Within it every quantity detection and editing derive (differences,
-/// midpoints, squared distances, velocities over [`MIN_SAMPLE_STEP_S`]) is finite;
-/// a place near 1e308 m would print as `(inf, -inf)`.
-pub const MAX_COORDINATE_M: f64 = 1e6;
-
-/// The largest time a track may hold, in seconds either way of 0 (about 31.7 years).
-pub const MAX_TIME_S: f64 = 1e9;
-
-/// The least time between a person's consecutive samples the track readers accept
-/// (seconds): 1 µs, well above the spacing of doubles near [`MAX_TIME_S`] (0.12 µs),
-/// so speeds stay below 2e12 m/s.
-pub const MIN_SAMPLE_STEP_S: f64 = 1e-6;
-
-/// What is wrong with a coordinate (metres), if anything: not finite, or beyond
-/// [`MAX_COORDINATE_M`].
-pub fn coordinate_problem(v: f64) -> Option<String> {
-    if !v.is_finite() {
-        Some(format!("{v} is not a finite number"))
-    } else if v.abs() > MAX_COORDINATE_M {
-        Some(format!(
-            "{v:e} m is beyond the coordinate bound of ±{MAX_COORDINATE_M:e} m"
-        ))
-    } else {
-        None
-    }
-}
-
-/// What is wrong with a time (seconds), if anything: not finite, or beyond
-/// [`MAX_TIME_S`].
-pub fn time_problem(v: f64) -> Option<String> {
-    if !v.is_finite() {
-        Some(format!("{v} is not a finite number"))
-    } else if v.abs() > MAX_TIME_S {
-        Some(format!(
-            "{v:e} s is beyond the time bound of ±{MAX_TIME_S:e} s"
-        ))
-    } else {
-        None
-    }
-}
 
 /// One person's tracks.
 #[derive(Clone, Debug, PartialEq)]
@@ -83,6 +37,16 @@ impl Track {
         }
     }
 
+    /// The track borrowed as a [`TrackRef`].
+    pub fn as_ref(&self) -> TrackRef<'_> {
+        TrackRef {
+            id: self.id,
+            points: &self.points,
+            times_s: &self.times_s,
+            linked: &self.linked,
+        }
+    }
+
     /// Number of samples.
     pub fn len(&self) -> usize {
         self.points.len()
@@ -95,75 +59,31 @@ impl Track {
 
     /// First and last time (seconds).
     pub fn span_s(&self) -> (f64, f64) {
-        (
-            self.times_s[0],
-            *self.times_s.last().unwrap_or(&self.times_s[0]),
-        )
+        self.as_ref().span_s()
     }
 
     /// Indices `j` of the linked segments `j → j + 1`.
     pub fn segments(&self) -> impl Iterator<Item = usize> + '_ {
-        self.linked
-            .iter()
-            .enumerate()
-            .filter(|(_, l)| **l)
-            .map(|(j, _)| j)
+        self.as_ref().segments()
     }
 
     /// Where the person is at `t_s`, if present then (on a sample, or on a linked
     /// segment, moving linearly).
     pub fn position_at(&self, t_s: f64) -> Option<Vec2> {
-        let n = self.times_s.len();
-        if n == 0 || t_s < self.times_s[0] || t_s > self.times_s[n - 1] {
-            return None;
-        }
-        let j = self.times_s.partition_point(|&t| t <= t_s);
-        // times_s[j - 1] <= t_s < times_s[j] (or j == n at the last sample).
-        let a = j - 1;
-        if self.times_s[a] == t_s || a + 1 == n {
-            return Some(self.points[a]);
-        }
-        if !self.linked[a] {
-            return None;
-        }
-        let s = (t_s - self.times_s[a]) / (self.times_s[a + 1] - self.times_s[a]);
-        Some(self.points[a] + (self.points[a + 1] - self.points[a]) * s)
+        self.as_ref().position_at(t_s)
     }
 
     /// Speed on segment `j → j + 1` in m/s.
     pub fn segment_speed(&self, j: usize) -> f64 {
-        (self.points[j + 1] - self.points[j]).norm() / (self.times_s[j + 1] - self.times_s[j])
+        self.as_ref().segment_speed(j)
     }
 
     /// Checks the invariants [`TrackSet::validate`] states, for this track alone.
+    ///
+    /// # Errors
+    /// The first broken invariant, naming the sample.
     pub fn validate(&self) -> Result<(), TrackError> {
-        let id = self.id;
-        if self.points.len() != self.times_s.len()
-            || self.linked.len() + 1 != self.points.len().max(1)
-        {
-            return Err(TrackError::Shape { id });
-        }
-        if self.points.is_empty() {
-            return Err(TrackError::Empty { id });
-        }
-        for (j, (p, t)) in self.points.iter().zip(&self.times_s).enumerate() {
-            if !p.x.is_finite() || !p.y.is_finite() || !t.is_finite() {
-                return Err(TrackError::NotFinite { id, sample: j });
-            }
-            if p.x.abs() > MAX_COORDINATE_M || p.y.abs() > MAX_COORDINATE_M || t.abs() > MAX_TIME_S
-            {
-                return Err(TrackError::OutOfRange { id, sample: j });
-            }
-            if j > 0 && *t <= self.times_s[j - 1] {
-                return Err(TrackError::NotIncreasing {
-                    id,
-                    sample: j,
-                    t_s: *t,
-                    previous_s: self.times_s[j - 1],
-                });
-            }
-        }
-        Ok(())
+        self.as_ref().validate()
     }
 }
 
@@ -180,23 +100,12 @@ pub struct TrackSet {
 impl TrackSet {
     /// Total number of samples.
     pub fn samples(&self) -> usize {
-        self.tracks.iter().map(Track::len).sum()
+        Tracks::samples(self)
     }
 
     /// First and last time of any sample (seconds); `(0, 0)` for an empty set.
     pub fn span_s(&self) -> (f64, f64) {
-        let mut lo = f64::INFINITY;
-        let mut hi = f64::NEG_INFINITY;
-        for t in &self.tracks {
-            let (a, b) = t.span_s();
-            lo = lo.min(a);
-            hi = hi.max(b);
-        }
-        if lo > hi {
-            (0.0, 0.0)
-        } else {
-            (lo, hi)
-        }
+        Tracks::span_s(self)
     }
 
     /// The index of the track with id `id`.
@@ -206,80 +115,70 @@ impl TrackSet {
 
     /// Checks that ids are unique, every track is non-empty with finite positions and
     /// strictly increasing times within [`MAX_COORDINATE_M`] and [`MAX_TIME_S`], `linked` has one entry per consecutive pair, and
-    /// the step is positive and finite.
+    /// the step is positive and finite ([`Tracks::validate`]).
+    ///
+    /// # Errors
+    /// The first broken invariant, naming the person and sample.
     pub fn validate(&self) -> Result<(), TrackError> {
-        if !(self.step_s.is_finite() && self.step_s > 0.0) {
-            return Err(TrackError::Step {
-                step_s: self.step_s,
-            });
-        }
-        let mut ids: Vec<u64> = self.tracks.iter().map(|t| t.id).collect();
-        ids.sort_unstable();
-        if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
-            return Err(TrackError::DuplicateId { id: w[0] });
-        }
-        for t in &self.tracks {
-            t.validate()?;
-        }
-        Ok(())
+        Tracks::validate(self)
     }
 }
 
-/// A track set that breaks [`TrackSet::validate`]'s invariants.
-#[derive(Debug, Error, PartialEq)]
-pub enum TrackError {
-    /// The step is not a positive finite number of seconds.
-    #[error("the frame step must be a positive number of seconds, not {step_s}")]
-    Step {
-        /// The step given.
-        step_s: f64,
-    },
-    /// Two tracks have one id.
-    #[error("person {id} appears twice")]
-    DuplicateId {
-        /// The id.
-        id: u64,
-    },
-    /// A track has no samples.
-    #[error("person {id} has no samples")]
-    Empty {
-        /// The id.
-        id: u64,
-    },
-    /// `points`, `times_s` and `linked` disagree in length.
-    #[error("person {id}: positions, times and links differ in length")]
-    Shape {
-        /// The id.
-        id: u64,
-    },
-    /// A position or time is NaN or infinite.
-    #[error("person {id}, sample {sample}: position or time is not a finite number")]
-    NotFinite {
-        /// The id.
-        id: u64,
-        /// The sample's index.
-        sample: usize,
-    },
-    /// A position or time is beyond [`MAX_COORDINATE_M`] or [`MAX_TIME_S`].
-    #[error("person {id}, sample {sample}: position beyond ±{MAX_COORDINATE_M:e} m or time beyond ±{MAX_TIME_S:e} s")]
-    OutOfRange {
-        /// The id.
-        id: u64,
-        /// The sample's index.
-        sample: usize,
-    },
-    /// Times do not strictly increase.
-    #[error("person {id}, sample {sample}: time {t_s} s does not come after {previous_s} s")]
-    NotIncreasing {
-        /// The id.
-        id: u64,
-        /// The sample's index.
-        sample: usize,
-        /// Its time.
-        t_s: f64,
-        /// The time before it.
-        previous_s: f64,
-    },
+impl From<&FlatTracks> for TrackSet {
+    /// The same people as editable [`Track`]s, each vector at its exact size.
+    fn from(f: &FlatTracks) -> TrackSet {
+        TrackSet {
+            tracks: (0..f.people())
+                .map(|k| {
+                    let t = f.track(k);
+                    Track {
+                        id: t.id,
+                        points: t.points.to_vec(),
+                        times_s: t.times_s.to_vec(),
+                        linked: t.linked.to_vec(),
+                    }
+                })
+                .collect(),
+            step_s: f.step_s(),
+        }
+    }
+}
+
+impl From<&TrackSet> for FlatTracks {
+    /// The people of a valid [`TrackSet`], in its order.
+    fn from(set: &TrackSet) -> FlatTracks {
+        let samples = set.samples();
+        let mut ids = Vec::with_capacity(set.tracks.len());
+        let mut starts = Vec::with_capacity(set.tracks.len() + 1);
+        let mut points = Vec::with_capacity(samples);
+        let mut times_s = Vec::with_capacity(samples);
+        let mut linked = Vec::with_capacity(samples);
+        starts.push(0);
+        for t in &set.tracks {
+            ids.push(t.id);
+            points.extend_from_slice(&t.points);
+            times_s.extend_from_slice(&t.times_s);
+            linked.extend_from_slice(&t.linked);
+            // The unused entry after a person's last sample.
+            linked.resize(points.len(), false);
+            starts.push(points.len() as u32);
+        }
+        FlatTracks::from_parts(ids, starts, points, times_s, linked, set.step_s)
+    }
+}
+
+impl Tracks for TrackSet {
+    fn people(&self) -> usize {
+        self.tracks.len()
+    }
+
+    fn track(&self, k: usize) -> TrackRef<'_> {
+        self.tracks[k].as_ref()
+    }
+
+    fn step_s(&self) -> f64 {
+        self.step_s
+    }
 }
 
 #[cfg(test)]
@@ -336,5 +235,24 @@ mod tests {
             step_s: 1.0,
         };
         assert_eq!(set.validate(), Err(TrackError::DuplicateId { id: 7 }));
+    }
+
+    #[test]
+    fn a_flat_store_reads_as_the_set_it_came_from() {
+        let set = TrackSet {
+            tracks: vec![
+                walk(),
+                Track::linked(3, vec![Vec2::new(2.0, 2.0)], vec![0.5]),
+            ],
+            step_s: 1.0,
+        };
+        let flat = FlatTracks::from(&set);
+        assert_eq!(flat.people(), 2);
+        assert_eq!(flat.samples(), set.samples());
+        assert_eq!(Tracks::span_s(&flat), set.span_s());
+        for k in 0..2 {
+            assert_eq!(flat.track(k), set.tracks[k].as_ref());
+        }
+        assert_eq!(TrackSet::from(&flat), set);
     }
 }

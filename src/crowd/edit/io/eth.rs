@@ -10,9 +10,8 @@
 
 use super::text::{clip, whole};
 use super::ReadError;
-use crate::crowd::edit::tracks::{
-    coordinate_problem, time_problem, Track, TrackSet, MAX_SAMPLES, MIN_SAMPLE_STEP_S,
-};
+use crate::crowd::edit::flat::{coordinate_problem, time_problem, MAX_SAMPLES, MIN_SAMPLE_STEP_S};
+use crate::crowd::edit::tracks::{Track, TrackSet};
 use crate::geom::Vec2;
 use std::collections::HashMap;
 use std::fmt::Write as _;

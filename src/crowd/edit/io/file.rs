@@ -6,8 +6,10 @@
 //! config load, never on the control thread; the messages it sends to clients
 //! never quote the file's text.
 
+use super::csv::read_csv_flat;
 use super::format::{self as io, Format, ReadOptions};
-use crate::crowd::edit::TrackSet;
+use super::ReadError;
+use crate::crowd::edit::{FlatTracks, TrackSet, Tracks};
 use crate::located::{
     check_entry_name, read_entry_text, read_text, EntryError, ReadError as FileError,
 };
@@ -29,13 +31,41 @@ pub fn read_tracks(
     format: Option<Format>,
     opts: &ReadOptions,
 ) -> Result<(TrackSet, Format), String> {
+    read_file_as(path, format, |text, f| io::read(text, f, opts))
+}
+
+/// [`read_tracks`] into the compact [`FlatTracks`], for reading without editing
+/// (`edit check`): CSV straight from the text, the other formats through a
+/// [`TrackSet`].
+///
+/// # Errors
+/// As [`read_tracks`].
+pub fn read_tracks_flat(
+    path: &Path,
+    format: Option<Format>,
+    opts: &ReadOptions,
+) -> Result<(FlatTracks, Format), String> {
+    read_file_as(path, format, |text, f| match f {
+        Format::Csv => read_csv_flat(text, opts.csv_step_s),
+        _ => io::read(text, f, opts).map(|set| FlatTracks::from(&set)),
+    })
+}
+
+/// The file at `path` read capped, its format detected unless given, parsed by
+/// `parse` and validated; errors name the file and line.
+fn read_file_as<T: Tracks>(
+    path: &Path,
+    format: Option<Format>,
+    parse: impl FnOnce(&str, Format) -> Result<T, ReadError>,
+) -> Result<(T, Format), String> {
     let shown = path.display();
     let text = read_text(path, MAX_TRACK_FILE_BYTES).map_err(|e| e.to_string())?;
     let format = format.unwrap_or_else(|| io::detect(path, &text));
-    let set = io::read(&text, format, opts).map_err(|e| match e.line {
+    let set = parse(&text, format).map_err(|e| match e.line {
         0 => format!("{shown}: {}", e.what),
         l => format!("{shown}:{l}: {}", e.what),
     })?;
+    drop(text);
     set.validate().map_err(|e| format!("{shown}: {e}"))?;
     Ok((set, format))
 }

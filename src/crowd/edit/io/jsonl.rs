@@ -20,9 +20,8 @@
 //! finite and more than [`MAX_SAMPLES`] samples are errors.
 
 use super::ReadError;
-use crate::crowd::edit::tracks::{
-    coordinate_problem, time_problem, Track, TrackSet, MAX_SAMPLES, MIN_SAMPLE_STEP_S,
-};
+use crate::crowd::edit::flat::{coordinate_problem, time_problem, MAX_SAMPLES, MIN_SAMPLE_STEP_S};
+use crate::crowd::edit::tracks::{Track, TrackSet};
 use crate::geom::Vec2;
 use serde::Deserialize;
 use std::collections::HashMap;

@@ -19,7 +19,7 @@ fn people() -> impl Strategy<Value = People> {
         -50.0f64..50.0,
         any::<f64>()
             .prop_filter("finite", |v| v.is_finite())
-            .prop_map(|v| v % crate::crowd::edit::tracks::MAX_COORDINATE_M)
+            .prop_map(|v| v % crate::crowd::edit::MAX_COORDINATE_M)
     ];
     let sample = (
         prop_oneof![3 => Just(1u32), 1 => 2u32..6],
