@@ -630,7 +630,7 @@ pub(super) fn collisions_involving<S: Tracks + ?Sized>(
 ///
 /// # Errors
 /// [`CollideError`]: a threshold that is not positive and finite, or a track set
-/// breaking [`TrackSet::validate`].
+/// breaking [`Tracks::validate`].
 pub fn collisions_all_pairs<S: Tracks + ?Sized>(
     set: &S,
     threshold_m: f64,

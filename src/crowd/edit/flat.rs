@@ -57,7 +57,7 @@ pub fn time_problem(v: f64) -> Option<String> {
     }
 }
 
-/// One person's track, borrowed: the fields of [`Track`] as slices.
+/// One person's track, borrowed: the fields of [`Track`](super::Track) as slices.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TrackRef<'a> {
     /// The person's id.
@@ -155,7 +155,7 @@ impl<'a> TrackRef<'a> {
     }
 }
 
-/// A crowd's tracks as detection reads them: [`TrackSet`] (editable) and
+/// A crowd's tracks as detection reads them: [`TrackSet`](super::TrackSet) (editable) and
 /// [`FlatTracks`] (compact) both are.
 pub trait Tracks {
     /// Number of people.
@@ -212,7 +212,7 @@ pub trait Tracks {
     }
 }
 
-/// A track set that breaks [`TrackSet::validate`]'s invariants.
+/// A track set that breaks [`Tracks::validate`]'s invariants.
 #[derive(Debug, Error, PartialEq)]
 pub enum TrackError {
     /// The step is not a positive finite number of seconds.

@@ -114,7 +114,7 @@ impl TrackSet {
     }
 
     /// Checks that ids are unique, every track is non-empty with finite positions and
-    /// strictly increasing times within [`MAX_COORDINATE_M`] and [`MAX_TIME_S`], `linked` has one entry per consecutive pair, and
+    /// strictly increasing times within [`MAX_COORDINATE_M`](super::MAX_COORDINATE_M) and [`MAX_TIME_S`](super::MAX_TIME_S), `linked` has one entry per consecutive pair, and
     /// the step is positive and finite ([`Tracks::validate`]).
     ///
     /// # Errors
