@@ -43,7 +43,8 @@ use anyhow::{ensure, Context, Result};
 use crowdtouch::config::{load_recogniser, Config};
 use crowdtouch::crowd::assign::{CostMatrix, Solver};
 use crowdtouch::crowd::motion::{
-    alignment, blend, build_library, rotated, BuildParams, GestureRequest, Placement, Synthesiser,
+    alignment, blend, build_library, rotated, start_costs, BuildParams, GestureRequest, Placement,
+    Synthesiser,
 };
 use crowdtouch::engine::{search_params, Engine};
 use crowdtouch::geom::Vec2;
@@ -256,6 +257,7 @@ pub fn gesture(run: &GestureRun) -> Result<()> {
     let mut synth = Synthesiser::new();
     let mut solver = Solver::new();
     let mut costs = CostMatrix::new(0, 0);
+    let (mut starts, mut mapped) = (Vec::with_capacity(m), Vec::with_capacity(m));
     let (mut prep, mut knn, mut blend_ms, mut synth_ms) = (vec![], vec![], vec![], vec![]);
     let (mut assign_ms, mut motion_ms, mut whole) = (vec![], vec![], vec![]);
     let (mut computed, mut abandoned, mut pruned, mut right) = (0, 0, 0, 0);
@@ -320,13 +322,10 @@ pub fn gesture(run: &GestureRun) -> Result<()> {
         motion_ms.push((b.0 + sy.0, b.1 + sy.1));
 
         // The same assignment on its own: agents to the synthesised starts.
+        starts.clear();
+        starts.extend(synthesis.trajectories.iter().map(|tr| tr[0]));
         let t = now();
-        costs.resize(m, m);
-        for (r, a) in agents.iter().enumerate() {
-            for (c, tr) in costs.row_mut(r).iter_mut().zip(&synthesis.trajectories) {
-                *c = (a - tr[0]).norm_squared();
-            }
-        }
+        start_costs(&agents, &starts, &mut mapped, &mut costs);
         solver.solve(&costs)?;
         assign_ms.push(ms_since(t));
 

@@ -38,4 +38,4 @@ pub use gmm::{
     fit, fit_auto, log_likelihood, standard_normal_pair, validate_mixture, GmmFit, GmmParams,
     GmmSampler, PRUNE_WEIGHT,
 };
-pub use synth::{synthesise, Placement, Synthesis, Synthesiser, MIN_CROWD_SCALE_M};
+pub use synth::{start_costs, synthesise, Placement, Synthesis, Synthesiser, MIN_CROWD_SCALE_M};

@@ -13,7 +13,7 @@ use super::error::MotionError;
 use super::features::validate_features;
 use super::fpca::reconstruct;
 use super::gmm::GmmSampler;
-use crate::crowd::assign::{CostMatrix, Solver};
+use crate::crowd::assign::{AffineMap, CostMatrix, Solver};
 use crate::geom::Vec2;
 use crate::gesture::library::{MotionFeatures, S_H, TRAJ_DIM};
 use crate::rng::SplitMix64;
@@ -127,10 +127,10 @@ pub struct Synthesis {
 /// and its cost matrix, the scores and the unassigned trajectories).
 ///
 /// The assignment runs on a full `M × M` matrix of squared distances (8 MB at 1,000
-/// agents, reused): the starts are sampled from a mixture and the agents stand in a
-/// formation, two differently shaped clouds on which the solver's sparse search over
-/// the matrix measured 12 ms at 1,000 agents against 16–22 ms from the positions
-/// (`Assigner`, `PointCosts`); both answers are the exact optimum.
+/// agents, reused) between the agents and the starts mapped to a common centre and
+/// spread ([`start_costs`]): the starts are sampled from a mixture and the agents
+/// stand in a formation, two differently shaped clouds; the answer is the exact
+/// optimum of the plain squared distances.
 pub struct Synthesiser {
     solver: Solver,
     costs: CostMatrix,
@@ -138,6 +138,8 @@ pub struct Synthesiser {
     buf: Vec<f64>,
     raw: Vec<[Vec2; S_H]>,
     starts: Vec<Vec2>,
+    /// The starts in the assignment's equalised coordinates.
+    mapped: Vec<Vec2>,
 }
 
 impl Default for Synthesiser {
@@ -156,6 +158,7 @@ impl Synthesiser {
             buf: vec![0.0; TRAJ_DIM],
             raw: Vec::new(),
             starts: Vec::new(),
+            mapped: Vec::new(),
         }
     }
 
@@ -201,17 +204,43 @@ impl Synthesiser {
             }
             self.starts.push(t[0]);
         }
-        self.costs.resize(m, m);
-        for (i, a) in agents.iter().enumerate() {
-            for (c, s) in self.costs.row_mut(i).iter_mut().zip(&self.starts) {
-                *c = (a - s).norm_squared();
-            }
-        }
+        start_costs(agents, &self.starts, &mut self.mapped, &mut self.costs);
         let goal_of = self.solver.solve(&self.costs)?;
         Ok(Synthesis {
             trajectories: goal_of.iter().map(|&g| self.raw[g]).collect(),
             duration_s: f.duration_s,
         })
+    }
+}
+
+/// The cost matrix of the assignment of `agents` to trajectory `starts` (section
+/// 7.3; as many of each): squared distances, not between the positions themselves
+/// but between the agents mapped by `a ↦ A(a − μa)` and the starts by
+/// `s ↦ A⁻¹(s − μs)` ([`AffineMap::equalising`]: both clouds centred and given
+/// the same covariance). Every assignment's total changes by the same constant, so
+/// the optimum is the same permutation; a row's cheapest starts are then its near
+/// ones, and the solver's candidate lists hold from the first pass (1,000 agents
+/// on a grid against the two clouds of a split: 9 ms instead of 13–27 ms).
+/// `mapped` is a workspace; `costs` is resized.
+pub fn start_costs(
+    agents: &[Vec2],
+    starts: &[Vec2],
+    mapped: &mut Vec<Vec2>,
+    costs: &mut CostMatrix,
+) {
+    let map = AffineMap::equalising(agents, starts);
+    mapped.clear();
+    mapped.extend(
+        starts
+            .iter()
+            .map(|&p| map.as_ref().map_or(p, |m| m.goal(p))),
+    );
+    costs.resize(agents.len(), starts.len());
+    for (i, &a) in agents.iter().enumerate() {
+        let a = map.as_ref().map_or(a, |m| m.agent(a));
+        for (c, s) in costs.row_mut(i).iter_mut().zip(mapped.iter()) {
+            *c = (a - s).norm_squared();
+        }
     }
 }
 
@@ -246,6 +275,7 @@ mod tests {
     use crate::crowd::motion::features::tests::split_motion;
     use crate::crowd::motion::{features, FeatureParams};
     use crate::gesture::library::{GmmComponent, MotionClass};
+    use crate::rng::SplitMix64;
 
     fn total_sq(agents: &[Vec2], s: &Synthesis) -> f64 {
         agents
@@ -303,6 +333,51 @@ mod tests {
         assert_ne!(
             synthesise(&f, &agents, &Placement::for_crowd(&agents), 10).unwrap(),
             s
+        );
+    }
+
+    #[test]
+    fn the_equalised_costs_give_the_plain_optimum() {
+        // A filled rectangle of agents against the two blobs of a split, far
+        // apart and differently shaped: the optimum of the mapped costs has the
+        // least total plain squared distance.
+        let mut rng = SplitMix64::new(5);
+        let agents: Vec<Vec2> = (0..300)
+            .map(|i| Vec2::new((i % 20) as f64 * 0.8, (i / 20) as f64 * 0.8))
+            .collect();
+        let starts: Vec<Vec2> = (0..300)
+            .map(|i| {
+                let c = if i % 2 == 0 { 4.0 } else { 30.0 };
+                Vec2::new(c + rng.uniform(-2.0, 2.0), 20.0 + rng.uniform(-6.0, 6.0))
+            })
+            .collect();
+        let (mut mapped, mut costs) = (Vec::new(), CostMatrix::new(0, 0));
+        start_costs(&agents, &starts, &mut mapped, &mut costs);
+        assert!(
+            mapped
+                .iter()
+                .zip(&starts)
+                .any(|(m, s)| (m - s).norm() > 1.0),
+            "the map moves the starts"
+        );
+        let mut plain = CostMatrix::new(300, 300);
+        for (i, a) in agents.iter().enumerate() {
+            for (c, s) in plain.row_mut(i).iter_mut().zip(&starts) {
+                *c = (a - s).norm_squared();
+            }
+        }
+        let total = |goal_of: &[usize]| -> f64 {
+            goal_of
+                .iter()
+                .enumerate()
+                .map(|(i, &j)| (agents[i] - starts[j]).norm_squared())
+                .sum()
+        };
+        let mapped_total = total(Solver::new().solve(&costs).unwrap());
+        let plain_total = total(Solver::new().solve(&plain).unwrap());
+        assert!(
+            (mapped_total - plain_total).abs() <= 1e-9 * plain_total,
+            "{mapped_total} vs {plain_total}"
         );
     }
 
