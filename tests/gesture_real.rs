@@ -20,12 +20,13 @@ use crowdtouch::config::Config;
 use crowdtouch::engine::{segment_params, tap_thresholds};
 use crowdtouch::geom::Vec2;
 use crowdtouch::gesture::find::{find_gestures, Found};
+use crowdtouch::gesture::segment::GHOST_LIFE;
 use crowdtouch::input::recording::{
     read_evemu_with_desc, read_recording, JsonlWriter, OnBadFrame, Recording,
 };
-use crowdtouch::vocab::{ContactFlags, Micros};
+use crowdtouch::vocab::{Contact, ContactFlags, ContactId, Micros, TouchFrame};
 use serde_json::Value;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -578,4 +579,158 @@ fn outcomes_that_hold_today() {
 fn every_expected_outcome() {
     let failures = check_outcomes(true);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// What [`damage`] did to a recording.
+#[derive(Debug, Default)]
+struct Damage {
+    new_ids: usize,
+    lost: usize,
+    ghosts: usize,
+}
+
+/// SYNTHETIC, derived from a real recording: the same touches as a worse device
+/// would report them. A finger down for a while gets a new tracking id now and
+/// then (it ends and a new contact begins at its position in the same frame,
+/// ended first as the decoders emit them); once per burst of touches a finger that
+/// has another beside it is lost for two frames and comes back under a new id;
+/// and once per burst a ghost contact appears for one frame between two fingers
+/// (when the frames are less than [`GHOST_LIFE`] apart).
+fn damage(frames: &[TouchFrame]) -> (Vec<TouchFrame>, Damage) {
+    let mut d = Damage::default();
+    let mut map: HashMap<u32, u32> = HashMap::new();
+    let mut age: HashMap<u32, usize> = HashMap::new();
+    let mut hidden: HashMap<u32, usize> = HashMap::new();
+    let mut fresh = 1_000_000u32;
+    let (mut lost_done, mut ghost_done) = (false, false);
+    let mut ghost_up: Option<Contact> = None;
+    let mut out = Vec::with_capacity(frames.len());
+    for (i, f) in frames.iter().enumerate() {
+        let (mut ended, mut begun, mut cont) = (Vec::new(), Vec::new(), Vec::new());
+        if let Some(g) = ghost_up.take() {
+            ended.push(g);
+        }
+        let others = f.contacts().iter().filter(|c| c.flags.0 == 0).count();
+        for c in f.contacts() {
+            let orig = c.id.0;
+            if c.flags.contains(ContactFlags::DOWN) {
+                map.insert(orig, orig);
+                age.insert(orig, 0);
+            }
+            let id = map[&orig];
+            let a = age[&orig];
+            *age.get_mut(&orig).unwrap() += 1;
+            let with = |id: u32, flags: ContactFlags| Contact {
+                id: ContactId(id),
+                flags,
+                ..*c
+            };
+            if let Some(&back) = hidden.get(&orig) {
+                if c.flags.ended() {
+                    hidden.remove(&orig);
+                } else if i >= back {
+                    hidden.remove(&orig);
+                    map.insert(orig, fresh);
+                    begun.push(with(fresh, ContactFlags::DOWN));
+                    fresh += 1;
+                }
+                continue;
+            }
+            if c.flags.ended() {
+                ended.push(with(id, c.flags));
+            } else if c.flags.contains(ContactFlags::DOWN) {
+                begun.push(with(id, c.flags));
+            } else if !lost_done && a >= 8 && others >= 2 {
+                ended.push(with(id, ContactFlags::UP));
+                hidden.insert(orig, i + 3);
+                lost_done = true;
+                d.lost += 1;
+            } else if a >= 3 && (i + orig as usize) % 7 == 0 {
+                ended.push(with(id, ContactFlags::UP));
+                map.insert(orig, fresh);
+                begun.push(with(fresh, ContactFlags::DOWN));
+                fresh += 1;
+                d.new_ids += 1;
+            } else {
+                cont.push(with(id, c.flags));
+            }
+        }
+        let next_soon = frames
+            .get(i + 1)
+            .is_some_and(|n| n.t.saturating_since(f.t) < GHOST_LIFE && n.len() >= 2);
+        if !ghost_done && cont.len() >= 2 && next_soon && age[&cont_orig(&map, &cont[0])] >= 5 {
+            let (a, b) = (cont[0], cont[1]);
+            let ghost = Contact {
+                id: ContactId(fresh),
+                x: (a.x + b.x) / 2.0,
+                y: (a.y + b.y) / 2.0,
+                flags: ContactFlags::DOWN,
+                ..a
+            };
+            fresh += 1;
+            begun.push(ghost);
+            ghost_up = Some(Contact {
+                flags: ContactFlags::UP,
+                ..ghost
+            });
+            ghost_done = true;
+            d.ghosts += 1;
+        }
+        let mut nf = TouchFrame::new(f.t);
+        for c in ended.into_iter().chain(begun).chain(cont) {
+            nf.push(c).unwrap();
+        }
+        if f.contacts().iter().all(|c| c.flags.ended()) {
+            // Every finger up: the next burst gets its own lost finger and ghost.
+            lost_done = false;
+            ghost_done = false;
+        }
+        out.push(nf);
+    }
+    (out, d)
+}
+
+/// The original id whose contact is `c` now.
+fn cont_orig(map: &HashMap<u32, u32>, c: &Contact) -> u32 {
+    map.iter()
+        .find(|(_, &now)| now == c.id.0)
+        .map(|(&o, _)| o)
+        .unwrap()
+}
+
+/// Segmentation holds when the device is worse (issue 28 item 2): the real
+/// multi-finger recordings, with new tracking ids mid-gesture, a finger lost for
+/// two frames and a ghost contact ([`damage`], SYNTHETIC), still give the
+/// manifest's gestures with their fingers and one track per finger.
+#[test]
+fn real_gestures_survive_new_ids_lost_frames_and_ghosts() {
+    let mut total = Damage::default();
+    for e in manifest()
+        .into_iter()
+        .filter(|e| e.fingers.iter().any(|&f| f >= 2))
+    {
+        let mut rec = load(&e);
+        let (frames, d) = damage(&rec.frames);
+        rec.frames = frames;
+        let found = segment(&rec);
+        let fingers: Vec<u32> = found.iter().map(|f| f.fingers).collect();
+        assert_eq!(
+            fingers, e.fingers,
+            "{MANIFEST}:{}: {} {d:?}",
+            e.line, e.file
+        );
+        for f in &found {
+            if let Ok(t) = &f.tracks {
+                assert_eq!(t.fingers.len(), f.fingers as usize, "{}: {d:?}", e.file);
+            }
+        }
+        total.new_ids += d.new_ids;
+        total.lost += d.lost;
+        total.ghosts += d.ghosts;
+    }
+    eprintln!("{total:?}");
+    assert!(
+        total.new_ids >= 20 && total.lost >= 5 && total.ghosts >= 3,
+        "the damage happened: {total:?}"
+    );
 }
