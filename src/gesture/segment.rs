@@ -350,7 +350,8 @@ pub enum Segment {
         id: u32,
         /// Most fingers down at once.
         fingers: u32,
-        /// Contacts that took part.
+        /// Fingers that took part, ghosts included: each once, however many
+        /// contact ids it had (a re-attached contact is its finger again).
         contacts: u32,
         /// First touch to last lift (µs).
         duration: Micros,
