@@ -50,7 +50,11 @@
 //! - a finger landing in open space joins the *nearest* live gesture within
 //!   `gesture_span_mm`, whatever the time since that gesture began, so fingers of a
 //!   hand landing apart in time (the first lifting before the last lands within the
-//!   grace period) or in space (a hand's span) are one gesture.
+//!   grace period) or in space (a hand's span) are one gesture;
+//! - a finger landing within `group_window` of a control's or a gesture's first
+//!   finger and within `hand_span_mm` of its fingers joins it whether or not it
+//!   landed on the crowd: a hand straddling the crowd's edge is one control, or one
+//!   gesture, as its first finger decided.
 //!
 //! `max_down`, the gesture's finger count, is the most non-ghost fingers down at
 //! once, counted from every finger's [`FingerSpan`] (a re-attached finger counts as
@@ -429,7 +433,11 @@ impl Segmenter {
             return;
         }
         if t.flags.contains(ContactFlags::DOWN) {
-            let on_crowd = on_crowd && !self.all_gestures;
+            let on_crowd = match self.young_hand(now, t.glass_mm) {
+                // A finger of a hand that just landed goes where the hand went.
+                Some(control) => control,
+                None => on_crowd,
+            } && !self.all_gestures;
             self.finger_down(now, t, on_crowd, out);
         } else {
             self.finger_moved(t);
@@ -471,6 +479,42 @@ impl Segmenter {
         }
         self.controls.clear();
         self.gestures.clear();
+    }
+
+    /// Whether a finger landing at `p` belongs to a hand that began within the
+    /// grouping window and within a hand's span of it: `Some(true)` for a control
+    /// still grouping, `Some(false)` for a gesture, the nearer when both; `None`
+    /// when no hand is that young and near. The fingers of one hand land up to
+    /// `group_window` apart and may straddle the crowd's edge: they stay together.
+    fn young_hand(&self, now: Micros, p: Vec2) -> Option<bool> {
+        let span2 = self.params.hand_span_mm * self.params.hand_span_mm;
+        let young = |t_begin: Micros| now.saturating_since(t_begin) <= self.params.group_window;
+        let nearest = |fingers: &[Finger]| {
+            fingers
+                .iter()
+                .map(|f| (f.glass_mm - p).norm_squared())
+                .fold(f64::INFINITY, f64::min)
+        };
+        let control = self
+            .controls
+            .iter()
+            .filter(|c| c.state == ControlState::Grouping && young(c.t_begin))
+            .filter(|c| c.fingers.len() < MAX_FINGERS)
+            .map(|c| nearest(&c.fingers))
+            .fold(f64::INFINITY, f64::min);
+        let gesture = self
+            .gestures
+            .iter()
+            .filter(|g| g.state == GestureState::Active && young(g.t_begin))
+            .filter(|g| g.down_count() < MAX_FINGERS)
+            .map(|g| nearest(&g.fingers))
+            .fold(f64::INFINITY, f64::min);
+        match (control <= span2, gesture <= span2) {
+            (false, false) => None,
+            (true, false) => Some(true),
+            (false, true) => Some(false),
+            (true, true) => Some(control <= gesture),
+        }
     }
 
     fn near(&self, fingers: &[Finger], p: Vec2) -> bool {

@@ -430,3 +430,43 @@ fn a_finger_of_the_hand_landing_late_joins_the_nearest_gesture() {
     assert_eq!(seg.gestures()[1].fingers.len(), 2);
     assert_eq!(seg.gestures()[1].max_down, 2);
 }
+
+#[test]
+fn a_hand_straddling_the_crowd_edge_stays_one_control_or_one_gesture() {
+    let crowd = |p: Vec2| p.x < 2.0; // the crowd is left of x = 200 mm
+                                     // First finger on the crowd, two more just off it within 150 ms: an area
+                                     // control of three.
+    let mut seg = Segmenter::new(params());
+    let out = run(
+        &mut seg,
+        &[
+            (0, 1, 180.0, 100.0, D),
+            (60, 2, 205.0, 110.0, D),
+            (140, 3, 230.0, 120.0, D),
+        ],
+        crowd,
+    );
+    assert_eq!(
+        out,
+        vec![
+            Segment::ControlBegin(1),
+            Segment::ControlUpdate(1),
+            Segment::ControlUpdate(1)
+        ]
+    );
+    assert_eq!(seg.controls()[0].kind(), ControlKind::Area);
+    assert!(seg.gestures().is_empty());
+    // First finger off the crowd, the next on its edge 80 ms later: one gesture.
+    let mut seg = Segmenter::new(params());
+    let out = run(
+        &mut seg,
+        &[(0, 1, 230.0, 100.0, D), (80, 2, 190.0, 110.0, D)],
+        crowd,
+    );
+    assert_eq!(out, vec![Segment::GestureBegin(1)]);
+    assert!(seg.controls().is_empty());
+    assert_eq!(seg.gestures()[0].max_down, 2);
+    // After the grouping window a finger on the crowd is a control of its own.
+    let out = run(&mut seg, &[(300, 3, 150.0, 100.0, D)], crowd);
+    assert_eq!(out, vec![Segment::ControlBegin(1)]);
+}
