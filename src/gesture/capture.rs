@@ -8,8 +8,11 @@
 //! [`GestureCapture::observe`]; the capture finds the gesture (and which of its
 //! contacts) the touch belongs to from the segmenter's live gestures, so the two
 //! always agree: a finger bouncing within the grace period, or joining mid-gesture,
-//! lands in the same gesture, as a new track (one track per contact, in landing
-//! order, exactly [`Gesture::fingers`](super::segment::Gesture::fingers)). On
+//! lands in the same gesture, as a new track (one track per finger, in landing
+//! order, exactly [`Gesture::fingers`](super::segment::Gesture::fingers)); a contact
+//! the segmenter re-attaches to a lifted finger (a finger lost for a few frames, a
+//! new tracking id) continues that finger's track, and a ghost contact's track is
+//! dropped (see the segmenter's module doc). On
 //! [`Segment::GestureEnd`](super::segment::Segment::GestureEnd) the engine calls
 //! [`GestureCapture::finish`], which copies the tracks into a caller-owned
 //! [`GestureTracks`] (reusing its capacity) or says why there is nothing to
@@ -156,6 +159,8 @@ struct Track {
     reach2: f64,
     /// The contact is still down (its end not yet seen).
     open: bool,
+    /// The segmenter called it a ghost contact: not a finger, not copied.
+    ghost: bool,
 }
 
 impl Track {
@@ -173,6 +178,7 @@ impl Track {
             origin: Vec2::new(0.0, 0.0),
             reach2: 0.0,
             open: false,
+            ghost: false,
         }
     }
 
@@ -183,6 +189,13 @@ impl Track {
         self.stride = 1;
         self.reach2 = 0.0;
         self.open = true;
+        self.ghost = false;
+    }
+
+    /// Whether this track is one of the gesture's fingers (it has a sample and is
+    /// not a ghost).
+    fn is_finger(&self) -> bool {
+        self.seen > 0 && !self.ghost
     }
 
     fn push(&mut self, s: TrackSample) {
@@ -192,6 +205,17 @@ impl Track {
         let d2 = (s.mm - self.origin).norm_squared();
         if d2.is_finite() && d2 > self.reach2 {
             self.reach2 = d2;
+        }
+        if self.seen > 0 && s.t == self.latest.t {
+            // A second position in one frame (a contact re-attached in the frame
+            // its predecessor ended): the frame's latest position stands.
+            self.latest = s;
+            if self.latest_stored {
+                if let Some(last) = self.stored.last_mut() {
+                    *last = s;
+                }
+            }
+            return;
         }
         let index = self.seen;
         self.seen += 1;
@@ -358,9 +382,18 @@ impl GestureCapture {
                 s.used += 1;
             }
             let tr = &mut s.tracks[k];
+            if f.down && !tr.open && tr.seen > 0 {
+                // The segmenter re-attached a landing to this lifted finger: its
+                // track goes on (a finger lost for a few frames, a new tracking id).
+                tr.open = true;
+                tr.ghost = false;
+            }
             if tr.open {
                 tr.push(sample);
                 tr.open = !ended;
+                if ended {
+                    tr.ghost = g.spans.get(k).is_some_and(|sp| sp.ghost);
+                }
             }
             return;
         }
@@ -422,14 +455,15 @@ impl GestureCapture {
         slot.gesture = None;
         let tracks = slot.tracks();
         let copied = copy_tracks(tracks, out);
-        let first = tracks.iter().filter_map(Track::first_t).min();
-        let last = tracks.iter().filter_map(Track::last_t).max();
+        let fingers = || tracks.iter().filter(|t| t.is_finger());
+        let first = fingers().filter_map(Track::first_t).min();
+        let last = fingers().filter_map(Track::last_t).max();
         let (Some(first), Some(last)) = (first, last) else {
             return Err(Rejected::NotCaptured);
         };
         let duration = last.saturating_since(first);
-        let travel_mm = tracks.iter().map(|t| t.reach2).fold(0.0, f64::max).sqrt();
-        let stride = tracks.iter().map(|t| t.stride).max().unwrap_or(1);
+        let travel_mm = fingers().map(|t| t.reach2).fold(0.0, f64::max).sqrt();
+        let stride = fingers().map(|t| t.stride).max().unwrap_or(1);
         let th = self.thresholds;
         if duration > th.max_duration {
             return Err(Rejected::TooLong {
@@ -465,15 +499,15 @@ impl GestureCapture {
     }
 }
 
-/// Copies the tracks that have a sample into `out`, reusing its tracks' capacity.
-/// Returns how many.
+/// Copies the fingers' tracks (a sample at least, no ghost) into `out`, reusing its
+/// tracks' capacity. Returns how many.
 fn copy_tracks(tracks: &[Track], out: &mut GestureTracks) -> usize {
-    let n = tracks.iter().filter(|t| t.seen > 0).count();
+    let n = tracks.iter().filter(|t| t.is_finger()).count();
     out.fingers.truncate(n);
     while out.fingers.len() < n {
         out.fingers.push(TouchTrack::default());
     }
-    let with_samples = tracks.iter().filter(|t| t.seen > 0);
+    let with_samples = tracks.iter().filter(|t| t.is_finger());
     for (t, o) in with_samples.zip(out.fingers.iter_mut()) {
         t.copy_into(o);
     }

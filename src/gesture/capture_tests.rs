@@ -205,23 +205,140 @@ fn a_bounce_within_the_grace_is_one_gesture_with_a_track_per_landing() {
         table.touch(i * 10, 1, 100.0 + 5.0 * i as f64, 100.0, flags);
     }
     table.touch(100, 1, 150.0, 100.0, U);
-    // Lands again 100 ms later (grace 250 ms), a few mm on.
+    // Lands again 120 ms later (grace 250 ms, past the re-attach window), a few mm on.
     for i in 0..10u64 {
         let flags = if i == 0 { D } else { M };
-        table.touch(200 + i * 10, 2, 155.0 + 5.0 * i as f64, 100.0, flags);
+        table.touch(220 + i * 10, 2, 155.0 + 5.0 * i as f64, 100.0, flags);
     }
-    table.touch(300, 2, 205.0, 100.0, U);
+    table.touch(320, 2, 205.0, 100.0, U);
     table.tick(400);
     assert!(table.ended().is_empty(), "grace not over");
-    table.tick(560);
+    table.tick(580);
     assert_eq!(table.ended(), vec![1]);
     let mut buf = GestureTracks::default();
     let c = table.cap.finish(1, &mut buf).expect("a gesture");
     assert_eq!(c.tracks, 2);
-    assert_eq!(c.duration, Micros(300 * MS));
+    assert_eq!(c.duration, Micros(320 * MS));
     assert_eq!(buf.fingers[0].samples.len(), 11);
     assert_eq!(buf.fingers[1].samples.len(), 11);
-    assert_eq!(buf.fingers[1].samples[0].t, Micros(200 * MS));
+    assert_eq!(buf.fingers[1].samples[0].t, Micros(220 * MS));
+}
+
+#[test]
+fn a_finger_lost_for_a_few_frames_goes_on_as_one_track() {
+    let mut table = Table::new(CaptureParams::default());
+    for i in 0..10u64 {
+        let flags = if i == 0 { D } else { M };
+        table.touch(i * 10, 1, 100.0 + 5.0 * i as f64, 100.0, flags);
+    }
+    table.touch(100, 1, 150.0, 100.0, U);
+    // Back 60 ms later as a new contact, 12 mm on (the hand kept moving).
+    for i in 0..10u64 {
+        let flags = if i == 0 { D } else { M };
+        table.touch(160 + i * 10, 2, 162.0 + 5.0 * i as f64, 100.0, flags);
+    }
+    table.touch(260, 2, 212.0, 100.0, U);
+    table.tick(600);
+    assert_eq!(table.ended(), vec![1]);
+    let mut buf = GestureTracks::default();
+    let c = table.cap.finish(1, &mut buf).expect("a gesture");
+    assert_eq!(c.tracks, 1, "one finger: {buf:?}");
+    let t = &buf.fingers[0];
+    assert_eq!(t.samples.len(), 22);
+    assert_eq!(t.samples[10].t, Micros(100 * MS));
+    assert_eq!(t.samples[11].t, Micros(160 * MS));
+    assert_eq!(t.samples[11].mm, Vec2::new(162.0, 100.0));
+    assert!((c.travel_mm - 112.0).abs() < 1e-9, "{c:?}");
+}
+
+#[test]
+fn ten_fingers_whose_ids_change_mid_run_are_ten_tracks() {
+    let mut table = Table::new(CaptureParams::default());
+    // Ten fingers move right for 1 s at 100 Hz; every 100 ms three of them get a new
+    // tracking id (the old contact ends, the new begins, in the same frame).
+    let mut ids: Vec<u32> = (1..=10).collect();
+    let mut next = 11;
+    for f in 0..=100u64 {
+        let t = f * 10;
+        for (k, id) in ids.iter_mut().enumerate() {
+            let (x, y) = (100.0 + 30.0 * k as f64 + f as f64, 200.0 + 5.0 * k as f64);
+            if f > 0 && f < 100 && f % 10 == 0 && k % 3 == (f / 10) as usize % 3 {
+                table.touch(t, *id, x, y, U);
+                *id = next;
+                next += 1;
+                table.touch(t, *id, x, y, D);
+                continue;
+            }
+            let flags = match f {
+                0 => D,
+                100 => U,
+                _ => M,
+            };
+            table.touch(t, *id, x, y, flags);
+        }
+    }
+    assert!(next > 30, "more ids than a gesture has records: {next}");
+    table.tick(1500);
+    assert_eq!(table.ended(), vec![1], "one gesture");
+    assert!(
+        matches!(
+            table.out.last(),
+            Some(Segment::GestureEnd {
+                fingers: 10,
+                contacts: 10,
+                ..
+            })
+        ),
+        "{:?}",
+        table.out.last()
+    );
+    let mut buf = table.cap.tracks_buffer();
+    let c = table.cap.finish(1, &mut buf).expect("a gesture");
+    assert_eq!(c.tracks, 10);
+    for (k, tr) in buf.fingers.iter().enumerate() {
+        assert_eq!(tr.samples.len(), 101, "finger {k}: every frame once");
+        assert_eq!(tr.samples[0].mm.x, 100.0 + 30.0 * k as f64);
+        assert_eq!(tr.samples[100].mm.x, 200.0 + 30.0 * k as f64);
+    }
+}
+
+#[test]
+fn a_ghost_contact_is_not_a_finger() {
+    let mut table = Table::new(CaptureParams::default());
+    // Two fingers drag; an infrared frame reports a third contact for two frames
+    // between them.
+    for f in 0..=50u64 {
+        let t = f * 10;
+        let flags = match f {
+            0 => D,
+            50 => U,
+            _ => M,
+        };
+        table.touch(t, 1, 100.0 + 2.0 * f as f64, 100.0, flags);
+        table.touch(t, 2, 100.0 + 2.0 * f as f64, 160.0, flags);
+        if f == 20 {
+            table.touch(t, 3, 140.0, 130.0, D);
+        } else if f == 22 {
+            table.touch(t, 3, 140.0, 130.0, U);
+        }
+    }
+    table.tick(900);
+    assert!(
+        matches!(
+            table.out.last(),
+            Some(Segment::GestureEnd {
+                fingers: 2,
+                contacts: 3,
+                ..
+            })
+        ),
+        "{:?}",
+        table.out.last()
+    );
+    let mut buf = table.cap.tracks_buffer();
+    let c = table.cap.finish(1, &mut buf).expect("a gesture");
+    assert_eq!(c.tracks, 2);
+    assert!(buf.fingers.iter().all(|f| f.samples.len() == 51));
 }
 
 #[test]

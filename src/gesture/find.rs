@@ -10,7 +10,7 @@ use super::capture::{DEFAULT_MAX_GESTURES, DEFAULT_SAMPLES_PER_TRACK};
 use super::segment::{Segment, SegmentParams, Segmenter, TouchPoint};
 use super::track::GestureTracks;
 use crate::geom::Vec2;
-use crate::vocab::{Micros, TouchFrame};
+use crate::vocab::{ContactFlags, Micros, TouchFrame};
 
 /// A gesture found in a stream.
 #[derive(Clone, Debug, PartialEq)]
@@ -59,11 +59,18 @@ impl GestureFinder {
         }
     }
 
-    /// Feeds one frame (surface coordinates in `[0, 1]²`).
+    /// Feeds one frame (surface coordinates in `[0, 1]²`). The frame's lifted
+    /// contacts go first, as the evdev decoders emit them, so that a contact
+    /// replacing one in the same frame (a new tracking id) is re-attached to its
+    /// finger whatever order the recording lists them in.
     pub fn frame(&mut self, f: &TouchFrame) {
         self.seg.tick(f.t, &mut self.out);
         self.collect();
-        for c in f.contacts() {
+        let lifted =
+            |c: &&crate::vocab::Contact| c.flags.ended() && !c.flags.contains(ContactFlags::DOWN);
+        let first = f.contacts().iter().filter(lifted);
+        let then = f.contacts().iter().filter(|c| !lifted(c));
+        for c in first.chain(then) {
             let mm = Vec2::new(c.x as f64 * self.glass_mm.x, c.y as f64 * self.glass_mm.y);
             let tp = TouchPoint {
                 id: c.id,
@@ -143,7 +150,7 @@ mod tests {
     use super::*;
     use crate::gesture::library::MotionClass;
     use crate::gesture::synth::{generate, to_frames, GestureStyle};
-    use crate::vocab::{Contact, ContactFlags, ContactId};
+    use crate::vocab::{Contact, ContactId};
 
     /// The default config's segmentation.
     fn params() -> SegmentParams {
@@ -208,6 +215,89 @@ mod tests {
         })
         .unwrap();
         f
+    }
+
+    #[test]
+    fn a_new_id_listed_before_the_lift_it_replaces_is_the_same_finger() {
+        let contact = |id: u32, x: f32, flags: ContactFlags| Contact {
+            id: ContactId(id),
+            x,
+            y: 0.5,
+            flags,
+            ..Contact::default()
+        };
+        let mut frames = Vec::new();
+        for k in 0..40u32 {
+            let mut f = TouchFrame::new(Micros(u64::from(k) * 10_000));
+            let x = 0.2 + 0.01 * k as f32;
+            let (a, b) = (
+                contact(1, x, ContactFlags::NONE),
+                contact(2, x + 0.05, ContactFlags::NONE),
+            );
+            match k {
+                0 => {
+                    f.push(Contact {
+                        flags: ContactFlags::DOWN,
+                        ..a
+                    })
+                    .unwrap();
+                    f.push(Contact {
+                        flags: ContactFlags::DOWN,
+                        ..b
+                    })
+                    .unwrap();
+                }
+                // Finger 1's new id listed before its old id's end.
+                20 => {
+                    f.push(Contact {
+                        id: ContactId(9),
+                        flags: ContactFlags::DOWN,
+                        ..a
+                    })
+                    .unwrap();
+                    f.push(Contact {
+                        flags: ContactFlags::UP,
+                        ..a
+                    })
+                    .unwrap();
+                    f.push(b).unwrap();
+                }
+                39 => {
+                    f.push(Contact {
+                        id: ContactId(9),
+                        flags: ContactFlags::UP,
+                        ..a
+                    })
+                    .unwrap();
+                    f.push(Contact {
+                        flags: ContactFlags::UP,
+                        ..b
+                    })
+                    .unwrap();
+                }
+                _ => {
+                    let id = if k > 20 { 9 } else { 1 };
+                    f.push(Contact {
+                        id: ContactId(id),
+                        ..a
+                    })
+                    .unwrap();
+                    f.push(b).unwrap();
+                }
+            }
+            frames.push(f);
+        }
+        let found = find_gestures(
+            &frames,
+            Vec2::new(1210.0, 680.0),
+            params(),
+            TapThresholds::default(),
+        );
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert_eq!(found[0].fingers, 2);
+        let tracks = found[0].tracks.as_ref().unwrap();
+        assert_eq!(tracks.fingers.len(), 2);
+        assert_eq!(tracks.fingers[0].samples.len(), 40);
     }
 
     #[test]

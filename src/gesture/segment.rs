@@ -31,6 +31,34 @@
 //! ```
 //! Fingers of a control that lift while others stay keep their handle pinned where
 //! they left it; the control ends when its last finger is up.
+//!
+//! # One hand, one gesture, on real hardware
+//! Touch surfaces lose a finger for a few frames, give a finger a new tracking id
+//! mid-stroke (the slot's id changes: the old contact ends and a new one begins in
+//! the same frame), and optical or infrared frames report ghost contacts for a frame
+//! or two where two real fingers' shadows cross. A gesture therefore counts
+//! *fingers*, not contact ids:
+//! - a contact landing within [`REATTACH_WINDOW`] of a lift in the same gesture and
+//!   within [`REATTACH_MM`] of where that finger lifted is the same finger again
+//!   (its record takes the new id and goes on; the capture continues its track);
+//! - a gesture whose records are full ([`MAX_GESTURE_CONTACTS`]) re-attaches any
+//!   further landing to its nearest lifted finger instead of starting a gesture of
+//!   its own, so no id churn cuts a hand into one gesture per finger;
+//! - a contact that lives less than [`GHOST_LIFE`], landing after another finger of
+//!   the gesture and lifting while that finger is still down, is a ghost: it is not
+//!   a finger (not counted in `max_down`, its track dropped by the capture);
+//! - a finger landing in open space joins the *nearest* live gesture within
+//!   `gesture_span_mm`, whatever the time since that gesture began, so fingers of a
+//!   hand landing apart in time (the first lifting before the last lands within the
+//!   grace period) or in space (a hand's span) are one gesture;
+//! - a finger landing within `group_window` of a control's or a gesture's first
+//!   finger and within `hand_span_mm` of its fingers joins it whether or not it
+//!   landed on the crowd: a hand straddling the crowd's edge is one control, or one
+//!   gesture, as its first finger decided.
+//!
+//! `max_down`, the gesture's finger count, is the most non-ghost fingers down at
+//! once, counted from every finger's [`FingerSpan`] (a re-attached finger counts as
+//! down through its gap).
 
 use crate::geom::Vec2;
 use crate::vocab::ControlKind;
@@ -56,6 +84,23 @@ pub const MAX_FINGERS: usize = 10;
 /// The capture ([`GestureCapture`](super::capture::GestureCapture)) keeps a track
 /// for each of them.
 pub const MAX_GESTURE_CONTACTS: usize = 2 * MAX_FINGERS;
+
+/// A contact landing this soon after a finger of the same gesture lifted may be that
+/// finger again (a finger lost for a few frames, or given a new tracking id):
+/// 100 ms, a dozen frames at 120 Hz.
+pub const REATTACH_WINDOW: Micros = Micros(100_000);
+
+/// ...if it lands within this distance of where that finger lifted (mm of glass):
+/// a finger at 250 mm/s covers 25 mm in [`REATTACH_WINDOW`]; neighbouring fingers of
+/// a hand are about 20 mm apart, but only *lifted* fingers are candidates, the
+/// nearest first.
+pub const REATTACH_MM: f64 = 25.0;
+
+/// A contact of a gesture that lives less than this, landing after another of its
+/// fingers and lifting while that finger is down, is a ghost (40 ms: one to three
+/// frames of an optical or infrared frame at 60–100 Hz). Fingers landing together
+/// (a two-finger tap of 30 ms) are not ghosts: none landed before the other.
+pub const GHOST_LIFE: Micros = Micros(40_000);
 
 /// Tunables of the segmenter.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -195,6 +240,17 @@ impl Control {
     }
 }
 
+/// When one finger of a gesture was down (its first landing to its last lift).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct FingerSpan {
+    /// Its first landing.
+    pub t_down: Micros,
+    /// Its last lift; `None` while down.
+    pub t_up: Option<Micros>,
+    /// Whether it was a ghost contact (see [`GHOST_LIFE`]).
+    pub ghost: bool,
+}
+
 /// A gesture: fingers in open space from first touch to last lift plus grace.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Gesture {
@@ -206,15 +262,71 @@ pub struct Gesture {
     pub t_begin: Micros,
     /// When the last finger lifted (valid in `Grace`).
     pub t_last_up: Micros,
-    /// Fingers that took part (current and lifted).
+    /// Fingers that took part (current and lifted), one record per finger: a
+    /// re-attached contact takes over its finger's record.
     pub fingers: Vec<Finger>,
-    /// Most fingers down at once.
+    /// When each finger was down, `spans[k]` for `fingers[k]`.
+    pub spans: Vec<FingerSpan>,
+    /// Most fingers down at once, ghosts not counted.
     pub max_down: u32,
+    /// Landings that continued a lifted finger (new ids, fingers lost for a while).
+    pub reattached: u32,
+    /// Most fingers down at once before the last forced re-attachment (a landing
+    /// given to a long-lifted finger restarts that finger's span).
+    max_down_before: u32,
 }
 
 impl Gesture {
     fn down_count(&self) -> usize {
         self.fingers.iter().filter(|f| f.down).count()
+    }
+
+    /// Distance from `p` to the nearest of its fingers (mm).
+    fn distance_mm(&self, p: Vec2) -> f64 {
+        self.fingers
+            .iter()
+            .map(|f| (f.glass_mm - p).norm_squared())
+            .fold(f64::INFINITY, f64::min)
+            .sqrt()
+    }
+
+    /// The lifted finger a landing at `p` at `now` continues, if any (see the
+    /// module doc): the nearest within [`REATTACH_MM`] that lifted within
+    /// [`REATTACH_WINDOW`], not a ghost; when the records are full, the nearest
+    /// lifted finger.
+    fn reattach_candidate(&self, now: Micros, p: Vec2) -> Option<(usize, bool)> {
+        let full = self.fingers.len() >= MAX_GESTURE_CONTACTS;
+        let mut best: Option<(usize, f64, bool)> = None;
+        for (k, (f, s)) in self.fingers.iter().zip(&self.spans).enumerate() {
+            let Some(t_up) = s.t_up else { continue };
+            if f.down {
+                continue;
+            }
+            let d2 = (f.glass_mm - p).norm_squared();
+            let near = !s.ghost
+                && now.saturating_since(t_up) <= REATTACH_WINDOW
+                && d2 <= REATTACH_MM * REATTACH_MM;
+            if (near || full) && best.is_none_or(|(_, b, _)| d2 < b) {
+                best = Some((k, d2, near));
+            }
+        }
+        best.map(|(k, _, near)| (k, near))
+    }
+
+    /// Most non-ghost fingers down at once, from the spans (at least 1) and what
+    /// was counted before the last forced re-attachment. A finger counts at its own
+    /// landing even when it lifted in the same frame.
+    fn count_max_down(&self) -> u32 {
+        let real = || self.spans.iter().enumerate().filter(|(_, s)| !s.ghost);
+        let mut most = 0;
+        for (k, sk) in real() {
+            let at = sk.t_down;
+            let n = real()
+                .filter(|(j, sj)| sj.t_down <= at && (*j == k || sj.t_up.is_none_or(|u| u > at)))
+                .count();
+            most = most.max(n);
+        }
+        (most.max(1) as u32).max(self.max_down_before)
     }
 }
 
@@ -242,7 +354,8 @@ pub enum Segment {
         id: u32,
         /// Most fingers down at once.
         fingers: u32,
-        /// Contacts that took part.
+        /// Fingers that took part, ghosts included: each once, however many
+        /// contact ids it had (a re-attached contact is its finger again).
         contacts: u32,
         /// First touch to last lift (µs).
         duration: Micros,
@@ -320,7 +433,11 @@ impl Segmenter {
             return;
         }
         if t.flags.contains(ContactFlags::DOWN) {
-            let on_crowd = on_crowd && !self.all_gestures;
+            let on_crowd = match self.young_hand(now, t.glass_mm) {
+                // A finger of a hand that just landed goes where the hand went.
+                Some(control) => control,
+                None => on_crowd,
+            } && !self.all_gestures;
             self.finger_down(now, t, on_crowd, out);
         } else {
             self.finger_moved(t);
@@ -364,12 +481,44 @@ impl Segmenter {
         self.gestures.clear();
     }
 
-    fn near(&self, fingers: &[Finger], p: Vec2) -> bool {
-        self.near_span(fingers, p, self.params.hand_span_mm)
+    /// Whether a finger landing at `p` belongs to a hand that began within the
+    /// grouping window and within a hand's span of it: `Some(true)` for a control
+    /// still grouping, `Some(false)` for a gesture, the nearer when both; `None`
+    /// when no hand is that young and near. The fingers of one hand land up to
+    /// `group_window` apart and may straddle the crowd's edge: they stay together.
+    fn young_hand(&self, now: Micros, p: Vec2) -> Option<bool> {
+        let span2 = self.params.hand_span_mm * self.params.hand_span_mm;
+        let young = |t_begin: Micros| now.saturating_since(t_begin) <= self.params.group_window;
+        let nearest = |fingers: &[Finger]| {
+            fingers
+                .iter()
+                .map(|f| (f.glass_mm - p).norm_squared())
+                .fold(f64::INFINITY, f64::min)
+        };
+        let control = self
+            .controls
+            .iter()
+            .filter(|c| c.state == ControlState::Grouping && young(c.t_begin))
+            .filter(|c| c.fingers.len() < MAX_FINGERS)
+            .map(|c| nearest(&c.fingers))
+            .fold(f64::INFINITY, f64::min);
+        let gesture = self
+            .gestures
+            .iter()
+            .filter(|g| g.state == GestureState::Active && young(g.t_begin))
+            .filter(|g| g.down_count() < MAX_FINGERS)
+            .map(|g| nearest(&g.fingers))
+            .fold(f64::INFINITY, f64::min);
+        match (control <= span2, gesture <= span2) {
+            (false, false) => None,
+            (true, false) => Some(true),
+            (false, true) => Some(false),
+            (true, true) => Some(control <= gesture),
+        }
     }
 
-    fn near_span(&self, fingers: &[Finger], p: Vec2, span_mm: f64) -> bool {
-        let span2 = span_mm * span_mm;
+    fn near(&self, fingers: &[Finger], p: Vec2) -> bool {
+        let span2 = self.params.hand_span_mm * self.params.hand_span_mm;
         fingers
             .iter()
             .any(|f| (f.glass_mm - p).norm_squared() <= span2)
@@ -411,17 +560,46 @@ impl Segmenter {
                 }
             }
         } else {
-            // A finger landing near a gesture joins it, in `Active` (a finger joining
-            // mid-gesture) and in `Grace` (a bounce: the gesture goes on).
-            let join = self.gestures.iter().position(|g| {
-                g.state != GestureState::Ended
-                    && g.fingers.len() < MAX_GESTURE_CONTACTS
-                    && g.down_count() < MAX_FINGERS
-                    && self.near_span(&g.fingers, t.glass_mm, self.params.gesture_span_mm)
-            });
+            // A finger landing near a gesture joins the nearest, in `Active` (a finger
+            // joining mid-gesture) and in `Grace` (a bounce: the gesture goes on).
+            let span2 = self.params.gesture_span_mm * self.params.gesture_span_mm;
+            let join = self
+                .gestures
+                .iter()
+                .enumerate()
+                .filter(|(_, g)| g.state != GestureState::Ended && g.down_count() < MAX_FINGERS)
+                .map(|(i, g)| (i, g.distance_mm(t.glass_mm)))
+                .filter(|&(_, d)| d * d <= span2)
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|(i, _)| i);
             match join {
                 Some(i) => {
-                    self.gestures[i].fingers.push(finger);
+                    let g = &mut self.gestures[i];
+                    match g.reattach_candidate(now, t.glass_mm) {
+                        Some((k, near)) => {
+                            if !near {
+                                // Forced (records full): the finger's gap is not a
+                                // time it was down; keep what was counted so far.
+                                g.max_down_before = g.count_max_down();
+                                g.spans[k].t_down = now;
+                            }
+                            g.fingers[k] = Finger {
+                                world_down: g.fingers[k].world_down,
+                                ..finger
+                            };
+                            g.spans[k].t_up = None;
+                            g.spans[k].ghost = false;
+                            g.reattached += 1;
+                        }
+                        None => {
+                            g.fingers.push(finger);
+                            g.spans.push(FingerSpan {
+                                t_down: now,
+                                t_up: None,
+                                ghost: false,
+                            });
+                        }
+                    }
                     self.gesture_event(i, now, SegEvent::FingerDown, out);
                 }
                 None => {
@@ -429,13 +607,22 @@ impl Segmenter {
                     self.next_gesture = self.next_gesture.wrapping_add(1).max(1);
                     let mut fingers = Vec::with_capacity(4);
                     fingers.push(finger);
+                    let mut spans = Vec::with_capacity(4);
+                    spans.push(FingerSpan {
+                        t_down: now,
+                        t_up: None,
+                        ghost: false,
+                    });
                     self.gestures.push(Gesture {
                         id,
                         state: GestureState::Active,
                         t_begin: now,
                         t_last_up: now,
                         fingers,
+                        spans,
                         max_down: 1,
+                        reattached: 0,
+                        max_down_before: 0,
                     });
                     out.push(Segment::GestureBegin(id));
                 }
@@ -474,10 +661,20 @@ impl Segmenter {
         }
         for i in 0..self.gestures.len() {
             let g = &mut self.gestures[i];
-            if let Some(f) = g.fingers.iter_mut().find(|f| f.id == t.id && f.down) {
+            if let Some(k) = g.fingers.iter().position(|f| f.id == t.id && f.down) {
+                let f = &mut g.fingers[k];
                 f.down = false;
                 f.cancelled = cancelled;
                 f.world = t.world;
+                let landed = g.spans[k].t_down;
+                let ghost = !cancelled
+                    && now.saturating_since(landed) < GHOST_LIFE
+                    && g.fingers
+                        .iter()
+                        .zip(&g.spans)
+                        .any(|(o, s)| o.down && s.t_down < landed);
+                g.spans[k].t_up = Some(now);
+                g.spans[k].ghost = ghost;
                 let last = g.down_count() == 0;
                 self.gesture_event(i, now, SegEvent::FingerUp { last }, out);
             }
@@ -546,14 +743,17 @@ impl Segmenter {
             (GestureState::Active, SegEvent::FingerDown)
             | (GestureState::Grace, SegEvent::FingerDown) => {
                 g.state = GestureState::Active;
-                g.max_down = g.max_down.max(g.down_count() as u32);
+                g.max_down = g.count_max_down();
             }
             (GestureState::Active, SegEvent::FingerUp { last: true }) => {
                 g.state = GestureState::Grace;
                 g.t_last_up = now;
+                g.max_down = g.count_max_down();
             }
-            (GestureState::Active, SegEvent::FingerUp { last: false })
-            | (GestureState::Active, SegEvent::Tick) => {}
+            (GestureState::Active, SegEvent::FingerUp { last: false }) => {
+                g.max_down = g.count_max_down();
+            }
+            (GestureState::Active, SegEvent::Tick) => {}
             (GestureState::Grace, SegEvent::Tick) => {
                 if now.saturating_since(g.t_last_up) >= self.params.gesture_grace {
                     g.state = GestureState::Ended;
@@ -573,277 +773,5 @@ impl Segmenter {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    const MS: u64 = 1000;
-
-    fn params() -> SegmentParams {
-        SegmentParams {
-            group_window: Micros(150 * MS),
-            hand_span_mm: 200.0,
-            gesture_span_mm: 200.0,
-            gesture_grace: Micros(250 * MS),
-        }
-    }
-
-    /// A tiny timeline: `(t_ms, id, x_mm, y_mm, flags)`; world = glass / 100.
-    fn run(
-        seg: &mut Segmenter,
-        steps: &[(u64, u32, f64, f64, ContactFlags)],
-        crowd: impl Fn(Vec2) -> bool,
-    ) -> Vec<Segment> {
-        let mut out = Vec::new();
-        for &(t, id, x, y, flags) in steps {
-            let now = Micros(t * MS);
-            seg.tick(now, &mut out);
-            let glass = Vec2::new(x, y);
-            let p = TouchPoint {
-                id: ContactId(id),
-                world: glass / 100.0,
-                glass_mm: glass,
-                flags,
-            };
-            let on = crowd(p.world);
-            seg.touch(now, &p, on, &mut out);
-        }
-        out
-    }
-
-    const D: ContactFlags = ContactFlags::DOWN;
-    const M: ContactFlags = ContactFlags::NONE;
-    const U: ContactFlags = ContactFlags::UP;
-
-    #[test]
-    fn one_two_three_fingers_make_point_line_area() {
-        for n in 1..=4u32 {
-            let mut seg = Segmenter::new(params());
-            let mut steps = vec![];
-            for i in 0..n {
-                steps.push((i as u64 * 30, i + 1, 100.0 + 40.0 * i as f64, 100.0, D));
-            }
-            run(&mut seg, &steps, |_| true);
-            assert_eq!(seg.controls().len(), 1);
-            assert_eq!(seg.controls()[0].kind(), control_kind(n as usize));
-        }
-    }
-
-    #[test]
-    fn late_finger_starts_a_new_control() {
-        let mut seg = Segmenter::new(params());
-        let out = run(
-            &mut seg,
-            &[(0, 1, 100.0, 100.0, D), (200, 2, 150.0, 100.0, D)],
-            |_| true,
-        );
-        assert_eq!(seg.controls().len(), 2);
-        assert_eq!(
-            out,
-            vec![Segment::ControlBegin(1), Segment::ControlBegin(2)]
-        );
-        assert!(seg
-            .controls()
-            .iter()
-            .all(|c| c.kind() == ControlKind::Point));
-    }
-
-    #[test]
-    fn two_hands_far_apart_make_two_controls() {
-        let mut seg = Segmenter::new(params());
-        run(
-            &mut seg,
-            &[
-                (0, 1, 100.0, 100.0, D),
-                (10, 2, 100.0, 180.0, D),
-                (20, 3, 600.0, 100.0, D),
-                (30, 4, 640.0, 120.0, D),
-                (40, 5, 620.0, 160.0, D),
-            ],
-            |_| true,
-        );
-        let kinds: Vec<_> = seg.controls().iter().map(|c| c.kind()).collect();
-        assert_eq!(kinds, vec![ControlKind::Line, ControlKind::Area]);
-    }
-
-    #[test]
-    fn control_ends_when_last_finger_lifts_and_pins_the_first() {
-        let mut seg = Segmenter::new(params());
-        let out = run(
-            &mut seg,
-            &[
-                (0, 1, 100.0, 100.0, D),
-                (20, 2, 150.0, 100.0, D),
-                (300, 1, 90.0, 100.0, U),
-                (310, 2, 160.0, 100.0, M),
-            ],
-            |_| true,
-        );
-        assert_eq!(seg.controls().len(), 1);
-        let c = &seg.controls()[0];
-        assert_eq!(c.state, ControlState::Held);
-        assert!(!c.fingers[0].down);
-        assert_eq!(c.fingers[0].world, Vec2::new(0.9, 1.0));
-        assert_eq!(out.len(), 2);
-        let out = run(&mut seg, &[(400, 2, 170.0, 100.0, U)], |_| true);
-        assert_eq!(
-            out,
-            vec![Segment::ControlEnd {
-                id: 1,
-                kind: ControlKind::Line,
-                cancelled: false
-            }]
-        );
-        assert!(seg.controls().is_empty());
-    }
-
-    #[test]
-    fn gesture_ends_after_grace_and_a_quick_refinger_continues_it() {
-        let mut seg = Segmenter::new(params());
-        let off = |_: Vec2| false;
-        let mut out = run(
-            &mut seg,
-            &[
-                (0, 1, 100.0, 100.0, D),
-                (100, 1, 120.0, 100.0, U),
-                (200, 2, 130.0, 100.0, D),
-            ],
-            off,
-        );
-        assert_eq!(out, vec![Segment::GestureBegin(1)]);
-        out = run(&mut seg, &[(300, 2, 140.0, 100.0, U)], off);
-        assert!(out.is_empty());
-        seg.tick(Micros(500 * MS), &mut out);
-        assert!(out.is_empty(), "grace not over yet: {out:?}");
-        seg.tick(Micros(551 * MS), &mut out);
-        assert_eq!(
-            out,
-            vec![Segment::GestureEnd {
-                id: 1,
-                fingers: 1,
-                contacts: 2,
-                duration: Micros(300 * MS),
-                cancelled: false
-            }]
-        );
-        assert!(seg.gestures().is_empty());
-    }
-
-    #[test]
-    fn cancelled_contact_is_reported_as_cancelled() {
-        let mut seg = Segmenter::new(params());
-        let out = run(
-            &mut seg,
-            &[
-                (0, 1, 100.0, 100.0, D),
-                (50, 1, 100.0, 100.0, ContactFlags::CANCELLED),
-            ],
-            |_| true,
-        );
-        assert_eq!(
-            out[1],
-            Segment::ControlEnd {
-                id: 1,
-                kind: ControlKind::Point,
-                cancelled: true
-            }
-        );
-    }
-
-    #[test]
-    fn down_and_up_in_one_coalesced_frame_begins_and_ends() {
-        let mut seg = Segmenter::new(params());
-        let out = run(&mut seg, &[(0, 1, 100.0, 100.0, D | U)], |_| true);
-        assert_eq!(out.len(), 2);
-        assert!(matches!(out[1], Segment::ControlEnd { .. }));
-        assert!(seg.controls().is_empty());
-    }
-
-    #[test]
-    fn palms_are_ignored() {
-        let mut seg = Segmenter::new(params());
-        let out = run(
-            &mut seg,
-            &[(0, 1, 100.0, 100.0, D | ContactFlags::PALM)],
-            |_| true,
-        );
-        assert!(out.is_empty());
-        assert!(seg.controls().is_empty());
-        assert_eq!(seg.bad_transitions, 0);
-    }
-
-    #[test]
-    fn a_finger_landing_after_the_grace_starts_a_new_gesture() {
-        let mut seg = Segmenter::new(params());
-        let off = |_: Vec2| false;
-        let mut out = run(
-            &mut seg,
-            &[
-                (0, 1, 100.0, 100.0, D),
-                (100, 1, 120.0, 100.0, U),
-                (400, 2, 125.0, 100.0, D),
-            ],
-            off,
-        );
-        assert_eq!(out[0], Segment::GestureBegin(1));
-        assert!(matches!(out[1], Segment::GestureEnd { id: 1, .. }));
-        assert_eq!(out[2], Segment::GestureBegin(2));
-        out.clear();
-        // A finger joining mid-gesture, far from the first but within a hand span.
-        out = run(&mut seg, &[(450, 3, 250.0, 180.0, D)], off);
-        assert!(out.is_empty(), "{out:?}");
-        assert_eq!(seg.gestures()[0].fingers.len(), 2);
-    }
-
-    #[test]
-    fn every_touch_is_a_gesture_when_switched_on() {
-        let mut seg = Segmenter::new(params());
-        seg.set_all_touches_are_gestures(true);
-        assert!(seg.all_touches_are_gestures());
-        let out = run(
-            &mut seg,
-            &[(0, 1, 100.0, 100.0, D), (20, 2, 140.0, 100.0, D)],
-            |_| true,
-        );
-        assert_eq!(out, vec![Segment::GestureBegin(1)]);
-        assert!(seg.controls().is_empty());
-        assert_eq!(seg.gestures()[0].fingers.len(), 2);
-        // Switched off again, the next touch on the crowd is a control.
-        seg.set_all_touches_are_gestures(false);
-        let out = run(&mut seg, &[(40, 3, 600.0, 600.0, D)], |_| true);
-        assert_eq!(out, vec![Segment::ControlBegin(1)]);
-    }
-
-    #[test]
-    fn an_eleventh_finger_down_starts_a_new_gesture() {
-        let mut seg = Segmenter::new(params());
-        let steps: Vec<_> = (0..11u32)
-            .map(|i| (i as u64 * 5, i + 1, 100.0 + 10.0 * i as f64, 100.0, D))
-            .collect();
-        let out = run(&mut seg, &steps, |_| false);
-        assert_eq!(
-            out,
-            vec![Segment::GestureBegin(1), Segment::GestureBegin(2)]
-        );
-        assert_eq!(seg.gestures()[0].fingers.len(), MAX_FINGERS);
-        assert_eq!(seg.gestures()[0].max_down, MAX_FINGERS as u32);
-        assert_eq!(seg.gestures()[1].fingers.len(), 1);
-    }
-
-    #[test]
-    fn a_gesture_takes_at_most_max_gesture_contacts_landings() {
-        let mut seg = Segmenter::new(params());
-        let mut steps = vec![(0, 100, 300.0, 100.0, D)];
-        // One finger stays down; another taps repeatedly beside it.
-        for k in 0..MAX_GESTURE_CONTACTS as u64 {
-            steps.push((10 + 20 * k, 1 + k as u32, 320.0, 100.0, D));
-            steps.push((20 + 20 * k, 1 + k as u32, 320.0, 100.0, U));
-        }
-        let out = run(&mut seg, &steps, |_| false);
-        let begins = out
-            .iter()
-            .filter(|s| matches!(s, Segment::GestureBegin(_)))
-            .count();
-        assert_eq!(begins, 2);
-        assert_eq!(seg.gestures()[0].fingers.len(), MAX_GESTURE_CONTACTS);
-    }
-}
+#[path = "segment_tests.rs"]
+mod tests;
