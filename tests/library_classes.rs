@@ -270,7 +270,7 @@ fn a_three_class_library_with_an_imported_motion_plays_each_class_in_the_daemon(
         );
     }
     assert!(
-        show.contains("participants 1 (24 gestures by no one named)"),
+        show.contains("classes 3, participants 1 (24 gestures by no one named), devices 1"),
         "{show}"
     );
     let read = read_library(&std::fs::read(&lib).unwrap(), "three.ctgl").unwrap();

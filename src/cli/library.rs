@@ -486,7 +486,7 @@ fn show(lib: &Library) -> Result<()> {
     }
     outln!(
         "{:<width$} {:>8} {:>9}",
-        format!("total ({} classes)", lib.classes.len()),
+        "total",
         lib.motions.len(),
         lib.gestures.len()
     )?;
@@ -512,7 +512,8 @@ fn show(lib: &Library) -> Result<()> {
         .filter(|g| g.participant.is_empty())
         .count();
     outln!(
-        "participants {} ({unknown} gestures by no one named), devices {}",
+        "classes {}, participants {} ({unknown} gestures by no one named), devices {}",
+        lib.classes.len(),
         participants.len(),
         devices.len()
     )?;
@@ -604,14 +605,21 @@ fn read_test_dir(
 
 fn print_report<C: Label>(r: &Report<C>, name: impl Fn(C) -> String) -> Result<()> {
     outln!()?;
-    outln!("the basic classes (translate, twist, contract, expand, join, split)")?;
+    outln!("six basic classes")?;
     if r.basic.confusion.classes.is_empty() {
-        outln!("(the library has none of them)")?;
+        outln!("(none: the library has no translate, twist, contract, expand, join or split)")?;
     } else {
         print_eval(&r.basic, &name)?;
     }
     outln!()?;
-    outln!("all classes")?;
+    const WORDS: [&str; 11] = [
+        "no", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten",
+    ];
+    let n = r.all.confusion.classes.len();
+    match WORDS.get(n) {
+        Some(w) => outln!("all {w} classes")?,
+        None => outln!("all {n} classes")?,
+    }
     print_eval(&r.all, &name)?;
     outln!()?;
     outln!("with one feature removed (others renormalised):")?;
