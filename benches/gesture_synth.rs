@@ -62,7 +62,7 @@ fn neighbours() -> Vec<MotionFeatures> {
                 MotionClass::Translate
             };
             features(
-                class,
+                class.id(),
                 &motion(k % 2 == 0, 100 + k),
                 &FeatureParams::default(),
             )
@@ -113,8 +113,12 @@ fn blend_and_synthesise(c: &mut Criterion) {
     let m = motion(true, 5);
     g.bench_function("features_60_agents", |b| {
         b.iter(|| {
-            features(MotionClass::Split, black_box(&m), &FeatureParams::default())
-                .expect("features")
+            features(
+                MotionClass::Split.id(),
+                black_box(&m),
+                &FeatureParams::default(),
+            )
+            .expect("features")
         })
     });
     g.finish();

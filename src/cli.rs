@@ -151,7 +151,8 @@ enum Cmd {
     /// Gesture commands: recognise the gestures of recordings.
     #[command(subcommand)]
     Gesture(gesture::GestureCmd),
-    /// The gesture library: build, show, evaluate, add to it, make a test set.
+    /// The gesture library: build or start one, import motions, add gestures,
+    /// remove a class, show, evaluate, make a test set.
     #[command(subcommand)]
     Library(library::LibraryCmd),
     /// Regenerate the shipped recordings (deterministic).
@@ -292,8 +293,12 @@ pub fn main() -> i32 {
                 _ => None,
             };
             let cfg = match &c {
-                // Building needs no config (nor a library to load one with).
-                library::LibraryCmd::Build { .. } | library::LibraryCmd::TestSet { .. } => Ok(None),
+                // Building and editing need no config (nor a library to load one with).
+                library::LibraryCmd::Build { .. }
+                | library::LibraryCmd::TestSet { .. }
+                | library::LibraryCmd::New { .. }
+                | library::LibraryCmd::ImportMotion { .. }
+                | library::LibraryCmd::Remove { .. } => Ok(None),
                 _ => find_config(config.as_deref()).map(|(cfg, _)| Some(cfg)),
             };
             done(cfg.and_then(|cfg| library::library(c, cfg.as_ref())))

@@ -119,14 +119,14 @@ fn classify(cfg: &Config, rec: &Recogniser, files: &[PathBuf], json: bool) -> Re
                         .iter()
                         .map(|n| {
                             let lg = &rec.library().gestures[n.entry];
-                            json!({"class": lg.class.as_str(), "distance": n.distance,
+                            json!({"class": rec.class_name(lg.class), "distance": n.distance,
                                    "weight": n.weight, "origin": lg.origin})
                         })
                         .collect();
                     outln!(
                         "{}",
                         json!({"file": name, "t_us": t_us, "fingers": g.fingers,
-                               "class": r.class.as_str(), "weight": r.weight,
+                               "class": rec.class_name(r.class), "weight": r.weight,
                                "neighbours": neighbours})
                     )?;
                 }
@@ -137,7 +137,7 @@ fn classify(cfg: &Config, rec: &Recogniser, files: &[PathBuf], json: bool) -> Re
                         .map(|n| {
                             format!(
                                 "{} {:.3} ({:.2})",
-                                rec.class_of(n.entry),
+                                rec.class_name(rec.class_of(n.entry)),
                                 n.distance,
                                 n.weight
                             )
@@ -147,7 +147,7 @@ fn classify(cfg: &Config, rec: &Recogniser, files: &[PathBuf], json: bool) -> Re
                         "{name} t={:.3}s fingers={} class={} weight={:.2} neighbours: {}",
                         t_us as f64 * 1e-6,
                         g.fingers,
-                        r.class,
+                        rec.class_name(r.class),
                         r.weight,
                         near.join(", ")
                     )?;

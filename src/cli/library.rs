@@ -1,23 +1,32 @@
 //! `crowdtouch library …`: the gesture library — build it from the simulator and the
-//! gesture generator, show it, evaluate its recognition (gesture-driven section
-//! 8.2), add a person's gestures to it, and make a labelled test set.
+//! gesture generator, or start one with classes of your own (`new`), import crowd
+//! motions from track files (`import-motion`), add a person's gestures to it, remove
+//! a class, show it, evaluate its recognition (gesture-driven section 8.2), and make
+//! a labelled test set.
 
 use super::gesture::gestures_in;
 use super::output::outln;
 use anyhow::{anyhow, bail, Context, Result};
 use crowdtouch::config::Config;
-use crowdtouch::crowd::motion::{build_library, BuildParams, FeatureParams, SHIPPED_SEED};
+use crowdtouch::crowd::edit::io::{read_tracks, ReadOptions};
+use crowdtouch::crowd::motion::{
+    build_library, import_motion, BuildParams, FeatureParams, ImportWindow, PersonSamples,
+    DEFAULT_IMPORT_DURATION_S, SHIPPED_SEED,
+};
 use crowdtouch::engine::search_params;
 use crowdtouch::gesture::dtw::{gesture_distance, Dtw};
-use crowdtouch::gesture::eval::{leave_one_out_report, train_test_report, Evaluation, Report};
+use crowdtouch::gesture::eval::{
+    leave_one_out_report, train_test_report, ClassLabel, Evaluation, Label, Report,
+};
 use crowdtouch::gesture::features::GestureFeatures;
 use crowdtouch::gesture::library::{
-    read_library, read_library_with, shipped, write_library, Library, LibraryGesture, LoadPolicy,
-    MotionClass, MAX_LIBRARY_BYTES,
+    check_class_name, read_library, read_library_with, shipped, validate_with, write_library,
+    ClassId, Library, LibraryGesture, LoadPolicy, MotionClass, MAX_CLASSES, MAX_LIBRARY_BYTES,
 };
 use crowdtouch::gesture::resample::prepare;
 use crowdtouch::gesture::synth::{generate, to_frames, GestureStyle, StyleRanges};
 use crowdtouch::input::recording::JsonlWriter;
+use crowdtouch::input::recording::{OnBadFrame, RecordingStream};
 use crowdtouch::input::{AxisRange, SurfaceInfo};
 use crowdtouch::vocab::Micros;
 use std::path::{Path, PathBuf};
@@ -45,8 +54,74 @@ pub enum LibraryCmd {
         /// fit the motions' mixtures (default: 2 components, as shipped).
         #[arg(long)]
         config: Option<PathBuf>,
+        /// The simulator's classes to build, in this order (default: all ten).
+        #[arg(long, value_delimiter = ',')]
+        classes: Vec<MotionClass>,
     },
-    /// Summarise a library: motions and gestures per class.
+    /// Start a library of your own: the classes named (none: an empty library),
+    /// no motion, no gesture. Fill it with `import-motion` and `add`.
+    New {
+        /// Output file (refused if it exists, unless `--force`).
+        #[arg(long, short)]
+        out: PathBuf,
+        /// A class name (an ASCII letter, then letters, digits, `_` or `-`);
+        /// repeat or separate with commas.
+        #[arg(long = "class", value_delimiter = ',')]
+        classes: Vec<String>,
+        /// Replace an existing file.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Import a crowd motion for class CLASS from a track file (our JSON Lines, CSV
+    /// `t,id,x,y`, the pedestrian datasets' ETH/UCY format, or a daemon run's
+    /// `replay --tracks`): the people present throughout a time window (given, or
+    /// the busiest `--duration-s` of the file), turned into the library's motion
+    /// representation as `library build` turns a simulated crowd (FPCA and a
+    /// Gaussian mixture, gesture-driven section 6). A class the library lacks is
+    /// added.
+    ImportMotion {
+        /// The class the motion belongs to.
+        #[arg(long)]
+        class: String,
+        /// The track file.
+        tracks: PathBuf,
+        /// Library to add to (default: the shipped one).
+        #[arg(long)]
+        library: Option<PathBuf>,
+        /// Where to write the new library.
+        #[arg(long, short)]
+        out: PathBuf,
+        /// Window start in the file's time (s).
+        #[arg(long)]
+        from_s: Option<f64>,
+        /// Window end in the file's time (s).
+        #[arg(long)]
+        to_s: Option<f64>,
+        /// Length of the window when it is chosen or given by one end (s).
+        #[arg(long, default_value_t = DEFAULT_IMPORT_DURATION_S)]
+        duration_s: f64,
+        /// Seed of the mixture's fitting.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Config whose `gestures.gmm_components` and `gestures.auto_components_max`
+        /// fit the motion's mixture (default: 2 components, as shipped).
+        #[arg(long)]
+        config: Option<PathBuf>,
+    },
+    /// Remove a class with its motions and gestures.
+    Remove {
+        /// The class.
+        #[arg(long)]
+        class: String,
+        /// Library to remove it from (default: the shipped one).
+        #[arg(long)]
+        library: Option<PathBuf>,
+        /// Where to write the new library.
+        #[arg(long, short)]
+        out: PathBuf,
+    },
+    /// Summarise a library: its classes with their motions and gestures, and who
+    /// drew the gestures.
     Show {
         /// Library file (default: the shipped one).
         #[arg(long)]
@@ -72,9 +147,9 @@ pub enum LibraryCmd {
     /// gesture found in each recording, paired with the library's motion of that
     /// class whose gestures it is nearest to (or `--motion N`).
     Add {
-        /// The class the gestures ask for.
+        /// The class the gestures ask for (one of the library's).
         #[arg(long)]
-        class: MotionClass,
+        class: String,
         /// Pair with this motion (an index into the library's motions).
         #[arg(long)]
         motion: Option<u32>,
@@ -87,6 +162,12 @@ pub enum LibraryCmd {
         /// Config (its `controls` for segmenting, `surface.size_mm`).
         #[arg(long)]
         config: Option<PathBuf>,
+        /// Who drew the gestures (stored with each, for leave-one-participant-out).
+        #[arg(long)]
+        participant: Option<String>,
+        /// The device they were drawn on (default: each recording's device name).
+        #[arg(long)]
+        device: Option<String>,
         /// Recordings.
         #[arg(required = true)]
         recordings: Vec<PathBuf>,
@@ -115,25 +196,64 @@ pub fn library(cmd: LibraryCmd, cfg: Option<&Config>) -> Result<()> {
             motions_per_class,
             gestures_per_motion,
             config,
+            classes,
         } => {
-            let mixtures = match config {
-                Some(p) => {
-                    let c = Config::load(&p)?;
-                    (
-                        c.gestures.gmm_components as usize,
-                        c.gestures.auto_components_max.map(|k| k as usize),
-                    )
-                }
-                None => (2, None),
+            let mixtures = mixtures(config.as_deref())?;
+            let classes = if classes.is_empty() {
+                MotionClass::ALL.to_vec()
+            } else {
+                classes
             };
-            build(&out, seed, motions_per_class, gestures_per_motion, mixtures)
+            build(
+                &out,
+                seed,
+                classes,
+                motions_per_class,
+                gestures_per_motion,
+                mixtures,
+            )
         }
+        LibraryCmd::New {
+            out,
+            classes,
+            force,
+        } => new(&out, classes, force),
+        LibraryCmd::ImportMotion {
+            class,
+            tracks,
+            library,
+            out,
+            from_s,
+            to_s,
+            duration_s,
+            seed,
+            config,
+        } => {
+            let (gmm_components, auto_components) = mixtures(config.as_deref())?;
+            let fp = FeatureParams {
+                gmm_components,
+                auto_components,
+                seed,
+                ..FeatureParams::default()
+            };
+            let window = ImportWindow {
+                from_s,
+                to_s,
+                duration_s,
+            };
+            import(library.as_deref(), &class, &tracks, &window, &fp, &out)
+        }
+        LibraryCmd::Remove {
+            class,
+            library,
+            out,
+        } => remove(library.as_deref(), &class, &out),
         LibraryCmd::TestSet {
             out,
             seed,
             per_class,
         } => test_set(&out, seed, per_class),
-        LibraryCmd::Show { library } => show(&load(library.as_deref())?),
+        LibraryCmd::Show { library } => show(&load_with(library.as_deref(), LoadPolicy::Partial)?),
         LibraryCmd::Eval { library, test, .. } => {
             eval(cfg()?, &load(library.as_deref())?, test.as_deref())
         }
@@ -143,9 +263,156 @@ pub fn library(cmd: LibraryCmd, cfg: Option<&Config>) -> Result<()> {
             library,
             out,
             recordings,
+            participant,
+            device,
             ..
-        } => add(cfg()?, library.as_deref(), class, motion, &out, &recordings),
+        } => add(
+            cfg()?,
+            library.as_deref(),
+            &class,
+            motion,
+            &out,
+            &recordings,
+            (participant, device),
+        ),
     }
+}
+
+/// `(gestures.gmm_components, gestures.auto_components_max)` of the config at
+/// `path`, or the shipped library's `(2, None)`.
+fn mixtures(path: Option<&Path>) -> Result<(usize, Option<usize>)> {
+    Ok(match path {
+        Some(p) => {
+            let c = Config::load(p)?;
+            (
+                c.gestures.gmm_components as usize,
+                c.gestures.auto_components_max.map(|k| k as usize),
+            )
+        }
+        None => (2, None),
+    })
+}
+
+/// Checks `lib` under [`LoadPolicy::Partial`] and writes it to `out`, read back
+/// first from the bytes to be written.
+fn save(lib: &Library, out: &Path) -> Result<usize> {
+    validate_with(lib, LoadPolicy::Partial).map_err(|mut e| {
+        e.file = out.display().to_string();
+        e
+    })?;
+    let bytes = write_library(lib);
+    read_library_with(&bytes, &out.display().to_string(), LoadPolicy::Partial)?;
+    std::fs::write(out, &bytes).with_context(|| format!("{}: cannot write", out.display()))?;
+    Ok(bytes.len())
+}
+
+/// The id of the class `name` of `lib`, or an error listing its classes.
+fn class_of(lib: &Library, name: &str) -> Result<ClassId> {
+    lib.class_id(name).ok_or_else(|| {
+        anyhow!(
+            "the library has no class `{}`; its classes are: {}",
+            crowdtouch::located::Escaped(name),
+            if lib.classes.is_empty() {
+                "(none)".to_string()
+            } else {
+                lib.classes.join(", ")
+            }
+        )
+    })
+}
+
+fn new(out: &Path, classes: Vec<String>, force: bool) -> Result<()> {
+    if out.exists() && !force {
+        bail!("{}: exists; give --force to replace it", out.display());
+    }
+    let lib = Library::with_classes(classes);
+    if lib.classes.len() > MAX_CLASSES {
+        bail!(
+            "{} classes; a library holds at most {MAX_CLASSES}",
+            lib.classes.len()
+        );
+    }
+    save(&lib, out)?;
+    outln!(
+        "{}: a new library of {} class{}{}{}",
+        out.display(),
+        lib.classes.len(),
+        if lib.classes.len() == 1 { "" } else { "es" },
+        if lib.classes.is_empty() { "" } else { ": " },
+        lib.classes.join(", ")
+    )?;
+    Ok(())
+}
+
+fn remove(library: Option<&Path>, class: &str, out: &Path) -> Result<()> {
+    let mut lib = load_with(library, LoadPolicy::Partial)?;
+    let id = class_of(&lib, class)?;
+    let c = lib.counts()[id.index()];
+    lib.remove_class(id);
+    let bytes = save(&lib, out)?;
+    outln!(
+        "{}: class {class} removed with {} motions and {} gestures; {} classes, {} motions, {} gestures, {bytes} bytes",
+        out.display(),
+        c.motions,
+        c.gestures,
+        lib.classes.len(),
+        lib.motions.len(),
+        lib.gestures.len()
+    )?;
+    Ok(())
+}
+
+fn import(
+    library: Option<&Path>,
+    class: &str,
+    tracks: &Path,
+    window: &ImportWindow,
+    fp: &FeatureParams,
+    out: &Path,
+) -> Result<()> {
+    check_class_name(class).with_context(|| format!("--class {class:?}"))?;
+    let mut lib = load_with(library, LoadPolicy::Partial)?;
+    let (set, format) = read_tracks(tracks, None, &ReadOptions::default())
+        .map_err(|e| anyhow!("cannot read tracks: {e}"))?;
+    let people: Vec<PersonSamples<'_>> = set
+        .tracks
+        .iter()
+        .map(|t| PersonSamples {
+            id: t.id,
+            times_s: &t.times_s,
+            points: &t.points,
+            linked: &t.linked,
+        })
+        .collect();
+    let (id, added) = match lib.class_id(class) {
+        Some(id) => (id, false),
+        None => {
+            if lib.classes.len() >= MAX_CLASSES {
+                bail!("the library holds {MAX_CLASSES} classes already");
+            }
+            lib.classes.push(class.to_string());
+            (ClassId((lib.classes.len() - 1) as u16), true)
+        }
+    };
+    let m = import_motion(&people, set.step_s, window, id, fp)
+        .with_context(|| format!("{}: no crowd motion", tracks.display()))?;
+    let index = lib.motions.len();
+    lib.motions.push(m.features);
+    let bytes = save(&lib, out)?;
+    outln!(
+        "{}: motion {index} of class {class}{}: {} people of {} ({:?}) from {:.2} s to {:.2} s; {} classes, {} motions, {} gestures, {bytes} bytes",
+        out.display(),
+        if added { " (a new class)" } else { "" },
+        m.people.len(),
+        tracks.display(),
+        format,
+        m.from_s,
+        m.to_s,
+        lib.classes.len(),
+        lib.motions.len(),
+        lib.gestures.len()
+    )?;
+    Ok(())
 }
 
 /// A library file, or the shipped library.
@@ -167,6 +434,7 @@ fn load_with(path: Option<&Path>, policy: LoadPolicy) -> Result<Library> {
 fn build(
     out: &Path,
     seed: u64,
+    classes: Vec<MotionClass>,
     per_class: usize,
     per_motion: usize,
     (gmm_components, auto_components): (usize, Option<usize>),
@@ -174,6 +442,7 @@ fn build(
     let defaults = BuildParams::default();
     let p = BuildParams {
         seed,
+        classes,
         motions_per_class: per_class,
         gestures_per_motion: per_motion,
         features: FeatureParams {
@@ -199,25 +468,67 @@ fn build(
 }
 
 fn show(lib: &Library) -> Result<()> {
-    outln!("{:<24} {:>8} {:>9}", "class", "motions", "gestures")?;
-    for c in MotionClass::ALL {
-        let m = lib.motions.iter().filter(|m| m.class == c).count();
-        let g = lib.gestures.iter().filter(|g| g.class == c).count();
-        outln!("{:<24} {m:>8} {g:>9}", c.as_str())?;
+    let width = lib
+        .classes
+        .iter()
+        .map(String::len)
+        .max()
+        .unwrap_or(0)
+        .max(24);
+    outln!("{:<width$} {:>8} {:>9}", "class", "motions", "gestures")?;
+    for (name, c) in lib.classes.iter().zip(lib.counts()) {
+        let warn = match (c.motions, c.gestures) {
+            (0, 0) => "  (empty)",
+            (_, 0) => "  (no gesture: never recognised)",
+            _ => "",
+        };
+        outln!("{name:<width$} {:>8} {:>9}{warn}", c.motions, c.gestures)?;
     }
     outln!(
-        "{:<24} {:>8} {:>9}",
+        "{:<width$} {:>8} {:>9}",
         "total",
         lib.motions.len(),
         lib.gestures.len()
     )?;
+    let mut participants: Vec<&str> = lib
+        .gestures
+        .iter()
+        .map(|g| g.participant.as_str())
+        .filter(|p| !p.is_empty())
+        .collect();
+    participants.sort_unstable();
+    participants.dedup();
+    let mut devices: Vec<&str> = lib
+        .gestures
+        .iter()
+        .map(|g| g.device.as_str())
+        .filter(|d| !d.is_empty())
+        .collect();
+    devices.sort_unstable();
+    devices.dedup();
+    let unknown = lib
+        .gestures
+        .iter()
+        .filter(|g| g.participant.is_empty())
+        .count();
+    outln!(
+        "classes {}, participants {} ({unknown} gestures by no one named), devices {}",
+        lib.classes.len(),
+        participants.len(),
+        devices.len()
+    )?;
     Ok(())
 }
 
-fn labelled(lib: &Library) -> Vec<(MotionClass, GestureFeatures)> {
+fn labelled(lib: &Library) -> Vec<(ClassLabel, GestureFeatures)> {
     lib.gestures
         .iter()
-        .map(|g| (g.class, GestureFeatures::of(&g.gesture)))
+        .map(|g| {
+            (
+                ClassLabel::of(lib, g.class),
+                GestureFeatures::of(&g.gesture),
+            )
+        })
         .collect()
 }
 
@@ -234,7 +545,7 @@ fn eval(cfg: &Config, lib: &Library, test: Option<&Path>) -> Result<()> {
             leave_one_out_report(&train, &params)
         }
         Some(dir) => {
-            let test = read_test_dir(dir, cfg)?;
+            let test = read_test_dir(dir, cfg, lib)?;
             outln!(
                 "{} test gestures from {} against {} library gestures (K = {})",
                 test.len(),
@@ -245,11 +556,16 @@ fn eval(cfg: &Config, lib: &Library, test: Option<&Path>) -> Result<()> {
             train_test_report(&train, &test, &params)
         }
     };
-    print_report(&report)
+    print_report(&report, |c: ClassLabel| lib.class_name(c.id).to_string())
 }
 
-/// `DIR/<class>/*`: every gesture in every recording, labelled by its folder.
-fn read_test_dir(dir: &Path, cfg: &Config) -> Result<Vec<(MotionClass, GestureFeatures)>> {
+/// `DIR/<class>/*`: every gesture in every recording, labelled by its folder (a
+/// class of `lib`).
+fn read_test_dir(
+    dir: &Path,
+    cfg: &Config,
+    lib: &Library,
+) -> Result<Vec<(ClassLabel, GestureFeatures)>> {
     let mut out = Vec::new();
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("{}: cannot read test directory", dir.display()))?
@@ -259,9 +575,11 @@ fn read_test_dir(dir: &Path, cfg: &Config) -> Result<Vec<(MotionClass, GestureFe
     entries.sort();
     for sub in entries {
         let name = sub.file_name().and_then(|n| n.to_str()).unwrap_or("");
-        let class: MotionClass = name
-            .parse()
-            .with_context(|| format!("{}: folder is not a class", sub.display()))?;
+        let class = ClassLabel::of(
+            lib,
+            class_of(lib, name)
+                .with_context(|| format!("{}: folder is not a class", sub.display()))?,
+        );
         let mut files: Vec<PathBuf> = std::fs::read_dir(&sub)?
             .filter_map(|e| e.ok().map(|e| e.path()))
             .filter(|p| p.is_file())
@@ -285,13 +603,24 @@ fn read_test_dir(dir: &Path, cfg: &Config) -> Result<Vec<(MotionClass, GestureFe
     Ok(out)
 }
 
-fn print_report(r: &Report) -> Result<()> {
+fn print_report<C: Label>(r: &Report<C>, name: impl Fn(C) -> String) -> Result<()> {
     outln!()?;
     outln!("six basic classes")?;
-    print_eval(&r.basic)?;
+    if r.basic.confusion.classes.is_empty() {
+        outln!("(none: the library has no translate, twist, contract, expand, join or split)")?;
+    } else {
+        print_eval(&r.basic, &name)?;
+    }
     outln!()?;
-    outln!("all ten classes")?;
-    print_eval(&r.all)?;
+    const WORDS: [&str; 11] = [
+        "no", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten",
+    ];
+    let n = r.all.confusion.classes.len();
+    match WORDS.get(n) {
+        Some(w) => outln!("all {w} classes")?,
+        None => outln!("all {n} classes")?,
+    }
+    print_eval(&r.all, &name)?;
     outln!()?;
     outln!("with one feature removed (others renormalised):")?;
     outln!("{:<10} {:>8} {:>8}", "removed", "basic", "all")?;
@@ -306,36 +635,44 @@ fn print_report(r: &Report) -> Result<()> {
     Ok(())
 }
 
-/// The short column names of the confusion matrix.
-fn short(c: MotionClass) -> &'static str {
-    match c {
-        MotionClass::Translate => "trans",
-        MotionClass::Twist => "twist",
-        MotionClass::Contract => "contr",
-        MotionClass::Expand => "expan",
-        MotionClass::Join => "join",
-        MotionClass::Split => "split",
-        MotionClass::SplitThenTranslate => "sp+tr",
-        MotionClass::TranslateThenJoin => "tr+jo",
-        MotionClass::TwistWhileExpanding => "tw+ex",
-        MotionClass::TwistWhileContracting => "tw+co",
+/// The short column name of a class in the confusion matrix: the built-in
+/// classes' abbreviations, else the first five characters of its name.
+fn short(name: &str) -> String {
+    match name.parse::<MotionClass>() {
+        Ok(MotionClass::Translate) => "trans".into(),
+        Ok(MotionClass::Twist) => "twist".into(),
+        Ok(MotionClass::Contract) => "contr".into(),
+        Ok(MotionClass::Expand) => "expan".into(),
+        Ok(MotionClass::Join) => "join".into(),
+        Ok(MotionClass::Split) => "split".into(),
+        Ok(MotionClass::SplitThenTranslate) => "sp+tr".into(),
+        Ok(MotionClass::TranslateThenJoin) => "tr+jo".into(),
+        Ok(MotionClass::TwistWhileExpanding) => "tw+ex".into(),
+        Ok(MotionClass::TwistWhileContracting) => "tw+co".into(),
+        Err(_) => name.chars().take(5).collect(),
     }
 }
 
-fn print_eval(e: &Evaluation) -> Result<()> {
+fn print_eval<C: Label>(e: &Evaluation<C>, name: &impl Fn(C) -> String) -> Result<()> {
     let classes = &e.confusion.classes;
-    let mut head = format!("{:<24}", "true \\ recognised");
-    for c in classes {
-        head.push_str(&format!(" {:>5}", short(*c)));
+    let width = classes
+        .iter()
+        .map(|&c| name(c).len())
+        .max()
+        .unwrap_or(0)
+        .max(24);
+    let mut head = format!("{:<width$}", "true \\ recognised");
+    for &c in classes {
+        head.push_str(&format!(" {:>5}", short(&name(c))));
     }
     head.push_str("  accuracy");
     outln!("{head}")?;
-    for (i, c) in classes.iter().enumerate() {
-        let mut row = format!("{:<24}", c.as_str());
+    for (i, &c) in classes.iter().enumerate() {
+        let mut row = format!("{:<width$}", name(c));
         for n in &e.confusion.counts[i] {
             row.push_str(&format!(" {n:>5}"));
         }
-        if let Some(pc) = e.per_class.iter().find(|p| p.class == *c) {
+        if let Some(pc) = e.per_class.iter().find(|p| p.class == c) {
             row.push_str(&format!("  {:>6.1}%", 100.0 * pc.accuracy()));
         }
         outln!("{row}")?;
@@ -351,14 +688,25 @@ fn print_eval(e: &Evaluation) -> Result<()> {
 fn add(
     cfg: &Config,
     library: Option<&Path>,
-    class: MotionClass,
+    name: &str,
     motion: Option<u32>,
     out: &Path,
     files: &[PathBuf],
+    (participant, device): (Option<String>, Option<String>),
 ) -> Result<()> {
     let mut lib = load_with(library, LoadPolicy::Partial)?;
+    let class = class_of(&lib, name)?;
+    let participant = participant.unwrap_or_default();
     let mut added = 0;
     for f in files {
+        let device = match &device {
+            Some(d) => d.clone(),
+            None => RecordingStream::load(f, OnBadFrame::Stop)
+                .with_context(|| format!("{}: cannot read recording", f.display()))?
+                .surface()
+                .name
+                .clone(),
+        };
         for g in gestures_in(f, cfg)? {
             let tracks = match g.tracks {
                 Ok(t) => t,
@@ -377,7 +725,10 @@ fn add(
             let motion = match motion {
                 Some(m) => match lib.motions.get(m as usize) {
                     Some(mf) if mf.class == class => m,
-                    Some(mf) => bail!("motion {m} is a {} motion, not {class}", mf.class),
+                    Some(mf) => bail!(
+                        "motion {m} is a {} motion, not {name}",
+                        lib.class_name(mf.class)
+                    ),
                     None => bail!("motion {m}: the library has {} motions", lib.motions.len()),
                 },
                 None => nearest_motion(&lib, class, &GestureFeatures::of(&gesture), cfg)?,
@@ -387,15 +738,15 @@ fn add(
                 motion,
                 gesture,
                 origin: format!("recording {} t={:.3}s", f.display(), g.t.as_secs_f64()),
+                participant: participant.clone(),
+                device: device.clone(),
             });
             added += 1;
         }
     }
-    let bytes = write_library(&lib);
-    read_library_with(&bytes, &out.display().to_string(), LoadPolicy::Partial)?;
-    std::fs::write(out, &bytes).with_context(|| format!("{}: cannot write", out.display()))?;
+    save(&lib, out)?;
     outln!(
-        "{}: {added} {class} gestures added; {} gestures, {} motions",
+        "{}: {added} {name} gestures added; {} gestures, {} motions",
         out.display(),
         lib.gestures.len(),
         lib.motions.len()
@@ -404,12 +755,7 @@ fn add(
 }
 
 /// The motion of `class` whose library gestures are nearest to `f` (eq. 12).
-fn nearest_motion(
-    lib: &Library,
-    class: MotionClass,
-    f: &GestureFeatures,
-    cfg: &Config,
-) -> Result<u32> {
+fn nearest_motion(lib: &Library, class: ClassId, f: &GestureFeatures, cfg: &Config) -> Result<u32> {
     // The nearest library gesture of the class (eq. 12; the first of equals).
     let p = search_params(cfg);
     let mut dtw = Dtw::new();
@@ -429,7 +775,11 @@ fn nearest_motion(
     match (best, lib.motions.iter().position(|m| m.class == class)) {
         (Some((_, motion)), _) => Ok(motion),
         (None, Some(m)) => Ok(m as u32),
-        (None, None) => bail!("the library has no {class} motion to pair the gesture with"),
+        (None, None) => bail!(
+            "the library has no {} motion to pair the gesture with (import one with `library import-motion --class {}`)",
+            lib.class_name(class),
+            lib.class_name(class)
+        ),
     }
 }
 

@@ -21,6 +21,11 @@ pub struct GesturesConfig {
     /// library embedded in the binary. Read at start and on every SIGHUP; a file that
     /// does not load leaves the running library in use.
     pub library: Option<PathBuf>,
+    /// Classes of the library that are recognised but ignored: their `gesture`
+    /// event carries the recognition and `rejected: "class_disabled"`, and no
+    /// crowd motion plays. Each must be a class of the library (checked when the
+    /// library loads), named once, and not also mapped by `formations.gestures`.
+    pub disabled: Vec<String>,
     /// Every touch is a gesture, wherever it lands (a table with no direct control).
     pub all_touches_are_gestures: bool,
     /// Shorter gestures (first touch to last lift) are taps, ignored (ms).
@@ -84,6 +89,7 @@ impl Default for GesturesConfig {
         GesturesConfig {
             enabled: true,
             library: None,
+            disabled: Vec::new(),
             all_touches_are_gestures: false,
             min_duration_ms: DEFAULT_MIN_DURATION_MS,
             min_travel_mm: DEFAULT_MIN_TRAVEL_MM,
@@ -155,6 +161,17 @@ impl GesturesConfig {
                 "library",
                 "library path is empty (None uses the shipped library)".to_string(),
             );
+        }
+        for (k, name) in self.disabled.iter().enumerate() {
+            if let Err(e) = crate::gesture::library::check_class_name(name) {
+                check(false, &format!("disabled[{k}]"), e.to_string());
+            } else if let Some(j) = self.disabled[..k].iter().position(|o| o == name) {
+                check(
+                    false,
+                    &format!("disabled[{k}]"),
+                    format!("class `{name}` is disabled twice (also disabled[{j}])"),
+                );
+            }
         }
         check(
             self.min_duration_ms <= 10_000,

@@ -145,6 +145,10 @@ pub const FIELDS: &[FieldClass] = &[
          not load leaves the running library",
     ),
     live(
+        "gestures.disabled",
+        "from the next recognised gesture; a motion playing plays to its end",
+    ),
+    live(
         "gestures.all_touches_are_gestures",
         "from the next touch; touches already down keep what they are",
     ),

@@ -116,7 +116,15 @@ impl Config {
         }
         if problems.is_empty() && cfg.gestures.enabled {
             match load_recogniser(cfg.gestures.library.as_deref(), cfg.gestures.band) {
-                Ok(r) => cfg.recogniser = Some(r),
+                Ok(r) => {
+                    problems.extend(super::transform::check_gesture_classes(
+                        &cfg.formations.gestures,
+                        &cfg.gestures.disabled,
+                        &r.library().classes,
+                        r.source(),
+                    ));
+                    cfg.recogniser = Some(r);
+                }
                 Err(e) => problems.push((
                     "gestures.library".to_string(),
                     format!("gesture library not usable: {e}"),

@@ -9,7 +9,6 @@
 //! defaults below, which are the crowd-level defaults of
 //! [`crate::crowd::transform::MoveParams`] and [`crate::crowd::transform::ApParams`].
 
-use crate::gesture::library::MotionClass;
 use crate::vocab::FormationMethod;
 use serde::{Deserialize, Serialize};
 
@@ -180,20 +179,11 @@ impl Default for SubgroupsConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GestureFormation {
-    /// A motion class name (`twist`, `split`, …; see
-    /// [`MotionClass`](crate::gesture::library::MotionClass)).
+    /// A class of the gesture library (`twist`, `split`, … in the shipped one;
+    /// checked against the library when it loads).
     pub class: String,
     /// A formation name (`start`, a shipped one or one of `formations.shapes`).
     pub formation: String,
-}
-
-impl GestureFormation {
-    /// The class named, when it is one.
-    pub fn motion_class(&self) -> Option<MotionClass> {
-        MotionClass::ALL
-            .into_iter()
-            .find(|c| c.as_str() == self.class)
-    }
 }
 
 /// The method a formation request uses when none is named.
@@ -302,17 +292,10 @@ pub(super) fn validate_transform(
         "subgroups.ring",
         format!("ring must be 1..=8, got {}", sg.ring),
     );
-    let classes = MotionClass::ALL.map(MotionClass::as_str).join(", ");
     for (k, g) in gestures.iter().enumerate() {
-        check(
-            g.motion_class().is_some(),
-            &format!("gestures[{k}].class"),
-            format!(
-                "no gesture class is called `{}`; the classes are {classes}",
-                g.class
-            ),
-        );
-        if let Some(j) = gestures[..k].iter().position(|o| o.class == g.class) {
+        if let Err(e) = crate::gesture::library::check_class_name(&g.class) {
+            check(false, &format!("gestures[{k}].class"), e.to_string());
+        } else if let Some(j) = gestures[..k].iter().position(|o| o.class == g.class) {
             check(
                 false,
                 &format!("gestures[{k}].class"),
@@ -323,6 +306,48 @@ pub(super) fn validate_transform(
             );
         }
     }
+}
+
+/// The classes of the gesture map and of `gestures.disabled` that the library
+/// (its class table `classes`) does not have, and classes both mapped and
+/// disabled, as `(field path, message)`.
+pub(super) fn check_gesture_classes(
+    gestures: &[GestureFormation],
+    disabled: &[String],
+    classes: &[String],
+    library: &str,
+) -> Vec<(String, String)> {
+    let known = |c: &str| classes.iter().any(|k| k == c);
+    let list = classes.join(", ");
+    let mut p = Vec::new();
+    for (k, g) in gestures.iter().enumerate() {
+        if !known(&g.class) {
+            p.push((
+                format!("formations.gestures[{k}].class"),
+                format!(
+                    "the gesture library {library} has no class `{}`; its classes are {list}",
+                    g.class
+                ),
+            ));
+        }
+    }
+    for (k, d) in disabled.iter().enumerate() {
+        if !known(d) {
+            p.push((
+                format!("gestures.disabled[{k}]"),
+                format!("the gesture library {library} has no class `{d}`; its classes are {list}"),
+            ));
+        } else if let Some(j) = gestures.iter().position(|g| &g.class == d) {
+            p.push((
+                format!("gestures.disabled[{k}]"),
+                format!(
+                    "class `{d}` is disabled and also mapped to formation `{}` (formations.gestures[{j}]); keep one",
+                    gestures[j].formation
+                ),
+            ));
+        }
+    }
+    p
 }
 
 /// The gesture map's formation names that the config does not define, as

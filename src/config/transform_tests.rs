@@ -94,7 +94,7 @@ fn the_gesture_map_names_known_classes_and_formations() {
     assert!(
         e.contains(&at(&t, "class: \"twirl\""))
             && e.contains(
-                "field `formations.gestures[0].class`: no gesture class is called `twirl`"
+                "field `formations.gestures[0].class`: the gesture library library.ctgl (shipped) has no class `twirl`; its classes are translate"
             )
             && e.contains("twist_while_contracting"),
         "{e}"

@@ -302,11 +302,12 @@ impl Engine {
     /// plays the next [`GESTURE_RETIME_S`] of every track faster, `expand` slower
     /// (a temporal edit, section 3.3, dragging each person's node nearest that
     /// horizon by the factor; the first and last times stay), then collisions are
-    /// avoided. Other classes do nothing to the tracks.
-    pub(super) fn edit_gesture(&mut self, id: u32, class: MotionClass) {
-        let factor = match class {
-            MotionClass::Contract => GESTURE_FASTER,
-            MotionClass::Expand => 1.0 / GESTURE_FASTER,
+    /// avoided. Other classes (and a library's classes of other names) do nothing
+    /// to the tracks.
+    pub(super) fn edit_gesture(&mut self, id: u32, class: &str) {
+        let factor = match class.parse::<MotionClass>() {
+            Ok(MotionClass::Contract) => GESTURE_FASTER,
+            Ok(MotionClass::Expand) => 1.0 / GESTURE_FASTER,
             _ => {
                 log::info!("gesture {id}: {class} does nothing to tracks (contract and expand retime them)");
                 return;

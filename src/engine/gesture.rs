@@ -11,8 +11,10 @@
 //!              recognise · blend · synthesise
 //!                        │
 //!     not recognised ◄───┴───► `gesture` event (recognition), `plan`,
-//!     `gesture` event          `gesture_motion` approach ─► follow ─► done
-//!     (rejected)                                                       │
+//!     `gesture` event     │    `gesture_motion` approach ─► follow ─► done
+//!     (rejected)          │                                            │
+//!                         └─ class in `gestures.disabled`: `gesture`   │
+//!                            event (recognition, `class_disabled`)     │
 //!                                              RemeshRequest::prepare ◄┘ (worker)
 //!                                              mesh_around → install: touch control
 //! ```
@@ -33,7 +35,7 @@ use crate::crowd::motion::{
 use crate::geom::Vec2;
 use crate::gesture::capture::Rejected;
 use crate::gesture::continuous::WindowParams;
-use crate::gesture::library::{MotionClass, S_H};
+use crate::gesture::library::S_H;
 use crate::vocab::{Event, Micros, MotionPhase, NeighbourView, PlanOrigin, PlanView, Recognition};
 use std::sync::Arc;
 
@@ -75,11 +77,12 @@ impl Engine {
             .map_or(0, |e| e.fired);
         if fired > 0 {
             // Recognised while it was drawn: its motion is under way already.
-            let recognition = g
+            let (recognition, rejected) = g
                 .fired
                 .iter()
                 .position(|f| f.0 == id)
-                .map(|k| g.fired.swap_remove(k).1);
+                .map(|k| g.fired.swap_remove(k))
+                .map_or((None, None), |(_, r, why)| (Some(r), why));
             return Some(Event::GestureEnd {
                 id,
                 fingers,
@@ -87,7 +90,7 @@ impl Engine {
                 duration_us,
                 cancelled,
                 recognition,
-                rejected: None,
+                rejected,
                 t: now,
             });
         }
@@ -182,9 +185,18 @@ impl Engine {
             if let (false, Ok(m)) = (stale, p.outcome) {
                 if m.synthesis.trajectories.len() == self.agents.len() {
                     let rec = recognition_view(&m, synth_us);
+                    let disabled = self.gestures.is_disabled(&m.class_name);
                     self.gestures.fired.retain(|f| f.0 != p.id);
-                    self.gestures.fired.push((p.id, rec));
-                    self.play(p.id, m.recognised.class, m.synthesis, now);
+                    self.gestures.fired.push((
+                        p.id,
+                        rec,
+                        disabled.then(|| CLASS_DISABLED.to_string()),
+                    ));
+                    if disabled {
+                        log::info!("gesture {}: {} is disabled", p.id, m.class_name);
+                    } else {
+                        self.play(p.id, m.class_name, m.synthesis, now);
+                    }
                 }
             }
             return;
@@ -212,8 +224,15 @@ impl Engine {
                     if let Event::GestureEnd { recognition, .. } = &mut event {
                         *recognition = Some(rec);
                     }
+                    if self.gestures.is_disabled(&m.class_name) {
+                        // Recognised, and ignored (`gestures.disabled`).
+                        log::info!("gesture {}: {} is disabled", p.id, m.class_name);
+                        set_rejected(&mut event, CLASS_DISABLED.to_string());
+                        self.events.push(event);
+                        return;
+                    }
                     self.events.push(event);
-                    self.play(p.id, m.recognised.class, m.synthesis, now);
+                    self.play(p.id, m.class_name, m.synthesis, now);
                     return;
                 }
             }
@@ -221,20 +240,21 @@ impl Engine {
         self.events.push(event);
     }
 
-    /// Starts playing a synthesised motion (a playing one is cancelled).
+    /// Starts playing a synthesised motion of class `class` (its name in the
+    /// library; a playing one is cancelled).
     fn play(
         &mut self,
         id: u32,
-        class: MotionClass,
+        class: String,
         synthesis: crate::crowd::motion::Synthesis,
         now: Micros,
     ) {
         if self.edits.active() {
             // Edit mode: the crowd is the tracks' people; a gesture retimes them.
-            self.edit_gesture(id, class);
+            self.edit_gesture(id, &class);
             return;
         }
-        if let Some(name) = self.gesture_formation(class) {
+        if let Some(name) = self.gesture_formation(&class) {
             // `formations.gestures` maps this class to a formation: a transform
             // goes there instead of the gesture's motion.
             log::info!("gesture {id}: {class} starts a transform to `{name}`");
@@ -262,7 +282,7 @@ impl Engine {
         };
         self.gestures.plan = Some(Arc::new(PlanView {
             origin: PlanOrigin::Gesture { id },
-            class: class.as_str().to_string(),
+            class: class.clone(),
             duration_s,
             samples: S_H as u32,
             points,
@@ -272,17 +292,17 @@ impl Engine {
             self.agents.len()
         );
         self.gestures.played += 1;
+        self.events.push(Event::GestureMotion {
+            id,
+            class: class.clone(),
+            phase: MotionPhase::Approach,
+            t: now,
+        });
         self.gestures.playing = Some(Playing {
             id,
             class,
             follower,
             phase: FollowPhase::Approach,
-        });
-        self.events.push(Event::GestureMotion {
-            id,
-            class: class.as_str().to_string(),
-            phase: MotionPhase::Approach,
-            t: now,
         });
     }
 
@@ -299,7 +319,7 @@ impl Engine {
             p.follower.cancel();
             self.events.push(Event::GestureMotion {
                 id: p.id,
-                class: p.class.as_str().to_string(),
+                class: p.class.clone(),
                 phase: MotionPhase::Cancelled,
                 t: now,
             });
@@ -330,7 +350,7 @@ impl Engine {
             p.phase = phase;
             self.events.push(Event::GestureMotion {
                 id: p.id,
-                class: p.class.as_str().to_string(),
+                class: p.class.clone(),
                 phase: phase_of(phase),
                 t: now,
             });
@@ -468,7 +488,7 @@ impl Engine {
         log::info!(
             "gesture {}: {} recognised while drawn (weight {:.2})",
             fire.id,
-            fire.class,
+            rec.class_name(fire.class),
             fire.weight
         );
         let req = GestureRequest {
@@ -503,7 +523,7 @@ impl Engine {
 /// A recognition as clients see it.
 fn recognition_view(m: &GestureMotion, synth_us: u64) -> Recognition {
     Recognition {
-        class: m.recognised.class.as_str().to_string(),
+        class: m.class_name.clone(),
         weight: m.recognised.weight,
         neighbours: m
             .recognised
@@ -511,7 +531,7 @@ fn recognition_view(m: &GestureMotion, synth_us: u64) -> Recognition {
             .iter()
             .zip(&m.neighbours)
             .map(|(n, (class, origin))| NeighbourView {
-                class: class.as_str().to_string(),
+                class: class.clone(),
                 distance: n.distance,
                 weight: n.weight,
                 origin: origin.clone(),
@@ -521,6 +541,10 @@ fn recognition_view(m: &GestureMotion, synth_us: u64) -> Recognition {
         agents: m.synthesis.trajectories.len() as u32,
     }
 }
+
+/// The `rejected` reason of a recognised gesture whose class `gestures.disabled`
+/// names.
+pub const CLASS_DISABLED: &str = "class_disabled";
 
 fn set_rejected(e: &mut Event, why: String) {
     if let Event::GestureEnd { rejected, .. } = e {

@@ -11,7 +11,6 @@ use crate::gesture::continuous::{
     DEFAULT_WINDOW_MIN_TRAVEL_MM,
 };
 use crate::gesture::knn::{SearchParams, Searcher};
-use crate::gesture::library::MotionClass;
 use crate::gesture::recognise::Recogniser;
 use crate::gesture::track::GestureTracks;
 use crate::vocab::{Micros, MotionPhase, PlanView, Recognition};
@@ -34,7 +33,8 @@ pub(super) struct PendingEnd {
 #[derive(Debug)]
 pub(super) struct Playing {
     pub(super) id: u32,
-    pub(super) class: MotionClass,
+    /// The class's name in the library that recognised it.
+    pub(super) class: String,
     pub(super) follower: Follower,
     pub(super) phase: FollowPhase,
 }
@@ -45,6 +45,8 @@ pub(super) struct Gestures {
     pub(super) tracks: GestureTracks,
     pub(super) recogniser: Option<Arc<Recogniser>>,
     pub(super) enabled: bool,
+    /// `gestures.disabled`: classes recognised but not played.
+    pub(super) disabled: Vec<String>,
     pub(super) search: SearchParams,
     pub(super) follow: FollowParams,
     pub(super) speed_m_s: f64,
@@ -69,8 +71,9 @@ pub(super) struct Gestures {
     pub(super) window: WindowParams,
     /// Live gestures with a window out on the worker.
     pub(super) windows_out: Vec<u32>,
-    /// Recognitions of live gestures that fired, for their end events.
-    pub(super) fired: Vec<(u32, Recognition)>,
+    /// Recognitions of live gestures that fired, for their end events (with why
+    /// no motion played, for a disabled class).
+    pub(super) fired: Vec<(u32, Recognition, Option<String>)>,
     /// Window workspaces, in the tick (replays).
     pub(super) inline_windows: Option<Box<WindowBuffers>>,
 }
@@ -88,6 +91,7 @@ impl Gestures {
             tracks: GestureTracks::default(),
             recogniser: None,
             enabled: false,
+            disabled: Vec::new(),
             search: SearchParams::default(),
             follow: follow_params(cfg),
             speed_m_s: 1.0,
@@ -120,6 +124,7 @@ impl Gestures {
         let gc = &cfg.gestures;
         self.capture.set_thresholds(tap_thresholds(cfg));
         self.enabled = gc.enabled;
+        self.disabled.clone_from(&gc.disabled);
         self.recogniser = cfg.gesture_recogniser().cloned();
         self.search = search_params(cfg);
         self.follow = follow_params(cfg);
@@ -139,6 +144,11 @@ impl Gestures {
             }
             None => self.continuous = None,
         }
+    }
+
+    /// Whether `gestures.disabled` names the class `name`.
+    pub(super) fn is_disabled(&self, name: &str) -> bool {
+        self.disabled.iter().any(|d| d == name)
     }
 
     /// Whether a crowd motion is playing (or holding for its new mesh).

@@ -41,7 +41,6 @@ use crate::crowd::transform::{
     PreparedTransform, RunSummary, StepReport, TransformPlan, TransformRequest, TransformRun,
 };
 use crate::geom::Vec2;
-use crate::gesture::library::MotionClass;
 use crate::vocab::{
     FormationMethod, Micros, TransformMeasures, TransformOutcome, TransformSummary,
 };
@@ -513,12 +512,12 @@ impl Engine {
     }
 
     /// The formation a recognised gesture class starts (`formations.gestures`).
-    pub(super) fn gesture_formation(&self, class: MotionClass) -> Option<String> {
+    pub(super) fn gesture_formation(&self, class: &str) -> Option<String> {
         self.transforms
             .settings
             .gestures
             .iter()
-            .find(|(c, _)| *c == class)
+            .find(|(c, _)| c == class)
             .map(|(_, f)| f.clone())
     }
 

@@ -10,7 +10,6 @@ use crate::crowd::transform::{
     ApParams, MoveParams, PairCost, StepReport, TransformRequest, TransformRun,
 };
 use crate::geom::Vec2;
-use crate::gesture::library::MotionClass;
 use crate::vocab::{FormationMethod, TransformSummary, TransformView};
 use std::sync::Arc;
 
@@ -28,7 +27,7 @@ pub(super) struct TransformSettings {
     /// `formations.subgroups` (`None`: off).
     pub(super) ap: Option<ApParams>,
     /// `formations.gestures`: recognised classes that start a transform.
-    pub(super) gestures: Vec<(MotionClass, String)>,
+    pub(super) gestures: Vec<(String, String)>,
 }
 
 impl TransformSettings {
@@ -43,7 +42,7 @@ impl TransformSettings {
                 .formations
                 .gestures
                 .iter()
-                .filter_map(|g| Some((g.motion_class()?, g.formation.clone())))
+                .map(|g| (g.class.clone(), g.formation.clone()))
                 .collect(),
         }
     }

@@ -85,7 +85,7 @@
 use super::error::GestureError;
 use super::features::GestureFeatures;
 use super::knn::{vote, GestureIndex, SearchParams, Searcher};
-use super::library::MotionClass;
+use super::library::ClassId;
 use super::resample::prepare;
 use super::track::{GestureTracks, TouchTrack, TrackSample};
 use crate::vocab::Micros;
@@ -159,7 +159,7 @@ pub struct Fire {
     /// The gesture (segmenter id).
     pub id: u32,
     /// The class that stayed ahead.
-    pub class: MotionClass,
+    pub class: ClassId,
     /// Its vote weight in the window that fired (in `[min_weight, 1]`).
     pub weight: f64,
     /// The window that fired, `(start, end)` (µs): `end` is the `now` of that vote.
@@ -177,7 +177,7 @@ pub struct Ended {
     /// its recognition as a whole should be skipped.
     pub fired: u32,
     /// The class that fired last.
-    pub last: Option<MotionClass>,
+    pub last: Option<ClassId>,
 }
 
 /// Counters of what the recogniser ignored or did, since it was made.
@@ -207,14 +207,14 @@ pub enum ContinuousState {
     /// `class` has been ahead since `since`, not yet for `hold`.
     Leading {
         /// The class ahead.
-        class: MotionClass,
+        class: ClassId,
         /// End of its first winning window (µs).
         since: Micros,
     },
     /// `class` is ahead and has already fired.
     Fired {
         /// The class ahead.
-        class: MotionClass,
+        class: ClassId,
     },
 }
 
@@ -250,7 +250,7 @@ pub enum ContinuousEvent {
         /// End of the window (µs).
         now: Micros,
         /// The vote.
-        vote: Option<(MotionClass, f64)>,
+        vote: Option<(ClassId, f64)>,
     },
     /// The gesture ended.
     End,
@@ -280,7 +280,7 @@ struct Slot {
     /// End of the latest vote's window.
     last_vote: Option<Micros>,
     /// The class that fired last.
-    last_fired: Option<MotionClass>,
+    last_fired: Option<ClassId>,
     fired: u32,
 }
 
@@ -398,12 +398,7 @@ impl ContinuousRecogniser {
     /// that asked for it): the winning class and its weight
     /// ([`WindowVote::vote`]), or `None`. Returns the fire, when one class has now
     /// stayed ahead for `hold` (see the module doc).
-    pub fn observe(
-        &mut self,
-        id: u32,
-        now: Micros,
-        vote: Option<(MotionClass, f64)>,
-    ) -> Option<Fire> {
+    pub fn observe(&mut self, id: u32, now: Micros, vote: Option<(ClassId, f64)>) -> Option<Fire> {
         let Some(i) = self.find(id) else {
             self.stats.unknown += 1;
             return None;
@@ -464,7 +459,7 @@ impl ContinuousRecogniser {
 
 /// The class ahead in a vote: the winner when its weight reaches the floor (a NaN
 /// weight does not).
-fn ahead(vote: Option<(MotionClass, f64)>, p: &ContinuousParams) -> Option<MotionClass> {
+fn ahead(vote: Option<(ClassId, f64)>, p: &ContinuousParams) -> Option<ClassId> {
     vote.filter(|&(_, w)| w >= p.min_weight).map(|(c, _)| c)
 }
 
@@ -510,7 +505,7 @@ fn on_leading(
     s: &mut Slot,
     ev: ContinuousEvent,
     p: &ContinuousParams,
-    class: MotionClass,
+    class: ClassId,
     since: Micros,
 ) -> Outcome {
     let ContinuousEvent::Vote { now, vote } = ev else {
@@ -527,12 +522,7 @@ fn on_leading(
     }
 }
 
-fn on_fired(
-    s: &mut Slot,
-    ev: ContinuousEvent,
-    p: &ContinuousParams,
-    class: MotionClass,
-) -> Outcome {
+fn on_fired(s: &mut Slot, ev: ContinuousEvent, p: &ContinuousParams, class: ClassId) -> Outcome {
     let ContinuousEvent::Vote { now, vote } = ev else {
         return Outcome::None;
     };
@@ -551,9 +541,9 @@ fn on_fired(
 /// 0), unless it is the class that fired last.
 fn take_lead(
     s: &mut Slot,
-    c: MotionClass,
+    c: ClassId,
     now: Micros,
-    vote: Option<(MotionClass, f64)>,
+    vote: Option<(ClassId, f64)>,
     p: &ContinuousParams,
 ) -> Outcome {
     if s.last_fired == Some(c) {
@@ -570,10 +560,10 @@ fn take_lead(
 /// Class `c`, ahead since `since`, is still ahead at `now`: fires when it has held.
 fn hold_or_fire(
     s: &mut Slot,
-    c: MotionClass,
+    c: ClassId,
     since: Micros,
     now: Micros,
-    vote: Option<(MotionClass, f64)>,
+    vote: Option<(ClassId, f64)>,
     p: &ContinuousParams,
 ) -> Outcome {
     if now.saturating_since(since) < p.hold {
@@ -702,7 +692,7 @@ pub enum WindowVote {
     /// The weighted KNN vote (section 8.2): the winning class and its weight.
     Voted {
         /// The class.
-        class: MotionClass,
+        class: ClassId,
         /// Its share of the K neighbours' weight (eq. 18 sums, in `[0, 1]`).
         weight: f64,
     },
@@ -719,7 +709,7 @@ pub enum WindowVote {
 
 impl WindowVote {
     /// The vote to give [`ContinuousRecogniser::observe`].
-    pub fn vote(&self) -> Option<(MotionClass, f64)> {
+    pub fn vote(&self) -> Option<(ClassId, f64)> {
         match *self {
             WindowVote::Voted { class, weight } => Some((class, weight)),
             _ => None,
@@ -755,7 +745,7 @@ pub fn recognise_window(
     now: Micros,
     p: &WindowParams,
     index: &GestureIndex,
-    class_of: impl Fn(usize) -> MotionClass,
+    class_of: impl Fn(usize) -> ClassId,
     buf: &mut WindowBuffers,
 ) -> WindowVote {
     window(tracks, now, p.window, &mut buf.cut);

@@ -3,8 +3,16 @@
 
 use super::*;
 use crate::geom::Vec2;
+use crate::gesture::library::MotionClass;
 use crate::rng::SplitMix64;
-use MotionClass::{Expand, Translate, Twist};
+
+// The classes of a library of the ten built-in classes, by their usual names.
+#[allow(non_upper_case_globals)]
+const Expand: ClassId = MotionClass::Expand.id();
+#[allow(non_upper_case_globals)]
+const Translate: ClassId = MotionClass::Translate.id();
+#[allow(non_upper_case_globals)]
+const Twist: ClassId = MotionClass::Twist.id();
 
 const MS: u64 = 1000;
 
@@ -20,7 +28,7 @@ fn params(window_ms: u64, hold_ms: u64) -> ContinuousParams {
 fn drive(
     r: &mut ContinuousRecogniser,
     until_ms: u64,
-    vote_at: impl Fn(u64) -> Option<(MotionClass, f64)>,
+    vote_at: impl Fn(u64) -> Option<(ClassId, f64)>,
 ) -> Vec<(u64, Fire)> {
     assert!(r.begin(1, Micros::ZERO));
     let mut fires = Vec::new();
@@ -125,8 +133,7 @@ fn fires_again_only_for_a_change_of_class() {
         // Translate holds again: fires (the last fire was twist).
         _ => Some((Translate, 0.9)),
     });
-    let got: Vec<(u64, MotionClass, u32)> =
-        fires.iter().map(|(t, f)| (*t, f.class, f.count)).collect();
+    let got: Vec<(u64, ClassId, u32)> = fires.iter().map(|(t, f)| (*t, f.class, f.count)).collect();
     assert_eq!(
         got,
         vec![(1200, Translate, 1), (3200, Twist, 2), (5200, Translate, 3)]
@@ -421,7 +428,7 @@ fn twisting(rng: &mut SplitMix64, dur_ms: u64, rate: f64) -> GestureTracks {
 }
 
 /// A labelled index of eight translates and eight twists of 0.8–1.5 s.
-fn tiny_index(rng: &mut SplitMix64) -> (GestureIndex, Vec<MotionClass>) {
+fn tiny_index(rng: &mut SplitMix64) -> (GestureIndex, Vec<ClassId>) {
     let mut features = Vec::new();
     let mut classes = Vec::new();
     for i in 0..16 {
@@ -449,7 +456,7 @@ fn tiny_index(rng: &mut SplitMix64) -> (GestureIndex, Vec<MotionClass>) {
 fn play(
     g: &GestureTracks,
     index: &GestureIndex,
-    classes: &[MotionClass],
+    classes: &[ClassId],
     r: &mut ContinuousRecogniser,
 ) -> (Vec<(u64, Fire)>, WindowVote) {
     let wp = WindowParams {
@@ -492,7 +499,7 @@ fn a_long_translate_fires_translate_after_window_plus_hold() {
     let mut r = ContinuousRecogniser::new(params(1000, 500));
     let g = translating(&mut rng, 3000, 120.0);
     let (fires, last) = play(&g, &index, &classes, &mut r);
-    let got: Vec<(u64, MotionClass)> = fires.iter().map(|(t, f)| (*t, f.class)).collect();
+    let got: Vec<(u64, ClassId)> = fires.iter().map(|(t, f)| (*t, f.class)).collect();
     assert_eq!(got, vec![(1500, Translate)], "last window: {last:?}");
     assert!(fires[0].1.weight >= 0.5);
     assert_eq!(last.vote().map(|v| v.0), Some(Translate));
@@ -500,7 +507,7 @@ fn a_long_translate_fires_translate_after_window_plus_hold() {
     // A long twist fires twist.
     let g = twisting(&mut rng, 3000, 2.0);
     let (fires, _) = play(&g, &index, &classes, &mut r);
-    let got: Vec<(u64, MotionClass)> = fires.iter().map(|(t, f)| (*t, f.class)).collect();
+    let got: Vec<(u64, ClassId)> = fires.iter().map(|(t, f)| (*t, f.class)).collect();
     assert_eq!(got, vec![(1500, Twist)]);
 
     // A gesture shorter than the window never fires.
@@ -528,7 +535,7 @@ fn a_translate_then_twist_fires_both_in_turn() {
     }
     g.fingers.push(a.fingers[2].clone());
     let (fires, _) = play(&g, &index, &classes, &mut r);
-    let got: Vec<MotionClass> = fires.iter().map(|(_, f)| f.class).collect();
+    let got: Vec<ClassId> = fires.iter().map(|(_, f)| f.class).collect();
     assert_eq!(got, vec![Translate, Twist], "{fires:?}");
     assert_eq!(fires[0].0, 1100);
     assert!(fires[1].0 > 2500 && fires[1].0 <= 2500 + 800 + 300 + 100);

@@ -4,12 +4,54 @@
 //! basic classes and on all ten, and a feature ablation (each feature's weight set
 //! to 0, the others rescaled to the same total).
 //!
-//! Results are plain data; the command line formats them.
+//! Results are plain data; the command line formats them. Labels are a library's
+//! classes ([`ClassLabel`]) or a generator's kinds ([`MotionClass`]): any
+//! [`Label`].
 
 use super::dtw::Weights;
 use super::features::GestureFeatures;
 use super::knn::{inverse_distance_weights, vote, GestureIndex, Neighbour, SearchParams, Searcher};
-use super::library::MotionClass;
+use super::library::{ClassId, Library, MotionClass};
+
+/// What the gestures of a labelled set are labelled with.
+pub trait Label: Copy + Ord + std::fmt::Debug {
+    /// Whether it is one of the six basic classes (the paper's evaluation of
+    /// section 8.2 is on those).
+    fn is_basic(self) -> bool;
+}
+
+impl Label for MotionClass {
+    fn is_basic(self) -> bool {
+        MotionClass::is_basic(self)
+    }
+}
+
+/// A library's class as a label: its id, and whether it is named after one of the
+/// six basic [`MotionClass`]es.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ClassLabel {
+    /// The class in the library's table.
+    pub id: ClassId,
+    /// Named after a basic kind (`translate`, `twist`, `contract`, `expand`, `join`,
+    /// `split`).
+    pub basic: bool,
+}
+
+impl ClassLabel {
+    /// Class `id` of `lib`.
+    pub fn of(lib: &Library, id: ClassId) -> ClassLabel {
+        ClassLabel {
+            id,
+            basic: lib.kind(id).is_some_and(MotionClass::is_basic),
+        }
+    }
+}
+
+impl Label for ClassLabel {
+    fn is_basic(self) -> bool {
+        self.basic
+    }
+}
 
 /// One of the four features of eq. 11.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
@@ -60,26 +102,26 @@ impl Feature {
 
 /// Counts of true class against recognised class.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Confusion {
+pub struct Confusion<C = MotionClass> {
     /// The classes of the rows and columns: those present among the true or the
-    /// recognised classes, in [`MotionClass::ALL`] order.
-    pub classes: Vec<MotionClass>,
+    /// recognised classes, in their order ([`MotionClass::ALL`]'s, a library's).
+    pub classes: Vec<C>,
     /// `counts[i][j]`: test gestures of class `classes[i]` recognised as `classes[j]`.
     pub counts: Vec<Vec<u32>>,
 }
 
 /// A class's accuracy.
 #[derive(Copy, Clone, Debug, PartialEq)]
-pub struct ClassAccuracy {
+pub struct ClassAccuracy<C = MotionClass> {
     /// The class.
-    pub class: MotionClass,
+    pub class: C,
     /// Test gestures of the class.
     pub tested: u32,
     /// Of those, recognised as the class.
     pub correct: u32,
 }
 
-impl ClassAccuracy {
+impl<C> ClassAccuracy<C> {
     /// `correct / tested` (0 when nothing was tested).
     pub fn accuracy(&self) -> f64 {
         if self.tested == 0 {
@@ -92,11 +134,11 @@ impl ClassAccuracy {
 
 /// The outcome of classifying a labelled set.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Evaluation {
+pub struct Evaluation<C = MotionClass> {
     /// The confusion matrix.
-    pub confusion: Confusion,
-    /// Per tested class, in [`MotionClass::ALL`] order.
-    pub per_class: Vec<ClassAccuracy>,
+    pub confusion: Confusion<C>,
+    /// Per tested class, in the classes' order.
+    pub per_class: Vec<ClassAccuracy<C>>,
     /// Correct over tested, all gestures together.
     pub accuracy: f64,
     /// Mean of the per-class accuracies.
@@ -105,43 +147,38 @@ pub struct Evaluation {
     pub unclassified: u32,
 }
 
-impl Evaluation {
-    fn from_pairs(pairs: &[(MotionClass, Option<MotionClass>)]) -> Evaluation {
-        let mut present = [false; 10];
-        for (t, r) in pairs {
-            present[t.index()] = true;
-            if let Some(r) = r {
-                present[r.index()] = true;
-            }
-        }
-        let classes: Vec<MotionClass> = MotionClass::ALL
+impl<C: Label> Evaluation<C> {
+    fn from_pairs(pairs: &[(C, Option<C>)]) -> Evaluation<C> {
+        let mut classes: Vec<C> = pairs
             .iter()
-            .copied()
-            .filter(|c| present[c.index()])
+            .flat_map(|&(t, r)| std::iter::once(t).chain(r))
             .collect();
-        let at = |c: MotionClass| classes.iter().position(|&x| x == c).unwrap_or(0);
+        classes.sort();
+        classes.dedup();
+        let at = |c: C| classes.binary_search(&c).unwrap_or(0);
         let mut counts = vec![vec![0u32; classes.len()]; classes.len()];
-        let mut per = [(0u32, 0u32); 10];
+        let mut per = vec![(0u32, 0u32); classes.len()];
         let mut unclassified = 0;
         for &(t, r) in pairs {
-            per[t.index()].0 += 1;
+            per[at(t)].0 += 1;
             match r {
                 Some(r) => {
                     counts[at(t)][at(r)] += 1;
                     if r == t {
-                        per[t.index()].1 += 1;
+                        per[at(t)].1 += 1;
                     }
                 }
                 None => unclassified += 1,
             }
         }
-        let per_class: Vec<ClassAccuracy> = MotionClass::ALL
+        let per_class: Vec<ClassAccuracy<C>> = classes
             .iter()
-            .filter(|c| per[c.index()].0 > 0)
-            .map(|&c| ClassAccuracy {
+            .zip(&per)
+            .filter(|(_, p)| p.0 > 0)
+            .map(|(&c, p)| ClassAccuracy {
                 class: c,
-                tested: per[c.index()].0,
-                correct: per[c.index()].1,
+                tested: p.0,
+                correct: p.1,
             })
             .collect();
         let tested: u32 = per_class.iter().map(|c| c.tested).sum();
@@ -179,11 +216,11 @@ pub struct Ablation {
 
 /// The full evaluation the `library eval` command prints.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Report {
+pub struct Report<C = MotionClass> {
     /// On every class.
-    pub all: Evaluation,
+    pub all: Evaluation<C>,
     /// Training and test both restricted to the six basic classes.
-    pub basic: Evaluation,
+    pub basic: Evaluation<C>,
     /// Each feature removed in turn.
     pub ablation: Vec<Ablation>,
 }
@@ -194,12 +231,12 @@ pub struct Report {
 /// # Complexity
 ///
 /// One search per gesture over the set.
-pub fn leave_one_out(set: &[(MotionClass, GestureFeatures)], p: &SearchParams) -> Evaluation {
+pub fn leave_one_out<C: Label>(set: &[(C, GestureFeatures)], p: &SearchParams) -> Evaluation<C> {
     let index = GestureIndex::with_band(set.iter().map(|(_, f)| f.clone()).collect(), p.band);
     let mut searcher = Searcher::new();
     let wider = SearchParams { k: p.k + 1, ..*p };
     let mut kept: Vec<Neighbour> = Vec::with_capacity(p.k + 1);
-    let pairs: Vec<(MotionClass, Option<MotionClass>)> = set
+    let pairs: Vec<(C, Option<C>)> = set
         .iter()
         .enumerate()
         .map(|(i, (class, f))| {
@@ -219,14 +256,14 @@ pub fn leave_one_out(set: &[(MotionClass, GestureFeatures)], p: &SearchParams) -
 }
 
 /// Classification of every gesture of `test` by weighted KNN voting among `train`.
-pub fn train_test(
-    train: &[(MotionClass, GestureFeatures)],
-    test: &[(MotionClass, GestureFeatures)],
+pub fn train_test<C: Label>(
+    train: &[(C, GestureFeatures)],
+    test: &[(C, GestureFeatures)],
     p: &SearchParams,
-) -> Evaluation {
+) -> Evaluation<C> {
     let index = GestureIndex::with_band(train.iter().map(|(_, f)| f.clone()).collect(), p.band);
     let mut searcher = Searcher::new();
-    let pairs: Vec<(MotionClass, Option<MotionClass>)> = test
+    let pairs: Vec<(C, Option<C>)> = test
         .iter()
         .map(|(class, f)| {
             (
@@ -238,12 +275,12 @@ pub fn train_test(
     Evaluation::from_pairs(&pairs)
 }
 
-fn basic_only(set: &[(MotionClass, GestureFeatures)]) -> Vec<(MotionClass, GestureFeatures)> {
+fn basic_only<C: Label>(set: &[(C, GestureFeatures)]) -> Vec<(C, GestureFeatures)> {
     set.iter().filter(|(c, _)| c.is_basic()).cloned().collect()
 }
 
 /// [`leave_one_out`] on all classes, on the basic ones, and with each feature removed.
-pub fn leave_one_out_report(set: &[(MotionClass, GestureFeatures)], p: &SearchParams) -> Report {
+pub fn leave_one_out_report<C: Label>(set: &[(C, GestureFeatures)], p: &SearchParams) -> Report<C> {
     let basic_set = basic_only(set);
     let run = |p: &SearchParams| (leave_one_out(set, p), leave_one_out(&basic_set, p));
     report(p, run)
@@ -251,11 +288,11 @@ pub fn leave_one_out_report(set: &[(MotionClass, GestureFeatures)], p: &SearchPa
 
 /// [`train_test`] on all classes, on the basic ones (both sets restricted), and with
 /// each feature removed.
-pub fn train_test_report(
-    train: &[(MotionClass, GestureFeatures)],
-    test: &[(MotionClass, GestureFeatures)],
+pub fn train_test_report<C: Label>(
+    train: &[(C, GestureFeatures)],
+    test: &[(C, GestureFeatures)],
     p: &SearchParams,
-) -> Report {
+) -> Report<C> {
     let (basic_train, basic_test) = (basic_only(train), basic_only(test));
     let run = |p: &SearchParams| {
         (
@@ -266,7 +303,10 @@ pub fn train_test_report(
     report(p, run)
 }
 
-fn report(p: &SearchParams, run: impl Fn(&SearchParams) -> (Evaluation, Evaluation)) -> Report {
+fn report<C: Label>(
+    p: &SearchParams,
+    run: impl Fn(&SearchParams) -> (Evaluation<C>, Evaluation<C>),
+) -> Report<C> {
     let (all, basic) = run(p);
     let ablation = Feature::ALL
         .iter()

@@ -16,7 +16,7 @@
 
 use super::dtw::{feature_dtw, lb_keogh, lb_kim, weighted_sum, Dtw, Envelope, Weights};
 use super::features::GestureFeatures;
-use super::library::{MotionClass, T_H};
+use super::library::T_H;
 use std::cmp::Ordering;
 
 /// Relative slack applied to the K-th distance before a bound is compared with it.
@@ -352,20 +352,30 @@ pub fn brute_force(
 /// Weighted KNN voting (gesture-driven section 8.2): the class with the largest sum
 /// of neighbour weights, and that sum (in `[0, 1]`). A tie goes to the class of the
 /// nearest neighbour among the tied classes. `None` without neighbours.
-pub fn vote(
+///
+/// Any class type: a library's [`ClassId`](super::library::ClassId), or a
+/// generator's [`MotionClass`](super::library::MotionClass). No allocation: each
+/// neighbour's class total is summed over the (at most K) neighbours.
+pub fn vote<C: Copy + PartialEq>(
     neighbours: &[Neighbour],
-    class_of: impl Fn(usize) -> MotionClass,
-) -> Option<(MotionClass, f64)> {
-    let mut totals = [0.0f64; 10];
-    for n in neighbours {
-        totals[class_of(n.entry).index()] += n.weight;
-    }
+    class_of: impl Fn(usize) -> C,
+) -> Option<(C, f64)> {
+    let total = |c: C| -> f64 {
+        neighbours
+            .iter()
+            .filter(|n| class_of(n.entry) == c)
+            .map(|n| n.weight)
+            .sum()
+    };
     // Neighbours are nearest first, so the first one whose class has the top total wins.
-    let top = totals.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let top = neighbours
+        .iter()
+        .map(|n| total(class_of(n.entry)))
+        .fold(f64::NEG_INFINITY, f64::max);
     neighbours
         .iter()
         .map(|n| class_of(n.entry))
-        .find(|c| totals[c.index()] == top)
+        .find(|&c| total(c) == top)
         .map(|c| (c, top))
 }
 
@@ -373,6 +383,7 @@ pub fn vote(
 mod tests {
     use super::*;
     use crate::geom::Vec2;
+    use crate::gesture::library::MotionClass;
     use crate::rng::SplitMix64;
     use proptest::prelude::*;
 

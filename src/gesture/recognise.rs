@@ -10,7 +10,7 @@
 use super::error::GestureError;
 use super::features::GestureFeatures;
 use super::knn::{vote, GestureIndex, Neighbour, SearchParams, Searcher};
-use super::library::{Library, LibraryError, MotionClass};
+use super::library::{ClassId, Library, LibraryError};
 use super::resample::prepare;
 use super::track::GestureTracks;
 
@@ -27,8 +27,9 @@ pub struct Recogniser {
 /// it, and the neighbours themselves (nearest first).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Recognised {
-    /// The class voted by the weighted neighbours (section 8.2).
-    pub class: MotionClass,
+    /// The class voted by the weighted neighbours (section 8.2), in the library's
+    /// class table ([`Recogniser::class_name`] names it).
+    pub class: ClassId,
     /// The summed eq. 18 weight of the neighbours of that class, in `[0, 1]`.
     pub weight: f64,
     /// The K nearest library gestures (entry, eq. 12 distance, eq. 18 weight).
@@ -85,12 +86,18 @@ impl Recogniser {
         &self.source
     }
 
-    /// The class of library gesture `entry`.
-    pub fn class_of(&self, entry: usize) -> MotionClass {
+    /// The class of library gesture `entry` (the first class for an entry out of
+    /// range, which the index never gives).
+    pub fn class_of(&self, entry: usize) -> ClassId {
         self.library
             .gestures
             .get(entry)
-            .map_or(MotionClass::Translate, |g| g.class)
+            .map_or(ClassId(0), |g| g.class)
+    }
+
+    /// The name of class `id` in the library.
+    pub fn class_name(&self, id: ClassId) -> &str {
+        self.library.class_name(id)
     }
 
     /// Recognises `tracks` (mm of glass) with `params`, reusing `searcher`'s

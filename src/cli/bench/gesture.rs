@@ -199,7 +199,11 @@ fn keep_evenly(lib: Library, n: usize) -> Library {
         g.motion = id as u32;
         gestures.push(g);
     }
-    Library { motions, gestures }
+    Library {
+        classes: lib.classes,
+        motions,
+        gestures,
+    }
 }
 
 /// Query gesture `i`: class `i mod 10`, the test set's style ranges.
@@ -282,7 +286,7 @@ pub fn gesture(run: &GestureRun) -> Result<()> {
             pruned + s.pruned,
         );
         let (voted, _) = vote(&neighbours, |e| rec.class_of(e)).context("empty library")?;
-        right += usize::from(voted == class);
+        right += usize::from(voted == class.id());
 
         // Section 7.2 as `GestureRequest::prepare` runs it: the voted class's
         // neighbours, turned to the drawn gesture, weights renormalised.

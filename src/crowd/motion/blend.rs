@@ -306,7 +306,7 @@ mod tests {
 
     fn split_features(seed: u64) -> MotionFeatures {
         features(
-            MotionClass::Split,
+            MotionClass::Split.id(),
             &split_motion(40, 2.0, seed),
             &FeatureParams::default(),
         )

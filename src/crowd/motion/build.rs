@@ -28,7 +28,7 @@ use super::simulate::{library_specs, measure, simulate, MotionSpec, SimulateErro
 use crate::crowd::agents::AgentParams;
 use crate::geom::{cross, Vec2};
 use crate::gesture::error::GestureError;
-use crate::gesture::library::{Library, LibraryGesture, MotionClass};
+use crate::gesture::library::{ClassId, Library, LibraryGesture, MotionClass};
 use crate::gesture::resample::prepare;
 use crate::gesture::synth::{generate, GestureStyle, StyleRanges};
 use crate::rng::SplitMix64;
@@ -42,7 +42,8 @@ pub struct BuildParams {
     pub motions_per_class: usize,
     /// Gestures drawn for each motion.
     pub gestures_per_motion: usize,
-    /// The classes to build (all ten by default).
+    /// The classes to build (all ten by default), in the order of the library's
+    /// class table.
     pub classes: Vec<MotionClass>,
     /// FPCA and mixture settings of the motions' features.
     pub features: FeatureParams,
@@ -124,14 +125,16 @@ pub enum BuildError {
 }
 
 /// Builds a library (see the module doc). Deterministic: the same parameters give
-/// the same library, bit for bit.
+/// the same library, bit for bit. Its class table is `p.classes`' names in order
+/// (with every class, as shipped, class `c` is [`MotionClass::id`]).
 ///
 /// # Errors
 /// [`BuildError`] naming the class, motion and gesture that failed.
 pub fn build_library(p: &BuildParams) -> Result<Library, BuildError> {
-    let mut lib = Library::default();
+    let mut lib = Library::with_classes(p.classes.iter().map(|c| c.as_str().to_string()).collect());
     let mut rng = SplitMix64::new(p.seed);
-    for &class in &p.classes {
+    for (k, &class) in p.classes.iter().enumerate() {
+        let id = ClassId(k as u16);
         let specs = library_specs(class, p.motions_per_class, rng.next_u64());
         for (index, spec) in specs.iter().enumerate() {
             let sim = simulate(spec, &p.agents, p.dt_s).map_err(|source| BuildError::Simulate {
@@ -145,7 +148,7 @@ pub fn build_library(p: &BuildParams) -> Result<Library, BuildError> {
                         seed: rng.next_u64(),
                         ..p.features
                     };
-                    features(class, &m, &fp)
+                    features(id, &m, &fp)
                 })
                 .map_err(|source| BuildError::Motion {
                     class,
@@ -168,10 +171,12 @@ pub fn build_library(p: &BuildParams) -> Result<Library, BuildError> {
                     source,
                 })?;
                 lib.gestures.push(LibraryGesture {
-                    class,
+                    class: id,
                     motion: motion_id,
                     gesture,
                     origin: format!("generated {class} {index}.{g} seed {gesture_seed:#x}"),
+                    participant: String::new(),
+                    device: String::new(),
                 });
             }
         }
@@ -249,12 +254,26 @@ mod tests {
         let a = build_library(&p).unwrap();
         assert_eq!(a.motions.len(), 20);
         assert_eq!(a.gestures.len(), 40);
+        assert_eq!(a.classes, MotionClass::all_names());
         validate(&a).unwrap();
         for g in &a.gestures {
             assert_eq!(a.motions[g.motion as usize].class, g.class);
         }
         assert_eq!(build_library(&p).unwrap(), a);
-        let other = build_library(&BuildParams { seed: 7, ..p }).unwrap();
+        let other = build_library(&BuildParams {
+            seed: 7,
+            ..p.clone()
+        })
+        .unwrap();
         assert_ne!(other, a);
+        // A subset of the classes is a library of those classes only.
+        let two = build_library(&BuildParams {
+            classes: vec![MotionClass::Twist, MotionClass::Join],
+            ..p
+        })
+        .unwrap();
+        assert_eq!(two.classes, ["twist", "join"]);
+        assert_eq!(two.kind(ClassId(1)), Some(MotionClass::Join));
+        validate(&two).unwrap();
     }
 }

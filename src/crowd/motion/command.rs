@@ -35,7 +35,7 @@ use crate::geom::Vec2;
 use crate::gesture::continuous::{recognise_window, WindowBuffers, WindowParams};
 use crate::gesture::features::GestureFeatures;
 use crate::gesture::knn::{SearchParams, Searcher};
-use crate::gesture::library::{MotionClass, MotionFeatures};
+use crate::gesture::library::{ClassId, MotionFeatures};
 use crate::gesture::library::{Resampled, T_H};
 use crate::gesture::recognise::{RecogniseError, Recognised, Recogniser};
 use crate::gesture::resample::prepare;
@@ -73,8 +73,10 @@ pub struct GestureRequest {
 pub struct GestureMotion {
     /// What the gesture was recognised as.
     pub recognised: Recognised,
-    /// Each neighbour's class and origin, in `recognised.neighbours`' order.
-    pub neighbours: Vec<(MotionClass, String)>,
+    /// The recognised class's name in the library that recognised it.
+    pub class_name: String,
+    /// Each neighbour's class name and origin, in `recognised.neighbours`' order.
+    pub neighbours: Vec<(String, String)>,
     /// One trajectory per agent (m) and how long it plays (s).
     pub synthesis: Synthesis,
 }
@@ -129,12 +131,12 @@ impl GestureRequest {
         let recognised =
             rec.recognise_features(&GestureFeatures::of(&drawn), &self.search, searcher)?;
         let lib = rec.library();
-        let neighbours: Vec<(MotionClass, String)> = recognised
+        let neighbours: Vec<(String, String)> = recognised
             .neighbours
             .iter()
             .map(|n| {
                 let g = &lib.gestures[n.entry];
-                (g.class, g.origin.clone())
+                (lib.class_name(g.class).to_string(), g.origin.clone())
             })
             .collect();
         // Section 7.2 with the voted class's neighbours (module doc).
@@ -164,6 +166,7 @@ impl GestureRequest {
         let mut synthesis = synth.synthesise(&motion, &self.agents, &placement, self.seed)?;
         synthesis.duration_s = play_duration(&synthesis, self.speed_m_s);
         Ok(GestureMotion {
+            class_name: lib.class_name(recognised.class).to_string(),
             recognised,
             neighbours,
             synthesis,
@@ -325,7 +328,7 @@ pub struct PreparedWindow {
     /// The window's end (µs).
     pub at: Micros,
     /// The weighted vote, if the window was recognised.
-    pub vote: Option<(MotionClass, f64)>,
+    pub vote: Option<(ClassId, f64)>,
     /// The window's tracks (to synthesise from when the vote fires).
     pub cut: GestureTracks,
 }

@@ -6,7 +6,7 @@ use super::crowd_motion::CrowdMotion;
 use super::error::MotionError;
 use super::fpca::fpca;
 use super::gmm::{fit, fit_auto, validate_mixture, GmmParams};
-use crate::gesture::library::{MotionClass, MotionFeatures, MAX_COMPONENTS, TRAJ_DIM};
+use crate::gesture::library::{ClassId, MotionFeatures, MAX_COMPONENTS, TRAJ_DIM};
 
 /// Parameters of [`features`].
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -42,7 +42,7 @@ impl Default for FeatureParams {
 /// # Errors
 /// [`fpca`]'s and [`fit`]'s.
 pub fn features(
-    class: MotionClass,
+    class: ClassId,
     m: &CrowdMotion,
     p: &FeatureParams,
 ) -> Result<MotionFeatures, MotionError> {
@@ -156,7 +156,12 @@ pub(crate) mod tests {
     #[test]
     fn features_of_a_split_separate_its_two_groups() {
         let m = split_motion(60, 2.0, 3);
-        let f = features(MotionClass::Split, &m, &FeatureParams::default()).unwrap();
+        let f = features(
+            crate::gesture::library::MotionClass::Split.id(),
+            &m,
+            &FeatureParams::default(),
+        )
+        .unwrap();
         validate_features(&f).unwrap();
         assert_eq!(f.basis.len(), fpca(&m, 15).unwrap().rank.min(15));
         assert!(f.basis.len() >= 3);
@@ -181,14 +186,19 @@ pub(crate) mod tests {
             auto_components: Some(4),
             ..FeatureParams::default()
         };
-        let g = features(MotionClass::Split, &m, &p).unwrap();
+        let g = features(crate::gesture::library::MotionClass::Split.id(), &m, &p).unwrap();
         assert!(!g.gmm.is_empty());
     }
 
     #[test]
     fn validate_features_names_what_is_wrong() {
         let m = split_motion(20, 1.0, 1);
-        let f = features(MotionClass::Split, &m, &FeatureParams::default()).unwrap();
+        let f = features(
+            crate::gesture::library::MotionClass::Split.id(),
+            &m,
+            &FeatureParams::default(),
+        )
+        .unwrap();
         let mut bad = f.clone();
         bad.basis[1].pop();
         assert!(matches!(

@@ -6,6 +6,7 @@
 mod build;
 mod command;
 mod follow;
+mod import;
 mod simulate;
 
 pub use build::{build_library, library_agents, BuildError, BuildParams, SHIPPED_SEED};
@@ -15,6 +16,10 @@ pub use command::{
     MOTION_DURATION_S,
 };
 pub use follow::{FollowError, FollowParams, FollowPhase, Follower};
+pub use import::{
+    busiest_window, import_motion, ImportError, ImportWindow, ImportedMotion, PersonSamples,
+    DEFAULT_IMPORT_DURATION_S, MAX_IMPORT_SAMPLES, MIN_IMPORT_PEOPLE,
+};
 pub use simulate::{
     library_specs, measure, simulate, MotionMeasure, MotionSpec, SimulateError, SimulatedMotion,
     ARRIVE_TOLERANCE_M, LIBRARY_AGENTS, REST_SPEED_M_S, SETTLE_CAP_S, WAYPOINTS_PER_PHASE,

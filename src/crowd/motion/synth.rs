@@ -303,7 +303,7 @@ mod tests {
     #[test]
     fn agents_get_the_starts_of_least_total_squared_distance() {
         let f = features(
-            MotionClass::Split,
+            MotionClass::Split.id(),
             &split_motion(30, 2.0, 2),
             &FeatureParams::default(),
         )
@@ -390,7 +390,7 @@ mod tests {
             mean[2 * s] = s as f64 / (S_H - 1) as f64;
         }
         let f = MotionFeatures {
-            class: MotionClass::Translate,
+            class: MotionClass::Translate.id(),
             duration_s: 2.0,
             mean,
             basis: vec![],
@@ -427,7 +427,7 @@ mod tests {
     #[test]
     fn any_crowd_size_is_served_and_keeps_the_motion() {
         let f = features(
-            MotionClass::Split,
+            MotionClass::Split.id(),
             &split_motion(40, 2.0, 5),
             &FeatureParams::default(),
         )
@@ -464,7 +464,7 @@ mod tests {
     #[test]
     fn bad_input_is_refused() {
         let f = features(
-            MotionClass::Split,
+            MotionClass::Split.id(),
             &split_motion(20, 2.0, 5),
             &FeatureParams::default(),
         )

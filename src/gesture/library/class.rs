@@ -1,10 +1,89 @@
-//! The ten motion classes of gesture-driven section 4 (figure 2).
+//! Classes: a library's own class table is data (its names live in the file, any
+//! non-empty set of them; a class is known by its [`ClassId`], its place in that
+//! table), and the ten motion kinds of gesture-driven section 4 (figure 2,
+//! [`MotionClass`]) are what the crowd simulator and the gesture generators make
+//! when `library build` fills a library of its own.
 
 use std::fmt;
 use std::str::FromStr;
 
-/// A class of crowd motion (gesture-driven section 4): six typical ones and four
-/// combinations.
+/// A class of a library: its index in the library's class table
+/// ([`Library::classes`](super::Library::classes)), which names it.
+///
+/// Ids are only meaningful with their library; a library built with the ten
+/// [`MotionClass`]es in order (`library build`'s default, and every version-1 file)
+/// gives class `c` the id [`MotionClass::id`].
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ClassId(pub u16);
+
+impl ClassId {
+    /// Its index in the class table.
+    pub fn index(self) -> usize {
+        usize::from(self.0)
+    }
+}
+
+/// Most classes a library holds.
+pub const MAX_CLASSES: usize = 1000;
+
+/// Longest class name, bytes.
+pub const MAX_CLASS_NAME_BYTES: usize = 64;
+
+/// Why a text is not a class name.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ClassNameError {
+    /// No characters.
+    #[error("a class name cannot be empty")]
+    Empty,
+    /// More than [`MAX_CLASS_NAME_BYTES`].
+    #[error("a class name has at most {MAX_CLASS_NAME_BYTES} bytes, this one {0}")]
+    TooLong(usize),
+    /// A character other than ASCII letters, digits, `_` and `-`, or a first
+    /// character that is not a letter.
+    #[error("a class name is an ASCII letter followed by letters, digits, `_` or `-`; `{}` has `{}` at byte {at}", crate::located::Escaped(.name), crate::located::Escaped(.found))]
+    BadCharacter {
+        /// The name.
+        name: String,
+        /// Byte offset of the character.
+        at: usize,
+        /// The character.
+        found: String,
+    },
+}
+
+/// Checks a class name: 1 to [`MAX_CLASS_NAME_BYTES`] bytes, an ASCII letter then
+/// ASCII letters, digits, `_` or `-` (names go into file names, configs, the
+/// command line and the protocol unquoted).
+///
+/// # Errors
+/// What is wrong with it.
+pub fn check_class_name(name: &str) -> Result<(), ClassNameError> {
+    if name.is_empty() {
+        return Err(ClassNameError::Empty);
+    }
+    if name.len() > MAX_CLASS_NAME_BYTES {
+        return Err(ClassNameError::TooLong(name.len()));
+    }
+    for (at, ch) in name.char_indices() {
+        let ok = if at == 0 {
+            ch.is_ascii_alphabetic()
+        } else {
+            ch.is_ascii_alphanumeric() || ch == '_' || ch == '-'
+        };
+        if !ok {
+            return Err(ClassNameError::BadCharacter {
+                name: name.to_string(),
+                at,
+                found: ch.to_string(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// A kind of crowd motion (gesture-driven section 4): six typical ones and four
+/// combinations. What the crowd simulator and the gesture generators make; a
+/// library names its own classes, which may or may not be these.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum MotionClass {
     /// Everyone moves in one direction.
@@ -87,6 +166,19 @@ impl MotionClass {
     pub fn is_basic(self) -> bool {
         self.index() < 6
     }
+
+    /// Its id in a library whose class table is [`MotionClass::ALL`] in order.
+    pub const fn id(self) -> ClassId {
+        ClassId(self as u16)
+    }
+
+    /// The ten names, in order: the class table of a version-1 library file.
+    pub fn all_names() -> Vec<String> {
+        MotionClass::ALL
+            .iter()
+            .map(|c| c.as_str().to_string())
+            .collect()
+    }
 }
 
 impl fmt::Display for MotionClass {
@@ -123,10 +215,30 @@ mod tests {
             assert_eq!(c.as_str().parse::<MotionClass>(), Ok(*c));
         }
         assert_eq!(MotionClass::ALL.iter().filter(|c| c.is_basic()).count(), 6);
+        for c in MotionClass::ALL {
+            assert_eq!(c.id().index(), c.index());
+            assert_eq!(check_class_name(c.as_str()), Ok(()));
+        }
         let e = "spin".parse::<MotionClass>().unwrap_err().to_string();
         assert!(
             e.contains("`spin`") && e.contains("twist_while_contracting"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn class_names_are_checked_at_their_byte() {
+        assert_eq!(check_class_name("zara-walk_2"), Ok(()));
+        assert_eq!(check_class_name(""), Err(ClassNameError::Empty));
+        assert_eq!(
+            check_class_name(&"a".repeat(65)),
+            Err(ClassNameError::TooLong(65))
+        );
+        let e = check_class_name("2fast").unwrap_err().to_string();
+        assert!(e.contains("`2fast` has `2` at byte 0"), "{e}");
+        let e = check_class_name("a b").unwrap_err().to_string();
+        assert!(e.contains("at byte 1"), "{e}");
+        let e = check_class_name("a\x1b").unwrap_err().to_string();
+        assert!(!e.contains('\x1b'), "control characters are escaped: {e}");
     }
 }

@@ -2,7 +2,8 @@
 //! library's boundary, naming the file, the byte offset (when read from bytes), the
 //! item (`gesture 17: finger 3: sample 12`) and the problem (`x is NaN`).
 
-use super::class::MotionClass;
+use super::class::ClassNameError;
+use crate::located::Escaped;
 use std::fmt;
 
 /// The part of a library a problem is in.
@@ -10,6 +11,8 @@ use std::fmt;
 pub enum Item {
     /// The file header (magic, version, counts).
     Header,
+    /// A class of the class table.
+    Class(usize),
     /// A crowd motion's record.
     Motion(usize),
     /// One eigenvector of a motion's basis.
@@ -47,6 +50,7 @@ impl fmt::Display for Item {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             Item::Header => f.write_str("header"),
+            Item::Class(c) => write!(f, "class {c}"),
             Item::Motion(m) => write!(f, "motion {m}"),
             Item::Basis { motion, vector } => write!(f, "motion {motion}: eigenvector {vector}"),
             Item::Component { motion, component } => {
@@ -74,11 +78,11 @@ pub enum Problem {
         found: Vec<u8>,
     },
     /// A format version this reader does not read.
-    #[error("format version {found}; this reader reads version {supported}")]
+    #[error("format version {found}; this reader reads versions 1 to {supported} (a newer crowdtouch wrote it, or it is damaged)")]
     UnsupportedVersion {
         /// The file's version.
         found: u32,
-        /// The version this build reads and writes.
+        /// The version this build writes, the newest it reads.
         supported: u32,
     },
     /// The file ends inside a record, or a count promises more than the file holds.
@@ -126,9 +130,34 @@ pub enum Problem {
         /// The allowed range, written out (`(0, 600] s`).
         range: &'static str,
     },
-    /// A class number that is not one of the ten classes.
-    #[error("class index {0} is not a motion class (0..=9)")]
-    BadClass(u64),
+    /// A class number beyond the class table.
+    #[error("class index {index} is out of range ({count} classes)")]
+    BadClass {
+        /// The index.
+        index: u64,
+        /// How many classes the library has.
+        count: usize,
+    },
+    /// A class name that is not one.
+    #[error("{0}")]
+    BadClassName(Box<ClassNameError>),
+    /// A class name given twice.
+    #[error("class `{}` is named twice (also class {first})", Escaped(.name))]
+    DuplicateClass {
+        /// The name.
+        name: String,
+        /// The class that has it first.
+        first: usize,
+    },
+    /// A library without classes.
+    #[error("the library has no class")]
+    NoClasses,
+    /// A gesture of a class that has no crowd motion to play.
+    #[error("class `{}` has gestures but no motions (import one with `library import-motion --class {}`)", Escaped(.class), Escaped(.class))]
+    ClassWithoutMotions {
+        /// The class's name.
+        class: String,
+    },
     /// A gesture names a motion that does not exist.
     #[error("motion index {index} is out of range ({count} motions)")]
     BadMotionIndex {
@@ -138,14 +167,14 @@ pub enum Problem {
         count: usize,
     },
     /// A gesture's class differs from its motion's.
-    #[error("class {gesture} differs from its motion {motion}'s class {motion_class}")]
+    #[error("class `{}` differs from its motion {motion}'s class `{}`", Escaped(.gesture), Escaped(.motion_class))]
     ClassMismatch {
-        /// The gesture's class.
-        gesture: MotionClass,
+        /// The gesture's class name.
+        gesture: Box<str>,
         /// The motion's index.
         motion: usize,
-        /// The motion's class.
-        motion_class: MotionClass,
+        /// The motion's class name.
+        motion_class: Box<str>,
     },
     /// A count outside its range (fingers, eigenvectors, components, origin bytes).
     #[error("{what} count {count} is outside {min}..={max}")]
@@ -207,27 +236,21 @@ pub enum Problem {
     #[error("covariance is not positive definite")]
     NotPositiveDefinite,
     /// The origin text is not UTF-8.
-    #[error("origin is not UTF-8 (at its byte {0})")]
-    OriginNotUtf8(usize),
+    #[error("{what} is not UTF-8 (at its byte {at})")]
+    NotUtf8 {
+        /// Which text (`origin`, `class name`, `participant`, `device`).
+        what: &'static str,
+        /// The byte of the text where it stops being UTF-8.
+        at: usize,
+    },
     /// A library with no motion or no gesture.
-    #[error("the library is empty ({motions} motions, {gestures} gestures)")]
+    #[error("the library has nothing to recognise: {motions} motions, {gestures} gestures (it needs at least one of each)")]
     Empty {
         /// Motions.
         motions: usize,
         /// Gestures.
         gestures: usize,
     },
-    /// Classes that no gesture stands for.
-    #[error("no gesture for class{}: {}", if .0.len() == 1 { "" } else { "es" }, class_list(.0))]
-    MissingClasses(Vec<MotionClass>),
-}
-
-fn class_list(classes: &[MotionClass]) -> String {
-    classes
-        .iter()
-        .map(|c| c.as_str())
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 /// A library that cannot be read or is not consistent.

@@ -3,17 +3,29 @@
 //! offset and the item at fault, never panics and never allocates more than the
 //! file's remaining bytes justify.
 //!
-//! # Layout (version 1)
+//! # Layout (version 2, written)
 //!
 //! ```text
-//! header     "CTGL"  version:u32  motions:u32  gestures:u32
-//! motion     class:u32  basis:u32 (d, 0..=15)  gmm:u32 (1..=32)
+//! header     "CTGL"  version:u32 (2)  classes:u32 (0..=1000)  motions:u32  gestures:u32
+//! class      name_len:u32 (1..=64)  name:[u8; name_len] (an ASCII letter, then
+//!            letters, digits, `_`, `-`; unique)
+//! motion     class:u32 (< classes)  basis:u32 (d, 0..=15)  gmm:u32 (1..=32)
 //!            duration_s:f64  mean:[f64; 128]  basis × [f64; 128]
 //!            gmm × { weight:f64  mean:[f64; d]  cov:[f64; d·d] (row-major) }
 //! gesture    class:u32  motion:u32  fingers:u32 (1..=10)  origin_len:u32 (0..=1024)
-//!            fingers × 64 × { x:f64  y:f64 }  origin:[u8; origin_len] (UTF-8)
+//!            participant_len:u32 (0..=64)  device_len:u32 (0..=256)
+//!            fingers × 64 × { x:f64  y:f64 }  origin:[u8; origin_len]
+//!            participant:[u8; participant_len]  device:[u8; device_len] (UTF-8)
 //! trailer    crc32:u32   (CRC-32/IEEE of every byte before it)
 //! ```
+//!
+//! # Version 1 (read, migrated)
+//!
+//! No class table: the classes are the ten [`MotionClass`]es in the paper's order,
+//! and a record's class is an index into them. The header is
+//! `"CTGL" version:u32 (1) motions:u32 gestures:u32`, and a gesture record has no
+//! participant and device (they read as empty). Everything else is as in version 2.
+//! A version-1 file reads as the library it holds; writing it gives version 2.
 //!
 //! Numbers are f64, not f32: the model holds f64, so a library written and read
 //! back is the same library bit for bit (a file rewritten by `library add` does not
@@ -26,10 +38,11 @@
 //! library. The structure is parsed before the checksum is compared, so a file cut
 //! short or with a bad count is reported where it breaks, not as a mere mismatch.
 
-use super::class::MotionClass;
+use super::class::{ClassId, MotionClass, MAX_CLASSES, MAX_CLASS_NAME_BYTES};
 use super::error::{Item, LibraryError, Problem};
 use super::model::{
-    GmmComponent, Library, LibraryGesture, MotionFeatures, Resampled, TRAJ_DIM, T_H,
+    GmmComponent, Library, LibraryGesture, MotionFeatures, Resampled, MAX_DEVICE_BYTES,
+    MAX_PARTICIPANT_BYTES, TRAJ_DIM, T_H,
 };
 use super::validate::{self, LoadPolicy, MAX_GMM_COMPONENTS, MAX_ORIGIN_BYTES};
 use crate::geom::Vec2;
@@ -37,22 +50,53 @@ use crate::geom::Vec2;
 /// The first four bytes of a library file.
 pub const MAGIC: [u8; 4] = *b"CTGL";
 
-/// The format version this build writes and reads.
-pub const FORMAT_VERSION: u32 = 1;
+/// The format version this build writes, the newest it reads.
+pub const FORMAT_VERSION: u32 = 2;
+
+/// The oldest format version this build reads (migrated on read).
+pub const OLDEST_VERSION: u32 = 1;
 
 /// Largest library file a caller should read into memory (bytes): 1,500 motions
 /// with 15 eigenvectors and 32 components take about 60 MB.
 pub const MAX_LIBRARY_BYTES: usize = 256 << 20;
 
-const HEADER_BYTES: usize = 16;
+const HEADER_BYTES: usize = 20;
 const MOTION_HEAD_BYTES: usize = 12;
-const GESTURE_HEAD_BYTES: usize = 16;
+const GESTURE_HEAD_BYTES: usize = 24;
 const FINGER_BYTES: usize = T_H * 16;
+/// The smallest class record: a one-byte name.
+const MIN_CLASS_BYTES: usize = 4 + 1;
 /// The smallest motion record: no eigenvector, one component (its weight).
 const MIN_MOTION_BYTES: usize = MOTION_HEAD_BYTES + 8 + TRAJ_DIM * 8 + 8;
-/// The smallest gesture record: one finger, no origin.
-const MIN_GESTURE_BYTES: usize = GESTURE_HEAD_BYTES + FINGER_BYTES;
 const CHECKSUM_BYTES: usize = 4;
+
+/// The sizes that differ between versions.
+#[derive(Copy, Clone)]
+struct Layout {
+    version: u32,
+    gesture_head_bytes: usize,
+}
+
+impl Layout {
+    fn of(version: u32) -> Layout {
+        if version == 1 {
+            Layout {
+                version,
+                gesture_head_bytes: 16,
+            }
+        } else {
+            Layout {
+                version,
+                gesture_head_bytes: GESTURE_HEAD_BYTES,
+            }
+        }
+    }
+
+    /// The smallest gesture record: one finger, no text.
+    fn min_gesture_bytes(self) -> usize {
+        self.gesture_head_bytes + FINGER_BYTES
+    }
+}
 
 /// Serialises a library (layout in the module doc).
 ///
@@ -60,18 +104,20 @@ const CHECKSUM_BYTES: usize = 4;
 /// written faithfully and refused by [`read_library`].
 pub fn write_library(lib: &Library) -> Vec<u8> {
     let size = HEADER_BYTES
+        + lib.classes.iter().map(|c| 4 + c.len()).sum::<usize>()
         + lib.motions.iter().map(motion_bytes).sum::<usize>()
-        + lib
-            .gestures
-            .iter()
-            .map(|g| GESTURE_HEAD_BYTES + g.gesture.fingers.len() * FINGER_BYTES + g.origin.len())
-            .sum::<usize>()
+        + lib.gestures.iter().map(gesture_bytes).sum::<usize>()
         + CHECKSUM_BYTES;
     let mut out = Vec::with_capacity(size);
     out.extend_from_slice(&MAGIC);
     out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+    put_u32(&mut out, lib.classes.len());
     put_u32(&mut out, lib.motions.len());
     put_u32(&mut out, lib.gestures.len());
+    for c in &lib.classes {
+        put_u32(&mut out, c.len());
+        out.extend_from_slice(c.as_bytes());
+    }
     for m in &lib.motions {
         put_u32(&mut out, m.class.index());
         put_u32(&mut out, m.basis.len());
@@ -92,15 +138,27 @@ pub fn write_library(lib: &Library) -> Vec<u8> {
         out.extend_from_slice(&g.motion.to_le_bytes());
         put_u32(&mut out, g.gesture.fingers.len());
         put_u32(&mut out, g.origin.len());
+        put_u32(&mut out, g.participant.len());
+        put_u32(&mut out, g.device.len());
         for finger in &g.gesture.fingers {
             for p in finger {
                 put_f64s(&mut out, &[p.x, p.y]);
             }
         }
         out.extend_from_slice(g.origin.as_bytes());
+        out.extend_from_slice(g.participant.as_bytes());
+        out.extend_from_slice(g.device.as_bytes());
     }
     seal(&mut out);
     out
+}
+
+fn gesture_bytes(g: &LibraryGesture) -> usize {
+    GESTURE_HEAD_BYTES
+        + g.gesture.fingers.len() * FINGER_BYTES
+        + g.origin.len()
+        + g.participant.len()
+        + g.device.len()
 }
 
 fn motion_bytes(m: &MotionFeatures) -> usize {
@@ -149,10 +207,11 @@ pub fn reseal(bytes: &mut [u8]) {
 /// `name` is the file's name in error messages.
 ///
 /// # Errors
-/// The first problem, with the byte offset and the item: bad magic, another version,
-/// a count the file cannot hold, a NaN, an index out of range, a basis that is not
-/// orthonormal, a checksum mismatch, trailing bytes; an empty library or missing
-/// classes (offset of the end of the records).
+/// The first problem, with the byte offset and the item: bad magic, a version this
+/// build does not read (named), a count the file cannot hold, a bad or repeated
+/// class name, a NaN, an index out of range, a class with gestures but no motion,
+/// a basis that is not orthonormal, a checksum mismatch, trailing bytes; a library
+/// without classes, motions or gestures (offset of the end of the records).
 pub fn read_library(bytes: &[u8], name: &str) -> Result<Library, LibraryError> {
     read_library_with(bytes, name, LoadPolicy::Complete)
 }
@@ -160,8 +219,8 @@ pub fn read_library(bytes: &[u8], name: &str) -> Result<Library, LibraryError> {
 /// Reads a library file and checks it under `policy`.
 ///
 /// # Errors
-/// As [`read_library`]; [`LoadPolicy::Partial`] accepts missing classes and an
-/// empty library.
+/// As [`read_library`]; [`LoadPolicy::Partial`] accepts a library without
+/// classes, motions or gestures.
 pub fn read_library_with(
     bytes: &[u8],
     name: &str,
@@ -248,9 +307,34 @@ impl<'a> Reader<'a> {
         Ok(out)
     }
 
-    fn class(&self, offset: usize, raw: u32, item: &Item) -> Result<MotionClass, LibraryError> {
-        MotionClass::from_index(raw as usize)
-            .ok_or_else(|| self.error(offset, item.clone(), Problem::BadClass(u64::from(raw))))
+    /// A class index into a table of `classes`.
+    fn class(
+        &self,
+        offset: usize,
+        raw: u32,
+        classes: usize,
+        item: &Item,
+    ) -> Result<ClassId, LibraryError> {
+        let id = ClassId(u16::try_from(raw).unwrap_or(u16::MAX));
+        validate::check_motion_class(id, classes)
+            .map(|()| id)
+            .map_err(|p| self.error(offset, item.clone(), p))
+    }
+
+    /// `n` bytes of UTF-8 text called `what`.
+    fn text(&mut self, n: usize, what: &'static str, item: &Item) -> Result<String, LibraryError> {
+        let at = self.pos;
+        let raw = self.take(n, what, item)?;
+        std::str::from_utf8(raw).map(str::to_string).map_err(|e| {
+            self.error(
+                at + e.valid_up_to(),
+                item.clone(),
+                Problem::NotUtf8 {
+                    what,
+                    at: e.valid_up_to(),
+                },
+            )
+        })
     }
 
     /// A count in `min..=max` whose records of at least `each` bytes fit in what is
@@ -308,7 +392,7 @@ impl<'a> Reader<'a> {
         }
         self.pos = 4;
         let version = self.u32("version", &h)?;
-        if version != FORMAT_VERSION {
+        if !(OLDEST_VERSION..=FORMAT_VERSION).contains(&version) {
             return Err(self.error(
                 4,
                 h,
@@ -318,35 +402,71 @@ impl<'a> Reader<'a> {
                 },
             ));
         }
+        let layout = Layout::of(version);
+        let raw_c = if version == 1 {
+            None
+        } else {
+            Some(self.u32("class count", &h)?)
+        };
+        let counts_at = self.pos;
         let raw_m = self.u32("motion count", &h)?;
         let raw_g = self.u32("gesture count", &h)?;
+        let n_c = match raw_c {
+            Some(raw) => self.count(
+                8,
+                &h,
+                "class",
+                raw,
+                (0, MAX_CLASSES),
+                MIN_CLASS_BYTES,
+                CHECKSUM_BYTES,
+            )?,
+            None => 0,
+        };
         let n_m = self.count(
-            8,
+            counts_at,
             &h,
             "motions",
             raw_m,
             (0, u32::MAX as usize),
             MIN_MOTION_BYTES,
-            CHECKSUM_BYTES,
+            n_c * MIN_CLASS_BYTES + CHECKSUM_BYTES,
         )?;
         let n_g = self.count(
-            12,
+            counts_at + 4,
             &h,
             "gestures",
             raw_g,
             (0, u32::MAX as usize),
-            MIN_GESTURE_BYTES,
-            n_m * MIN_MOTION_BYTES + CHECKSUM_BYTES,
+            layout.min_gesture_bytes(),
+            n_c * MIN_CLASS_BYTES + n_m * MIN_MOTION_BYTES + CHECKSUM_BYTES,
         )?;
+        let classes = match raw_c {
+            None => MotionClass::all_names(),
+            Some(_) => {
+                let mut classes = Vec::with_capacity(n_c);
+                for i in 0..n_c {
+                    let left = (n_c - 1 - i) * MIN_CLASS_BYTES
+                        + n_m * MIN_MOTION_BYTES
+                        + n_g * layout.min_gesture_bytes()
+                        + CHECKSUM_BYTES;
+                    let c = self.class_record(i, &classes, left)?;
+                    classes.push(c);
+                }
+                classes
+            }
+        };
         let mut motions = Vec::with_capacity(n_m);
         for i in 0..n_m {
-            let left = (n_m - 1 - i) * MIN_MOTION_BYTES + n_g * MIN_GESTURE_BYTES + CHECKSUM_BYTES;
-            motions.push(self.motion(i, left)?);
+            let left = (n_m - 1 - i) * MIN_MOTION_BYTES
+                + n_g * layout.min_gesture_bytes()
+                + CHECKSUM_BYTES;
+            motions.push(self.motion(i, classes.len(), left)?);
         }
         let mut gestures = Vec::with_capacity(n_g);
         for i in 0..n_g {
-            let left = (n_g - 1 - i) * MIN_GESTURE_BYTES + CHECKSUM_BYTES;
-            gestures.push(self.gesture(i, &motions, left)?);
+            let left = (n_g - 1 - i) * layout.min_gesture_bytes() + CHECKSUM_BYTES;
+            gestures.push(self.gesture(i, layout, &classes, &motions, left)?);
         }
         let body = self.pos;
         let stored = self.u32("checksum", &Item::Checksum)?;
@@ -367,15 +487,49 @@ impl<'a> Reader<'a> {
                 },
             ));
         }
-        Ok(Library { motions, gestures })
+        Ok(Library {
+            classes,
+            motions,
+            gestures,
+        })
     }
 
-    /// Motion `i`; `left` bytes must remain after it for the records that follow.
-    fn motion(&mut self, i: usize, left: usize) -> Result<MotionFeatures, LibraryError> {
+    /// Class `i` of the table, after `earlier`; `left` bytes must remain after it.
+    fn class_record(
+        &mut self,
+        i: usize,
+        earlier: &[String],
+        left: usize,
+    ) -> Result<String, LibraryError> {
+        let item = Item::Class(i);
+        let start = self.pos;
+        let raw = self.u32("class name length", &item)?;
+        let n = self.count(
+            start,
+            &item,
+            "class name byte",
+            raw,
+            (1, MAX_CLASS_NAME_BYTES),
+            1,
+            left,
+        )?;
+        let name = self.text(n, "class name", &item)?;
+        validate::check_class(&name, earlier).map_err(|p| self.error(start + 4, item, p))?;
+        Ok(name)
+    }
+
+    /// Motion `i` of a library of `classes` classes; `left` bytes must remain after
+    /// it for the records that follow.
+    fn motion(
+        &mut self,
+        i: usize,
+        classes: usize,
+        left: usize,
+    ) -> Result<MotionFeatures, LibraryError> {
         let item = Item::Motion(i);
         let start = self.pos;
         let raw_class = self.u32("motion class", &item)?;
-        let class = self.class(start, raw_class, &item)?;
+        let class = self.class(start, raw_class, classes, &item)?;
         let raw_d = self.u32("eigenvector count", &item)?;
         let raw_k = self.u32("gmm component count", &item)?;
         let d = self.count(
@@ -446,19 +600,47 @@ impl<'a> Reader<'a> {
     fn gesture(
         &mut self,
         i: usize,
+        layout: Layout,
+        classes: &[String],
         motions: &[MotionFeatures],
         left: usize,
     ) -> Result<LibraryGesture, LibraryError> {
         let item = Item::Gesture(i);
         let start = self.pos;
         let raw_class = self.u32("gesture class", &item)?;
-        let class = self.class(start, raw_class, &item)?;
+        let class = self.class(start, raw_class, classes.len(), &item)?;
         let motion = self.u32("motion index", &item)?;
         let raw_f = self.u32("finger count", &item)?;
         let raw_o = self.u32("origin length", &item)?;
-        validate::check_gesture_head(class, u64::from(motion), raw_f as usize, motions)
+        let (raw_p, raw_d) = if layout.version == 1 {
+            (0, 0)
+        } else {
+            (
+                self.u32("participant length", &item)?,
+                self.u32("device length", &item)?,
+            )
+        };
+        validate::check_gesture_head(class, u64::from(motion), raw_f as usize, classes, motions)
             .map_err(|p| self.error(start, item.clone(), p))?;
         let n_f = raw_f as usize;
+        let n_p = self.count(
+            start + 16,
+            &item,
+            "participant byte",
+            raw_p,
+            (0, MAX_PARTICIPANT_BYTES),
+            1,
+            n_f * FINGER_BYTES + left,
+        )?;
+        let n_d = self.count(
+            start + 20,
+            &item,
+            "device byte",
+            raw_d,
+            (0, MAX_DEVICE_BYTES),
+            1,
+            n_f * FINGER_BYTES + n_p + left,
+        )?;
         let n_o = self.count(
             start + 12,
             &item,
@@ -466,7 +648,7 @@ impl<'a> Reader<'a> {
             raw_o,
             (0, MAX_ORIGIN_BYTES),
             1,
-            n_f * FINGER_BYTES + left,
+            n_f * FINGER_BYTES + n_p + n_d + left,
         )?;
         let mut fingers = Vec::with_capacity(n_f);
         for f in 0..n_f {
@@ -501,22 +683,16 @@ impl<'a> Reader<'a> {
             }
             fingers.push(pts);
         }
-        let at = self.pos;
-        let raw = self.take(n_o, "origin", &item)?;
-        let origin = std::str::from_utf8(raw)
-            .map_err(|e| {
-                self.error(
-                    at + e.valid_up_to(),
-                    item.clone(),
-                    Problem::OriginNotUtf8(e.valid_up_to()),
-                )
-            })?
-            .to_string();
+        let origin = self.text(n_o, "origin", &item)?;
+        let participant = self.text(n_p, "participant", &item)?;
+        let device = self.text(n_d, "device", &item)?;
         Ok(LibraryGesture {
             class,
             motion,
             gesture: Resampled { fingers },
             origin,
+            participant,
+            device,
         })
     }
 }

@@ -1,5 +1,7 @@
 use super::*;
-use crate::gesture::library::{random_library, validate, validate_with, RandomLibrarySpec};
+use crate::gesture::library::{
+    random_library, validate, validate_with, ClassNameError, RandomLibrarySpec,
+};
 use proptest::prelude::*;
 
 const NAME: &str = "library.ctgl";
@@ -18,14 +20,46 @@ fn small() -> Library {
     random_library(&spec(10, 20), 7)
 }
 
+/// Offset of class `c`'s record in the file of `lib`.
+fn class_offset(lib: &Library, c: usize) -> usize {
+    HEADER_BYTES + lib.classes[..c].iter().map(|n| 4 + n.len()).sum::<usize>()
+}
+
 /// Offset of gesture `g`'s record in the file of `lib`.
 fn gesture_offset(lib: &Library, g: usize) -> usize {
-    HEADER_BYTES
+    class_offset(lib, lib.classes.len())
         + lib.motions.iter().map(motion_bytes).sum::<usize>()
-        + lib.gestures[..g]
-            .iter()
-            .map(|g| GESTURE_HEAD_BYTES + g.gesture.fingers.len() * FINGER_BYTES + g.origin.len())
-            .sum::<usize>()
+        + lib.gestures[..g].iter().map(gesture_bytes).sum::<usize>()
+}
+
+/// `lib` in the version-1 layout (no class table: its classes must be the ten
+/// built-in ones in order; no participant and device).
+fn write_v1(lib: &Library) -> Vec<u8> {
+    assert_eq!(lib.classes, MotionClass::all_names());
+    let v2 = write_library(lib);
+    let mut out = Vec::new();
+    out.extend_from_slice(&MAGIC);
+    out.extend_from_slice(&1u32.to_le_bytes());
+    put_u32(&mut out, lib.motions.len());
+    put_u32(&mut out, lib.gestures.len());
+    // Motion records are the same in both versions.
+    let motions = class_offset(lib, lib.classes.len());
+    let gestures = gesture_offset(lib, 0);
+    out.extend_from_slice(&v2[motions..gestures]);
+    for g in &lib.gestures {
+        put_u32(&mut out, g.class.index());
+        out.extend_from_slice(&g.motion.to_le_bytes());
+        put_u32(&mut out, g.gesture.fingers.len());
+        put_u32(&mut out, g.origin.len());
+        for finger in &g.gesture.fingers {
+            for p in finger {
+                put_f64s(&mut out, &[p.x, p.y]);
+            }
+        }
+        out.extend_from_slice(g.origin.as_bytes());
+    }
+    seal(&mut out);
+    out
 }
 
 fn read_err(bytes: &[u8]) -> LibraryError {
@@ -60,12 +94,14 @@ fn a_random_library_is_valid_and_round_trips() {
 #[test]
 fn wrong_magic_and_version_are_named() {
     let mut bytes = write_library(&small());
-    bytes[4] = 2;
+    bytes[4] = 3;
     let e = read_err(&bytes).to_string();
     assert_eq!(
         e,
-        "library.ctgl: offset 4: header: format version 2; this reader reads version 1"
+        "library.ctgl: offset 4: header: format version 3; this reader reads versions 1 to 2 (a newer crowdtouch wrote it, or it is damaged)"
     );
+    bytes[4] = 0;
+    assert!(read_err(&bytes).to_string().contains("format version 0;"));
     bytes[0] = b'X';
     let e = read_err(&bytes);
     assert!(matches!(e.problem, Problem::BadMagic { .. }), "{e}");
@@ -112,6 +148,14 @@ fn a_huge_count_is_refused_before_allocating() {
     reseal(&mut bytes);
     let e = read_err(&bytes);
     assert!(
+        matches!(e.problem, Problem::BadCount { what: "class", .. }),
+        "{e}"
+    );
+    let mut bytes = write_library(&small());
+    bytes[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+    reseal(&mut bytes);
+    let e = read_err(&bytes);
+    assert!(
         matches!(
             e.problem,
             Problem::Truncated {
@@ -122,7 +166,7 @@ fn a_huge_count_is_refused_before_allocating() {
         "{e}"
     );
     let mut bytes = write_library(&small());
-    bytes[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+    bytes[16..20].copy_from_slice(&u32::MAX.to_le_bytes());
     let e = read_err(&bytes);
     assert!(
         matches!(
@@ -167,7 +211,16 @@ fn out_of_range_indices_are_refused() {
     bytes[at..at + 4].copy_from_slice(&10u32.to_le_bytes());
     reseal(&mut bytes);
     let e = read_err(&bytes);
-    assert_eq!((e.offset, &e.problem), (Some(at), &Problem::BadClass(10)));
+    assert_eq!(
+        (e.offset, &e.problem),
+        (
+            Some(at),
+            &Problem::BadClass {
+                index: 10,
+                count: 10
+            }
+        )
+    );
     let mut bytes = write_library(&lib);
     bytes[at + 4..at + 8].copy_from_slice(&10u32.to_le_bytes());
     reseal(&mut bytes);
@@ -265,6 +318,17 @@ fn mismatched_dimensions_are_refused_in_memory() {
 fn empty_and_partial_libraries_follow_the_policy() {
     let empty = Library::default();
     let e = read_err(&write_library(&empty));
+    assert_eq!(e.problem, Problem::NoClasses);
+    assert_eq!(
+        e.to_string(),
+        "library.ctgl: offset 20: library: the library has no class"
+    );
+    assert_eq!(
+        read_library_with(&write_library(&empty), NAME, LoadPolicy::Partial),
+        Ok(empty.clone())
+    );
+    let named = Library::with_classes(vec!["wave".into(), "crossing".into()]);
+    let e = read_err(&write_library(&named));
     assert_eq!(
         e.problem,
         Problem::Empty {
@@ -273,24 +337,237 @@ fn empty_and_partial_libraries_follow_the_policy() {
         }
     );
     assert_eq!(
-        read_library_with(&write_library(&empty), NAME, LoadPolicy::Partial),
-        Ok(empty.clone())
+        read_library_with(&write_library(&named), NAME, LoadPolicy::Partial),
+        Ok(named)
     );
-    // Six motions: classes 0..=5 only.
+    // Six motions: gestures of classes 0..=5 only, of a table of ten: any set of
+    // classes loads.
     let lib = random_library(&spec(6, 12), 1);
+    assert_eq!(read_library(&write_library(&lib), NAME), Ok(lib.clone()));
+    assert_eq!(validate(&lib), Ok(()));
+}
+
+#[test]
+fn class_tables_of_any_size_round_trip() {
+    let mut lib = random_library(&spec(3, 6), 4);
+    lib.classes = vec!["sweep".into(), "Zara-walk_2".into(), "x".into()];
+    let bytes = write_library(&lib);
+    assert_eq!(read_library(&bytes, NAME), Ok(lib.clone()));
+    assert_eq!(lib.class_id("Zara-walk_2"), Some(ClassId(1)));
+    assert_eq!(lib.class_name(ClassId(2)), "x");
+    assert_eq!(lib.kind(ClassId(0)), None);
+    let counts = lib.counts();
+    assert_eq!(
+        counts
+            .iter()
+            .map(|c| (c.motions, c.gestures))
+            .collect::<Vec<_>>(),
+        [(1, 2), (1, 2), (1, 2)]
+    );
+    // One class, one motion, one gesture is a complete library.
+    let one = Library {
+        classes: vec!["only".into()],
+        motions: vec![lib.motions[0].clone()],
+        gestures: vec![lib.gestures[0].clone()],
+    };
+    assert_eq!(read_library(&write_library(&one), NAME), Ok(one));
+}
+
+#[test]
+fn duplicate_and_bad_class_names_are_located() {
+    let mut lib = random_library(&spec(3, 3), 4);
+    lib.classes = vec!["sweep".into(), "wave".into(), "sweep".into()];
+    let at = class_offset(&lib, 2);
     let e = read_err(&write_library(&lib));
     assert_eq!(
         e.to_string(),
         format!(
-            "library.ctgl: offset {}: library: no gesture for classes: split_then_translate, translate_then_join, twist_while_expanding, twist_while_contracting",
-            write_library(&lib).len() - 4
+            "library.ctgl: offset {}: class 2: class `sweep` is named twice (also class 0)",
+            at + 4
         )
     );
-    assert!(validate(&lib).is_err());
-    assert_eq!(validate_with(&lib, LoadPolicy::Partial), Ok(()));
     assert_eq!(
-        read_library_with(&write_library(&lib), NAME, LoadPolicy::Partial),
-        Ok(lib)
+        validate(&lib).unwrap_err().to_string(),
+        "(in memory): class 2: class `sweep` is named twice (also class 0)"
+    );
+    lib.classes[2] = "two words".into();
+    let e = read_err(&write_library(&lib));
+    assert_eq!(e.item, Item::Class(2));
+    assert!(
+        matches!(
+            &e.problem,
+            Problem::BadClassName(b) if matches!(**b, ClassNameError::BadCharacter { at: 3, .. })
+        ),
+        "{e}"
+    );
+    lib.classes[2] = String::new();
+    let e = read_err(&write_library(&lib));
+    assert_eq!((e.offset, &e.item), (Some(at), &Item::Class(2)));
+    assert!(
+        matches!(
+            e.problem,
+            Problem::BadCount {
+                what: "class name byte",
+                count: 0,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // A name that is not UTF-8, at its byte.
+    lib.classes[2] = "ab".into();
+    let mut bytes = write_library(&lib);
+    bytes[at + 5] = 0xff;
+    reseal(&mut bytes);
+    let e = read_err(&bytes);
+    assert_eq!(
+        (e.offset, &e.problem),
+        (
+            Some(at + 5),
+            &Problem::NotUtf8 {
+                what: "class name",
+                at: 1
+            }
+        )
+    );
+}
+
+#[test]
+fn a_class_with_gestures_but_no_motions_is_named() {
+    // Class 2 ("contract") loses its only motion; its gesture still names it.
+    let mut lib = random_library(&spec(3, 3), 5);
+    lib.motions[2].class = ClassId(1);
+    let e = validate(&lib).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "(in memory): gesture 2: class `contract` has gestures but no motions (import one with `library import-motion --class contract`)"
+    );
+    let at = gesture_offset(&lib, 2);
+    let e = read_err(&write_library(&lib));
+    assert_eq!((e.offset, &e.item), (Some(at), &Item::Gesture(2)));
+    assert!(
+        matches!(&e.problem, Problem::ClassWithoutMotions { class } if class == "contract"),
+        "{e}"
+    );
+    // A gesture pointing at a motion of another class, while its class has
+    // motions, is a mismatch named by both classes.
+    let mut lib = random_library(&spec(3, 3), 5);
+    lib.gestures[2].motion = 1;
+    let e = validate(&lib).unwrap_err().to_string();
+    assert!(
+        e.ends_with("class `contract` differs from its motion 1's class `twist`"),
+        "{e}"
+    );
+}
+
+#[test]
+fn removing_a_class_renumbers_classes_and_motions() {
+    let lib = random_library(&spec(10, 30), 6);
+    let mut cut = lib.clone();
+    cut.remove_class(ClassId(3));
+    assert_eq!(cut.classes.len(), 9);
+    assert!(!cut.classes.iter().any(|c| c == "expand"));
+    assert_eq!(cut.motions.len(), 9);
+    assert_eq!(cut.gestures.len(), 27);
+    validate(&cut).unwrap();
+    // Every kept gesture still names the same motion, by its new index.
+    let kept: Vec<&LibraryGesture> = lib
+        .gestures
+        .iter()
+        .filter(|g| g.class != ClassId(3))
+        .collect();
+    for (old, new) in kept.iter().zip(&cut.gestures) {
+        assert_eq!(old.origin, new.origin);
+        assert_eq!(
+            lib.motions[old.motion as usize].mean,
+            cut.motions[new.motion as usize].mean
+        );
+        assert_eq!(
+            lib.class_name(old.class),
+            cut.class_name(new.class),
+            "{}",
+            old.origin
+        );
+    }
+    cut.remove_class(ClassId(100));
+    assert_eq!(cut.classes.len(), 9);
+}
+
+#[test]
+fn version_1_files_read_as_the_ten_classes() {
+    let lib = small();
+    let old = write_v1(&lib);
+    assert_eq!(&old[4..8], &1u32.to_le_bytes());
+    let mut expect = lib.clone();
+    for g in &mut expect.gestures {
+        g.participant.clear();
+        g.device.clear();
+    }
+    let read = read_library(&old, NAME).unwrap();
+    assert_eq!(read, expect);
+    assert_eq!(read.classes, MotionClass::all_names());
+    // Written again, it is version 2 and reads as the same library.
+    let new = write_library(&read);
+    assert_eq!(&new[4..8], &FORMAT_VERSION.to_le_bytes());
+    assert_eq!(read_library(&new, NAME), Ok(expect));
+    // A version-1 file's class beyond the ten is named against the ten.
+    let mut bad = old.clone();
+    let at = 16 + lib.motions.iter().map(motion_bytes).sum::<usize>();
+    bad[at..at + 4].copy_from_slice(&10u32.to_le_bytes());
+    reseal(&mut bad);
+    let e = read_err(&bad);
+    assert_eq!(
+        (e.offset, e.problem),
+        (
+            Some(at),
+            Problem::BadClass {
+                index: 10,
+                count: 10
+            }
+        )
+    );
+    // The shipped file is a version-1 file.
+    assert_eq!(&super::super::SHIPPED_BYTES[4..8], &1u32.to_le_bytes());
+}
+
+#[test]
+fn participant_and_device_round_trip_and_are_capped() {
+    let mut lib = small();
+    lib.gestures[4].participant = "P07".into();
+    lib.gestures[4].device = "Dell Canvas 27 (hidraw)".into();
+    assert_eq!(read_library(&write_library(&lib), NAME), Ok(lib.clone()));
+    lib.gestures[4].participant = "p".repeat(65);
+    let e = read_err(&write_library(&lib));
+    assert_eq!(
+        e.offset,
+        Some(gesture_offset(&lib, 4) + 16),
+        "at its length field"
+    );
+    assert!(
+        matches!(
+            e.problem,
+            Problem::BadCount {
+                what: "participant byte",
+                count: 65,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(validate(&lib).is_err());
+    lib.gestures[4].participant.clear();
+    lib.gestures[4].device = "d".repeat(257);
+    let e = read_err(&write_library(&lib));
+    assert!(
+        matches!(
+            e.problem,
+            Problem::BadCount {
+                what: "device byte",
+                count: 257,
+                ..
+            }
+        ),
+        "{e}"
     );
 }
 
@@ -323,13 +600,20 @@ fn origin_must_be_utf8_and_short() {
     );
     let lib = small();
     let mut bytes = write_library(&lib);
-    let at = gesture_offset(&lib, 1) - lib.gestures[0].origin.len();
+    let g = &lib.gestures[0];
+    let at = gesture_offset(&lib, 1) - g.origin.len() - g.participant.len() - g.device.len();
     bytes[at] = 0xff;
     reseal(&mut bytes);
     let e = read_err(&bytes);
     assert_eq!(
         (e.offset, &e.problem),
-        (Some(at), &Problem::OriginNotUtf8(0))
+        (
+            Some(at),
+            &Problem::NotUtf8 {
+                what: "origin",
+                at: 0
+            }
+        )
     );
 }
 

@@ -9,15 +9,18 @@ mod random;
 mod shipped;
 mod validate;
 
-pub use class::{MotionClass, UnknownClass};
+pub use class::{
+    check_class_name, ClassId, ClassNameError, MotionClass, UnknownClass, MAX_CLASSES,
+    MAX_CLASS_NAME_BYTES,
+};
 pub use error::{Item, LibraryError, Problem};
 pub use format::{
     crc32, read_library, read_library_with, reseal, write_library, FORMAT_VERSION, MAGIC,
-    MAX_LIBRARY_BYTES,
+    MAX_LIBRARY_BYTES, OLDEST_VERSION,
 };
 pub use model::{
-    GmmComponent, Library, LibraryGesture, MotionFeatures, Resampled, MAX_COMPONENTS, S_H,
-    TRAJ_DIM, T_H,
+    ClassCounts, GmmComponent, Library, LibraryGesture, MotionFeatures, Resampled, MAX_COMPONENTS,
+    MAX_DEVICE_BYTES, MAX_PARTICIPANT_BYTES, S_H, TRAJ_DIM, T_H,
 };
 pub use random::{random_library, RandomLibrarySpec};
 pub use shipped::{shipped, shipped_from, SHIPPED_BYTES, SHIPPED_NAME};

@@ -4,8 +4,11 @@
 //! Plain data, shared by the file format (`format.rs`), recognition (which indexes
 //! the gestures' features) and the crowd's synthesis (`crowd::motion`, which blends
 //! the motions' features).
+//!
+//! The classes are data too: [`Library::classes`] names them (any non-empty set,
+//! unique names), and every motion and gesture is of one of them ([`ClassId`]).
 
-use super::class::MotionClass;
+use super::class::{ClassId, MotionClass};
 use crate::geom::Vec2;
 
 /// Samples of a resampled gesture trajectory, `T_H` (gesture-driven section 5.1).
@@ -47,8 +50,8 @@ pub struct GmmComponent {
 /// radius is 1; synthesis scales them to the crowd it drives.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MotionFeatures {
-    /// The class the motion was generated for.
-    pub class: MotionClass,
+    /// The class the motion belongs to.
+    pub class: ClassId,
     /// How long the motion lasts (s), from its first to its last sample.
     pub duration_s: f64,
     /// The mean trajectory `c̄_s`, serialised as in eq. 15 (x, y per sample).
@@ -65,20 +68,124 @@ pub struct MotionFeatures {
 #[derive(Clone, Debug, PartialEq)]
 pub struct LibraryGesture {
     /// The class of its crowd motion.
-    pub class: MotionClass,
+    pub class: ClassId,
     /// Index of its crowd motion in [`Library::motions`].
     pub motion: u32,
     /// The gesture, normalised and resampled.
     pub gesture: Resampled,
     /// Where it came from (`generated seed 7`, `recording twist-1.jsonl`, …).
     pub origin: String,
+    /// Who drew it (a participant id, for leave-one-participant-out evaluation);
+    /// empty when not known (generated gestures, version-1 files).
+    pub participant: String,
+    /// The device it was drawn on (its name as the recording or the daemon gives
+    /// it); empty when not known.
+    pub device: String,
 }
+
+/// Longest participant id, bytes of UTF-8.
+pub const MAX_PARTICIPANT_BYTES: usize = 64;
+
+/// Longest device name, bytes of UTF-8.
+pub const MAX_DEVICE_BYTES: usize = 256;
 
 /// The gesture/crowd-motion library (gesture-driven section 4).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Library {
+    /// The class names, in the order of their [`ClassId`]s.
+    pub classes: Vec<String>,
     /// The crowd motions.
     pub motions: Vec<MotionFeatures>,
     /// The gestures, each naming its motion.
     pub gestures: Vec<LibraryGesture>,
+}
+
+/// How many motions and gestures one class has.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub struct ClassCounts {
+    /// Crowd motions of the class.
+    pub motions: usize,
+    /// Gestures of the class.
+    pub gestures: usize,
+}
+
+impl Library {
+    /// An empty library with these classes (no motion, no gesture).
+    pub fn with_classes(classes: Vec<String>) -> Library {
+        Library {
+            classes,
+            ..Library::default()
+        }
+    }
+
+    /// The name of class `id`; `?` for an id the table does not hold (a library
+    /// that passed validation has none).
+    pub fn class_name(&self, id: ClassId) -> &str {
+        self.classes.get(id.index()).map_or("?", String::as_str)
+    }
+
+    /// The class called `name`.
+    pub fn class_id(&self, name: &str) -> Option<ClassId> {
+        self.classes
+            .iter()
+            .position(|c| c == name)
+            .and_then(|i| u16::try_from(i).ok())
+            .map(ClassId)
+    }
+
+    /// The built-in motion kind class `id` is named after, if any.
+    pub fn kind(&self, id: ClassId) -> Option<MotionClass> {
+        self.class_name(id).parse().ok()
+    }
+
+    /// Every class's motions and gestures, in class order.
+    pub fn counts(&self) -> Vec<ClassCounts> {
+        let mut out = vec![ClassCounts::default(); self.classes.len()];
+        for m in &self.motions {
+            if let Some(c) = out.get_mut(m.class.index()) {
+                c.motions += 1;
+            }
+        }
+        for g in &self.gestures {
+            if let Some(c) = out.get_mut(g.class.index()) {
+                c.gestures += 1;
+            }
+        }
+        out
+    }
+
+    /// Removes class `id` with its motions and gestures; the classes after it and
+    /// the motions after removed ones are renumbered.
+    pub fn remove_class(&mut self, id: ClassId) {
+        if id.index() >= self.classes.len() {
+            return;
+        }
+        self.classes.remove(id.index());
+        let shift = |c: ClassId| {
+            if c > id {
+                ClassId(c.0 - 1)
+            } else {
+                c
+            }
+        };
+        // The new index of each kept motion.
+        let mut renumber = Vec::with_capacity(self.motions.len());
+        let mut kept = 0u32;
+        for m in &self.motions {
+            renumber.push((m.class != id).then_some(kept));
+            kept += u32::from(m.class != id);
+        }
+        self.motions.retain(|m| m.class != id);
+        for m in &mut self.motions {
+            m.class = shift(m.class);
+        }
+        self.gestures.retain(|g| g.class != id);
+        for g in &mut self.gestures {
+            g.class = shift(g.class);
+            // A kept gesture's motion is of its class, so it was kept.
+            if let Some(Some(k)) = renumber.get(g.motion as usize) {
+                g.motion = *k;
+            }
+        }
+    }
 }

@@ -3,7 +3,7 @@
 //! every invariant (orthonormal bases, symmetric positive definite covariances,
 //! weights summing to 1) but describe no real gesture or crowd motion.
 
-use super::class::MotionClass;
+use super::class::{ClassId, MotionClass};
 use super::model::{
     GmmComponent, Library, LibraryGesture, MotionFeatures, Resampled, MAX_COMPONENTS, TRAJ_DIM, T_H,
 };
@@ -13,7 +13,8 @@ use crate::rng::SplitMix64;
 /// The shape of a random library.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub struct RandomLibrarySpec {
-    /// Crowd motions; motion `i` has class `i % 10`, so ten or more cover every class.
+    /// Crowd motions; motion `i` has class `i % 10` of the ten [`MotionClass`]
+    /// names (the class table), so ten or more cover every class.
     pub motions: usize,
     /// Gestures; gesture `j` names motion `j % motions` (none when there is no motion).
     pub gestures: usize,
@@ -33,7 +34,7 @@ pub fn random_library(spec: &RandomLibrarySpec, seed: u64) -> Library {
         .map(|i| {
             random_motion(
                 &mut rng,
-                MotionClass::ALL[i % 10],
+                ClassId((i % 10) as u16),
                 d,
                 spec.gmm_components.max(1),
             )
@@ -60,14 +61,28 @@ pub fn random_library(spec: &RandomLibrarySpec, seed: u64) -> Library {
                     motion: m as u32,
                     gesture: Resampled { fingers },
                     origin: format!("random seed {seed} gesture {j}"),
+                    participant: if j % 3 == 0 {
+                        String::new()
+                    } else {
+                        format!("p{}", j % 4)
+                    },
+                    device: if j % 2 == 0 {
+                        String::new()
+                    } else {
+                        "random table".to_string()
+                    },
                 }
             })
             .collect()
     };
-    Library { motions, gestures }
+    Library {
+        classes: MotionClass::all_names(),
+        motions,
+        gestures,
+    }
 }
 
-fn random_motion(rng: &mut SplitMix64, class: MotionClass, d: usize, k: usize) -> MotionFeatures {
+fn random_motion(rng: &mut SplitMix64, class: ClassId, d: usize, k: usize) -> MotionFeatures {
     let mean: Vec<f64> = (0..TRAJ_DIM).map(|_| rng.uniform(-3.0, 3.0)).collect();
     // Gram–Schmidt (twice, for orthonormality to rounding) on random vectors.
     let mut basis: Vec<Vec<f64>> = Vec::with_capacity(d);

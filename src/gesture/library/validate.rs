@@ -1,20 +1,26 @@
 //! The invariants of a library, checked item by item by the file reader (which adds
 //! the byte offset) and as a whole by [`validate`] for a library built in memory.
 //!
-//! A motion: a known class; a duration in `(0, MAX_MOTION_DURATION_S]`; a mean of
-//! [`TRAJ_DIM`] values; at most [`MAX_COMPONENTS`] eigenvectors of [`TRAJ_DIM`]
-//! values, orthonormal within [`ORTHONORMAL_TOLERANCE`]; 1 to
-//! [`MAX_GMM_COMPONENTS`] Gaussians over as many dimensions as eigenvectors, with
-//! weights in `[0, 1]` summing to 1 within [`WEIGHT_SUM_TOLERANCE`] and symmetric
-//! positive definite covariances. A gesture: a known class equal to its motion's,
-//! a motion index in range, 1 to [`MAX_GESTURE_FINGERS`] fingers, every point finite
-//! and inside `[-POINT_SLACK, 1 + POINT_SLACK]²`, an origin of at most
-//! [`MAX_ORIGIN_BYTES`]. Every number finite. The whole: not empty, and under
-//! [`LoadPolicy::Complete`] a gesture for every one of the ten classes.
+//! The class table: at most [`MAX_CLASSES`] names, each a valid class name
+//! ([`check_class_name`]) given once. A motion: a class in the table; a duration
+//! in `(0, MAX_MOTION_DURATION_S]`; a mean of [`TRAJ_DIM`] values; at most
+//! [`MAX_COMPONENTS`] eigenvectors of [`TRAJ_DIM`] values, orthonormal within
+//! [`ORTHONORMAL_TOLERANCE`]; 1 to [`MAX_GMM_COMPONENTS`] Gaussians over as many
+//! dimensions as eigenvectors, with weights in `[0, 1]` summing to 1 within
+//! [`WEIGHT_SUM_TOLERANCE`] and symmetric positive definite covariances. A gesture:
+//! a class that has a motion, a motion index in range of the same class, 1 to
+//! [`MAX_GESTURE_FINGERS`] fingers, every point finite and inside
+//! `[-POINT_SLACK, 1 + POINT_SLACK]²`, an origin of at most [`MAX_ORIGIN_BYTES`], a
+//! participant and a device of at most [`MAX_PARTICIPANT_BYTES`] and
+//! [`MAX_DEVICE_BYTES`]. Every number finite. The whole, under
+//! [`LoadPolicy::Complete`]: at least one class, one motion and one gesture.
 
-use super::class::MotionClass;
+use super::class::{check_class_name, ClassId, MAX_CLASSES};
 use super::error::{Item, LibraryError, Problem};
-use super::model::{Library, LibraryGesture, MotionFeatures, MAX_COMPONENTS, TRAJ_DIM};
+use super::model::{
+    Library, LibraryGesture, MotionFeatures, MAX_COMPONENTS, MAX_DEVICE_BYTES,
+    MAX_PARTICIPANT_BYTES, TRAJ_DIM,
+};
 use crate::gesture::track::MAX_GESTURE_FINGERS;
 
 /// Largest `|e_i · e_j − δ_ij|` accepted between two eigenvectors of a motion.
@@ -43,13 +49,14 @@ pub const MAX_MOTION_DURATION_S: f64 = 600.0;
 /// Longest origin text, bytes of UTF-8.
 pub const MAX_ORIGIN_BYTES: usize = 1024;
 
-/// Whether a library must hold a gesture of every class.
+/// Whether a library must be usable for recognition.
 #[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
 pub enum LoadPolicy {
-    /// Every class has a gesture and the library is not empty: what the daemon loads.
+    /// At least one class, one motion and one gesture: what the daemon loads.
     #[default]
     Complete,
-    /// Any subset of the classes, even none: a library being built (`library add`).
+    /// Anything consistent, even no class: a library being built (`library new`,
+    /// `add`, `import-motion`, `remove`).
     Partial,
 }
 
@@ -75,11 +82,22 @@ pub fn validate_with(lib: &Library, policy: LoadPolicy) -> Result<(), LibraryErr
         item,
         problem,
     };
+    count("class", lib.classes.len(), 0, MAX_CLASSES)
+        .map_err(|p| (Item::Library, p))
+        .map_err(fail)?;
+    for (i, name) in lib.classes.iter().enumerate() {
+        check_class(name, &lib.classes[..i])
+            .map_err(|p| (Item::Class(i), p))
+            .map_err(fail)?;
+    }
     for (i, m) in lib.motions.iter().enumerate() {
+        check_motion_class(m.class, lib.classes.len())
+            .map_err(|p| (Item::Motion(i), p))
+            .map_err(fail)?;
         check_motion(i, m).map_err(fail)?;
     }
     for (i, g) in lib.gestures.iter().enumerate() {
-        check_gesture(i, g, &lib.motions).map_err(fail)?;
+        check_gesture(i, g, &lib.classes, &lib.motions).map_err(fail)?;
     }
     check_whole(lib, policy).map_err(fail)
 }
@@ -96,7 +114,7 @@ pub(crate) fn finite(field: impl FnOnce() -> String, value: f64) -> Result<(), P
     }
 }
 
-fn count(what: &'static str, n: usize, min: usize, max: usize) -> Result<(), Problem> {
+pub(crate) fn count(what: &'static str, n: usize, min: usize, max: usize) -> Result<(), Problem> {
     if (min..=max).contains(&n) {
         Ok(())
     } else {
@@ -121,7 +139,31 @@ fn dims(what: &'static str, found: usize, expected: usize) -> Result<(), Problem
     }
 }
 
-/// Checks one motion (index `i`).
+/// Checks a class name, and that none of the `earlier` classes has it.
+pub(crate) fn check_class(name: &str, earlier: &[String]) -> Result<(), Problem> {
+    check_class_name(name).map_err(|e| Problem::BadClassName(Box::new(e)))?;
+    match earlier.iter().position(|e| e == name) {
+        Some(first) => Err(Problem::DuplicateClass {
+            name: name.to_string(),
+            first,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Checks that a motion's class is in a table of `classes`.
+pub(crate) fn check_motion_class(class: ClassId, classes: usize) -> Result<(), Problem> {
+    if class.index() < classes {
+        Ok(())
+    } else {
+        Err(Problem::BadClass {
+            index: u64::from(class.0),
+            count: classes,
+        })
+    }
+}
+
+/// Checks one motion (index `i`), but for its class (see [`check_motion_class`]).
 pub(crate) fn check_motion(i: usize, m: &MotionFeatures) -> Result<(), (Item, Problem)> {
     let at = |p| (Item::Motion(i), p);
     finite(|| "duration_s".into(), m.duration_s).map_err(at)?;
@@ -234,14 +276,22 @@ fn check_covariance(cov: &[f64], d: usize) -> Result<(), Problem> {
     }
 }
 
-/// Checks one gesture's class and counts against the motions (before its points).
+/// Checks one gesture's class and counts against the classes and motions (before
+/// its points).
 pub(crate) fn check_gesture_head(
-    class: MotionClass,
+    class: ClassId,
     motion: u64,
     fingers: usize,
+    classes: &[String],
     motions: &[MotionFeatures],
 ) -> Result<(), Problem> {
-    let Some(m) = usize::try_from(motion).ok().and_then(|i| motions.get(i)) else {
+    check_motion_class(class, classes.len())?;
+    let name = |c: ClassId| classes[c.index()].clone();
+    let m = usize::try_from(motion).ok().and_then(|i| motions.get(i));
+    if m.is_none_or(|m| m.class != class) && !motions.iter().any(|m| m.class == class) {
+        return Err(Problem::ClassWithoutMotions { class: name(class) });
+    }
+    let Some(m) = m else {
         return Err(Problem::BadMotionIndex {
             index: motion,
             count: motions.len(),
@@ -249,9 +299,12 @@ pub(crate) fn check_gesture_head(
     };
     if m.class != class {
         return Err(Problem::ClassMismatch {
-            gesture: class,
+            gesture: name(class).into(),
             motion: motion as usize,
-            motion_class: m.class,
+            motion_class: classes
+                .get(m.class.index())
+                .map_or("?", String::as_str)
+                .into(),
         });
     }
     count("finger", fingers, 1, MAX_GESTURE_FINGERS)
@@ -274,6 +327,7 @@ pub(crate) fn check_coordinate(axis: &'static str, v: f64) -> Result<(), Problem
 pub(crate) fn check_gesture(
     i: usize,
     g: &LibraryGesture,
+    classes: &[String],
     motions: &[MotionFeatures],
 ) -> Result<(), (Item, Problem)> {
     let at = |p| (Item::Gesture(i), p);
@@ -281,10 +335,19 @@ pub(crate) fn check_gesture(
         g.class,
         u64::from(g.motion),
         g.gesture.fingers.len(),
+        classes,
         motions,
     )
     .map_err(at)?;
     count("origin byte", g.origin.len(), 0, MAX_ORIGIN_BYTES).map_err(at)?;
+    count(
+        "participant byte",
+        g.participant.len(),
+        0,
+        MAX_PARTICIPANT_BYTES,
+    )
+    .map_err(at)?;
+    count("device byte", g.device.len(), 0, MAX_DEVICE_BYTES).map_err(at)?;
     for (f, finger) in g.gesture.fingers.iter().enumerate() {
         for (s, p) in finger.iter().enumerate() {
             let at = |pr| {
@@ -304,11 +367,14 @@ pub(crate) fn check_gesture(
     Ok(())
 }
 
-/// Checks the library as a whole: not empty, and every class present under
-/// [`LoadPolicy::Complete`].
+/// Checks the library as a whole: under [`LoadPolicy::Complete`], at least one
+/// class, one motion and one gesture.
 pub(crate) fn check_whole(lib: &Library, policy: LoadPolicy) -> Result<(), (Item, Problem)> {
     if policy == LoadPolicy::Partial {
         return Ok(());
+    }
+    if lib.classes.is_empty() {
+        return Err((Item::Library, Problem::NoClasses));
     }
     if lib.motions.is_empty() || lib.gestures.is_empty() {
         return Err((
@@ -319,18 +385,5 @@ pub(crate) fn check_whole(lib: &Library, policy: LoadPolicy) -> Result<(), (Item
             },
         ));
     }
-    let mut seen = [false; 10];
-    for g in &lib.gestures {
-        seen[g.class.index()] = true;
-    }
-    let missing: Vec<MotionClass> = MotionClass::ALL
-        .iter()
-        .copied()
-        .filter(|c| !seen[c.index()])
-        .collect();
-    if missing.is_empty() {
-        Ok(())
-    } else {
-        Err((Item::Library, Problem::MissingClasses(missing)))
-    }
+    Ok(())
 }
