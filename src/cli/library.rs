@@ -15,7 +15,7 @@ use crowdtouch::gesture::library::{
     read_library, read_library_with, shipped, write_library, Library, LibraryGesture, LoadPolicy,
     MotionClass, MAX_LIBRARY_BYTES,
 };
-use crowdtouch::gesture::resample::prepare;
+use crowdtouch::gesture::resample::{prepare, prepare_scaled};
 use crowdtouch::gesture::synth::{generate, to_frames, GestureStyle, StyleRanges};
 use crowdtouch::input::recording::JsonlWriter;
 use crowdtouch::input::{AxisRange, SurfaceInfo};
@@ -371,7 +371,7 @@ fn add(
                     continue;
                 }
             };
-            let gesture = prepare(&tracks).with_context(|| {
+            let (gesture, scale_mm) = prepare_scaled(&tracks).with_context(|| {
                 format!("{}: gesture at {:.3} s", f.display(), g.t.as_secs_f64())
             })?;
             let motion = match motion {
@@ -387,6 +387,7 @@ fn add(
                 motion,
                 gesture,
                 origin: format!("recording {} t={:.3}s", f.display(), g.t.as_secs_f64()),
+                scale_mm: Some(scale_mm),
             });
             added += 1;
         }

@@ -29,7 +29,7 @@ use crate::crowd::agents::AgentParams;
 use crate::geom::{cross, Vec2};
 use crate::gesture::error::GestureError;
 use crate::gesture::library::{Library, LibraryGesture, MotionClass};
-use crate::gesture::resample::prepare;
+use crate::gesture::resample::prepare_scaled;
 use crate::gesture::synth::{generate, GestureStyle, StyleRanges};
 use crate::rng::SplitMix64;
 
@@ -161,17 +161,19 @@ pub fn build_library(p: &BuildParams) -> Result<Library, BuildError> {
                 let mut style = GestureStyle::random(class, style_seed, &p.styles);
                 heading.point(class, &mut style);
                 let tracks = generate(class, &style, gesture_seed);
-                let gesture = prepare(&tracks).map_err(|source| BuildError::Gesture {
-                    class,
-                    index,
-                    gesture: g,
-                    source,
-                })?;
+                let (gesture, scale_mm) =
+                    prepare_scaled(&tracks).map_err(|source| BuildError::Gesture {
+                        class,
+                        index,
+                        gesture: g,
+                        source,
+                    })?;
                 lib.gestures.push(LibraryGesture {
                     class,
                     motion: motion_id,
                     gesture,
                     origin: format!("generated {class} {index}.{g} seed {gesture_seed:#x}"),
+                    scale_mm: Some(scale_mm),
                 });
             }
         }

@@ -74,13 +74,16 @@ pub enum Problem {
         found: Vec<u8>,
     },
     /// A format version this reader does not read.
-    #[error("format version {found}; this reader reads version {supported}")]
+    #[error("format version {found}; this reader reads versions 1 to {supported}")]
     UnsupportedVersion {
         /// The file's version.
         found: u32,
         /// The version this build reads and writes.
         supported: u32,
     },
+    /// A gesture's scale (eq. 2's extent, mm) is negative.
+    #[error("scale_mm is {0}, negative")]
+    NegativeScale(f64),
     /// The file ends inside a record, or a count promises more than the file holds.
     #[error("{what}: needs {needed} bytes, the file has {remaining} left")]
     Truncated {

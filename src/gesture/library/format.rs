@@ -3,7 +3,7 @@
 //! offset and the item at fault, never panics and never allocates more than the
 //! file's remaining bytes justify.
 //!
-//! # Layout (version 1)
+//! # Layout (version 2)
 //!
 //! ```text
 //! header     "CTGL"  version:u32  motions:u32  gestures:u32
@@ -11,9 +11,13 @@
 //!            duration_s:f64  mean:[f64; 128]  basis × [f64; 128]
 //!            gmm × { weight:f64  mean:[f64; d]  cov:[f64; d·d] (row-major) }
 //! gesture    class:u32  motion:u32  fingers:u32 (1..=10)  origin_len:u32 (0..=1024)
+//!            scale_mm:f64 (eq. 2's extent on the glass; 0 when unknown)
 //!            fingers × 64 × { x:f64  y:f64 }  origin:[u8; origin_len] (UTF-8)
 //! trailer    crc32:u32   (CRC-32/IEEE of every byte before it)
 //! ```
+//!
+//! Version 1 is the same without `scale_mm`; it is still read (every gesture's scale
+//! unknown, so recognition leaves the features that need millimetres out for it).
 //!
 //! Numbers are f64, not f32: the model holds f64, so a library written and read
 //! back is the same library bit for bit (a file rewritten by `library add` does not
@@ -37,8 +41,8 @@ use crate::geom::Vec2;
 /// The first four bytes of a library file.
 pub const MAGIC: [u8; 4] = *b"CTGL";
 
-/// The format version this build writes and reads.
-pub const FORMAT_VERSION: u32 = 1;
+/// The format version this build writes (it also reads version 1).
+pub const FORMAT_VERSION: u32 = 2;
 
 /// Largest library file a caller should read into memory (bytes): 1,500 motions
 /// with 15 eigenvectors and 32 components take about 60 MB.
@@ -46,12 +50,15 @@ pub const MAX_LIBRARY_BYTES: usize = 256 << 20;
 
 const HEADER_BYTES: usize = 16;
 const MOTION_HEAD_BYTES: usize = 12;
-const GESTURE_HEAD_BYTES: usize = 16;
+const GESTURE_HEAD_BYTES: usize = 24;
+/// A version 1 gesture head: no `scale_mm`.
+const GESTURE_HEAD_BYTES_V1: usize = 16;
 const FINGER_BYTES: usize = T_H * 16;
 /// The smallest motion record: no eigenvector, one component (its weight).
 const MIN_MOTION_BYTES: usize = MOTION_HEAD_BYTES + 8 + TRAJ_DIM * 8 + 8;
 /// The smallest gesture record: one finger, no origin.
 const MIN_GESTURE_BYTES: usize = GESTURE_HEAD_BYTES + FINGER_BYTES;
+const MIN_GESTURE_BYTES_V1: usize = GESTURE_HEAD_BYTES_V1 + FINGER_BYTES;
 const CHECKSUM_BYTES: usize = 4;
 
 /// Serialises a library (layout in the module doc).
@@ -92,6 +99,7 @@ pub fn write_library(lib: &Library) -> Vec<u8> {
         out.extend_from_slice(&g.motion.to_le_bytes());
         put_u32(&mut out, g.gesture.fingers.len());
         put_u32(&mut out, g.origin.len());
+        put_f64s(&mut out, &[g.scale_mm.unwrap_or(0.0)]);
         for finger in &g.gesture.fingers {
             for p in finger {
                 put_f64s(&mut out, &[p.x, p.y]);
@@ -171,6 +179,7 @@ pub fn read_library_with(
         bytes,
         pos: 0,
         name,
+        version: FORMAT_VERSION,
     };
     let lib = r.library()?;
     // The library-wide problems are reported where the records end.
@@ -183,6 +192,8 @@ struct Reader<'a> {
     bytes: &'a [u8],
     pos: usize,
     name: &'a str,
+    /// The file's format version (1 or 2).
+    version: u32,
 }
 
 impl<'a> Reader<'a> {
@@ -308,7 +319,7 @@ impl<'a> Reader<'a> {
         }
         self.pos = 4;
         let version = self.u32("version", &h)?;
-        if version != FORMAT_VERSION {
+        if !(1..=FORMAT_VERSION).contains(&version) {
             return Err(self.error(
                 4,
                 h,
@@ -318,6 +329,12 @@ impl<'a> Reader<'a> {
                 },
             ));
         }
+        self.version = version;
+        let min_gesture = if version == 1 {
+            MIN_GESTURE_BYTES_V1
+        } else {
+            MIN_GESTURE_BYTES
+        };
         let raw_m = self.u32("motion count", &h)?;
         let raw_g = self.u32("gesture count", &h)?;
         let n_m = self.count(
@@ -335,17 +352,17 @@ impl<'a> Reader<'a> {
             "gestures",
             raw_g,
             (0, u32::MAX as usize),
-            MIN_GESTURE_BYTES,
+            min_gesture,
             n_m * MIN_MOTION_BYTES + CHECKSUM_BYTES,
         )?;
         let mut motions = Vec::with_capacity(n_m);
         for i in 0..n_m {
-            let left = (n_m - 1 - i) * MIN_MOTION_BYTES + n_g * MIN_GESTURE_BYTES + CHECKSUM_BYTES;
+            let left = (n_m - 1 - i) * MIN_MOTION_BYTES + n_g * min_gesture + CHECKSUM_BYTES;
             motions.push(self.motion(i, left)?);
         }
         let mut gestures = Vec::with_capacity(n_g);
         for i in 0..n_g {
-            let left = (n_g - 1 - i) * MIN_GESTURE_BYTES + CHECKSUM_BYTES;
+            let left = (n_g - 1 - i) * min_gesture + CHECKSUM_BYTES;
             gestures.push(self.gesture(i, &motions, left)?);
         }
         let body = self.pos;
@@ -468,6 +485,16 @@ impl<'a> Reader<'a> {
             1,
             n_f * FINGER_BYTES + left,
         )?;
+        let scale_mm = if self.version >= 2 {
+            let at = self.pos;
+            let s = self.f64s(1, "scale", &item, |_| "scale_mm".into())?[0];
+            if s < 0.0 {
+                return Err(self.error(at, item, Problem::NegativeScale(s)));
+            }
+            (s > 0.0).then_some(s)
+        } else {
+            None
+        };
         let mut fingers = Vec::with_capacity(n_f);
         for f in 0..n_f {
             let base = self.pos;
@@ -517,6 +544,7 @@ impl<'a> Reader<'a> {
             motion,
             gesture: Resampled { fingers },
             origin,
+            scale_mm,
         })
     }
 }

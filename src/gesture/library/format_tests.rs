@@ -60,11 +60,11 @@ fn a_random_library_is_valid_and_round_trips() {
 #[test]
 fn wrong_magic_and_version_are_named() {
     let mut bytes = write_library(&small());
-    bytes[4] = 2;
+    bytes[4] = 3;
     let e = read_err(&bytes).to_string();
     assert_eq!(
         e,
-        "library.ctgl: offset 4: header: format version 2; this reader reads version 1"
+        "library.ctgl: offset 4: header: format version 3; this reader reads versions 1 to 2"
     );
     bytes[0] = b'X';
     let e = read_err(&bytes);

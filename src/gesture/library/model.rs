@@ -72,6 +72,10 @@ pub struct LibraryGesture {
     pub gesture: Resampled,
     /// Where it came from (`generated seed 7`, `recording twist-1.jsonl`, …).
     pub origin: String,
+    /// Eq. 2's scale: the larger side of the gesture's bounding box on the glass
+    /// (mm), which the physical features need (`gesture::physical`); `None` when
+    /// unknown (a file of format version 1).
+    pub scale_mm: Option<f64>,
 }
 
 /// The gesture/crowd-motion library (gesture-driven section 4).

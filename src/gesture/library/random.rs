@@ -60,6 +60,7 @@ pub fn random_library(spec: &RandomLibrarySpec, seed: u64) -> Library {
                     motion: m as u32,
                     gesture: Resampled { fingers },
                     origin: format!("random seed {seed} gesture {j}"),
+                    scale_mm: Some(40.0 + 30.0 * (j % 9) as f64),
                 }
             })
             .collect()
