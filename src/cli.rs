@@ -33,6 +33,7 @@ mod formations;
 mod gesture;
 mod hid;
 mod library;
+mod library_eval;
 mod output;
 mod record;
 mod running;

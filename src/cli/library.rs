@@ -16,15 +16,19 @@ use crowdtouch::crowd::motion::{
 use crowdtouch::engine::search_params;
 use crowdtouch::gesture::dtw::{gesture_distance, Dtw};
 use crowdtouch::gesture::eval::{
-    leave_one_out_report, train_test_report, ClassLabel, Evaluation, Label, Report,
+    evaluate, leave_one_out_report, outcomes, train_test_report, ClassLabel, Evaluation, Example,
+    Label, Report,
 };
 use crowdtouch::gesture::features::GestureFeatures;
+use crowdtouch::gesture::generator::{draw_labelled, Generator};
 use crowdtouch::gesture::library::{
     check_class_name, read_library, read_library_with, shipped, validate_with, write_library,
     ClassId, Library, LibraryGesture, LoadPolicy, MotionClass, MAX_CLASSES, MAX_LIBRARY_BYTES,
 };
-use crowdtouch::gesture::resample::prepare;
-use crowdtouch::gesture::synth::{generate, to_frames, GestureStyle, StyleRanges};
+use crowdtouch::gesture::physical::{PhysicalFeatures, PhysicalWeights};
+use crowdtouch::gesture::reject::{Movement, RejectParams};
+use crowdtouch::gesture::resample::prepare_scaled;
+use crowdtouch::gesture::synth::to_frames;
 use crowdtouch::input::recording::JsonlWriter;
 use crowdtouch::input::recording::{OnBadFrame, RecordingStream};
 use crowdtouch::input::{AxisRange, SurfaceInfo};
@@ -57,6 +61,10 @@ pub enum LibraryCmd {
         /// The simulator's classes to build, in this order (default: all ten).
         #[arg(long, value_delimiter = ',')]
         classes: Vec<MotionClass>,
+        /// The gesture generator (`synth` or `style2`; `both`, as shipped: the
+        /// motion's gestures alternate between them).
+        #[arg(long, default_value = "both")]
+        generator: GeneratorChoice,
     },
     /// Start a library of your own: the classes named (none: an empty library),
     /// no motion, no gesture. Fill it with `import-motion` and `add`.
@@ -130,8 +138,10 @@ pub enum LibraryCmd {
     /// Evaluate recognition (gesture-driven section 8.2): leave-one-out with
     /// weighted KNN voting over the library, or the classification of a labelled
     /// test directory (`DIR/<class>/*`, any recording format). Prints the confusion
-    /// matrices and accuracies on the six basic classes and on all ten, and the
-    /// accuracy with each feature removed.
+    /// matrices and accuracies on the six basic classes and on all ten (eq. 12 plus
+    /// the physical features), eq. 12 alone beside them, and the accuracy with each
+    /// of eq. 12's features removed. `--cross-style` instead trains on one gesture
+    /// generator and tests on the other, both ways, plus leave-one-out on each.
     Eval {
         /// Library file (default: the shipped one).
         #[arg(long)]
@@ -142,6 +152,19 @@ pub enum LibraryCmd {
         /// Config (its `gestures` weights, K and band; `controls` for segmenting).
         #[arg(long)]
         config: Option<PathBuf>,
+        /// Cross-style evaluation on generated sets of both generators.
+        #[arg(long, conflicts_with_all = ["library", "test"])]
+        cross_style: bool,
+        /// Gestures per class and generator (`--cross-style`).
+        #[arg(long, default_value_t = 30, requires = "cross_style")]
+        per_class: usize,
+        /// Seed of the evaluation sets (`--cross-style`).
+        #[arg(long, default_value_t = 28, requires = "cross_style")]
+        seed: u64,
+        /// Fit the physical features' weights across styles first, on sets of
+        /// seed + 1, and evaluate with them (`--cross-style`).
+        #[arg(long, requires = "cross_style")]
+        fit: bool,
     },
     /// Add a person's gestures of class CLASS from recordings (any format): every
     /// gesture found in each recording, paired with the library's motion of that
@@ -183,7 +206,31 @@ pub enum LibraryCmd {
         /// Gestures per class.
         #[arg(long, default_value_t = 50)]
         per_class: usize,
+        /// The gesture generator (`synth`: its test-set ranges; `style2`).
+        #[arg(long, default_value = "synth")]
+        generator: Generator,
     },
+}
+
+/// `--generator` of `library build`: one generator, or both alternating.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum GeneratorChoice {
+    /// One generator.
+    One(Generator),
+    /// Both, alternating gesture by gesture.
+    Both,
+}
+
+impl std::str::FromStr for GeneratorChoice {
+    type Err = String;
+    fn from_str(s: &str) -> Result<GeneratorChoice, String> {
+        match s {
+            "both" => Ok(GeneratorChoice::Both),
+            g => g.parse().map(GeneratorChoice::One).map_err(
+                |e: crowdtouch::gesture::generator::UnknownGenerator| format!("{e}, or both"),
+            ),
+        }
+    }
 }
 
 /// Runs a `library` subcommand with the config found for it.
@@ -197,6 +244,7 @@ pub fn library(cmd: LibraryCmd, cfg: Option<&Config>) -> Result<()> {
             gestures_per_motion,
             config,
             classes,
+            generator,
         } => {
             let mixtures = mixtures(config.as_deref())?;
             let classes = if classes.is_empty() {
@@ -204,13 +252,17 @@ pub fn library(cmd: LibraryCmd, cfg: Option<&Config>) -> Result<()> {
             } else {
                 classes
             };
+            let generators = match generator {
+                GeneratorChoice::One(g) => vec![g],
+                GeneratorChoice::Both => Generator::ALL.to_vec(),
+            };
             build(
                 &out,
                 seed,
                 classes,
-                motions_per_class,
-                gestures_per_motion,
+                (motions_per_class, gestures_per_motion),
                 mixtures,
+                generators,
             )
         }
         LibraryCmd::New {
@@ -252,8 +304,23 @@ pub fn library(cmd: LibraryCmd, cfg: Option<&Config>) -> Result<()> {
             out,
             seed,
             per_class,
-        } => test_set(&out, seed, per_class),
+            generator,
+        } => test_set(&out, seed, per_class, generator),
         LibraryCmd::Show { library } => show(&load_with(library.as_deref(), LoadPolicy::Partial)?),
+        LibraryCmd::Eval {
+            cross_style: true,
+            per_class,
+            seed,
+            fit,
+            ..
+        } => super::library_eval::cross(
+            cfg()?,
+            &super::library_eval::CrossArgs {
+                per_class,
+                seed,
+                fit,
+            },
+        ),
         LibraryCmd::Eval { library, test, .. } => {
             eval(cfg()?, &load(library.as_deref())?, test.as_deref())
         }
@@ -435,9 +502,9 @@ fn build(
     out: &Path,
     seed: u64,
     classes: Vec<MotionClass>,
-    per_class: usize,
-    per_motion: usize,
+    (per_class, per_motion): (usize, usize),
     (gmm_components, auto_components): (usize, Option<usize>),
+    generators: Vec<Generator>,
 ) -> Result<()> {
     let defaults = BuildParams::default();
     let p = BuildParams {
@@ -445,6 +512,7 @@ fn build(
         classes,
         motions_per_class: per_class,
         gestures_per_motion: per_motion,
+        generators,
         features: FeatureParams {
             gmm_components,
             auto_components,
@@ -520,14 +588,18 @@ fn show(lib: &Library) -> Result<()> {
     Ok(())
 }
 
-fn labelled(lib: &Library) -> Vec<(ClassLabel, GestureFeatures)> {
+fn labelled(lib: &Library) -> Vec<Example<ClassLabel>> {
     lib.gestures
         .iter()
-        .map(|g| {
-            (
-                ClassLabel::of(lib, g.class),
-                GestureFeatures::of(&g.gesture),
-            )
+        .map(|g| Example {
+            class: ClassLabel::of(lib, g.class),
+            features: GestureFeatures::of(&g.gesture),
+            physical: PhysicalFeatures::of(&g.gesture, g.scale_mm),
+            // A library gesture moved (it was drawn as one).
+            movement: Movement {
+                travel_mm: f64::INFINITY,
+                jitter_mm: 0.0,
+            },
         })
         .collect()
 }
@@ -535,14 +607,14 @@ fn labelled(lib: &Library) -> Vec<(ClassLabel, GestureFeatures)> {
 fn eval(cfg: &Config, lib: &Library, test: Option<&Path>) -> Result<()> {
     let params = search_params(cfg);
     let train = labelled(lib);
-    let report = match test {
+    let test = match test {
         None => {
             outln!(
                 "leave-one-out over {} library gestures (K = {}, weighted voting)",
                 train.len(),
                 params.k
             )?;
-            leave_one_out_report(&train, &params)
+            None
         }
         Some(dir) => {
             let test = read_test_dir(dir, cfg, lib)?;
@@ -553,19 +625,69 @@ fn eval(cfg: &Config, lib: &Library, test: Option<&Path>) -> Result<()> {
                 train.len(),
                 params.k
             )?;
-            train_test_report(&train, &test, &params)
+            Some(test)
         }
     };
-    print_report(&report, |c: ClassLabel| lib.class_name(c.id).to_string())
+    let name = |c: ClassLabel| lib.class_name(c.id).to_string();
+    let w = PhysicalWeights::default();
+    let basic = |s: &[Example<ClassLabel>]| -> Vec<Example<ClassLabel>> {
+        s.iter().filter(|e| e.class.is_basic()).cloned().collect()
+    };
+    let (train_b, test_b) = (basic(&train), test.as_deref().map(basic));
+    let all = outcomes(&train, test.as_deref(), &w, &params);
+    let rejected = all
+        .iter()
+        .filter(|o| o.rejected(&RejectParams::default()))
+        .count();
+    outln!()?;
+    outln!("recogniser: eq. 12 + physical features")?;
+    outln!("six basic classes")?;
+    if train_b.is_empty() {
+        outln!("(none: the library has no translate, twist, contract, expand, join or split)")?;
+    } else {
+        print_eval(
+            &evaluate(&outcomes(&train_b, test_b.as_deref(), &w, &params)),
+            &name,
+        )?;
+    }
+    outln!()?;
+    outln!("{}", all_classes(lib.classes.len()))?;
+    print_eval(&evaluate(&all), &name)?;
+    outln!(
+        "rejected by the default thresholds: {rejected} of {}",
+        all.len()
+    )?;
+    // The paper's recogniser, eq. 12 alone, with its feature ablation.
+    let plain = |s: &[Example<ClassLabel>]| -> Vec<(ClassLabel, GestureFeatures)> {
+        s.iter().map(|e| (e.class, e.features.clone())).collect()
+    };
+    let report = match &test {
+        None => leave_one_out_report(&plain(&train), &params),
+        Some(t) => train_test_report(&plain(&train), &plain(t), &params),
+    };
+    outln!()?;
+    outln!(
+        "eq. 12 alone (the paper's baseline): basic {:.1}%, all {:.1}%",
+        100.0 * report.basic.accuracy,
+        100.0 * report.all.accuracy
+    )?;
+    print_report(&report)
+}
+
+/// "all ten classes", "all 12 classes".
+fn all_classes(n: usize) -> String {
+    const WORDS: [&str; 11] = [
+        "no", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten",
+    ];
+    match WORDS.get(n) {
+        Some(w) => format!("all {w} classes"),
+        None => format!("all {n} classes"),
+    }
 }
 
 /// `DIR/<class>/*`: every gesture in every recording, labelled by its folder (a
 /// class of `lib`).
-fn read_test_dir(
-    dir: &Path,
-    cfg: &Config,
-    lib: &Library,
-) -> Result<Vec<(ClassLabel, GestureFeatures)>> {
+fn read_test_dir(dir: &Path, cfg: &Config, lib: &Library) -> Result<Vec<Example<ClassLabel>>> {
     let mut out = Vec::new();
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("{}: cannot read test directory", dir.display()))?
@@ -588,8 +710,8 @@ fn read_test_dir(
         for f in files {
             for g in gestures_in(&f, cfg)? {
                 match g.tracks {
-                    Ok(t) => match prepare(&t) {
-                        Ok(r) => out.push((class, GestureFeatures::of(&r))),
+                    Ok(t) => match Example::of(class, &t) {
+                        Ok(e) => out.push(e),
                         Err(e) => outln!("{}: gesture skipped: {e}", f.display())?,
                     },
                     Err(why) => outln!("{}: gesture skipped: {why}", f.display())?,
@@ -603,26 +725,8 @@ fn read_test_dir(
     Ok(out)
 }
 
-fn print_report<C: Label>(r: &Report<C>, name: impl Fn(C) -> String) -> Result<()> {
-    outln!()?;
-    outln!("six basic classes")?;
-    if r.basic.confusion.classes.is_empty() {
-        outln!("(none: the library has no translate, twist, contract, expand, join or split)")?;
-    } else {
-        print_eval(&r.basic, &name)?;
-    }
-    outln!()?;
-    const WORDS: [&str; 11] = [
-        "no", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten",
-    ];
-    let n = r.all.confusion.classes.len();
-    match WORDS.get(n) {
-        Some(w) => outln!("all {w} classes")?,
-        None => outln!("all {n} classes")?,
-    }
-    print_eval(&r.all, &name)?;
-    outln!()?;
-    outln!("with one feature removed (others renormalised):")?;
+fn print_report<C: Label>(r: &Report<C>) -> Result<()> {
+    outln!("with one of eq. 12's features removed (others renormalised; eq. 12 alone):")?;
     outln!("{:<10} {:>8} {:>8}", "removed", "basic", "all")?;
     for a in &r.ablation {
         outln!(
@@ -653,7 +757,9 @@ fn short(name: &str) -> String {
     }
 }
 
-fn print_eval<C: Label>(e: &Evaluation<C>, name: &impl Fn(C) -> String) -> Result<()> {
+/// Prints a confusion matrix with per-class and overall accuracy, each class
+/// named by `name`.
+pub(super) fn print_eval<C: Label>(e: &Evaluation<C>, name: &impl Fn(C) -> String) -> Result<()> {
     let classes = &e.confusion.classes;
     let width = classes
         .iter()
@@ -719,7 +825,7 @@ fn add(
                     continue;
                 }
             };
-            let gesture = prepare(&tracks).with_context(|| {
+            let (gesture, scale_mm) = prepare_scaled(&tracks).with_context(|| {
                 format!("{}: gesture at {:.3} s", f.display(), g.t.as_secs_f64())
             })?;
             let motion = match motion {
@@ -740,6 +846,7 @@ fn add(
                 origin: format!("recording {} t={:.3}s", f.display(), g.t.as_secs_f64()),
                 participant: participant.clone(),
                 device: device.clone(),
+                scale_mm: Some(scale_mm),
             });
             added += 1;
         }
@@ -783,33 +890,28 @@ fn nearest_motion(lib: &Library, class: ClassId, f: &GestureFeatures, cfg: &Conf
     }
 }
 
-fn test_set(out: &Path, seed: u64, per_class: usize) -> Result<()> {
-    let ranges = StyleRanges::test_set();
+fn test_set(out: &Path, seed: u64, per_class: usize, generator: Generator) -> Result<()> {
     let mut n = 0;
     for class in MotionClass::ALL {
         let dir = out.join(class.as_str());
         std::fs::create_dir_all(&dir)
             .with_context(|| format!("{}: cannot create", dir.display()))?;
         for i in 0..per_class {
-            let s = seed
-                .wrapping_mul(1_000_003)
-                .wrapping_add((class.index() * 10_000 + i) as u64);
-            let style = GestureStyle::random(class, s, &ranges);
-            let tracks = generate(class, &style, s ^ 0xa5a5);
-            let frames = to_frames(&tracks, style.device_mm, Micros(1_000_000));
+            let d = draw_labelled(generator, class, seed, i, None);
+            let frames = to_frames(&d.tracks, d.device_mm, Micros(1_000_000));
             let surface = SurfaceInfo {
                 name: format!(
-                    "test set {:.0}x{:.0} mm",
-                    style.device_mm.0, style.device_mm.1
+                    "test set ({generator}) {:.0}x{:.0} mm",
+                    d.device_mm.0, d.device_mm.1
                 ),
                 x: AxisRange {
                     min: 0.0,
-                    max: style.device_mm.0 * 10.0,
+                    max: d.device_mm.0 * 10.0,
                     resolution: 10.0,
                 },
                 y: AxisRange {
                     min: 0.0,
-                    max: style.device_mm.1 * 10.0,
+                    max: d.device_mm.1 * 10.0,
                     resolution: 10.0,
                 },
                 max_contacts: 10,

@@ -7,8 +7,19 @@
 //! Results are plain data; the command line formats them. Labels are a library's
 //! classes ([`ClassLabel`]) or a generator's kinds ([`MotionClass`]): any
 //! [`Label`].
+//!
+//! # Across drawing styles
+//!
+//! [`cross_style`] runs the four evaluations issue 28 asks for on two labelled sets
+//! drawn by different generators (`gesture::generator`): leave-one-out on each,
+//! and each set classified against the other, both by the recogniser's combined
+//! distance (eq. 12 plus the physical features, `physical.rs`) and by eq. 12 alone
+//! (the paper's baseline). [`fit_weights`] chooses the combined distance's weights
+//! by coordinate search on the cross-style accuracies: the weights are fitted
+//! across styles, never per sample.
 
 use super::dtw::Weights;
+use super::error::GestureError;
 use super::features::GestureFeatures;
 use super::knn::{inverse_distance_weights, vote, GestureIndex, Neighbour, SearchParams, Searcher};
 use super::library::{ClassId, Library, MotionClass};
@@ -52,6 +63,10 @@ impl Label for ClassLabel {
         self.basic
     }
 }
+use super::physical::{PhysicalFeatures, PhysicalWeights, PHYSICAL_DIM};
+use super::reject::{Movement, RejectParams};
+use super::resample::prepare_scaled;
+use super::track::GestureTracks;
 
 /// One of the four features of eq. 11.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
@@ -327,6 +342,237 @@ fn report<C: Label>(
         basic,
         ablation,
     }
+}
+
+/// A labelled gesture as recognition sees it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Example<C = MotionClass> {
+    /// Its class (a generator's kind, or a library's class).
+    pub class: C,
+    /// The four features of section 5.2.
+    pub features: GestureFeatures,
+    /// The physical features.
+    pub physical: PhysicalFeatures,
+    /// How far its fingers moved, and their jitter.
+    pub movement: Movement,
+}
+
+impl<C> Example<C> {
+    /// The example of `tracks` (mm of glass) labelled `class`.
+    ///
+    /// # Errors
+    /// As [`prepare_scaled`].
+    pub fn of(class: C, tracks: &GestureTracks) -> Result<Example<C>, GestureError> {
+        let (r, scale_mm) = prepare_scaled(tracks)?;
+        Ok(Example {
+            class,
+            features: GestureFeatures::of(&r),
+            physical: PhysicalFeatures::of(&r, Some(scale_mm)),
+            movement: Movement::of(tracks),
+        })
+    }
+}
+
+/// One gesture classified in an evaluation.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Outcome<C = MotionClass> {
+    /// Its true class.
+    pub truth: C,
+    /// The class voted (`None` without neighbours).
+    pub voted: Option<C>,
+    /// The winning class's share of the vote.
+    pub weight: f64,
+    /// Distance to the nearest neighbour.
+    pub nearest: f64,
+    /// Its movement.
+    pub movement: Movement,
+}
+
+impl<C> Outcome<C> {
+    /// Whether `p` rejects it.
+    pub fn rejected(&self, p: &RejectParams) -> bool {
+        self.movement.check(p).is_some() || self.weight < p.min_vote || self.nearest > p.max_nearest
+    }
+}
+
+fn index_of<C>(set: &[Example<C>], w: &PhysicalWeights, band: Option<usize>) -> GestureIndex {
+    GestureIndex::with_physical(
+        set.iter().map(|e| e.features.clone()).collect(),
+        set.iter().map(|e| e.physical).collect(),
+        *w,
+        band,
+    )
+}
+
+/// Every gesture of `test` classified against `train` (or, with `test = None`,
+/// every gesture of `train` against the others: leave-one-out) by the combined
+/// distance with weights `w`.
+pub fn outcomes<C: Label>(
+    train: &[Example<C>],
+    test: Option<&[Example<C>]>,
+    w: &PhysicalWeights,
+    p: &SearchParams,
+) -> Vec<Outcome<C>> {
+    let index = index_of(train, w, p.band);
+    let mut searcher = Searcher::new();
+    let loo = test.is_none();
+    let queries = test.unwrap_or(train);
+    let wider = SearchParams {
+        k: p.k + usize::from(loo),
+        ..*p
+    };
+    let mut kept: Vec<Neighbour> = Vec::with_capacity(p.k + 1);
+    queries
+        .iter()
+        .enumerate()
+        .map(|(i, q)| {
+            kept.clear();
+            kept.extend(
+                searcher
+                    .search_with(&index, &q.features, &q.physical, &wider)
+                    .iter()
+                    .filter(|n| !loo || n.entry != i)
+                    .take(p.k),
+            );
+            inverse_distance_weights(&mut kept);
+            let v = vote(&kept, |e| train[e].class);
+            Outcome {
+                truth: q.class,
+                voted: v.map(|v| v.0),
+                weight: v.map_or(0.0, |v| v.1),
+                nearest: kept.first().map_or(f64::INFINITY, |n| n.distance),
+                movement: q.movement,
+            }
+        })
+        .collect()
+}
+
+/// The evaluation of outcomes (rejection not applied: the class voted).
+pub fn evaluate<C: Label>(outcomes: &[Outcome<C>]) -> Evaluation<C> {
+    let pairs: Vec<(C, Option<C>)> = outcomes.iter().map(|o| (o.truth, o.voted)).collect();
+    Evaluation::from_pairs(&pairs)
+}
+
+/// One of the four cross-style evaluations, on the basic classes and on all.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CrossRun {
+    /// What was trained on and tested (`synth → style2`, `leave-one-out style2`).
+    pub name: String,
+    /// The combined distance, six basic classes (both sets restricted).
+    pub basic: Evaluation,
+    /// The combined distance, all classes.
+    pub all: Evaluation,
+    /// Eq. 12 alone, basic classes.
+    pub baseline_basic: Evaluation,
+    /// Eq. 12 alone, all classes.
+    pub baseline_all: Evaluation,
+    /// Test gestures (all classes) that `RejectParams::default()` would reject.
+    pub rejected: usize,
+    /// Test gestures (all classes).
+    pub tested: usize,
+}
+
+fn basic_examples<C: Label>(set: &[Example<C>]) -> Vec<Example<C>> {
+    set.iter().filter(|e| e.class.is_basic()).cloned().collect()
+}
+
+fn cross_run(
+    name: String,
+    train: &[Example],
+    test: Option<&[Example]>,
+    w: &PhysicalWeights,
+    p: &SearchParams,
+) -> CrossRun {
+    let (train_b, test_b) = (basic_examples(train), test.map(basic_examples));
+    let all = outcomes(train, test, w, p);
+    let reject = RejectParams::default();
+    let base = PhysicalWeights::BASELINE;
+    CrossRun {
+        name,
+        basic: evaluate(&outcomes(&train_b, test_b.as_deref(), w, p)),
+        baseline_basic: evaluate(&outcomes(&train_b, test_b.as_deref(), &base, p)),
+        baseline_all: evaluate(&outcomes(train, test, &base, p)),
+        rejected: all.iter().filter(|o| o.rejected(&reject)).count(),
+        tested: all.len(),
+        all: evaluate(&all),
+    }
+}
+
+/// The four evaluations across two generators' sets `a` and `b`: leave-one-out on
+/// `a`, leave-one-out on `b`, trained on `a` and tested on `b`, trained on `b` and
+/// tested on `a`.
+pub fn cross_style(
+    (name_a, a): (&str, &[Example]),
+    (name_b, b): (&str, &[Example]),
+    w: &PhysicalWeights,
+    p: &SearchParams,
+) -> Vec<CrossRun> {
+    vec![
+        cross_run(format!("leave-one-out {name_a}"), a, None, w, p),
+        cross_run(format!("leave-one-out {name_b}"), b, None, w, p),
+        cross_run(format!("train {name_a}, test {name_b}"), a, Some(b), w, p),
+        cross_run(format!("train {name_b}, test {name_a}"), b, Some(a), w, p),
+    ]
+}
+
+/// The score [`fit_weights`] maximises: the worse of the two cross-style
+/// accuracies on the six basic classes, plus a tenth of the worse on all classes.
+pub fn cross_score(a: &[Example], b: &[Example], w: &PhysicalWeights, p: &SearchParams) -> f64 {
+    let (ab, bb) = (basic_examples(a), basic_examples(b));
+    let acc =
+        |train: &[Example], test: &[Example]| evaluate(&outcomes(train, Some(test), w, p)).accuracy;
+    let basic = acc(&ab, &bb).min(acc(&bb, &ab));
+    let all = acc(a, b).min(acc(b, a));
+    basic + 0.1 * all
+}
+
+/// Coordinate search for the combined distance's weights: each weight in turn is
+/// multiplied by 0, ½, ⅔, 3⁄2 and 2 (a zero weight tries 0.25), and the change kept
+/// when it raises [`cross_score`]; `rounds` passes. Returns the weights and their
+/// score.
+pub fn fit_weights(
+    a: &[Example],
+    b: &[Example],
+    start: PhysicalWeights,
+    p: &SearchParams,
+    rounds: usize,
+) -> (PhysicalWeights, f64) {
+    let mut best = start;
+    let mut score = cross_score(a, b, &best, p);
+    for _ in 0..rounds {
+        let mut improved = false;
+        for k in 0..=PHYSICAL_DIM {
+            let current = if k == PHYSICAL_DIM {
+                best.eq12
+            } else {
+                best.features[k]
+            };
+            let tries: Vec<f64> = if current == 0.0 {
+                vec![0.25]
+            } else {
+                [0.0, 0.5, 2.0 / 3.0, 1.5, 2.0]
+                    .iter()
+                    .map(|m| m * current)
+                    .collect()
+            };
+            for v in tries {
+                let mut w = best;
+                if k == PHYSICAL_DIM {
+                    w.eq12 = v;
+                } else {
+                    w.features[k] = v;
+                }
+                let s = cross_score(a, b, &w, p);
+                if s > score + 1e-12 {
+                    (best, score, improved) = (w, s, true);
+                }
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
+    (best, score)
 }
 
 #[cfg(test)]

@@ -13,10 +13,17 @@
 //!
 //! A relative slack of [`PRUNE_SLACK`] on every comparison keeps rounding in the
 //! bounds from ever pruning an entry that a brute-force scan would keep.
+//!
+//! An index may also hold every entry's physical features (`physical.rs`) with their
+//! weights: the distance is then `w₁₂ · eq. 12 + Σ_k w_k │a_k − b_k│`. The physical
+//! part is cheap and exact, so it is added to every entry's bound as it is and the
+//! search stays exact. An index without them (or with
+//! [`PhysicalWeights::BASELINE`]) is the paper's eq. 12 alone.
 
 use super::dtw::{feature_dtw, lb_keogh, lb_kim, weighted_sum, Dtw, Envelope, Weights};
 use super::features::GestureFeatures;
 use super::library::T_H;
+use super::physical::{PhysicalFeatures, PhysicalWeights};
 use std::cmp::Ordering;
 
 /// Relative slack applied to the K-th distance before a bound is compared with it.
@@ -92,12 +99,15 @@ fn kim(a: &GestureFeatures, b: &GestureFeatures, f: usize) -> f64 {
     }
 }
 
-/// Library gestures' features with their LB_Keogh envelopes.
+/// Library gestures' features with their LB_Keogh envelopes, and optionally their
+/// physical features and the weights of the combined distance.
 #[derive(Clone, Debug)]
 pub struct GestureIndex {
     entries: Vec<GestureFeatures>,
     envelopes: Vec<Envelopes>,
     band: Option<usize>,
+    physical: Vec<PhysicalFeatures>,
+    physical_weights: PhysicalWeights,
 }
 
 impl GestureIndex {
@@ -111,10 +121,39 @@ impl GestureIndex {
     pub fn with_band(entries: Vec<GestureFeatures>, band: Option<usize>) -> GestureIndex {
         let envelopes = entries.iter().map(|g| Envelopes::of(g, band)).collect();
         GestureIndex {
+            physical: vec![PhysicalFeatures::default(); entries.len()],
             entries,
             envelopes,
             band,
+            physical_weights: PhysicalWeights::BASELINE,
         }
+    }
+
+    /// An index searched by the combined distance of eq. 12 and the physical
+    /// features (module doc). `physical` has one vector per entry (missing ones are
+    /// unknown).
+    pub fn with_physical(
+        entries: Vec<GestureFeatures>,
+        mut physical: Vec<PhysicalFeatures>,
+        weights: PhysicalWeights,
+        band: Option<usize>,
+    ) -> GestureIndex {
+        physical.resize(entries.len(), PhysicalFeatures::default());
+        GestureIndex {
+            physical,
+            physical_weights: weights,
+            ..GestureIndex::with_band(entries, band)
+        }
+    }
+
+    /// The weights of the combined distance.
+    pub fn physical_weights(&self) -> &PhysicalWeights {
+        &self.physical_weights
+    }
+
+    /// Entry `i`'s physical features.
+    pub fn physical(&self, i: usize) -> Option<&PhysicalFeatures> {
+        self.physical.get(i)
     }
 
     /// Entries.
@@ -160,7 +199,20 @@ pub struct Searcher {
     /// `(weighted bound, entry)`, sorted.
     order: Vec<(f64, usize)>,
     best: Vec<Neighbour>,
+    /// Per entry: the physical part of its distance.
+    physical: Vec<f64>,
     stats: SearchStats,
+}
+
+/// The combined distance from its parts (one expression, so the search and the
+/// brute force agree to the bit).
+#[inline]
+fn combined(scale12: f64, eq12: f64, physical: f64) -> f64 {
+    if scale12 > 0.0 {
+        scale12 * eq12 + physical
+    } else {
+        physical
+    }
 }
 
 /// `(distance, entry)` order: nearer first, then lower index.
@@ -192,22 +244,45 @@ impl Searcher {
         query: &GestureFeatures,
         p: &SearchParams,
     ) -> &[Neighbour] {
+        self.search_with(index, query, &PhysicalFeatures::default(), p)
+    }
+
+    /// [`search`](Self::search) by the index's combined distance, with the query's
+    /// physical features (unknown ones, and all of them with the baseline weights,
+    /// count for nothing).
+    pub fn search_with(
+        &mut self,
+        index: &GestureIndex,
+        query: &GestureFeatures,
+        query_physical: &PhysicalFeatures,
+        p: &SearchParams,
+    ) -> &[Neighbour] {
         self.best.clear();
         self.stats = SearchStats::default();
         let k = p.k.min(index.len());
         if k == 0 {
             return &self.best;
         }
-        let w = p.weights.as_array();
+        let pw = &index.physical_weights;
+        let scale12 = pw.eq12;
+        // With no weight on eq. 12 no DTW is needed: the physical part is exact.
+        let w = if scale12 > 0.0 {
+            p.weights.as_array()
+        } else {
+            [0.0; 4]
+        };
         let own_env = index.band == p.band;
         if !own_env {
             self.query_env.fill(query, p.band);
         }
         self.bounds.clear();
         self.order.clear();
+        self.physical.clear();
         for (e, g) in index.entries.iter().enumerate() {
             let mut lb = [0.0; 4];
             let mut total = 0.0;
+            let phys = pw.distance(query_physical, &index.physical[e]);
+            self.physical.push(phys);
             for f in 0..4 {
                 if w[f] == 0.0 {
                     continue;
@@ -221,7 +296,7 @@ impl Searcher {
                 total += w[f] * lb[f];
             }
             self.bounds.push(lb);
-            self.order.push((total, e));
+            self.order.push((scale12 * total + phys, e));
         }
         self.order
             .sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -242,6 +317,13 @@ impl Searcher {
                 break;
             }
             let lb = self.bounds[e];
+            let phys = self.physical[e];
+            // What eq. 12's weighted sum may reach before the entry is out.
+            let limit12 = if scale12 > 0.0 {
+                (limit - phys) / scale12
+            } else {
+                f64::INFINITY
+            };
             let mut d = [0.0; 4];
             let mut acc = 0.0;
             let mut rest: f64 = feats.iter().map(|&f| w[f] * lb[f]).sum();
@@ -252,7 +334,7 @@ impl Searcher {
                 }
                 rest -= w[f] * lb[f];
                 let max_f = if full {
-                    Some(((limit - acc - rest.max(0.0)) / w[f]).max(0.0) * (1.0 + PRUNE_SLACK))
+                    Some(((limit12 - acc - rest.max(0.0)) / w[f]).max(0.0) * (1.0 + PRUNE_SLACK))
                 } else {
                     None
                 };
@@ -268,7 +350,7 @@ impl Searcher {
                 continue;
             }
             self.stats.computed += 1;
-            let dist = weighted_sum(&p.weights, &d);
+            let dist = combined(scale12, weighted_sum(&p.weights, &d), phys);
             if full
                 && !closer(
                     (dist, e),
@@ -328,15 +410,38 @@ pub fn brute_force(
     query: &GestureFeatures,
     p: &SearchParams,
 ) -> Vec<Neighbour> {
+    brute_force_with(index, query, &PhysicalFeatures::default(), p)
+}
+
+/// [`brute_force`] by the index's combined distance: what
+/// [`Searcher::search_with`] must equal.
+pub fn brute_force_with(
+    index: &GestureIndex,
+    query: &GestureFeatures,
+    query_physical: &PhysicalFeatures,
+    p: &SearchParams,
+) -> Vec<Neighbour> {
     let mut dtw = Dtw::new();
+    let pw = &index.physical_weights;
     let mut all: Vec<Neighbour> = index
         .entries
         .iter()
         .enumerate()
-        .map(|(e, g)| Neighbour {
-            entry: e,
-            distance: super::dtw::gesture_distance(&mut dtw, query, g, &p.weights, p.band),
-            weight: 0.0,
+        .map(|(e, g)| {
+            let eq12 = if pw.eq12 > 0.0 {
+                super::dtw::gesture_distance(&mut dtw, query, g, &p.weights, p.band)
+            } else {
+                0.0
+            };
+            Neighbour {
+                entry: e,
+                distance: combined(
+                    pw.eq12,
+                    eq12,
+                    pw.distance(query_physical, &index.physical[e]),
+                ),
+                weight: 0.0,
+            }
         })
         .collect();
     all.sort_by(|a, b| {
@@ -529,6 +634,7 @@ mod tests {
             index_band in proptest::option::of(0usize..10),
             dup in any::<bool>(),
             ablate in 0usize..5,
+            physical in 0usize..3,
         ) {
             let mut rng = SplitMix64::new(seed);
             let mut entries: Vec<GestureFeatures> = (0..n).map(|_| random_features(&mut rng)).collect();
@@ -543,11 +649,32 @@ mod tests {
                 w[ablate] = 0.0;
             }
             let p = SearchParams { k, weights: Weights::from_array(w), band };
-            let index = GestureIndex::with_band(entries, index_band);
-            let want = brute_force(&index, &query, &p);
-            let mut s = Searcher::new();
-            let got = s.search(&index, &query, &p).to_vec();
-            prop_assert_eq!(got, want);
+            if physical == 0 {
+                let index = GestureIndex::with_band(entries, index_band);
+                let want = brute_force(&index, &query, &p);
+                let mut s = Searcher::new();
+                let got = s.search(&index, &query, &p).to_vec();
+                prop_assert_eq!(got, want);
+            } else {
+                // The combined distance, with eq. 12 weighted or (physical == 2) not
+                // at all, and some features unknown.
+                let phys = |rng: &mut SplitMix64| PhysicalFeatures {
+                    values: std::array::from_fn(|_| {
+                        if rng.unit() < 0.1 { f64::NAN } else { rng.uniform(-2.0, 2.0) }
+                    }),
+                };
+                let ph: Vec<PhysicalFeatures> = (0..entries.len()).map(|_| phys(&mut rng)).collect();
+                let q = phys(&mut rng);
+                let weights = PhysicalWeights {
+                    eq12: if physical == 2 { 0.0 } else { rng.uniform(0.1, 2.0) },
+                    features: std::array::from_fn(|_| rng.uniform(0.0, 1.0)),
+                };
+                let index = GestureIndex::with_physical(entries, ph, weights, index_band);
+                let want = brute_force_with(&index, &query, &q, &p);
+                let mut s = Searcher::new();
+                let got = s.search_with(&index, &query, &q, &p).to_vec();
+                prop_assert_eq!(got, want);
+            }
         }
     }
 }

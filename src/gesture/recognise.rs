@@ -1,17 +1,24 @@
 //! Recognition: a captured gesture against the library (gesture-driven sections 5
-//! and 7.1). The gesture is validated, normalised and resampled ([`prepare`]), its
-//! four features extracted ([`GestureFeatures::of`]), its K nearest library gestures
-//! found by eq. 12 with the pruned search ([`Searcher`]), weighted by eq. 18, and its
-//! class voted by the weighted neighbours (section 8.2).
+//! and 7.1). The gesture is validated, normalised and resampled ([`prepare_scaled`]),
+//! its four features extracted ([`GestureFeatures::of`]) and its physical features
+//! ([`PhysicalFeatures::of`], before eq. 2's scaling), its K nearest library gestures
+//! found by eq. 12 plus the weighted physical distance with the pruned search
+//! ([`Searcher`]), weighted by eq. 18, and its class voted by the weighted neighbours
+//! (section 8.2). Then rejection (`reject.rs`): a weak vote, far neighbours or
+//! fingers that barely moved give no class.
 //!
-//! A [`Recogniser`] is the library made searchable: every library gesture's features
-//! and lower-bound envelopes, computed once when the library is loaded.
+//! A [`Recogniser`] is the library made searchable: every library gesture's features,
+//! physical features and lower-bound envelopes, computed once when the library is
+//! loaded. [`Recogniser::baseline`] is the paper's recogniser (eq. 12 alone, nothing
+//! rejected), kept to report beside the new one.
 
 use super::error::GestureError;
 use super::features::GestureFeatures;
 use super::knn::{vote, GestureIndex, Neighbour, SearchParams, Searcher};
-use super::library::{ClassId, Library, LibraryError};
-use super::resample::prepare;
+use super::library::{ClassId, Library, LibraryError, Resampled};
+use super::physical::{PhysicalFeatures, PhysicalWeights};
+use super::reject::{Movement, RejectParams, Rejection};
+use super::resample::prepare_scaled;
 use super::track::GestureTracks;
 
 /// The library with its gestures' features indexed for search.
@@ -21,6 +28,17 @@ pub struct Recogniser {
     index: GestureIndex,
     /// What the library was read from (`library.ctgl (shipped)`, a path).
     source: String,
+    /// When a recognition is refused.
+    reject: RejectParams,
+}
+
+/// A gesture classified: what the vote says and, when the outcome is "none", why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Classified {
+    /// The vote (the class it would be).
+    pub recognised: Recognised,
+    /// Why it is not a command, if it is not.
+    pub rejection: Option<Rejection>,
 }
 
 /// A gesture recognised: its class, how much of the neighbours' weight voted for
@@ -45,6 +63,10 @@ pub enum RecogniseError {
     /// The library holds no gesture.
     #[error("the gesture library is empty")]
     EmptyLibrary,
+    /// The gesture is not a command (a weak vote, far neighbours, fingers that
+    /// barely moved).
+    #[error("{0}")]
+    Rejected(Rejection),
 }
 
 impl Recogniser {
@@ -59,16 +81,65 @@ impl Recogniser {
         source: impl Into<String>,
         band: Option<usize>,
     ) -> Result<Recogniser, LibraryError> {
+        Recogniser::with_params(
+            library,
+            source,
+            band,
+            PhysicalWeights::default(),
+            RejectParams::default(),
+        )
+    }
+
+    /// The paper's recogniser: eq. 12 alone, nothing rejected.
+    ///
+    /// # Errors
+    /// As [`new`](Self::new).
+    pub fn baseline(
+        library: Library,
+        source: impl Into<String>,
+        band: Option<usize>,
+    ) -> Result<Recogniser, LibraryError> {
+        Recogniser::with_params(
+            library,
+            source,
+            band,
+            PhysicalWeights::BASELINE,
+            RejectParams::NONE,
+        )
+    }
+
+    /// A recogniser with the given distance weights and rejection thresholds.
+    ///
+    /// # Errors
+    /// As [`new`](Self::new).
+    pub fn with_params(
+        library: Library,
+        source: impl Into<String>,
+        band: Option<usize>,
+        weights: PhysicalWeights,
+        reject: RejectParams,
+    ) -> Result<Recogniser, LibraryError> {
         let features = library
             .gestures
             .iter()
             .map(|g| GestureFeatures::of(&g.gesture))
             .collect();
+        let physical = library
+            .gestures
+            .iter()
+            .map(|g| PhysicalFeatures::of(&g.gesture, g.scale_mm))
+            .collect();
         Ok(Recogniser {
-            index: GestureIndex::with_band(features, band),
+            index: GestureIndex::with_physical(features, physical, weights, band),
             library,
             source: source.into(),
+            reject,
         })
+    }
+
+    /// The rejection thresholds.
+    pub fn reject_params(&self) -> &RejectParams {
+        &self.reject
     }
 
     /// The library.
@@ -101,22 +172,89 @@ impl Recogniser {
     }
 
     /// Recognises `tracks` (mm of glass) with `params`, reusing `searcher`'s
-    /// buffers.
+    /// buffers: the class, or why the gesture is not a command.
     ///
     /// # Errors
     /// [`RecogniseError::Gesture`] when the gesture cannot be compared,
-    /// [`RecogniseError::EmptyLibrary`] with nothing to compare it with.
+    /// [`RecogniseError::EmptyLibrary`] with nothing to compare it with,
+    /// [`RecogniseError::Rejected`] when it is not a command.
     pub fn recognise(
         &self,
         tracks: &GestureTracks,
         params: &SearchParams,
         searcher: &mut Searcher,
     ) -> Result<Recognised, RecogniseError> {
-        let features = GestureFeatures::of(&prepare(tracks)?);
-        self.recognise_features(&features, params, searcher)
+        let c = self.classify(tracks, params, searcher)?;
+        match c.rejection {
+            Some(r) => Err(RecogniseError::Rejected(r)),
+            None => Ok(c.recognised),
+        }
     }
 
-    /// [`recognise`](Self::recognise) for features already extracted.
+    /// Classifies `tracks`: the vote, and the rejection if there is one.
+    ///
+    /// # Errors
+    /// [`RecogniseError::Gesture`], [`RecogniseError::EmptyLibrary`].
+    pub fn classify(
+        &self,
+        tracks: &GestureTracks,
+        params: &SearchParams,
+        searcher: &mut Searcher,
+    ) -> Result<Classified, RecogniseError> {
+        let (drawn, scale_mm) = prepare_scaled(tracks)?;
+        self.classify_prepared(&drawn, scale_mm, &Movement::of(tracks), params, searcher)
+    }
+
+    /// [`classify`](Self::classify) for a gesture already resampled (with its eq. 2
+    /// scale, mm) and its raw movement.
+    ///
+    /// # Errors
+    /// [`RecogniseError::EmptyLibrary`].
+    pub fn classify_prepared(
+        &self,
+        drawn: &Resampled,
+        scale_mm: f64,
+        movement: &Movement,
+        params: &SearchParams,
+        searcher: &mut Searcher,
+    ) -> Result<Classified, RecogniseError> {
+        let features = GestureFeatures::of(drawn);
+        let physical = PhysicalFeatures::of(drawn, Some(scale_mm));
+        let neighbours = searcher
+            .search_with(&self.index, &features, &physical, params)
+            .to_vec();
+        let (class, weight) =
+            vote(&neighbours, |e| self.class_of(e)).ok_or(RecogniseError::EmptyLibrary)?;
+        let r = &self.reject;
+        let nearest = neighbours.first().map_or(0.0, |n| n.distance);
+        let rejection = movement.check(r).or_else(|| {
+            if weight < r.min_vote {
+                Some(Rejection::WeakVote {
+                    class: self.class_name(class).to_string(),
+                    weight,
+                    min: r.min_vote,
+                })
+            } else if nearest > r.max_nearest {
+                Some(Rejection::Far {
+                    distance: nearest,
+                    max: r.max_nearest,
+                })
+            } else {
+                None
+            }
+        });
+        Ok(Classified {
+            recognised: Recognised {
+                class,
+                weight,
+                neighbours,
+            },
+            rejection,
+        })
+    }
+
+    /// The vote for features already extracted, by eq. 12 alone (the physical
+    /// features are unknown here), nothing rejected.
     ///
     /// # Errors
     /// [`RecogniseError::EmptyLibrary`] with nothing to compare with.
@@ -142,6 +280,8 @@ impl PartialEq for Recogniser {
     fn eq(&self, other: &Recogniser) -> bool {
         self.source == other.source
             && self.index.band() == other.index.band()
+            && self.index.physical_weights() == other.index.physical_weights()
+            && self.reject == other.reject
             && self.library == other.library
     }
 }

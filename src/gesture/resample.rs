@@ -77,6 +77,15 @@ pub const MIN_EXTENT_MM: f64 = 1e-6;
 /// assert!((r.fingers[0][21].x - 21.0 / 63.0).abs() < 1e-12); // a line at constant speed stays one
 /// ```
 pub fn prepare(tracks: &GestureTracks) -> Result<Resampled, GestureError> {
+    prepare_scaled(tracks).map(|(r, _)| r)
+}
+
+/// [`prepare`], with eq. 2's scale: the larger side of the resampled gesture's
+/// bounding box on the glass (mm), which `physical` features need.
+///
+/// # Errors
+/// As [`prepare`].
+pub fn prepare_scaled(tracks: &GestureTracks) -> Result<(Resampled, f64), GestureError> {
     let present: Vec<usize> = (0..tracks.fingers.len())
         .filter(|&f| !tracks.fingers[f].samples.is_empty())
         .collect();
@@ -139,8 +148,8 @@ pub fn prepare(tracks: &GestureTracks) -> Result<Resampled, GestureError> {
 
     let mut fingers: Vec<[Vec2; T_H]> =
         knots.iter().map(|k| resample_finger(k, duration)).collect();
-    normalise(&mut fingers)?;
-    Ok(Resampled { fingers })
+    let scale_mm = normalise(&mut fingers)?;
+    Ok((Resampled { fingers }, scale_mm))
 }
 
 /// One finger's samples as spline knots: `(µs since t0, position mm)`, sorted by
@@ -220,8 +229,8 @@ fn hermite(k: &[(f64, Vec2)], i: usize, tau: f64) -> Vec2 {
 }
 
 /// Eq. 2 on the resampled points: translate the minimum x, y to 0 and scale by
-/// `1 / max(d_v, d_h)`.
-fn normalise(fingers: &mut [[Vec2; T_H]]) -> Result<(), GestureError> {
+/// `1 / max(d_v, d_h)`; returns `max(d_v, d_h)` (mm).
+fn normalise(fingers: &mut [[Vec2; T_H]]) -> Result<f64, GestureError> {
     let mut lo = Vec2::new(f64::INFINITY, f64::INFINITY);
     let mut hi = Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY);
     for p in fingers.iter().flatten() {
@@ -236,7 +245,7 @@ fn normalise(fingers: &mut [[Vec2; T_H]]) -> Result<(), GestureError> {
     for p in fingers.iter_mut().flatten() {
         *p = ((*p - lo) * lambda).map(|c| c.clamp(0.0, 1.0));
     }
-    Ok(())
+    Ok(extent_mm)
 }
 
 #[cfg(test)]

@@ -51,8 +51,9 @@ use crowdtouch::geom::Vec2;
 use crowdtouch::gesture::features::GestureFeatures;
 use crowdtouch::gesture::knn::{vote, Searcher};
 use crowdtouch::gesture::library::{read_library, write_library, Library, MotionClass};
+use crowdtouch::gesture::physical::PhysicalFeatures;
 use crowdtouch::gesture::recognise::Recogniser;
-use crowdtouch::gesture::resample::prepare;
+use crowdtouch::gesture::resample::prepare_scaled;
 use crowdtouch::gesture::synth::{generate, GestureStyle, StyleRanges};
 use crowdtouch::gesture::track::GestureTracks;
 use serde::Serialize;
@@ -269,15 +270,19 @@ pub fn gesture(run: &GestureRun) -> Result<()> {
     for i in 0..repeats {
         let (class, tracks) = query(i);
         let t = now();
-        let Ok(drawn) = prepare(&tracks) else {
+        let Ok((drawn, scale_mm)) = prepare_scaled(&tracks) else {
             failed.push(format!("query {i} ({class}) does not prepare"));
             continue;
         };
         let features = GestureFeatures::of(&drawn);
+        let physical = PhysicalFeatures::of(&drawn, Some(scale_mm));
         prep.push(ms_since(t));
 
+        // The recogniser's distance: eq. 12 plus the physical features.
         let t = now();
-        let neighbours = searcher.search(rec.index(), &features, &params).to_vec();
+        let neighbours = searcher
+            .search_with(rec.index(), &features, &physical, &params)
+            .to_vec();
         knn.push(ms_since(t));
         let s = searcher.stats();
         (computed, abandoned, pruned) = (

@@ -1,7 +1,8 @@
 //! Building a gesture library (gesture-driven section 4) from our own data: crowd
 //! motions from the simulator ([`library_specs`], [`simulate`]) turned into their
 //! features ([`features`], eq. 17), each paired with gestures from the generator of
-//! human-like multi-touch gestures ([`crate::gesture::synth`]), drawn *for that
+//! human-like multi-touch gestures ([`crate::gesture::synth`], and in turn the
+//! independently written [`crate::gesture::style2`]), drawn *for that
 //! motion*: the way the paper's participants watched a motion and drew a gesture
 //! for it, the generator is pointed the way the motion goes.
 //!
@@ -28,8 +29,10 @@ use super::simulate::{library_specs, measure, simulate, MotionSpec, SimulateErro
 use crate::crowd::agents::AgentParams;
 use crate::geom::{cross, Vec2};
 use crate::gesture::error::GestureError;
+use crate::gesture::generator::Generator;
 use crate::gesture::library::{ClassId, Library, LibraryGesture, MotionClass};
-use crate::gesture::resample::prepare;
+use crate::gesture::resample::prepare_scaled;
+use crate::gesture::style2::{self, Aim};
 use crate::gesture::synth::{generate, GestureStyle, StyleRanges};
 use crate::rng::SplitMix64;
 
@@ -47,8 +50,11 @@ pub struct BuildParams {
     pub classes: Vec<MotionClass>,
     /// FPCA and mixture settings of the motions' features.
     pub features: FeatureParams,
-    /// The ranges gesture styles are drawn from.
+    /// The ranges gesture styles are drawn from (`synth`).
     pub styles: StyleRanges,
+    /// The gesture generators, taken in turn gesture by gesture (the shipped
+    /// library: `synth`, then `style2`).
+    pub generators: Vec<Generator>,
     /// The simulated agents.
     pub agents: AgentParams,
     /// The simulator's time step (s).
@@ -68,6 +74,7 @@ impl Default for BuildParams {
             classes: MotionClass::ALL.to_vec(),
             features: FeatureParams::default(),
             styles: StyleRanges::default(),
+            generators: Generator::ALL.to_vec(),
             agents: library_agents(),
             dt_s: 1.0 / 30.0,
         }
@@ -161,22 +168,43 @@ pub fn build_library(p: &BuildParams) -> Result<Library, BuildError> {
             for g in 0..p.gestures_per_motion {
                 let style_seed = rng.next_u64();
                 let gesture_seed = rng.next_u64();
-                let mut style = GestureStyle::random(class, style_seed, &p.styles);
-                heading.point(class, &mut style);
-                let tracks = generate(class, &style, gesture_seed);
-                let gesture = prepare(&tracks).map_err(|source| BuildError::Gesture {
-                    class,
-                    index,
-                    gesture: g,
-                    source,
-                })?;
+                let generator = p
+                    .generators
+                    .get(g % p.generators.len().max(1))
+                    .copied()
+                    .unwrap_or(Generator::Synth);
+                let tracks = match generator {
+                    Generator::Synth => {
+                        let mut style = GestureStyle::random(class, style_seed, &p.styles);
+                        heading.point(class, &mut style);
+                        generate(class, &style, gesture_seed)
+                    }
+                    Generator::Style2 => {
+                        style2::draw(class, gesture_seed, &heading.aim(class)).tracks
+                    }
+                };
+                let (gesture, scale_mm) =
+                    prepare_scaled(&tracks).map_err(|source| BuildError::Gesture {
+                        class,
+                        index,
+                        gesture: g,
+                        source,
+                    })?;
                 lib.gestures.push(LibraryGesture {
                     class: id,
                     motion: motion_id,
                     gesture,
-                    origin: format!("generated {class} {index}.{g} seed {gesture_seed:#x}"),
                     participant: String::new(),
                     device: String::new(),
+                    origin: match generator {
+                        Generator::Synth => {
+                            format!("generated {class} {index}.{g} seed {gesture_seed:#x}")
+                        }
+                        g2 => {
+                            format!("generated ({g2}) {class} {index}.{g} seed {gesture_seed:#x}")
+                        }
+                    },
+                    scale_mm: Some(scale_mm),
                 });
             }
         }
@@ -216,6 +244,34 @@ impl Heading {
             shift: m.centroid_shift,
             rotation_rad: m.rotation_rad,
             axis,
+        }
+    }
+
+    /// Where `style2` should point a gesture of `class` (the same table as
+    /// [`point`](Self::point)).
+    fn aim(&self, class: MotionClass) -> Aim {
+        let angle = |v: Vec2| v.y.atan2(v.x);
+        match class {
+            MotionClass::Translate => Aim {
+                direction_rad: Some(angle(self.shift)),
+                ..Aim::default()
+            },
+            MotionClass::Twist
+            | MotionClass::TwistWhileExpanding
+            | MotionClass::TwistWhileContracting => Aim {
+                clockwise: Some(self.rotation_rad > 0.0),
+                ..Aim::default()
+            },
+            MotionClass::Join | MotionClass::Split => Aim {
+                axis_rad: Some(angle(self.axis)),
+                ..Aim::default()
+            },
+            MotionClass::SplitThenTranslate | MotionClass::TranslateThenJoin => Aim {
+                axis_rad: Some(angle(self.axis)),
+                direction_rad: Some(angle(self.shift)),
+                ..Aim::default()
+            },
+            MotionClass::Contract | MotionClass::Expand => Aim::default(),
         }
     }
 

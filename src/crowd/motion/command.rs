@@ -33,12 +33,12 @@ use super::synth::{Placement, Synthesis, Synthesiser};
 use crate::crowd::mesh::{mesh_around, GoalSample, MeshError, TriMesh};
 use crate::geom::Vec2;
 use crate::gesture::continuous::{recognise_window, WindowBuffers, WindowParams};
-use crate::gesture::features::GestureFeatures;
 use crate::gesture::knn::{SearchParams, Searcher};
 use crate::gesture::library::{ClassId, MotionFeatures};
 use crate::gesture::library::{Resampled, T_H};
 use crate::gesture::recognise::{RecogniseError, Recognised, Recogniser};
-use crate::gesture::resample::prepare;
+use crate::gesture::reject::Movement;
+use crate::gesture::resample::prepare_scaled;
 use crate::gesture::track::GestureTracks;
 use crate::vocab::Micros;
 use std::sync::Arc;
@@ -127,9 +127,13 @@ impl GestureRequest {
             return Err(GestureCommandError::NoAgents);
         }
         let rec = &self.recogniser;
-        let drawn = prepare(&self.tracks).map_err(RecogniseError::from)?;
-        let recognised =
-            rec.recognise_features(&GestureFeatures::of(&drawn), &self.search, searcher)?;
+        let (drawn, scale_mm) = prepare_scaled(&self.tracks).map_err(RecogniseError::from)?;
+        let movement = Movement::of(&self.tracks);
+        let c = rec.classify_prepared(&drawn, scale_mm, &movement, &self.search, searcher)?;
+        if let Some(r) = c.rejection {
+            return Err(RecogniseError::Rejected(r).into());
+        }
+        let recognised = c.recognised;
         let lib = rec.library();
         let neighbours: Vec<(String, String)> = recognised
             .neighbours

@@ -85,6 +85,9 @@ pub enum Problem {
         /// The version this build writes, the newest it reads.
         supported: u32,
     },
+    /// A gesture's scale (eq. 2's extent, mm) is negative.
+    #[error("scale_mm is {0}, negative")]
+    NegativeScale(f64),
     /// The file ends inside a record, or a count promises more than the file holds.
     #[error("{what}: needs {needed} bytes, the file has {remaining} left")]
     Truncated {

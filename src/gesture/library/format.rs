@@ -14,6 +14,7 @@
 //!            gmm × { weight:f64  mean:[f64; d]  cov:[f64; d·d] (row-major) }
 //! gesture    class:u32  motion:u32  fingers:u32 (1..=10)  origin_len:u32 (0..=1024)
 //!            participant_len:u32 (0..=64)  device_len:u32 (0..=256)
+//!            scale_mm:f64 (eq. 2's extent on the glass; 0 when unknown)
 //!            fingers × 64 × { x:f64  y:f64 }  origin:[u8; origin_len]
 //!            participant:[u8; participant_len]  device:[u8; device_len] (UTF-8)
 //! trailer    crc32:u32   (CRC-32/IEEE of every byte before it)
@@ -24,7 +25,9 @@
 //! No class table: the classes are the ten [`MotionClass`]es in the paper's order,
 //! and a record's class is an index into them. The header is
 //! `"CTGL" version:u32 (1) motions:u32 gestures:u32`, and a gesture record has no
-//! participant and device (they read as empty). Everything else is as in version 2.
+//! participant, device and scale (they read as empty and unknown: recognition
+//! leaves the features that need millimetres out for such a gesture). Everything
+//! else is as in version 2.
 //! A version-1 file reads as the library it holds; writing it gives version 2.
 //!
 //! Numbers are f64, not f32: the model holds f64, so a library written and read
@@ -62,7 +65,8 @@ pub const MAX_LIBRARY_BYTES: usize = 256 << 20;
 
 const HEADER_BYTES: usize = 20;
 const MOTION_HEAD_BYTES: usize = 12;
-const GESTURE_HEAD_BYTES: usize = 24;
+/// A version-2 gesture head: six `u32`s and `scale_mm`.
+const GESTURE_HEAD_BYTES: usize = 32;
 const FINGER_BYTES: usize = T_H * 16;
 /// The smallest class record: a one-byte name.
 const MIN_CLASS_BYTES: usize = 4 + 1;
@@ -140,6 +144,7 @@ pub fn write_library(lib: &Library) -> Vec<u8> {
         put_u32(&mut out, g.origin.len());
         put_u32(&mut out, g.participant.len());
         put_u32(&mut out, g.device.len());
+        put_f64s(&mut out, &[g.scale_mm.unwrap_or(0.0)]);
         for finger in &g.gesture.fingers {
             for p in finger {
                 put_f64s(&mut out, &[p.x, p.y]);
@@ -620,6 +625,16 @@ impl<'a> Reader<'a> {
                 self.u32("device length", &item)?,
             )
         };
+        let scale_mm = if layout.version >= 2 {
+            let at = self.pos;
+            let s = self.f64s(1, "scale", &item, |_| "scale_mm".into())?[0];
+            if s < 0.0 {
+                return Err(self.error(at, item, Problem::NegativeScale(s)));
+            }
+            (s > 0.0).then_some(s)
+        } else {
+            None
+        };
         validate::check_gesture_head(class, u64::from(motion), raw_f as usize, classes, motions)
             .map_err(|p| self.error(start, item.clone(), p))?;
         let n_f = raw_f as usize;
@@ -693,6 +708,7 @@ impl<'a> Reader<'a> {
             origin,
             participant,
             device,
+            scale_mm,
         })
     }
 }

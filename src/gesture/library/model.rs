@@ -81,6 +81,10 @@ pub struct LibraryGesture {
     /// The device it was drawn on (its name as the recording or the daemon gives
     /// it); empty when not known.
     pub device: String,
+    /// Eq. 2's scale: the larger side of the gesture's bounding box on the glass
+    /// (mm), which the physical features need (`gesture::physical`); `None` when
+    /// unknown (a file of format version 1).
+    pub scale_mm: Option<f64>,
 }
 
 /// Longest participant id, bytes of UTF-8.

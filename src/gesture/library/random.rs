@@ -71,6 +71,7 @@ pub fn random_library(spec: &RandomLibrarySpec, seed: u64) -> Library {
                     } else {
                         "random table".to_string()
                     },
+                    scale_mm: Some(40.0 + 30.0 * (j % 9) as f64),
                 }
             })
             .collect()
