@@ -471,7 +471,8 @@ pub fn vote(
         .iter()
         .map(|n| class_of(n.entry))
         .find(|c| totals[c.index()] == top)
-        .map(|c| (c, top))
+        // Rounding may sum ten weights to a hair over 1.
+        .map(|c| (c, top.min(1.0)))
 }
 
 #[cfg(test)]
