@@ -316,7 +316,16 @@ fn real_recordings_come_out_as_a_person_would_label_them() {
         ntrig("ntrig-multitouch.2-fingers-touch-release.events"),
     ];
     let config = dir.path().join("ntrig.ron");
-    std::fs::write(&config, "(surface: (size_mm: Some((261.0, 163.0))))").unwrap();
+    let shipped = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("config/crowdtouch.ron"),
+    )
+    .unwrap();
+    let sized = shipped.replace(
+        "size_mm: Some((1210.0, 680.0))",
+        "size_mm: Some((261.0, 163.0))",
+    );
+    assert_ne!(sized, shipped, "the shipped config names the glass's size");
+    std::fs::write(&config, sized).unwrap();
     let files = [
         fixture("atmel-maxtouch.1-finger-drag-up-down.events"),
         fixture("atmel-maxtouch.2-fingers-touch-release.events"),

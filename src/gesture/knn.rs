@@ -481,7 +481,8 @@ pub fn vote<C: Copy + PartialEq>(
         .iter()
         .map(|n| class_of(n.entry))
         .find(|&c| total(c) == top)
-        .map(|c| (c, top))
+        // Rounding may sum ten weights to a hair over 1.
+        .map(|c| (c, top.min(1.0)))
 }
 
 #[cfg(test)]

@@ -69,9 +69,15 @@ pub const SPREAD_FLOOR: f64 = 0.02;
 /// Largest magnitude of a spread change (features 3, 4; natural log).
 pub const SPREAD_CHANGE_CLAMP: f64 = 2.5;
 
-/// A one-finger step shorter than this (normalised units) turns nothing: a finger
-/// at rest has no heading (feature 8).
-pub const TURN_MIN_STEP: f64 = 2e-3;
+/// A one-finger step shorter than this (normalised units: 3 % of the gesture's
+/// extent) is merged into the next (feature 8): a finger at rest has no heading,
+/// and the slow steps where a stroke reverses become one cusp.
+pub const TURN_MIN_STEP: f64 = 0.03;
+
+/// A one-finger step turning more than this (rad) from the previous one is a cusp
+/// (a stroke that reverses, a drag up and down), not a curve: it turns nothing
+/// (feature 8). A circle sampled at 64 steps turns a few degrees per step.
+pub const CUSP_RAD: f64 = 2.0 * std::f64::consts::FRAC_PI_3;
 
 /// Largest turning counted (features 7, 8; turns).
 pub const TURNS_CLAMP: f64 = 2.5;
@@ -291,8 +297,8 @@ fn longest_tree_edge(g: &Resampled, t: usize) -> f64 {
         return 0.0;
     }
     in_tree[0] = true;
-    for j in 1..n {
-        best[j] = (g.fingers[0][t] - g.fingers[j][t]).norm();
+    for (j, b) in best.iter_mut().enumerate().take(n).skip(1) {
+        *b = (g.fingers[0][t] - g.fingers[j][t]).norm();
     }
     let mut longest = 0.0f64;
     for _ in 1..n {
@@ -357,7 +363,8 @@ fn rotation_about_centroid(g: &Resampled) -> f64 {
 }
 
 /// The signed turning of one finger's own path (rad): the angles between its
-/// consecutive steps, steps shorter than [`TURN_MIN_STEP`] merged into the next.
+/// consecutive steps, steps shorter than [`TURN_MIN_STEP`] merged into the next,
+/// cusps (turns beyond [`CUSP_RAD`]) left out.
 fn path_turning(p: &[Vec2; T_H]) -> f64 {
     let mut total = 0.0;
     let mut heading: Option<Vec2> = None;
@@ -368,7 +375,10 @@ fn path_turning(p: &[Vec2; T_H]) -> f64 {
             continue;
         }
         if let Some(h) = heading {
-            total += cross(d, h).atan2(d.dot(&h));
+            let turn = cross(d, h).atan2(d.dot(&h));
+            if turn.abs() <= CUSP_RAD {
+                total += turn;
+            }
         }
         heading = Some(d);
         from = q;
@@ -451,6 +461,15 @@ mod tests {
         // A bow turns from +atan(0.2π) to −atan(0.2π): about a sixth of a turn.
         let want = 2.0 * (0.2 * PI).atan() / TAU;
         assert!((b[8] - want).abs() < 0.01, "{} vs {want}", b[8]);
+    }
+
+    #[test]
+    fn a_drag_up_and_down_is_a_cusp_not_a_turn() {
+        let g = Resampled {
+            fingers: vec![finger(|s| Vec2::new(0.5, 1.0 - (2.0 * s - 1.0).abs()))],
+        };
+        let f = PhysicalFeatures::of(&g, Some(100.0)).values;
+        assert!(f[8] < 0.01, "{}", f[8]);
     }
 
     #[test]

@@ -628,7 +628,8 @@ impl<'a> Reader<'a> {
         let scale_mm = if layout.version >= 2 {
             let at = self.pos;
             let s = self.f64s(1, "scale", &item, |_| "scale_mm".into())?[0];
-            if s < 0.0 {
+            // -0 is refused with the negatives: a file reads back to its own bytes.
+            if s.is_sign_negative() {
                 return Err(self.error(at, item, Problem::NegativeScale(s)));
             }
             (s > 0.0).then_some(s)

@@ -527,8 +527,11 @@ fn version_1_files_read_as_the_ten_classes() {
             }
         )
     );
-    // The shipped file is a version-1 file.
-    assert_eq!(&super::super::SHIPPED_BYTES[4..8], &1u32.to_le_bytes());
+    // The shipped file is written by this build: the newest version.
+    assert_eq!(
+        &super::super::SHIPPED_BYTES[4..8],
+        &FORMAT_VERSION.to_le_bytes()
+    );
 }
 
 #[test]

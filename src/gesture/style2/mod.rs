@@ -178,7 +178,7 @@ pub fn draw(class: MotionClass, seed: u64, aim: &Aim) -> Drawn {
 /// 4 mm), a touch and release (2–4 fingers, 0.1–0.8 s, a slide of up to 5 mm as
 /// they lift), or a tap (1–2 fingers, 40–200 ms).
 pub fn draw_still(seed: u64) -> Drawn {
-    let mut rng = SplitMix64::new(seed ^ STYLE2_SALT ^ 0x0057_111);
+    let mut rng = SplitMix64::new(seed ^ STYLE2_SALT ^ 0x0005_7111);
     let person = Person::draw(&mut rng);
     let kind = rng.next_u64() % 3;
     let (n, dur, drift_mm) = match kind {
