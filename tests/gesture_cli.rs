@@ -424,3 +424,47 @@ fn library_eval_cross_style_prints_four_runs() {
     assert_eq!(stdout.matches("eq. 12 alone (baseline)").count(), 4);
     assert!(stdout.contains("summary") && stdout.contains("rejection ("));
 }
+
+/// Cross-style recognition on a small deterministic set (6 gestures per class and
+/// generator, seed 28): the recogniser (eq. 12 plus the physical features) beats
+/// eq. 12 alone in both directions and holds a floor. Issue 28's 90 % in both
+/// directions is not reached yet (docs/gestures.md "Accuracy"); these floors are
+/// what the recogniser reaches, so a regression fails.
+#[test]
+fn cross_style_recognition_beats_eq_12_both_ways() {
+    use crowdtouch::gesture::eval::{cross_style, Example};
+    use crowdtouch::gesture::generator::{labelled_set, Generator};
+    use crowdtouch::gesture::knn::SearchParams;
+    use crowdtouch::gesture::physical::PhysicalWeights;
+    use crowdtouch::gesture::synth::StyleRanges;
+    let set = |g: Generator| -> Vec<Example> {
+        labelled_set(g, &MotionClass::ALL, 6, 28, Some(&StyleRanges::default()))
+            .iter()
+            .filter_map(|d| Example::of(d.class, &d.tracks).ok())
+            .collect()
+    };
+    let (a, b) = (set(Generator::Synth), set(Generator::Style2));
+    let runs = cross_style(
+        ("synth", &a),
+        ("style2", &b),
+        &PhysicalWeights::default(),
+        &SearchParams::default(),
+    );
+    for r in &runs {
+        eprintln!(
+            "{}: basic {:.3} (eq. 12 {:.3}), all {:.3} (eq. 12 {:.3})",
+            r.name,
+            r.basic.accuracy,
+            r.baseline_basic.accuracy,
+            r.all.accuracy,
+            r.baseline_all.accuracy
+        );
+    }
+    for r in &runs[2..] {
+        assert!(r.basic.accuracy >= 0.8, "{}: {}", r.name, r.basic.accuracy);
+        assert!(r.basic.accuracy > r.baseline_basic.accuracy, "{}", r.name);
+        assert!(r.all.accuracy > r.baseline_all.accuracy, "{}", r.name);
+    }
+    assert!(runs[0].basic.accuracy >= 0.9, "{}", runs[0].basic.accuracy);
+    assert!(runs[1].all.accuracy > runs[1].baseline_all.accuracy);
+}

@@ -43,7 +43,9 @@ pub struct GesturesConfig {
     /// Sakoe–Chiba half-width of the DTW warping path, in resampled samples
     /// (0..=64); `None`: unconstrained, the paper's DTW.
     pub band: Option<u32>,
-    /// Gaussians in each motion's eigenscore mixture (section 6.2).
+    /// Gaussians in each motion's eigenscore mixture (section 6.2) when a library
+    /// is built with `library build --config`; a loaded library keeps the
+    /// mixtures it was built with.
     pub gmm_components: u32,
     /// When set, each motion's mixture takes the number of Gaussians in
     /// `gmm_components ..= auto_components_max` with the best penalised likelihood.
