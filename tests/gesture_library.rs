@@ -68,7 +68,10 @@ fn the_shipped_file_is_what_the_builder_makes() {
     let bytes = write_library(&lib);
     assert_eq!(read_library(&bytes, "rebuilt").unwrap(), shipped);
     // The shipped file is this build's writing of it, byte for byte.
-    assert!(bytes == SHIPPED_BYTES, "the shipped file is not the rebuild's bytes");
+    assert!(
+        bytes == SHIPPED_BYTES,
+        "the shipped file is not the rebuild's bytes"
+    );
 }
 
 /// (b) Leave-one-out on the shipped library's basic classes, default search, by

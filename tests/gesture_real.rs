@@ -565,8 +565,9 @@ fn check_outcomes(all: bool) -> Vec<String> {
 }
 
 /// The outcomes that hold with today's recogniser (the manifest's `holds`
-/// column): taps and touch-and-release are rejected, the drags that are
-/// recognised as translate stay so.
+/// column, 26 of 29): taps, touch-and-release and resting hands are rejected,
+/// every multi-finger drag and scroll and the one-finger drags are translate, the
+/// one-finger circle is a twist.
 #[test]
 fn outcomes_that_hold_today() {
     let failures = check_outcomes(false);
@@ -575,7 +576,7 @@ fn outcomes_that_hold_today() {
 
 /// Every expected outcome of the manifest.
 #[test]
-#[ignore = "needs the style-robust recogniser of issue 28"]
+#[ignore = "3 of 29 do not hold yet (docs/gestures.md, Real recordings): a five-finger pinch taken for a join, a resting touch that drifts 16 mm, a two-finger circle"]
 fn every_expected_outcome() {
     let failures = check_outcomes(true);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
