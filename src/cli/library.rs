@@ -15,18 +15,12 @@ use crowdtouch::crowd::motion::{
 };
 use crowdtouch::engine::search_params;
 use crowdtouch::gesture::dtw::{gesture_distance, Dtw};
-use crowdtouch::gesture::eval::{
-    evaluate, leave_one_out_report, outcomes, train_test_report, ClassLabel, Evaluation, Example,
-    Label, Report,
-};
 use crowdtouch::gesture::features::GestureFeatures;
 use crowdtouch::gesture::generator::{draw_labelled, Generator};
 use crowdtouch::gesture::library::{
     check_class_name, read_library, read_library_with, shipped, validate_with, write_library,
     ClassId, Library, LibraryGesture, LoadPolicy, MotionClass, MAX_CLASSES, MAX_LIBRARY_BYTES,
 };
-use crowdtouch::gesture::physical::{PhysicalFeatures, PhysicalWeights};
-use crowdtouch::gesture::reject::{Movement, RejectParams};
 use crowdtouch::gesture::resample::prepare_scaled;
 use crowdtouch::gesture::synth::to_frames;
 use crowdtouch::input::recording::JsonlWriter;
@@ -322,7 +316,7 @@ pub fn library(cmd: LibraryCmd, cfg: Option<&Config>) -> Result<()> {
             },
         ),
         LibraryCmd::Eval { library, test, .. } => {
-            eval(cfg()?, &load(library.as_deref())?, test.as_deref())
+            super::library_eval::eval(cfg()?, &load(library.as_deref())?, test.as_deref())
         }
         LibraryCmd::Add {
             class,
@@ -374,7 +368,7 @@ fn save(lib: &Library, out: &Path) -> Result<usize> {
 }
 
 /// The id of the class `name` of `lib`, or an error listing its classes.
-fn class_of(lib: &Library, name: &str) -> Result<ClassId> {
+pub(super) fn class_of(lib: &Library, name: &str) -> Result<ClassId> {
     lib.class_id(name).ok_or_else(|| {
         anyhow!(
             "the library has no class `{}`; its classes are: {}",
@@ -584,209 +578,6 @@ fn show(lib: &Library) -> Result<()> {
         lib.classes.len(),
         participants.len(),
         devices.len()
-    )?;
-    Ok(())
-}
-
-fn labelled(lib: &Library) -> Vec<Example<ClassLabel>> {
-    lib.gestures
-        .iter()
-        .map(|g| Example {
-            class: ClassLabel::of(lib, g.class),
-            features: GestureFeatures::of(&g.gesture),
-            physical: PhysicalFeatures::of(&g.gesture, g.scale_mm),
-            // A library gesture moved (it was drawn as one).
-            movement: Movement {
-                travel_mm: f64::INFINITY,
-                jitter_mm: 0.0,
-            },
-        })
-        .collect()
-}
-
-fn eval(cfg: &Config, lib: &Library, test: Option<&Path>) -> Result<()> {
-    let params = search_params(cfg);
-    let train = labelled(lib);
-    let test = match test {
-        None => {
-            outln!(
-                "leave-one-out over {} library gestures (K = {}, weighted voting)",
-                train.len(),
-                params.k
-            )?;
-            None
-        }
-        Some(dir) => {
-            let test = read_test_dir(dir, cfg, lib)?;
-            outln!(
-                "{} test gestures from {} against {} library gestures (K = {})",
-                test.len(),
-                dir.display(),
-                train.len(),
-                params.k
-            )?;
-            Some(test)
-        }
-    };
-    let name = |c: ClassLabel| lib.class_name(c.id).to_string();
-    let w = PhysicalWeights::default();
-    let basic = |s: &[Example<ClassLabel>]| -> Vec<Example<ClassLabel>> {
-        s.iter().filter(|e| e.class.is_basic()).cloned().collect()
-    };
-    let (train_b, test_b) = (basic(&train), test.as_deref().map(basic));
-    let all = outcomes(&train, test.as_deref(), &w, &params);
-    let rejected = all
-        .iter()
-        .filter(|o| o.rejected(&RejectParams::default()))
-        .count();
-    outln!()?;
-    outln!("recogniser: eq. 12 + physical features")?;
-    outln!("six basic classes")?;
-    if train_b.is_empty() {
-        outln!("(none: the library has no translate, twist, contract, expand, join or split)")?;
-    } else {
-        print_eval(
-            &evaluate(&outcomes(&train_b, test_b.as_deref(), &w, &params)),
-            &name,
-        )?;
-    }
-    outln!()?;
-    outln!("{}", all_classes(lib.classes.len()))?;
-    print_eval(&evaluate(&all), &name)?;
-    outln!(
-        "rejected by the default thresholds: {rejected} of {}",
-        all.len()
-    )?;
-    // The paper's recogniser, eq. 12 alone, with its feature ablation.
-    let plain = |s: &[Example<ClassLabel>]| -> Vec<(ClassLabel, GestureFeatures)> {
-        s.iter().map(|e| (e.class, e.features.clone())).collect()
-    };
-    let report = match &test {
-        None => leave_one_out_report(&plain(&train), &params),
-        Some(t) => train_test_report(&plain(&train), &plain(t), &params),
-    };
-    outln!()?;
-    outln!(
-        "eq. 12 alone (the paper's baseline): basic {:.1}%, all {:.1}%",
-        100.0 * report.basic.accuracy,
-        100.0 * report.all.accuracy
-    )?;
-    print_report(&report)
-}
-
-/// "all ten classes", "all 12 classes".
-fn all_classes(n: usize) -> String {
-    const WORDS: [&str; 11] = [
-        "no", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten",
-    ];
-    match WORDS.get(n) {
-        Some(w) => format!("all {w} classes"),
-        None => format!("all {n} classes"),
-    }
-}
-
-/// `DIR/<class>/*`: every gesture in every recording, labelled by its folder (a
-/// class of `lib`).
-fn read_test_dir(dir: &Path, cfg: &Config, lib: &Library) -> Result<Vec<Example<ClassLabel>>> {
-    let mut out = Vec::new();
-    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| format!("{}: cannot read test directory", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_dir())
-        .collect();
-    entries.sort();
-    for sub in entries {
-        let name = sub.file_name().and_then(|n| n.to_str()).unwrap_or("");
-        let class = ClassLabel::of(
-            lib,
-            class_of(lib, name)
-                .with_context(|| format!("{}: folder is not a class", sub.display()))?,
-        );
-        let mut files: Vec<PathBuf> = std::fs::read_dir(&sub)?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.is_file())
-            .collect();
-        files.sort();
-        for f in files {
-            for g in gestures_in(&f, cfg)? {
-                match g.tracks {
-                    Ok(t) => match Example::of(class, &t) {
-                        Ok(e) => out.push(e),
-                        Err(e) => outln!("{}: gesture skipped: {e}", f.display())?,
-                    },
-                    Err(why) => outln!("{}: gesture skipped: {why}", f.display())?,
-                }
-            }
-        }
-    }
-    if out.is_empty() {
-        bail!("{}: no labelled gesture found", dir.display());
-    }
-    Ok(out)
-}
-
-fn print_report<C: Label>(r: &Report<C>) -> Result<()> {
-    outln!("with one of eq. 12's features removed (others renormalised; eq. 12 alone):")?;
-    outln!("{:<10} {:>8} {:>8}", "removed", "basic", "all")?;
-    for a in &r.ablation {
-        outln!(
-            "{:<10} {:>7.1}% {:>7.1}%",
-            a.removed.as_str(),
-            100.0 * a.accuracy_basic,
-            100.0 * a.accuracy_all
-        )?;
-    }
-    Ok(())
-}
-
-/// The short column name of a class in the confusion matrix: the built-in
-/// classes' abbreviations, else the first five characters of its name.
-fn short(name: &str) -> String {
-    match name.parse::<MotionClass>() {
-        Ok(MotionClass::Translate) => "trans".into(),
-        Ok(MotionClass::Twist) => "twist".into(),
-        Ok(MotionClass::Contract) => "contr".into(),
-        Ok(MotionClass::Expand) => "expan".into(),
-        Ok(MotionClass::Join) => "join".into(),
-        Ok(MotionClass::Split) => "split".into(),
-        Ok(MotionClass::SplitThenTranslate) => "sp+tr".into(),
-        Ok(MotionClass::TranslateThenJoin) => "tr+jo".into(),
-        Ok(MotionClass::TwistWhileExpanding) => "tw+ex".into(),
-        Ok(MotionClass::TwistWhileContracting) => "tw+co".into(),
-        Err(_) => name.chars().take(5).collect(),
-    }
-}
-
-/// Prints a confusion matrix with per-class and overall accuracy, each class
-/// named by `name`.
-pub(super) fn print_eval<C: Label>(e: &Evaluation<C>, name: &impl Fn(C) -> String) -> Result<()> {
-    let classes = &e.confusion.classes;
-    let width = classes
-        .iter()
-        .map(|&c| name(c).len())
-        .max()
-        .unwrap_or(0)
-        .max(24);
-    let mut head = format!("{:<width$}", "true \\ recognised");
-    for &c in classes {
-        head.push_str(&format!(" {:>5}", short(&name(c))));
-    }
-    head.push_str("  accuracy");
-    outln!("{head}")?;
-    for (i, &c) in classes.iter().enumerate() {
-        let mut row = format!("{:<width$}", name(c));
-        for n in &e.confusion.counts[i] {
-            row.push_str(&format!(" {n:>5}"));
-        }
-        if let Some(pc) = e.per_class.iter().find(|p| p.class == c) {
-            row.push_str(&format!("  {:>6.1}%", 100.0 * pc.accuracy()));
-        }
-        outln!("{row}")?;
-    }
-    outln!(
-        "accuracy {:.1}% (mean of classes {:.1}%)",
-        100.0 * e.accuracy,
-        100.0 * e.mean_class_accuracy
     )?;
     Ok(())
 }
