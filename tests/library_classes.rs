@@ -621,3 +621,102 @@ fn bad_classes_and_motion_files_get_clear_errors() {
         "{e}"
     );
 }
+
+/// `library eval --by participant`: two people's translate and twist gestures
+/// added to a generated two-class library; each person's are classified against
+/// the rest (the generated gestures always train), one confusion matrix, each
+/// person's accuracy. With one person named there is nothing to leave out.
+#[test]
+fn leave_one_participant_out_prints_each_person_and_one_matrix() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = dir.path().join("base.ctgl");
+    let cfg = dir.path().join("default.ron");
+    std::fs::write(&cfg, crowdtouch::config::DEFAULT_CONFIG_RON).unwrap();
+    run_ok(&[
+        "library",
+        "build",
+        "--classes",
+        "translate,twist",
+        "--motions-per-class",
+        "2",
+        "--gestures-per-motion",
+        "2",
+        "--out",
+        s(&base),
+    ]);
+    let mut lib = base.clone();
+    for (who, seed) in [("p01", 300u64), ("p02", 600)] {
+        for (name, kind) in [
+            ("translate", MotionClass::Translate),
+            ("twist", MotionClass::Twist),
+        ] {
+            let mut recordings = Vec::new();
+            for k in 0..4u64 {
+                let tracks = generate(kind, &style(kind, 0.4 * k as f64), seed + k);
+                let p = dir.path().join(format!("{who}-{name}-{k}.jsonl"));
+                write_recording(&to_frames(&tracks, GLASS_MM, Micros(500_000)), &p);
+                recordings.push(p.display().to_string());
+            }
+            let next = dir.path().join(format!("{who}-{name}.ctgl"));
+            let mut args = vec![
+                "library",
+                "add",
+                "--library",
+                s(&lib),
+                "--class",
+                name,
+                "--participant",
+                who,
+                "--config",
+                s(&cfg),
+                "--out",
+                s(&next),
+            ];
+            args.extend(recordings.iter().map(String::as_str));
+            run_ok(&args);
+            lib = next;
+            if who == "p01" && name == "twist" {
+                let one = run_err(&[
+                    "library",
+                    "eval",
+                    "--by",
+                    "participant",
+                    "--library",
+                    s(&lib),
+                ]);
+                assert!(one.contains("at least two named participants"), "{one}");
+            }
+        }
+    }
+    let out = run_ok(&[
+        "library",
+        "eval",
+        "--by",
+        "participant",
+        "--library",
+        s(&lib),
+    ]);
+    eprintln!("{out}");
+    assert!(
+        out.contains("2 participants, 16 of their gestures; 8 gestures of no one named"),
+        "{out}"
+    );
+    for who in ["p01", "p02"] {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(who))
+            .unwrap_or_else(|| panic!("no line for {who} in\n{out}"));
+        assert_eq!(line.split_whitespace().nth(1), Some("8"), "{line}");
+    }
+    assert!(out.contains("true \\ recognised"), "{out}");
+    let accuracy: f64 = out
+        .lines()
+        .find_map(|l| l.strip_prefix("accuracy "))
+        .and_then(|l| l.split('%').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no accuracy in\n{out}"));
+    assert!(
+        accuracy >= 75.0,
+        "translate against twist by other people: {accuracy}%\n{out}"
+    );
+}

@@ -159,6 +159,11 @@ pub enum LibraryCmd {
         /// seed + 1, and evaluate with them (`--cross-style`).
         #[arg(long, requires = "cross_style")]
         fit: bool,
+        /// `participant`: leave one participant out — each named participant's
+        /// gestures classified against everyone else's (gestures of no one named,
+        /// such as generated ones, are always in the training set).
+        #[arg(long, value_enum, conflicts_with_all = ["test", "cross_style"])]
+        by: Option<EvalBy>,
     },
     /// Add a person's gestures of class CLASS from recordings (any format): every
     /// gesture found in each recording, paired with the library's motion of that
@@ -204,6 +209,13 @@ pub enum LibraryCmd {
         #[arg(long, default_value = "synth")]
         generator: Generator,
     },
+}
+
+/// `--by` of `library eval`.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum EvalBy {
+    /// Leave one participant out (section 8.2's evaluation by person).
+    Participant,
 }
 
 /// `--generator` of `library build`: one generator, or both alternating.
@@ -315,6 +327,11 @@ pub fn library(cmd: LibraryCmd, cfg: Option<&Config>) -> Result<()> {
                 fit,
             },
         ),
+        LibraryCmd::Eval {
+            library,
+            by: Some(EvalBy::Participant),
+            ..
+        } => super::library_eval::by_participant(cfg()?, &load(library.as_deref())?),
         LibraryCmd::Eval { library, test, .. } => {
             super::library_eval::eval(cfg()?, &load(library.as_deref())?, test.as_deref())
         }
