@@ -32,25 +32,22 @@ pub const MIN_SAMPLE_STEP_S: f64 = 1e-6;
 /// What is wrong with a coordinate (metres), if anything: not finite, or beyond
 /// [`MAX_COORDINATE_M`].
 pub fn coordinate_problem(v: f64) -> Option<String> {
-    if !v.is_finite() {
-        Some(format!("{v} is not a finite number"))
-    } else if v.abs() > MAX_COORDINATE_M {
-        Some(format!(
-            "{v:e} m is beyond the coordinate bound of ±{MAX_COORDINATE_M:e} m"
-        ))
-    } else {
-        None
-    }
+    bound_problem(v, MAX_COORDINATE_M, "m", "coordinate")
 }
 
 /// What is wrong with a time (seconds), if anything: not finite, or beyond
 /// [`MAX_TIME_S`].
 pub fn time_problem(v: f64) -> Option<String> {
+    bound_problem(v, MAX_TIME_S, "s", "time")
+}
+
+/// `v` not finite, or beyond `±bound` (in `unit`, the bound named `what`).
+fn bound_problem(v: f64, bound: f64, unit: &str, what: &str) -> Option<String> {
     if !v.is_finite() {
         Some(format!("{v} is not a finite number"))
-    } else if v.abs() > MAX_TIME_S {
+    } else if v.abs() > bound {
         Some(format!(
-            "{v:e} s is beyond the time bound of ±{MAX_TIME_S:e} s"
+            "{v:e} {unit} is beyond the {what} bound of ±{bound:e} {unit}"
         ))
     } else {
         None
