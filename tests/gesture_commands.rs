@@ -96,6 +96,12 @@ fn write_recording(tracks: &GestureTracks, path: &Path) {
 /// `AFTER_MESH_S` after the first mesh that follows a finished motion (at most
 /// `SETTLE_S`).
 fn replay_file(path: &Path) -> Run {
+    replay(path, true)
+}
+
+/// [`replay_file`]; without `motion`, a gesture that plays none: ticking on until
+/// `AFTER_MESH_S` after its end.
+fn replay(path: &Path, motion: bool) -> Run {
     let mut cfg = Config::embedded_default();
     // Timer ticks at 60 Hz (the recording's frames tick at its 120 Hz): half the
     // work of a debug build; motions are timed in seconds, not ticks.
@@ -133,6 +139,13 @@ fn replay_file(path: &Path) -> Run {
                     }
                 )
             });
+            let ended = o
+                .events
+                .iter()
+                .any(|e| matches!(e, Event::GestureEnd { .. }));
+            if !motion && ended && stop_at.is_none() {
+                stop_at = Some(o.snapshot.t + Micros::from_secs_f64(AFTER_MESH_S));
+            }
             if let Some(m) = &o.mesh {
                 run.meshes.push(Arc::clone(m));
                 if done && stop_at.is_none() {
@@ -146,7 +159,7 @@ fn replay_file(path: &Path) -> Run {
         },
     );
     assert!(
-        stopped.is_err() || run.meshes.len() > 1,
+        !motion || stopped.is_err() || run.meshes.len() > 1,
         "no mesh after the motion within {SETTLE_S} s"
     );
     run
@@ -483,5 +496,47 @@ fn twist_while_contracting_turns_and_gathers() {
         m.rms_ratio < 0.8,
         "{c}: RMS radius ratio {:.2}",
         m.rms_ratio
+    );
+}
+
+/// Two fingers that creep 11 mm (past the tap's 10 mm, short of the 12 mm a gesture
+/// must travel) are not a command: the `gesture` event says `still`, a reason of
+/// docs/protocol.md's list, and no motion plays.
+#[test]
+fn a_creeping_hand_is_rejected_as_still_and_moves_nothing() {
+    use crowdtouch::gesture::track::{TouchTrack, TrackSample};
+    let finger = |x0: f64| TouchTrack {
+        samples: (0..=72)
+            .map(|i| TrackSample {
+                t: Micros(500_000 + i * 8_333),
+                mm: Vec2::new(x0 + 11.0 * i as f64 / 72.0, 300.0),
+            })
+            .collect(),
+    };
+    let tracks = GestureTracks {
+        fingers: vec![finger(400.0), finger(430.0)],
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("creep.jsonl");
+    write_recording(&tracks, &path);
+    let run = replay(&path, false);
+    let ends: Vec<_> = run
+        .events
+        .iter()
+        .filter_map(|e| match e {
+            Event::GestureEnd {
+                recognition,
+                rejected,
+                ..
+            } => Some((recognition.is_some(), rejected.clone())),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(ends, [(false, Some("still".to_string()))], "{ends:?}");
+    assert!(
+        !run.events
+            .iter()
+            .any(|e| matches!(e, Event::GestureMotion { .. })),
+        "no motion for a creeping hand"
     );
 }

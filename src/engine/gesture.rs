@@ -214,7 +214,10 @@ impl Engine {
         let stale = p.epoch != g.epoch || self.agents.is_empty();
         match p.outcome {
             _ if stale => set_rejected(&mut event, "superseded".to_string()),
-            Err(e) => set_rejected(&mut event, e.to_string()),
+            Err(e) => {
+                log::info!("gesture {}: {e}", p.id);
+                set_rejected(&mut event, e.reason().to_string());
+            }
             Ok(m) => {
                 let agents = m.synthesis.trajectories.len();
                 if agents != self.agents.len() {

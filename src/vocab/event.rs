@@ -88,8 +88,9 @@ pub enum Event {
         cancelled: bool,
         /// What it was recognised as, when a motion was made of it.
         recognition: Option<Recognition>,
-        /// Why no motion was made (`tap`, `too_long`, `not_captured`,
-        /// `not_recognised`, `no_library`, `disabled`); `None` with a recognition.
+        /// Why no motion was made (`tap`, `too_long`, `not_captured`, `still`,
+        /// `weak_vote`, `far`, `not_recognised`, `no_library`, `no_motion`,
+        /// `no_agents`, `superseded`, `disabled`, `class_disabled`: docs/protocol.md).
         rejected: Option<String>,
         /// When it ended.
         t: Micros,

@@ -95,6 +95,22 @@ pub enum GestureCommandError {
     NoAgents,
 }
 
+impl GestureCommandError {
+    /// The reason as the `gesture` event's `rejected` field names it
+    /// (docs/protocol.md): `still`, `weak_vote` or `far` for a gesture the
+    /// recogniser rejects, `not_recognised` for one it cannot compare,
+    /// `no_library`, `no_motion`, `no_agents`.
+    pub fn reason(&self) -> &'static str {
+        match self {
+            GestureCommandError::Recognise(RecogniseError::Rejected(r)) => r.as_str(),
+            GestureCommandError::Recognise(RecogniseError::Gesture(_)) => "not_recognised",
+            GestureCommandError::Recognise(RecogniseError::EmptyLibrary) => "no_library",
+            GestureCommandError::Motion(_) => "no_motion",
+            GestureCommandError::NoAgents => "no_agents",
+        }
+    }
+}
+
 /// The outcome of a [`GestureRequest`].
 #[derive(Debug)]
 pub struct PreparedGesture {
