@@ -20,8 +20,7 @@ use crowdtouch::geom::Vec2;
 use crowdtouch::gesture::library::MotionClass;
 use crowdtouch::gesture::synth::{generate, to_frames, GestureStyle};
 use crowdtouch::gesture::track::GestureTracks;
-use crowdtouch::input::recording::{load_recording, JsonlWriter, OnBadFrame};
-use crowdtouch::input::{AxisRange, SurfaceInfo};
+use crowdtouch::input::recording::{load_recording, OnBadFrame};
 use crowdtouch::vocab::{Event, Micros, MotionPhase};
 use std::path::Path;
 use std::sync::Arc;
@@ -68,27 +67,8 @@ fn style(class: MotionClass, orientation_rad: f64, clockwise: bool) -> GestureSt
 
 /// Writes `tracks` as a JSONL recording of the default glass (0.1 mm units).
 fn write_recording(tracks: &GestureTracks, path: &Path) {
-    let surface = SurfaceInfo {
-        name: "generated gesture".to_string(),
-        x: AxisRange {
-            min: 0.0,
-            max: GLASS_MM.0 * 10.0,
-            resolution: 10.0,
-        },
-        y: AxisRange {
-            min: 0.0,
-            max: GLASS_MM.1 * 10.0,
-            resolution: 10.0,
-        },
-        max_contacts: 10,
-    };
     let frames = to_frames(tracks, GLASS_MM, Micros(500_000));
-    let file = std::fs::File::create(path).unwrap();
-    let mut w = JsonlWriter::new(&surface, std::io::BufWriter::new(file)).unwrap();
-    for f in &frames {
-        w.frame(f).unwrap();
-    }
-    w.flush().unwrap();
+    common::write_jsonl(&frames, GLASS_MM, "generated gesture", path);
 }
 
 /// Replays the recording at `path` through the engine (default config, inline

@@ -14,8 +14,7 @@ use crowdtouch::engine::{replay_virtual, Engine, VirtualClock};
 use crowdtouch::geom::Vec2;
 use crowdtouch::gesture::library::{read_library, MotionClass};
 use crowdtouch::gesture::synth::{generate, to_frames, GestureStyle, StyleRanges};
-use crowdtouch::input::recording::{load_recording, JsonlWriter, OnBadFrame};
-use crowdtouch::input::{AxisRange, SurfaceInfo};
+use crowdtouch::input::recording::{load_recording, OnBadFrame};
 use crowdtouch::vocab::{Event, Micros, MotionPhase, TouchFrame};
 use serde_json::Value;
 use std::convert::Infallible;
@@ -92,26 +91,7 @@ fn style(kind: MotionClass, orientation_rad: f64) -> GestureStyle {
 
 /// Writes frames as a JSONL recording of the default glass (0.1 mm units).
 fn write_recording(frames: &[TouchFrame], path: &Path) {
-    let surface = SurfaceInfo {
-        name: "test glass".to_string(),
-        x: AxisRange {
-            min: 0.0,
-            max: GLASS_MM.0 * 10.0,
-            resolution: 10.0,
-        },
-        y: AxisRange {
-            min: 0.0,
-            max: GLASS_MM.1 * 10.0,
-            resolution: 10.0,
-        },
-        max_contacts: 10,
-    };
-    let file = std::fs::File::create(path).unwrap();
-    let mut w = JsonlWriter::new(&surface, std::io::BufWriter::new(file)).unwrap();
-    for f in frames {
-        w.frame(f).unwrap();
-    }
-    w.flush().unwrap();
+    common::write_jsonl(frames, GLASS_MM, "test glass", path);
 }
 
 /// The three-class library, made with the `library` commands in `dir`.

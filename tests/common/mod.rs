@@ -281,3 +281,33 @@ pub fn raw_upgrade(addr: std::net::SocketAddr) -> std::net::TcpStream {
     );
     s
 }
+
+/// Writes `frames` as a JSONL recording of a glass of `glass_mm` (0.1 mm units)
+/// named `device`.
+pub fn write_jsonl(
+    frames: &[crowdtouch::vocab::TouchFrame],
+    glass_mm: (f64, f64),
+    device: &str,
+    path: &Path,
+) {
+    use crowdtouch::input::{AxisRange, SurfaceInfo};
+    let axis = |mm: f64| AxisRange {
+        min: 0.0,
+        max: mm * 10.0,
+        resolution: 10.0,
+    };
+    let surface = SurfaceInfo {
+        name: device.to_string(),
+        x: axis(glass_mm.0),
+        y: axis(glass_mm.1),
+        max_contacts: 10,
+    };
+    let file = std::fs::File::create(path).unwrap();
+    let mut w =
+        crowdtouch::input::recording::JsonlWriter::new(&surface, std::io::BufWriter::new(file))
+            .unwrap();
+    for f in frames {
+        w.frame(f).unwrap();
+    }
+    w.flush().unwrap();
+}
