@@ -54,11 +54,19 @@ fn rows(text: &str) -> impl Iterator<Item = Result<(usize, Row), ReadError>> + '
         if s.is_empty() || s.starts_with('#') {
             return None;
         }
-        let fields: Vec<&str> = s.splitn(5, ',').map(str::trim).collect();
+        // At most five pieces (a fifth means too many fields), without allocating:
+        // the reader runs this twice per row.
+        let mut pieces = [""; 5];
+        let mut n = 0;
+        for f in s.splitn(5, ',') {
+            pieces[n] = f.trim();
+            n += 1;
+        }
+        let fields = &pieces[..n];
         if std::mem::take(&mut first) && fields == CSV_HEADER {
             return None;
         }
-        Some(row(raw, line, &fields).map(|r| (line, r)))
+        Some(row(raw, line, fields).map(|r| (line, r)))
     })
 }
 
