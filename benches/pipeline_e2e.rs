@@ -34,6 +34,7 @@ fn e2e(c: &mut Criterion) {
             vec![SourceSpec::Channel { rx, glass_mm: None }],
             DaemonOptions {
                 socket_path: sock.clone(),
+                collect: None,
             },
         )
         .expect("daemon starts");

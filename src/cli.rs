@@ -489,7 +489,10 @@ fn start_daemon(cfg: Config, socket: Option<PathBuf>) -> Result<Running> {
     Ok(Running(Some(Daemon::start(
         cfg,
         sources,
-        DaemonOptions { socket_path },
+        DaemonOptions {
+            socket_path,
+            collect: None,
+        },
     )?)))
 }
 

@@ -51,6 +51,7 @@ fn start(mut cfg: Config, names: &[&str], path: &Path) -> Daemon {
         vec![source(names, false)],
         DaemonOptions {
             socket_path: path.to_path_buf(),
+            collect: None,
         },
     )
     .expect("daemon starts")
@@ -235,6 +236,7 @@ fn a_live_socket_is_refused_and_a_stale_one_replaced() {
         vec![source(&["07-open-space-swipe.jsonl"], false)],
         DaemonOptions {
             socket_path: path.clone(),
+            collect: None,
         },
     );
     let err = second

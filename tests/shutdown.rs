@@ -181,6 +181,7 @@ fn quiet_daemon(dir: &Path, mesh_side: u32) -> (Daemon, crossbeam_channel::Sende
         vec![SourceSpec::Channel { rx, glass_mm: None }],
         DaemonOptions {
             socket_path: dir.join("q.sock"),
+            collect: None,
         },
     )
     .expect("daemon starts");

@@ -102,6 +102,7 @@ fn tuio_cursors_drag_the_crowd_and_lift_when_they_leave_alive() {
         sources,
         DaemonOptions {
             socket_path: path.clone(),
+            collect: None,
         },
     )
     .expect("daemon starts");
@@ -207,6 +208,7 @@ fn a_silent_sender_is_lifted_and_garbage_changes_nothing() {
         sources_from_config(&cfg).unwrap(),
         DaemonOptions {
             socket_path: path.clone(),
+            collect: None,
         },
     )
     .unwrap();
@@ -280,6 +282,7 @@ fn daemon_on_tuio(
         sources_from_config(&cfg).expect("the TUIO port binds"),
         DaemonOptions {
             socket_path: path.clone(),
+            collect: None,
         },
     )
     .expect("daemon starts");

@@ -72,6 +72,7 @@ fn start(version: &str, port: u16, sock: &Path) -> Daemon {
         vec![source],
         DaemonOptions {
             socket_path: sock.to_path_buf(),
+            collect: None,
         },
     )
     .expect("daemon starts")

@@ -61,6 +61,7 @@ fn start(mut cfg: Config, sock: &Path) -> Daemon {
         vec![source],
         DaemonOptions {
             socket_path: sock.to_path_buf(),
+            collect: None,
         },
     )
     .expect("daemon starts")

@@ -58,6 +58,7 @@ mod tests {
             vec![SourceSpec::Channel { rx, glass_mm: None }],
             DaemonOptions {
                 socket_path: socket_path.clone(),
+                collect: None,
             },
         )
         .unwrap();

@@ -299,6 +299,7 @@ fn run(a: &SoakArgs, cfg_path: &Path, sock: &Path) -> Result<Report> {
         sources,
         DaemonOptions {
             socket_path: sock.to_path_buf(),
+            collect: None,
         },
     )?;
     let socket: PathBuf = daemon.socket_path().to_path_buf();

@@ -52,6 +52,10 @@ impl Engine {
             Command::EditSave { entry, overwrite } => self.edit_save(entry.as_deref(), *overwrite),
             Command::EditRetime { at_s, to_s } => self.edit_retime(*at_s, *to_s),
             Command::EditExit => self.edit_exit(now),
+            Command::CollectSkip
+            | Command::CollectUndo
+            | Command::CollectAgain
+            | Command::CollectStatus => self.collect_command(cmd, now),
             // Turned into touch frames by the control loop before the engine.
             Command::Touch { .. } => Err(CommandError::NotHere("touch")),
         }

@@ -36,6 +36,10 @@ pub enum CommandError {
     /// under way, nothing to undo, bad arguments).
     #[error("{}", crate::located::EscapedLines(.0))]
     Edit(String),
+    /// A `collect.*` command that cannot be applied now (no session, the session
+    /// finished, nothing to undo).
+    #[error("{0}")]
+    Collect(&'static str),
     /// A command the control loop handles itself reached the engine (an internal bug).
     #[error("internal bug: `{0}` reached the engine")]
     NotHere(&'static str),

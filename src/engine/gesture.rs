@@ -70,6 +70,22 @@ impl Engine {
         let g = &mut self.gestures;
         let captured = g.capture.finish(id, &mut g.tracks);
         g.windows_out.retain(|&w| w != id);
+        if self.collect.is_some() {
+            // `library collect`: the gesture is recorded, not recognised.
+            let tracks = std::mem::take(&mut self.gestures.tracks);
+            let why = self.collect_gesture(captured.as_ref().map(|_| &tracks), cancelled, now);
+            self.gestures.tracks = tracks;
+            return Some(Event::GestureEnd {
+                id,
+                fingers,
+                contacts,
+                duration_us,
+                cancelled,
+                recognition: None,
+                rejected: why,
+                t: now,
+            });
+        }
         let fired = g
             .continuous
             .as_mut()
@@ -265,6 +281,20 @@ impl Engine {
             let _ = self.request_transform(&name, None, None, heading, now);
             return;
         }
+        self.start_motion(PlanOrigin::Gesture { id }, id, class, synthesis, now);
+    }
+
+    /// Starts a synthesised motion on the crowd (a gesture's, or a `library
+    /// collect` demonstration's with `id` 0): a playing one is cancelled, a
+    /// transform dropped; its plan goes to `plan` subscribers.
+    pub(super) fn start_motion(
+        &mut self,
+        origin: PlanOrigin,
+        id: u32,
+        class: String,
+        synthesis: crate::crowd::motion::Synthesis,
+        now: Micros,
+    ) {
         self.cancel_gesture_motion(now);
         if self.transforms.busy() {
             self.drop_transforms(crate::vocab::TransformOutcome::Superseded, now);
@@ -284,17 +314,25 @@ impl Engine {
             }
         };
         self.gestures.plan = Some(Arc::new(PlanView {
-            origin: PlanOrigin::Gesture { id },
+            origin,
             class: class.clone(),
             duration_s,
             samples: S_H as u32,
             points,
         }));
-        log::info!(
-            "gesture {id}: {class}, {} agents over {duration_s:.1} s",
-            self.agents.len()
-        );
-        self.gestures.played += 1;
+        match origin {
+            PlanOrigin::Gesture { .. } => {
+                log::info!(
+                    "gesture {id}: {class}, {} agents over {duration_s:.1} s",
+                    self.agents.len()
+                );
+                self.gestures.played += 1;
+            }
+            PlanOrigin::Demo { motion } => log::info!(
+                "collect: showing motion {motion} ({class}), {} agents over {duration_s:.1} s",
+                self.agents.len()
+            ),
+        }
         self.events.push(Event::GestureMotion {
             id,
             class: class.clone(),
@@ -435,7 +473,7 @@ impl Engine {
         let (Some(c), Some(rec)) = (&mut g.continuous, &g.recogniser) else {
             return;
         };
-        if !g.enabled {
+        if !g.enabled || self.collect.is_some() {
             return;
         }
         for k in 0..self.segmenter.gestures().len() {

@@ -19,6 +19,9 @@
 //! | `replay.rs` | replays on a virtual clock |
 //! | `error.rs` | why a command or switch was refused |
 
+mod collect;
+mod collect_jobs;
+mod collect_state;
 mod commands;
 mod edit;
 mod edit_grab;
@@ -42,6 +45,7 @@ mod transform_state;
 #[cfg(test)]
 mod tests;
 
+pub use collect_state::{CollectDone, CollectJob, CollectPlan};
 pub use edit::{GESTURE_FASTER, GESTURE_RETIME_S, HELD_TRACKS_PERIOD_US};
 pub use edit_state::{EditDone, EditFileJob, EditJob, EDIT_THRESHOLD_M, GROUP_LINK_M, MAX_UNDO};
 pub use error::{CommandError, SwitchError};

@@ -126,6 +126,8 @@ pub struct Engine {
     pub(super) transforms: super::transform_state::Transforms,
     /// Edit mode: the tracks, the grab, the jobs out (`edit.rs`).
     pub(super) edits: super::edit_state::Edits,
+    /// A `library collect` session, when one runs.
+    pub(super) collect: Option<Box<super::collect_state::Collecting>>,
     /// The scene to publish: whether it changed, the poses' pool (`scene_state.rs`).
     pub(super) scene_out: super::scene_state::SceneOut,
 }
@@ -202,6 +204,7 @@ impl Engine {
             gestures: super::gesture_state::Gestures::new(cfg, inline_assignment),
             transforms: super::transform_state::Transforms::new(cfg, cfg.crowd.agent_radius_m),
             edits: super::edit_state::Edits::new(),
+            collect: None,
             scene_out: super::scene_state::SceneOut::new(),
         };
         e.segmenter

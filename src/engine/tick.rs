@@ -47,6 +47,9 @@ impl Engine {
     /// Feeds one input frame (segmentation happens at the frame's own time stamp).
     pub fn push_frame(&mut self, frame: &TouchFrame) {
         let t = frame.t;
+        if !frame.contacts().is_empty() {
+            self.collect_note_device(frame.device);
+        }
         for c in frame.contacts() {
             let world = self.to_world(c.x, c.y);
             let tp = TouchPoint {
@@ -134,6 +137,7 @@ impl Engine {
         self.seq += 1;
         self.segmenter.tick(now, &mut self.seg_out);
         self.poll_continuous(now);
+        self.poll_collect(now);
         let t0 = *self.scene_t0.get_or_insert(now);
         self.scene_t_s = now.saturating_since(t0).as_secs_f64();
         self.direct.set_time(self.scene_t_s);

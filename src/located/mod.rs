@@ -12,6 +12,7 @@ mod json;
 mod read;
 mod ron_words;
 mod strict_ron;
+mod write;
 
 pub use escape::{escape, escape_bytes, needs_escape, Escaped, EscapedBytes, EscapedLines};
 pub use issue::{format_issues, Issue, Located};
@@ -21,3 +22,4 @@ pub use read::{
     read_text_stoppable, EntryError, NameError, ReadError, MAX_ENTRY_NAME_BYTES, READ_CHUNK_BYTES,
 };
 pub use strict_ron::{field_positions, locate_field, parse_strict};
+pub use write::{place, PlaceError};

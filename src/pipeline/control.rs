@@ -111,6 +111,10 @@ pub(super) struct ControlLoop {
     edit_out: Option<FormationJob>,
     /// An edit file job (`edit.load`, `edit.save`) waiting for room.
     edit_file_out: Option<FormationJob>,
+    /// A `library collect` job waiting for room.
+    collect_out: Option<FormationJob>,
+    /// Set once a `library collect` session has finished.
+    collect_finished: Arc<AtomicBool>,
     /// `set_agent_count` commands acknowledged once their resize is applied.
     resize_waiters: Vec<(ClientId, serde_json::Value)>,
     /// What the workers poll to give up stale jobs.
@@ -163,6 +167,8 @@ impl ControlLoop {
             transform_out: None,
             edit_out: None,
             edit_file_out: None,
+            collect_out: None,
+            collect_finished: Arc::new(AtomicBool::new(false)),
             resize_waiters: Vec::with_capacity(MAX_RESIZE_WAITERS),
             fresh,
             t_input: StageTimer::new("input", b.input_us),
@@ -177,6 +183,12 @@ impl ControlLoop {
             publish_overflow: 0,
             client_touches: ClientTouches::new(input_counters),
         }
+    }
+
+    /// Where the loop says that a `library collect` session has finished.
+    pub(super) fn with_collect_flag(mut self, flag: Arc<AtomicBool>) -> ControlLoop {
+        self.collect_finished = flag;
+        self
     }
 
     pub(super) fn run(mut self) {
@@ -421,6 +433,7 @@ impl ControlLoop {
                 }
                 FormationDone::TransformRemesh(p) => self.engine.apply_transform_remesh(*p, now),
                 FormationDone::Edit(d) => self.engine.apply_edit(*d, now),
+                FormationDone::Collected(d) => self.engine.apply_collect(*d, now),
                 FormationDone::EditLoaded {
                     epoch,
                     result,
@@ -526,7 +539,17 @@ impl ControlLoop {
                 .take_edit_job()
                 .map(|j| FormationJob::Edit(Box::new(j)));
         }
+        if self.collect_out.is_none() {
+            self.collect_out = self
+                .engine
+                .take_collect_job()
+                .map(|j| FormationJob::Collect(Box::new(j)));
+        }
+        if self.engine.collect_finished() && self.collect_out.is_none() {
+            self.collect_finished.store(true, Ordering::Relaxed);
+        }
         for slot in [
+            &mut self.collect_out,
             &mut self.edit_file_out,
             &mut self.edit_out,
             &mut self.transform_out,

@@ -43,6 +43,8 @@ pub const SHUTDOWN_BUDGET_MS: u64 = 700;
 pub struct DaemonOptions {
     /// Socket path (already resolved).
     pub socket_path: PathBuf,
+    /// A `library collect` session to run instead of gesture commands.
+    pub collect: Option<crate::engine::CollectPlan>,
 }
 
 /// The running daemon: its threads and the handles the supervisor needs.
@@ -60,6 +62,8 @@ pub struct Daemon {
     /// Every TUIO input's counters, with the address it listens on (`stats`).
     tuio_inputs: Vec<(String, Arc<crate::input::tuio::TuioCounters>)>,
     heartbeat_us: Arc<AtomicU64>,
+    /// Set by the control thread once a `library collect` session has finished.
+    collect_finished: Arc<AtomicBool>,
     control_stats: Receiver<ControlStats>,
     out: Outputs,
     reload: Sender<Box<Reload>>,
@@ -156,6 +160,10 @@ impl Daemon {
         });
         let mut engine = Engine::new(&cfg, glass, !cfg.assignment.worker);
         engine.set_switch_worker(true);
+        if let Some(plan) = opts.collect {
+            engine.start_collecting(plan).map_err(Error::Collect)?;
+        }
+        let collect_finished = Arc::new(AtomicBool::new(false));
         let hello = HelloInfo {
             world: cfg.surface.world,
             agents: engine.agent_count() as u32,
@@ -238,7 +246,8 @@ impl Daemon {
             Arc::clone(&heartbeat_us),
             Arc::clone(&fresh),
             Arc::clone(&input_counters),
-        );
+        )
+        .with_collect_flag(Arc::clone(&collect_finished));
         let priority = start.priority;
         start.spawn("control", move || {
             Start::realtime(priority, "control");
@@ -282,6 +291,7 @@ impl Daemon {
             input_counters,
             tuio_inputs,
             heartbeat_us,
+            collect_finished,
             control_stats: cstats_rx,
             out,
             reload: reload_tx,
@@ -312,6 +322,12 @@ impl Daemon {
     /// Input counters.
     pub fn input_counters(&self) -> &Arc<InputCounters> {
         &self.input_counters
+    }
+
+    /// Whether a `library collect` session has asked for every motion and saved
+    /// what was drawn.
+    pub fn collect_finished(&self) -> bool {
+        self.collect_finished.load(Ordering::Relaxed)
     }
 
     /// Time since the control thread last ticked.

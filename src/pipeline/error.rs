@@ -35,4 +35,7 @@ pub enum Error {
     /// The config has no input.
     #[error("the config has no inputs: add a Replay(...) input")]
     NoInputs,
+    /// A `library collect` session that cannot start.
+    #[error("library collect: {0}")]
+    Collect(String),
 }

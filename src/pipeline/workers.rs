@@ -15,7 +15,7 @@ use crate::crowd::motion::{
     GestureJob, PreparedGesture, PreparedRemesh, PreparedWindow, RemeshRequest, Synthesiser,
 };
 use crate::crowd::transform::{PreparedTransform, TransformRequest};
-use crate::engine::{EditDone, EditFileJob, EditJob};
+use crate::engine::{CollectDone, CollectJob, EditDone, EditFileJob, EditJob};
 use crate::geom::Vec2;
 use crate::gesture::continuous::WindowBuffers;
 use crate::gesture::knn::Searcher;
@@ -224,6 +224,9 @@ pub(super) enum FormationJob {
     TransformRemesh(Box<RemeshRequest>),
     /// Edit mode: a drag on a cage, or what follows a release.
     Edit(Box<EditJob>),
+    /// `library collect`: a motion to show, a gesture to record, the last one to
+    /// remove (run even while the daemon stops: a gesture drawn is saved).
+    Collect(Box<CollectJob>),
     /// Edit mode: a track file to read or write for a client's command.
     EditFile {
         /// The job.
@@ -254,6 +257,8 @@ pub(super) enum FormationDone {
     TransformRemesh(Box<PreparedRemesh>),
     /// An edit job done.
     Edit(Box<EditDone>),
+    /// A collection job done.
+    Collected(Box<CollectDone>),
     /// A track file read for `edit.load` (at that edit epoch).
     EditLoaded {
         /// The edit epoch the load was asked at.
@@ -298,10 +303,22 @@ pub(super) fn formation_worker(
     let mut synth = Synthesiser::new();
     let mut windows = WindowBuffers::new();
     for job in requests.iter() {
+        if let FormationJob::Collect(job) = job {
+            // A file write of milliseconds, never abandoned: what a person drew
+            // is saved even while the daemon stops.
+            if done
+                .send(FormationDone::Collected(Box::new(job.run())))
+                .is_err()
+            {
+                break;
+            }
+            continue;
+        }
         if fresh.stopping() {
             break;
         }
         let out = match job {
+            FormationJob::Collect(_) => None,
             FormationJob::Switch(r) => {
                 let epoch = r.epoch;
                 let stale =

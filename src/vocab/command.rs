@@ -71,6 +71,20 @@ pub enum Command {
     /// Leave edit mode: the crowd comes back.
     #[serde(rename = "edit.exit")]
     EditExit,
+    /// `library collect`: the item shown is skipped; the next one is shown.
+    #[serde(rename = "collect.skip")]
+    CollectSkip,
+    /// `library collect`: the last gesture recorded is removed from the library and
+    /// its item asked for again.
+    #[serde(rename = "collect.undo")]
+    CollectUndo,
+    /// `library collect`: the item's motion is shown again.
+    #[serde(rename = "collect.again")]
+    CollectAgain,
+    /// `library collect`: a `collect` event with the session's state goes out now
+    /// (a viewer that just connected learns where the session is).
+    #[serde(rename = "collect.status")]
+    CollectStatus,
     /// Touches from the client itself (a viewer page's mouse or fingers): the
     /// contacts down now on the client's own virtual surface, covering the table.
     /// A contact not listed any more is lifted; an empty list lifts them all.
@@ -137,12 +151,16 @@ impl Command {
             Command::EditSave { .. } => "edit.save",
             Command::EditRetime { .. } => "edit.retime",
             Command::EditExit => "edit.exit",
+            Command::CollectSkip => "collect.skip",
+            Command::CollectUndo => "collect.undo",
+            Command::CollectAgain => "collect.again",
+            Command::CollectStatus => "collect.status",
             Command::Touch { .. } => "touch",
         }
     }
 
     /// Every command name, in the order the protocol doc lists them.
-    pub const NAMES: [&'static str; 11] = [
+    pub const NAMES: [&'static str; 15] = [
         "reset",
         "set_agent_count",
         "set_formation",
@@ -154,6 +172,10 @@ impl Command {
         "edit.retime",
         "edit.exit",
         "touch",
+        "collect.skip",
+        "collect.undo",
+        "collect.again",
+        "collect.status",
     ];
 }
 

@@ -152,6 +152,70 @@ pub enum Event {
         /// When.
         t: Micros,
     },
+    /// `library collect`: what the session asks for or did (a motion shown, a
+    /// gesture recorded, skipped or undone, the session finished).
+    Collect(Box<CollectView>),
+}
+
+/// What a `collect` event says (`library collect`, gesture-driven section 4).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CollectView {
+    /// What happened.
+    pub state: CollectState,
+    /// The item the session now asks for (0-based; equal to `of` when finished).
+    pub item: u32,
+    /// Items in the session.
+    pub of: u32,
+    /// The class of the item's motion (empty when finished).
+    pub class: String,
+    /// The motion's index in the library (as in `demo_motion`).
+    pub motion: u32,
+    /// Who is drawing.
+    pub participant: String,
+    /// Gestures recorded by this session so far (after this event).
+    pub recorded: u32,
+    /// Why a gesture was not recorded, or a save failed (`refused`, `failed`).
+    pub detail: Option<String>,
+    /// When.
+    pub t: Micros,
+}
+
+/// The states of a `collect` event.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CollectState {
+    /// The item's motion is shown (`demo_motion` went out): draw its gesture.
+    Showing,
+    /// A gesture was recorded and saved for the previous item.
+    Recorded,
+    /// The previous item was skipped.
+    Skipped,
+    /// The last recorded gesture was removed from the library; its item is asked
+    /// for again.
+    Undone,
+    /// A gesture was not recorded (a tap, too short, too many fingers); the item
+    /// is still asked for.
+    Refused,
+    /// Saving the library failed; nothing was lost from memory, the item is still
+    /// asked for.
+    Failed,
+    /// Every item was recorded or skipped.
+    Finished,
+}
+
+impl CollectState {
+    /// Lower-case name, as on the wire.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CollectState::Showing => "showing",
+            CollectState::Recorded => "recorded",
+            CollectState::Skipped => "skipped",
+            CollectState::Undone => "undone",
+            CollectState::Refused => "refused",
+            CollectState::Failed => "failed",
+            CollectState::Finished => "finished",
+        }
+    }
 }
 
 /// Life of a touch device.

@@ -28,7 +28,7 @@ pub use command::{
 };
 pub use device::parse_vendor_product;
 pub use edit::{CollisionView, EditView, TrackView, TracksView};
-pub use event::{ControlKind, DeviceState, Event};
+pub use event::{CollectState, CollectView, ControlKind, DeviceState, Event};
 pub use motion::MotionType;
 pub use plan::{MotionPhase, NeighbourView, PlanOrigin, PlanView, Recognition};
 pub use scene::{CheckpointView, SceneItemView, ScenePoses, SceneView, ShapeView, TerrainView};

@@ -242,6 +242,7 @@ pub fn daemon_on_channel(
         vec![SourceSpec::Channel { rx, glass_mm: None }],
         DaemonOptions {
             socket_path: socket.to_path_buf(),
+            collect: None,
         },
     )
     .expect("daemon starts");

@@ -629,6 +629,7 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
         sources,
         DaemonOptions {
             socket_path: sock.clone(),
+            collect: None,
         },
     )?;
     let mut stream = UnixStream::connect(&sock).context("connecting the bench client")?;

@@ -71,6 +71,17 @@ enum Wire<'a> {
         paused: bool,
         t_us: u64,
     },
+    Collect {
+        state: crate::vocab::CollectState,
+        item: u32,
+        of: u32,
+        class: &'a str,
+        motion: u32,
+        participant: &'a str,
+        recorded: u32,
+        detail: Option<&'a str>,
+        t_us: u64,
+    },
     Formation {
         name: &'a str,
         checkpoint: Option<&'a str>,
@@ -258,6 +269,17 @@ pub fn encode_event(e: &Event, out: &mut Vec<u8>) {
         Event::Paused { paused, t } => Wire::Paused {
             paused: *paused,
             t_us: t.0,
+        },
+        Event::Collect(c) => Wire::Collect {
+            state: c.state,
+            item: c.item,
+            of: c.of,
+            class: &c.class,
+            motion: c.motion,
+            participant: &c.participant,
+            recorded: c.recorded,
+            detail: c.detail.as_deref(),
+            t_us: c.t.0,
         },
         Event::Formation {
             name,

@@ -11,9 +11,9 @@ use super::format::{self as io, Format, ReadOptions};
 use super::ReadError;
 use crate::crowd::edit::{FlatTracks, TrackSet, Tracks};
 use crate::located::{
-    check_entry_name, read_entry_text, read_text, EntryError, ReadError as FileError,
+    check_entry_name, place, read_entry_text, read_text, EntryError, PlaceError,
+    ReadError as FileError,
 };
-use std::io::Write as _;
 use std::path::Path;
 
 /// The largest track file read (bytes).
@@ -184,9 +184,9 @@ pub fn write_track_entry(
                 .unwrap_or_default()
         ));
     }
-    place(&text, &dir.join(entry), overwrite).map_err(|e| match e {
-        Placed::Exists => format!("{entry} exists; saving does not replace it"),
-        Placed::Io(e) => format!("{entry}: cannot write: {e}"),
+    place(text.as_bytes(), &dir.join(entry), overwrite).map_err(|e| match e {
+        PlaceError::Exists => format!("{entry} exists; saving does not replace it"),
+        PlaceError::Io(e) => format!("{entry}: cannot write: {e}"),
     })
 }
 
@@ -205,53 +205,10 @@ pub fn write_tracks(
 ) -> Result<(), String> {
     let shown = path.display();
     let text = io::write(set, format, opts);
-    place(&text, path, overwrite).map_err(|e| match e {
-        Placed::Exists => format!("{shown} exists; give overwrite to replace it"),
-        Placed::Io(e) => format!("{shown}: cannot write: {e}"),
+    place(text.as_bytes(), path, overwrite).map_err(|e| match e {
+        PlaceError::Exists => format!("{shown} exists; give overwrite to replace it"),
+        PlaceError::Io(e) => format!("{shown}: cannot write: {e}"),
     })
-}
-
-/// Why [`place`] did not write.
-enum Placed {
-    /// The file exists and was not to be replaced.
-    Exists,
-    /// Writing failed.
-    Io(std::io::Error),
-}
-
-/// Writes `text` to a new temporary file beside `path` (`O_EXCL`: never an
-/// existing file, a FIFO or a link), then puts it in place: renamed over `path`
-/// with `overwrite`; else hard-linked to `path`, which fails when `path` exists
-/// (no window between a check and the write), with a check-then-rename where the
-/// filesystem has no hard links. A reader never sees half a file.
-fn place(text: &str, path: &Path, overwrite: bool) -> Result<(), Placed> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.tmp{}", std::process::id()));
-    let written = std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&tmp)
-        .and_then(|mut f| f.write_all(text.as_bytes()).and_then(|()| f.sync_all()));
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(Placed::Io(e));
-    }
-    let placed = if overwrite {
-        std::fs::rename(&tmp, path).map_err(Placed::Io)
-    } else {
-        match std::fs::hard_link(&tmp, path) {
-            Ok(()) => Ok(()),
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Err(Placed::Exists),
-            // No hard links here (vfat, some network filesystems).
-            Err(_) if std::fs::symlink_metadata(path).is_ok() => Err(Placed::Exists),
-            Err(_) => std::fs::rename(&tmp, path).map_err(Placed::Io),
-        }
-    };
-    let _ = std::fs::remove_file(&tmp);
-    placed
 }
 
 #[cfg(test)]
