@@ -33,6 +33,7 @@ mod formations;
 mod gesture;
 mod hid;
 mod library;
+mod library_collect;
 mod library_eval;
 mod output;
 mod record;
@@ -287,6 +288,7 @@ pub fn main() -> i32 {
             };
             done(find_config(config.as_deref()).and_then(|(cfg, _)| gesture::gesture(c, &cfg)))
         }
+        Cmd::Library(library::LibraryCmd::Collect(a)) => done(collect(a)),
         Cmd::Library(c) => {
             let config = match &c {
                 library::LibraryCmd::Eval { config, .. }
@@ -413,10 +415,19 @@ fn supervise(
     let watchdog = sd_notify::watchdog_enabled(false, &mut watchdog_us);
     let _ = sd_notify::notify(false, &[sd_notify::NotifyState::Ready]);
     let mut last_ping = monotonic_now();
+    let mut finished: Option<Micros> = None;
     let mut outcome = Ok(());
     loop {
         if sig.stop.load(Ordering::Relaxed) || until.is_some_and(|u| monotonic_now() >= u) {
             break;
+        }
+        // A `library collect` session that asked for everything: a second for its
+        // last events to reach the clients, then stop.
+        if daemon.collect_finished() {
+            let now = monotonic_now();
+            if now.saturating_since(*finished.get_or_insert(now)) >= Micros(1_000_000) {
+                break;
+            }
         }
         if sig.reload.swap(false, Ordering::Relaxed) {
             reload_on_sighup(&mut daemon, config_path.as_deref());
@@ -444,6 +455,46 @@ fn supervise(
     log::info!("stopping");
     daemon.shutdown();
     outcome
+}
+
+/// `library collect`: the daemon on the config's inputs and outputs (and the
+/// viewer with `--http`), running a collection session until it has asked for
+/// every motion, or until SIGTERM/SIGINT.
+fn collect(a: library_collect::CollectArgs) -> Result<()> {
+    let sig = signals()?;
+    let (mut cfg, path) = find_config(a.config.as_deref())?;
+    init_logging(cfg.log_level);
+    if let Some(addr) = &a.http {
+        cfg.outputs
+            .push(demo_websocket(addr, a.token.clone(), &[])?);
+    }
+    let (start, from) = library_collect::starting_library(&a)?;
+    let sources = sources_from_config(&cfg)?;
+    let plan = library_collect::plan(&a, &sources)?;
+    let socket_path = a
+        .socket
+        .clone()
+        .unwrap_or_else(|| cfg.socket.resolved_path());
+    library_collect::announce(&a, &plan, &from, &socket_path)?;
+    let participant = plan.participant.clone();
+    let daemon = Running(Some(Daemon::start(
+        cfg,
+        sources,
+        DaemonOptions {
+            socket_path,
+            collect: Some(plan),
+        },
+    )?));
+    supervise(sig, daemon, path, None, |r| {
+        log::debug!("{}", status_line(r));
+        Ok(())
+    })?;
+    let before = start
+        .gestures
+        .iter()
+        .filter(|g| g.participant == participant)
+        .count();
+    library_collect::summary(&a.out, &participant, before)
 }
 
 /// What a SIGHUP does: reads the config file again and hands it to the daemon; a

@@ -194,6 +194,11 @@ pub enum LibraryCmd {
         #[arg(required = true)]
         recordings: Vec<PathBuf>,
     },
+    /// Collect gestures from a person at the table: each chosen motion is shown by
+    /// the crowd (and to renderers as `demo_motion`), the gesture drawn for it is
+    /// stored with the participant id and the device; the library is saved after
+    /// every gesture. Skip, undo and show again from a client or the viewer.
+    Collect(super::library_collect::CollectArgs),
     /// Write a labelled test set of generated gestures, `DIR/<class>/<class>-NN.jsonl`,
     /// drawn with other seeds, devices and style ranges than the shipped library.
     TestSet {
@@ -312,6 +317,8 @@ pub fn library(cmd: LibraryCmd, cfg: Option<&Config>) -> Result<()> {
             per_class,
             generator,
         } => test_set(&out, seed, per_class, generator),
+        // Run by `cli.rs`, which starts the daemon.
+        LibraryCmd::Collect(_) => bail!("internal: library collect reached the library tools"),
         LibraryCmd::Show { library } => show(&load_with(library.as_deref(), LoadPolicy::Partial)?),
         LibraryCmd::Eval {
             cross_style: true,
