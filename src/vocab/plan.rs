@@ -71,7 +71,7 @@ pub enum PlanOrigin {
     },
     /// A library motion shown by `library collect` for a person to draw (`demo_motion`).
     Demo {
-        /// The motion's index among the library's motions of its class.
+        /// The motion's index in the library's motions.
         motion: u32,
     },
 }

@@ -287,3 +287,75 @@ fn the_documented_gesture_end_example_is_what_the_encoder_writes() {
     encode_event(&e, &mut out);
     assert_eq!(std::str::from_utf8(&out).unwrap().trim_end(), line);
 }
+
+#[test]
+fn a_collect_event_carries_the_session_state_in_the_documented_order() {
+    use crate::vocab::{CollectState, CollectView};
+    let e = Event::Collect(Box::new(CollectView {
+        state: CollectState::Refused,
+        item: 2,
+        of: 12,
+        class: "twist".into(),
+        motion: 16,
+        participant: "p\"07".into(),
+        recorded: 3,
+        detail: Some("tap".into()),
+        t: Micros(73_960_000_000),
+    }));
+    let mut out = Vec::new();
+    encode_event(&e, &mut out);
+    assert_eq!(
+        String::from_utf8(out).unwrap(),
+        "{\"type\":\"collect\",\"state\":\"refused\",\"item\":2,\"of\":12,\"class\":\"twist\",\"motion\":16,\"participant\":\"p\\\"07\",\"recorded\":3,\"detail\":\"tap\",\"t_us\":73960000000}\n"
+    );
+    for s in [
+        CollectState::Showing,
+        CollectState::Recorded,
+        CollectState::Skipped,
+        CollectState::Undone,
+        CollectState::Refused,
+        CollectState::Failed,
+        CollectState::Finished,
+    ] {
+        let e = Event::Collect(Box::new(CollectView {
+            state: s,
+            item: 0,
+            of: 1,
+            class: String::new(),
+            motion: 0,
+            participant: "p".into(),
+            recorded: 0,
+            detail: None,
+            t: Micros(1),
+        }));
+        let mut out = Vec::new();
+        encode_event(&e, &mut out);
+        let v = one_line(&out);
+        assert_eq!(v["state"], s.as_str());
+        assert_eq!(v["detail"], Value::Null);
+    }
+}
+
+#[test]
+fn the_collect_commands_parse_and_refuse_arguments() {
+    use crate::vocab::Command;
+    for (name, cmd) in [
+        ("collect.skip", Command::CollectSkip),
+        ("collect.undo", Command::CollectUndo),
+        ("collect.again", Command::CollectAgain),
+        ("collect.status", Command::CollectStatus),
+    ] {
+        let line = format!("{{\"type\":\"command\",\"id\":4,\"name\":\"{name}\"}}");
+        match parse_client_message(line.as_bytes()).unwrap() {
+            ClientMessage::Command { id, command } => {
+                assert_eq!(id, json!(4));
+                assert_eq!(command, cmd);
+                assert_eq!(command.name(), name);
+            }
+            other => panic!("{other:?}"),
+        }
+        let line = format!("{{\"type\":\"command\",\"id\":5,\"name\":\"{name}\",\"item\":3}}");
+        let err = parse_client_message(line.as_bytes()).unwrap_err();
+        assert!(err.to_string().contains("item"), "{err}");
+    }
+}
