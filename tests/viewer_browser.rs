@@ -11,6 +11,9 @@
 //!   the daemon's error;
 //! * a page of another origin (served from another loopback port) cannot open the
 //!   WebSocket at all: no hello, no message, the daemon logs the 403 (issue 27);
+//! * in a `library collect` session the page shows the motion and the session's
+//!   progress, a mouse gesture on it is recorded into the library, and its Undo
+//!   and Skip buttons steer the session (issue 28);
 //! * the page draws the scene (an obstacle, a patch, a checkpoint, a moving cart
 //!   where the daemon's poses put it, those poses where the scene's path puts the
 //!   cart) and, while a formation transform runs, colours each agent by the subgroup
@@ -238,12 +241,18 @@ fn config_text(agents: u32, inputs: Option<&str>, outputs: &[WsOut]) -> String {
 }
 
 fn start_daemon(text: &str, outputs: &[WsOut]) -> Running {
+    start_command(&["run"], text, outputs)
+}
+
+/// `crowdtouch ARGS --config <text> --socket …` (`run`, or `library collect …`).
+fn start_command(args: &[&str], text: &str, outputs: &[WsOut]) -> Running {
     let dir = tempfile::tempdir().unwrap();
     let cfg = dir.path().join("crowdtouch.ron");
     std::fs::write(&cfg, text).unwrap();
     let socket = dir.path().join("ct.sock");
     let mut child = Command::new(env!("CARGO_BIN_EXE_crowdtouch"))
-        .args(["run", "--config"])
+        .args(args)
+        .arg("--config")
         .arg(&cfg)
         .arg("--socket")
         .arg(&socket)
@@ -1009,4 +1018,144 @@ fn measure_the_page_frame_rate_with_5000_agents() {
         assert_eq!(m["stats"]["agentsDrawn"], 5000);
         drop(daemon);
     });
+}
+
+#[test]
+fn the_collection_mode_shows_the_motion_and_records_the_mouse_gestures() {
+    in_browser(
+        "the_collection_mode_shows_the_motion_and_records_the_mouse_gestures",
+        || {
+            if bridged() {
+                let _ = writeln!(
+                std::io::stderr(),
+                "bridged: the collection mode needs the page's touches, which the bridge does not carry"
+            );
+                return;
+            }
+            let port = free_port();
+            let outs = [WsOut {
+                port,
+                privileged: true,
+            }];
+            // An input that touches nothing: the gestures come from the page.
+            let dir = tempfile::tempdir().unwrap();
+            let quiet = dir.path().join("quiet.jsonl");
+            common::write_jsonl(
+                &[crowdtouch::vocab::TouchFrame::new(
+                    crowdtouch::vocab::Micros(0),
+                )],
+                (1210.0, 680.0),
+                "quiet table",
+                &quiet,
+            );
+            let inputs = format!("Replay(files: [\"{}\"], looped: false)", quiet.display());
+            let out = dir.path().join("viewer.ctgl");
+            let out_arg = out.to_str().unwrap();
+            let daemon = start_command(
+                &[
+                    "library",
+                    "collect",
+                    "--participant",
+                    "browser-1",
+                    "--in-order",
+                    "--class",
+                    "translate,twist",
+                    "--replay-after-s",
+                    "60",
+                    "--out",
+                    out_arg,
+                ],
+                &config_text(40, Some(&inputs), &outs),
+                &outs,
+            );
+            let watcher = Watcher::connect(&daemon.socket);
+            let hello = watcher.hello();
+            let mut browser = open_viewer(port);
+            // The page learns of the session (collect.status) and draws the motion.
+            browser.call(json!({"cmd": "wait", "until": "collect.demoPaths", "min": 1}));
+            let shot = browser.call(json!({"cmd": "stats"}));
+            let c = &shot["stats"]["collect"];
+            assert_eq!(c["state"], "showing", "{c}");
+            assert_eq!(
+                (c["item"].as_u64(), c["of"].as_u64()),
+                (Some(0), Some(2)),
+                "{c}"
+            );
+            assert_eq!(c["class"], "translate");
+            assert_eq!(c["demoAgents"], 40);
+            let text = shot["text"].as_str().unwrap();
+            assert!(text.contains("Motion 1 of 2 · translate"), "{text}");
+            assert!(text.contains("draw the gesture you would use"), "{text}");
+            if let Ok(keep) = std::env::var("CROWDTOUCH_VIEWER_COLLECT_SCREENSHOT") {
+                browser.call(json!({"cmd": "screenshot", "path": keep}));
+            }
+
+            // A mouse stroke left of the crowd (in collection mode every touch is a
+            // gesture) is recorded for the translate.
+            let map = Mapping::new(&hello, &shot["view"]);
+            let stroke = |browser: &mut Browser, from: (f64, f64), to: (f64, f64)| {
+                let (a, b) = (map.to_page(from), map.to_page(to));
+                browser.call(json!({"cmd": "drag", "from": [a.0, a.1], "to": [b.0, b.1],
+                                "steps": 30, "ms": 900, "hold_ms": 0}));
+            };
+            let mark = watcher.len();
+            stroke(&mut browser, (1.5, 7.5), (4.5, 7.0));
+            let recorded =
+                watcher.wait_for(mark, |v| v["type"] == "collect" && v["state"] != "showing");
+            assert_eq!(recorded["state"], "recorded", "{recorded}");
+            assert_eq!(recorded["item"], 0);
+            browser.call(json!({"cmd": "wait", "until": "collect.recorded", "min": 1}));
+
+            // Undo takes it back, Skip moves on to the twist.
+            let mark = watcher.len();
+            browser.call(json!({"cmd": "click", "selector": "#btn-collect-undo"}));
+            let undone =
+                watcher.wait_for(mark, |v| v["type"] == "collect" && v["state"] == "undone");
+            assert_eq!(undone["recorded"], 0, "{undone}");
+            let mark = watcher.len();
+            browser.call(json!({"cmd": "click", "selector": "#btn-collect-skip"}));
+            let shown = watcher.wait_for(mark, |v| {
+                v["type"] == "collect" && v["state"] == "showing" && v["item"] == 1
+            });
+            assert_eq!(shown["class"], "twist");
+
+            // A stroke for the twist ends the session.
+            let mark = watcher.len();
+            stroke(&mut browser, (2.0, 7.5), (2.5, 5.0));
+            watcher.wait_for(mark, |v| v["type"] == "collect" && v["state"] == "finished");
+            browser.call(json!({"cmd": "wait", "until": "collect.item", "min": 2}));
+            let text = browser.call(json!({"cmd": "stats"}))["text"]
+                .as_str()
+                .unwrap()
+                .to_string();
+            assert!(
+                text.contains("Done: 1 gestures recorded from browser-1"),
+                "{text}"
+            );
+
+            let lib =
+                crowdtouch::gesture::library::read_library(&std::fs::read(&out).unwrap(), "viewer")
+                    .unwrap();
+            let mine: Vec<_> = lib
+                .gestures
+                .iter()
+                .filter(|g| g.participant == "browser-1")
+                .map(|g| (lib.class_name(g.class).to_string(), g.device.clone()))
+                .collect();
+            assert_eq!(
+                mine,
+                vec![(
+                    "twist".to_string(),
+                    "client touches (viewer or touch commands)".to_string()
+                )]
+            );
+            let stats = browser.call(json!({"cmd": "stats"}));
+            assert_eq!(
+                stats["stats"]["lastError"],
+                Value::Null,
+                "{}",
+                stats["text"]
+            );
+        },
+    );
 }

@@ -77,6 +77,7 @@ impl Engine {
             queued: vec![Wanted::Show],
             outbox: None,
             shown: None,
+            demo_plan: None,
             demo_ended: None,
             last_device: 0,
         }));
@@ -144,11 +145,13 @@ impl Engine {
                 Some("collect_finished".into())
             }
             Ok(tracks) => {
-                let device = c
-                    .devices
-                    .get(c.last_device as usize)
-                    .cloned()
-                    .unwrap_or_else(|| format!("input {}", c.last_device));
+                let device = match c.devices.get(c.last_device as usize) {
+                    Some(name) => name.clone(),
+                    None if c.last_device == crate::vocab::CLIENT_DEVICE => {
+                        "client touches (viewer or touch commands)".to_string()
+                    }
+                    None => format!("input {}", c.last_device),
+                };
                 c.queued.push(Wanted::Save {
                     tracks: Box::new(tracks.clone()),
                     device,
@@ -179,6 +182,11 @@ impl Engine {
                     CollectState::Showing
                 };
                 let view = c.view(state, c.item, None, now);
+                // The motion shown goes out again too (for `plan` subscribers).
+                let shown = c.shown.as_ref().is_some_and(|(i, _)| *i == c.item);
+                if shown && self.gestures.plan.is_none() {
+                    self.gestures.plan.clone_from(&c.demo_plan);
+                }
                 self.events.push(view);
                 Ok(())
             }
@@ -420,6 +428,10 @@ impl Engine {
             return;
         }
         self.start_motion(PlanOrigin::Demo { motion }, 0, class, s, now);
+        let plan = self.gestures.plan.clone();
+        if let Some(c) = self.collect.as_mut() {
+            c.demo_plan = plan;
+        }
     }
 }
 

@@ -117,6 +117,8 @@ pub(super) struct Collecting {
     /// The item whose motion was synthesised, with its synthesis (played again
     /// while the item waits).
     pub(super) shown: Option<(usize, Synthesis)>,
+    /// The last `demo_motion` published (sent again by `collect.status`).
+    pub(super) demo_plan: Option<std::sync::Arc<crate::vocab::PlanView>>,
     /// When the last demonstration ended (its motion done), for the replay.
     pub(super) demo_ended: Option<Micros>,
     /// The input index of the last frame with a contact.

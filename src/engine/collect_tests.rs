@@ -258,9 +258,12 @@ fn a_demonstration_plays_again_while_its_item_waits_and_status_says_where_the_se
     assert!(s.demos.len() >= 2, "{:?}", s.demos);
     assert!(s.demos.iter().all(|d| d.1 == "twist"));
     s.events.clear();
+    let shown = s.demos.len();
     s.e.command(&Command::CollectStatus, Micros(s.now)).unwrap();
     s.tick();
     assert_eq!(s.states(), vec![(CollectState::Showing, 0)]);
+    // The motion shown goes out again for a client that just connected.
+    assert_eq!(s.demos.len(), shown + 1);
 }
 
 #[test]

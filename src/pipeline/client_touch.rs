@@ -44,10 +44,12 @@ pub struct ClientTouches {
 impl ClientTouches {
     /// Contact ids come from `counters` (shared with the input queues).
     pub fn new(counters: Arc<InputCounters>) -> ClientTouches {
+        let mut frame = TouchFrame::default();
+        frame.device = crate::vocab::CLIENT_DEVICE;
         ClientTouches {
             clients: Vec::with_capacity(MAX_TOUCHING_CLIENTS),
             counters,
-            frame: TouchFrame::default(),
+            frame,
         }
     }
 

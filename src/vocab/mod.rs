@@ -35,5 +35,7 @@ pub use scene::{CheckpointView, SceneItemView, ScenePoses, SceneView, ShapeView,
 pub use snapshot::{AgentView, MeshView, Snapshot, TouchView};
 pub use stats::{OutputCounters, RestartPending, StageStats, StatsReport};
 pub use time::Micros;
-pub use touch::{Contact, ContactFlags, ContactId, FrameFull, TouchFrame, MAX_CONTACTS};
+pub use touch::{
+    Contact, ContactFlags, ContactId, FrameFull, TouchFrame, CLIENT_DEVICE, MAX_CONTACTS,
+};
 pub use transform::{TransformMeasures, TransformOutcome, TransformSummary, TransformView};

@@ -15,6 +15,10 @@ use serde::{Deserialize, Serialize};
 /// The most contacts one frame holds. Large touch tables declare up to 60.
 pub const MAX_CONTACTS: usize = 64;
 
+/// The `device` of frames made from clients' `touch` commands (a viewer's mouse or
+/// fingers): no input of the config has this index.
+pub const CLIENT_DEVICE: u16 = u16::MAX;
+
 /// A contact identifier, unique across devices and never reused while the daemon runs.
 #[derive(
     Copy, Clone, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize,
