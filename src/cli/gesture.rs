@@ -64,7 +64,7 @@ pub fn recogniser(cfg: &Config, explicit: Option<&Path>) -> Result<Arc<Recognise
             return Ok(Arc::clone(r));
         }
     }
-    load_recogniser(path, cfg.gestures.band).map_err(anyhow::Error::msg)
+    load_recogniser(path, cfg.gestures.band, cfg.gestures.collected).map_err(anyhow::Error::msg)
 }
 
 /// The gestures of one recording, read a frame at a time, cut as the daemon cuts

@@ -65,7 +65,27 @@ pub struct GesturesConfig {
     /// Recognition while a long gesture goes on (a sliding window); `None`: only
     /// when the gesture ends.
     pub continuous: Option<ContinuousConfig>,
+    /// Gestures people drew (`library collect`, `library add --participant`)
+    /// against the generated ones, the cold start: `Weigh(w)` makes each such
+    /// neighbour count `w` times (1 ..= 100) in the vote and the blend;
+    /// `Replace` recognises a class that has people's gestures from those alone.
+    pub collected: Collected,
 }
+
+/// How gestures people drew count against generated ones (`gestures.collected`).
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Collected {
+    /// Each collected neighbour's weight (eq. 18) is multiplied by this, then the
+    /// weights renormalised.
+    Weigh(f64),
+    /// A class with collected gestures is recognised from them alone.
+    Replace,
+}
+
+/// Default `gestures.collected`: a person's gesture counts twice a generated one.
+pub const DEFAULT_COLLECTED: Collected = Collected::Weigh(2.0);
+/// Largest `Weigh` of `gestures.collected`.
+pub const MAX_COLLECTED_WEIGHT: f64 = 100.0;
 
 /// Default `min_duration_ms`.
 pub const DEFAULT_MIN_DURATION_MS: u64 = 150;
@@ -105,6 +125,7 @@ impl Default for GesturesConfig {
             approach_timeout_s: DEFAULT_APPROACH_TIMEOUT_S,
             motion_speed_m_s: DEFAULT_MOTION_SPEED_M_S,
             continuous: None,
+            collected: DEFAULT_COLLECTED,
         }
     }
 }
@@ -280,6 +301,15 @@ impl GesturesConfig {
                 None => format!("motion speed must be positive, got {v}"),
             },
         );
+        if let Collected::Weigh(w) = self.collected {
+            check(
+                w.is_finite() && (1.0..=MAX_COLLECTED_WEIGHT).contains(&w),
+                "collected",
+                format!(
+                    "a collected gesture's weight must be in 1..={MAX_COLLECTED_WEIGHT}, got {w}"
+                ),
+            );
+        }
         if let Some(c) = self.continuous {
             check(
                 (100..=10_000).contains(&c.window_ms),

@@ -172,6 +172,10 @@ pub const FIELDS: &[FieldClass] = &[
     live("gestures.approach_timeout_s", "from the next motion"),
     live("gestures.motion_speed_m_s", "from the next motion"),
     live(
+        "gestures.collected",
+        "the library is indexed again and swapped in for the next gesture",
+    ),
+    live(
         "gestures.continuous",
         "from the next gesture; a gesture under way keeps its recogniser",
     ),

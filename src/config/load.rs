@@ -115,7 +115,11 @@ impl Config {
             ));
         }
         if problems.is_empty() && cfg.gestures.enabled {
-            match load_recogniser(cfg.gestures.library.as_deref(), cfg.gestures.band) {
+            match load_recogniser(
+                cfg.gestures.library.as_deref(),
+                cfg.gestures.band,
+                cfg.gestures.collected,
+            ) {
                 Ok(r) => {
                     problems.extend(super::transform::check_gesture_classes(
                         &cfg.formations.gestures,
@@ -197,35 +201,51 @@ fn read_image(path: &Path) -> Result<Vec<u8>, String> {
 ///
 /// # Errors
 /// The file's read error or [`crate::gesture::library::LibraryError`], as text.
-pub fn load_recogniser(path: Option<&Path>, band: Option<u32>) -> Result<Arc<Recogniser>, String> {
+pub fn load_recogniser(
+    path: Option<&Path>,
+    band: Option<u32>,
+    collected: super::Collected,
+) -> Result<Arc<Recogniser>, String> {
     use crate::gesture::library::{read_library, shipped, MAX_LIBRARY_BYTES, SHIPPED_NAME};
     let band = band.map(|b| b as usize);
+    // `gestures.collected` (issue 28 item 6): people's gestures weigh more than
+    // generated ones, or replace them in the classes they were drawn for.
+    let build = |mut lib: crate::gesture::library::Library, name: String| {
+        let weight = match collected {
+            super::Collected::Weigh(w) => w,
+            super::Collected::Replace => {
+                let dropped = lib.keep_collected_where_drawn();
+                if dropped > 0 {
+                    log::info!("{name}: {dropped} generated gestures left out (gestures.collected: Replace)");
+                }
+                1.0
+            }
+        };
+        Recogniser::new(lib, name, band)
+            .map(|r| Arc::new(r.with_collected_weight(weight)))
+            .map_err(|e| e.to_string())
+    };
     match path {
+        // The shipped library has no gesture drawn by a person: `collected` changes
+        // nothing, and its index is built once.
         None if band.is_none() => {
             static SHIPPED: OnceLock<Result<Arc<Recogniser>, String>> = OnceLock::new();
             SHIPPED
                 .get_or_init(|| {
                     let lib = shipped().map_err(|e| e.to_string())?;
-                    let name = format!("{SHIPPED_NAME} (shipped)");
-                    Recogniser::new(lib, name, None)
-                        .map(Arc::new)
-                        .map_err(|e| e.to_string())
+                    build(lib, format!("{SHIPPED_NAME} (shipped)"))
                 })
                 .clone()
         }
         None => {
             let lib = shipped().map_err(|e| e.to_string())?;
-            Recogniser::new(lib, format!("{SHIPPED_NAME} (shipped)"), band)
-                .map(Arc::new)
-                .map_err(|e| e.to_string())
+            build(lib, format!("{SHIPPED_NAME} (shipped)"))
         }
         Some(p) => {
             let bytes = read_bytes(p, MAX_LIBRARY_BYTES as u64).map_err(|e| e.to_string())?;
             let name = p.display().to_string();
             let lib = read_library(&bytes, &name).map_err(|e| e.to_string())?;
-            Recogniser::new(lib, name, band)
-                .map(Arc::new)
-                .map_err(|e| e.to_string())
+            build(lib, name)
         }
     }
 }

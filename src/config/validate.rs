@@ -633,6 +633,11 @@ mod tests {
                 "motion_speed_m_s: 2.0,",
                 "gestures.motion_speed_m_s",
             ),
+            (
+                "collected: Weigh(2.0),",
+                "collected: Weigh(0.5),",
+                "gestures.collected",
+            ),
             ("library: None,", "library: Some(\"\"),", "gestures.library"),
             (
                 "continuous: None,",

@@ -30,6 +30,9 @@ pub struct Recogniser {
     source: String,
     /// When a recognition is refused.
     reject: RejectParams,
+    /// How many times a gesture drawn by a person (a participant id) weighs a
+    /// generated one's (1: the same).
+    collected_weight: f64,
 }
 
 /// A gesture classified: what the vote says and, when the outcome is "none", why.
@@ -134,7 +137,51 @@ impl Recogniser {
             library,
             source: source.into(),
             reject,
+            collected_weight: 1.0,
         })
+    }
+
+    /// Gestures people drew (a participant id: `library collect`, `library add
+    /// --participant`) weigh `w` times a generated one's in the vote and in the
+    /// blend (issue 28 item 6: generated gestures are the cold start): each such
+    /// neighbour's eq. 18 weight is multiplied by `w` and the weights renormalised
+    /// to sum to 1. `w` below 1 or not finite is taken as 1.
+    pub fn with_collected_weight(mut self, w: f64) -> Recogniser {
+        self.collected_weight = if w.is_finite() { w.max(1.0) } else { 1.0 };
+        self
+    }
+
+    /// How much more a collected gesture weighs ([`with_collected_weight`](Self::with_collected_weight)).
+    pub fn collected_weight(&self) -> f64 {
+        self.collected_weight
+    }
+
+    /// Applies the collected gestures' weight to `neighbours` (in place, still
+    /// summing to 1).
+    fn weigh_collected(&self, neighbours: &mut [Neighbour]) {
+        if self.collected_weight == 1.0 {
+            return;
+        }
+        let collected = |e: usize| {
+            self.library
+                .gestures
+                .get(e)
+                .is_some_and(|g| !g.participant.is_empty())
+        };
+        if !neighbours.iter().any(|n| collected(n.entry)) {
+            return;
+        }
+        for n in neighbours.iter_mut() {
+            if collected(n.entry) {
+                n.weight *= self.collected_weight;
+            }
+        }
+        let total: f64 = neighbours.iter().map(|n| n.weight).sum();
+        if total > 0.0 && total.is_finite() {
+            for n in neighbours.iter_mut() {
+                n.weight /= total;
+            }
+        }
     }
 
     /// The rejection thresholds.
@@ -220,9 +267,10 @@ impl Recogniser {
     ) -> Result<Classified, RecogniseError> {
         let features = GestureFeatures::of(drawn);
         let physical = PhysicalFeatures::of(drawn, Some(scale_mm));
-        let neighbours = searcher
+        let mut neighbours = searcher
             .search_with(&self.index, &features, &physical, params)
             .to_vec();
+        self.weigh_collected(&mut neighbours);
         let (class, weight) =
             vote(&neighbours, |e| self.class_of(e)).ok_or(RecogniseError::EmptyLibrary)?;
         let r = &self.reject;
@@ -264,7 +312,8 @@ impl Recogniser {
         params: &SearchParams,
         searcher: &mut Searcher,
     ) -> Result<Recognised, RecogniseError> {
-        let neighbours = searcher.search(&self.index, features, params).to_vec();
+        let mut neighbours = searcher.search(&self.index, features, params).to_vec();
+        self.weigh_collected(&mut neighbours);
         let (class, weight) =
             vote(&neighbours, |e| self.class_of(e)).ok_or(RecogniseError::EmptyLibrary)?;
         Ok(Recognised {
@@ -282,6 +331,7 @@ impl PartialEq for Recogniser {
             && self.index.band() == other.index.band()
             && self.index.physical_weights() == other.index.physical_weights()
             && self.reject == other.reject
+            && self.collected_weight == other.collected_weight
             && self.library == other.library
     }
 }

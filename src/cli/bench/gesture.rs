@@ -240,7 +240,7 @@ pub fn gesture(run: &GestureRun) -> Result<()> {
     let mut recogniser = None;
     for _ in 0..repeats {
         let t = now();
-        let r = load_recogniser(Some(&path), band);
+        let r = load_recogniser(Some(&path), band, crowdtouch::config::DEFAULT_COLLECTED);
         load.push(ms_since(t));
         recogniser = Some(r.map_err(|e| anyhow::anyhow!(e))?);
         let t = now();

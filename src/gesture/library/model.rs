@@ -114,6 +114,28 @@ pub struct ClassCounts {
 }
 
 impl Library {
+    /// Leaves out the generated gestures (no participant) of every class that has
+    /// gestures drawn by people, so those classes are recognised from people's
+    /// gestures alone and the others from the generated ones (`gestures.collected:
+    /// Replace`). Returns how many were left out.
+    pub fn keep_collected_where_drawn(&mut self) -> usize {
+        let drawn: Vec<ClassId> = {
+            let mut c: Vec<ClassId> = self
+                .gestures
+                .iter()
+                .filter(|g| !g.participant.is_empty())
+                .map(|g| g.class)
+                .collect();
+            c.sort_unstable();
+            c.dedup();
+            c
+        };
+        let before = self.gestures.len();
+        self.gestures
+            .retain(|g| !g.participant.is_empty() || !drawn.contains(&g.class));
+        before - self.gestures.len()
+    }
+
     /// An empty library with these classes (no motion, no gesture).
     pub fn with_classes(classes: Vec<String>) -> Library {
         Library {
@@ -191,5 +213,43 @@ impl Library {
                 g.motion = *k;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn gesture(class: u16, participant: &str) -> LibraryGesture {
+        LibraryGesture {
+            class: ClassId(class),
+            motion: 0,
+            gesture: Resampled::default(),
+            origin: String::new(),
+            participant: participant.into(),
+            device: String::new(),
+            scale_mm: None,
+        }
+    }
+
+    #[test]
+    fn only_generated_gestures_of_classes_people_drew_are_left_out() {
+        let mut lib = Library::with_classes(vec!["a".into(), "b".into(), "c".into()]);
+        lib.gestures = vec![
+            gesture(0, ""),
+            gesture(0, "p1"),
+            gesture(1, ""),
+            gesture(1, ""),
+            gesture(2, "p2"),
+            gesture(0, ""),
+        ];
+        assert_eq!(lib.keep_collected_where_drawn(), 2);
+        let left: Vec<(u16, &str)> = lib
+            .gestures
+            .iter()
+            .map(|g| (g.class.0, g.participant.as_str()))
+            .collect();
+        assert_eq!(left, vec![(0, "p1"), (1, ""), (1, ""), (2, "p2")]);
+        assert_eq!(lib.keep_collected_where_drawn(), 0);
     }
 }
