@@ -22,8 +22,8 @@
 //! - blend: each voting neighbour's motion turned to the drawn gesture, blended;
 //! - synthesis + assignment: `Synthesiser::synthesise` on the crowd the daemon
 //!   starts with at `--agents` (the config's formation), and, on the same
-//!   instance, the assignment alone (the cold agents-to-starts `Assigner` solve
-//!   the synthesis runs);
+//!   instance, the assignment alone (cost matrix and solve, as the synthesis runs
+//!   it);
 //! - the whole `GestureRequest::prepare`, as the formation thread runs it.
 //!
 //! The library load is timed as the daemon loads a library file
@@ -41,9 +41,9 @@
 use super::super::output::outln;
 use anyhow::{ensure, Context, Result};
 use crowdtouch::config::{load_recogniser, Config};
-use crowdtouch::crowd::assign::{Assigner, PointMetric};
+use crowdtouch::crowd::assign::{CostMatrix, Solver};
 use crowdtouch::crowd::motion::{
-    alignment, blend, build_library, rotated, BuildParams, GestureRequest, Placement,
+    alignment, blend, build_library, rotated, start_costs, BuildParams, GestureRequest, Placement,
     Synthesiser,
 };
 use crowdtouch::engine::{search_params, Engine};
@@ -260,8 +260,9 @@ pub fn gesture(run: &GestureRun) -> Result<()> {
     let m = agents.len();
     let mut searcher = Searcher::new();
     let mut synth = Synthesiser::new();
-    let mut assigner = Assigner::new(PointMetric::Squared);
-    let (mut starts, mut goal_of) = (Vec::with_capacity(m), Vec::with_capacity(m));
+    let mut solver = Solver::new();
+    let mut costs = CostMatrix::new(0, 0);
+    let (mut starts, mut mapped) = (Vec::with_capacity(m), Vec::with_capacity(m));
     let (mut prep, mut knn, mut blend_ms, mut synth_ms) = (vec![], vec![], vec![], vec![]);
     let (mut assign_ms, mut motion_ms, mut whole) = (vec![], vec![], vec![]);
     let (mut computed, mut abandoned, mut pruned, mut right) = (0, 0, 0, 0);
@@ -333,8 +334,8 @@ pub fn gesture(run: &GestureRun) -> Result<()> {
         starts.clear();
         starts.extend(synthesis.trajectories.iter().map(|tr| tr[0]));
         let t = now();
-        assigner.forget();
-        assigner.solve(&agents, &starts, &mut goal_of)?;
+        start_costs(&agents, &starts, &mut mapped, &mut costs);
+        solver.solve(&costs)?;
         assign_ms.push(ms_since(t));
 
         let req = GestureRequest {

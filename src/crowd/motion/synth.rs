@@ -13,7 +13,7 @@ use super::error::MotionError;
 use super::features::validate_features;
 use super::fpca::reconstruct;
 use super::gmm::GmmSampler;
-use crate::crowd::assign::{AffineMap, Assigner, CostMatrix, PointMetric};
+use crate::crowd::assign::{AffineMap, CostMatrix, Solver};
 use crate::geom::Vec2;
 use crate::gesture::library::{MotionFeatures, S_H, TRAJ_DIM};
 use crate::rng::SplitMix64;
@@ -126,20 +126,20 @@ pub struct Synthesis {
 /// [`synthesise`] with its workspaces kept from call to call (the assignment solver
 /// and its cost matrix, the scores and the unassigned trajectories).
 ///
-/// The assignment is the daemon's own agents-to-goals [`Assigner`] with squared
-/// distances, solved cold each time: agents and starts mapped to a common centre
-/// and spread (as [`start_costs`] maps them; the starts are sampled from a mixture
-/// and the agents stand in a formation, two differently shaped clouds), the costs
-/// read from the positions through a spatial index instead of a full `M × M`
-/// matrix (8 MB at 1,000 agents). The answer is the exact optimum of the plain
-/// squared distances.
+/// The assignment runs on a full `M × M` matrix of squared distances (8 MB at 1,000
+/// agents, reused) between the agents and the starts mapped to a common centre and
+/// spread ([`start_costs`]): the starts are sampled from a mixture and the agents
+/// stand in a formation, two differently shaped clouds; the answer is the exact
+/// optimum of the plain squared distances.
 pub struct Synthesiser {
-    assigner: Assigner,
-    goal_of: Vec<u32>,
+    solver: Solver,
+    costs: CostMatrix,
     scores: Vec<f64>,
     buf: Vec<f64>,
     raw: Vec<[Vec2; S_H]>,
     starts: Vec<Vec2>,
+    /// The starts in the assignment's equalised coordinates.
+    mapped: Vec<Vec2>,
 }
 
 impl Default for Synthesiser {
@@ -152,12 +152,13 @@ impl Synthesiser {
     /// Empty workspaces.
     pub fn new() -> Synthesiser {
         Synthesiser {
-            assigner: Assigner::new(PointMetric::Squared),
-            goal_of: Vec::new(),
+            solver: Solver::new(),
+            costs: CostMatrix::new(0, 0),
             scores: Vec::new(),
             buf: vec![0.0; TRAJ_DIM],
             raw: Vec::new(),
             starts: Vec::new(),
+            mapped: Vec::new(),
         }
     }
 
@@ -203,12 +204,10 @@ impl Synthesiser {
             }
             self.starts.push(t[0]);
         }
-        // A new instance each time: no warm start from the last one.
-        self.assigner.forget();
-        self.assigner
-            .solve(agents, &self.starts, &mut self.goal_of)?;
+        start_costs(agents, &self.starts, &mut self.mapped, &mut self.costs);
+        let goal_of = self.solver.solve(&self.costs)?;
         Ok(Synthesis {
-            trajectories: self.goal_of.iter().map(|&g| self.raw[g as usize]).collect(),
+            trajectories: goal_of.iter().map(|&g| self.raw[g]).collect(),
             duration_s: f.duration_s,
         })
     }
@@ -273,7 +272,6 @@ pub fn synthesise(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::crowd::assign::Solver;
     use crate::crowd::motion::features::tests::split_motion;
     use crate::crowd::motion::{features, FeatureParams};
     use crate::gesture::library::{GmmComponent, MotionClass};
@@ -303,9 +301,9 @@ mod tests {
     }
 
     #[test]
-    fn a_large_crowd_gets_the_dense_solvers_optimum() {
-        // 400 agents on a grid against the starts of a split: the spatial-index
-        // assignment's total is the full matrix's optimum.
+    fn a_large_crowd_gets_the_optimum_of_the_plain_squared_distances() {
+        // 400 agents on a grid against the starts of a split: the total of the
+        // equalised instance's optimum is the plain matrix's optimum.
         let f = features(
             MotionClass::Split.id(),
             &split_motion(60, 3.0, 4),
@@ -317,14 +315,14 @@ mod tests {
             .collect();
         let s = synthesise(&f, &agents, &Placement::for_crowd(&agents), 3).unwrap();
         let starts: Vec<Vec2> = s.trajectories.iter().map(|t| t[0]).collect();
-        let mut dense = CostMatrix::new(400, 400);
+        let mut plain = CostMatrix::new(400, 400);
         for (i, a) in agents.iter().enumerate() {
-            for (c, st) in dense.row_mut(i).iter_mut().zip(&starts) {
+            for (c, st) in plain.row_mut(i).iter_mut().zip(&starts) {
                 *c = (a - st).norm_squared();
             }
         }
         let best: f64 = Solver::new()
-            .solve(&dense)
+            .solve(&plain)
             .unwrap()
             .iter()
             .enumerate()
