@@ -216,8 +216,8 @@ impl Default for PhysicalWeights {
     /// towards the same drawer's gestures of other classes (with any weight on eq.
     /// 12 the worse cross-style accuracy drops); the hand gap and the end span get 0
     /// (the generators disagree on how wide a hand is, and the reach beyond a hand
-    /// and the rigid pairs say what they would); the pair change carries the most
-    /// weight, as it is what one hand and two hands differ in.
+    /// and the rigid pairs say what they would); the pair features carry the most
+    /// weight, as they are what one hand and two hands differ in.
     fn default() -> PhysicalWeights {
         FITTED_WEIGHTS
     }
@@ -227,7 +227,7 @@ impl Default for PhysicalWeights {
 pub const FITTED_WEIGHTS: PhysicalWeights = PhysicalWeights {
     eq12: 0.0,
     features: [
-        0.125, 0.0, 0.0, 1.2, 1.2, 0.27, 0.8, 1.0, 0.67, 0.3, 3.6, 0.5, 1.5, 0.5,
+        0.125, 0.0, 0.0, 1.2, 1.2, 0.27, 0.8, 1.0, 0.67, 0.3, 1.8, 1.0, 1.5, 0.75,
     ],
 };
 
