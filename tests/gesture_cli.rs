@@ -315,27 +315,49 @@ fn real_recordings_come_out_as_a_person_would_label_them() {
         ntrig("ntrig-multitouch.1-finger-drag-NW-SE.events"),
         ntrig("ntrig-multitouch.2-fingers-touch-release.events"),
     ];
-    let config = dir.path().join("ntrig.ron");
+    // Files without an axis resolution are read with a config giving their glass's
+    // size, as a table's config would (sizes from tests/fixtures/gestures/expected.tsv):
+    // the physical features are in mm of glass.
     let shipped = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("config/crowdtouch.ron"),
     )
     .unwrap();
-    let sized = shipped.replace(
-        "size_mm: Some((1210.0, 680.0))",
-        "size_mm: Some((261.0, 163.0))",
-    );
-    assert_ne!(sized, shipped, "the shipped config names the glass's size");
-    std::fs::write(&config, sized).unwrap();
-    let files = [
+    let sized = |name: &str, w: f64, h: f64| {
+        let text = shipped.replace(
+            "size_mm: Some((1210.0, 680.0))",
+            &format!("size_mm: Some(({w:.1}, {h:.1}))"),
+        );
+        assert_ne!(text, shipped, "the shipped config names the glass's size");
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    // A 12.1" tablet, 261 x 163 mm.
+    let config = sized("ntrig.ron", 261.0, 163.0);
+    let atmel = [
         fixture("atmel-maxtouch.1-finger-drag-up-down.events"),
         fixture("atmel-maxtouch.2-fingers-touch-release.events"),
         fixture("atmel-maxtouch.4-finger-drag-down.events"),
+    ];
+    let ep = [
         fixture("ep0430m09.2-finger-scroll-down.events"),
         fixture("ep0430m09.2-fingers-touch-release.events"),
+    ];
+    let files = [
         fixture("dell-canvas-27-touch.evemu"),
         fixture("ite-8595-touchpad-06cb-2968.two-finger-scroll.yml"),
     ];
     let mut lines = classified(dir.path(), &files, None);
+    lines.extend(classified(
+        dir.path(),
+        &atmel,
+        Some(&sized("atmel.ron", 154.0, 92.0)),
+    ));
+    lines.extend(classified(
+        dir.path(),
+        &ep,
+        Some(&sized("ep0430m09.ron", 95.0, 57.0)),
+    ));
     lines.extend(classified(dir.path(), &ntrig_files, Some(&config)));
     for l in &lines {
         eprintln!("{}", l.4);

@@ -71,7 +71,7 @@ pub fn cross(cfg: &Config, args: &CrossArgs) -> Result<()> {
         let (w, score) = fit_weights(&fa, &fb, weights, &p, 3);
         weights = w;
         outln!(
-            "fitted: score {score:.4} (worse basic cross-style accuracy + 0.1 x worse all-class)"
+            "fitted: score {score:.4} (worst of the four basic-class figures + 0.1 x their mean)"
         )?;
         outln!("  eq12 {:.4}", w.eq12)?;
         for (name, v) in PHYSICAL_NAMES.iter().zip(w.features) {

@@ -13,8 +13,9 @@
 //!
 //! # Three parts, so each is testable alone
 //! - [`window`]: cuts a gesture's tracks to their last `window` (pure, no library).
-//! - [`recognise_window`]: window → [`prepare`] → [`GestureFeatures::of`] →
-//!   [`Searcher::search`] → [`vote`], with reused buffers ([`WindowBuffers`]); what
+//! - [`recognise_window`]: window → [`prepare_scaled`] → [`GestureFeatures::of`]
+//!   and [`PhysicalFeatures::of`] → [`Searcher::search_with`] (the recogniser's
+//!   combined distance) → [`vote`], with reused buffers ([`WindowBuffers`]); what
 //!   the engine's worker calls.
 //! - [`ContinuousRecogniser`]: the state machine, fed votes (`Option<(class,
 //!   weight)>`), never a library; it decides when a window is due and when a class
@@ -80,13 +81,14 @@
 //! and `end` never allocate. More gestures at once than slots are not watched and
 //! are counted ([`ContinuousStats::overflowed`]); their end is recognised as usual.
 //! [`window`] and [`recognise_window`] reuse their output buffers' capacity
-//! ([`prepare`] itself allocates its small result: they are meant for the worker).
+//! ([`prepare_scaled`] itself allocates its small result: they are meant for the worker).
 
 use super::error::GestureError;
 use super::features::GestureFeatures;
 use super::knn::{vote, GestureIndex, SearchParams, Searcher};
 use super::library::ClassId;
-use super::resample::prepare;
+use super::physical::PhysicalFeatures;
+use super::resample::prepare_scaled;
 use super::track::{GestureTracks, TouchTrack, TrackSample};
 use crate::vocab::Micros;
 
@@ -733,13 +735,14 @@ impl WindowBuffers {
 }
 
 /// Recognises the window of `tracks` ending at `now`: [`window`] →
-/// [`prepare`] (eqs. 1–3) → [`GestureFeatures::of`] (eq. 11) →
-/// [`Searcher::search`] (eqs. 12, 18) → [`vote`] (section 8.2), where `class_of`
-/// names the class of an index entry.
+/// [`prepare_scaled`] (eqs. 1–3) → [`GestureFeatures::of`] (eq. 11) and
+/// [`PhysicalFeatures::of`] → [`Searcher::search_with`] (the index's combined
+/// distance, eq. 18) → [`vote`] (section 8.2), where `class_of` names the class of
+/// an index entry.
 ///
 /// # Complexity
 /// That of one KNN query over `index` (the search's buffers and the window are
-/// reused; `prepare` allocates its result).
+/// reused; `prepare_scaled` allocates its result).
 pub fn recognise_window(
     tracks: &GestureTracks,
     now: Micros,
@@ -766,12 +769,17 @@ pub fn recognise_window(
     if travel_mm < p.min_travel_mm {
         return WindowVote::Still { travel_mm };
     }
-    let resampled = match prepare(&buf.cut) {
+    let (resampled, scale_mm) = match prepare_scaled(&buf.cut) {
         Ok(r) => r,
         Err(e) => return WindowVote::Refused(e),
     };
+    // The recogniser's own distance (the index's weights: eq. 12 and the physical
+    // features), so a window is judged as the whole gesture is.
     let features = GestureFeatures::of(&resampled);
-    let neighbours = buf.searcher.search(index, &features, &p.search);
+    let physical = PhysicalFeatures::of(&resampled, Some(scale_mm));
+    let neighbours = buf
+        .searcher
+        .search_with(index, &features, &physical, &p.search);
     match vote(neighbours, class_of) {
         Some((class, weight)) => WindowVote::Voted { class, weight },
         None => WindowVote::NoNeighbours,

@@ -4,6 +4,7 @@
 use super::*;
 use crate::geom::Vec2;
 use crate::gesture::library::MotionClass;
+use crate::gesture::resample::prepare;
 use crate::rng::SplitMix64;
 
 // The classes of a library of the ten built-in classes, by their usual names.

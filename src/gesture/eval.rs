@@ -515,15 +515,24 @@ pub fn cross_style(
     ]
 }
 
-/// The score [`fit_weights`] maximises: the worse of the two cross-style
-/// accuracies on the six basic classes, plus a tenth of the worse on all classes.
+/// The score [`fit_weights`] maximises: the worst of the four cross-style
+/// accuracies on the six basic classes (leave-one-out on `a`, on `b`, `a`
+/// classified against `b` and `b` against `a`), plus a tenth of their mean (which
+/// breaks ties towards the better average). Issue 28 asks for every one of the
+/// four, so the worst is what is raised.
 pub fn cross_score(a: &[Example], b: &[Example], w: &PhysicalWeights, p: &SearchParams) -> f64 {
     let (ab, bb) = (basic_examples(a), basic_examples(b));
-    let acc =
-        |train: &[Example], test: &[Example]| evaluate(&outcomes(train, Some(test), w, p)).accuracy;
-    let basic = acc(&ab, &bb).min(acc(&bb, &ab));
-    let all = acc(a, b).min(acc(b, a));
-    basic + 0.1 * all
+    let acc = |train: &[Example], test: Option<&[Example]>| {
+        evaluate(&outcomes(train, test, w, p)).accuracy
+    };
+    let runs = [
+        acc(&ab, None),
+        acc(&bb, None),
+        acc(&ab, Some(&bb)),
+        acc(&bb, Some(&ab)),
+    ];
+    let worst = runs.iter().copied().fold(f64::INFINITY, f64::min);
+    worst + 0.1 * runs.iter().sum::<f64>() / runs.len() as f64
 }
 
 /// Coordinate search for the combined distance's weights: each weight in turn is

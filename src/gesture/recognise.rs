@@ -300,28 +300,6 @@ impl Recogniser {
             rejection,
         })
     }
-
-    /// The vote for features already extracted, by eq. 12 alone (the physical
-    /// features are unknown here), nothing rejected.
-    ///
-    /// # Errors
-    /// [`RecogniseError::EmptyLibrary`] with nothing to compare with.
-    pub fn recognise_features(
-        &self,
-        features: &GestureFeatures,
-        params: &SearchParams,
-        searcher: &mut Searcher,
-    ) -> Result<Recognised, RecogniseError> {
-        let mut neighbours = searcher.search(&self.index, features, params).to_vec();
-        self.weigh_collected(&mut neighbours);
-        let (class, weight) =
-            vote(&neighbours, |e| self.class_of(e)).ok_or(RecogniseError::EmptyLibrary)?;
-        Ok(Recognised {
-            class,
-            weight,
-            neighbours,
-        })
-    }
 }
 
 impl PartialEq for Recogniser {

@@ -44,7 +44,7 @@ impl Default for RejectParams {
     fn default() -> RejectParams {
         RejectParams {
             min_vote: 0.5,
-            max_nearest: 4.0,
+            max_nearest: 1.5,
             min_travel_to_jitter: 20.0,
             min_travel_mm: 12.0,
         }
