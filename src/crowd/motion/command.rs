@@ -33,6 +33,7 @@ use super::synth::{Placement, Synthesis, Synthesiser};
 use crate::crowd::mesh::{mesh_around, GoalSample, MeshError, TriMesh};
 use crate::geom::Vec2;
 use crate::gesture::continuous::{recognise_window, WindowBuffers, WindowParams};
+use crate::gesture::features::GestureFeatures;
 use crate::gesture::knn::{SearchParams, Searcher};
 use crate::gesture::library::{ClassId, MotionFeatures};
 use crate::gesture::library::{Resampled, T_H};
@@ -166,8 +167,17 @@ impl GestureRequest {
             if g.class != recognised.class {
                 continue;
             }
-            let theta = alignment(&g.gesture, &drawn);
-            turned.push((rotated(&lib.motions[g.motion as usize], theta), n.weight));
+            // A neighbour drawn turning the other way (the recogniser's distance
+            // does not tell the two apart) gives its motion mirrored: the
+            // direction of a turn comes from the gesture drawn.
+            let motion = &lib.motions[g.motion as usize];
+            let (motion, theta) = if opposite_turns(&g.gesture, &drawn) {
+                let flipped = mirrored_gesture(&g.gesture);
+                (mirrored(motion), alignment(&flipped, &drawn))
+            } else {
+                (motion.clone(), alignment(&g.gesture, &drawn))
+            };
+            turned.push((rotated(&motion, theta), n.weight));
         }
         let mut parts: Vec<(&MotionFeatures, f64)> = turned.iter().map(|(m, w)| (m, *w)).collect();
         let total: f64 = parts.iter().map(|p| p.1).sum();
@@ -248,6 +258,58 @@ pub fn alignment(from: &Resampled, to: &Resampled) -> f64 {
             d
         }
         _ => 0.0,
+    }
+}
+
+/// The least net turn (rad) of a gesture whose direction counts: below it, in
+/// either gesture, nothing is mirrored (a bowed stroke, a wobbling pinch).
+pub const MIRROR_MIN_TURN_RAD: f64 = std::f64::consts::FRAC_PI_6;
+
+/// Whether `a` and `b` turn clearly in opposite directions: the net cumulative
+/// rotation of eq. 9 (`GestureFeatures::rotation`: the fingers about their
+/// centroid, or one finger's path) of each is at least
+/// [`MIRROR_MIN_TURN_RAD`], with opposite signs.
+pub fn opposite_turns(a: &Resampled, b: &Resampled) -> bool {
+    let net = |g: &Resampled| GestureFeatures::of(g).rotation[T_H - 1];
+    let (ra, rb) = (net(a), net(b));
+    ra.abs() >= MIRROR_MIN_TURN_RAD && rb.abs() >= MIRROR_MIN_TURN_RAD && ra * rb < 0.0
+}
+
+/// `g` reflected top to bottom (`y ↦ 1 − y` in its normalised square): it turns
+/// the other way.
+pub fn mirrored_gesture(g: &Resampled) -> Resampled {
+    Resampled {
+        fingers: g
+            .fingers
+            .iter()
+            .map(|f| {
+                let mut m = *f;
+                for p in m.iter_mut() {
+                    p.y = 1.0 - p.y;
+                }
+                m
+            })
+            .collect(),
+    }
+}
+
+/// `m` reflected across the x axis of crowd units (`y ↦ −y` in the mean trajectory
+/// and every eigenvector): the same motion turning the other way. The basis stays
+/// orthonormal and the eigenscores' mixture applies unchanged.
+pub fn mirrored(m: &MotionFeatures) -> MotionFeatures {
+    let flip = |v: &[f64]| -> Vec<f64> {
+        let mut out = v.to_vec();
+        for k in 0..v.len() / 2 {
+            out[2 * k + 1] = -v[2 * k + 1];
+        }
+        out
+    };
+    MotionFeatures {
+        class: m.class,
+        duration_s: m.duration_s,
+        mean: flip(&m.mean),
+        basis: m.basis.iter().map(|b| flip(b)).collect(),
+        gmm: m.gmm.clone(),
     }
 }
 
@@ -385,4 +447,61 @@ pub enum GestureJob {
     Recognise(GestureRequest),
     /// Rebuild the direct-control mesh around the crowd.
     Remesh(RemeshRequest),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::crowd::motion::features::tests::split_motion;
+    use crate::crowd::motion::{features, FeatureParams};
+    use crate::gesture::library::MotionClass;
+
+    /// One finger around a circle of `turns` (positive: x towards y).
+    fn circle(turns: f64) -> Resampled {
+        let mut f = [Vec2::zeros(); T_H];
+        for (t, p) in f.iter_mut().enumerate() {
+            let a = turns * std::f64::consts::TAU * t as f64 / (T_H - 1) as f64;
+            *p = Vec2::new(0.5 + 0.4 * a.cos(), 0.5 + 0.4 * a.sin());
+        }
+        Resampled { fingers: vec![f] }
+    }
+
+    #[test]
+    fn turns_count_as_opposite_only_when_both_clearly_turn() {
+        assert!(opposite_turns(&circle(0.75), &circle(-0.75)));
+        assert!(!opposite_turns(&circle(0.75), &circle(0.6)));
+        // A slight bow is no direction.
+        assert!(!opposite_turns(&circle(0.75), &circle(-0.05)));
+        // Mirroring a gesture turns it the other way.
+        assert!(opposite_turns(
+            &circle(0.75),
+            &mirrored_gesture(&circle(0.75))
+        ));
+        assert!(!opposite_turns(
+            &circle(-0.5),
+            &mirrored_gesture(&circle(0.5))
+        ));
+    }
+
+    #[test]
+    fn a_mirrored_motion_is_reflected_and_mirroring_twice_gives_it_back() {
+        let m = features(
+            MotionClass::Split.id(),
+            &split_motion(30, 2.0, 2),
+            &FeatureParams::default(),
+        )
+        .unwrap();
+        let once = mirrored(&m);
+        for k in 0..m.mean.len() / 2 {
+            assert_eq!(once.mean[2 * k], m.mean[2 * k]);
+            assert_eq!(once.mean[2 * k + 1], -m.mean[2 * k + 1]);
+        }
+        // Still orthonormal.
+        for (a, b) in once.basis.iter().zip(&m.basis) {
+            let na: f64 = a.iter().map(|x| x * x).sum();
+            let nb: f64 = b.iter().map(|x| x * x).sum();
+            assert!((na - nb).abs() < 1e-12);
+        }
+        assert_eq!(mirrored(&once), m);
+    }
 }
