@@ -190,13 +190,25 @@ fn a_session_on_a_replay_stores_each_gesture_with_its_participant_and_a_client_u
     assert!(status.success(), "{status}\n{stdout}\n{stderr}");
 
     let s = |a: &str, i: u64| (a.to_string(), i);
+    // The tap is refused for the contract item, whether or not the translate
+    // drawn before it has been saved yet (its events may come either side).
+    let refused: Vec<_> = states
+        .iter()
+        .filter(|x| x.0 == "refused")
+        .cloned()
+        .collect();
+    assert_eq!(refused, vec![s("refused", 1)], "{states:?}\n{stderr}");
+    let steps: Vec<_> = states
+        .iter()
+        .filter(|x| x.0 != "refused")
+        .cloned()
+        .collect();
     assert_eq!(
-        states,
+        steps,
         vec![
             s("showing", 0),
             s("recorded", 0),
             s("showing", 1),
-            s("refused", 1),
             s("recorded", 1),
             s("showing", 2),
             s("undone", 1),
