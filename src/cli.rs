@@ -620,11 +620,7 @@ fn demo(a: DemoArgs) -> Result<()> {
         outln!("  TUIO 1.1:   to {target} (/tuio/2Dcur touches, /tuio/2Dobj agents, /tuio/2Dblb controls)")?;
     }
     if let Some(addr) = &a.http {
-        let query = a
-            .token
-            .as_ref()
-            .map(|t| format!("?token={t}"))
-            .unwrap_or_default();
+        let query = output::token_query(a.token.as_deref());
         outln!("  viewer:     http://{addr}/{query}")?;
         for h in &a.hosts {
             let port = addr.rsplit_once(':').map_or("", |(_, p)| p);

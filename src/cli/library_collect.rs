@@ -219,11 +219,7 @@ pub fn announce(a: &CollectArgs, plan: &CollectPlan, from: &str, socket: &Path) 
         socket.display()
     )?;
     if let Some(addr) = &a.http {
-        let query = a
-            .token
-            .as_ref()
-            .map(|t| format!("?token={t}"))
-            .unwrap_or_default();
+        let query = super::output::token_query(a.token.as_deref());
         outln!("  viewer:  http://{addr}/{query} (collection mode)")?;
     }
     outln!("  Ctrl-C stops; what was drawn so far is saved.")?;
