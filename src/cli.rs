@@ -32,6 +32,7 @@ mod edit_path;
 mod formations;
 mod gesture;
 mod hid;
+mod journal;
 mod library;
 mod library_eval;
 mod output;
@@ -201,6 +202,10 @@ struct DemoArgs {
     /// naming any other host are refused (421): the guard against DNS rebinding.
     #[arg(long = "host", value_name = "NAME", requires = "http")]
     hosts: Vec<String>,
+    /// Also serve the newest stats as Prometheus text at /metrics beside the
+    /// viewer (with --token when one is given).
+    #[arg(long, requires = "http")]
+    metrics: bool,
 }
 
 #[derive(Args, Debug)]
@@ -333,7 +338,8 @@ fn clap_exit(e: &clap::Error) -> i32 {
     }
 }
 
-/// Logs to stderr at `level`; `RUST_LOG` overrides it. Without `RUST_LOG` the
+/// Logs to stderr at `level` (as journal lines under systemd: `journal.rs`);
+/// `RUST_LOG` overrides it. Without `RUST_LOG` the
 /// logger passes everything and the level is `log`'s maximum, which a config
 /// reload changes (`Daemon::reload`).
 fn init_logging(level: config::LogLevel) {
@@ -349,6 +355,9 @@ fn init_logging(level: config::LogLevel) {
         }
     }
     b.format_target(false);
+    if journal::stderr_is_journal() {
+        journal::use_journal_format(&mut b);
+    }
     if b.try_init().is_ok() && spec.is_none() {
         log::set_max_level(level.filter());
     }
@@ -555,7 +564,7 @@ fn demo(a: DemoArgs) -> Result<()> {
     }
     if let Some(addr) = &a.http {
         cfg.outputs
-            .push(demo_websocket(addr, a.token.clone(), &a.hosts)?);
+            .push(demo_websocket(addr, a.token.clone(), &a.hosts, a.metrics)?);
     }
     let daemon = start_daemon(cfg, a.socket)?;
     // From here on, every way out (a line that cannot be written included) stops
@@ -572,6 +581,9 @@ fn demo(a: DemoArgs) -> Result<()> {
             .map(|t| format!("?token={t}"))
             .unwrap_or_default();
         outln!("  viewer:     http://{addr}/{query}")?;
+        if a.metrics {
+            outln!("  metrics:    http://{addr}/metrics")?;
+        }
         for h in &a.hosts {
             let port = addr.rsplit_once(':').map_or("", |(_, p)| p);
             let shown = if h.contains(':') && !h.ends_with(']') {
@@ -617,6 +629,7 @@ fn demo_websocket(
     addr: &str,
     token: Option<String>,
     hosts: &[String],
+    metrics: bool,
 ) -> Result<config::OutputConfig> {
     let hosts = hosts
         .iter()
@@ -642,6 +655,7 @@ fn demo_websocket(
         max_clients: 16,
         max_message_bytes: 64 * 1024,
         viewer: true,
+        metrics,
         // The viewer is served by this output: its own origin is privileged, as
         // are clients that send no Origin; pages of other sites are refused.
         origins: vec![],
