@@ -27,6 +27,8 @@ mod bench;
 mod calibrate;
 mod check;
 mod devices;
+mod doctor;
+mod doctor_device;
 mod edit;
 mod edit_path;
 mod formations;
@@ -46,6 +48,7 @@ mod transform;
 mod transform_compare;
 mod transform_setup;
 mod transform_svg;
+mod unit;
 mod watch;
 
 /// crowdtouch — a multi-touch table daemon that drives a crowd.
@@ -92,6 +95,23 @@ enum Cmd {
     CheckConfig {
         /// Config file.
         file: PathBuf,
+    },
+    /// What is wrong with this table, each finding with its fix: the config, the
+    /// service user, the device and who may open it, the udev rule, real-time
+    /// limits, the socket, each network output, the running daemon's last stats.
+    /// Exit code 0 only when nothing is wrong.
+    Doctor(doctor::DoctorArgs),
+    /// The systemd drop-in that opens to the service exactly the network its config
+    /// names (printed; `--generator DIR` writes it, as the package's systemd
+    /// generator does at boot and on `systemctl daemon-reload`).
+    #[command(hide = true)]
+    UnitNetwork {
+        /// Config (default: /etc/crowdtouch/crowdtouch.ron).
+        #[arg(long, short)]
+        config: Option<PathBuf>,
+        /// systemd's generator output directories (the first is used).
+        #[arg(long, num_args = 1..=3)]
+        generator: Vec<PathBuf>,
     },
     /// Measure the standard workloads on this machine (p50/p99/max).
     Bench(bench::BenchArgs),
@@ -273,6 +293,10 @@ pub fn main() -> i32 {
         Cmd::Replay(a) => done(replay(a)),
         Cmd::Watch(a) => done(watch::watch(a.socket, a.fps, a.seconds)),
         Cmd::CheckConfig { file } => check::check_config(&file),
+        Cmd::Doctor(a) => doctor::doctor(&a),
+        Cmd::UnitNetwork { config, generator } => {
+            unit::unit_network(config.as_deref(), generator.first().map(PathBuf::as_path))
+        }
         Cmd::Bench(a) => done(bench::bench(a)),
         Cmd::SynthRecordings { out } => done(synth(&out)),
         Cmd::Calibrate {
