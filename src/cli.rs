@@ -113,6 +113,12 @@ enum Cmd {
         #[arg(long, num_args = 1..=3)]
         generator: Vec<PathBuf>,
     },
+    /// Write the man pages (roff) into DIR, as the Debian package installs them.
+    #[command(hide = true)]
+    Man {
+        /// Output directory.
+        dir: PathBuf,
+    },
     /// Measure the standard workloads on this machine (p50/p99/max).
     Bench(bench::BenchArgs),
     /// List the touch devices on this machine (evdev and hidraw) with their ranges,
@@ -279,6 +285,16 @@ struct WatchArgs {
     seconds: Option<f64>,
 }
 
+/// `crowdtouch man DIR`: the man pages (`crowdtouch.1` and one `crowdtouch-CMD.1`
+/// per visible command), from the clap definitions above.
+fn man(dir: &Path) -> Result<()> {
+    use clap::CommandFactory;
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    clap_mangen::generate_to(Cli::command(), dir)
+        .with_context(|| format!("writing the man pages into {}", dir.display()))?;
+    Ok(())
+}
+
 /// Entry point; returns the process exit code (see `output` for what a write
 /// that fails does to it).
 pub fn main() -> i32 {
@@ -294,6 +310,7 @@ pub fn main() -> i32 {
         Cmd::Watch(a) => done(watch::watch(a.socket, a.fps, a.seconds)),
         Cmd::CheckConfig { file } => check::check_config(&file),
         Cmd::Doctor(a) => doctor::doctor(&a),
+        Cmd::Man { dir } => done(man(&dir)),
         Cmd::UnitNetwork { config, generator } => {
             unit::unit_network(config.as_deref(), generator.first().map(PathBuf::as_path))
         }
