@@ -4,8 +4,10 @@
 # from Debian's packages when this is a Debian machine and we are root), then
 # checks it with lintian.
 #
-#   packaging/deb.sh            # build and lint; prints the .deb's path last
-#   packaging/deb.sh --no-lint  # build only
+#   packaging/deb.sh                  # build and lint; prints the .deb's path last
+#   packaging/deb.sh --no-lint        # build only
+#   packaging/deb.sh --binary PATH    # package this release build of the daemon
+#                                     # (CI: the HIL's static one) instead of building
 #
 # Exit status: 0 built (and lintian clean but for the tags packaging/lintian-expected
 # explains), 1 failed.
@@ -14,7 +16,14 @@ ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$ROOT"
 CARGO_DEB_VERSION=3.8.0
 lint=1
-[ "${1:-}" = --no-lint ] && lint=0
+binary=""
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --no-lint) lint=0; shift ;;
+        --binary) binary="$2"; shift 2 ;;
+        *) echo "usage: packaging/deb.sh [--no-lint] [--binary PATH]" >&2; exit 2 ;;
+    esac
+done
 say() { printf 'deb: %s\n' "$*" >&2; }
 
 # 1. The tools.
@@ -36,10 +45,17 @@ if [ "$lint" = 1 ] && ! command -v lintian >/dev/null 2>&1; then
 fi
 
 # 2. The binary and the man pages (generated from the command line's definitions).
-say "cargo build --release"
-cargo build --release --quiet --bin crowdtouch
+mkdir -p target/deb-bin
+if [ -z "$binary" ]; then
+    say "cargo build --release"
+    cargo build --release --quiet --bin crowdtouch
+    binary=target/release/crowdtouch
+fi
+cp "$binary" target/deb-bin/crowdtouch
+# Debug symbols stay in the build (profile.release keeps them for backtraces).
+strip --strip-unneeded target/deb-bin/crowdtouch
 rm -rf target/man && mkdir -p target/man
-target/release/crowdtouch man target/man
+target/deb-bin/crowdtouch man target/man
 gzip -9n target/man/*.1
 rm -rf target/debian-doc && mkdir -p target/debian-doc
 gzip -9nc packaging/debian/changelog >target/debian-doc/changelog.gz
@@ -51,7 +67,7 @@ arch="$(dpkg --print-architecture 2>/dev/null || echo amd64)"
 out="target/debian/crowdtouch_${version}_${arch}.deb"
 mkdir -p target/debian
 say "cargo deb"
-cargo deb --no-build --strip --deb-version "$version" --output "$out" >&2
+cargo deb --no-build --no-strip --deb-version "$version" --output "$out" >&2
 [ -f "$out" ] || { say "failed: cargo deb wrote no $out"; exit 1; }
 
 # 4. lintian: every tag it reports must be one packaging/lintian-expected explains.
