@@ -132,16 +132,20 @@ class Touch:
 
 
 def uhid_nodes():
-    """The hidraw and event nodes of the test digitizer."""
+    """The nodes of the test digitizer the daemon may read: its hidraw node (bound to
+    hid-multitouch) and its touchscreen event node, as udev sees them."""
     out = []
-    for cls, pat in (("hidraw", "hidraw*"), ("input", "event*")):
+    for cls in ("hidraw", "input"):
         base = f"/sys/class/{cls}"
         for n in sorted(os.listdir(base)):
-            if not re.fullmatch(pat.replace("*", r"\d+"), n):
+            if not re.fullmatch(r"(hidraw|event)\d+", n):
                 continue
-            real = os.path.realpath(f"{base}/{n}")
-            if "0596:0500" in real.upper() or "0596:0500" in real:
-                out.append(f"/dev/{'input/' if cls == 'input' else ''}{n}")
+            if "0596:0500" not in os.path.realpath(f"{base}/{n}").upper():
+                continue
+            node = f"/dev/{'input/' if cls == 'input' else ''}{n}"
+            props = sh(["udevadm", "info", "-q", "property", "-n", node]).stdout
+            if cls == "hidraw" or "ID_INPUT_TOUCHSCREEN=1" in props:
+                out.append(node)
     return out
 
 
@@ -151,7 +155,7 @@ def run():
 
     # 1. The package, with apt.
     t = time.monotonic()
-    r = sh(f"DEBIAN_FRONTEND=noninteractive apt-get install -y --no-download {HERE}/crowdtouch.deb",
+    r = sh(f"DEBIAN_FRONTEND=noninteractive apt-get install -y {HERE}/crowdtouch.deb",
            timeout=300)
     result("apt_install", r.returncode == 0,
            f"{time.monotonic() - t:.1f} s; " + (r.stdout + r.stderr).strip()[-400:])
@@ -178,8 +182,19 @@ def run():
         "journalctl -u crowdtouch -b --no-pager -o cat").stdout, 30)
     nodes = uhid_nodes()
     modes = {n: oct(os.stat(n).st_mode & 0o777) + " gid " + str(os.stat(n).st_gid) for n in nodes}
-    result("udev_rule_applied", attached and all(os.stat(n).st_gid == int(gr.split(":")[2]) for n in nodes)
-           and nodes, f"{modes}")
+    applied = bool(nodes) and all(os.stat(n).st_gid == int(gr.split(":")[2]) for n in nodes)
+    why = ""
+    if not applied:
+        # What udev makes of the rule for these nodes, and what it logged.
+        for n in nodes:
+            sysp = "/sys/class/" + ("hidraw/" if "hidraw" in n else "input/") + os.path.basename(n)
+            t = sh(["udevadm", "test", "--action=change", sysp]).stdout
+            t += sh(["udevadm", "test", "--action=change", sysp]).stderr
+            why += f"\n{n}: " + " | ".join(l for l in t.splitlines()
+                                          if re.search(r"crowdtouch|GROUP|group", l))[-700:]
+        why += "\nudevd: " + " | ".join(sh("journalctl -b -u systemd-udevd --no-pager -o cat")
+                                        .stdout.splitlines()[-12:])
+    result("udev_rule_applied", attached and applied, f"{modes}{why}")
     for _ in range(3):
         touch.drag()
         time.sleep(0.5)
@@ -239,7 +254,10 @@ def run():
     c = doctor_check(v, "device_access") or {}
     result("doctor_finds_unreadable_node", code == 1 and c.get("ok") is False
            and "udevadm trigger" in (c.get("fix") or ""), json.dumps(c))
-    sh("udevadm trigger --action=change --subsystem-match=input --subsystem-match=hidraw && udevadm settle")
+    # The fix doctor names, as the person at the kiosk would run it.
+    fix = (c.get("fix") or "")
+    cmd = fix[fix.find("sudo udevadm"):].replace("sudo ", "") if "sudo udevadm" in fix else ""
+    sh(f"{cmd} && udevadm settle" if cmd else "false")
     code, v = doctor()
     c = doctor_check(v, "device_access") or {}
     result("doctor_fix_for_the_node_works", c.get("ok") is True, json.dumps(c))
