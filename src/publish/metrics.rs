@@ -44,6 +44,18 @@ fn seconds(us: u64) -> f64 {
     us as f64 * 1e-6
 }
 
+/// Microseconds as an exact decimal number of seconds (`50` → `0.00005`), for the
+/// `le` labels: a float would print `0.000049999999999999996`.
+fn seconds_text(us: u64) -> String {
+    let frac = format!("{:06}", us % 1_000_000);
+    let frac = frac.trim_end_matches('0');
+    if frac.is_empty() {
+        (us / 1_000_000).to_string()
+    } else {
+        format!("{}.{frac}", us / 1_000_000)
+    }
+}
+
 /// The exposition of `report` (`None` before the daemon's first report: only
 /// `crowdtouch_info` and `crowdtouch_stats_reported 0`).
 pub fn render(report: Option<&StatsReport>) -> String {
@@ -214,7 +226,7 @@ fn stages(out: &mut String, r: &StatsReport) {
                 let _ = writeln!(
                     out,
                     "crowdtouch_stage_latency_seconds_bucket{{stage=\"{stage}\",le=\"{}\"}} {n}",
-                    seconds(*le)
+                    seconds_text(*le)
                 );
             }
             let _ = writeln!(
@@ -323,6 +335,14 @@ fn outputs(out: &mut String, r: &StatsReport) {
 mod tests {
     use super::*;
     use crate::vocab::{DeviceStatus, OutputCounters, RestartPending, StageHistogram};
+
+    #[test]
+    fn bucket_bounds_are_exact_decimals() {
+        assert_eq!(seconds_text(50), "0.00005");
+        assert_eq!(seconds_text(125_000), "0.125");
+        assert_eq!(seconds_text(1_000_000), "1");
+        assert_eq!(seconds_text(2_500_000), "2.5");
+    }
 
     #[test]
     fn label_values_are_escaped() {
