@@ -68,6 +68,8 @@ def main(argv):
         f.write(" ".join(cmd) + "\n")
     print(f"systemd-test: booting the guest (TUIO listener on 127.0.0.1:{port})", flush=True)
     q = subprocess.Popen(cmd, stdin=subprocess.DEVNULL)
+    with open(os.path.join(args.out, "qemu.pid"), "w") as f:
+        f.write(f"{q.pid}\n")
     timed_out = False
     try:
         q.wait(timeout=args.timeout)
@@ -76,6 +78,7 @@ def main(argv):
         q.kill()
         q.wait()
     elapsed = time.monotonic() - t0
+    os.unlink(os.path.join(args.out, "qemu.pid"))
     stop.set()
     th.join()
 

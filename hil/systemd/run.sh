@@ -33,7 +33,14 @@ t0=$(date +%s)
 step() { printf 'systemd-test: %s (%ds)\n' "$*" "$(($(date +%s) - t0))"; }
 fail() { echo "systemd-test: failed: $*" >&2; exit 1; }
 mkdir -p "$DIR"
-trap 'pkill -KILL -f "qemu-system-x86_64.*$DIR/run/" 2>/dev/null || true' EXIT
+# host.py stops its QEMU itself; should it be killed, the guest's pid file says
+# which process to end (that one only).
+stop_guest() {
+    local p
+    p="$(cat "$DIR/run/qemu.pid" 2>/dev/null || true)"
+    if [ -n "$p" ]; then kill -KILL "$p" 2>/dev/null || true; fi
+}
+trap stop_guest EXIT
 
 step "dependencies"
 case "$(uname -m)" in x86_64) ;; *) echo "systemd-test: skipped: the guest is x86_64, this host is $(uname -m)"; exit 77 ;; esac
