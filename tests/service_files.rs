@@ -107,6 +107,27 @@ fn unit_sysusers_and_udev_agree() {
     );
 }
 
+/// The package's preinst creates the user and group from the same lines as the
+/// sysusers file (before the udev rule naming the group is unpacked).
+#[test]
+fn preinst_creates_what_the_sysusers_file_says() {
+    let lines = |text: &str| -> Vec<String> {
+        text.lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty() && !l.starts_with('#'))
+            .map(str::to_string)
+            .collect()
+    };
+    let sysusers = lines(&read("systemd/crowdtouch.sysusers"));
+    let preinst = read("packaging/debian/preinst");
+    let here = preinst
+        .split("<<'SYSUSERS'\n")
+        .nth(1)
+        .and_then(|r| r.split("\nSYSUSERS\n").next())
+        .expect("a here-document SYSUSERS in preinst");
+    assert_eq!(lines(here), sysusers);
+}
+
 /// udev rule lines are `KEY{attr}OP"value"` pairs separated by commas.
 #[test]
 fn udev_rule_syntax() {

@@ -25,8 +25,11 @@ const RULE_DIRS: [&str; 4] = [
     "usr/lib/udev/rules.d",
     "lib/udev/rules.d",
 ];
-/// The udev command that applies the rule to the nodes there are.
-pub const UDEV_TRIGGER: &str = "sudo udevadm control --reload && sudo udevadm trigger \
+/// The commands that apply the rule to the nodes there are. udevd is restarted
+/// rather than told to reload: it resolves a rule's group when it loads the rules
+/// and reloads them only when the files change, so a rule it read before the group
+/// existed keeps the nodes root-only until it restarts.
+pub const UDEV_TRIGGER: &str = "sudo systemctl restart systemd-udevd && sudo udevadm trigger \
      --subsystem-match=input --subsystem-match=hidraw";
 
 /// The service user's ids.

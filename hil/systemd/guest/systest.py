@@ -183,6 +183,9 @@ def run():
     nodes = uhid_nodes()
     modes = {n: oct(os.stat(n).st_mode & 0o777) + " gid " + str(os.stat(n).st_gid) for n in nodes}
     applied = bool(nodes) and all(os.stat(n).st_gid == int(gr.split(":")[2]) for n in nodes)
+    # udevd read the rule only once the group existed (the package's preinst).
+    unknown = "Unknown group 'crowdtouch'" in sh("journalctl -b -u systemd-udevd --no-pager -o cat").stdout
+    applied = applied and not unknown
     why = ""
     if not applied:
         # What udev makes of the rule for these nodes, and what it logged.
@@ -256,7 +259,8 @@ def run():
            and "udevadm trigger" in (c.get("fix") or ""), json.dumps(c))
     # The fix doctor names, as the person at the kiosk would run it.
     fix = (c.get("fix") or "")
-    cmd = fix[fix.find("sudo udevadm"):].replace("sudo ", "") if "sudo udevadm" in fix else ""
+    start = fix.find("sudo systemctl restart systemd-udevd")
+    cmd = fix[start:].replace("sudo ", "") if start >= 0 else ""
     sh(f"{cmd} && udevadm settle" if cmd else "false")
     code, v = doctor()
     c = doctor_check(v, "device_access") or {}
