@@ -516,7 +516,7 @@ fn collect(a: library_collect::CollectArgs) -> Result<()> {
     init_logging(cfg.log_level);
     if let Some(addr) = &a.http {
         cfg.outputs
-            .push(demo_websocket(addr, a.token.clone(), &[])?);
+            .push(demo_websocket(addr, a.token.clone(), &[], false)?);
     }
     let (start, from) = library_collect::starting_library(&a)?;
     let sources = sources_from_config(&cfg)?;

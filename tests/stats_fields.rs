@@ -145,6 +145,7 @@ fn a_drag_moves_the_touch_figures_and_the_rates() {
         sources,
         DaemonOptions {
             socket_path: path.clone(),
+            collect: None,
         },
     )
     .unwrap();
