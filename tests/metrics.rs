@@ -5,10 +5,9 @@
 
 mod common;
 
-use common::{daemon_on_channel, free_addr, shipped};
+use common::{daemon_on_channel, free_addr, send_drag};
 use crowdtouch::config::{Config, OutputConfig};
-use crowdtouch::input::recording::{read_recording, OnBadFrame};
-use crowdtouch::vocab::{StatsReport, TouchFrame};
+use crowdtouch::vocab::StatsReport;
 use prometheus_parse::{Sample, Scrape, Value};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream};
@@ -56,23 +55,6 @@ fn number(s: &Scrape, name: &str) -> f64 {
     }
 }
 
-fn send_drag(tx: &crossbeam_channel::Sender<TouchFrame>) {
-    let rec = read_recording(&shipped("01-point-drag.jsonl"), OnBadFrame::Stop).unwrap();
-    let start = Instant::now();
-    let t0 = rec.frames[0].t;
-    for f in &rec.frames {
-        let due = Duration::from_micros(f.t.saturating_since(t0).0);
-        if let Some(wait) = due.checked_sub(start.elapsed()) {
-            std::thread::sleep(wait);
-        }
-        let mut g = TouchFrame::new(crowdtouch::rt::monotonic_now());
-        for c in f.contacts() {
-            g.push(*c).unwrap();
-        }
-        tx.send(g).unwrap();
-    }
-}
-
 fn websocket(addr: SocketAddr, metrics: bool, token: Option<&str>) -> OutputConfig {
     let mut o: OutputConfig = ron::from_str("WebSocket()").unwrap();
     if let OutputConfig::WebSocket {
@@ -111,7 +93,7 @@ fn metrics_agree_with_the_stats_report() {
     assert_eq!(get(addr, "/metrics", "").0, 401);
 
     let drag = std::thread::spawn(move || {
-        send_drag(&tx);
+        send_drag(&tx, true);
         tx
     });
     let _tx = drag.join().unwrap();

@@ -4,11 +4,11 @@
 
 mod common;
 
-use common::{daemon_on_channel, read_until, shipped};
+use common::{daemon_on_channel, read_until, send_drag, shipped};
 use crowdtouch::config::{Config, InputConfig};
 use crowdtouch::input::recording::{read_recording, OnBadFrame};
 use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions, SourceSpec};
-use crowdtouch::vocab::{DeviceState, StatsReport, TouchFrame};
+use crowdtouch::vocab::{DeviceState, StatsReport};
 use std::io::{BufReader, Read, Write};
 use std::os::unix::net::UnixStream;
 use std::path::Path;
@@ -72,27 +72,6 @@ fn report_until(
             return r;
         }
         assert!(Instant::now() < end, "no report with {what}: last {r:?}");
-    }
-}
-
-/// The shipped one-finger drag over the crowd, stamped now; `paced` sends it at its
-/// own pace, otherwise as fast as the channel takes it.
-fn send_drag(tx: &crossbeam_channel::Sender<TouchFrame>, paced: bool) {
-    let rec = read_recording(&shipped("01-point-drag.jsonl"), OnBadFrame::Stop).unwrap();
-    let start = Instant::now();
-    let t0 = rec.frames[0].t;
-    for f in &rec.frames {
-        if paced {
-            let due = Duration::from_micros(f.t.saturating_since(t0).0);
-            if let Some(wait) = due.checked_sub(start.elapsed()) {
-                std::thread::sleep(wait);
-            }
-        }
-        let mut g = TouchFrame::new(crowdtouch::rt::monotonic_now());
-        for c in f.contacts() {
-            g.push(*c).unwrap();
-        }
-        tx.send(g).unwrap();
     }
 }
 
