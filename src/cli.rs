@@ -520,7 +520,12 @@ fn collect(a: library_collect::CollectArgs) -> Result<()> {
     }
     let (start, from) = library_collect::starting_library(&a)?;
     let sources = sources_from_config(&cfg)?;
-    let plan = library_collect::plan(&a, &sources)?;
+    let before = start
+        .gestures
+        .iter()
+        .filter(|g| g.participant == a.participant.trim())
+        .count();
+    let plan = library_collect::plan(&a, &sources, start)?;
     let socket_path = a
         .socket
         .clone()
@@ -539,11 +544,6 @@ fn collect(a: library_collect::CollectArgs) -> Result<()> {
         log::debug!("{}", status_line(r));
         Ok(())
     })?;
-    let before = start
-        .gestures
-        .iter()
-        .filter(|g| g.participant == participant)
-        .count();
     library_collect::summary(&a.out, &participant, before)
 }
 
