@@ -7,24 +7,41 @@
 //! | class | hands × fingers | the gesture |
 //! |---|---|---|
 //! | translate | 1 × 1–5 | the hand moves `size` mm in one direction |
-//! | twist | 1 × 2–5 | fingers on a circle of diameter `size` turn 60–200° about their centre |
+//! | twist | 1 × 2–5 | fingers on a circle of diameter `size` (at most the hand's reach) turn 60–200° about their centre |
 //! | twist | 1 × 1 | one finger draws a circle (or spiral) arc of 180–330°, diameter `size` |
-//! | contract | 1 × 2–5 | fingers converge from diameter `size` to 15–40 % of it |
-//! | expand | 1 × 2–5 | fingers spread from 15–40 % of `size` to diameter `size` |
-//! | join | 2 × 1–3 | hands `size` apart (at least twice their closest) move towards each other |
-//! | split | 2 × 1–3 | hands starting close move `size` apart (at least as far again) |
+//! | contract | 1 × 2–5 | a thumb and the fingers opposite it, open `size` wide (at most the hand's reach), converge to 15–40 % of it |
+//! | expand | 1 × 2–5 | the same, spreading from 15–40 % to open |
+//! | join | 2 × 1–3 | hands `size` further apart than when close (side by side) move towards each other |
+//! | split | 2 × 1–3 | hands starting close (side by side) move `size` apart (at least as far again) |
 //! | split_then_translate | 2 × 1–3 | split, then both move on together (roughly across the split) |
 //! | translate_then_join | 2 × 1–3 | both move together, then towards each other |
 //! | twist_while_expanding | 1 × 2–5 | turning 90–270° while spreading (outward spiral) |
 //! | twist_while_contracting | 1 × 2–5 | turning 90–270° while converging (inward spiral) |
 //!
+//! # Hands a person has
+//!
+//! The hands are an adult's (issue 28; docs/gestures.md, "The generators' hands"):
+//! one hand's fingertips open at most as wide as a hand reaches with that many
+//! fingers ([`HAND_SPAN_MM`], [`REACH_SHARE`], [`COMFORTABLE_STRETCH`]; the size
+//! of the hand follows the style's finger spacing); a pinching hand is a thumb
+//! opposite the other fingers, which splay when the hand opens and close only
+//! until their tips touch ([`FINGERTIP_PITCH_MM`]); two hands are never closer
+//! than side by side, a palm's breadth and a gap apart ([`HAND_BREADTH_MM`],
+//! [`HANDS_GAP_MM`]); and each hand of a two-hand gesture holds one finger more
+//! often than two or three. Before this, one hand's pinch opened up to 234 mm
+//! with two fingers and two hands of one finger each came within 15 mm, so
+//! nothing in the library told a join drawn with two index fingers from a pinch.
+//!
 //! # How a hand moves
 //!
-//! Each hand has a rest layout of fingers about its centre (on a circle for the
-//! turning and scaling classes, along a slightly curved row otherwise). At motion
+//! Each hand has a rest layout of fingers about its centre (on a circle for a
+//! twist, a thumb opposite a row of fingers for the scaling classes, along a
+//! slightly curved row otherwise). At motion
 //! progress `u ∈ [0, 1]` (smoothstep-eased per phase, so speed rises and falls as a
 //! person's does) finger `i` is at
-//! `centre + Σ_phases (D_p e_p + bow_p) + s(u) R(θ(u)) r_i`, where `D_p` is a phase's
+//! `centre + Σ_phases (D_p e_p + bow_p) + R(θ(u)) (s(u) r_i + l(u) q_i)`, where
+//! `q_i` is a pinching finger's offset within the row opposite the thumb (scaled by
+//! `l(u) = max(s(u), tips touching)`, zero otherwise), `D_p` is a phase's
 //! displacement, `bow_p` bends its path sideways by `bow · |D_p| · 4 e_p (1 − e_p)`,
 //! `s` scales the layout linearly and `θ` turns it linearly. Then the whole gesture is
 //! turned by `orientation_rad`, placed on the glass at `placement` (shifted and, if
@@ -49,6 +66,72 @@ use std::f64::consts::PI;
 
 /// Distance kept between a gesture and the glass's edge when placing it, mm.
 pub const EDGE_MARGIN_MM: f64 = 10.0;
+
+/// An adult hand's span, thumb tip to little-finger tip at full stretch with the
+/// hand flat, mm: from a small to a large hand. Boyle, Boyle and Booker, "Pianist
+/// hand spans: gender and ethnic differences and implications for piano playing"
+/// (2015; 473 adult pianists): mean 1–5 span 201 mm for women and 226 mm for men,
+/// adults' spans differing by up to about 127 mm; this range keeps the bulk of
+/// both.
+pub const HAND_SPAN_MM: (f64, f64) = (180.0, 240.0);
+
+/// An adult hand's breadth across the palm (at the knuckles), mm, for the same
+/// small to large hand: British adults aged 19–65, 5th percentile of women to 95th
+/// of men (Pheasant and Haslegrave, *Bodyspace*, 3rd ed., hand dimensions; as
+/// tabulated by City University of Hong Kong's online anthropometry, item 29:
+/// women 70–85 mm, men 80–95 mm). Two hands side by side have their centres at
+/// least this far apart.
+pub const HAND_BREADTH_MM: (f64, f64) = (70.0, 95.0);
+
+/// The share of a hand's span (thumb to little finger, [`HAND_SPAN_MM`]) that the
+/// thumb and the farthest of `n` fingertips can reach, `n` = 2..=5 (index 0 is
+/// one finger, which spans nothing). The 1–5 span is the widest a hand opens;
+/// thumb to index (2), middle (3) and ring finger (4) open less. The pianists'
+/// 1–2 spans are shorter than their 1–5 spans; the shares below are this
+/// generator's own assumption, not a measurement.
+pub const REACH_SHARE: [f64; 5] = [0.0, 0.8, 0.85, 0.9, 1.0];
+
+/// How much of its full stretch a hand uses when it opens for a gesture: nobody
+/// pinches from a painful stretch.
+pub const COMFORTABLE_STRETCH: f64 = 0.9;
+
+/// The least distance between the touch points of two fingers side by side (not
+/// the thumb) when a pinch has closed them together, mm: fingertips cannot
+/// overlap, so they close onto each other's side, the lower end of the library's
+/// resting finger spacing (15–25 mm, `StyleRanges::spacing_mm`).
+pub const FINGERTIP_PITCH_MM: f64 = 15.0;
+
+/// Extra room between two hands side by side beyond their breadth, mm.
+pub const HANDS_GAP_MM: (f64, f64) = (0.0, 40.0);
+
+/// The drawing hand's size, from the style's finger spacing: wider-spaced
+/// fingertips belong to a larger hand, so spacing 15–25 mm (the library's range;
+/// beyond it clamped) maps onto the small-to-large ranges of [`HAND_SPAN_MM`] and
+/// [`HAND_BREADTH_MM`].
+#[derive(Copy, Clone, Debug, PartialEq)]
+struct HandSize {
+    /// Thumb tip to little-finger tip at full stretch, mm.
+    span_mm: f64,
+    /// Across the palm, mm.
+    breadth_mm: f64,
+}
+
+impl HandSize {
+    fn of(style: &GestureStyle) -> HandSize {
+        let f = ((style.spacing_mm - 15.0) / 10.0).clamp(0.0, 1.0);
+        let lerp = |(a, b): (f64, f64)| a + (b - a) * f;
+        HandSize {
+            span_mm: lerp(HAND_SPAN_MM),
+            breadth_mm: lerp(HAND_BREADTH_MM),
+        }
+    }
+
+    /// The widest `n` fingertips of this hand comfortably open, tip to tip, mm.
+    fn reach_mm(&self, n: usize) -> f64 {
+        let share = REACH_SHARE[n.clamp(1, 5) - 1];
+        COMFORTABLE_STRETCH * share * self.span_mm
+    }
+}
 
 /// The style of one gesture: how a particular person draws it on a particular table.
 #[derive(Clone, Debug, PartialEq)]
@@ -172,6 +255,26 @@ fn pick_count(rng: &mut SplitMix64, lo: usize, hi: usize) -> usize {
     lo + (rng.next_u64() % (hi.saturating_sub(lo) as u64 + 1)) as usize
 }
 
+/// A finger count in `lo..=hi` with chance proportional to `1 / n`: a hand of a
+/// two-hand gesture is most often one pointing finger (with 1–3 fingers: one
+/// finger 6 times in 11, two 3 in 11, three 2 in 11, so both hands draw with one
+/// finger in about 30 % of joins and splits). A join drawn with both index fingers
+/// is the commonest way to bring two hands together, and the one a two-finger
+/// pinch must be told from (docs/gestures.md, Accuracy): a library that rarely
+/// holds it cannot tell them apart.
+fn pick_count_favouring_few(rng: &mut SplitMix64, lo: usize, hi: usize) -> usize {
+    let (lo, hi) = (lo.max(1), hi.max(lo.max(1)));
+    let total: f64 = (lo..=hi).map(|n| 1.0 / n as f64).sum();
+    let mut x = rng.uniform(0.0, total);
+    for n in lo..=hi {
+        x -= 1.0 / n as f64;
+        if x < 0.0 {
+            return n;
+        }
+    }
+    hi
+}
+
 impl GestureStyle {
     /// A style for `class` drawn from `ranges`, the same for the same seed.
     pub fn random(class: MotionClass, seed: u64, ranges: &StyleRanges) -> GestureStyle {
@@ -182,7 +285,13 @@ impl GestureStyle {
             ranges.fingers.1.clamp(lo, hi),
         );
         let fingers: Vec<usize> = (0..hands)
-            .map(|_| pick_count(&mut rng, lo, hi.max(lo)))
+            .map(|_| {
+                if hands == 2 {
+                    pick_count_favouring_few(&mut rng, lo, hi.max(lo))
+                } else {
+                    pick_count(&mut rng, lo, hi.max(lo))
+                }
+            })
             .collect();
         let device_mm = if ranges.devices_mm.is_empty() {
             (1210.0, 680.0)
@@ -249,6 +358,12 @@ struct Hand {
     turn: f64,
     /// Layout scale at the start and end.
     scale: (f64, f64),
+    /// Per finger, an offset within its group of fingers (the fingers opposite a
+    /// pinching thumb), added to `layout`; zero for other hands.
+    local: Vec<Vec2>,
+    /// The scale of `local` at the start and end: fingers side by side close only
+    /// until their tips touch ([`FINGERTIP_PITCH_MM`]).
+    local_scale: (f64, f64),
 }
 
 impl Hand {
@@ -261,7 +376,9 @@ impl Hand {
         }
         let u = u.clamp(0.0, 1.0);
         let s = self.scale.0 + (self.scale.1 - self.scale.0) * u;
-        c + rot(self.layout[i], self.turn * u) * s
+        let ls = self.local_scale.0 + (self.local_scale.1 - self.local_scale.0) * u;
+        let local = self.local.get(i).copied().unwrap_or_else(Vec2::zeros);
+        c + rot(self.layout[i] * s + local * ls, self.turn * u)
     }
 }
 
@@ -277,6 +394,101 @@ fn ring(rng: &mut SplitMix64, n: usize, radius: f64) -> Vec<Vec2> {
             unit(a) * radius * rng.uniform(0.85, 1.15)
         })
         .collect()
+}
+
+/// Scales `layout` about its centroid so that no two fingertips are more than
+/// `max_mm` apart (a hand cannot open wider), leaving a narrower one as it is.
+fn within_reach(layout: Vec<Vec2>, max_mm: f64) -> Vec<Vec2> {
+    let mut widest = 0.0f64;
+    for (i, a) in layout.iter().enumerate() {
+        for b in &layout[i + 1..] {
+            widest = widest.max((a - b).norm());
+        }
+    }
+    if widest <= max_mm || widest <= 0.0 {
+        return layout;
+    }
+    let c = layout.iter().sum::<Vec2>() / layout.len() as f64;
+    layout
+        .into_iter()
+        .map(|p| c + (p - c) * (max_mm / widest))
+        .collect()
+}
+
+/// A pinching hand, open: where each fingertip's group sits (the thumb alone; the
+/// other fingers together) and each fingertip's offset within its group, mm about
+/// the hand's centroid.
+struct Pinch {
+    groups: Vec<Vec2>,
+    local: Vec<Vec2>,
+    /// The fingers' spacing side by side, open, mm.
+    open_pitch_mm: f64,
+}
+
+/// A pinching hand of `n` fingertips open `span_mm` wide (thumb to the farthest
+/// fingertip): the thumb on one side, the other fingertips in a slightly curved
+/// row on the other, facing it. The thumb opposes the fingers: a pinch closes the
+/// thumb and the fingers onto each other, so a four- or five-finger pinch is two
+/// groups converging (the thumb alone, the fingers together), not fingers evenly
+/// round a circle. A hand opened wide also splays its fingers: adjacent fingers
+/// abduct up to 14–32° from each other (Chatzioglou, Pınar and Govsa, "Biometric
+/// analysis hand parameters in young adults…", Anat Cell Biol 57(2), 2024: index–
+/// middle 17°, middle–ring 14°, ring–little 32° at maximum abduction; fingers
+/// 53–71 mm long), which puts fingertips about twice their resting spacing apart
+/// at full stretch; so the row's pitch is `spacing` times 1 plus the share of the
+/// full span (`full_span_mm`) the hand is open.
+fn pinch_hand(
+    rng: &mut SplitMix64,
+    n: usize,
+    span_mm: f64,
+    full_span_mm: f64,
+    spacing: f64,
+) -> Pinch {
+    if n <= 1 {
+        return Pinch {
+            groups: vec![Vec2::zeros()],
+            local: vec![Vec2::zeros()],
+            open_pitch_mm: spacing,
+        };
+    }
+    let fingers = n - 1;
+    // Splayed, but the row stays within the span (its ends 80 % of it apart at
+    // most), so the thumb still faces it.
+    let pitch = (spacing * (1.0 + (span_mm / full_span_mm.max(1.0)).clamp(0.0, 1.0)))
+        .min(0.8 * span_mm / (fingers as f64 - 1.0).max(1.0));
+    let half_row = (fingers as f64 - 1.0) / 2.0 * pitch;
+    // The farthest fingertip (a row's end) is `span_mm` from the thumb.
+    let across = (span_mm * span_mm - half_row * half_row)
+        .max((0.3 * span_mm).powi(2))
+        .sqrt();
+    let thumb = Vec2::new(rng.uniform(-2.0, 2.0), rng.uniform(-2.0, 2.0));
+    // The row turned a quarter to run along y, its middle bowed away from the
+    // thumb (the middle finger reaches furthest).
+    let row: Vec<Vec2> = row(rng, fingers, pitch, 0.0)
+        .into_iter()
+        .map(|p| rot(p, PI / 2.0))
+        .collect();
+    let c = (thumb + Vec2::new(across, 0.0) * fingers as f64) / n as f64;
+    let mut groups = vec![thumb - c];
+    let mut local = vec![Vec2::zeros()];
+    for p in row {
+        groups.push(Vec2::new(across, 0.0) - c);
+        local.push(p);
+    }
+    // The row's curve moves the tips' centroid off `c`: measured and kept within
+    // the span as a whole.
+    let tips: Vec<Vec2> = groups.iter().zip(&local).map(|(g, l)| g + l).collect();
+    let fitted = within_reach(tips.clone(), span_mm);
+    let shrink = if tips.len() > 1 {
+        (fitted[1] - fitted[0]).norm() / (tips[1] - tips[0]).norm().max(1e-9)
+    } else {
+        1.0
+    };
+    Pinch {
+        groups: groups.into_iter().map(|g| g * shrink).collect(),
+        local: local.into_iter().map(|l| l * shrink).collect(),
+        open_pitch_mm: pitch * shrink,
+    }
 }
 
 /// Fingers along a slightly curved row across direction `across` (rad), `spacing` apart.
@@ -310,13 +522,38 @@ fn hands(class: MotionClass, style: &GestureStyle, rng: &mut SplitMix64) -> Vec<
     let sign = if style.clockwise { 1.0 } else { -1.0 };
     let n0 = style.fingers.first().copied().unwrap_or(1).clamp(1, 5);
     let spacing = style.spacing_mm.max(1.0);
+    let hand = HandSize::of(style);
+    // The widest the fingers of this one hand open (anatomy, not the style's size:
+    // a one-hand gesture larger than that cannot be drawn by one hand).
+    let reach = hand.reach_mm(n0);
+    // The least a pinching hand opens: 40 mm, and with three or more fingers the
+    // row opposite the thumb at rest and a tenth more (five fingertips do not fit
+    // in 40 mm; a hand that cannot open past its own fingers cannot pinch).
+    let least_open = (1.1 * n0.saturating_sub(2) as f64 * spacing).max(40.0);
     let single = |layout: Vec<Vec2>, phases: Vec<Phase>, turn: f64, scale: (f64, f64)| {
         vec![Hand {
             centre: Vec2::zeros(),
+            local: vec![Vec2::zeros(); layout.len()],
             layout,
             phases,
             turn,
             scale,
+            local_scale: (1.0, 1.0),
+        }]
+    };
+    // A pinching hand opening or closing between `scale.0` and `scale.1` of its
+    // open size: the thumb and the fingers' group converge by the full scale; the
+    // fingers side by side only until their tips touch.
+    let pinching = |pinch: Pinch, phases: Vec<Phase>, turn: f64, scale: (f64, f64)| {
+        let least = (FINGERTIP_PITCH_MM / pinch.open_pitch_mm.max(1e-9)).min(1.0);
+        vec![Hand {
+            centre: Vec2::zeros(),
+            layout: pinch.groups,
+            local: pinch.local,
+            phases,
+            turn,
+            scale,
+            local_scale: (scale.0.max(least), scale.1.max(least)),
         }]
     };
     match class {
@@ -338,12 +575,16 @@ fn hands(class: MotionClass, style: &GestureStyle, rng: &mut SplitMix64) -> Vec<
             single(vec![Vec2::new(r, 0.0)], Vec::new(), arc, (1.0, spiral))
         }
         MotionClass::Twist => {
+            // Fingertips round a knob, as wide as the hand opens.
             let r = (size / 2.0).clamp(15.0, 90.0);
             let turn = sign * rng.uniform(60.0, 200.0).to_radians();
-            single(ring(rng, n0, r), Vec::new(), turn, (1.0, 1.0))
+            let layout = within_reach(ring(rng, n0, r), reach);
+            single(layout, Vec::new(), turn, (1.0, 1.0))
         }
         MotionClass::Contract | MotionClass::Expand => {
-            let r = (size / 2.0).clamp(20.0, 110.0);
+            // Open `size` wide, but no wider than this hand's `n0` fingers reach.
+            let open = size.clamp(least_open, reach.max(least_open));
+            let r = open / 2.0;
             let small = rng.uniform(0.15, 0.4);
             let scale = if class == MotionClass::Contract {
                 (1.0, small)
@@ -351,10 +592,11 @@ fn hands(class: MotionClass, style: &GestureStyle, rng: &mut SplitMix64) -> Vec<
                 (small, 1.0)
             };
             let drift = unit(rng.uniform(0.0, 2.0 * PI)) * rng.uniform(0.0, 0.1) * r;
-            single(ring(rng, n0, r), one_phase(drift, 0.0), 0.0, scale)
+            let pinch = pinch_hand(rng, n0, open, hand.span_mm, spacing);
+            pinching(pinch, one_phase(drift, 0.0), 0.0, scale)
         }
         MotionClass::TwistWhileExpanding | MotionClass::TwistWhileContracting => {
-            let r = (size / 2.0).clamp(20.0, 110.0);
+            let open = size.clamp(least_open, reach.max(least_open));
             let small = rng.uniform(0.2, 0.45);
             let scale = if class == MotionClass::TwistWhileContracting {
                 (1.0, small)
@@ -362,7 +604,8 @@ fn hands(class: MotionClass, style: &GestureStyle, rng: &mut SplitMix64) -> Vec<
                 (small, 1.0)
             };
             let turn = sign * rng.uniform(90.0, 270.0).to_radians();
-            single(ring(rng, n0, r), Vec::new(), turn, scale)
+            let pinch = pinch_hand(rng, n0, open, hand.span_mm, spacing);
+            pinching(pinch, Vec::new(), turn, scale)
         }
         MotionClass::Join
         | MotionClass::Split
@@ -384,8 +627,11 @@ fn two_hands(class: MotionClass, style: &GestureStyle, rng: &mut SplitMix64) -> 
         })
         .collect();
     let half_width = |l: &Vec<Vec2>| l.iter().map(|p| p.norm()).fold(0.0, f64::max);
-    // Hands close: their centres this far apart.
-    let close = half_width(&layouts[0]) + half_width(&layouts[1]) + rng.uniform(15.0, 35.0);
+    // Hands close: side by side, palm beside palm, their centres at least a hand's
+    // breadth apart (two hands cannot overlap; whatever fingers they hold down).
+    let breadth = HandSize::of(style).breadth_mm;
+    let close = (breadth + rng.uniform(HANDS_GAP_MM.0, HANDS_GAP_MM.1))
+        .max(half_width(&layouts[0]) + half_width(&layouts[1]) + 15.0);
     // The hands travel `size`, and at least as far as they are apart when close.
     let far = close + style.size_mm.max(close);
     let (start, end) = match class {
@@ -434,6 +680,8 @@ fn two_hands(class: MotionClass, style: &GestureStyle, rng: &mut SplitMix64) -> 
         };
         hands.push(Hand {
             centre: Vec2::new(side * start / 2.0, 0.0),
+            local: vec![Vec2::zeros(); layout.len()],
+            local_scale: (1.0, 1.0),
             layout,
             phases,
             turn: 0.0,

@@ -342,3 +342,137 @@ fn a_one_sample_track_is_down_and_up_in_one_frame() {
     );
     assert_eq!(frames[2].contacts()[0].flags, ContactFlags::UP);
 }
+
+/// Widest distance between two of `p`, mm.
+fn widest(p: &[Vec2]) -> f64 {
+    let mut m = 0.0f64;
+    for (i, a) in p.iter().enumerate() {
+        for b in &p[i + 1..] {
+            m = m.max((a - b).norm());
+        }
+    }
+    m
+}
+
+#[test]
+fn one_hand_never_opens_wider_than_a_hand_reaches() {
+    // Sensor noise and tremor: at most a millimetre or two on top of the hand.
+    let noise_mm = 4.0;
+    for class in [
+        MotionClass::Twist,
+        MotionClass::Contract,
+        MotionClass::Expand,
+        MotionClass::TwistWhileExpanding,
+        MotionClass::TwistWhileContracting,
+    ] {
+        for seed in 0..40 {
+            let mut s = style(class, seed);
+            // The largest size asked for: the hand, not the size, limits it.
+            s.size_mm = 250.0;
+            s.fingers = vec![2 + (seed as usize % 4)];
+            let g = generate_detailed(class, &s, seed);
+            let n = s.fingers[0];
+            let most = HAND_SPAN_MM.1 * REACH_SHARE[n - 1] * COMFORTABLE_STRETCH;
+            let (t0, t1) = g.motion_us;
+            for k in 0..=16 {
+                let t = t0 + (t1 - t0) * k / 16;
+                let w = widest(&points(&g, t, None));
+                assert!(
+                    w <= most + noise_mm,
+                    "{class} seed {seed}, {n} fingers: {w:.1} mm apart, a hand reaches {most:.1}"
+                );
+            }
+        }
+    }
+    // And a two-finger pinch of a hand opens less than a five-finger one.
+    assert!(REACH_SHARE[1] < REACH_SHARE[4]);
+}
+
+#[test]
+fn a_pinch_closes_the_thumb_on_the_fingers_which_close_only_until_they_touch() {
+    for seed in 0..20 {
+        for n in 3..=5 {
+            let mut s = style(MotionClass::Contract, seed);
+            s.fingers = vec![n];
+            s.size_mm = 200.0;
+            let mut rng = SplitMix64::new(seed);
+            let h = &hands(MotionClass::Contract, &s, &mut rng)[0];
+            let at = |u: f64| (0..n).map(|i| h.at(i, u)).collect::<Vec<_>>();
+            let (open, closed) = (at(0.0), at(1.0));
+            // The thumb (finger 0) comes towards the fingers by the pinch's scale.
+            let towards = |p: &[Vec2]| (p[0] - centroid(&p[1..])).norm();
+            assert!(
+                towards(&closed) < 0.45 * towards(&open),
+                "seed {seed}, {n} fingers: thumb {:.1} -> {:.1} mm from the fingers",
+                towards(&open),
+                towards(&closed)
+            );
+            // The fingers side by side stay at least a fingertip apart (less the
+            // row's ±2 mm irregularity on each finger).
+            for i in 1..n {
+                for j in i + 1..n {
+                    let d = (closed[i] - closed[j]).norm();
+                    assert!(
+                        d > FINGERTIP_PITCH_MM - 4.0,
+                        "seed {seed}, {n} fingers: fingers {i} and {j} {d:.1} mm apart"
+                    );
+                }
+            }
+            // Open, the fingers are splayed wider than at rest.
+            let pitch = (open[1] - open[2]).norm();
+            assert!(pitch > s.spacing_mm, "{pitch:.1} vs {}", s.spacing_mm);
+        }
+    }
+}
+
+#[test]
+fn two_hands_are_at_least_a_palm_apart() {
+    for class in [
+        MotionClass::Join,
+        MotionClass::Split,
+        MotionClass::SplitThenTranslate,
+        MotionClass::TranslateThenJoin,
+    ] {
+        for seed in 0..40 {
+            let s = style(class, seed);
+            let g = generate_detailed(class, &s, seed);
+            let (t0, t1) = g.motion_us;
+            for k in 0..=16 {
+                let t = t0 + (t1 - t0) * k / 16;
+                let d =
+                    (centroid(&points(&g, t, Some(0))) - centroid(&points(&g, t, Some(1)))).norm();
+                assert!(
+                    d > HAND_BREADTH_MM.0 - 3.0,
+                    "{class} seed {seed} {:?}: hands {d:.1} mm apart",
+                    s.fingers
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn two_hand_gestures_are_often_one_finger_per_hand() {
+    let mut both_one = 0;
+    let mut counts = [0usize; 4];
+    let trials = 600;
+    for seed in 0..trials {
+        let s = GestureStyle::random(MotionClass::Join, seed, &StyleRanges::default());
+        both_one += usize::from(s.fingers == [1, 1]);
+        for &n in &s.fingers {
+            counts[n] += 1;
+        }
+    }
+    // One finger 6/11, two 3/11, three 2/11 per hand: both one about 30 %.
+    let share = both_one as f64 / trials as f64;
+    assert!((0.22..0.38).contains(&share), "{share} {counts:?}");
+    assert!(counts[1] > counts[2] && counts[2] > counts[3], "{counts:?}");
+    // One-hand classes keep drawing 1–5 fingers evenly.
+    let fives = (0..trials)
+        .filter(|&seed| {
+            GestureStyle::random(MotionClass::Translate, seed, &StyleRanges::default()).fingers
+                == [5]
+        })
+        .count();
+    assert!((80..160).contains(&fives), "{fives}");
+}
