@@ -128,11 +128,15 @@ fn three_class_library(dir: &Path) -> PathBuf {
         out.contains("motion 6 of class crossing (a new class)"),
         "{out}"
     );
-    // A person's crossing gestures: two hands drawn together, turned every way.
+    // A person's crossing gestures: two hands drawn together, turned every way,
+    // on the glass the recordings are written for (a gesture drawn for a smaller
+    // glass and written as this one's would be scaled up, its hands spread past
+    // one gesture's span).
     let mut recordings = Vec::new();
     for k in 0..8u64 {
         let mut st = GestureStyle::random(MotionClass::Join, 900 + k, &StyleRanges::default());
         st.orientation_rad = k as f64 * std::f64::consts::FRAC_PI_4;
+        st.device_mm = GLASS_MM;
         let tracks = generate(MotionClass::Join, &st, 77 + k);
         let p = dir.join(format!("crossing-{k}.jsonl"));
         write_recording(&to_frames(&tracks, st.device_mm, Micros(500_000)), &p);
