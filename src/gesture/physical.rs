@@ -134,7 +134,11 @@ pub const PAIR_RIGID: f64 = 0.15;
 pub const PAIR_MIN_OVERLAP: f64 = 0.5;
 
 /// One hand's reach (mm): features 12 and 13 measure the span beyond it. A thumb
-/// and index finger open to about 150 mm; further apart, two hands.
+/// and index finger open to about 150 mm comfortably; further apart, more and more
+/// likely two hands (a large hand stretched to its limit reaches about 190 mm, and
+/// with five fingers 240: `synth::HAND_SPAN_MM`, `synth::REACH_SHARE`). Scaling
+/// this reach with the finger count was tried (2–5 fingers: 150–188 mm) and left
+/// the cross-style figures within ±0.6 % over seeds 27–33, so it stays one number.
 pub const HAND_REACH_MM: f64 = 150.0;
 
 /// A gesture's physical features (module doc); NaN where a feature is unknown.
