@@ -91,6 +91,14 @@ pub const HAND_BREADTH_MM: (f64, f64) = (70.0, 95.0);
 /// generator's own assumption, not a measurement.
 pub const REACH_SHARE: [f64; 5] = [0.0, 0.8, 0.85, 0.9, 1.0];
 
+// More fingers reach further, up to the whole span.
+const _: () = assert!(
+    REACH_SHARE[1] < REACH_SHARE[2]
+        && REACH_SHARE[2] < REACH_SHARE[3]
+        && REACH_SHARE[3] < REACH_SHARE[4]
+        && REACH_SHARE[4] == 1.0
+);
+
 /// How much of its full stretch a hand uses when it opens for a gesture: nobody
 /// pinches from a painful stretch.
 pub const COMFORTABLE_STRETCH: f64 = 0.9;
