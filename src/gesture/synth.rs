@@ -77,18 +77,16 @@ pub const HAND_SPAN_MM: (f64, f64) = (180.0, 240.0);
 
 /// An adult hand's breadth across the palm (at the knuckles), mm, for the same
 /// small to large hand: British adults aged 19–65, 5th percentile of women to 95th
-/// of men (Pheasant and Haslegrave, *Bodyspace*, 3rd ed., hand dimensions; as
-/// tabulated by City University of Hong Kong's online anthropometry, item 29:
-/// women 70–85 mm, men 80–95 mm). Two hands side by side have their centres at
+/// of men (City University of Hong Kong's online anthropometry, item 29 "Hand
+/// breadth": women 70–85 mm, men 80–95 mm). Two hands side by side have their centres at
 /// least this far apart.
 pub const HAND_BREADTH_MM: (f64, f64) = (70.0, 95.0);
 
 /// The share of a hand's span (thumb to little finger, [`HAND_SPAN_MM`]) that the
 /// thumb and the farthest of `n` fingertips can reach, `n` = 2..=5 (index 0 is
 /// one finger, which spans nothing). The 1–5 span is the widest a hand opens;
-/// thumb to index (2), middle (3) and ring finger (4) open less. The pianists'
-/// 1–2 spans are shorter than their 1–5 spans; the shares below are this
-/// generator's own assumption, not a measurement.
+/// thumb to index (2), middle (3) and ring finger (4) open less. The shares are
+/// this generator's own assumption, not a measurement.
 pub const REACH_SHARE: [f64; 5] = [0.0, 0.8, 0.85, 0.9, 1.0];
 
 // More fingers reach further, up to the whole span.
@@ -407,12 +405,7 @@ fn ring(rng: &mut SplitMix64, n: usize, radius: f64) -> Vec<Vec2> {
 /// Scales `layout` about its centroid so that no two fingertips are more than
 /// `max_mm` apart (a hand cannot open wider), leaving a narrower one as it is.
 fn within_reach(layout: Vec<Vec2>, max_mm: f64) -> Vec<Vec2> {
-    let mut widest = 0.0f64;
-    for (i, a) in layout.iter().enumerate() {
-        for b in &layout[i + 1..] {
-            widest = widest.max((a - b).norm());
-        }
-    }
+    let widest = widest_mm(&layout);
     if widest <= max_mm || widest <= 0.0 {
         return layout;
     }
@@ -421,6 +414,17 @@ fn within_reach(layout: Vec<Vec2>, max_mm: f64) -> Vec<Vec2> {
         .into_iter()
         .map(|p| c + (p - c) * (max_mm / widest))
         .collect()
+}
+
+/// The largest distance between two of `points`, mm (0 for fewer than two).
+fn widest_mm(points: &[Vec2]) -> f64 {
+    let mut widest = 0.0f64;
+    for (i, a) in points.iter().enumerate() {
+        for b in &points[i + 1..] {
+            widest = widest.max((a - b).norm());
+        }
+    }
+    widest
 }
 
 /// A pinching hand, open: where each fingertip's group sits (the thumb alone; the
@@ -483,12 +487,12 @@ fn pinch_hand(
         groups.push(Vec2::new(across, 0.0) - c);
         local.push(p);
     }
-    // The row's curve moves the tips' centroid off `c`: measured and kept within
-    // the span as a whole.
+    // The row's curve and irregularity can put a tip past `span_mm`: the hand is
+    // shrunk as a whole to keep within it.
     let tips: Vec<Vec2> = groups.iter().zip(&local).map(|(g, l)| g + l).collect();
-    let fitted = within_reach(tips.clone(), span_mm);
-    let shrink = if tips.len() > 1 {
-        (fitted[1] - fitted[0]).norm() / (tips[1] - tips[0]).norm().max(1e-9)
+    let widest = widest_mm(&tips);
+    let shrink = if widest > span_mm {
+        span_mm / widest
     } else {
         1.0
     };
