@@ -27,11 +27,14 @@ mod bench;
 mod calibrate;
 mod check;
 mod devices;
+mod doctor;
+mod doctor_device;
 mod edit;
 mod edit_path;
 mod formations;
 mod gesture;
 mod hid;
+mod journal;
 mod library;
 mod library_collect;
 mod library_eval;
@@ -46,6 +49,7 @@ mod transform;
 mod transform_compare;
 mod transform_setup;
 mod transform_svg;
+mod unit;
 mod watch;
 
 /// crowdtouch — a multi-touch table daemon that drives a crowd.
@@ -92,6 +96,29 @@ enum Cmd {
     CheckConfig {
         /// Config file.
         file: PathBuf,
+    },
+    /// What is wrong with this table, each finding with its fix: the config, the
+    /// service user, the device and who may open it, the udev rule, real-time
+    /// limits, the socket, each network output, the running daemon's last stats.
+    /// Exit code 0 only when nothing is wrong.
+    Doctor(doctor::DoctorArgs),
+    /// The systemd drop-in that opens to the service exactly the network its config
+    /// names (printed; `--generator DIR` writes it, as the package's systemd
+    /// generator does at boot and on `systemctl daemon-reload`).
+    #[command(hide = true)]
+    UnitNetwork {
+        /// Config (default: /etc/crowdtouch/crowdtouch.ron).
+        #[arg(long, short)]
+        config: Option<PathBuf>,
+        /// systemd's generator output directories (the first is used).
+        #[arg(long, num_args = 1..=3)]
+        generator: Vec<PathBuf>,
+    },
+    /// Write the man pages (roff) into DIR, as the Debian package installs them.
+    #[command(hide = true)]
+    Man {
+        /// Output directory.
+        dir: PathBuf,
     },
     /// Measure the standard workloads on this machine (p50/p99/max).
     Bench(bench::BenchArgs),
@@ -202,6 +229,10 @@ struct DemoArgs {
     /// naming any other host are refused (421): the guard against DNS rebinding.
     #[arg(long = "host", value_name = "NAME", requires = "http")]
     hosts: Vec<String>,
+    /// Also serve the newest stats as Prometheus text at /metrics beside the
+    /// viewer (with --token when one is given).
+    #[arg(long, requires = "http")]
+    metrics: bool,
 }
 
 #[derive(Args, Debug)]
@@ -255,6 +286,16 @@ struct WatchArgs {
     seconds: Option<f64>,
 }
 
+/// `crowdtouch man DIR`: the man pages (`crowdtouch.1` and one `crowdtouch-CMD.1`
+/// per visible command), from the clap definitions above.
+fn man(dir: &Path) -> Result<()> {
+    use clap::CommandFactory;
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    clap_mangen::generate_to(Cli::command(), dir)
+        .with_context(|| format!("writing the man pages into {}", dir.display()))?;
+    Ok(())
+}
+
 /// Entry point; returns the process exit code (see `output` for what a write
 /// that fails does to it).
 pub fn main() -> i32 {
@@ -269,6 +310,11 @@ pub fn main() -> i32 {
         Cmd::Replay(a) => done(replay(a)),
         Cmd::Watch(a) => done(watch::watch(a.socket, a.fps, a.seconds)),
         Cmd::CheckConfig { file } => check::check_config(&file),
+        Cmd::Doctor(a) => doctor::doctor(&a),
+        Cmd::Man { dir } => done(man(&dir)),
+        Cmd::UnitNetwork { config, generator } => {
+            unit::unit_network(config.as_deref(), generator.first().map(PathBuf::as_path))
+        }
         Cmd::Bench(a) => done(bench::bench(a)),
         Cmd::SynthRecordings { out } => done(synth(&out)),
         Cmd::Calibrate {
@@ -335,7 +381,8 @@ fn clap_exit(e: &clap::Error) -> i32 {
     }
 }
 
-/// Logs to stderr at `level`; `RUST_LOG` overrides it. Without `RUST_LOG` the
+/// Logs to stderr at `level` (as journal lines under systemd: `journal.rs`);
+/// `RUST_LOG` overrides it. Without `RUST_LOG` the
 /// logger passes everything and the level is `log`'s maximum, which a config
 /// reload changes (`Daemon::reload`).
 fn init_logging(level: config::LogLevel) {
@@ -351,6 +398,9 @@ fn init_logging(level: config::LogLevel) {
         }
     }
     b.format_target(false);
+    if journal::stderr_is_journal() {
+        journal::use_journal_format(&mut b);
+    }
     if b.try_init().is_ok() && spec.is_none() {
         log::set_max_level(level.filter());
     }
@@ -466,11 +516,16 @@ fn collect(a: library_collect::CollectArgs) -> Result<()> {
     init_logging(cfg.log_level);
     if let Some(addr) = &a.http {
         cfg.outputs
-            .push(demo_websocket(addr, a.token.clone(), &[])?);
+            .push(demo_websocket(addr, a.token.clone(), &[], false)?);
     }
     let (start, from) = library_collect::starting_library(&a)?;
     let sources = sources_from_config(&cfg)?;
-    let plan = library_collect::plan(&a, &sources)?;
+    let before = start
+        .gestures
+        .iter()
+        .filter(|g| g.participant == a.participant.trim())
+        .count();
+    let plan = library_collect::plan(&a, &sources, start)?;
     let socket_path = a
         .socket
         .clone()
@@ -489,11 +544,6 @@ fn collect(a: library_collect::CollectArgs) -> Result<()> {
         log::debug!("{}", status_line(r));
         Ok(())
     })?;
-    let before = start
-        .gestures
-        .iter()
-        .filter(|g| g.participant == participant)
-        .count();
     library_collect::summary(&a.out, &participant, before)
 }
 
@@ -609,7 +659,7 @@ fn demo(a: DemoArgs) -> Result<()> {
     }
     if let Some(addr) = &a.http {
         cfg.outputs
-            .push(demo_websocket(addr, a.token.clone(), &a.hosts)?);
+            .push(demo_websocket(addr, a.token.clone(), &a.hosts, a.metrics)?);
     }
     let daemon = start_daemon(cfg, a.socket)?;
     // From here on, every way out (a line that cannot be written included) stops
@@ -620,12 +670,11 @@ fn demo(a: DemoArgs) -> Result<()> {
         outln!("  TUIO 1.1:   to {target} (/tuio/2Dcur touches, /tuio/2Dobj agents, /tuio/2Dblb controls)")?;
     }
     if let Some(addr) = &a.http {
-        let query = a
-            .token
-            .as_ref()
-            .map(|t| format!("?token={t}"))
-            .unwrap_or_default();
+        let query = output::token_query(a.token.as_deref());
         outln!("  viewer:     http://{addr}/{query}")?;
+        if a.metrics {
+            outln!("  metrics:    http://{addr}/metrics")?;
+        }
         for h in &a.hosts {
             let port = addr.rsplit_once(':').map_or("", |(_, p)| p);
             let shown = if h.contains(':') && !h.ends_with(']') {
@@ -671,6 +720,7 @@ fn demo_websocket(
     addr: &str,
     token: Option<String>,
     hosts: &[String],
+    metrics: bool,
 ) -> Result<config::OutputConfig> {
     let hosts = hosts
         .iter()
@@ -696,6 +746,7 @@ fn demo_websocket(
         max_clients: 16,
         max_message_bytes: 64 * 1024,
         viewer: true,
+        metrics,
         // The viewer is served by this output: its own origin is privileged, as
         // are clients that send no Origin; pages of other sites are refused.
         origins: vec![],

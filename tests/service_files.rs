@@ -107,6 +107,27 @@ fn unit_sysusers_and_udev_agree() {
     );
 }
 
+/// The package's preinst creates the user and group from the same lines as the
+/// sysusers file (before the udev rule naming the group is unpacked).
+#[test]
+fn preinst_creates_what_the_sysusers_file_says() {
+    let lines = |text: &str| -> Vec<String> {
+        text.lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty() && !l.starts_with('#'))
+            .map(str::to_string)
+            .collect()
+    };
+    let sysusers = lines(&read("systemd/crowdtouch.sysusers"));
+    let preinst = read("packaging/debian/preinst");
+    let here = preinst
+        .split("<<'SYSUSERS'\n")
+        .nth(1)
+        .and_then(|r| r.split("\nSYSUSERS\n").next())
+        .expect("a here-document SYSUSERS in preinst");
+    assert_eq!(lines(here), sysusers);
+}
+
 /// udev rule lines are `KEY{attr}OP"value"` pairs separated by commas.
 #[test]
 fn udev_rule_syntax() {
@@ -140,14 +161,14 @@ fn systemd_analyze_verifies_the_unit_where_available() {
     };
     assert!(v.status.success());
     let dir = tempfile::tempdir().unwrap();
-    let unit = read("systemd/crowdtouch.service").replace(
-        "/usr/local/bin/crowdtouch",
-        env!("CARGO_BIN_EXE_crowdtouch"),
-    );
+    let unit = read("systemd/crowdtouch.service")
+        .replace("/usr/bin/crowdtouch", env!("CARGO_BIN_EXE_crowdtouch"));
     let path = dir.path().join("crowdtouch.service");
     std::fs::write(&path, unit).unwrap();
     let out = Command::new("systemd-analyze")
         .arg("verify")
+        // The man page is the package's: not installed where the tests run.
+        .arg("--man=no")
         .arg(&path)
         .output()
         .unwrap();

@@ -33,6 +33,7 @@ fn websocket(addr: SocketAddr, privileged: bool, token: Option<&str>) -> OutputC
         max_clients: 8,
         max_message_bytes: 4096,
         viewer: true,
+        metrics: false,
         origins: vec![],
         privileged_origins: vec![],
         hosts: vec![],

@@ -5,7 +5,7 @@ use super::output::{self, errln, outln};
 use anyhow::Result;
 use crowdtouch::config::{self, Config};
 use crowdtouch::pipeline::{preflight, Finding, Preflight, Severity};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// `file:line:col: field `f`: what` lines for the findings of one severity
 /// (warnings say so after the field).
@@ -38,7 +38,7 @@ pub fn check_config(file: &Path) -> Result<i32> {
         Err(e) => return Ok(output::fail_with(1, format_args!("{e}"))),
     };
     let socket = c.socket.resolved_path();
-    let findings = preflight(
+    let mut findings = preflight(
         &c,
         &Preflight {
             socket: Some(&socket),
@@ -46,6 +46,9 @@ pub fn check_config(file: &Path) -> Result<i32> {
             starting: false,
         },
     );
+    // The installed service's network (its unit and drop-ins) against the outputs.
+    let root = std::env::var_os("CROWDTOUCH_ROOT").map_or_else(|| "/".into(), PathBuf::from);
+    findings.extend(super::unit::unit_findings(&c, &root));
     let warnings = located_findings(file, &text, &findings, Severity::Warning);
     let errors = located_findings(file, &text, &findings, Severity::Error);
     if !errors.is_empty() {

@@ -147,8 +147,8 @@ pub fn starting_library(a: &CollectArgs) -> Result<(Library, String)> {
     }
 }
 
-/// The session the daemon runs.
-pub fn plan(a: &CollectArgs, sources: &[SourceSpec]) -> Result<CollectPlan> {
+/// The session the daemon runs, on `library` ([`starting_library`]).
+pub fn plan(a: &CollectArgs, sources: &[SourceSpec], library: Library) -> Result<CollectPlan> {
     let participant = a.participant.trim().to_string();
     if participant.is_empty()
         || participant.len() > MAX_PARTICIPANT_BYTES
@@ -164,7 +164,6 @@ pub fn plan(a: &CollectArgs, sources: &[SourceSpec]) -> Result<CollectPlan> {
             bail!("{}: no such directory for the library", dir.display());
         }
     }
-    let (library, _) = starting_library(a)?;
     let motions = choose_motions(&library, a)?;
     Ok(CollectPlan {
         library,
@@ -219,11 +218,7 @@ pub fn announce(a: &CollectArgs, plan: &CollectPlan, from: &str, socket: &Path) 
         socket.display()
     )?;
     if let Some(addr) = &a.http {
-        let query = a
-            .token
-            .as_ref()
-            .map(|t| format!("?token={t}"))
-            .unwrap_or_default();
+        let query = super::output::token_query(a.token.as_deref());
         outln!("  viewer:  http://{addr}/{query} (collection mode)")?;
     }
     outln!("  Ctrl-C stops; what was drawn so far is saved.")?;

@@ -145,6 +145,11 @@ pub fn fail_with(code: i32, report: fmt::Arguments<'_>) -> i32 {
     code
 }
 
+/// The viewer URL's query for a WebSocket token (`?token=T`, or nothing).
+pub fn token_query(token: Option<&str>) -> String {
+    token.map(|t| format!("?token={t}")).unwrap_or_default()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

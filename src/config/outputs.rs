@@ -66,6 +66,10 @@ pub enum OutputConfig {
         /// Serve the live viewer page at `/`.
         #[serde(default = "default_true")]
         viewer: bool,
+        /// Serve the newest `stats` as Prometheus text at `/metrics` (with the
+        /// output's `token`, when it has one). Off unless asked for.
+        #[serde(default)]
+        metrics: bool,
         /// Web origins besides the server's own (`scheme://host[:port]`, like
         /// `"https://kiosk.example"`) whose pages may connect, read-only unless
         /// also in `privileged_origins`. A browser upgrade from any other origin is
@@ -420,6 +424,7 @@ mod tests {
             max_clients: 4,
             max_message_bytes: 65536,
             viewer: true,
+            metrics: false,
             origins: vec![],
             privileged_origins: vec![],
             hosts: vec![],

@@ -80,6 +80,7 @@ impl Engine {
             demo_plan: None,
             demo_ended: None,
             last_device: 0,
+            saving: false,
         }));
         Ok(())
     }
@@ -130,7 +131,16 @@ impl Engine {
         match captured {
             Err(r) => {
                 let why = r.as_str().to_string();
-                let view = c.view(CollectState::Refused, c.item, Some(why.clone()), now);
+                // About the item the person is drawing for: past the gestures
+                // drawn and still being saved.
+                let pending = c
+                    .queued
+                    .iter()
+                    .filter(|w| matches!(w, Wanted::Save { .. }))
+                    .count()
+                    + usize::from(c.saving);
+                let item = (c.item + pending).min(c.items.len().saturating_sub(1));
+                let view = c.view(CollectState::Refused, item, Some(why.clone()), now);
                 self.events.push(view);
                 Some(why)
             }
@@ -236,6 +246,7 @@ impl Engine {
             return;
         };
         c.collector = Some(done.collector);
+        c.saving = false;
         match done.kind {
             CollectDoneKind::Shown { item, synthesis } => match synthesis {
                 // Skipped meanwhile: the newer item's Show is queued.
@@ -397,6 +408,7 @@ impl Engine {
             let Some(collector) = c.collector.take() else {
                 return;
             };
+            c.saving = matches!(kind, CollectJobKind::Save { .. });
             let job = CollectJob { collector, kind };
             if inline {
                 let done = job.run();

@@ -123,6 +123,8 @@ pub(super) struct Collecting {
     pub(super) demo_ended: Option<Micros>,
     /// The input index of the last frame with a contact.
     pub(super) last_device: u16,
+    /// A save is out on the formation thread.
+    pub(super) saving: bool,
 }
 
 /// Work asked for while the collector was out.

@@ -70,21 +70,22 @@ impl Engine {
         let g = &mut self.gestures;
         let captured = g.capture.finish(id, &mut g.tracks);
         g.windows_out.retain(|&w| w != id);
+        let end = |recognition, rejected| Event::GestureEnd {
+            id,
+            fingers,
+            contacts,
+            duration_us,
+            cancelled,
+            recognition,
+            rejected,
+            t: now,
+        };
         if self.collect.is_some() {
             // `library collect`: the gesture is recorded, not recognised.
             let tracks = std::mem::take(&mut self.gestures.tracks);
             let why = self.collect_gesture(captured.as_ref().map(|_| &tracks), cancelled, now);
             self.gestures.tracks = tracks;
-            return Some(Event::GestureEnd {
-                id,
-                fingers,
-                contacts,
-                duration_us,
-                cancelled,
-                recognition: None,
-                rejected: why,
-                t: now,
-            });
+            return Some(end(None, why));
         }
         let fired = g
             .continuous
@@ -99,16 +100,7 @@ impl Engine {
                 .position(|f| f.0 == id)
                 .map(|k| g.fired.swap_remove(k))
                 .map_or((None, None), |(_, r, why)| (Some(r), why));
-            return Some(Event::GestureEnd {
-                id,
-                fingers,
-                contacts,
-                duration_us,
-                cancelled,
-                recognition,
-                rejected,
-                t: now,
-            });
+            return Some(end(recognition, rejected));
         }
         let rejected = match (&captured, &g.recogniser) {
             _ if cancelled => Some("cancelled".to_string()),
@@ -119,16 +111,7 @@ impl Engine {
             (Ok(_), Some(_)) => None,
         };
         if let Some(rejected) = rejected {
-            return Some(Event::GestureEnd {
-                id,
-                fingers,
-                contacts,
-                duration_us,
-                cancelled,
-                recognition: None,
-                rejected: Some(rejected),
-                t: now,
-            });
+            return Some(end(None, Some(rejected)));
         }
         let recogniser = g.recogniser.clone()?;
         let req = GestureRequest {

@@ -7,6 +7,7 @@ use super::error::Error;
 use super::outputs::{register_outputs, Registered};
 use super::queue::{FrameQueue, InputCounters};
 use super::reload;
+use super::report::{self, DeviceBoard};
 use super::sources::SourceSpec;
 use super::timing::StageTimer;
 use super::workers::{
@@ -61,6 +62,10 @@ pub struct Daemon {
     input_counters: Arc<InputCounters>,
     /// Every TUIO input's counters, with the address it listens on (`stats`).
     tuio_inputs: Vec<(String, Arc<crate::input::tuio::TuioCounters>)>,
+    /// Every `Device` input's last state (`stats`).
+    devices: Arc<DeviceBoard>,
+    /// Assignments applied at the previous report (`assignment_hz`).
+    last_assignments: u64,
     heartbeat_us: Arc<AtomicU64>,
     /// Set by the control thread once a `library collect` session has finished.
     collect_finished: Arc<AtomicBool>,
@@ -81,6 +86,7 @@ pub struct Daemon {
     encode: StageTimer,
     totals: Vec<StageTimer>,
     interval_us: u64,
+    /// When the control thread made the figures of the previous report.
     last_report: Micros,
 }
 
@@ -266,9 +272,13 @@ impl Daemon {
                 _ => None,
             })
             .collect();
+        let devices = Arc::new(DeviceBoard::new(sources.iter().filter_map(|s| match s {
+            SourceSpec::Device { input, .. } => Some(*input),
+            _ => None,
+        })));
         for (i, source) in sources.into_iter().enumerate() {
             let queue = FrameQueue::new(frame_tx.clone(), i as u16, Arc::clone(&input_counters));
-            start.spawn_input(source, queue, &cmd_tx, &out)?;
+            start.spawn_input(source, queue, &cmd_tx, &out, &devices)?;
         }
         drop(frame_tx);
         let b = &cfg.pipeline.budgets;
@@ -290,6 +300,8 @@ impl Daemon {
             outputs: output_stats,
             input_counters,
             tuio_inputs,
+            devices,
+            last_assignments: 0,
             heartbeat_us,
             collect_finished,
             control_stats: cstats_rx,
@@ -434,8 +446,12 @@ impl Daemon {
             }
         }
         let stages: Vec<StageStats> = timers.iter().map(StageTimer::peek).collect();
-        let interval_us = now.saturating_since(self.last_report).0.max(1);
-        self.last_report = now;
+        // The control thread's figures cover the time since its previous ones,
+        // however late the supervisor reads them.
+        let interval_us = cs.t.saturating_since(self.last_report).0.max(1);
+        self.last_report = cs.t;
+        let assignment_hz = report::rate_hz(cs.assignments, self.last_assignments, interval_us);
+        self.last_assignments = cs.assignments;
         for s in &stages {
             if s.overruns > 0 {
                 log::warn!(
@@ -459,7 +475,7 @@ impl Daemon {
             transitions_lost: self.input_counters.transitions_lost.load(Ordering::Relaxed),
             ticks: cs.ticks,
             assignments: cs.assignments,
-            assignment_hz: 0.0,
+            assignment_hz,
             snapshots_dropped: self.outputs.iter().map(|o| o.snapshots_dropped()).sum(),
             clients: self.outputs.iter().map(|o| o.clients()).sum(),
             agents: cs.agents,
@@ -477,6 +493,9 @@ impl Daemon {
                 .filter_map(|o| o.counters())
                 .chain(self.tuio_inputs.iter().map(|(a, c)| c.report(a)))
                 .collect(),
+            touches: u64::from(self.input_counters.last_contact_id.load(Ordering::Relaxed)),
+            devices: self.devices.snapshot(),
+            histograms: self.totals.iter().map(report::stage_histogram).collect(),
         });
         self.out.send(Outgoing::Stats(Arc::clone(&report)));
         Some(report)
@@ -633,6 +652,7 @@ impl Start {
         mut queue: FrameQueue,
         commands: &Sender<CommandRequest>,
         out: &Outputs,
+        board: &Arc<DeviceBoard>,
     ) -> Result<(), Error> {
         let stop = Arc::clone(&self.input_stop);
         let priority = self.priority;
@@ -671,6 +691,7 @@ impl Start {
                 transform,
             } => {
                 let out = out.clone();
+                let board = Arc::clone(board);
                 let cpus = self.input_cpus.clone();
                 self.spawn("input", move || {
                     Start::realtime(priority, "input");
@@ -681,13 +702,15 @@ impl Start {
                     let mut sink = device::TransformSink::new(queue, transform);
                     let mut notify = |n: device::DeviceNotice| {
                         let info = n.info.as_ref();
+                        let node = info
+                            .map(|i| i.identity.node.display().to_string())
+                            .unwrap_or_default();
+                        board.set(input, n.state, &node, n.message.as_deref());
                         let ev = Event::Device {
                             input,
                             state: n.state,
                             name: info.map(|i| i.identity.name.clone()).unwrap_or_default(),
-                            node: info
-                                .map(|i| i.identity.node.display().to_string())
-                                .unwrap_or_default(),
+                            node,
                             stable_id: info.map(|i| i.stable_id.clone()).unwrap_or_default(),
                             message: n.message,
                             t: n.t,

@@ -23,6 +23,7 @@ mod outputs;
 mod preflight;
 mod queue;
 mod reload;
+mod report;
 mod sources;
 pub mod timing;
 mod workers;

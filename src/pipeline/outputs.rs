@@ -85,6 +85,7 @@ fn websocket_listener(entry: &OutputConfig) -> Result<Option<WebSocketListener>,
         max_clients,
         max_message_bytes,
         viewer,
+        metrics,
         origins,
         privileged_origins,
         hosts,
@@ -104,6 +105,7 @@ fn websocket_listener(entry: &OutputConfig) -> Result<Option<WebSocketListener>,
         max_clients: *max_clients,
         max_message_bytes: *max_message_bytes,
         viewer: *viewer,
+        metrics: *metrics,
         // Validated with the config: what fails to normalise is not there.
         origins: origins
             .iter()

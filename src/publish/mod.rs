@@ -9,6 +9,7 @@
 //! * [`websocket`]: the same stream over WebSocket, served by the socket's
 //!   publisher, and the viewer page.
 
+pub mod metrics;
 mod outgoing;
 pub mod output;
 pub mod protocol;

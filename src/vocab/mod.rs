@@ -33,7 +33,9 @@ pub use motion::MotionType;
 pub use plan::{MotionPhase, NeighbourView, PlanOrigin, PlanView, Recognition};
 pub use scene::{CheckpointView, SceneItemView, ScenePoses, SceneView, ShapeView, TerrainView};
 pub use snapshot::{AgentView, MeshView, Snapshot, TouchView};
-pub use stats::{OutputCounters, RestartPending, StageStats, StatsReport};
+pub use stats::{
+    DeviceStatus, OutputCounters, RestartPending, StageHistogram, StageStats, StatsReport,
+};
 pub use time::Micros;
 pub use touch::{
     Contact, ContactFlags, ContactId, FrameFull, TouchFrame, CLIENT_DEVICE, MAX_CONTACTS,

@@ -41,7 +41,8 @@ pub struct StatsReport {
     pub ticks: u64,
     /// Assignments applied since start.
     pub assignments: u64,
-    /// Assignments applied per second over the interval.
+    /// Assignments applied per second over the interval: the assignments applied
+    /// since the previous report divided by the interval's length.
     pub assignment_hz: f64,
     /// Snapshots dropped for slow clients since start (all clients).
     pub snapshots_dropped: u64,
@@ -76,6 +77,48 @@ pub struct StatsReport {
     /// bytes, send errors…), one entry per output; absent when none does.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub outputs: Vec<OutputCounters>,
+    /// Touches seen since start: every contact that landed, on any input.
+    #[serde(default)]
+    pub touches: u64,
+    /// Each `Device` input's state (the last `device` event), in config order;
+    /// absent when the daemon reads no device.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub devices: Vec<DeviceStatus>,
+    /// Every stage's histogram since start (`/metrics`); not sent in `stats`,
+    /// whose `stages` summarise the interval.
+    #[serde(skip)]
+    pub histograms: Vec<StageHistogram>,
+}
+
+/// A `Device` input's state in `stats`: what its last `device` event said.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DeviceStatus {
+    /// Index of the input in the config.
+    pub input: u16,
+    /// Attached, unplugged or failed; `None` before the first event.
+    pub state: Option<super::event::DeviceState>,
+    /// The node it was read through (`/dev/input/event5`), when one was found.
+    pub node: String,
+    /// Why, for `failed` and `unplugged`.
+    pub message: Option<String>,
+}
+
+/// One stage's durations since start, in cumulative buckets (a Prometheus
+/// histogram).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StageHistogram {
+    /// Stage name.
+    pub stage: String,
+    /// `(upper bound µs, samples ≤ it)`, bounds increasing; the last bucket is the
+    /// largest bound, `count` covers the rest (`+Inf`).
+    pub buckets: Vec<(u64, u64)>,
+    /// Samples since start.
+    pub count: u64,
+    /// Sum of the samples (µs), from the histogram's recorded values (three
+    /// significant digits).
+    pub sum_us: u64,
+    /// Samples over the stage's budget since start.
+    pub overruns: u64,
 }
 
 /// One output's own counters in `stats` (since start).

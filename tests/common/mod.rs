@@ -312,3 +312,28 @@ pub fn write_jsonl(
     }
     w.flush().unwrap();
 }
+
+/// The shipped one-finger drag over the crowd, stamped now; `paced` sends it at its
+/// own pace, otherwise as fast as the channel takes it.
+pub fn send_drag(tx: &crossbeam_channel::Sender<crowdtouch::vocab::TouchFrame>, paced: bool) {
+    let rec = crowdtouch::input::recording::read_recording(
+        &shipped("01-point-drag.jsonl"),
+        crowdtouch::input::recording::OnBadFrame::Stop,
+    )
+    .unwrap();
+    let start = std::time::Instant::now();
+    let t0 = rec.frames[0].t;
+    for f in &rec.frames {
+        if paced {
+            let due = std::time::Duration::from_micros(f.t.saturating_since(t0).0);
+            if let Some(wait) = due.checked_sub(start.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
+        let mut g = crowdtouch::vocab::TouchFrame::new(crowdtouch::rt::monotonic_now());
+        for c in f.contacts() {
+            g.push(*c).unwrap();
+        }
+        tx.send(g).unwrap();
+    }
+}

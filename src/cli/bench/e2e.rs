@@ -591,6 +591,7 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
             max_clients: run.websocket_clients.max(16),
             max_message_bytes: 64 * 1024,
             viewer: false,
+            metrics: false,
             origins: vec![],
             privileged_origins: vec![],
             hosts: vec![],

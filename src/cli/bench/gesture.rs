@@ -383,9 +383,10 @@ pub fn gesture(run: &GestureRun) -> Result<()> {
             knn,
             knn_target,
             format!(
-                "K={} unbanded={} eq. 12; per query {} computed, {} abandoned, {} pruned",
+                "K={} unbanded={} the recogniser's distance (eq. 12 weight {}, physical features); per query {} computed, {} abandoned, {} pruned",
                 params.k,
                 params.band.is_none(),
+                rec.index().physical_weights().eq12,
                 computed / q,
                 abandoned / q,
                 pruned / q

@@ -5,7 +5,7 @@ use super::privilege::PeerPolicy;
 use super::queue::ClientShared;
 use super::stats::{lock, PublisherStats};
 use crate::publish::protocol::{self, ClientSettings, HelloInfo, ServerHello};
-use crate::vocab::{ClientId, CommandRequest, MeshView};
+use crate::vocab::{ClientId, CommandRequest, MeshView, StatsReport};
 use crossbeam_channel::Sender;
 use nix::sys::eventfd::{EfdFlags, EventFd};
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
@@ -20,8 +20,8 @@ struct LatestMesh {
 
 /// Shared by the publisher thread and the I/O thread.
 ///
-/// Lock order: `clients`, then a client's queue, then `latest_mesh` or
-/// `latest_scene`.
+/// Lock order: `clients`, then a client's queue, then `latest_mesh`,
+/// `latest_scene` or `latest_stats` (each held alone).
 #[derive(Debug)]
 pub(crate) struct Hub {
     /// Static hello facts.
@@ -34,6 +34,9 @@ pub(crate) struct Hub {
     latest_mesh: Mutex<LatestMesh>,
     /// The newest `scene` line, sent to clients when they subscribe to `scene`.
     latest_scene: Mutex<Option<Arc<[u8]>>>,
+    /// The newest `stats` report (`/metrics`); the publisher replaces it once per
+    /// interval, a WebSocket I/O thread reads it when `/metrics` is asked for.
+    latest_stats: Mutex<Option<Arc<StatsReport>>>,
     /// Commands to the control thread (bounded; `try_send` only).
     pub commands: Sender<CommandRequest>,
     /// Counters, and the live client limit.
@@ -73,6 +76,7 @@ impl Hub {
             client_queue,
             latest_mesh: Mutex::new(LatestMesh::default()),
             latest_scene: Mutex::new(None),
+            latest_stats: Mutex::new(None),
             commands,
             stats,
             clients: Mutex::new(Vec::new()),
@@ -187,6 +191,16 @@ impl Hub {
             latest.json = Some(out.into());
         }
         Some((Arc::clone(latest.json.as_ref()?), topology))
+    }
+
+    /// Keeps the newest `stats` report.
+    pub fn set_latest_stats(&self, report: Arc<StatsReport>) {
+        *lock(&self.latest_stats) = Some(report);
+    }
+
+    /// The newest `stats` report, if one was made.
+    pub fn latest_stats(&self) -> Option<Arc<StatsReport>> {
+        lock(&self.latest_stats).clone()
     }
 
     /// Makes `json` (a `scene` line) the newest scene.

@@ -90,7 +90,8 @@ impl Publisher {
             Outgoing::Scene(sc) => self.scene(&sc),
             Outgoing::ScenePoses(p) => self.poses(&p),
             Outgoing::Stats(r) => {
-                self.broadcast(|s| s.stats, |out| protocol::encode_stats(&r, out))
+                self.broadcast(|s| s.stats, |out| protocol::encode_stats(&r, out));
+                self.hub.set_latest_stats(r);
             }
             Outgoing::Reply { client, id, result } => self.reply(client, &id, result),
         }

@@ -181,13 +181,14 @@ pub(crate) fn origin_privilege(
 }
 
 /// Decides what to answer a complete request head that reached `local`, or
-/// [`Answer::Wait`].
+/// [`Answer::Wait`]; `metrics` makes the `/metrics` body when the output serves it.
 pub(crate) fn answer(
     buf: &[u8],
     opts: &WebSocketOptions,
     page: &str,
     clients: usize,
     local: SocketAddr,
+    metrics: &dyn Fn() -> String,
 ) -> Answer {
     let refuse = |status: u16, reason: &str, extra: &str, why: String| Answer::Respond {
         bytes: http::response(status, reason, extra, &format!("{why}\n")),
@@ -234,6 +235,27 @@ pub(crate) fn answer(
             "/" | "/index.html" if opts.viewer => Answer::Respond {
                 bytes: http::page(page),
                 refusal: None,
+            },
+            // The token, when the output has one, guards the figures too
+            // (Prometheus: `authorization: {credentials: …}` in the scrape config).
+            "/metrics" if opts.metrics => match &opts.token {
+                Some(token)
+                    if !req.token().is_some_and(|t| {
+                        http::constant_time_eq(t.as_bytes(), token.as_bytes())
+                    }) =>
+                {
+                    refuse(
+                        401,
+                        "Unauthorized",
+                        "WWW-Authenticate: Bearer\r\n",
+                        "/metrics needs the output's token: Authorization: Bearer or ?token="
+                            .to_string(),
+                    )
+                }
+                _ => Answer::Respond {
+                    bytes: http::ok(crate::publish::metrics::CONTENT_TYPE, &metrics()),
+                    refusal: None,
+                },
             },
             "/ws" => refuse(
                 426,
@@ -959,10 +981,45 @@ mod tests {
     }
 
     #[test]
+    fn metrics_are_served_only_when_asked_for_and_with_the_token() {
+        let at = local("127.0.0.1:8080");
+        let body = || "crowdtouch_ticks_total 3\n".to_string();
+        let get = |o: &WebSocketOptions, extra: &str| {
+            answer(
+                format!("GET /metrics HTTP/1.1\r\nHost: 127.0.0.1:8080\r\n{extra}\r\n").as_bytes(),
+                o,
+                "page",
+                0,
+                at,
+                &body,
+            )
+        };
+        let mut o = opts(true);
+        assert_eq!(status(&get(&o, "")), 404, "off by default");
+        o.metrics = true;
+        let a = get(&o, "");
+        assert_eq!(status(&a), 200);
+        let Answer::Respond { bytes, .. } = a else {
+            unreachable!()
+        };
+        let text = String::from_utf8(bytes).unwrap();
+        assert!(text.contains("Content-Type: text/plain; version=0.0.4"));
+        assert!(text.ends_with("\r\n\r\ncrowdtouch_ticks_total 3\n"));
+        o.token = Some("0123456789abcdef".into());
+        assert_eq!(status(&get(&o, "")), 401);
+        assert_eq!(status(&get(&o, "Authorization: Bearer wrong\r\n")), 401);
+        assert_eq!(
+            status(&get(&o, "Authorization: Bearer 0123456789abcdef\r\n")),
+            200
+        );
+    }
+
+    #[test]
     fn answers_in_order_host_origin_version_key() {
         let o = opts(true);
         let at = local("127.0.0.1:8080");
-        let ask = |head: &str| status(&answer(head.as_bytes(), &o, "page", 0, at));
+        let none = String::new;
+        let ask = |head: &str| status(&answer(head.as_bytes(), &o, "page", 0, at, &none));
         let up = |version: &str, host: &str, extra: &str, key: &str, v: &str| {
             format!(
                 "GET /ws HTTP/{version}\r\nHost: {host}\r\nUpgrade: websocket\r\n\
@@ -990,6 +1047,7 @@ mod tests {
             "page",
             0,
             at,
+            &none,
         );
         assert!(matches!(
             a,

@@ -255,10 +255,15 @@ pub fn response(status: u16, reason: &str, extra_headers: &str, body: &str) -> V
 
 /// The viewer page.
 pub fn page(html: &str) -> Vec<u8> {
+    ok("text/html; charset=utf-8", html)
+}
+
+/// A `200 OK` with `body` of `content_type`, not to be cached.
+pub fn ok(content_type: &str, body: &str) -> Vec<u8> {
     format!(
-        "HTTP/1.1 200 OK\r\nContent-Type: text/html; charset=utf-8\r\nContent-Length: {}\r\n\
-         Connection: close\r\nCache-Control: no-store\r\nX-Content-Type-Options: nosniff\r\n\r\n{html}",
-        html.len()
+        "HTTP/1.1 200 OK\r\nContent-Type: {content_type}\r\nContent-Length: {}\r\n\
+         Connection: close\r\nCache-Control: no-store\r\nX-Content-Type-Options: nosniff\r\n\r\n{body}",
+        body.len()
     )
     .into_bytes()
 }

@@ -17,6 +17,8 @@ pub struct WebSocketOptions {
     pub max_message_bytes: u32,
     /// Serve the viewer page at `/`.
     pub viewer: bool,
+    /// Serve the newest `stats` as Prometheus text at `/metrics`.
+    pub metrics: bool,
     /// Other web origins whose pages may connect, read-only: `scheme://host[:port]`,
     /// lowercase, without the scheme's default port (as browsers send `Origin`).
     pub origins: Vec<String>,
@@ -38,6 +40,7 @@ impl WebSocketOptions {
             max_clients,
             max_message_bytes: 64 * 1024,
             viewer: true,
+            metrics: false,
             origins: Vec::new(),
             privileged_origins: Vec::new(),
             hosts: Vec::new(),

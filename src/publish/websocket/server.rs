@@ -232,10 +232,12 @@ impl WsLoop {
             return c.input(&self.hub, monotonic_now());
         }
         let opts = &self.opts;
+        let hub = &self.hub;
+        let metrics = || crate::publish::metrics::render(hub.latest_stats().as_deref());
         let local = c.local;
         let mut refused: Option<String> = None;
         let fate = c.head_input(
-            |buf| conn::answer(buf, opts, VIEWER_PAGE, clients, local),
+            |buf| conn::answer(buf, opts, VIEWER_PAGE, clients, local, &metrics),
             |why| refused = Some(why.to_string()),
         );
         if let Some(why) = refused {

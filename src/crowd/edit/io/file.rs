@@ -267,7 +267,11 @@ mod entry_tests {
     /// that is a path is refused and nothing is written.
     #[test]
     fn saving_creates_entries_and_replaces_only_when_allowed() {
-        let dir = tempfile::tempdir().unwrap();
+        // The entries' directory inside the test's own: its parent is the test's
+        // too (not a shared /tmp another program may write `out.jsonl` into).
+        let root = tempfile::tempdir().unwrap();
+        std::fs::create_dir(root.path().join("entries")).unwrap();
+        let dir = tempfile::TempDir::new_in(root.path().join("entries")).unwrap();
         let o = ReadOptions::default();
         write_track_entry(&set(), dir.path(), "a.jsonl", &o, false).unwrap();
         let before = std::fs::read(dir.path().join("a.jsonl")).unwrap();
@@ -284,6 +288,7 @@ mod entry_tests {
         let e = write_track_entry(&set(), dir.path(), "../out.jsonl", &o, true).unwrap_err();
         assert!(e.starts_with("not an entry name"), "{e}");
         assert!(!dir.path().parent().unwrap().join("out.jsonl").exists());
+        assert!(!root.path().join("out.jsonl").exists());
         // Only the entry is left: no temporary file.
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(names.len(), 1);
