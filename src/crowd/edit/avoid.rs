@@ -36,7 +36,7 @@ use super::collide::{
 };
 use super::tracks::{Track, TrackSet};
 use nalgebra::{DMatrix, DVector};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use thiserror::Error;
 
 /// Speeds below this (m/s) count as standing still in eq. 20.
@@ -214,6 +214,9 @@ pub struct AvoidReport {
     /// and the input was kept instead (a safety net: each retiming kept already
     /// makes things better).
     pub reverted: bool,
+    /// Rigid shifts kept: a group, or one person, whose every time moved by
+    /// the same amount (`avoid_shift`).
+    pub shifts: usize,
 }
 
 /// The nodes of one person's colliding piece and how the collision time depends on
@@ -722,6 +725,7 @@ fn separate_pair(
     q: &PairCollision,
     p: &AvoidParams,
     original: &[Vec<f64>],
+    input: &[Vec<f64>],
     orders: &mut HashMap<(usize, usize), f64>,
     pins: &mut [Vec<(usize, f64)>],
 ) -> Result<usize, PairFailure> {
@@ -750,8 +754,8 @@ fn separate_pair(
         let why = match separate(set, &pq, p, original, orders, pins) {
             None => Stuck::Infeasible,
             Some(_)
-                if largest_shift(&set.tracks[q.a].times_s, &original[q.a]) > p.max_shift_s
-                    || largest_shift(&set.tracks[q.b].times_s, &original[q.b]) > p.max_shift_s =>
+                if largest_shift(&set.tracks[q.a].times_s, &input[q.a]) > p.max_shift_s
+                    || largest_shift(&set.tracks[q.b].times_s, &input[q.b]) > p.max_shift_s =>
             {
                 Stuck::Bound
             }
@@ -838,6 +842,16 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
     check_params(params)?;
     let n = set.tracks.len();
     let original: Vec<Vec<f64>> = set.tracks.iter().map(|t| t.times_s.clone()).collect();
+    // Each person's schedule the piece retimings smooth towards (eq. 28's `t`):
+    // the input's times moved by the rigid shifts made so far (`shift`), so a
+    // later retiming does not pull a shifted person back.
+    let mut base = original.clone();
+    let boxes = shift::boxes(set);
+    let shifts_s = shift::candidates_s(params.max_shift_s);
+    // Groups whose every shift was tried since the last change, and how many
+    // shifts were kept.
+    let mut shift_tried: HashSet<Vec<usize>> = HashSet::new();
+    let mut shifts_kept = 0;
     let collisions = detect(set, params.threshold_m)?;
     let pairs_before = collisions.pair_count();
     let closest_before_m = collisions.closest().map(|q| q.closest.distance_m);
@@ -879,6 +893,7 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
         // A retiming that did not help may help once others have moved.
         if kept_last_round {
             stuck.retain(|_, w| *w != Stuck::NoImprovement);
+            shift_tried.clear();
         }
         let mut pairs: Vec<PairCollision> = current
             .iter()
@@ -891,14 +906,85 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
         iterations += 1;
         kept_last_round = false;
         pairs.sort_by(|x, y| x.closest.distance_m.total_cmp(&y.closest.distance_m));
+        pairs.retain(|q| {
+            let together = companions(set, q, params.companion_rel_speed);
+            if together {
+                stuck.insert((q.a, q.b), Stuck::Companions);
+            }
+            !together
+        });
         let mut touched = vec![false; n];
+        // Rigid shifts first: one side of each connected part of the pairs (for
+        // two crossing crowds, one crowd), then (below) each person of a pair alone.
+        for part in shift::sides(n, &pairs) {
+            for side in part
+                .iter()
+                .filter(|s| s.len() > 1 || part[0].len() + part[1].len() > 2)
+            {
+                if side.is_empty() || side.iter().any(|&k| touched[k]) || shift_tried.contains(side)
+                {
+                    continue;
+                }
+                match shift::best_shift(set, &boxes, side, params, &original, floor, &shifts_s)? {
+                    Some(sh) => {
+                        apply_shift(set, &mut base, &mut pins, &sh);
+                        refresh(
+                            set,
+                            params,
+                            &sh.group,
+                            &mut who,
+                            &mut current,
+                            &mut complete,
+                        )?;
+                        for &k in &sh.group {
+                            touched[k] = true;
+                        }
+                        shifts_kept += 1;
+                        kept_last_round = true;
+                        break;
+                    }
+                    None => {
+                        shift_tried.insert(side.clone());
+                    }
+                }
+            }
+        }
         for q in &pairs {
             if touched[q.a] || touched[q.b] {
                 continue;
             }
             let key = (q.a, q.b);
-            if companions(set, q, params.companion_rel_speed) {
-                stuck.insert(key, Stuck::Companions);
+            // One of the two shifted whole, the smaller shift of the two.
+            let mut alone: Option<shift::Shift> = None;
+            for k in [q.a, q.b] {
+                let g = vec![k];
+                if shift_tried.contains(&g) {
+                    continue;
+                }
+                match shift::best_shift(set, &boxes, &g, params, &original, floor, &shifts_s)? {
+                    Some(sh) if alone.as_ref().is_none_or(|a| sh.dt_s.abs() < a.dt_s.abs()) => {
+                        alone = Some(sh);
+                    }
+                    Some(_) => {}
+                    None => {
+                        shift_tried.insert(g);
+                    }
+                }
+            }
+            if let Some(sh) = alone {
+                apply_shift(set, &mut base, &mut pins, &sh);
+                refresh(
+                    set,
+                    params,
+                    &sh.group,
+                    &mut who,
+                    &mut current,
+                    &mut complete,
+                )?;
+                touched[q.a] = true;
+                touched[q.b] = true;
+                shifts_kept += 1;
+                kept_last_round = true;
                 continue;
             }
             who[q.a] = true;
@@ -944,33 +1030,36 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
                     None => orders.remove(&key),
                 };
             };
-            let verdict = match separate_pair(set, q, params, &original, &mut orders, &mut pins) {
-                Err(PairFailure::Collide(e)) => return Err(e.into()),
-                Err(PairFailure::Stuck(why)) => Err(why),
-                Ok(c) => {
-                    let after = collisions_involving(set, params.threshold_m, &who, DEFAULT_KEEP)?;
-                    let closest = after
-                        .closest()
-                        .map_or(f64::INFINITY, |p| p.closest.distance_m);
-                    let now = if after.is_complete() {
-                        depth(&mut after.pairs.iter())
-                    } else {
-                        (after.pair_count(), f64::INFINITY)
-                    };
-                    // Kept only when it makes things better (the others' pairs
-                    // are as they were): fewer colliding pairs, or as many
-                    // reaching less deep into the threshold; and nobody closer
-                    // than the input's closest pair. So the number of colliding
-                    // pairs never grows and the closest approach never shrinks.
-                    let better = now.0 < before.0 || (now.0 == before.0 && now.1 < before.1 - 1e-9);
-                    if better && closest >= floor {
-                        Ok((c, after))
-                    } else {
-                        undone += 1;
-                        Err(Stuck::NoImprovement)
+            let verdict =
+                match separate_pair(set, q, params, &base, &original, &mut orders, &mut pins) {
+                    Err(PairFailure::Collide(e)) => return Err(e.into()),
+                    Err(PairFailure::Stuck(why)) => Err(why),
+                    Ok(c) => {
+                        let after =
+                            collisions_involving(set, params.threshold_m, &who, DEFAULT_KEEP)?;
+                        let closest = after
+                            .closest()
+                            .map_or(f64::INFINITY, |p| p.closest.distance_m);
+                        let now = if after.is_complete() {
+                            depth(&mut after.pairs.iter())
+                        } else {
+                            (after.pair_count(), f64::INFINITY)
+                        };
+                        // Kept only when it makes things better (the others' pairs
+                        // are as they were): fewer colliding pairs, or as many
+                        // reaching less deep into the threshold; and nobody closer
+                        // than the input's closest pair. So the number of colliding
+                        // pairs never grows and the closest approach never shrinks.
+                        let better =
+                            now.0 < before.0 || (now.0 == before.0 && now.1 < before.1 - 1e-9);
+                        if better && closest >= floor {
+                            Ok((c, after))
+                        } else {
+                            undone += 1;
+                            Err(Stuck::NoImprovement)
+                        }
                     }
-                }
-            };
+                };
             who[q.a] = false;
             who[q.b] = false;
             match verdict {
@@ -1061,7 +1150,60 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
         closest_before_m,
         closest_after_m: closest(&after),
         reverted: worse,
+        shifts: shifts_kept,
     })
+}
+
+/// Makes a rigid shift: every time of the group, its pins and its schedule move
+/// by `dt_s`.
+fn apply_shift(
+    set: &mut TrackSet,
+    base: &mut [Vec<f64>],
+    pins: &mut [Vec<(usize, f64)>],
+    sh: &shift::Shift,
+) {
+    for &k in &sh.group {
+        for t in &mut set.tracks[k].times_s {
+            *t += sh.dt_s;
+        }
+        for t in &mut base[k] {
+            *t += sh.dt_s;
+        }
+        for pin in &mut pins[k] {
+            pin.1 += sh.dt_s;
+        }
+    }
+}
+
+/// After `group` changed: their pairs in `current` replaced by a detection of
+/// theirs (when the list is whole; otherwise the next round detects everything).
+fn refresh(
+    set: &TrackSet,
+    p: &AvoidParams,
+    group: &[usize],
+    who: &mut [bool],
+    current: &mut Vec<PairCollision>,
+    complete: &mut bool,
+) -> Result<(), AvoidError> {
+    if !*complete {
+        return Ok(());
+    }
+    for &k in group {
+        who[k] = true;
+    }
+    let found = collisions_involving(set, p.threshold_m, who, DEFAULT_KEEP);
+    for &k in group {
+        who[k] = false;
+    }
+    let found = found?;
+    current.retain(|q| !(who_has(group, q.a) || who_has(group, q.b)));
+    current.extend(found.pairs.iter().copied());
+    *complete = found.is_complete();
+    Ok(())
+}
+
+fn who_has(group: &[usize], k: usize) -> bool {
+    group.binary_search(&k).is_ok()
 }
 
 /// The pairs that still collide, and why: each cluster once (its first two
@@ -1109,6 +1251,9 @@ fn remaining_of(
     }));
     out
 }
+
+#[path = "avoid_shift.rs"]
+mod shift;
 
 #[cfg(test)]
 #[path = "avoid_tests.rs"]

@@ -190,7 +190,7 @@ fn nearly_head_on_crowds_are_separated_by_retiming() {
 const SPEED_BOUND_PCT: f64 = 25.0 + 1e-6;
 
 #[test]
-fn people_standing_on_each_other_are_reported_not_fixed() {
+fn people_standing_on_each_other_are_separated_only_by_waiting() {
     let mut set = TrackSet {
         tracks: vec![
             Track::linked(1, vec![v(0.0, 0.0); 3], vec![0.0, 1.0, 2.0]),
@@ -199,10 +199,36 @@ fn people_standing_on_each_other_are_reported_not_fixed() {
         step_s: 1.0,
     };
     let before = set.clone();
-    let r = avoid(&mut set, &AvoidParams::default()).unwrap();
+    // Within a 1.5 s bound nothing separates them: no piece retiming moves two
+    // people standing still, and one would have to wait 2 s for the other to leave.
+    let tight = AvoidParams {
+        max_shift_s: 1.5,
+        ..AvoidParams::default()
+    };
+    let r = avoid(&mut set, &tight).unwrap();
     assert_eq!(r.pairs_after, 1);
     assert_eq!(r.remaining[0].why, Stuck::Infeasible);
     assert_eq!(set, before);
+    // With the default 10 s, one of them arrives after the other has left: all
+    // of that person's times move by one amount, more than the 2 s they stand.
+    let r = avoid(&mut set, &AvoidParams::default()).unwrap();
+    assert_eq!(r.pairs_after, 0, "{r:?}");
+    assert_eq!((r.shifts, r.retimed_people), (1, 1), "{r:?}");
+    let moved: Vec<f64> = set
+        .tracks
+        .iter()
+        .zip(&before.tracks)
+        .flat_map(|(a, b)| a.times_s.iter().zip(&b.times_s).map(|(x, y)| x - y))
+        .filter(|d| *d != 0.0)
+        .collect();
+    assert_eq!(moved.len(), 3);
+    assert!(
+        moved
+            .iter()
+            .all(|d| (d - moved[0]).abs() < 1e-12 && *d > 2.0),
+        "{moved:?}"
+    );
+    assert_points_unchanged(&before, &set);
 }
 
 #[test]
@@ -295,4 +321,51 @@ fn a_crowd_at_one_point_is_left_as_one_cluster() {
     assert_eq!(r.remaining[0].why, Stuck::Cluster);
     assert_eq!(set.tracks[..2_000], before.tracks[..2_000]);
     assert_points_unchanged(&before, &set);
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig {
+        cases: 96,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x6176_6f69),
+        failure_persistence: None,
+        ..proptest::prelude::ProptestConfig::default()
+    })]
+
+    /// On random small crowds (gaps, people standing, companions, irregular
+    /// times): never worse on pairs or closest distance, times strictly
+    /// increasing and never negative when they were not, no one's times moved
+    /// further than the bound, only people in a collision retimed, positions kept.
+    #[test]
+    fn prop_avoidance_is_never_worse(
+        s in crate::crowd::edit::collide::tests::crowd(),
+        d in 0.1f64..1.0,
+        bound in 0.5f64..6.0,
+    ) {
+        let p = AvoidParams { threshold_m: d, max_shift_s: bound, ..AvoidParams::default() };
+        let before = detect(&s, d).unwrap();
+        let mut set = s.clone();
+        let r = avoid(&mut set, &p).unwrap();
+        let after = detect(&set, d).unwrap();
+        proptest::prop_assert!(after.pair_count() <= before.pair_count(), "{r:?}");
+        proptest::prop_assert_eq!(after.pair_count(), r.pairs_after);
+        if let (Some(a), Some(b)) = (after.min_distance_m(), before.min_distance_m()) {
+            proptest::prop_assert!(a >= b, "closest {a} < {b}: {r:?}");
+        }
+        set.validate().unwrap();
+        let mut in_pair = vec![false; s.tracks.len()];
+        for q in &before.pairs {
+            in_pair[q.a] = true;
+            in_pair[q.b] = true;
+        }
+        for (k, (a, b)) in set.tracks.iter().zip(&s.tracks).enumerate() {
+            proptest::prop_assert_eq!(&a.points, &b.points);
+            proptest::prop_assert!(largest_shift(&a.times_s, &b.times_s) <= bound + 1e-9);
+            if b.times_s[0] >= 0.0 {
+                proptest::prop_assert!(a.times_s[0] >= 0.0);
+            }
+            if a.times_s != b.times_s {
+                proptest::prop_assert!(in_pair[k], "person {k} retimed, never in a collision");
+            }
+        }
+    }
 }

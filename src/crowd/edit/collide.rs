@@ -1055,4 +1055,4 @@ fn detect_among<S: Tracks + ?Sized>(
 
 #[cfg(test)]
 #[path = "collide_tests.rs"]
-mod tests;
+pub(super) mod tests;

@@ -238,7 +238,7 @@ fn bad_threshold_and_tracks_are_errors() {
 
 /// Random small crowds in a 3 × 3 m square: regular and irregular times, gaps,
 /// single samples, people standing still, and pairs walking with equal velocities.
-fn crowd() -> impl Strategy<Value = TrackSet> {
+pub(in crate::crowd::edit) fn crowd() -> impl Strategy<Value = TrackSet> {
     let person = (
         1usize..8,
         0.0f64..3.0,
