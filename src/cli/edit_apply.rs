@@ -42,6 +42,10 @@ pub struct EditArgs {
     /// Two people closer than this collide (metres).
     #[arg(long, default_value_t = 0.3)]
     pub threshold: f64,
+    /// The most collision avoidance may move anyone's times from the input
+    /// (seconds).
+    #[arg(long, default_value_t = AvoidParams::default().max_shift_s)]
+    pub max_shift: f64,
     /// Drags must end inside `x0,y0,x1,y1` (metres); default: the tracks' bounding
     /// box grown by half its size and at least 10 m.
     #[arg(long, value_parser = parse_rect)]
@@ -136,6 +140,7 @@ pub fn run(a: &EditArgs) -> Result<Outcome> {
     let avoided = if a.avoid_collisions {
         let params = AvoidParams {
             threshold_m: a.threshold,
+            max_shift_s: a.max_shift,
             ..AvoidParams::default()
         };
         Some(avoid(&mut set, &params).map_err(|e| anyhow!("collision avoidance: {e}"))?)
@@ -250,9 +255,12 @@ pub fn apply(a: ApplyArgs) -> Result<()> {
     }
     if let Some(v) = j["avoidance"].as_object() {
         outln!(
-            "  collision avoidance: {} pairs before, {} after, {} retimings in {} rounds; times moved {:.2} s in all, speeds changed by at most {:.1} %",
-            v["pairs_before"], v["pairs_after"], v["retimings"], v["iterations"],
-            v["total_abs_dt_s"].as_f64().unwrap_or(f64::NAN),
+            "  collision avoidance: {} pairs before, {} after ({} of them companions), {} shifts and {} retimings in {} rounds; {} of {} people in a collision retimed, by {:.2} s (median) and at most {:.2} s (bound {} s); speeds changed by at most {:.1} %",
+            v["pairs_before"], v["pairs_after"], v["companions"], v["shifts"], v["retimings"], v["iterations"],
+            v["retimed_people"], v["people_in_collision"],
+            v["median_shift_s"].as_f64().unwrap_or(f64::NAN),
+            v["max_shift_s"].as_f64().unwrap_or(f64::NAN),
+            v["max_shift_bound_s"],
             v["max_speed_change_pct"].as_f64().unwrap_or(f64::NAN)
         )?;
         for r in v["remaining"].as_array().into_iter().flatten() {
@@ -365,6 +373,17 @@ fn avoid_json(r: &AvoidReport) -> Value {
         "retimings": r.retimings,
         "total_abs_dt_s": r.total_abs_dt_s,
         "max_speed_change_pct": r.max_speed_change_pct,
+        "people_in_collision": r.people_in_collision,
+        "retimed_people": r.retimed_people,
+        "median_shift_s": r.median_shift_s,
+        "max_shift_s": r.max_shift_s,
+        "max_shift_bound_s": r.max_shift_bound_s,
+        "shifts": r.shifts,
+        "companions": r.companions,
+        "undone": r.undone,
+        "closest_before_m": r.closest_before_m,
+        "closest_after_m": r.closest_after_m,
+        "reverted": r.reverted,
         "remaining": r.remaining.iter().map(|x| json!({
             "a": x.pair.id_a,
             "b": x.pair.id_b,

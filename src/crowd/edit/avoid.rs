@@ -200,6 +200,8 @@ pub struct AvoidReport {
     /// The largest time shift of anyone (s); at most
     /// [`AvoidParams::max_shift_s`].
     pub max_shift_s: f64,
+    /// The bound it was held to, [`AvoidParams::max_shift_s`] (s).
+    pub max_shift_bound_s: f64,
     /// Pairs left as they are because they walk together.
     pub companions: usize,
     /// Retimings undone because they did not reduce the collisions or brought
@@ -848,8 +850,9 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
     let mut base = original.clone();
     let boxes = shift::boxes(set);
     let shifts_s = shift::candidates_s(params.max_shift_s);
-    // Groups whose every shift was tried since the last change, and how many
-    // shifts were kept.
+    // Groups whose every shift was tried (each group is tried once: a rigid
+    // shift that failed is rarely the answer after others moved, and the piece
+    // retimings still get their pairs), and how many shifts were kept.
     let mut shift_tried: HashSet<Vec<usize>> = HashSet::new();
     let mut shifts_kept = 0;
     let collisions = detect(set, params.threshold_m)?;
@@ -893,7 +896,6 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
         // A retiming that did not help may help once others have moved.
         if kept_last_round {
             stuck.retain(|_, w| *w != Stuck::NoImprovement);
-            shift_tried.clear();
         }
         let mut pairs: Vec<PairCollision> = current
             .iter()
@@ -925,7 +927,7 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
                 {
                     continue;
                 }
-                match shift::best_shift(set, &boxes, side, params, &original, floor, &shifts_s)? {
+                match shift::best_shift(set, &boxes, side, params, &original, floor, &shifts_s) {
                     Some(sh) => {
                         apply_shift(set, &mut base, &mut pins, &sh);
                         refresh(
@@ -961,7 +963,7 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
                 if shift_tried.contains(&g) {
                     continue;
                 }
-                match shift::best_shift(set, &boxes, &g, params, &original, floor, &shifts_s)? {
+                match shift::best_shift(set, &boxes, &g, params, &original, floor, &shifts_s) {
                     Some(sh) if alone.as_ref().is_none_or(|a| sh.dt_s.abs() < a.dt_s.abs()) => {
                         alone = Some(sh);
                     }
@@ -1145,6 +1147,7 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
         retimed_people: shifts.len(),
         median_shift_s,
         max_shift_s: shifts.last().copied().unwrap_or(0.0),
+        max_shift_bound_s: params.max_shift_s,
         companions,
         undone,
         closest_before_m,

@@ -21,13 +21,14 @@
 //! with the group already, and brings nobody closer than the input's closest pair
 //! (`floor`): the never-worse rule of the piece retimings, made stricter.
 //!
-//! Evaluation is exact and cheap: detection runs on the group and the people who
-//! could meet it at all — those whose spatial bounding box, widened by the
-//! threshold, meets a group member's and whose time span meets the group's
-//! widened by the largest shift.
+//! Evaluation is exact and cheap: each member's closest approach to each person
+//! who could meet them at all — whose spatial bounding box, widened by the
+//! threshold, meets the member's and whose time span meets the member's widened
+//! by the largest shift — computed on the shifted pieces as detection computes
+//! it, without building detection's grid for every shift tried.
 
-use super::super::collide::{collisions_involving, CollideError, Collisions, DEFAULT_KEEP};
-use super::super::tracks::{Track, TrackSet};
+use super::super::collide::{closest_shifted, PersonPieces};
+use super::super::tracks::TrackSet;
 use super::{AvoidParams, PairCollision};
 use crate::geom::Vec2;
 
@@ -72,9 +73,9 @@ pub(super) fn boxes(set: &TrackSet) -> Vec<(Vec2, Vec2)> {
         .collect()
 }
 
-/// How a group fares at one shift: its pairs (those involving a member, pairs
-/// inside the group included: a shift does not change them), their depth into
-/// the threshold in all (m), and the closest of them (m; infinite without).
+/// How a group fares at one shift against everyone else: its pairs with people
+/// outside it (pairs inside the group do not change), their depth into the
+/// threshold in all (m), and the closest of them (m; infinite without).
 #[derive(Copy, Clone, Debug, PartialEq)]
 struct Fare {
     pairs: usize,
@@ -83,21 +84,6 @@ struct Fare {
 }
 
 impl Fare {
-    fn of(c: &Collisions, threshold_m: f64) -> Fare {
-        Fare {
-            pairs: c.pair_count(),
-            depth_m: if c.is_complete() {
-                c.pairs
-                    .iter()
-                    .map(|p| (threshold_m - p.closest.distance_m).max(0.0))
-                    .sum()
-            } else {
-                f64::INFINITY
-            },
-            closest_m: c.closest().map_or(f64::INFINITY, |p| p.closest.distance_m),
-        }
-    }
-
     fn better_than(&self, o: &Fare) -> bool {
         self.pairs < o.pairs || (self.pairs == o.pairs && self.depth_m < o.depth_m - 1e-9)
     }
@@ -110,13 +96,16 @@ pub(super) struct Shift {
     pub dt_s: f64,
 }
 
-/// The best rigid shift of `group` (indices into `set`), or `None` if no shift
-/// tried makes the group's pairs fewer (or as many and shallower) without
-/// bringing anyone closer than `floor_m`. `input` holds everyone's times in the
-/// input (the shift bound and time zero are measured against it).
+/// The best rigid shift of `group` (indices into `set`, sorted), or `None` if no
+/// shift tried makes the group's pairs fewer (or as many and shallower) without
+/// bringing anyone new into collision with it or anyone closer than `floor_m`.
+/// `input` holds everyone's times in the input (the shift bound and time zero
+/// are measured against it).
 ///
-/// # Errors
-/// A [`CollideError`] from detection (a threshold out of range).
+/// # Complexity
+/// One closest-approach scan ([`closest_shifted`], linear in the two tracks'
+/// samples) per shift tried and pair of a member and a person whose bounding box
+/// comes within the threshold of the member's.
 pub(super) fn best_shift(
     set: &TrackSet,
     boxes: &[(Vec2, Vec2)],
@@ -125,14 +114,9 @@ pub(super) fn best_shift(
     input: &[Vec<f64>],
     floor_m: f64,
     shifts_s: &[f64],
-) -> Result<Option<Shift>, CollideError> {
+) -> Option<Shift> {
     if group.is_empty() {
-        return Ok(None);
-    }
-    let n = set.tracks.len();
-    let mut in_group = vec![false; n];
-    for &k in group {
-        in_group[k] = true;
+        return None;
     }
     // The shift bound and time zero: the room each member leaves.
     let (mut most_delay, mut most_advance) = (p.max_shift_s, p.max_shift_s);
@@ -149,86 +133,87 @@ pub(super) fn best_shift(
         }
     }
     let reach_s = most_delay.max(most_advance).max(0.0);
-    // The group and whoever could meet it.
-    let (mut t_lo, mut t_hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for &k in group {
-        let (a, b) = set.tracks[k].span_s();
-        t_lo = t_lo.min(a);
-        t_hi = t_hi.max(b);
-    }
-    let (t_lo, t_hi) = (t_lo - reach_s, t_hi + reach_s);
+    // Each member's pieces against the pieces of everyone outside the group who
+    // could meet it: bounding boxes within the threshold, times within reach.
     let r = p.threshold_m;
-    let meets = |k: usize| {
-        let (lo, hi) = boxes[k];
-        group.iter().any(|&g| {
-            let (glo, ghi) = boxes[g];
-            lo.x <= ghi.x + r && glo.x <= hi.x + r && lo.y <= ghi.y + r && glo.y <= hi.y + r
-        })
+    let near = |a: usize, b: usize| {
+        let ((alo, ahi), (blo, bhi)) = (boxes[a], boxes[b]);
+        let (sa, sb) = (set.tracks[a].span_s(), set.tracks[b].span_s());
+        blo.x <= ahi.x + r
+            && alo.x <= bhi.x + r
+            && blo.y <= ahi.y + r
+            && alo.y <= bhi.y + r
+            && sb.1 >= sa.0 - reach_s
+            && sb.0 <= sa.1 + reach_s
     };
-    let mut tracks: Vec<Track> = group.iter().map(|&k| set.tracks[k].clone()).collect();
-    for k in 0..n {
-        if in_group[k] {
-            continue;
-        }
-        let (a, b) = set.tracks[k].span_s();
-        if b >= t_lo && a <= t_hi && meets(k) {
-            tracks.push(set.tracks[k].clone());
+    let mut others: Vec<(usize, PersonPieces)> = Vec::new();
+    let mut checks: Vec<(usize, usize)> = Vec::new();
+    let mut members: Vec<PersonPieces> = Vec::with_capacity(group.len());
+    for (gi, &a) in group.iter().enumerate() {
+        members.push(PersonPieces::of(&set.tracks[a].as_ref()));
+        for b in 0..set.tracks.len() {
+            if group.binary_search(&b).is_ok() || !near(a, b) {
+                continue;
+            }
+            let oi = match others.iter().position(|(k, _)| *k == b) {
+                Some(i) => i,
+                None => {
+                    others.push((b, PersonPieces::of(&set.tracks[b].as_ref())));
+                    others.len() - 1
+                }
+            };
+            checks.push((gi, oi));
         }
     }
-    let who: Vec<bool> = (0..tracks.len()).map(|i| i < group.len()).collect();
-    let mut sub = TrackSet {
-        tracks,
-        step_s: set.step_s,
-    };
-    let zero = collisions_involving(&sub, r, &who, DEFAULT_KEEP)?;
-    if !zero.is_complete() {
-        return Ok(None);
-    }
-    let at_zero = Fare::of(&zero, r);
-    let before: Vec<(usize, usize)> = zero.pairs.iter().map(|q| (q.a, q.b)).collect();
-    // Pairs inside the group: no shift changes them.
-    let inside = {
-        let own = TrackSet {
-            tracks: sub.tracks[..group.len()].to_vec(),
-            step_s: set.step_s,
+    let fare = |dt: f64, colliding: &mut Vec<usize>| {
+        colliding.clear();
+        let mut f = Fare {
+            pairs: 0,
+            depth_m: 0.0,
+            closest_m: f64::INFINITY,
         };
-        collisions_involving(&own, r, &who[..group.len()], DEFAULT_KEEP)?.pair_count()
+        for (c, &(gi, oi)) in checks.iter().enumerate() {
+            if let Some(d) = closest_shifted(&members[gi], dt, &others[oi].1) {
+                if d < r {
+                    f.pairs += 1;
+                    f.depth_m += r - d;
+                    f.closest_m = f.closest_m.min(d);
+                    colliding.push(c);
+                }
+            }
+        }
+        f
     };
-    if at_zero.pairs <= inside {
-        return Ok(None);
+    let mut before = Vec::new();
+    let at_zero = fare(0.0, &mut before);
+    if at_zero.pairs == 0 {
+        return None;
     }
+    let mut now = Vec::new();
     let mut best: Option<(f64, Fare)> = None;
-    let mut applied = 0.0;
     for &dt in shifts_s {
         if (dt > 0.0 && dt > most_delay) || (dt < 0.0 && -dt > most_advance) {
             continue;
         }
-        for t in &mut sub.tracks[..group.len()] {
-            for x in &mut t.times_s {
-                *x += dt - applied;
-            }
-        }
-        applied = dt;
-        let c = collisions_involving(&sub, r, &who, DEFAULT_KEEP)?;
-        let fare = Fare::of(&c, r);
+        let f = fare(dt, &mut now);
         // No one the group did not collide with is brought into collision: a
         // shift trades no pair for another (a new pair may be two people walking
         // the same way, whom nothing separates afterwards).
-        let fresh = !c.is_complete() || c.pairs.iter().any(|q| !before.contains(&(q.a, q.b)));
-        if fresh || fare.closest_m < floor_m || !fare.better_than(&at_zero) {
+        let fresh = now.iter().any(|c| before.binary_search(c).is_err());
+        if fresh || f.closest_m < floor_m || !f.better_than(&at_zero) {
             continue;
         }
-        if best.as_ref().is_none_or(|(_, b)| fare.better_than(b)) {
-            best = Some((dt, fare));
+        if best.as_ref().is_none_or(|(_, b)| f.better_than(b)) {
+            best = Some((dt, f));
         }
-        if fare.pairs <= inside {
+        if f.pairs == 0 {
             break;
         }
     }
-    Ok(best.map(|(dt_s, _)| Shift {
+    best.map(|(dt_s, _)| Shift {
         group: group.to_vec(),
         dt_s,
-    }))
+    })
 }
 
 /// The two sides of each connected part of the graph of `pairs` (people as

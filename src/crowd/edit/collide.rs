@@ -44,7 +44,7 @@
 use super::clusters::{
     classes, closest_standing, spatial_order, standing_groups, Cluster, NO_GROUP,
 };
-use super::flat::{TrackError, Tracks};
+use super::flat::{TrackError, TrackRef, Tracks};
 use super::slab_grid::{cell_range, overlap, SlabGrid};
 use crate::geom::Vec2;
 use std::cmp::Ordering;
@@ -447,34 +447,85 @@ fn pieces<S: Tracks + ?Sized>(
         if include.is_some_and(|m| m[k] == 0) {
             continue;
         }
-        let n = tr.len();
-        for j in 0..n {
-            let next = j + 1 < n && tr.linked[j];
-            let prev = j > 0 && tr.linked[j - 1];
-            if next {
-                out.push(Piece {
-                    track: k as u32,
-                    sample: j as u32,
-                    t0: tr.times_s[j],
-                    t1: tr.times_s[j + 1],
-                    p0: tr.points[j],
-                    p1: tr.points[j + 1],
-                });
-            } else if !prev {
-                out.push(Piece {
-                    track: k as u32,
-                    sample: j as u32,
-                    t0: tr.times_s[j],
-                    t1: tr.times_s[j],
-                    p0: tr.points[j],
-                    p1: tr.points[j],
-                });
-            }
-        }
+        push_pieces(&tr, k, &mut out);
     }
     starts.push(out.len());
     out.shrink_to_fit();
     (out, starts)
+}
+
+/// Appends person `k`'s pieces (track `tr`) to `out`: a linked segment per
+/// linked pair of samples, a lone sample where neither neighbour is linked.
+fn push_pieces(tr: &TrackRef<'_>, k: usize, out: &mut Vec<Piece>) {
+    let n = tr.len();
+    for j in 0..n {
+        let next = j + 1 < n && tr.linked[j];
+        let prev = j > 0 && tr.linked[j - 1];
+        if next {
+            out.push(Piece {
+                track: k as u32,
+                sample: j as u32,
+                t0: tr.times_s[j],
+                t1: tr.times_s[j + 1],
+                p0: tr.points[j],
+                p1: tr.points[j + 1],
+            });
+        } else if !prev {
+            out.push(Piece {
+                track: k as u32,
+                sample: j as u32,
+                t0: tr.times_s[j],
+                t1: tr.times_s[j],
+                p0: tr.points[j],
+                p1: tr.points[j],
+            });
+        }
+    }
+}
+
+/// One person's pieces as detection sees them, for [`closest_shifted`].
+#[derive(Clone, Debug, Default)]
+pub(super) struct PersonPieces(Vec<Piece>);
+
+impl PersonPieces {
+    /// The pieces of `tr`.
+    pub(super) fn of(tr: &TrackRef<'_>) -> PersonPieces {
+        let mut out = Vec::with_capacity(tr.len());
+        push_pieces(tr, 0, &mut out);
+        PersonPieces(out)
+    }
+}
+
+/// The closest approach of two people (metres), `a`'s times all moved by
+/// `shift_s`, exactly as [`detect`] would find it on the shifted tracks (the same
+/// pieces and eqs. 13–17); `None` when their times never meet. The pieces of a
+/// track are in time order, so each of `a`'s pieces is compared only with the
+/// pieces of `b` whose times meet it: O(n_a + n_b) comparisons plus the overlaps.
+pub(super) fn closest_shifted(a: &PersonPieces, shift_s: f64, b: &PersonPieces) -> Option<f64> {
+    let pb = &b.0;
+    let mut best: Option<f64> = None;
+    let mut first = 0;
+    for pa in &a.0 {
+        let pa = Piece {
+            t0: pa.t0 + shift_s,
+            t1: pa.t1 + shift_s,
+            ..*pa
+        };
+        while first < pb.len() && pb[first].t1 < pa.t0 {
+            first += 1;
+        }
+        for q in &pb[first..] {
+            if q.t0 > pa.t1 {
+                break;
+            }
+            if let Some((_, _, x)) = closest(&pa, q) {
+                if best.is_none_or(|d| x.distance_m < d) {
+                    best = Some(x.distance_m);
+                }
+            }
+        }
+    }
+    best
 }
 
 /// A piece pair closer than the threshold.

@@ -562,3 +562,30 @@ proptest! {
         prop_assert_eq!(fast.closest, reference.closest);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 256,
+        rng_seed: RngSeed::Fixed(0x7368_6966),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn prop_closest_shifted_is_detection_on_the_shifted_tracks(s in crowd(), shift in -3.0f64..3.0) {
+        // Avoidance's rigid shifts are judged by `closest_shifted`: it must be
+        // what the all-pairs reference finds once the person's times are moved.
+        prop_assume!(s.tracks.len() >= 2);
+        let mut moved = s.clone();
+        for t in &mut moved.tracks[0].times_s {
+            *t += shift;
+        }
+        let reference = collisions_all_pairs(&moved, 1e6).unwrap();
+        let a = super::PersonPieces::of(&s.tracks[0].as_ref());
+        for k in 1..s.tracks.len() {
+            let b = super::PersonPieces::of(&s.tracks[k].as_ref());
+            let want = reference.pairs.iter().find(|p| p.a == 0 && p.b == k).map(|p| p.closest.distance_m);
+            prop_assert_eq!(super::closest_shifted(&a, shift, &b), want, "person {}", k);
+        }
+    }
+}
