@@ -173,13 +173,11 @@ pub(super) fn best_shift(
             closest_m: f64::INFINITY,
         };
         for (c, &(gi, oi)) in checks.iter().enumerate() {
-            if let Some(d) = closest_shifted(&members[gi], dt, &others[oi].1) {
-                if d < r {
-                    f.pairs += 1;
-                    f.depth_m += r - d;
-                    f.closest_m = f.closest_m.min(d);
-                    colliding.push(c);
-                }
+            if let Some(d) = closest_shifted(&members[gi], dt, &others[oi].1, r) {
+                f.pairs += 1;
+                f.depth_m += r - d;
+                f.closest_m = f.closest_m.min(d);
+                colliding.push(c);
             }
         }
         f

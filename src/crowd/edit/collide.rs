@@ -496,12 +496,19 @@ impl PersonPieces {
     }
 }
 
-/// The closest approach of two people (metres), `a`'s times all moved by
-/// `shift_s`, exactly as [`detect`] would find it on the shifted tracks (the same
-/// pieces and eqs. 13–17); `None` when their times never meet. The pieces of a
-/// track are in time order, so each of `a`'s pieces is compared only with the
-/// pieces of `b` whose times meet it: O(n_a + n_b) comparisons plus the overlaps.
-pub(super) fn closest_shifted(a: &PersonPieces, shift_s: f64, b: &PersonPieces) -> Option<f64> {
+/// The closest approach of two people (metres) if it is under `below_m`, `a`'s
+/// times all moved by `shift_s`, exactly as [`detect`] would find it on the
+/// shifted tracks (the same pieces and eqs. 13–17); `None` when their times
+/// never meet or they never come that close. The pieces of a track are in time
+/// order, so each of `a`'s pieces is compared only with the pieces of `b` whose
+/// times meet it, and two pieces whose bounding boxes are `below_m` apart are
+/// not compared: O(n_a + n_b) comparisons plus the overlaps.
+pub(super) fn closest_shifted(
+    a: &PersonPieces,
+    shift_s: f64,
+    b: &PersonPieces,
+    below_m: f64,
+) -> Option<f64> {
     let pb = &b.0;
     let mut best: Option<f64> = None;
     let mut first = 0;
@@ -518,8 +525,14 @@ pub(super) fn closest_shifted(a: &PersonPieces, shift_s: f64, b: &PersonPieces) 
             if q.t0 > pa.t1 {
                 break;
             }
+            let apart = |u0: f64, u1: f64, v0: f64, v1: f64| {
+                u0.min(u1) - v0.max(v1) >= below_m || v0.min(v1) - u0.max(u1) >= below_m
+            };
+            if apart(pa.p0.x, pa.p1.x, q.p0.x, q.p1.x) || apart(pa.p0.y, pa.p1.y, q.p0.y, q.p1.y) {
+                continue;
+            }
             if let Some((_, _, x)) = closest(&pa, q) {
-                if best.is_none_or(|d| x.distance_m < d) {
+                if x.distance_m < below_m && best.is_none_or(|d| x.distance_m < d) {
                     best = Some(x.distance_m);
                 }
             }

@@ -585,7 +585,10 @@ proptest! {
         for k in 1..s.tracks.len() {
             let b = super::PersonPieces::of(&s.tracks[k].as_ref());
             let want = reference.pairs.iter().find(|p| p.a == 0 && p.b == k).map(|p| p.closest.distance_m);
-            prop_assert_eq!(super::closest_shifted(&a, shift, &b), want, "person {}", k);
+            prop_assert_eq!(super::closest_shifted(&a, shift, &b, 1e6), want, "person {}", k);
+            // Under a cutoff: the same distance when it is below, else nothing.
+            let cut = 0.7;
+            prop_assert_eq!(super::closest_shifted(&a, shift, &b, cut), want.filter(|d| *d < cut), "person {}", k);
         }
     }
 }
