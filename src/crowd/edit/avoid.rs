@@ -23,7 +23,7 @@
 //! retiming) is reported in [`AvoidReport::remaining`]; nothing panics.
 //!
 //! The work is bounded whatever the input: each round looks at no more than the
-//! [`DEFAULT_KEEP`] closest pairs detection keeps (when more collide, the next
+//! [`DEFAULT_KEEP`](super::DEFAULT_KEEP) closest pairs detection keeps (when more collide, the next
 //! round detects again and takes the next closest), and the people of a
 //! [`Cluster`](super::Cluster) of detection (on one identical track, for instance
 //! standing at one point, or standing together within the threshold) are left as
@@ -31,9 +31,7 @@
 //! not retimed, and each cluster is one [`Remaining`] ([`Stuck::Cluster`]) for its
 //! first two members.
 
-use super::collide::{
-    collisions_involving, detect, Approach, CollideError, Collisions, PairCollision, DEFAULT_KEEP,
-};
+use super::collide::{detect, Approach, CollideError, Collisions, PairCollision};
 use super::tracks::{Track, TrackSet};
 use nalgebra::{DMatrix, DVector};
 use std::collections::{HashMap, HashSet};
@@ -180,7 +178,7 @@ pub struct AvoidReport {
     pub pairs_after: usize,
     /// Pair retimings applied (eq. 19 solves whose result was kept).
     pub retimings: usize,
-    /// The pairs that still collide: at most [`DEFAULT_KEEP`] of them (the closest)
+    /// The pairs that still collide: at most [`DEFAULT_KEEP`](super::DEFAULT_KEEP) of them (the closest)
     /// and one per cluster; `pairs_after` counts them all.
     pub remaining: Vec<Remaining>,
     /// Sum over all samples of `|t̄ − t|` (seconds).
@@ -883,7 +881,6 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
     let mut current: Vec<PairCollision> = collisions.pairs.clone();
     let mut stuck: HashMap<(usize, usize), Stuck> = HashMap::new();
     let mut pins: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
-    let mut who = vec![false; n];
     let (mut iterations, mut retimings, mut corrections, mut undone) = (0, 0, 0, 0);
     let mut orders = HashMap::new();
     let mut kept_last_round = false;
@@ -930,14 +927,7 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
                 match shift::best_shift(set, &boxes, side, params, &original, floor, &shifts_s) {
                     Some(sh) => {
                         apply_shift(set, &mut base, &mut pins, &sh);
-                        refresh(
-                            set,
-                            params,
-                            &sh.group,
-                            &mut who,
-                            &mut current,
-                            &mut complete,
-                        )?;
+                        refresh(set, &boxes, params, &sh.group, &mut current, &mut complete)?;
                         for &k in &sh.group {
                             touched[k] = true;
                         }
@@ -975,22 +965,13 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
             }
             if let Some(sh) = alone {
                 apply_shift(set, &mut base, &mut pins, &sh);
-                refresh(
-                    set,
-                    params,
-                    &sh.group,
-                    &mut who,
-                    &mut current,
-                    &mut complete,
-                )?;
+                refresh(set, &boxes, params, &sh.group, &mut current, &mut complete)?;
                 touched[q.a] = true;
                 touched[q.b] = true;
                 shifts_kept += 1;
                 kept_last_round = true;
                 continue;
             }
-            who[q.a] = true;
-            who[q.b] = true;
             // The pairs of these two now (from the list when it is whole): how
             // many, and how deep into the threshold they reach in all.
             let depth = |ps: &mut dyn Iterator<Item = &PairCollision>| -> (usize, f64) {
@@ -1008,7 +989,7 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
                         .filter(|p| p.a == q.a || p.b == q.a || p.a == q.b || p.b == q.b),
                 )
             } else {
-                let c = collisions_involving(set, params.threshold_m, &who, DEFAULT_KEEP)?;
+                let c = shift::involving_near(set, &boxes, &pair_of(q), params.threshold_m)?;
                 if c.is_complete() {
                     depth(&mut c.pairs.iter())
                 } else {
@@ -1038,7 +1019,7 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
                     Err(PairFailure::Stuck(why)) => Err(why),
                     Ok(c) => {
                         let after =
-                            collisions_involving(set, params.threshold_m, &who, DEFAULT_KEEP)?;
+                            shift::involving_near(set, &boxes, &pair_of(q), params.threshold_m)?;
                         let closest = after
                             .closest()
                             .map_or(f64::INFINITY, |p| p.closest.distance_m);
@@ -1062,8 +1043,6 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
                         }
                     }
                 };
-            who[q.a] = false;
-            who[q.b] = false;
             match verdict {
                 Ok((c, after)) => {
                     corrections += c;
@@ -1182,27 +1161,25 @@ fn apply_shift(
 /// theirs (when the list is whole; otherwise the next round detects everything).
 fn refresh(
     set: &TrackSet,
+    boxes: &[(crate::geom::Vec2, crate::geom::Vec2)],
     p: &AvoidParams,
     group: &[usize],
-    who: &mut [bool],
     current: &mut Vec<PairCollision>,
     complete: &mut bool,
 ) -> Result<(), AvoidError> {
     if !*complete {
         return Ok(());
     }
-    for &k in group {
-        who[k] = true;
-    }
-    let found = collisions_involving(set, p.threshold_m, who, DEFAULT_KEEP);
-    for &k in group {
-        who[k] = false;
-    }
-    let found = found?;
+    let found = shift::involving_near(set, boxes, group, p.threshold_m)?;
     current.retain(|q| !(who_has(group, q.a) || who_has(group, q.b)));
     current.extend(found.pairs.iter().copied());
     *complete = found.is_complete();
     Ok(())
+}
+
+/// The two people of a pair as a sorted group.
+fn pair_of(q: &PairCollision) -> [usize; 2] {
+    [q.a.min(q.b), q.a.max(q.b)]
 }
 
 fn who_has(group: &[usize], k: usize) -> bool {

@@ -27,7 +27,9 @@
 //! by the largest shift — computed on the shifted pieces as detection computes
 //! it, without building detection's grid for every shift tried.
 
-use super::super::collide::{closest_shifted, PersonPieces};
+use super::super::collide::{
+    closest_shifted, collisions_involving, CollideError, Collisions, PersonPieces, DEFAULT_KEEP,
+};
 use super::super::tracks::TrackSet;
 use super::{AvoidParams, PairCollision};
 use crate::geom::Vec2;
@@ -250,4 +252,52 @@ pub(super) fn sides(n: usize, pairs: &[PairCollision]) -> Vec<[Vec<usize>; 2]> {
     }
     parts.sort_by_key(|p| std::cmp::Reverse(p[0].len() + p[1].len()));
     parts
+}
+
+/// The pairs involving `group` (sorted indices into `set`), as
+/// [`collisions_involving`] finds them on the whole set, but detected among the
+/// group and the people who could meet it (bounding boxes within the threshold,
+/// time spans meeting) only; indices are the set's.
+///
+/// # Errors
+/// A [`CollideError`] from detection.
+pub(super) fn involving_near(
+    set: &TrackSet,
+    boxes: &[(Vec2, Vec2)],
+    group: &[usize],
+    threshold_m: f64,
+) -> Result<Collisions, CollideError> {
+    let r = threshold_m;
+    let near = |a: usize, b: usize| {
+        let ((alo, ahi), (blo, bhi)) = (boxes[a], boxes[b]);
+        let (sa, sb) = (set.tracks[a].span_s(), set.tracks[b].span_s());
+        blo.x <= ahi.x + r
+            && alo.x <= bhi.x + r
+            && blo.y <= ahi.y + r
+            && alo.y <= bhi.y + r
+            && sb.1 >= sa.0
+            && sb.0 <= sa.1
+    };
+    // In the set's order, so a < b holds after mapping back.
+    let people: Vec<usize> = (0..set.tracks.len())
+        .filter(|&k| group.binary_search(&k).is_ok() || group.iter().any(|&g| near(g, k)))
+        .collect();
+    let sub = TrackSet {
+        tracks: people.iter().map(|&k| set.tracks[k].clone()).collect(),
+        step_s: set.step_s,
+    };
+    let who: Vec<bool> = people
+        .iter()
+        .map(|k| group.binary_search(k).is_ok())
+        .collect();
+    let mut c = collisions_involving(&sub, threshold_m, &who, DEFAULT_KEEP)?;
+    for q in c.pairs.iter_mut().chain(c.closest.iter_mut()) {
+        q.a = people[q.a];
+        q.b = people[q.b];
+    }
+    for e in &mut c.events {
+        e.a = people[e.a];
+        e.b = people[e.b];
+    }
+    Ok(c)
 }

@@ -510,9 +510,18 @@ pub(super) fn closest_shifted(
     below_m: f64,
 ) -> Option<f64> {
     let pb = &b.0;
+    let (Some(b_first), Some(b_last)) = (pb.first(), pb.last()) else {
+        return None;
+    };
+    let (b_t0, b_t1) = (b_first.t0, b_last.t1);
     let mut best: Option<f64> = None;
     let mut first = 0;
-    for pa in &a.0 {
+    // `a`'s pieces before `b` begins cannot meet it (ends are non-decreasing).
+    let start = a.0.partition_point(|p| p.t1 + shift_s < b_t0);
+    for pa in &a.0[start..] {
+        if pa.t0 + shift_s > b_t1 {
+            break;
+        }
         let pa = Piece {
             t0: pa.t0 + shift_s,
             t1: pa.t1 + shift_s,
