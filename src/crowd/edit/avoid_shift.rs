@@ -28,7 +28,7 @@
 //! it, without building detection's grid for every shift tried.
 
 use super::super::collide::{
-    closest_shifted, collisions_involving, CollideError, Collisions, PersonPieces, DEFAULT_KEEP,
+    collisions_involving, CollideError, Collisions, NearPieces, PersonPieces, DEFAULT_KEEP,
 };
 use super::super::tracks::TrackSet;
 use super::{AvoidParams, PairCollision};
@@ -105,9 +105,9 @@ pub(super) struct Shift {
 /// are measured against it).
 ///
 /// # Complexity
-/// One closest-approach scan ([`closest_shifted`], linear in the two tracks'
-/// samples) per shift tried and pair of a member and a person whose bounding box
-/// comes within the threshold of the member's.
+/// For each member and person whose bounding box comes within the threshold of
+/// the member's, one pass over their piece pairs to keep those close in space
+/// ([`NearPieces`]); then one closest approach per kept piece pair and shift tried.
 pub(super) fn best_shift(
     set: &TrackSet,
     boxes: &[(Vec2, Vec2)],
@@ -149,10 +149,11 @@ pub(super) fn best_shift(
             && sb.0 <= sa.1 + reach_s
     };
     let mut others: Vec<(usize, PersonPieces)> = Vec::new();
-    let mut checks: Vec<(usize, usize)> = Vec::new();
-    let mut members: Vec<PersonPieces> = Vec::with_capacity(group.len());
-    for (gi, &a) in group.iter().enumerate() {
-        members.push(PersonPieces::of(&set.tracks[a].as_ref()));
+    // Per member and person near them: the pieces that come within the
+    // threshold of each other in space, where alone a shift can make them meet.
+    let mut checks: Vec<NearPieces> = Vec::new();
+    for &a in group {
+        let mine = PersonPieces::of(&set.tracks[a].as_ref());
         for b in 0..set.tracks.len() {
             if group.binary_search(&b).is_ok() || !near(a, b) {
                 continue;
@@ -164,7 +165,10 @@ pub(super) fn best_shift(
                     others.len() - 1
                 }
             };
-            checks.push((gi, oi));
+            let close = NearPieces::of(&mine, &others[oi].1, r);
+            if !close.is_empty() {
+                checks.push(close);
+            }
         }
     }
     let fare = |dt: f64, colliding: &mut Vec<usize>| {
@@ -174,8 +178,8 @@ pub(super) fn best_shift(
             depth_m: 0.0,
             closest_m: f64::INFINITY,
         };
-        for (c, &(gi, oi)) in checks.iter().enumerate() {
-            if let Some(d) = closest_shifted(&members[gi], dt, &others[oi].1, r) {
+        for (c, close) in checks.iter().enumerate() {
+            if let Some(d) = close.closest_shifted(dt, r) {
                 f.pairs += 1;
                 f.depth_m += r - d;
                 f.closest_m = f.closest_m.min(d);

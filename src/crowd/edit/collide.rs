@@ -496,13 +496,14 @@ impl PersonPieces {
     }
 }
 
-/// The closest approach of two people (metres) if it is under `below_m`, `a`'s
+/// The reference for [`NearPieces::closest_shifted`] (tests): the closest approach of two people (metres) if it is under `below_m`, `a`'s
 /// times all moved by `shift_s`, exactly as [`detect`] would find it on the
 /// shifted tracks (the same pieces and eqs. 13–17); `None` when their times
 /// never meet or they never come that close. The pieces of a track are in time
 /// order, so each of `a`'s pieces is compared only with the pieces of `b` whose
 /// times meet it, and two pieces whose bounding boxes are `below_m` apart are
 /// not compared: O(n_a + n_b) comparisons plus the overlaps.
+#[cfg(test)]
 pub(super) fn closest_shifted(
     a: &PersonPieces,
     shift_s: f64,
@@ -534,10 +535,7 @@ pub(super) fn closest_shifted(
             if q.t0 > pa.t1 {
                 break;
             }
-            let apart = |u0: f64, u1: f64, v0: f64, v1: f64| {
-                u0.min(u1) - v0.max(v1) >= below_m || v0.min(v1) - u0.max(u1) >= below_m
-            };
-            if apart(pa.p0.x, pa.p1.x, q.p0.x, q.p1.x) || apart(pa.p0.y, pa.p1.y, q.p0.y, q.p1.y) {
+            if boxes_apart(&pa, q, below_m) {
                 continue;
             }
             if let Some((_, _, x)) = closest(&pa, q) {
@@ -548,6 +546,64 @@ pub(super) fn closest_shifted(
         }
     }
     best
+}
+
+/// The pairs of pieces of two people that come within some distance of each
+/// other in space, whenever they are (their bounding boxes that close): the only
+/// places where the two can come that close at any relative shift of their
+/// times. [`NearPieces::closest_shifted`] then costs one comparison per pair.
+#[derive(Clone, Debug, Default)]
+pub(super) struct NearPieces(Vec<(Piece, Piece)>);
+
+impl NearPieces {
+    /// The piece pairs of `a` and `b` whose bounding boxes are closer than
+    /// `within_m` on both axes.
+    pub(super) fn of(a: &PersonPieces, b: &PersonPieces, within_m: f64) -> NearPieces {
+        let mut out = Vec::new();
+        for pa in &a.0 {
+            for pb in &b.0 {
+                if !boxes_apart(pa, pb, within_m) {
+                    out.push((*pa, *pb));
+                }
+            }
+        }
+        NearPieces(out)
+    }
+
+    /// Whether no two pieces come that close.
+    pub(super) fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// As [`closest_shifted`] with the `within_m` given to [`NearPieces::of`]
+    /// as `below_m` (no larger): the same distance, found among the near pairs.
+    pub(super) fn closest_shifted(&self, shift_s: f64, below_m: f64) -> Option<f64> {
+        let mut best: Option<f64> = None;
+        for (pa, pb) in &self.0 {
+            if pa.t1 + shift_s < pb.t0 || pa.t0 + shift_s > pb.t1 {
+                continue;
+            }
+            let pa = Piece {
+                t0: pa.t0 + shift_s,
+                t1: pa.t1 + shift_s,
+                ..*pa
+            };
+            if let Some((_, _, x)) = closest(&pa, pb) {
+                if x.distance_m < below_m && best.is_none_or(|d| x.distance_m < d) {
+                    best = Some(x.distance_m);
+                }
+            }
+        }
+        best
+    }
+}
+
+/// Whether two pieces' bounding boxes are at least `d` apart on an axis.
+fn boxes_apart(a: &Piece, b: &Piece, d: f64) -> bool {
+    let apart = |u0: f64, u1: f64, v0: f64, v1: f64| {
+        u0.min(u1) - v0.max(v1) >= d || v0.min(v1) - u0.max(u1) >= d
+    };
+    apart(a.p0.x, a.p1.x, b.p0.x, b.p1.x) || apart(a.p0.y, a.p1.y, b.p0.y, b.p1.y)
 }
 
 /// A piece pair closer than the threshold.

@@ -589,6 +589,8 @@ proptest! {
             // Under a cutoff: the same distance when it is below, else nothing.
             let cut = 0.7;
             prop_assert_eq!(super::closest_shifted(&a, shift, &b, cut), want.filter(|d| *d < cut), "person {}", k);
+            let near = super::NearPieces::of(&a, &b, cut);
+            prop_assert_eq!(near.closest_shifted(shift, cut), want.filter(|d| *d < cut), "person {}", k);
         }
     }
 }
