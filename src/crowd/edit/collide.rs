@@ -559,11 +559,38 @@ impl NearPieces {
     /// The piece pairs of `a` and `b` whose bounding boxes are closer than
     /// `within_m` on both axes.
     pub(super) fn of(a: &PersonPieces, b: &PersonPieces, within_m: f64) -> NearPieces {
+        // Each side's pieces near the other's whole box first: a path crossing
+        // another meets it in a few pieces.
+        let bound = |ps: &[Piece]| {
+            ps.iter().fold(
+                Piece {
+                    track: 0,
+                    sample: 0,
+                    t0: 0.0,
+                    t1: 0.0,
+                    p0: Vec2::new(f64::INFINITY, f64::INFINITY),
+                    p1: Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+                },
+                |acc, p| Piece {
+                    p0: acc.p0.inf(&p.p0.inf(&p.p1)),
+                    p1: acc.p1.sup(&p.p0.sup(&p.p1)),
+                    ..acc
+                },
+            )
+        };
+        let (box_a, box_b) = (bound(&a.0), bound(&b.0));
+        let near_b: Vec<&Piece> =
+            b.0.iter()
+                .filter(|p| !boxes_apart(p, &box_a, within_m))
+                .collect();
         let mut out = Vec::new();
-        for pa in &a.0 {
-            for pb in &b.0 {
+        if near_b.is_empty() {
+            return NearPieces(out);
+        }
+        for pa in a.0.iter().filter(|p| !boxes_apart(p, &box_b, within_m)) {
+            for pb in &near_b {
                 if !boxes_apart(pa, pb, within_m) {
-                    out.push((*pa, *pb));
+                    out.push((*pa, **pb));
                 }
             }
         }
