@@ -884,15 +884,26 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
     let (mut iterations, mut retimings, mut corrections, mut undone) = (0, 0, 0, 0);
     let mut orders = HashMap::new();
     let mut kept_last_round = false;
+    // The round in which each person last changed, and in which each pair's
+    // retiming last failed to help.
+    let mut changed_at = vec![0usize; n];
+    let mut failed_at: HashMap<(usize, usize), usize> = HashMap::new();
     while iterations < params.max_iterations {
         if !complete {
             let again = detect(set, params.threshold_m)?;
             complete = again.is_complete();
             current = again.pairs.clone();
         }
-        // A retiming that did not help may help once others have moved.
+        // A retiming that did not help may help once one of the two has moved
+        // (retrying every such pair after every change anywhere costs a
+        // detection per pair per round on a dense file, for little).
         if kept_last_round {
-            stuck.retain(|_, w| *w != Stuck::NoImprovement);
+            stuck.retain(|k, w| {
+                *w != Stuck::NoImprovement || {
+                    let at = failed_at.get(k).copied().unwrap_or(0);
+                    changed_at[k.0] <= at && changed_at[k.1] <= at
+                }
+            });
         }
         let mut pairs: Vec<PairCollision> = current
             .iter()
@@ -927,6 +938,9 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
                 match shift::best_shift(set, &boxes, side, params, &original, floor, &shifts_s) {
                     Some(sh) => {
                         apply_shift(set, &mut base, &mut pins, &sh);
+                        for &k in &sh.group {
+                            changed_at[k] = iterations;
+                        }
                         refresh(set, &boxes, params, &sh.group, &mut current, &mut complete)?;
                         for &k in &sh.group {
                             touched[k] = true;
@@ -965,6 +979,9 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
             }
             if let Some(sh) = alone {
                 apply_shift(set, &mut base, &mut pins, &sh);
+                for &k in &sh.group {
+                    changed_at[k] = iterations;
+                }
                 refresh(set, &boxes, params, &sh.group, &mut current, &mut complete)?;
                 touched[q.a] = true;
                 touched[q.b] = true;
@@ -1049,6 +1066,8 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
                     retimings += 1;
                     touched[q.a] = true;
                     touched[q.b] = true;
+                    changed_at[q.a] = iterations;
+                    changed_at[q.b] = iterations;
                     kept_last_round = true;
                     if complete {
                         current.retain(|p| !(p.a == q.a || p.b == q.a || p.a == q.b || p.b == q.b));
@@ -1059,6 +1078,7 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
                 Err(why) => {
                     restore(set, &mut pins, &mut orders);
                     stuck.insert(key, why);
+                    failed_at.insert(key, iterations);
                 }
             }
         }
