@@ -50,8 +50,15 @@ fn never_worse(name: &str, threshold_m: f64) -> AvoidReport {
         r.max_shift_s
     );
     assert_eq!(r.pairs_before, c0.pair_count());
-    assert_eq!(r.pairs_after, c1.pair_count(), "the report counts what detection finds");
-    assert!(c1.pair_count() <= c0.pair_count(), "{name}: more pairs than the input");
+    assert_eq!(
+        r.pairs_after,
+        c1.pair_count(),
+        "the report counts what detection finds"
+    );
+    assert!(
+        c1.pair_count() <= c0.pair_count(),
+        "{name}: more pairs than the input"
+    );
     if let (Some(a), Some(b)) = (c1.min_distance_m(), c0.min_distance_m()) {
         assert!(a >= b, "{name}: closest pair {a} m, the input's {b} m");
     }
@@ -74,7 +81,11 @@ fn never_worse(name: &str, threshold_m: f64) -> AvoidReport {
             .zip(&b.times_s)
             .map(|(x, y)| (x - y).abs())
             .fold(0.0, f64::max);
-        assert!(shift <= params.max_shift_s + 1e-9, "{name}: {} moved {shift} s", a.id);
+        assert!(
+            shift <= params.max_shift_s + 1e-9,
+            "{name}: {} moved {shift} s",
+            a.id
+        );
         if shift > 0.0 {
             retimed += 1;
             assert!(in_pair[k], "{name}: {} retimed, never in a collision", a.id);
