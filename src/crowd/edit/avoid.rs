@@ -839,6 +839,22 @@ fn largest_shift(t: &[f64], t0: &[f64]) -> f64 {
 /// [`TrackSet::validate`]. Pairs that cannot be separated are not errors: they are
 /// in [`AvoidReport::remaining`].
 pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, AvoidError> {
+    avoid_around(set, params, &[])
+}
+
+/// As [`avoid`], but only the pairs with one of `people` (indices into `set`) are
+/// worked on; everyone else's collisions are left as they are (and counted in
+/// the report). An empty `people` means everyone. The daemon's edit mode uses it
+/// after a drag: the people dragged and whoever they now meet are retimed, not
+/// strangers who happened to collide already.
+///
+/// # Errors
+/// As [`avoid`].
+pub fn avoid_around(
+    set: &mut TrackSet,
+    params: &AvoidParams,
+    people: &[usize],
+) -> Result<AvoidReport, AvoidError> {
     check_params(params)?;
     let n = set.tracks.len();
     let original: Vec<Vec<f64>> = set.tracks.iter().map(|t| t.times_s.clone()).collect();
@@ -873,7 +889,15 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
         in_collision[q.b] = true;
     }
     let people_in_collision = in_collision.iter().filter(|&&x| x).count();
-    let workable = |q: &PairCollision| !in_cluster[q.a] && !in_cluster[q.b];
+    let mut in_scope = vec![people.is_empty(); n];
+    for &k in people {
+        if let Some(x) = in_scope.get_mut(k) {
+            *x = true;
+        }
+    }
+    let workable = |q: &PairCollision| {
+        !in_cluster[q.a] && !in_cluster[q.b] && (in_scope[q.a] || in_scope[q.b])
+    };
     // The colliding pairs as retimings change them: a retiming changes two people,
     // so only their pairs are detected again, as long as every pair is known
     // (`complete`); else each round detects everything again.

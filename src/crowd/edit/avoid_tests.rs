@@ -372,3 +372,29 @@ proptest::proptest! {
         }
     }
 }
+
+#[test]
+fn avoidance_around_some_people_leaves_strangers_as_they_are() {
+    // Two pairs crossing: 1 and 2 near the origin, 3 and 4 20 m away. Around
+    // person 1, only the first pair is worked on; 3 and 4 still collide, their
+    // times untouched.
+    let mut set = TrackSet {
+        tracks: vec![
+            walker(1, v(-5.0, 0.0), v(1.0, 0.0), 1.0, 101, 0.1),
+            walker(2, v(0.0, -5.0), v(0.0, 1.0), 1.0, 101, 0.1),
+            walker(3, v(15.0, 0.0), v(1.0, 0.0), 1.0, 101, 0.1),
+            walker(4, v(20.0, -5.0), v(0.0, 1.0), 1.0, 101, 0.1),
+        ],
+        step_s: 0.1,
+    };
+    let before = set.clone();
+    let r = avoid_around(&mut set, &AvoidParams::default(), &[0]).unwrap();
+    assert_eq!((r.pairs_before, r.pairs_after), (2, 1), "{r:?}");
+    assert_eq!(set.tracks[2..], before.tracks[2..]);
+    assert_ne!(set.tracks[..2], before.tracks[..2]);
+    let left = detect(&set, 0.3).unwrap();
+    assert_eq!((left.pairs[0].a, left.pairs[0].b), (2, 3));
+    // Around everyone, both are.
+    let mut all = before.clone();
+    assert_eq!(avoid(&mut all, &AvoidParams::default()).unwrap().pairs_after, 0);
+}

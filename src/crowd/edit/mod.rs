@@ -44,7 +44,7 @@ mod tracks;
 
 pub use apply::{run_script, ApplyParams, ApplyReport, DragReport, HANDLE_RADIUS_M};
 pub use avoid::{
-    avoid, AvoidError, AvoidParams, AvoidReport, Remaining, Stuck, MIN_PACE_LENGTH_M,
+    avoid, avoid_around, AvoidError, AvoidParams, AvoidReport, Remaining, Stuck, MIN_PACE_LENGTH_M,
     STILL_SPEED_M_S,
 };
 pub use cage::{
