@@ -396,5 +396,10 @@ fn avoidance_around_some_people_leaves_strangers_as_they_are() {
     assert_eq!((left.pairs[0].a, left.pairs[0].b), (2, 3));
     // Around everyone, both are.
     let mut all = before.clone();
-    assert_eq!(avoid(&mut all, &AvoidParams::default()).unwrap().pairs_after, 0);
+    assert_eq!(
+        avoid(&mut all, &AvoidParams::default())
+            .unwrap()
+            .pairs_after,
+        0
+    );
 }
