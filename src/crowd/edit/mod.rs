@@ -65,7 +65,10 @@ pub use hull::{
     concave_hull, grid_cell, grid_subsample, is_simple, Hull, HullParams, DEFAULT_CONCAVITY,
     DEFAULT_MAX_EDGE_CELLS, DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M,
 };
-pub use obstacles::{avoid_obstacles, crowd_width, crowd_width_at, ObstacleParams, ObstacleReport};
+pub use obstacles::{
+    avoid_obstacles, crowd_width, crowd_width_at, push_samples_out, samples_in_obstacles,
+    ObstacleParams, ObstacleReport,
+};
 pub use paths::{group_tracks, standard_path, GroupPath, PathError, DIRECTION_SPAN_M};
 pub use record::{RecordError, TrackRecorder};
 pub use script::{parse_script, Op, OpDef, Script, ScriptError, SelectSpec, MAX_LIST, MAX_OPS};
