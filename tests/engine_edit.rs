@@ -522,3 +522,59 @@ fn a_crowd_at_one_point_is_published_as_one_collision() {
     assert_eq!(v.collisions.len(), 256);
     assert_eq!(v.collisions[0].distance_m, 0.0, "the crowd first");
 }
+
+#[test]
+fn a_release_retimes_no_stranger_who_collided_already() {
+    // The parade and two strangers who cross each other at (12, 7) at t = 2 s,
+    // far from it. Dragging the parade brings no one into collision: the release
+    // retimes no one outside it, the strangers' collision stays as it was (it is
+    // not the edit's), and undo brings back every track byte for byte.
+    let mut set = parade(3, 4);
+    let times: Vec<f64> = (0..=50).map(|k| k as f64 * 0.2).collect();
+    for (id, from, dir) in [
+        (500, Vec2::new(10.0, 7.0), Vec2::new(1.0, 0.0)),
+        (501, Vec2::new(12.0, 5.0), Vec2::new(0.0, 1.0)),
+    ] {
+        set.tracks.push(Track::linked(
+            id,
+            times.iter().map(|t| from + dir * *t).collect(),
+            times.clone(),
+        ));
+    }
+    let strangers = detect(&set, 0.3).unwrap();
+    assert_eq!(strangers.pair_count(), 1, "the strangers collide");
+    let mut s = Session::new(set);
+    s.e.command(&Command::Pause, Micros(s.now)).unwrap();
+    s.tick();
+    let before = s.set();
+    let t = s.views.last().map_or(0.0, |v| v.play_t_s);
+    let held = Vec2::new(2.8 + t, 2.8);
+    s.touch(&[(1, held, ContactFlags::DOWN)]);
+    s.ticks(3);
+    for k in 1..=10 {
+        s.touch(&[(
+            1,
+            held + Vec2::new(0.0, 1.0) * (k as f64 / 10.0),
+            ContactFlags::NONE,
+        )]);
+        s.ticks(2);
+    }
+    s.touch(&[(1, held + Vec2::new(0.0, 1.0), ContactFlags::UP)]);
+    s.ticks(10);
+    assert_eq!(s.views.last().unwrap().state, "idle");
+    let after = s.set();
+    for id in [500, 501, 999] {
+        let k = after.index_of(id).unwrap();
+        assert_eq!(
+            after.tracks[k], before.tracks[k],
+            "person {id}, outside the drag, is not retimed"
+        );
+    }
+    let left = detect(after.as_ref(), 0.3).unwrap();
+    assert_eq!(left.pair_count(), 1);
+    let q = &left.pairs[0];
+    assert_eq!((q.id_a, q.id_b), (500, 501));
+    s.e.command(&Command::EditUndo, Micros(s.now)).unwrap();
+    s.tick();
+    assert_eq!(*s.set(), *before, "undo restores every track");
+}

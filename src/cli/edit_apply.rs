@@ -9,9 +9,10 @@ use crate::cli::output::outln;
 use anyhow::{anyhow, bail, Context, Result};
 use crowdtouch::crowd::edit::io::{self, EthOptions, Format, ReadOptions};
 use crowdtouch::crowd::edit::{
-    avoid, avoid_obstacles, correct_speeds, detect, parse_script, run_script, ApplyParams,
-    ApplyReport, AvoidParams, AvoidReport, Cage, CageParams, Collisions, ObstacleParams,
-    ObstacleReport, Script, ScriptError, Selection, SelectionQuery, TrackSet,
+    avoid, avoid_obstacles, correct_speeds, crowd_width_at, detect, detect_keeping, parse_script,
+    push_samples_out, run_script, samples_in_obstacles, ApplyParams, ApplyReport, AvoidParams,
+    AvoidReport, Cage, CageParams, Collisions, ObstacleParams, ObstacleReport, Script, ScriptError,
+    Selection, SelectionQuery, TrackSet,
 };
 use crowdtouch::crowd::environment::{load_scene, Scene, DEFAULT_AGENT_RADIUS_M};
 use crowdtouch::geom::Rect;
@@ -42,6 +43,10 @@ pub struct EditArgs {
     /// Two people closer than this collide (metres).
     #[arg(long, default_value_t = 0.3)]
     pub threshold: f64,
+    /// The most collision avoidance may move anyone's times from the input
+    /// (seconds).
+    #[arg(long, default_value_t = AvoidParams::default().max_shift_s)]
+    pub max_shift: f64,
     /// Drags must end inside `x0,y0,x1,y1` (metres); default: the tracks' bounding
     /// box grown by half its size and at least 10 m.
     #[arg(long, value_parser = parse_rect)]
@@ -79,7 +84,7 @@ pub struct Outcome {
     /// What the script did.
     pub report: ApplyReport,
     /// The scene of `--avoid-obstacles` and what keeping out of it did.
-    pub obstacles: Option<(Scene, ObstacleReport)>,
+    pub obstacles: Option<(Scene, ObstacleReport, ObstacleDetail)>,
     /// What collision avoidance did.
     pub avoided: Option<AvoidReport>,
     /// Collisions of the input.
@@ -136,6 +141,7 @@ pub fn run(a: &EditArgs) -> Result<Outcome> {
     let avoided = if a.avoid_collisions {
         let params = AvoidParams {
             threshold_m: a.threshold,
+            max_shift_s: a.max_shift,
             ..AvoidParams::default()
         };
         Some(avoid(&mut set, &params).map_err(|e| anyhow!("collision avoidance: {e}"))?)
@@ -175,7 +181,7 @@ pub fn apply(a: ApplyArgs) -> Result<()> {
         collisions_after,
         speed,
     } = run(&a.edit)?;
-    let obstacles = obstacles.map(|(_, r)| r);
+    let obstacles = obstacles.map(|(_, r, d)| (r, d));
     let avoided = avoided.as_ref().map(avoid_json);
     let e = &a.edit;
     let out_format = output_format(&a.output).unwrap_or(format);
@@ -200,7 +206,7 @@ pub fn apply(a: ApplyArgs) -> Result<()> {
         "retimes": report.retimes,
         "retimed_samples": report.retimed_samples,
         "touched": report.touched.len(),
-        "obstacles": obstacles.as_ref().map(obstacles_json),
+        "obstacles": obstacles.as_ref().map(|(r, d)| obstacles_json((r, d))),
         "avoidance": avoided,
         "collisions_before": collisions_before.pair_count(),
         "collisions_after": collisions_after.pair_count(),
@@ -240,19 +246,27 @@ pub fn apply(a: ApplyArgs) -> Result<()> {
             report.retimed_samples
         )?;
     }
-    if let Some(o) = &obstacles {
+    if let Some((o, d)) = &obstacles {
         outln!(
-            "  obstacles: {} samples inside before, {} after ({} rounds)",
+            "  obstacles: {} samples inside before, {} after ({} groups, {} cage rounds, {} samples moved out one by one)",
             o.samples_inside_before,
             o.samples_inside_after,
-            o.rounds
+            d.groups.len(),
+            o.rounds,
+            d.pushed_samples
         )?;
+        for (name, b, a) in d.per_obstacle.iter().filter(|x| x.1 + x.2 > 0) {
+            outln!("    {name}: {b} samples inside before, {a} after")?;
+        }
     }
     if let Some(v) = j["avoidance"].as_object() {
         outln!(
-            "  collision avoidance: {} pairs before, {} after, {} retimings in {} rounds; times moved {:.2} s in all, speeds changed by at most {:.1} %",
-            v["pairs_before"], v["pairs_after"], v["retimings"], v["iterations"],
-            v["total_abs_dt_s"].as_f64().unwrap_or(f64::NAN),
+            "  collision avoidance: {} pairs before, {} after ({} of them companions), {} shifts and {} retimings in {} rounds; {} of {} people in a collision retimed, by {:.2} s (median) and at most {:.2} s (bound {} s); speeds changed by at most {:.1} %",
+            v["pairs_before"], v["pairs_after"], v["companions"], v["shifts"], v["retimings"], v["iterations"],
+            v["retimed_people"], v["people_in_collision"],
+            v["median_shift_s"].as_f64().unwrap_or(f64::NAN),
+            v["max_shift_s"].as_f64().unwrap_or(f64::NAN),
+            v["max_shift_bound_s"],
             v["max_speed_change_pct"].as_f64().unwrap_or(f64::NAN)
         )?;
         for r in v["remaining"].as_array().into_iter().flatten() {
@@ -327,34 +341,151 @@ fn output_format(p: &Path) -> Option<Format> {
     }
 }
 
-/// The cage of every person kept out of the scene's obstacles (section 4.2), then
-/// speeds corrected (eq. 9).
+/// People who come within this distance of each other at the same time walk
+/// together (metres): each such group gets a cage of its own for obstacle
+/// avoidance (section 4.2: a cage encloses one crowd; one cage around two groups
+/// apart encloses the space, and the walls, between them).
+const GROUP_DISTANCE_M: f64 = 1.0;
+
+/// Sample pushes per sample at most (a push may land in another part).
+const PUSH_ROUNDS: usize = 4;
+
+/// What keeping out of obstacles did beyond the cages' own report.
+#[derive(Clone, Debug, Default)]
+pub struct ObstacleDetail {
+    /// Per group: its people, its width across its motion (eq. 29, the largest
+    /// at its sample times, m), its cage's hull vertices or edges still in an
+    /// obstacle after the cage's rounds, and its samples still inside an obstacle
+    /// after its cage (an obstacle inside the cage: the hull is clear, the
+    /// people are not).
+    pub groups: Vec<(usize, f64, usize, usize)>,
+    /// Per obstacle: its name and the samples inside it before and after.
+    pub per_obstacle: Vec<(String, usize, usize)>,
+    /// Samples the cages left inside and that were moved out one by one.
+    pub pushed_samples: usize,
+}
+
+/// The people of `set` in groups: connected by coming within
+/// [`GROUP_DISTANCE_M`] of each other at the same time (each group's indices
+/// sorted; groups by first index).
+fn groups_of(set: &TrackSet) -> Result<Vec<Vec<usize>>> {
+    let n = set.tracks.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut k: usize) -> usize {
+        while parent[k] != k {
+            parent[k] = parent[parent[k]];
+            k = parent[k];
+        }
+        k
+    }
+    let near = detect_keeping(set, GROUP_DISTANCE_M, usize::MAX).map_err(|e| anyhow!("{e}"))?;
+    let links = near.pairs.iter().map(|q| (q.a, q.b)).chain(
+        near.clusters
+            .iter()
+            .flat_map(|c| c.members.windows(2).map(|w| (w[0], w[1]))),
+    );
+    for (a, b) in links {
+        let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+        if ra != rb {
+            parent[ra.max(rb)] = ra.min(rb);
+        }
+    }
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut slot = vec![usize::MAX; n];
+    for k in 0..n {
+        let r = root(&mut parent, k);
+        if slot[r] == usize::MAX {
+            slot[r] = groups.len();
+            groups.push(Vec::new());
+        }
+        groups[slot[r]].push(k);
+    }
+    Ok(groups)
+}
+
+/// The largest width of a group across its motion (eq. 29) at its people's
+/// sample times (metres).
+fn group_width(set: &TrackSet, group: &[usize]) -> f64 {
+    let mut times: Vec<f64> = group
+        .iter()
+        .flat_map(|&k| set.tracks[k].times_s.iter().copied())
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times.dedup();
+    let stride = (times.len() / 200).max(1);
+    times
+        .iter()
+        .step_by(stride)
+        .filter_map(|&t| crowd_width_at(set, group, t))
+        .fold(0.0, f64::max)
+}
+
+/// Each group's cage kept out of the scene's obstacles (section 4.2, one cage
+/// per group of people walking together), then every sample still inside an
+/// obstacle moved out on its own and reported, then speeds corrected (eq. 9).
 fn keep_out_of_obstacles(
     set: &mut TrackSet,
     scene: &Path,
     world: Rect,
-) -> Result<(Scene, ObstacleReport)> {
+) -> Result<(Scene, ObstacleReport, ObstacleDetail)> {
     let file = super::super::edit_path::scene_file(scene);
     let scene = load_scene(&file, DEFAULT_AGENT_RADIUS_M).map_err(|e| anyhow!("{e}"))?;
-    let sel = Selection::select(set, &SelectionQuery::default())
-        .map_err(|e| anyhow!("{}: {e}", file.display()))?;
     let before = set.clone();
+    let obstacles = scene.obstacles();
+    let everyone: Vec<usize> = (0..set.tracks.len()).collect();
+    let inside_before = samples_in_obstacles(set, &everyone, obstacles);
     let params = CageParams {
         world: Some(world),
         ..CageParams::default()
     };
-    let mut cage = Cage::new(set, &sel, &params).map_err(|e| anyhow!("the crowd's cage: {e}"))?;
-    let report = avoid_obstacles(
-        &mut cage,
-        scene.obstacles(),
-        &[],
-        &ObstacleParams::default(),
-    )
-    .map_err(|e| anyhow!("keeping out of the obstacles of {}: {e}", file.display()))?;
-    cage.apply(set).map_err(|e| anyhow!("{e}"))?;
-    let touched: Vec<usize> = (0..set.tracks.len()).collect();
-    correct_speeds(&before, set, &touched).map_err(|e| anyhow!("{e}"))?;
-    Ok((scene, report))
+    let mut report = ObstacleReport {
+        targets: Vec::new(),
+        rounds: 0,
+        hull_violations: 0,
+        samples_inside_before: inside_before.iter().sum(),
+        samples_inside_after: 0,
+    };
+    let mut detail = ObstacleDetail::default();
+    for group in groups_of(set)? {
+        let width_m = group_width(set, &group);
+        if samples_in_obstacles(set, &group, obstacles)
+            .iter()
+            .all(|&c| c == 0)
+        {
+            detail.groups.push((group.len(), width_m, 0, 0));
+            continue;
+        }
+        let ids: Vec<u64> = group.iter().map(|&k| set.tracks[k].id).collect();
+        let sel = Selection::select(set, &SelectionQuery::default().ids(&ids))
+            .map_err(|e| anyhow!("{}: {e}", file.display()))?;
+        let mut cage = Cage::new(set, &sel, &params).map_err(|e| anyhow!("a group's cage: {e}"))?;
+        let r = avoid_obstacles(&mut cage, obstacles, &[], &ObstacleParams::default())
+            .map_err(|e| anyhow!("keeping out of the obstacles of {}: {e}", file.display()))?;
+        cage.apply(set).map_err(|e| anyhow!("{e}"))?;
+        report.targets.extend(r.targets.iter().copied());
+        report.rounds = report.rounds.max(r.rounds);
+        report.hull_violations += r.hull_violations;
+        let left: usize = samples_in_obstacles(set, &group, obstacles).iter().sum();
+        detail
+            .groups
+            .push((group.len(), width_m, r.hull_violations, left));
+    }
+    detail.pushed_samples = push_samples_out(
+        set,
+        &everyone,
+        obstacles,
+        ObstacleParams::default().clearance_m,
+        PUSH_ROUNDS,
+    );
+    correct_speeds(&before, set, &everyone).map_err(|e| anyhow!("{e}"))?;
+    let inside_after = samples_in_obstacles(set, &everyone, obstacles);
+    report.samples_inside_after = inside_after.iter().sum();
+    detail.per_obstacle = obstacles
+        .iter()
+        .zip(inside_before.iter().zip(&inside_after))
+        .map(|(o, (&b, &a))| (o.name.clone(), b, a))
+        .collect();
+    Ok((scene, report, detail))
 }
 
 fn avoid_json(r: &AvoidReport) -> Value {
@@ -365,6 +496,17 @@ fn avoid_json(r: &AvoidReport) -> Value {
         "retimings": r.retimings,
         "total_abs_dt_s": r.total_abs_dt_s,
         "max_speed_change_pct": r.max_speed_change_pct,
+        "people_in_collision": r.people_in_collision,
+        "retimed_people": r.retimed_people,
+        "median_shift_s": r.median_shift_s,
+        "max_shift_s": r.max_shift_s,
+        "max_shift_bound_s": r.max_shift_bound_s,
+        "shifts": r.shifts,
+        "companions": r.companions,
+        "undone": r.undone,
+        "closest_before_m": r.closest_before_m,
+        "closest_after_m": r.closest_after_m,
+        "reverted": r.reverted,
         "remaining": r.remaining.iter().map(|x| json!({
             "a": x.pair.id_a,
             "b": x.pair.id_b,
@@ -375,13 +517,21 @@ fn avoid_json(r: &AvoidReport) -> Value {
     })
 }
 
-fn obstacles_json(o: &ObstacleReport) -> Value {
+fn obstacles_json((o, d): (&ObstacleReport, &ObstacleDetail)) -> Value {
     json!({
         "rounds": o.rounds,
         "moved_hull_vertices": o.targets.len(),
         "samples_inside_before": o.samples_inside_before,
         "samples_inside_after": o.samples_inside_after,
         "hull_violations": o.hull_violations,
+        "pushed_samples": d.pushed_samples,
+        "groups": d.groups.iter().map(|(people, width_m, hull, left)| json!({
+            "people": people, "width_m": width_m, "hull_violations": hull,
+            "samples_inside_after_cage": left,
+        })).collect::<Vec<_>>(),
+        "per_obstacle": d.per_obstacle.iter().map(|(name, b, a)| json!({
+            "name": name, "samples_inside_before": b, "samples_inside_after": a,
+        })).collect::<Vec<_>>(),
     })
 }
 

@@ -307,7 +307,7 @@ fn grid(s: &mut String, lo: Vec2, hi: Vec2, k: f64) {
 }
 
 fn obstacles(s: &mut String, o: &Outcome, lo: Vec2, hi: Vec2, w: &impl Fn(f64) -> String) {
-    let Some((scene, _)) = &o.obstacles else {
+    let Some((scene, _, _)) = &o.obstacles else {
         return;
     };
     let _ = writeln!(
@@ -826,7 +826,7 @@ fn legend(s: &mut String, o: &Outcome, threshold_m: f64, t0: f64, t1: f64, at_s:
     let inside = o
         .obstacles
         .as_ref()
-        .map(|(_, r)| {
+        .map(|(_, r, _)| {
             format!(
                 "; samples in obstacles: {} before, {} after",
                 r.samples_inside_before, r.samples_inside_after

@@ -5,7 +5,7 @@
 
 use super::edit_state::{AvoidSettings, CageBox, EditDone, EditDoneKind, EditJob, EditJobKind};
 use crate::crowd::edit::{
-    avoid, correct_speeds, detect_keeping, retime, AvoidParams, Cage, Collisions, Handle,
+    avoid_around, correct_speeds, detect_keeping, retime, AvoidParams, Cage, Collisions, Handle,
     RetimeParams, SampleRef, Selection, TimeDrag, Track, TrackSet,
 };
 use crate::geom::Vec2;
@@ -74,7 +74,7 @@ impl EditJob {
                 let mut set = (*edited).clone();
                 let result = correct_speeds(&base, &mut set, &selected)
                     .map_err(|e| e.to_string())
-                    .and_then(|_| keep_apart(&mut set, avoid))
+                    .and_then(|_| keep_apart(&mut set, avoid, &selected))
                     .map(|c| {
                         let view = Arc::new(tracks_view(&set, None, version, &source));
                         (Arc::new(set), c, view)
@@ -102,7 +102,7 @@ impl EditJob {
             } => {
                 let mut set = (*base).clone();
                 let result = retime_all(&mut set, at_s, to_s)
-                    .and_then(|()| keep_apart(&mut set, avoid))
+                    .and_then(|()| keep_apart(&mut set, avoid, &[]))
                     .map(|c| {
                         let view = Arc::new(tracks_view(&set, None, version, &source));
                         (Arc::new(set), c, view)
@@ -225,12 +225,19 @@ pub(super) fn nearest_node(t: &Track, at_s: f64) -> usize {
 
 /// People kept apart by retiming (section 4.1.2), then the collisions that remain,
 /// as published.
-fn keep_apart(set: &mut TrackSet, settings: AvoidSettings) -> Result<Vec<CollisionView>, String> {
+/// Collision avoidance after an edit: around `people` (the people a drag
+/// moved: they and whoever they now meet are retimed, not strangers who
+/// collided already), or around everyone when empty (a retime of everyone).
+fn keep_apart(
+    set: &mut TrackSet,
+    settings: AvoidSettings,
+    people: &[usize],
+) -> Result<Vec<CollisionView>, String> {
     let params = AvoidParams {
         threshold_m: settings.threshold_m,
         ..AvoidParams::default()
     };
-    avoid(set, &params).map_err(|e| format!("collision avoidance: {e}"))?;
+    avoid_around(set, &params, people).map_err(|e| format!("collision avoidance: {e}"))?;
     Ok(collisions_of(set, settings.threshold_m))
 }
 

@@ -5,7 +5,8 @@
 //! selection the next operations act on; `Fix` holds the selected samples nearest
 //! the places given; `Drag` builds the cage of the current selection on the tracks as
 //! they are now (section 3.2), drags the handle nearest `from` (a cage vertex within
-//! [`HANDLE_RADIUS_M`], else the nearest selected sample) to `to` with the fixed
+//! [`HANDLE_RADIUS_M`] unless a selected sample is nearer, else the nearest
+//! selected sample) to `to` with the fixed
 //! samples held (eq. 1, or eq. 6 with fixed points), writes the deformed samples
 //! back and, unless told not to, corrects the speeds of the tracks it touched
 //! (eq. 9); `Retime` drags the time node nearest `at_s` of every selected person
@@ -127,13 +128,24 @@ pub fn run_script(
                 let sel = need(&selection)?;
                 let before = set.clone();
                 let mut cage = Cage::new(set, &sel, &cage_params).map_err(at)?;
-                let handle = cage
-                    .handle_near(*from, HANDLE_RADIUS_M)
-                    .or_else(|| nearest_sample(set, &sel, *from).map(Handle::Sample))
-                    .ok_or(ScriptError::Op {
-                        line,
-                        what: "nothing to drag near `from`".into(),
-                    })?;
+                // The nearer of a cage vertex within the radius and the nearest
+                // selected sample: a sample under the finger is what it holds,
+                // not a hull vertex beside it.
+                let sample = nearest_sample(set, &sel, *from);
+                let sample_d =
+                    sample.map(|r| (set.tracks[r.track].points[r.sample] - *from).norm());
+                let hull = cage.handle_near(*from, HANDLE_RADIUS_M).filter(|h| {
+                    let d = cage
+                        .handle_position(*h)
+                        .map_or(f64::INFINITY, |q| (q - *from).norm());
+                    sample_d.is_none_or(|s| d <= s)
+                });
+                let handle =
+                    hull.or_else(|| sample.map(Handle::Sample))
+                        .ok_or(ScriptError::Op {
+                            line,
+                            what: "nothing to drag near `from`".into(),
+                        })?;
                 let fixed: Vec<Handle> = fixed_places
                     .iter()
                     .filter_map(|&p| nearest_sample(set, &sel, p).map(Handle::Sample))
@@ -286,8 +298,11 @@ mod tests {
         assert_eq!(r.drags.len(), 1);
         let d = &r.drags[0];
         let held = set.tracks[2].points[10];
+        // The sample under the finger is the handle (a hull vertex 2.5 cm away
+        // was taken before, and the sample went only near the target).
+        assert_eq!(d.handle, "track 2 sample 10");
         assert!(
-            (held - Vec2::new(6.6, -1.0)).norm() < 1e-9 || d.handle.starts_with("hull"),
+            (held - Vec2::new(6.6, -1.0)).norm() < 1e-6,
             "{held:?} {}",
             d.handle
         );

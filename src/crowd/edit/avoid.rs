@@ -23,7 +23,7 @@
 //! retiming) is reported in [`AvoidReport::remaining`]; nothing panics.
 //!
 //! The work is bounded whatever the input: each round looks at no more than the
-//! [`DEFAULT_KEEP`] closest pairs detection keeps (when more collide, the next
+//! [`DEFAULT_KEEP`](super::DEFAULT_KEEP) closest pairs detection keeps (when more collide, the next
 //! round detects again and takes the next closest), and the people of a
 //! [`Cluster`](super::Cluster) of detection (on one identical track, for instance
 //! standing at one point, or standing together within the threshold) are left as
@@ -31,12 +31,10 @@
 //! not retimed, and each cluster is one [`Remaining`] ([`Stuck::Cluster`]) for its
 //! first two members.
 
-use super::collide::{
-    collisions_involving, detect, Approach, CollideError, Collisions, PairCollision, DEFAULT_KEEP,
-};
+use super::collide::{detect, Approach, CollideError, Collisions, PairCollision};
 use super::tracks::{Track, TrackSet};
 use nalgebra::{DMatrix, DVector};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use thiserror::Error;
 
 /// Speeds below this (m/s) count as standing still in eq. 20.
@@ -79,6 +77,15 @@ pub struct AvoidParams {
     pub gamma: f64,
     /// The most detection-and-retiming rounds (Algorithm 3). Default 200.
     pub max_iterations: usize,
+    /// The most any person's time may move from the input (seconds): a retiming
+    /// that would move someone further is not made (the pair is reported as
+    /// [`Stuck::Bound`]). Default 10 s (ours: the paper states no bound).
+    pub max_shift_s: f64,
+    /// Two people whose velocities at their closest approach differ by at most
+    /// this fraction of the faster one's speed walk together (*companions*): no
+    /// retiming separates people who walk side by side, so they are left as they
+    /// are and reported ([`Stuck::Companions`]). Default 0.25 (ours).
+    pub companion_rel_speed: f64,
 }
 
 impl Default for AvoidParams {
@@ -91,6 +98,8 @@ impl Default for AvoidParams {
             beta: 1.0,
             gamma: 0.1,
             max_iterations: 200,
+            max_shift_s: 10.0,
+            companion_rel_speed: 0.25,
         }
     }
 }
@@ -124,6 +133,15 @@ pub enum Stuck {
     /// They are (or one is) in a cluster of people on one identical track, which
     /// avoidance leaves as it is.
     Cluster,
+    /// They walk together (similar velocities where they are closest,
+    /// [`AvoidParams::companion_rel_speed`]): retiming cannot separate them.
+    Companions,
+    /// Separating them would move someone's times by more than
+    /// [`AvoidParams::max_shift_s`].
+    Bound,
+    /// Every retiming tried made things worse (more collisions, or a closer
+    /// approach than the input's closest), and was undone.
+    NoImprovement,
 }
 
 impl Stuck {
@@ -133,6 +151,9 @@ impl Stuck {
             Stuck::Infeasible => "infeasible",
             Stuck::IterationLimit => "iteration-limit",
             Stuck::Cluster => "cluster",
+            Stuck::Companions => "companions",
+            Stuck::Bound => "bound",
+            Stuck::NoImprovement => "no-improvement",
         }
     }
 }
@@ -157,7 +178,7 @@ pub struct AvoidReport {
     pub pairs_after: usize,
     /// Pair retimings applied (eq. 19 solves whose result was kept).
     pub retimings: usize,
-    /// The pairs that still collide: at most [`DEFAULT_KEEP`] of them (the closest)
+    /// The pairs that still collide: at most [`DEFAULT_KEEP`](super::DEFAULT_KEEP) of them (the closest)
     /// and one per cluster; `pairs_after` counts them all.
     pub remaining: Vec<Remaining>,
     /// Sum over all samples of `|t̄ − t|` (seconds).
@@ -168,6 +189,34 @@ pub struct AvoidReport {
     /// Track re-solves (eq. 28) that broke strictly increasing times and were
     /// replaced by the correction of `smooth_track`.
     pub corrections: usize,
+    /// People in a colliding pair before (clusters' people included).
+    pub people_in_collision: usize,
+    /// People whose times changed.
+    pub retimed_people: usize,
+    /// The median, over the retimed people, of their largest time shift (s).
+    pub median_shift_s: f64,
+    /// The largest time shift of anyone (s); at most
+    /// [`AvoidParams::max_shift_s`].
+    pub max_shift_s: f64,
+    /// The bound it was held to, [`AvoidParams::max_shift_s`] (s).
+    pub max_shift_bound_s: f64,
+    /// Pairs left as they are because they walk together.
+    pub companions: usize,
+    /// Retimings undone because they did not reduce the collisions or brought
+    /// two people closer than the input's closest approach.
+    pub undone: usize,
+    /// The closest approach of any colliding pair before and after (m; `None`
+    /// without collisions). Never smaller after than before.
+    pub closest_before_m: Option<f64>,
+    /// See `closest_before_m`.
+    pub closest_after_m: Option<f64>,
+    /// Whether the result would have been worse than the input on either count
+    /// and the input was kept instead (a safety net: each retiming kept already
+    /// makes things better).
+    pub reverted: bool,
+    /// Rigid shifts kept: a group, or one person, whose every time moved by
+    /// the same amount (`avoid_shift`).
+    pub shifts: usize,
 }
 
 /// The nodes of one person's colliding piece and how the collision time depends on
@@ -331,7 +380,10 @@ fn retime_pair(
 /// `E_DT = Σ (Δt̄_{i+1}/l_{i+1} − Δt̄_i/l_i)²` over consecutive linked segments both
 /// at least [`MIN_PACE_LENGTH_M`] long (eq. 24), `E_T = Σ (Δt̄_i − Δt_i)²` over all
 /// intervals, gaps included (eq. 26), and `E_TP = Σ (t̄_i − t_i)²` (eq. 27), `t`
-/// the times before this retiming. The
+/// the times of the input (`original_s`): measured against the input, not the
+/// times of the previous round, so rounds do not drift a person's times away
+/// (the fixed nodes are every node a retiming of this person has fixed so far).
+/// The
 /// normal equations are pentadiagonal; the fixed nodes are eliminated and the
 /// system solved by a banded Cholesky factorisation, O(n).
 ///
@@ -344,7 +396,8 @@ fn retime_pair(
 /// The correction keeps every other interval as it is, so by induction over the
 /// rounds every interval stays within those bounds and the speed of every segment
 /// within `[a_min, 1 / a_min]` times its input speed. Returns whether the
-/// correction was used.
+/// correction was used; `None`, with the track unchanged, when the correction is
+/// not strictly increasing either (the fixed nodes disagree).
 ///
 /// # Units
 /// Seconds; lengths in metres.
@@ -353,9 +406,9 @@ fn smooth_track(
     original_s: &[f64],
     fixed: &[(usize, f64)],
     p: &AvoidParams,
-) -> bool {
+) -> Option<bool> {
     let n = track.len();
-    let t = track.times_s.clone();
+    let t = original_s.to_vec();
     let mut is_fixed = vec![None; n];
     for &(k, v) in fixed {
         is_fixed[k] = Some(v);
@@ -438,10 +491,21 @@ fn smooth_track(
         });
     if increasing {
         track.times_s = rhs;
-        false
+        Some(false)
     } else {
-        track.times_s = anchored(&t, fixed);
-        true
+        let a = anchored(&t, fixed);
+        // Pins of several retimings may disagree (a later one earlier than an
+        // earlier one's node, or squeezing the intervals between them past the
+        // speed bound): then nothing is changed.
+        let within = (1..n).all(|i| {
+            let (new, old) = (a[i] - a[i - 1], original_s[i] - original_s[i - 1]);
+            new > 0.0 && new >= lo * old && new <= hi * old
+        });
+        if !within || a.iter().any(|x| !x.is_finite()) {
+            return None;
+        }
+        track.times_s = a;
+        Some(true)
     }
 }
 
@@ -539,6 +603,16 @@ fn check_params(p: &AvoidParams) -> Result<(), AvoidError> {
     if !(p.gamma.is_finite() && p.gamma > 0.0) {
         return bad("gamma", "finite and positive", p.gamma);
     }
+    if !(p.max_shift_s.is_finite() && p.max_shift_s > 0.0) {
+        return bad("max_shift_s", "finite and positive", p.max_shift_s);
+    }
+    if !(p.companion_rel_speed.is_finite() && p.companion_rel_speed >= 0.0) {
+        return bad(
+            "companion_rel_speed",
+            "finite and non-negative",
+            p.companion_rel_speed,
+        );
+    }
     Ok(())
 }
 
@@ -550,6 +624,7 @@ fn separate(
     p: &AvoidParams,
     original: &[Vec<f64>],
     orders: &mut HashMap<(usize, usize), f64>,
+    pins: &mut [Vec<(usize, f64)>],
 ) -> Option<usize> {
     let a: &Approach = &pair.closest;
     let velocity = |t: &Track, a: &Approach| {
@@ -615,11 +690,137 @@ fn separate(
         .collect();
     let mut corrections = 0;
     for (k, fixed) in [(pair.a, fixed_i), (pair.b, fixed_j)] {
-        if smooth_track(&mut set.tracks[k], &original[k], &fixed, p) {
+        // Every node fixed for this person so far stays fixed: earlier
+        // separations hold while the track is re-solved against its input times.
+        for (node, t) in fixed {
+            match pins[k].iter_mut().find(|x| x.0 == node) {
+                Some(x) => x.1 = t,
+                None => pins[k].push((node, t)),
+            }
+        }
+        if smooth_track(&mut set.tracks[k], &original[k], &pins[k], p)? {
             corrections += 1;
         }
     }
     Some(corrections)
+}
+
+/// The most retimings of one pair in a row (each from where the previous left
+/// it) before the result is judged: a pair walking head-on along one line needs
+/// several, as the paper's rounds give it.
+const PAIR_STEPS: usize = 8;
+
+/// Why one pair's retimings were not kept.
+enum PairFailure {
+    Stuck(Stuck),
+    Collide(CollideError),
+}
+
+/// Retimes one pair until it no longer collides (at most [`PAIR_STEPS`] times,
+/// each step undone if it fails), within the shift bound. Returns the
+/// corrections used, or why nothing was done (the tracks and pins are then as
+/// before).
+fn separate_pair(
+    set: &mut TrackSet,
+    q: &PairCollision,
+    p: &AvoidParams,
+    original: &[Vec<f64>],
+    input: &[Vec<f64>],
+    orders: &mut HashMap<(usize, usize), f64>,
+    pins: &mut [Vec<(usize, f64)>],
+) -> Result<usize, PairFailure> {
+    let key = (q.a, q.b);
+    let mut pq = *q;
+    let mut corrections = 0;
+    let mut steps = 0;
+    for _ in 0..PAIR_STEPS {
+        let saved = [
+            (q.a, set.tracks[q.a].times_s.clone(), pins[q.a].clone()),
+            (q.b, set.tracks[q.b].times_s.clone(), pins[q.b].clone()),
+        ];
+        let order = orders.get(&key).copied();
+        let undo = |set: &mut TrackSet,
+                    pins: &mut [Vec<(usize, f64)>],
+                    orders: &mut HashMap<(usize, usize), f64>| {
+            for (k, t, pp) in &saved {
+                set.tracks[*k].times_s.clone_from(t);
+                pins[*k].clone_from(pp);
+            }
+            match order {
+                Some(o) => orders.insert(key, o),
+                None => orders.remove(&key),
+            };
+        };
+        let why = match separate(set, &pq, p, original, orders, pins) {
+            None => Stuck::Infeasible,
+            Some(_)
+                if largest_shift(&set.tracks[q.a].times_s, &input[q.a]) > p.max_shift_s
+                    || largest_shift(&set.tracks[q.b].times_s, &input[q.b]) > p.max_shift_s =>
+            {
+                Stuck::Bound
+            }
+            Some(c) => {
+                corrections += c;
+                steps += 1;
+                // Does the pair still collide? The two alone.
+                let two = TrackSet {
+                    tracks: vec![set.tracks[q.a].clone(), set.tracks[q.b].clone()],
+                    step_s: set.step_s,
+                };
+                let c2 = detect(&two, p.threshold_m).map_err(PairFailure::Collide)?;
+                match c2.pairs.first() {
+                    None => return Ok(corrections),
+                    Some(x) => {
+                        pq = PairCollision {
+                            a: q.a,
+                            b: q.b,
+                            id_a: q.id_a,
+                            id_b: q.id_b,
+                            ..*x
+                        };
+                        continue;
+                    }
+                }
+            }
+        };
+        undo(set, pins, orders);
+        if steps == 0 {
+            return Err(PairFailure::Stuck(why));
+        }
+        break;
+    }
+    Ok(corrections)
+}
+
+/// Whether the pair walks together where it is closest: both moving, velocities
+/// differing by at most `rel` of the faster one's speed.
+fn companions(set: &TrackSet, pair: &PairCollision, rel: f64) -> bool {
+    let a = &pair.closest;
+    let velocity = |t: &Track, k: usize, moving: bool| {
+        if moving && k + 1 < t.len() {
+            Some((t.points[k + 1] - t.points[k]) / (t.times_s[k + 1] - t.times_s[k]))
+        } else {
+            None
+        }
+    };
+    match (
+        velocity(&set.tracks[pair.a], a.sample_a, a.moving_a),
+        velocity(&set.tracks[pair.b], a.sample_b, a.moving_b),
+    ) {
+        (Some(vi), Some(vj)) => {
+            let fast = vi.norm().max(vj.norm());
+            fast > STILL_SPEED_M_S && (vi - vj).norm() <= rel * fast
+        }
+        _ => false,
+    }
+}
+
+/// The largest `|t − t₀|` of one person (s).
+fn largest_shift(t: &[f64], t0: &[f64]) -> f64 {
+    t.iter()
+        .zip(t0)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
 }
 
 /// Retimes the tracks so no two people come closer than `params.threshold_m`
@@ -638,75 +839,295 @@ fn separate(
 /// [`TrackSet::validate`]. Pairs that cannot be separated are not errors: they are
 /// in [`AvoidReport::remaining`].
 pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, AvoidError> {
+    avoid_around(set, params, &[])
+}
+
+/// As [`avoid`], but only the pairs with one of `people` (indices into `set`) are
+/// worked on; everyone else's collisions are left as they are (and counted in
+/// the report). An empty `people` means everyone. The daemon's edit mode uses it
+/// after a drag: the people dragged and whoever they now meet are retimed, not
+/// strangers who happened to collide already.
+///
+/// # Errors
+/// As [`avoid`].
+pub fn avoid_around(
+    set: &mut TrackSet,
+    params: &AvoidParams,
+    people: &[usize],
+) -> Result<AvoidReport, AvoidError> {
     check_params(params)?;
+    let n = set.tracks.len();
     let original: Vec<Vec<f64>> = set.tracks.iter().map(|t| t.times_s.clone()).collect();
+    // Each person's schedule the piece retimings smooth towards (eq. 28's `t`):
+    // the input's times moved by the rigid shifts made so far (`shift`), so a
+    // later retiming does not pull a shifted person back.
+    let mut base = original.clone();
+    let boxes = shift::boxes(set);
+    let shifts_s = shift::candidates_s(params.max_shift_s);
+    // Groups whose every shift was tried (each group is tried once: a rigid
+    // shift that failed is rarely the answer after others moved, and the piece
+    // retimings still get their pairs), and how many shifts were kept.
+    let mut shift_tried: HashSet<Vec<usize>> = HashSet::new();
+    let mut shifts_kept = 0;
     let collisions = detect(set, params.threshold_m)?;
     let pairs_before = collisions.pair_count();
+    let closest_before_m = collisions.closest().map(|q| q.closest.distance_m);
+    // No retiming may bring two people closer than the input's closest pair.
+    let floor = closest_before_m.unwrap_or(f64::INFINITY);
     // People in clusters are left as they are (their tracks are never retimed, so
     // the clusters stay what they were).
-    let mut in_cluster = vec![false; set.tracks.len()];
+    let mut in_cluster = vec![false; n];
+    let mut in_collision = vec![false; n];
     for c in &collisions.clusters {
         for &k in &c.members {
             in_cluster[k] = true;
+            in_collision[k] = true;
         }
     }
-    let workable = |q: &PairCollision| !in_cluster[q.a] && !in_cluster[q.b];
-    // The colliding pairs as the rounds change them: a round changes only the
-    // people it retimed, so only their pairs are detected again, as long as every
-    // pair is known (`complete`); else the round detects everything again.
+    for q in &collisions.pairs {
+        in_collision[q.a] = true;
+        in_collision[q.b] = true;
+    }
+    let people_in_collision = in_collision.iter().filter(|&&x| x).count();
+    let mut in_scope = vec![people.is_empty(); n];
+    for &k in people {
+        if let Some(x) = in_scope.get_mut(k) {
+            *x = true;
+        }
+    }
+    let workable = |q: &PairCollision| {
+        !in_cluster[q.a] && !in_cluster[q.b] && (in_scope[q.a] || in_scope[q.b])
+    };
+    // The colliding pairs as retimings change them: a retiming changes two people,
+    // so only their pairs are detected again, as long as every pair is known
+    // (`complete`); else each round detects everything again.
     let mut complete = collisions.is_complete();
-    let mut current: Vec<PairCollision> =
-        collisions.pairs.iter().copied().filter(workable).collect();
-    let mut infeasible: std::collections::HashSet<(usize, usize)> = Default::default();
-    let mut iterations = 0;
-    let mut retimings = 0;
-    let mut corrections = 0;
+    let mut current: Vec<PairCollision> = collisions.pairs.clone();
+    let mut stuck: HashMap<(usize, usize), Stuck> = HashMap::new();
+    let mut pins: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
+    let (mut iterations, mut retimings, mut corrections, mut undone) = (0, 0, 0, 0);
     let mut orders = HashMap::new();
+    let mut kept_last_round = false;
+    // The round in which each person last changed, and in which each pair's
+    // retiming last failed to help.
+    let mut changed_at = vec![0usize; n];
+    let mut failed_at: HashMap<(usize, usize), usize> = HashMap::new();
     while iterations < params.max_iterations {
         if !complete {
             let again = detect(set, params.threshold_m)?;
             complete = again.is_complete();
-            current = again.pairs.iter().copied().filter(workable).collect();
+            current = again.pairs.clone();
+        }
+        // A retiming that did not help may help once one of the two has moved
+        // (retrying every such pair after every change anywhere costs a
+        // detection per pair per round on a dense file, for little).
+        if kept_last_round {
+            stuck.retain(|k, w| {
+                *w != Stuck::NoImprovement || {
+                    let at = failed_at.get(k).copied().unwrap_or(0);
+                    changed_at[k.0] <= at && changed_at[k.1] <= at
+                }
+            });
         }
         let mut pairs: Vec<PairCollision> = current
             .iter()
-            .filter(|q| !infeasible.contains(&(q.a, q.b)))
+            .filter(|q| workable(q) && !stuck.contains_key(&(q.a, q.b)))
             .copied()
             .collect();
         if pairs.is_empty() {
             break;
         }
         iterations += 1;
+        kept_last_round = false;
         pairs.sort_by(|x, y| x.closest.distance_m.total_cmp(&y.closest.distance_m));
-        let mut touched = vec![false; set.tracks.len()];
+        pairs.retain(|q| {
+            let together = companions(set, q, params.companion_rel_speed);
+            if together {
+                stuck.insert((q.a, q.b), Stuck::Companions);
+            }
+            !together
+        });
+        let mut touched = vec![false; n];
+        // Rigid shifts first: one side of each connected part of the pairs (for
+        // two crossing crowds, one crowd), then (below) each person of a pair alone.
+        for part in shift::sides(n, &pairs) {
+            for side in part
+                .iter()
+                .filter(|s| s.len() > 1 || part[0].len() + part[1].len() > 2)
+            {
+                if side.is_empty() || side.iter().any(|&k| touched[k]) || shift_tried.contains(side)
+                {
+                    continue;
+                }
+                match shift::best_shift(set, &boxes, side, params, &original, floor, &shifts_s) {
+                    Some(sh) => {
+                        apply_shift(set, &mut base, &mut pins, &sh);
+                        for &k in &sh.group {
+                            changed_at[k] = iterations;
+                        }
+                        refresh(set, &boxes, params, &sh.group, &mut current, &mut complete)?;
+                        for &k in &sh.group {
+                            touched[k] = true;
+                        }
+                        shifts_kept += 1;
+                        kept_last_round = true;
+                        break;
+                    }
+                    None => {
+                        shift_tried.insert(side.clone());
+                    }
+                }
+            }
+        }
         for q in &pairs {
             if touched[q.a] || touched[q.b] {
                 continue;
             }
-            match separate(set, q, params, &original, &mut orders) {
-                Some(c) => {
+            let key = (q.a, q.b);
+            // One of the two shifted whole, the smaller shift of the two.
+            let mut alone: Option<shift::Shift> = None;
+            for k in [q.a, q.b] {
+                let g = vec![k];
+                if shift_tried.contains(&g) {
+                    continue;
+                }
+                match shift::best_shift(set, &boxes, &g, params, &original, floor, &shifts_s) {
+                    Some(sh) if alone.as_ref().is_none_or(|a| sh.dt_s.abs() < a.dt_s.abs()) => {
+                        alone = Some(sh);
+                    }
+                    Some(_) => {}
+                    None => {
+                        shift_tried.insert(g);
+                    }
+                }
+            }
+            if let Some(sh) = alone {
+                apply_shift(set, &mut base, &mut pins, &sh);
+                for &k in &sh.group {
+                    changed_at[k] = iterations;
+                }
+                refresh(set, &boxes, params, &sh.group, &mut current, &mut complete)?;
+                touched[q.a] = true;
+                touched[q.b] = true;
+                shifts_kept += 1;
+                kept_last_round = true;
+                continue;
+            }
+            // The pairs of these two now (from the list when it is whole): how
+            // many, and how deep into the threshold they reach in all.
+            let depth = |ps: &mut dyn Iterator<Item = &PairCollision>| -> (usize, f64) {
+                ps.fold((0, 0.0), |(n, d), p| {
+                    (
+                        n + 1,
+                        d + (params.threshold_m - p.closest.distance_m).max(0.0),
+                    )
+                })
+            };
+            let before = if complete {
+                depth(
+                    &mut current
+                        .iter()
+                        .filter(|p| p.a == q.a || p.b == q.a || p.a == q.b || p.b == q.b),
+                )
+            } else {
+                let c = shift::involving_near(set, &boxes, &pair_of(q), params.threshold_m)?;
+                if c.is_complete() {
+                    depth(&mut c.pairs.iter())
+                } else {
+                    (c.pair_count(), f64::INFINITY)
+                }
+            };
+            let saved = [
+                (q.a, set.tracks[q.a].times_s.clone(), pins[q.a].clone()),
+                (q.b, set.tracks[q.b].times_s.clone(), pins[q.b].clone()),
+            ];
+            let order = orders.get(&key).copied();
+            let restore = |set: &mut TrackSet,
+                           pins: &mut [Vec<(usize, f64)>],
+                           orders: &mut HashMap<(usize, usize), f64>| {
+                for (k, t, p) in &saved {
+                    set.tracks[*k].times_s.clone_from(t);
+                    pins[*k].clone_from(p);
+                }
+                match order {
+                    Some(o) => orders.insert(key, o),
+                    None => orders.remove(&key),
+                };
+            };
+            let verdict =
+                match separate_pair(set, q, params, &base, &original, &mut orders, &mut pins) {
+                    Err(PairFailure::Collide(e)) => return Err(e.into()),
+                    Err(PairFailure::Stuck(why)) => Err(why),
+                    Ok(c) => {
+                        let after =
+                            shift::involving_near(set, &boxes, &pair_of(q), params.threshold_m)?;
+                        let closest = after
+                            .closest()
+                            .map_or(f64::INFINITY, |p| p.closest.distance_m);
+                        let now = if after.is_complete() {
+                            depth(&mut after.pairs.iter())
+                        } else {
+                            (after.pair_count(), f64::INFINITY)
+                        };
+                        // Kept only when it makes things better (the others' pairs
+                        // are as they were): fewer colliding pairs, or as many
+                        // reaching less deep into the threshold; and nobody closer
+                        // than the input's closest pair. So the number of colliding
+                        // pairs never grows and the closest approach never shrinks.
+                        let better =
+                            now.0 < before.0 || (now.0 == before.0 && now.1 < before.1 - 1e-9);
+                        if better && closest >= floor {
+                            Ok((c, after))
+                        } else {
+                            undone += 1;
+                            Err(Stuck::NoImprovement)
+                        }
+                    }
+                };
+            match verdict {
+                Ok((c, after)) => {
                     corrections += c;
                     retimings += 1;
                     touched[q.a] = true;
                     touched[q.b] = true;
+                    changed_at[q.a] = iterations;
+                    changed_at[q.b] = iterations;
+                    kept_last_round = true;
+                    if complete {
+                        current.retain(|p| !(p.a == q.a || p.b == q.a || p.a == q.b || p.b == q.b));
+                        current.extend(after.pairs.iter().copied());
+                        complete = after.is_complete();
+                    }
                 }
-                None => {
-                    infeasible.insert((q.a, q.b));
+                Err(why) => {
+                    restore(set, &mut pins, &mut orders);
+                    stuck.insert(key, why);
+                    failed_at.insert(key, iterations);
                 }
             }
         }
-        if complete {
-            let again = collisions_involving(set, params.threshold_m, &touched, DEFAULT_KEEP)?;
-            complete = again.is_complete();
-            current.retain(|q| !touched[q.a] && !touched[q.b]);
-            current.extend(again.pairs.iter().copied().filter(workable));
-        }
     }
-    // The report's pairs from a full detection.
-    let after = detect(set, params.threshold_m)?;
-    let remaining = remaining_of(set, &after, &in_cluster, &infeasible);
+    // The report's pairs from a full detection; the input back if the result is
+    // worse on either count (each kept retiming made things better, so this is a
+    // safety net).
+    let mut after = detect(set, params.threshold_m)?;
+    let closest = |c: &Collisions| c.closest().map(|q| q.closest.distance_m);
+    let worse = after.pair_count() > pairs_before
+        || match (closest(&after), closest_before_m) {
+            (Some(a), Some(b)) => a < b,
+            (Some(_), None) => true,
+            _ => false,
+        };
+    if worse {
+        for (t, t0) in set.tracks.iter_mut().zip(&original) {
+            t.times_s.clone_from(t0);
+        }
+        after = detect(set, params.threshold_m)?;
+    }
+    let remaining = remaining_of(set, &after, &in_cluster, &stuck);
     let mut total_abs_dt_s = 0.0;
     let mut max_speed_change_pct: f64 = 0.0;
+    let mut shifts: Vec<f64> = Vec::new();
     for (tr, t0) in set.tracks.iter().zip(&original) {
         total_abs_dt_s += tr
             .times_s
@@ -714,6 +1135,10 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
             .zip(t0)
             .map(|(a, b)| (a - b).abs())
             .sum::<f64>();
+        let shift = largest_shift(&tr.times_s, t0);
+        if shift > 0.0 {
+            shifts.push(shift);
+        }
         for j in tr.segments() {
             if (tr.points[j + 1] - tr.points[j]).norm() < MIN_PACE_LENGTH_M {
                 continue;
@@ -722,6 +1147,16 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
             max_speed_change_pct = max_speed_change_pct.max((ratio - 1.0).abs() * 100.0);
         }
     }
+    shifts.sort_by(f64::total_cmp);
+    let median_shift_s = match shifts.len() {
+        0 => 0.0,
+        k if k % 2 == 1 => shifts[k / 2],
+        k => 0.5 * (shifts[k / 2 - 1] + shifts[k / 2]),
+    };
+    let companions = remaining
+        .iter()
+        .filter(|r| r.why == Stuck::Companions)
+        .count();
     Ok(AvoidReport {
         iterations,
         pairs_before,
@@ -731,7 +1166,68 @@ pub fn avoid(set: &mut TrackSet, params: &AvoidParams) -> Result<AvoidReport, Av
         total_abs_dt_s,
         max_speed_change_pct,
         corrections,
+        people_in_collision,
+        retimed_people: shifts.len(),
+        median_shift_s,
+        max_shift_s: shifts.last().copied().unwrap_or(0.0),
+        max_shift_bound_s: params.max_shift_s,
+        companions,
+        undone,
+        closest_before_m,
+        closest_after_m: closest(&after),
+        reverted: worse,
+        shifts: shifts_kept,
     })
+}
+
+/// Makes a rigid shift: every time of the group, its pins and its schedule move
+/// by `dt_s`.
+fn apply_shift(
+    set: &mut TrackSet,
+    base: &mut [Vec<f64>],
+    pins: &mut [Vec<(usize, f64)>],
+    sh: &shift::Shift,
+) {
+    for &k in &sh.group {
+        for t in &mut set.tracks[k].times_s {
+            *t += sh.dt_s;
+        }
+        for t in &mut base[k] {
+            *t += sh.dt_s;
+        }
+        for pin in &mut pins[k] {
+            pin.1 += sh.dt_s;
+        }
+    }
+}
+
+/// After `group` changed: their pairs in `current` replaced by a detection of
+/// theirs (when the list is whole; otherwise the next round detects everything).
+fn refresh(
+    set: &TrackSet,
+    boxes: &[(crate::geom::Vec2, crate::geom::Vec2)],
+    p: &AvoidParams,
+    group: &[usize],
+    current: &mut Vec<PairCollision>,
+    complete: &mut bool,
+) -> Result<(), AvoidError> {
+    if !*complete {
+        return Ok(());
+    }
+    let found = shift::involving_near(set, boxes, group, p.threshold_m)?;
+    current.retain(|q| !(who_has(group, q.a) || who_has(group, q.b)));
+    current.extend(found.pairs.iter().copied());
+    *complete = found.is_complete();
+    Ok(())
+}
+
+/// The two people of a pair as a sorted group.
+fn pair_of(q: &PairCollision) -> [usize; 2] {
+    [q.a.min(q.b), q.a.max(q.b)]
+}
+
+fn who_has(group: &[usize], k: usize) -> bool {
+    group.binary_search(&k).is_ok()
 }
 
 /// The pairs that still collide, and why: each cluster once (its first two
@@ -740,7 +1236,7 @@ fn remaining_of(
     set: &TrackSet,
     after: &Collisions,
     in_cluster: &[bool],
-    infeasible: &std::collections::HashSet<(usize, usize)>,
+    stuck: &HashMap<(usize, usize), Stuck>,
 ) -> Vec<Remaining> {
     let mut out: Vec<Remaining> = after
         .clusters
@@ -770,14 +1266,18 @@ fn remaining_of(
         pair: *q,
         why: if in_cluster[q.a] || in_cluster[q.b] {
             Stuck::Cluster
-        } else if infeasible.contains(&(q.a, q.b)) {
-            Stuck::Infeasible
         } else {
-            Stuck::IterationLimit
+            stuck
+                .get(&(q.a, q.b))
+                .copied()
+                .unwrap_or(Stuck::IterationLimit)
         },
     }));
     out
 }
+
+#[path = "avoid_shift.rs"]
+mod shift;
 
 #[cfg(test)]
 #[path = "avoid_tests.rs"]

@@ -44,7 +44,7 @@
 use super::clusters::{
     classes, closest_standing, spatial_order, standing_groups, Cluster, NO_GROUP,
 };
-use super::flat::{TrackError, Tracks};
+use super::flat::{TrackError, TrackRef, Tracks};
 use super::slab_grid::{cell_range, overlap, SlabGrid};
 use crate::geom::Vec2;
 use std::cmp::Ordering;
@@ -447,34 +447,190 @@ fn pieces<S: Tracks + ?Sized>(
         if include.is_some_and(|m| m[k] == 0) {
             continue;
         }
-        let n = tr.len();
-        for j in 0..n {
-            let next = j + 1 < n && tr.linked[j];
-            let prev = j > 0 && tr.linked[j - 1];
-            if next {
-                out.push(Piece {
-                    track: k as u32,
-                    sample: j as u32,
-                    t0: tr.times_s[j],
-                    t1: tr.times_s[j + 1],
-                    p0: tr.points[j],
-                    p1: tr.points[j + 1],
-                });
-            } else if !prev {
-                out.push(Piece {
-                    track: k as u32,
-                    sample: j as u32,
-                    t0: tr.times_s[j],
-                    t1: tr.times_s[j],
-                    p0: tr.points[j],
-                    p1: tr.points[j],
-                });
-            }
-        }
+        push_pieces(&tr, k, &mut out);
     }
     starts.push(out.len());
     out.shrink_to_fit();
     (out, starts)
+}
+
+/// Appends person `k`'s pieces (track `tr`) to `out`: a linked segment per
+/// linked pair of samples, a lone sample where neither neighbour is linked.
+fn push_pieces(tr: &TrackRef<'_>, k: usize, out: &mut Vec<Piece>) {
+    let n = tr.len();
+    for j in 0..n {
+        let next = j + 1 < n && tr.linked[j];
+        let prev = j > 0 && tr.linked[j - 1];
+        if next {
+            out.push(Piece {
+                track: k as u32,
+                sample: j as u32,
+                t0: tr.times_s[j],
+                t1: tr.times_s[j + 1],
+                p0: tr.points[j],
+                p1: tr.points[j + 1],
+            });
+        } else if !prev {
+            out.push(Piece {
+                track: k as u32,
+                sample: j as u32,
+                t0: tr.times_s[j],
+                t1: tr.times_s[j],
+                p0: tr.points[j],
+                p1: tr.points[j],
+            });
+        }
+    }
+}
+
+/// One person's pieces as detection sees them, for [`closest_shifted`].
+#[derive(Clone, Debug, Default)]
+pub(super) struct PersonPieces(Vec<Piece>);
+
+impl PersonPieces {
+    /// The pieces of `tr`.
+    pub(super) fn of(tr: &TrackRef<'_>) -> PersonPieces {
+        let mut out = Vec::with_capacity(tr.len());
+        push_pieces(tr, 0, &mut out);
+        PersonPieces(out)
+    }
+}
+
+/// The reference for [`NearPieces::closest_shifted`] (tests): the closest approach of two people (metres) if it is under `below_m`, `a`'s
+/// times all moved by `shift_s`, exactly as [`detect`] would find it on the
+/// shifted tracks (the same pieces and eqs. 13–17); `None` when their times
+/// never meet or they never come that close. The pieces of a track are in time
+/// order, so each of `a`'s pieces is compared only with the pieces of `b` whose
+/// times meet it, and two pieces whose bounding boxes are `below_m` apart are
+/// not compared: O(n_a + n_b) comparisons plus the overlaps.
+#[cfg(test)]
+pub(super) fn closest_shifted(
+    a: &PersonPieces,
+    shift_s: f64,
+    b: &PersonPieces,
+    below_m: f64,
+) -> Option<f64> {
+    let pb = &b.0;
+    let (Some(b_first), Some(b_last)) = (pb.first(), pb.last()) else {
+        return None;
+    };
+    let (b_t0, b_t1) = (b_first.t0, b_last.t1);
+    let mut best: Option<f64> = None;
+    let mut first = 0;
+    // `a`'s pieces before `b` begins cannot meet it (ends are non-decreasing).
+    let start = a.0.partition_point(|p| p.t1 + shift_s < b_t0);
+    for pa in &a.0[start..] {
+        if pa.t0 + shift_s > b_t1 {
+            break;
+        }
+        let pa = Piece {
+            t0: pa.t0 + shift_s,
+            t1: pa.t1 + shift_s,
+            ..*pa
+        };
+        while first < pb.len() && pb[first].t1 < pa.t0 {
+            first += 1;
+        }
+        for q in &pb[first..] {
+            if q.t0 > pa.t1 {
+                break;
+            }
+            if boxes_apart(&pa, q, below_m) {
+                continue;
+            }
+            if let Some((_, _, x)) = closest(&pa, q) {
+                if x.distance_m < below_m && best.is_none_or(|d| x.distance_m < d) {
+                    best = Some(x.distance_m);
+                }
+            }
+        }
+    }
+    best
+}
+
+/// The pairs of pieces of two people that come within some distance of each
+/// other in space, whenever they are (their bounding boxes that close): the only
+/// places where the two can come that close at any relative shift of their
+/// times. [`NearPieces::closest_shifted`] then costs one comparison per pair.
+#[derive(Clone, Debug, Default)]
+pub(super) struct NearPieces(Vec<(Piece, Piece)>);
+
+impl NearPieces {
+    /// The piece pairs of `a` and `b` whose bounding boxes are closer than
+    /// `within_m` on both axes.
+    pub(super) fn of(a: &PersonPieces, b: &PersonPieces, within_m: f64) -> NearPieces {
+        // Each side's pieces near the other's whole box first: a path crossing
+        // another meets it in a few pieces.
+        let bound = |ps: &[Piece]| {
+            ps.iter().fold(
+                Piece {
+                    track: 0,
+                    sample: 0,
+                    t0: 0.0,
+                    t1: 0.0,
+                    p0: Vec2::new(f64::INFINITY, f64::INFINITY),
+                    p1: Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+                },
+                |acc, p| Piece {
+                    p0: acc.p0.inf(&p.p0.inf(&p.p1)),
+                    p1: acc.p1.sup(&p.p0.sup(&p.p1)),
+                    ..acc
+                },
+            )
+        };
+        let (box_a, box_b) = (bound(&a.0), bound(&b.0));
+        let near_b: Vec<&Piece> =
+            b.0.iter()
+                .filter(|p| !boxes_apart(p, &box_a, within_m))
+                .collect();
+        let mut out = Vec::new();
+        if near_b.is_empty() {
+            return NearPieces(out);
+        }
+        for pa in a.0.iter().filter(|p| !boxes_apart(p, &box_b, within_m)) {
+            for pb in &near_b {
+                if !boxes_apart(pa, pb, within_m) {
+                    out.push((*pa, **pb));
+                }
+            }
+        }
+        NearPieces(out)
+    }
+
+    /// Whether no two pieces come that close.
+    pub(super) fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// As [`closest_shifted`] with the `within_m` given to [`NearPieces::of`]
+    /// as `below_m` (no larger): the same distance, found among the near pairs.
+    pub(super) fn closest_shifted(&self, shift_s: f64, below_m: f64) -> Option<f64> {
+        let mut best: Option<f64> = None;
+        for (pa, pb) in &self.0 {
+            if pa.t1 + shift_s < pb.t0 || pa.t0 + shift_s > pb.t1 {
+                continue;
+            }
+            let pa = Piece {
+                t0: pa.t0 + shift_s,
+                t1: pa.t1 + shift_s,
+                ..*pa
+            };
+            if let Some((_, _, x)) = closest(&pa, pb) {
+                if x.distance_m < below_m && best.is_none_or(|d| x.distance_m < d) {
+                    best = Some(x.distance_m);
+                }
+            }
+        }
+        best
+    }
+}
+
+/// Whether two pieces' bounding boxes are at least `d` apart on an axis.
+fn boxes_apart(a: &Piece, b: &Piece, d: f64) -> bool {
+    let apart = |u0: f64, u1: f64, v0: f64, v1: f64| {
+        u0.min(u1) - v0.max(v1) >= d || v0.min(v1) - u0.max(u1) >= d
+    };
+    apart(a.p0.x, a.p1.x, b.p0.x, b.p1.x) || apart(a.p0.y, a.p1.y, b.p0.y, b.p1.y)
 }
 
 /// A piece pair closer than the threshold.
@@ -1055,4 +1211,4 @@ fn detect_among<S: Tracks + ?Sized>(
 
 #[cfg(test)]
 #[path = "collide_tests.rs"]
-mod tests;
+pub(super) mod tests;

@@ -238,7 +238,7 @@ fn bad_threshold_and_tracks_are_errors() {
 
 /// Random small crowds in a 3 × 3 m square: regular and irregular times, gaps,
 /// single samples, people standing still, and pairs walking with equal velocities.
-fn crowd() -> impl Strategy<Value = TrackSet> {
+pub(in crate::crowd::edit) fn crowd() -> impl Strategy<Value = TrackSet> {
     let person = (
         1usize..8,
         0.0f64..3.0,
@@ -560,5 +560,37 @@ proptest! {
         prop_assert_eq!(fast.pair_total, reference.pair_total);
         prop_assert_eq!(fast.event_total, reference.event_total);
         prop_assert_eq!(fast.closest, reference.closest);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 256,
+        rng_seed: RngSeed::Fixed(0x7368_6966),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn prop_closest_shifted_is_detection_on_the_shifted_tracks(s in crowd(), shift in -3.0f64..3.0) {
+        // Avoidance's rigid shifts are judged by `closest_shifted`: it must be
+        // what the all-pairs reference finds once the person's times are moved.
+        prop_assume!(s.tracks.len() >= 2);
+        let mut moved = s.clone();
+        for t in &mut moved.tracks[0].times_s {
+            *t += shift;
+        }
+        let reference = collisions_all_pairs(&moved, 1e6).unwrap();
+        let a = super::PersonPieces::of(&s.tracks[0].as_ref());
+        for k in 1..s.tracks.len() {
+            let b = super::PersonPieces::of(&s.tracks[k].as_ref());
+            let want = reference.pairs.iter().find(|p| p.a == 0 && p.b == k).map(|p| p.closest.distance_m);
+            prop_assert_eq!(super::closest_shifted(&a, shift, &b, 1e6), want, "person {}", k);
+            // Under a cutoff: the same distance when it is below, else nothing.
+            let cut = 0.7;
+            prop_assert_eq!(super::closest_shifted(&a, shift, &b, cut), want.filter(|d| *d < cut), "person {}", k);
+            let near = super::NearPieces::of(&a, &b, cut);
+            prop_assert_eq!(near.closest_shifted(shift, cut), want.filter(|d| *d < cut), "person {}", k);
+        }
     }
 }

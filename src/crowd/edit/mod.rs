@@ -44,7 +44,7 @@ mod tracks;
 
 pub use apply::{run_script, ApplyParams, ApplyReport, DragReport, HANDLE_RADIUS_M};
 pub use avoid::{
-    avoid, AvoidError, AvoidParams, AvoidReport, Remaining, Stuck, MIN_PACE_LENGTH_M,
+    avoid, avoid_around, AvoidError, AvoidParams, AvoidReport, Remaining, Stuck, MIN_PACE_LENGTH_M,
     STILL_SPEED_M_S,
 };
 pub use cage::{
@@ -65,7 +65,10 @@ pub use hull::{
     concave_hull, grid_cell, grid_subsample, is_simple, Hull, HullParams, DEFAULT_CONCAVITY,
     DEFAULT_MAX_EDGE_CELLS, DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M,
 };
-pub use obstacles::{avoid_obstacles, crowd_width, crowd_width_at, ObstacleParams, ObstacleReport};
+pub use obstacles::{
+    avoid_obstacles, crowd_width, crowd_width_at, push_samples_out, samples_in_obstacles,
+    ObstacleParams, ObstacleReport,
+};
 pub use paths::{group_tracks, standard_path, GroupPath, PathError, DIRECTION_SPAN_M};
 pub use record::{RecordError, TrackRecorder};
 pub use script::{parse_script, Op, OpDef, Script, ScriptError, SelectSpec, MAX_LIST, MAX_OPS};

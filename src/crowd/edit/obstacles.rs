@@ -157,6 +157,59 @@ pub fn avoid_obstacles(
     Ok(rep)
 }
 
+/// How many samples of `tracks` (indices into `set`) lie inside each obstacle,
+/// one count per obstacle of `obstacles`.
+pub fn samples_in_obstacles(
+    set: &TrackSet,
+    tracks: &[usize],
+    obstacles: &[Obstacle],
+) -> Vec<usize> {
+    let mut out = vec![0; obstacles.len()];
+    for &k in tracks {
+        for &p in &set.tracks[k].points {
+            for (o, count) in obstacles.iter().zip(out.iter_mut()) {
+                if o.parts.iter().any(|part| part.contains(p)) {
+                    *count += 1;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Moves each sample of `tracks` that is inside an obstacle (or nearer its
+/// boundary than half the clearance) to its exit: the nearest boundary point of
+/// the deepest part, pushed out by `clearance_m` along the outward normal (the
+/// targets of section 4.2's hull vertices, applied to one person's sample when the
+/// cage could not carry it out: a cage encloses its group, not each person).
+/// Repeats while a moved sample lands in another part, at most `rounds` times.
+/// Returns how many samples were moved.
+pub fn push_samples_out(
+    set: &mut TrackSet,
+    tracks: &[usize],
+    obstacles: &[Obstacle],
+    clearance_m: f64,
+    rounds: usize,
+) -> usize {
+    let mut moved = 0;
+    for &k in tracks {
+        for p in &mut set.tracks[k].points {
+            let mut changed = false;
+            for _ in 0..rounds.max(1) {
+                match deepest(obstacles, *p, clearance_m) {
+                    Some((d, exit)) if d < 0.5 * clearance_m => {
+                        *p = exit;
+                        changed = true;
+                    }
+                    _ => break,
+                }
+            }
+            moved += usize::from(changed);
+        }
+    }
+    moved
+}
+
 /// The crowd's width across its moving direction (eq. 29).
 ///
 /// # Formula
