@@ -31,6 +31,7 @@
 //! not retimed, and each cluster is one [`Remaining`] ([`Stuck::Cluster`]) for its
 //! first two members.
 
+use super::avoid_shift as shift;
 use super::collide::{detect, Approach, CollideError, Collisions, PairCollision};
 use super::tracks::{Track, TrackSet};
 use nalgebra::{DMatrix, DVector};
@@ -874,6 +875,12 @@ pub fn avoid_around(
     let closest_before_m = collisions.closest().map(|q| q.closest.distance_m);
     // No retiming may bring two people closer than the input's closest pair.
     let floor = closest_before_m.unwrap_or(f64::INFINITY);
+    let limits = shift::Limits {
+        threshold_m: params.threshold_m,
+        max_shift_s: params.max_shift_s,
+        floor_m: floor,
+        input: &original,
+    };
     // People in clusters are left as they are (their tracks are never retimed, so
     // the clusters stay what they were).
     let mut in_cluster = vec![false; n];
@@ -959,7 +966,7 @@ pub fn avoid_around(
                 {
                     continue;
                 }
-                match shift::best_shift(set, &boxes, side, params, &original, floor, &shifts_s) {
+                match shift::best_shift(set, &boxes, side, &limits, &shifts_s) {
                     Some(sh) => {
                         apply_shift(set, &mut base, &mut pins, &sh);
                         for &k in &sh.group {
@@ -991,7 +998,7 @@ pub fn avoid_around(
                 if shift_tried.contains(&g) {
                     continue;
                 }
-                match shift::best_shift(set, &boxes, &g, params, &original, floor, &shifts_s) {
+                match shift::best_shift(set, &boxes, &g, &limits, &shifts_s) {
                     Some(sh) if alone.as_ref().is_none_or(|a| sh.dt_s.abs() < a.dt_s.abs()) => {
                         alone = Some(sh);
                     }
@@ -1275,9 +1282,6 @@ fn remaining_of(
     }));
     out
 }
-
-#[path = "avoid_shift.rs"]
-mod shift;
 
 #[cfg(test)]
 #[path = "avoid_tests.rs"]

@@ -13,7 +13,7 @@
 //! graph (a two-colouring by breadth-first search: for two crossing crowds, the
 //! crowds), and each person of a colliding pair alone. The shifts tried run
 //! outwards from zero ([`candidates_s`]), delays and advances, within
-//! [`AvoidParams::max_shift_s`] of the input and never before time zero for a
+//! the shift bound (`AvoidParams::max_shift_s`) of the input and never before time zero for a
 //! track that starts at or after it; the first shift that leaves the group with no
 //! pair outside itself wins, else the one that leaves the fewest (then the least
 //! deep). A shift is kept only if it lowers the group's pairs (in number, or in
@@ -27,11 +27,11 @@
 //! by the largest shift — computed on the shifted pieces as detection computes
 //! it, without building detection's grid for every shift tried.
 
-use super::super::collide::{
+use super::collide::PairCollision;
+use super::collide::{
     collisions_involving, CollideError, Collisions, NearPieces, PersonPieces, DEFAULT_KEEP,
 };
-use super::super::tracks::TrackSet;
-use super::{AvoidParams, PairCollision};
+use super::tracks::TrackSet;
 use crate::geom::Vec2;
 
 /// The shifts tried, in seconds, by increasing size, each as a delay then an
@@ -98,11 +98,24 @@ pub(super) struct Shift {
     pub dt_s: f64,
 }
 
-/// The best rigid shift of `group` (indices into `set`, sorted), or `None` if no
-/// shift tried makes the group's pairs fewer (or as many and shallower) without
-/// bringing anyone new into collision with it or anyone closer than `floor_m`.
-/// `input` holds everyone's times in the input (the shift bound and time zero
-/// are measured against it).
+/// What a shift must respect.
+#[derive(Copy, Clone, Debug)]
+pub(super) struct Limits<'a> {
+    /// Two people closer than this collide (m).
+    pub threshold_m: f64,
+    /// The most anyone's times may move from `input` (s).
+    pub max_shift_s: f64,
+    /// No pair may come closer than this (m): the input's closest.
+    pub floor_m: f64,
+    /// Everyone's times in the input (the bound and time zero are measured
+    /// against them).
+    pub input: &'a [Vec<f64>],
+}
+
+/// The best rigid shift of `group` (indices into `set`, sorted) among
+/// `shifts_s`, or `None` if none makes the group's pairs fewer (or as many and
+/// shallower) without bringing anyone new into collision with it or anyone
+/// closer than the floor.
 ///
 /// # Complexity
 /// For each member and person whose bounding box comes within the threshold of
@@ -112,24 +125,28 @@ pub(super) fn best_shift(
     set: &TrackSet,
     boxes: &[(Vec2, Vec2)],
     group: &[usize],
-    p: &AvoidParams,
-    input: &[Vec<f64>],
-    floor_m: f64,
+    limits: &Limits<'_>,
     shifts_s: &[f64],
 ) -> Option<Shift> {
     if group.is_empty() {
         return None;
     }
+    let Limits {
+        threshold_m,
+        max_shift_s,
+        floor_m,
+        input,
+    } = *limits;
     // The shift bound and time zero: the room each member leaves.
-    let (mut most_delay, mut most_advance) = (p.max_shift_s, p.max_shift_s);
+    let (mut most_delay, mut most_advance) = (max_shift_s, max_shift_s);
     for &k in group {
         let (t, t0) = (&set.tracks[k].times_s, &input[k]);
         let off = t.iter().zip(t0).map(|(a, b)| a - b);
         let (lo, hi) = off.fold((0.0f64, 0.0f64), |(lo, hi), d| (lo.min(d), hi.max(d)));
         // A delay dt moves the largest offset to hi + dt, an advance a the
         // smallest to lo − a; both must stay within the bound.
-        most_delay = most_delay.min(p.max_shift_s - hi);
-        most_advance = most_advance.min(p.max_shift_s + lo);
+        most_delay = most_delay.min(max_shift_s - hi);
+        most_advance = most_advance.min(max_shift_s + lo);
         if t0[0] >= 0.0 {
             most_advance = most_advance.min(t[0]);
         }
@@ -137,7 +154,7 @@ pub(super) fn best_shift(
     let reach_s = most_delay.max(most_advance).max(0.0);
     // Each member's pieces against the pieces of everyone outside the group who
     // could meet it: bounding boxes within the threshold, times within reach.
-    let r = p.threshold_m;
+    let r = threshold_m;
     let near = |a: usize, b: usize| {
         let ((alo, ahi), (blo, bhi)) = (boxes[a], boxes[b]);
         let (sa, sb) = (set.tracks[a].span_s(), set.tracks[b].span_s());

@@ -22,10 +22,12 @@
 //! | `clusters.rs` | [`Cluster`]s: identical tracks and people standing together, counted in closed form; the order detection visits people in | 4.1.1 |
 //! | `slab_grid.rs` | the uniform grid detection lays over each time slab | 4.1.1 |
 //! | `avoid.rs` | [`avoid`]: retiming people apart, positions kept | 4.1.2, eqs. 18–28 |
+//! | `avoid_shift.rs` | avoidance's first candidates: rigid time shifts of a group or one person, judged on the piece pairs near in space | 4.1.2 (ours) |
 //! | `obstacles.rs` | [`avoid_obstacles`]: hull vertices mapped out of obstacles, then eq. 1; [`crowd_width`] | 4.2, eq. 29 |
 
 mod apply;
 mod avoid;
+mod avoid_shift;
 mod cage;
 mod clusters;
 mod collide;
