@@ -1,7 +1,8 @@
 //! Crowd motion from a recognised gesture (gesture-driven section 7.2–7.3): blending
 //! the motions of K = 10 neighbours, synthesising trajectories for 1,000 agents and
 //! matching the agents to their starts — what the synthesis worker runs per gesture
-//! (target: at most 20 ms on one core); and the features (FPCA + mixture) of one
+//! (target: at most 20 ms on one core); the assignment alone, coarse to fine (as the
+//! synthesis runs it) and in one level (as it ran before); and the features (FPCA + mixture) of one
 //! 60-agent motion, what building the library costs per motion.
 //!
 //! `cargo bench --bench gesture_synth`
@@ -10,8 +11,9 @@
 //! crowd on a jittered grid along eased paths with per-agent wobble.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use crowdtouch::crowd::assign::{CoarseToFine, CostMatrix, Solver};
 use crowdtouch::crowd::motion::{
-    blend, features, CrowdMotion, FeatureParams, Placement, Synthesiser,
+    blend, features, start_costs, CrowdMotion, FeatureParams, Placement, Synthesiser,
 };
 use crowdtouch::geom::Vec2;
 use crowdtouch::gesture::library::{MotionClass, MotionFeatures};
@@ -108,6 +110,35 @@ fn blend_and_synthesise(c: &mut Criterion) {
             let f = blend(black_box(&pairs)).expect("blend");
             syn.synthesise(&f, &agents, &placement, 3)
                 .expect("synthesis")
+        })
+    });
+    // The assignment alone, on the starts the synthesis sampled: coarse to fine
+    // (what it runs) and the one-level solve of the equalised matrix.
+    let starts: Vec<Vec2> = syn
+        .synthesise(&blended, &agents, &placement, 3)
+        .expect("synthesis")
+        .trajectories
+        .iter()
+        .map(|t| t[0])
+        .collect();
+    let mut c2f = CoarseToFine::new();
+    g.bench_function("assign_1000_coarse_to_fine", |b| {
+        b.iter(|| {
+            c2f.solve(black_box(&agents), black_box(&starts))
+                .expect("assignment")
+                .len()
+        })
+    });
+    let (mut mapped, mut costs, mut solver) = (Vec::new(), CostMatrix::new(0, 0), Solver::new());
+    g.bench_function("assign_1000_one_level", |b| {
+        b.iter(|| {
+            start_costs(
+                black_box(&agents),
+                black_box(&starts),
+                &mut mapped,
+                &mut costs,
+            );
+            solver.solve(&costs).expect("assignment").len()
         })
     });
     let m = motion(true, 5);

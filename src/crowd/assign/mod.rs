@@ -18,6 +18,9 @@
 //! * `points` — [`PointCosts`], the geometric fast path (bucket grid, ring search);
 //! * `candidates` — sort keys and the streaming selection of a row's cheapest columns;
 //! * `solver` — [`Solver`]: options, workspaces, cold and warm solves, the certificate;
+//! * `seeded` — solves started from given column prices, and the duals of a solve;
+//! * `coarse` — [`CoarseToFine`]: square squared-distance instances solved on nested
+//!   random subsets, each level started from the prices of the one below;
 //! * `pricing` — rows priced against the column prices, candidate lists and thresholds;
 //! * `auction` — the auction and the row reduction that initialise the prices;
 //! * `augment` — exact Dijkstra over the candidate lists (sparse strategy);
@@ -38,6 +41,7 @@ mod auction;
 mod augment;
 mod cancel;
 mod candidates;
+mod coarse;
 mod costs;
 mod dense;
 mod error;
@@ -47,12 +51,14 @@ mod least_effort;
 mod normalise;
 mod points;
 mod pricing;
+mod seeded;
 mod solver;
 #[cfg(test)]
 mod tests;
 
 pub use agents_to_goals::Assigner;
 pub use cancel::{Cancel, POLL_WORK};
+pub use coarse::{CoarseStats, CoarseToFine};
 pub use costs::{CostMatrix, CostProvider, CostSource, Distance, SquaredDistance};
 pub use error::AssignError;
 pub use layouts::Layout;
