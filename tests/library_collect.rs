@@ -215,7 +215,21 @@ fn a_session_on_a_replay_stores_each_gesture_with_its_participant_and_a_client_u
             _ => {}
         }
     }
-    let status = child.wait().unwrap();
+    // The session ends by itself after the last item; if the replay ran out
+    // before it did (a gesture lost), fail with what was seen instead of
+    // waiting on the daemon for ever.
+    let t0 = Instant::now();
+    let status = loop {
+        if let Some(st) = child.try_wait().unwrap() {
+            break st;
+        }
+        if t0.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("the session did not end: states {states:?}, demos {demos:?}, acks {acks:?}");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
     let mut stdout = String::new();
     std::io::Read::read_to_string(&mut child.stdout.take().unwrap(), &mut stdout).unwrap();
     let mut stderr = String::new();
