@@ -333,11 +333,6 @@ mod tests {
                 "Select must come first",
             ),
             (
-                "(ops: [\n Select(ids: Some([1])),\n Drag(from: (0.0, 0.0), to: (1.0, 1.0)),\n])",
-                3,
-                "",
-            ),
-            (
                 "(ops: [\n Select(rect: Some(((100.0, 100.0), (101.0, 101.0)))),\n])",
                 2,
                 "no hull",
@@ -357,12 +352,19 @@ mod tests {
                     assert_eq!(l, line, "{text}: {w}");
                     assert!(w.contains(what), "{text}: {w}");
                 }
-                other => {
-                    // A single person walking has many distinct places: that drag is valid.
-                    assert!(what.is_empty(), "{text}: {other:?}");
-                }
+                other => panic!("{text}: expected an error, got {other:?}"),
             }
         }
+        // A single person walking has many distinct places: a drag of one
+        // person's samples is valid and moves the sample under the finger.
+        let one = parse_script(
+            "(ops: [\n Select(ids: Some([1])),\n Drag(from: (0.8, 0.0), to: (1.0, 1.0)),\n])",
+        )
+        .unwrap();
+        let mut single = parade();
+        let r = run_script(&mut single, &one, &params).unwrap();
+        assert_eq!(r.drags.len(), 1);
+        assert!((single.tracks[1].points[0] - Vec2::new(1.0, 1.0)).norm() < 1e-6);
         let outside = parse_script(
             "(ops: [\n Select(ids: Some([1, 2])),\n Drag(from: (1.0, 0.0), to: (50.0, 0.0)),\n])",
         )
