@@ -972,7 +972,7 @@ pub fn avoid_around(
                         for &k in &sh.group {
                             changed_at[k] = iterations;
                         }
-                        refresh(set, &boxes, params, &sh.group, &mut current, &mut complete)?;
+                        refresh_after_shift(set, &boxes, params, &sh, &mut current, &mut complete)?;
                         for &k in &sh.group {
                             touched[k] = true;
                         }
@@ -1013,7 +1013,7 @@ pub fn avoid_around(
                 for &k in &sh.group {
                     changed_at[k] = iterations;
                 }
-                refresh(set, &boxes, params, &sh.group, &mut current, &mut complete)?;
+                refresh_after_shift(set, &boxes, params, &sh, &mut current, &mut complete)?;
                 touched[q.a] = true;
                 touched[q.b] = true;
                 shifts_kept += 1;
@@ -1226,6 +1226,30 @@ fn refresh(
     current.extend(found.pairs.iter().copied());
     *complete = found.is_complete();
     Ok(())
+}
+
+/// After a rigid shift: when it left the group no pair with anyone outside (its
+/// evaluation is exact), those pairs are dropped from `current` without a
+/// detection (pairs inside the group do not change); else as [`refresh`].
+fn refresh_after_shift(
+    set: &TrackSet,
+    boxes: &[(crate::geom::Vec2, crate::geom::Vec2)],
+    p: &AvoidParams,
+    sh: &shift::Shift,
+    current: &mut Vec<PairCollision>,
+    complete: &mut bool,
+) -> Result<(), AvoidError> {
+    if sh.pairs_left == 0 {
+        current.retain(|q| who_has(&sh.group, q.a) == who_has(&sh.group, q.b));
+        // Pairs inside the group meet dt later (or earlier), at the same places.
+        for q in current.iter_mut() {
+            if who_has(&sh.group, q.a) {
+                q.closest.t_s += sh.dt_s;
+            }
+        }
+        return Ok(());
+    }
+    refresh(set, boxes, p, &sh.group, current, complete)
 }
 
 /// The two people of a pair as a sorted group.

@@ -96,6 +96,8 @@ impl Fare {
 pub(super) struct Shift {
     pub group: Vec<usize>,
     pub dt_s: f64,
+    /// The group's pairs with people outside it after the shift.
+    pub pairs_left: usize,
 }
 
 /// What a shift must respect.
@@ -182,7 +184,7 @@ pub(super) fn best_shift(
                     others.len() - 1
                 }
             };
-            let close = NearPieces::of(&mine, &others[oi].1, r);
+            let close = NearPieces::of(&mine, &others[oi].1, r, reach_s);
             if !close.is_empty() {
                 checks.push(close);
             }
@@ -231,9 +233,10 @@ pub(super) fn best_shift(
             break;
         }
     }
-    best.map(|(dt_s, _)| Shift {
+    best.map(|(dt_s, f)| Shift {
         group: group.to_vec(),
         dt_s,
+        pairs_left: f.pairs,
     })
 }
 

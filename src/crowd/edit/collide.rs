@@ -557,8 +557,14 @@ pub(super) struct NearPieces(Vec<(Piece, Piece)>);
 
 impl NearPieces {
     /// The piece pairs of `a` and `b` whose bounding boxes are closer than
-    /// `within_m` on both axes.
-    pub(super) fn of(a: &PersonPieces, b: &PersonPieces, within_m: f64) -> NearPieces {
+    /// `within_m` on both axes and whose times can meet when `a`'s move by at
+    /// most `reach_s` either way.
+    pub(super) fn of(
+        a: &PersonPieces,
+        b: &PersonPieces,
+        within_m: f64,
+        reach_s: f64,
+    ) -> NearPieces {
         // Each side's pieces near the other's whole box first: a path crossing
         // another meets it in a few pieces.
         let bound = |ps: &[Piece]| {
@@ -589,7 +595,8 @@ impl NearPieces {
         }
         for pa in a.0.iter().filter(|p| !boxes_apart(p, &box_b, within_m)) {
             for pb in &near_b {
-                if !boxes_apart(pa, pb, within_m) {
+                let meet = pa.t1 + reach_s >= pb.t0 && pa.t0 - reach_s <= pb.t1;
+                if meet && !boxes_apart(pa, pb, within_m) {
                     out.push((*pa, **pb));
                 }
             }

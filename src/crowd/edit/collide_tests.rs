@@ -589,7 +589,7 @@ proptest! {
             // Under a cutoff: the same distance when it is below, else nothing.
             let cut = 0.7;
             prop_assert_eq!(super::closest_shifted(&a, shift, &b, cut), want.filter(|d| *d < cut), "person {}", k);
-            let near = super::NearPieces::of(&a, &b, cut);
+            let near = super::NearPieces::of(&a, &b, cut, shift.abs());
             prop_assert_eq!(near.closest_shifted(shift, cut), want.filter(|d| *d < cut), "person {}", k);
         }
     }
