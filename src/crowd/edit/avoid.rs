@@ -706,6 +706,49 @@ fn separate(
     Some(corrections)
 }
 
+/// A pair's two people as they were (times and pins) and the pair's passing
+/// order, to undo a retiming that did not help.
+struct PairState {
+    key: (usize, usize),
+    people: [Saved; 2],
+    order: Option<f64>,
+}
+
+/// One person's index, times and pins.
+type Saved = (usize, Vec<f64>, Vec<(usize, f64)>);
+
+impl PairState {
+    fn save(
+        set: &TrackSet,
+        pins: &[Vec<(usize, f64)>],
+        orders: &HashMap<(usize, usize), f64>,
+        q: &PairCollision,
+    ) -> PairState {
+        let one = |k: usize| (k, set.tracks[k].times_s.clone(), pins[k].clone());
+        PairState {
+            key: (q.a, q.b),
+            people: [one(q.a), one(q.b)],
+            order: orders.get(&(q.a, q.b)).copied(),
+        }
+    }
+
+    fn restore(
+        &self,
+        set: &mut TrackSet,
+        pins: &mut [Vec<(usize, f64)>],
+        orders: &mut HashMap<(usize, usize), f64>,
+    ) {
+        for (k, t, p) in &self.people {
+            set.tracks[*k].times_s.clone_from(t);
+            pins[*k].clone_from(p);
+        }
+        match self.order {
+            Some(o) => orders.insert(self.key, o),
+            None => orders.remove(&self.key),
+        };
+    }
+}
+
 /// The most retimings of one pair in a row (each from where the previous left
 /// it) before the result is judged: a pair walking head-on along one line needs
 /// several, as the paper's rounds give it.
@@ -730,28 +773,11 @@ fn separate_pair(
     orders: &mut HashMap<(usize, usize), f64>,
     pins: &mut [Vec<(usize, f64)>],
 ) -> Result<usize, PairFailure> {
-    let key = (q.a, q.b);
     let mut pq = *q;
     let mut corrections = 0;
     let mut steps = 0;
     for _ in 0..PAIR_STEPS {
-        let saved = [
-            (q.a, set.tracks[q.a].times_s.clone(), pins[q.a].clone()),
-            (q.b, set.tracks[q.b].times_s.clone(), pins[q.b].clone()),
-        ];
-        let order = orders.get(&key).copied();
-        let undo = |set: &mut TrackSet,
-                    pins: &mut [Vec<(usize, f64)>],
-                    orders: &mut HashMap<(usize, usize), f64>| {
-            for (k, t, pp) in &saved {
-                set.tracks[*k].times_s.clone_from(t);
-                pins[*k].clone_from(pp);
-            }
-            match order {
-                Some(o) => orders.insert(key, o),
-                None => orders.remove(&key),
-            };
-        };
+        let saved = PairState::save(set, pins, orders, q);
         let why = match separate(set, &pq, p, original, orders, pins) {
             None => Stuck::Infeasible,
             Some(_)
@@ -784,7 +810,7 @@ fn separate_pair(
                 }
             }
         };
-        undo(set, pins, orders);
+        saved.restore(set, pins, orders);
         if steps == 0 {
             return Err(PairFailure::Stuck(why));
         }
@@ -1044,23 +1070,7 @@ pub fn avoid_around(
                     (c.pair_count(), f64::INFINITY)
                 }
             };
-            let saved = [
-                (q.a, set.tracks[q.a].times_s.clone(), pins[q.a].clone()),
-                (q.b, set.tracks[q.b].times_s.clone(), pins[q.b].clone()),
-            ];
-            let order = orders.get(&key).copied();
-            let restore = |set: &mut TrackSet,
-                           pins: &mut [Vec<(usize, f64)>],
-                           orders: &mut HashMap<(usize, usize), f64>| {
-                for (k, t, p) in &saved {
-                    set.tracks[*k].times_s.clone_from(t);
-                    pins[*k].clone_from(p);
-                }
-                match order {
-                    Some(o) => orders.insert(key, o),
-                    None => orders.remove(&key),
-                };
-            };
+            let saved = PairState::save(set, &pins, &orders, q);
             let verdict =
                 match separate_pair(set, q, params, &base, &original, &mut orders, &mut pins) {
                     Err(PairFailure::Collide(e)) => return Err(e.into()),
@@ -1107,7 +1117,7 @@ pub fn avoid_around(
                     }
                 }
                 Err(why) => {
-                    restore(set, &mut pins, &mut orders);
+                    saved.restore(set, &mut pins, &mut orders);
                     stuck.insert(key, why);
                     failed_at.insert(key, iterations);
                 }

@@ -157,16 +157,7 @@ pub(super) fn best_shift(
     // Each member's pieces against the pieces of everyone outside the group who
     // could meet it: bounding boxes within the threshold, times within reach.
     let r = threshold_m;
-    let near = |a: usize, b: usize| {
-        let ((alo, ahi), (blo, bhi)) = (boxes[a], boxes[b]);
-        let (sa, sb) = (set.tracks[a].span_s(), set.tracks[b].span_s());
-        blo.x <= ahi.x + r
-            && alo.x <= bhi.x + r
-            && blo.y <= ahi.y + r
-            && alo.y <= bhi.y + r
-            && sb.1 >= sa.0 - reach_s
-            && sb.0 <= sa.1 + reach_s
-    };
+    let near = |a: usize, b: usize| could_meet(set, boxes, a, b, r, reach_s);
     let mut others: Vec<(usize, PersonPieces)> = Vec::new();
     // Per member and person near them: the pieces that come within the
     // threshold of each other in space, where alone a shift can make them meet.
@@ -291,17 +282,7 @@ pub(super) fn involving_near(
     group: &[usize],
     threshold_m: f64,
 ) -> Result<Collisions, CollideError> {
-    let r = threshold_m;
-    let near = |a: usize, b: usize| {
-        let ((alo, ahi), (blo, bhi)) = (boxes[a], boxes[b]);
-        let (sa, sb) = (set.tracks[a].span_s(), set.tracks[b].span_s());
-        blo.x <= ahi.x + r
-            && alo.x <= bhi.x + r
-            && blo.y <= ahi.y + r
-            && alo.y <= bhi.y + r
-            && sb.1 >= sa.0
-            && sb.0 <= sa.1
-    };
+    let near = |a: usize, b: usize| could_meet(set, boxes, a, b, threshold_m, 0.0);
     // In the set's order, so a < b holds after mapping back.
     let people: Vec<usize> = (0..set.tracks.len())
         .filter(|&k| group.binary_search(&k).is_ok() || group.iter().any(|&g| near(g, k)))
@@ -324,4 +305,25 @@ pub(super) fn involving_near(
         e.b = people[e.b];
     }
     Ok(c)
+}
+
+/// Whether people `a` and `b` could come within `r` metres of each other with
+/// `a`'s times moved by at most `reach_s` either way: their bounding boxes
+/// within `r` on both axes and their time spans meeting, widened by `reach_s`.
+fn could_meet(
+    set: &TrackSet,
+    boxes: &[(Vec2, Vec2)],
+    a: usize,
+    b: usize,
+    r: f64,
+    reach_s: f64,
+) -> bool {
+    let ((alo, ahi), (blo, bhi)) = (boxes[a], boxes[b]);
+    let (sa, sb) = (set.tracks[a].span_s(), set.tracks[b].span_s());
+    blo.x <= ahi.x + r
+        && alo.x <= bhi.x + r
+        && blo.y <= ahi.y + r
+        && alo.y <= bhi.y + r
+        && sb.1 >= sa.0 - reach_s
+        && sb.0 <= sa.1 + reach_s
 }
