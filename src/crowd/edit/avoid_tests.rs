@@ -1,6 +1,11 @@
 use super::*;
+use crate::crowd::edit::avoid_solve::{
+    banded_cholesky_solve, retime_pair, smooth_track, PieceNodes,
+};
 use crate::crowd::edit::io::{read_eth, EthOptions};
+use crate::crowd::edit::tracks::Track;
 use crate::geom::Vec2;
+use nalgebra::{DMatrix, DVector};
 
 fn v(x: f64, y: f64) -> Vec2 {
     Vec2::new(x, y)

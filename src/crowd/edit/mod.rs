@@ -22,12 +22,16 @@
 //! | `clusters.rs` | [`Cluster`]s: identical tracks and people standing together, counted in closed form; the order detection visits people in | 4.1.1 |
 //! | `slab_grid.rs` | the uniform grid detection lays over each time slab | 4.1.1 |
 //! | `avoid.rs` | [`avoid`]: retiming people apart, positions kept | 4.1.2, eqs. 18–28 |
+//! | `avoid_params.rs` | [`AvoidParams`], [`AvoidReport`], [`AvoidError`]: what avoidance takes and tells | 4.1.2 |
+//! | `avoid_solve.rs` | one pair's pieces retimed, a person's track re-solved, a pair's retiming and its undo | 4.1.2, eqs. 18–28 |
 //! | `avoid_shift.rs` | avoidance's first candidates: rigid time shifts of a group or one person, judged on the piece pairs near in space | 4.1.2 (ours) |
 //! | `obstacles.rs` | [`avoid_obstacles`]: hull vertices mapped out of obstacles, then eq. 1; [`crowd_width`] | 4.2, eq. 29 |
 
 mod apply;
 mod avoid;
+mod avoid_params;
 mod avoid_shift;
+mod avoid_solve;
 mod cage;
 mod clusters;
 mod collide;
@@ -45,9 +49,9 @@ mod temporal;
 mod tracks;
 
 pub use apply::{run_script, ApplyParams, ApplyReport, DragReport, HANDLE_RADIUS_M};
-pub use avoid::{
-    avoid, avoid_around, AvoidError, AvoidParams, AvoidReport, Remaining, Stuck, MIN_PACE_LENGTH_M,
-    STILL_SPEED_M_S,
+pub use avoid::{avoid, avoid_around};
+pub use avoid_params::{
+    AvoidError, AvoidParams, AvoidReport, Remaining, Stuck, MIN_PACE_LENGTH_M, STILL_SPEED_M_S,
 };
 pub use cage::{
     correct_speeds, Cage, CageParams, Handle, ShapeError, SpeedReport, MIN_INTERVAL_FRACTION,
