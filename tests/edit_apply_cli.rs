@@ -128,6 +128,41 @@ fn bad_scripts_and_edits_name_their_line() {
     assert!(e.contains("bad.txt:2:"), "{e}");
 }
 
+/// `--max-shift` takes a positive, finite number of seconds; anything else is
+/// refused before any file is read, naming the option and the value.
+#[test]
+fn a_bad_max_shift_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.jsonl").display().to_string();
+    let zara = fixture("crowds_zara01.txt");
+    for bad in ["-3", "0", "nan", "inf", "abc", ""] {
+        let o = run(&[
+            "apply",
+            &zara,
+            "--avoid-collisions",
+            "--max-shift",
+            bad,
+            "-o",
+            &out,
+        ]);
+        assert!(!o.status.success(), "--max-shift {bad:?} accepted");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains("--max-shift"), "{bad:?}: {e}");
+        assert!(e.contains(&format!("`{bad}`")), "{bad:?}: {e}");
+        assert!(!Path::new(&out).exists(), "{bad:?}: nothing written");
+    }
+    let o = run(&[
+        "apply",
+        &zara,
+        "--avoid-collisions",
+        "--max-shift",
+        "2.5",
+        "-o",
+        &out,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
 /// The docs' corridor group (25 people five abreast through the corridor's 2 m
 /// passage) and a copy of it 3.5 m north, whose rows walk inside the south
 /// wall: each group gets its own cage; the copy's cage cannot carry its people

@@ -45,7 +45,8 @@ pub struct EditArgs {
     pub threshold: f64,
     /// The most collision avoidance may move anyone's times from the input
     /// (seconds).
-    #[arg(long, default_value_t = AvoidParams::default().max_shift_s)]
+    #[arg(long, default_value_t = AvoidParams::default().max_shift_s,
+          value_parser = parse_positive_seconds, allow_hyphen_values = true)]
     pub max_shift: f64,
     /// Drags must end inside `x0,y0,x1,y1` (metres); default: the tracks' bounding
     /// box grown by half its size and at least 10 m.
@@ -311,6 +312,15 @@ fn default_world(set: &TrackSet) -> Rect {
     Rect {
         min: [lo[0] - gx, lo[1] - gy],
         max: [hi[0] + gx, hi[1] + gy],
+    }
+}
+
+/// A finite, positive number of seconds (`--max-shift`).
+fn parse_positive_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        Ok(_) => Err(format!("`{s}` is not a positive, finite number of seconds")),
+        Err(_) => Err(format!("`{s}` is not a number")),
     }
 }
 
