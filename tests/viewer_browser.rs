@@ -327,12 +327,15 @@ struct Watcher {
 
 impl Watcher {
     fn connect(socket: &Path) -> Watcher {
+        Watcher::subscribed(socket, &["snapshot", "events", "transform"])
+    }
+
+    /// A client subscribed to `subscribe` (positions and touches in snapshots).
+    fn subscribed(socket: &Path, subscribe: &[&str]) -> Watcher {
         let mut stream = UnixStream::connect(socket).unwrap();
-        stream
-            .write_all(
-                b"{\"type\":\"hello\",\"protocol\":1,\"subscribe\":[\"snapshot\",\"events\",\"transform\"],\"fields\":[\"positions\",\"touches\"],\"max_rate_hz\":30}\n",
-            )
-            .unwrap();
+        let hello = json!({"type": "hello", "protocol": 1, "subscribe": subscribe,
+            "fields": ["positions", "touches"], "max_rate_hz": 30});
+        stream.write_all(format!("{hello}\n").as_bytes()).unwrap();
         let writer = stream.try_clone().unwrap();
         let msgs = Arc::new(Mutex::new(Vec::new()));
         let sink = Arc::clone(&msgs);
@@ -694,6 +697,147 @@ fn the_page_draws_the_crowd_and_a_mouse_drag_moves_it() {
             stats["text"]
         );
     });
+}
+
+/// The edit mode's people for the page: a block of 5 × 5 people 0.8 m apart
+/// around (4, 2.5) m walking slowly right (0.05 m/s) for a minute, sampled every
+/// 0.5 s, and one person far off (id 100). The replayed point drag of the config
+/// lands in open space, away from them.
+fn edit_block() -> crowdtouch::crowd::edit::TrackSet {
+    use crowdtouch::crowd::edit::{Track, TrackSet};
+    use crowdtouch::geom::Vec2;
+    let times: Vec<f64> = (0..=120).map(|k| f64::from(k) * 0.5).collect();
+    let walk = |p0: Vec2| {
+        times
+            .iter()
+            .map(|t| p0 + Vec2::new(0.05 * t, 0.0))
+            .collect()
+    };
+    let mut tracks: Vec<Track> = (0..25)
+        .map(|k| {
+            let (r, c) = (f64::from(k / 5), f64::from(k % 5));
+            let p0 = Vec2::new(4.0 + (c - 2.0) * 0.8, 2.5 + (r - 2.0) * 0.8);
+            Track::linked(k as u64, walk(p0), times.clone())
+        })
+        .collect();
+    tracks.push(Track::linked(
+        100,
+        walk(Vec2::new(12.0, 7.5)),
+        times.clone(),
+    ));
+    TrackSet {
+        tracks,
+        step_s: 0.5,
+    }
+}
+
+/// The mean of every track sample of a full `tracks` message (m).
+fn mean_of_tracks(msg: &Value) -> (f64, f64) {
+    let ps: Vec<(f64, f64)> = msg["tracks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|t| t["points"].as_array().unwrap().iter())
+        .map(|q| (q[0].as_f64().unwrap(), q[1].as_f64().unwrap()))
+        .collect();
+    centroid(&ps)
+}
+
+#[test]
+fn the_edit_mode_draws_the_tracks_and_a_mouse_drag_edits_them() {
+    in_browser(
+        "the_edit_mode_draws_the_tracks_and_a_mouse_drag_edits_them",
+        || {
+            if bridged() {
+                let _ = writeln!(std::io::stderr(), "bridged: the edit drag needs touches");
+                return;
+            }
+            let dir = tempfile::tempdir().unwrap();
+            let tracks_path = dir.path().join("block.jsonl");
+            crowdtouch::crowd::edit::io::write_tracks(
+                &edit_block(),
+                &tracks_path,
+                crowdtouch::crowd::edit::io::Format::Jsonl,
+                &crowdtouch::crowd::edit::io::ReadOptions::default(),
+                false,
+            )
+            .unwrap();
+            let port = free_port();
+            let outs = [WsOut {
+                port,
+                privileged: true,
+            }];
+            let text = config_text(26, Some(POINT_DRAG), &outs).replacen(
+            "    pipeline: (",
+            &format!(
+                "    edit: Some((tracks: {:?}, threshold_m: 0.3, dir: Some({:?}))),\n    pipeline: (",
+                tracks_path.display().to_string(),
+                dir.path().display().to_string()
+            ),
+            1,
+        );
+            let daemon = start_daemon(&text, &outs);
+            let watcher = Watcher::subscribed(&daemon.socket, &["snapshot", "edit"]);
+            let hello = watcher.hello();
+            let loaded = watcher.wait_for(0, |v| v["type"] == "tracks" && v["full"] == true);
+
+            // The page draws every person's track.
+            let mut browser = open_viewer(port);
+            let st = browser.call(json!({"cmd": "wait", "until": "edit.tracks", "min": 26}));
+            assert_eq!(st["stats"]["edit"]["points"], 26 * 121, "{}", st["stats"]);
+            assert_eq!(st["stats"]["edit"]["version"], loaded["version"]);
+
+            // A mouse drag on the block's middle person, 1.5 m to the right.
+            let shot = browser.call(json!({"cmd": "stats"}));
+            let map = Mapping::new(&hello, &shot["view"]);
+            let mark = watcher.len();
+            let snap = watcher.wait_for(mark, |v| v["type"] == "snapshot");
+            let middle = points(&snap["positions"])[12];
+            let (from, to) = (map.to_page(middle), map.to_page((middle.0 + 1.5, middle.1)));
+            browser.call(
+                json!({"cmd": "drag", "from": [from.0, from.1], "to": [to.0, to.1],
+            "steps": 30, "ms": 1500, "hold_ms": 400}),
+            );
+            let grabbed =
+                watcher.wait_for(mark, |v| v["type"] == "edit" && v["state"] == "grabbed");
+            assert_eq!(
+                grabbed["selected"].as_array().unwrap().len(),
+                25,
+                "{grabbed}"
+            );
+            // The edited tracks, as the socket client got them and as the page drew them.
+            let edited = watcher.wait_for(mark, |v| {
+                v["type"] == "tracks" && v["full"] == true && v["version"] != loaded["version"]
+            });
+            let want = mean_of_tracks(&edited);
+            let before = mean_of_tracks(&loaded);
+            assert!(
+                want.0 - before.0 > 0.5,
+                "the block's tracks did not move right: mean x {} -> {}",
+                before.0,
+                want.0
+            );
+            let st = browser.call(json!({"cmd": "wait", "until": "edit.version",
+            "min": edited["version"]}));
+            let page = &st["stats"]["edit"];
+            assert_eq!(page["version"], edited["version"], "{page}");
+            let got = (
+                page["meanX"].as_f64().unwrap(),
+                page["meanY"].as_f64().unwrap(),
+            );
+            assert!(
+                dist(got, want) < 1e-3,
+                "the page drew tracks with mean {got:?}, the socket's are at {want:?}"
+            );
+            let stats = browser.call(json!({"cmd": "stats"}));
+            assert_eq!(
+                stats["stats"]["lastError"],
+                Value::Null,
+                "{}",
+                stats["text"]
+            );
+        },
+    );
 }
 
 #[test]

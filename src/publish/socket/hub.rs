@@ -21,7 +21,7 @@ struct LatestMesh {
 /// Shared by the publisher thread and the I/O thread.
 ///
 /// Lock order: `clients`, then a client's queue, then `latest_mesh`,
-/// `latest_scene` or `latest_stats` (each held alone).
+/// `latest_scene`, `latest_edit` or `latest_stats` (each held alone).
 #[derive(Debug)]
 pub(crate) struct Hub {
     /// Static hello facts.
@@ -34,6 +34,9 @@ pub(crate) struct Hub {
     latest_mesh: Mutex<LatestMesh>,
     /// The newest `scene` line, sent to clients when they subscribe to `scene`.
     latest_scene: Mutex<Option<Arc<[u8]>>>,
+    /// The edit mode's newest full `tracks` line and newest `edit` line, sent to
+    /// clients when they subscribe to `edit` (none outside the edit mode).
+    latest_edit: Mutex<LatestEdit>,
     /// The newest `stats` report (`/metrics`); the publisher replaces it once per
     /// interval, a WebSocket I/O thread reads it when `/metrics` is asked for.
     latest_stats: Mutex<Option<Arc<StatsReport>>>,
@@ -76,6 +79,7 @@ impl Hub {
             client_queue,
             latest_mesh: Mutex::new(LatestMesh::default()),
             latest_scene: Mutex::new(None),
+            latest_edit: Mutex::new(LatestEdit::default()),
             latest_stats: Mutex::new(None),
             commands,
             stats,
@@ -212,4 +216,34 @@ impl Hub {
     pub fn latest_scene_json(&self) -> Option<Arc<[u8]>> {
         lock(&self.latest_scene).clone()
     }
+
+    /// Makes `json` (a `tracks` line with every person) the newest tracks.
+    pub fn set_latest_tracks(&self, json: Arc<[u8]>) {
+        lock(&self.latest_edit).tracks = Some(json);
+    }
+
+    /// Makes `json` (an `edit` line) the newest edit state; with `off`, the edit
+    /// mode ended and neither it nor the tracks are sent to newcomers.
+    pub fn set_latest_edit(&self, json: Arc<[u8]>, off: bool) {
+        let mut latest = lock(&self.latest_edit);
+        if off {
+            *latest = LatestEdit::default();
+        } else {
+            latest.state = Some(json);
+        }
+    }
+
+    /// The newest full `tracks` line and `edit` line of the edit mode, if any.
+    pub fn latest_edit_json(&self) -> LatestEdit {
+        lock(&self.latest_edit).clone()
+    }
+}
+
+/// What a client subscribing to `edit` is sent first: the tracks, then the state.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct LatestEdit {
+    /// The newest `tracks` line with every person (`full: true`).
+    pub tracks: Option<Arc<[u8]>>,
+    /// The newest `edit` line.
+    pub state: Option<Arc<[u8]>>,
 }

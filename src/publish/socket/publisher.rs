@@ -82,10 +82,22 @@ impl Publisher {
                 |out| protocol::encode_transform_end_json(&t, out),
             ),
             Outgoing::Tracks(t) => {
-                self.broadcast(|s| s.edit, |out| protocol::encode_tracks_json(&t, out))
+                let mut out = Vec::new();
+                protocol::encode_tracks_json(&t, &mut out);
+                let json: Arc<[u8]> = out.into();
+                // Latest first, then the broadcast (as for `scene`).
+                if t.full {
+                    self.hub.set_latest_tracks(Arc::clone(&json));
+                }
+                self.broadcast(|s| s.edit, |o| o.extend_from_slice(&json));
             }
             Outgoing::Edit(e) => {
-                self.broadcast(|s| s.edit, |out| protocol::encode_edit_json(&e, out))
+                let mut out = Vec::new();
+                protocol::encode_edit_json(&e, &mut out);
+                let json: Arc<[u8]> = out.into();
+                self.hub
+                    .set_latest_edit(Arc::clone(&json), e.state == "off");
+                self.broadcast(|s| s.edit, |o| o.extend_from_slice(&json));
             }
             Outgoing::Scene(sc) => self.scene(&sc),
             Outgoing::ScenePoses(p) => self.poses(&p),

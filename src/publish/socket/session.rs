@@ -172,6 +172,13 @@ impl Session {
                 result = result.and(q.push_message(json, settings.format));
             }
         }
+        if settings.subscriptions.edit && !old.subscriptions.edit {
+            // The edit mode as it is: every person's tracks, then its state.
+            let latest = hub.latest_edit_json();
+            for json in [latest.tracks, latest.state].into_iter().flatten() {
+                result = result.and(q.push_message(json, settings.format));
+            }
+        }
         if let Err(o) = result {
             q.fail(&o.to_string());
         }

@@ -14,6 +14,10 @@
 //   {"cmd":"screenshot","page":"a","path":"/tmp/x.png"}        a PNG of the viewport; answers #view's rect
 //   {"cmd":"drag","page":"a","from":[x,y],"to":[x,y],"steps":30,"ms":1500,"hold_ms":500}
 //                                                               a mouse drag in CSS px of the viewport
+//   {"cmd":"stroke","page":"a","points":[[x,y],…],"ms":1500,"hold_ms":300,"shift":false}
+//                                                               a mouse stroke through the points (CSS px; one
+//                                                               point: a click), Shift held if asked
+//   {"cmd":"fill","page":"a","selector":"#edit-from","value":"2.5"}
 //   {"cmd":"click","page":"a","selector":"#btn-pause"}
 //   {"cmd":"fps","page":"a","seconds":5}                        viewerStats.fps sampled once a second
 //   {"cmd":"probe","page":"a","points":[[x,y],…]}              right after the page draws a frame: the
@@ -112,6 +116,28 @@ async function run(req) {
       }
       await page.waitForTimeout(req.hold_ms ?? 300);
       await page.mouse.up();
+      return {};
+    }
+    case "stroke": {
+      const page = pageOf(req);
+      const pts = req.points || [];
+      if (pts.length === 0) throw new Error("a stroke needs points");
+      if (req.shift) await page.keyboard.down("Shift");
+      await page.mouse.move(pts[0][0], pts[0][1]);
+      await page.mouse.down();
+      const step = pts.length > 1 ? (req.ms ?? 1500) / (pts.length - 1) : 0;
+      if (pts.length > 1) await page.waitForTimeout(req.hold_ms ?? 300);
+      for (const [x, y] of pts.slice(1)) {
+        await page.mouse.move(x, y);
+        await page.waitForTimeout(step);
+      }
+      if (pts.length > 1) await page.waitForTimeout(req.hold_ms ?? 300);
+      await page.mouse.up();
+      if (req.shift) await page.keyboard.up("Shift");
+      return {};
+    }
+    case "fill": {
+      await pageOf(req).fill(req.selector, String(req.value), { timeout: 5000 });
       return {};
     }
     case "click": {
