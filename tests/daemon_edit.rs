@@ -207,3 +207,70 @@ fn a_recorded_drag_through_the_daemon_changes_the_tracks_a_client_receives() {
     assert_eq!(e.last().unwrap()["type"], "error");
     daemon.shutdown();
 }
+
+/// A client that subscribes to `edit` after the tracks were loaded (a renderer or a
+/// viewer page opened later) gets them at once, every person, then the edit state;
+/// one that leaves `edit` out gets neither.
+#[test]
+fn a_client_subscribing_later_gets_the_tracks_as_they_are() {
+    let dir = tempfile::tempdir().unwrap();
+    let tracks_path = dir.path().join("block.jsonl");
+    write_tracks(
+        &block(),
+        &tracks_path,
+        Format::Jsonl,
+        &ReadOptions::default(),
+        false,
+    )
+    .unwrap();
+    let socket = dir.path().join("ct.sock");
+    let mut cfg = Config::from_str(
+        &crowdtouch::config::DEFAULT_CONFIG_RON.replace(
+            "    pipeline: (",
+            &format!(
+                "    edit: Some((tracks: {:?}, threshold_m: 0.3)),\n    pipeline: (",
+                tracks_path.display().to_string(),
+            ),
+        ),
+        Path::new("<test>"),
+    )
+    .expect("config with an edit section");
+    cfg.pipeline.realtime = Default::default();
+    let (daemon, _tx) = daemon_on_channel(cfg, &socket, 64);
+    let hello = |subscribe: &str| {
+        let stream = UnixStream::connect(&socket).unwrap();
+        let mut w = stream.try_clone().unwrap();
+        let mut r = BufReader::new(stream);
+        writeln!(
+            w,
+            r#"{{"type":"hello","protocol":1,"subscribe":{subscribe},"max_rate_hz":10}}"#
+        )
+        .unwrap();
+        read_until(&mut r, 3.0, |v| v["type"] == "hello");
+        (w, r)
+    };
+    // The people play first: the load is over before anyone asks.
+    let (_w0, mut r0) = hello(r#"["snapshot"]"#);
+    let snap = read_until(&mut r0, 3.0, |v| v["type"] == "snapshot");
+    assert_eq!(snap.last().unwrap()["agents"], 26);
+    let (_w1, mut r1) = hello(r#"["edit"]"#);
+    let got = read_until(&mut r1, 3.0, |v| v["type"] == "edit");
+    let tracks: Vec<&Value> = got.iter().filter(|v| v["type"] == "tracks").collect();
+    assert_eq!(tracks.len(), 1, "{got:?}");
+    assert_eq!(tracks[0]["full"], true);
+    assert_eq!(tracks[0]["tracks"].as_array().unwrap().len(), 26);
+    let original = block();
+    // Points go out to the millimetre.
+    assert!((x_of(tracks[0], 12, 2) - original.tracks[12].points[2].x).abs() <= 5e-4);
+    assert_eq!(got.last().unwrap()["state"], "idle", "{:?}", got.last());
+    // Without `edit`: none of it.
+    let more = read_until(&mut r0, 1.0, |v| {
+        v["type"] == "tracks" || v["type"] == "edit"
+    });
+    assert!(
+        more.iter()
+            .all(|v| v["type"] != "tracks" && v["type"] != "edit"),
+        "{more:?}"
+    );
+    daemon.shutdown();
+}
