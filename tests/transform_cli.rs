@@ -207,7 +207,7 @@ fn well_formed(svg: &str) -> Result<(), String> {
 }
 
 #[test]
-fn compare_prints_five_variants_and_plots_them() {
+fn compare_prints_six_variants_and_plots_them() {
     let dir = tempfile::tempdir().unwrap();
     let svg = dir.path().join("cmp.svg");
     let out = bin()
@@ -224,6 +224,7 @@ fn compare_prints_five_variants_and_plots_them() {
     let t = String::from_utf8_lossy(&out.stdout);
     for name in [
         "least-effort",
+        "travel-only",
         "euclidean",
         "manhattan",
         "no-feedback",
@@ -231,7 +232,9 @@ fn compare_prints_five_variants_and_plots_them() {
         "I_d",
         "σ_min_dis",
         "σ_curr_eft",
+        "swaps",
         "overlaps",
+        "95 % confidence interval",
     ] {
         assert!(t.contains(name), "missing `{name}`:\n{t}");
     }
@@ -269,43 +272,83 @@ fn compare_prints_five_variants_and_plots_them() {
     assert!(text.matches("<polyline").count() >= 30);
 }
 
+/// The JSON of `transform compare`: one row per variant, over the seeds, each
+/// with its switches as booleans, the exchanges of targets, and every measure as
+/// a mean with its 95 % interval; the subgroups' count, convergence and
+/// locality. The ORCA row is ORCA as RVO2 runs it (no feedback, no exchanges of
+/// targets, no positional contacts, no settling), and the paper preset turns the
+/// project's additions off in every row.
 #[test]
-fn compare_json_has_a_row_per_variant() {
-    let out = bin()
-        .args(["transform", "compare", "--from", "line", "--to", "square"])
-        .args(["--agents", "20", "--json"])
-        .output()
-        .unwrap();
-    let v = json_of(&out);
-    let rows = v["variants"].as_array().unwrap();
-    let names: Vec<&str> = rows
-        .iter()
-        .map(|r| r["variant"].as_str().unwrap())
-        .collect();
-    assert_eq!(
-        names,
-        [
-            "least-effort",
-            "euclidean",
-            "manhattan",
-            "no-feedback",
-            "orca"
-        ]
-    );
-    for r in rows {
-        for k in [
-            "arrival_s",
-            "arrived_fraction",
-            "I_d",
-            "sigma_min_dis",
-            "sigma_curr_eft",
-            "overlapping_pairs",
-        ] {
-            assert!(r.get(k).is_some(), "no `{k}` in {r}");
+fn compare_json_has_a_row_per_variant_with_intervals_and_switches() {
+    for preset in [None, Some("paper")] {
+        let mut cmd = bin();
+        cmd.args(["transform", "compare", "--from", "line", "--to", "square"])
+            .args(["--agents", "20", "--seeds", "3", "--json"]);
+        if let Some(p) = preset {
+            cmd.args(["--preset", p]);
         }
+        let v = json_of(&cmd.output().unwrap());
+        assert_eq!(v["seeds"], 3);
+        let rows = v["rows"].as_array().unwrap();
+        let names: Vec<&str> = rows
+            .iter()
+            .map(|r| r["variant"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "least-effort",
+                "travel-only",
+                "euclidean",
+                "manhattan",
+                "no-feedback",
+                "orca"
+            ]
+        );
+        for r in rows {
+            assert_eq!(r["seeds"], 3, "{r}");
+            for k in ["feedback", "exchanges", "contacts", "settling", "fades"] {
+                assert!(r[k].is_boolean(), "`{k}` of {r}");
+            }
+            assert!(
+                r["swaps"]["mean"].as_f64().is_some(),
+                "no swap count in {r}"
+            );
+            for k in ["i_d", "sigma_min_dis", "sigma_curr_eft", "arrived_fraction"] {
+                assert!(r[k]["mean"].as_f64().is_some(), "`{k}` of {r}");
+                assert!(r[k]["ci95"].as_f64().unwrap() >= 0.0, "`{k}` of {r}");
+            }
+            assert!(r["arrival_s"].get("mean").is_some() && r["arrival_s"].get("ci95").is_some());
+            let paper = preset.is_some() || r["mover"] == "orca";
+            for k in ["exchanges", "contacts", "settling", "fades"] {
+                assert_eq!(r[k], !paper, "`{k}` of {r}");
+            }
+            if paper {
+                assert_eq!(r["swaps"]["mean"], 0.0, "{r}");
+            }
+        }
+        let orca = &rows[5];
+        assert_eq!(orca["mover"], "orca");
+        assert_eq!(orca["feedback"], false);
+        assert_eq!(rows[4]["feedback"], false);
+        assert_eq!(rows[0]["feedback"], true);
+        assert_eq!(rows[1]["lambda"], 1.0);
+        let sub = &v["subgroups"];
+        assert!(sub["count"]["mean"].as_f64().unwrap() >= 1.0, "{sub}");
+        assert!(sub["converged"].is_boolean(), "{sub}");
+        let loc = sub["locality"]["mean"].as_f64().unwrap();
+        assert!((0.0..=1.0).contains(&loc), "{sub}");
+        // The common window is no longer than the shortest run.
+        assert!(v["window_s"].as_f64().unwrap() > 0.0);
     }
-    assert_eq!(rows[4]["mover"], "orca");
-    assert_eq!(rows[3]["feedback"], false);
+    assert_error(
+        &bin()
+            .args(["transform", "compare", "--from", "line", "--to", "square"])
+            .args(["--seeds", "0"])
+            .output()
+            .unwrap(),
+        &["--seeds must be 1 to 100, got 0"],
+    );
 }
 
 #[test]

@@ -51,12 +51,14 @@ pub struct TransformCmd {
 /// Subcommands of `transform`.
 #[derive(Subcommand, Debug)]
 pub enum TransformSub {
-    /// The paper's comparisons on one start and one set of targets: least-effort,
+    /// The paper's comparisons over `--seeds` starts: least-effort (and λ = 1),
     /// Euclidean and Manhattan pairing (section 5.2, Table 2), without the
-    /// mutual-information feedback (section 5.3), and ORCA on the least-effort
-    /// pairing (section 5.4); a table of arrival time and the three measures,
-    /// `--svg` plots the measures over time.
-    Compare(Common),
+    /// mutual-information feedback (section 5.3), and ORCA as RVO2 runs it on
+    /// the least-effort pairing (section 5.4); means and 95 % intervals of the
+    /// arrival time, the three measures over a common window and the exchanges of
+    /// targets; `--preset paper` without the project's additions; `--svg` plots
+    /// the first seed's measures over time.
+    Compare(super::transform_compare::CompareArgs),
 }
 
 /// What every transform run needs.
@@ -118,7 +120,7 @@ pub enum CostArg {
 /// Runs `transform` or `transform compare`.
 pub fn transform(c: TransformCmd) -> Result<()> {
     match c.sub {
-        Some(TransformSub::Compare(common)) => super::transform_compare::compare(&common),
+        Some(TransformSub::Compare(args)) => super::transform_compare::compare(&args),
         None => single(&c.run),
     }
 }
@@ -193,8 +195,11 @@ pub fn run(plan: &TransformPlan, params: &MoveParams, seed: u64, keep_paths: boo
             }
         }
     }
+    // Short: not within arrive_m of the target, or (with settling) not settled.
     let short = (0..pos.len())
-        .filter(|&i| !r.settled(i))
+        .filter(|&i| {
+            (pos[i] - r.targets()[i]).norm() > params.arrive_m || (params.settling && !r.settled(i))
+        })
         .map(|i| (i, (pos[i] - r.targets()[i]).norm(), vel[i].norm()))
         .collect();
     Recorded {

@@ -1,49 +1,233 @@
 //! `crowdtouch transform compare`: the comparisons of formation-transform section
-//! 5 on one start (the agents sampled in the source) and one set of targets:
+//! 5, on `--seeds` starts (each seed samples the agents in the source, the targets
+//! and the run's own draws):
 //!
 //! | variant | pairing | mover | feedback | paper |
 //! |---|---|---|---|---|
-//! | `least-effort` | ΔE, eq. 3 | social forces | on | 5.2, Table 2 |
+//! | `least-effort` | ΔE, eq. 3, the config's λ | social forces | on | 5.2, Table 2 |
+//! | `travel-only` | ΔE at λ = 1: squared distance | social forces | on | 5.2 (λ's end) |
 //! | `euclidean` | Euclidean | social forces | on | 5.2, Table 2 |
 //! | `manhattan` | Manhattan | social forces | on | 5.2, Table 2 |
 //! | `no-feedback` | ΔE, eq. 3 | social forces | off | 5.3 |
-//! | `orca` | ΔE, eq. 3 | ORCA | — | 5.4, Table 3 |
+//! | `orca` | ΔE, eq. 3 | ORCA as RVO2 runs it | off | 5.4, Table 3 |
 //!
-//! The last two share the first's pairing and subgroups. Each row gives the time
-//! to arrive (or the share arrived at the timeout) and the three measures of
-//! section 5.1 averaged over the run; `--svg` plots them over time.
+//! The social-force rows use the config's movement model, with the project's
+//! additions (fades, settling, positional contacts, exchanges of targets) unless
+//! `--preset paper` turns them off; the ORCA row never has them
+//! ([`MoveParams::rvo2_orca`]). Each row gives, over the seeds, the mean and the
+//! 95 % confidence interval of the arrival time, of the three measures of section
+//! 5.1 averaged over a *common window* (the first seconds every run of every row
+//! lasted, or `--window`) and over each run's own length (normalised progress), the
+//! exchanges of targets per run and the overlaps. `--svg` plots the first seed's
+//! measures over time.
 
 use super::output::outln;
 use super::transform::{finite_or_null, run, Common, Recorded};
 use super::transform_setup::Setup;
 use super::transform_svg;
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
+use clap::{Args, ValueEnum};
 use crowdtouch::crowd::assign::Cancel;
-use crowdtouch::crowd::transform::{Mover, PairCost, TransformPlan};
-use serde_json::json;
+use crowdtouch::crowd::transform::{
+    interval, locality, window_mean, Interval, Measures, MoveParams, Mover, PairCost, TransformPlan,
+};
+use serde_json::{json, Value};
 use std::time::Instant;
 
-/// One row of the comparison.
+/// `transform compare`.
+#[derive(Args, Debug, Clone)]
+pub struct CompareArgs {
+    /// Source, target, crowd, output; `--seed` is the first seed.
+    #[command(flatten)]
+    pub common: Common,
+    /// Runs per variant, with seeds `--seed`, `--seed` + 1, …: means and 95 %
+    /// confidence intervals over them.
+    #[arg(long, default_value_t = 1)]
+    pub seeds: u32,
+    /// `paper`: the social-force rows without the project's additions (no fades,
+    /// no settling, no positional contacts, no exchanges of targets).
+    #[arg(long, value_enum)]
+    pub preset: Option<Preset>,
+    /// The common window of the measures (s); default: the shortest run of all.
+    #[arg(long)]
+    pub window: Option<f64>,
+}
+
+/// `--preset`.
+#[derive(ValueEnum, Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Preset {
+    /// Only what formation-transform has.
+    Paper,
+}
+
+/// Most seeds of one comparison.
+const MAX_SEEDS: u32 = 100;
+
+/// One row of the comparison, one seed's run.
 pub struct Variant {
     /// Its name in the table.
     pub name: &'static str,
     /// The pairing cost.
     pub cost: PairCost,
-    /// What moves the agents.
-    pub mover: Mover,
-    /// Mutual-information feedback (eqs. 18–19).
-    pub feedback: bool,
+    /// What moves the agents, and how.
+    pub params: MoveParams,
     /// How long its pairing and subgroups took (ms; 0 for a shared one).
     pub prepare_ms: f64,
-    /// Subgroups of its plan.
-    pub subgroups: usize,
     /// The run.
     pub rec: Recorded,
 }
 
+impl Variant {
+    /// Mutual-information feedback (eqs. 18–19).
+    pub fn feedback(&self) -> bool {
+        self.params.feedback
+    }
+
+    /// What moves the agents.
+    pub fn mover(&self) -> Mover {
+        self.params.mover
+    }
+}
+
+/// The subgroups of one seed's least-effort plan.
+struct GroupFacts {
+    count: usize,
+    converged: bool,
+    iterations: u32,
+    locality: f64,
+}
+
 /// `transform compare`.
-pub fn compare(c: &Common) -> Result<()> {
-    let setup = Setup::new(c)?;
+pub fn compare(a: &CompareArgs) -> Result<()> {
+    if !(1..=MAX_SEEDS).contains(&a.seeds) {
+        bail!("--seeds must be 1 to {MAX_SEEDS}, got {}", a.seeds);
+    }
+    if let Some(w) = a.window {
+        if !(w.is_finite() && w > 0.0) {
+            bail!("--window must be a positive number of seconds, got {w}");
+        }
+    }
+    let c = &a.common;
+    let mut runs: Vec<Vec<Variant>> = Vec::new();
+    let mut groups = Vec::new();
+    let mut first: Option<Setup> = None;
+    for k in 0..a.seeds {
+        let mut ck = c.clone();
+        ck.seed = c.seed.wrapping_add(u64::from(k));
+        let setup = Setup::new(&ck)?;
+        let (row, g) = one_seed(&setup, a.preset)?;
+        runs.push(row);
+        groups.push(g);
+        if first.is_none() {
+            first = Some(setup);
+        }
+    }
+    let setup = first.ok_or_else(|| anyhow!("no seed ran"))?;
+    let lambda = setup.cfg.formations.lambda;
+    let window_s = a.window.unwrap_or_else(|| {
+        runs.iter()
+            .flatten()
+            .map(|v| v.rec.summary.simulated_s)
+            .fold(f64::INFINITY, f64::min)
+    });
+    if let Some(path) = &c.svg {
+        let title = format!(
+            "{} → {}, {} agents, seed {}: the measures of formation-transform section 5.1 over time",
+            setup.from_label, setup.to_label, setup.agents, c.seed
+        );
+        let text = transform_svg::measures_plot(&runs[0], &title);
+        std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    let rows: Vec<Row> = (0..runs[0].len())
+        .map(|r| Row::of(runs.iter().map(|seed| &seed[r]).collect(), window_s))
+        .collect();
+    let sub = GroupSummary::of(&groups);
+    if c.json {
+        let v = json!({
+            "from": setup.from_label,
+            "to": setup.to_label,
+            "agents": setup.agents,
+            "radius_m": setup.radius_m,
+            "area_m2": setup.place.area_m2,
+            "seed": c.seed,
+            "seeds": a.seeds,
+            "preset": a.preset.map(|_| "paper"),
+            "lambda": lambda,
+            "window_s": window_s,
+            "rows": rows.iter().map(Row::json).collect::<Vec<_>>(),
+            "subgroups": sub.json(),
+        });
+        outln!("{v}")?;
+        return Ok(());
+    }
+    outln!(
+        "transform compare {} → {}: {} agents (radius {} m), λ {lambda}, {} seed{} from {}{}",
+        setup.from_label,
+        setup.to_label,
+        setup.agents,
+        setup.radius_m,
+        a.seeds,
+        if a.seeds == 1 { "" } else { "s" },
+        c.seed,
+        if a.preset.is_some() {
+            ", preset paper"
+        } else {
+            ""
+        }
+    )?;
+    if let Some(note) = &setup.area_note {
+        outln!("area: {note}")?;
+    }
+    outln!(
+        "{:<13} {:<12} {:<13} {:>17} {:>15} {:>17} {:>17} {:>8} {:>9}",
+        "variant",
+        "pairing",
+        "mover",
+        "arrival (s)",
+        "I_d",
+        "σ_min_dis (m)",
+        "σ_curr_eft (m)",
+        "swaps",
+        "overlaps"
+    )?;
+    for r in &rows {
+        outln!(
+            "{:<13} {:<12} {:<13} {:>17} {:>15} {:>17} {:>17} {:>8.1} {:>9.1}",
+            r.name,
+            r.cost,
+            r.mover_label(),
+            r.arrival_text(),
+            pm(&r.window.0, 3),
+            pm(&r.window.1, 4),
+            pm(&r.window.2, 4),
+            r.swaps.mean,
+            r.overlaps.mean
+        )?;
+    }
+    outln!(
+        "measures averaged over the first {window_s:.2} s of every run (I_d eq. 17 in bits, σ_min_dis eq. 24, σ_curr_eft eq. 26); ± is the 95 % confidence interval over the seeds; SF: social forces, MI: mutual-information feedback, +ours: fades, settling, contacts and exchanges of targets"
+    )?;
+    outln!(
+        "subgroups (least effort): {:.1} ± {:.1}, converged in {} of {} seeds, locality {} (agents whose nearest neighbour is in their own subgroup)",
+        sub.count.mean,
+        sub.count.ci95,
+        sub.converged,
+        a.seeds,
+        pm(&sub.locality, 3)
+    )?;
+    if let Some(path) = &c.svg {
+        outln!("wrote {}", path.display())?;
+    }
+    Ok(())
+}
+
+/// `mean ± ci95` to `digits` decimals.
+fn pm(i: &Interval, digits: usize) -> String {
+    format!("{:.digits$} ± {:.digits$}", i.mean, i.ci95)
+}
+
+/// One seed: the four pairings and the six runs.
+fn one_seed(setup: &Setup, preset: Option<Preset>) -> Result<(Vec<Variant>, GroupFacts)> {
     let targets = setup.targets()?;
     let s = &setup.settings;
     let lambda = setup.cfg.formations.lambda;
@@ -60,140 +244,222 @@ pub fn compare(c: &Common) -> Result<()> {
         .ok_or_else(|| anyhow!("pairing was cancelled"))?;
         Ok((plan, t0.elapsed().as_secs_f64() * 1e3))
     };
+    let social = match preset {
+        Some(Preset::Paper) => s.moves.clone().paper(),
+        None => s.moves.clone(),
+    };
     let (least, least_ms) = plan_for(PairCost::LeastEffort { lambda })?;
+    let facts = GroupFacts {
+        count: least.subgroups.count(),
+        converged: least.subgroups.converged,
+        iterations: least.subgroups.iterations,
+        locality: locality(&least.sources_m, &least.subgroups.group_of),
+    };
     let mut variants = Vec::new();
-    let mut add = |name, plan: &TransformPlan, ms, mover, feedback: bool| {
-        let mut p = s.moves.clone();
-        p.mover = mover;
-        p.feedback = feedback;
-        let rec = run(plan, &p, setup.seed, false);
+    let mut add = |name, plan: &TransformPlan, ms, params: MoveParams| {
+        let rec = run(plan, &params, setup.seed, false);
         variants.push(Variant {
             name,
             cost: plan.cost,
-            mover,
-            feedback,
+            params,
             prepare_ms: ms,
-            subgroups: plan.subgroups.count(),
             rec,
         });
     };
-    let feedback = s.moves.feedback;
-    add(
-        "least-effort",
-        &least,
-        least_ms,
-        Mover::SocialForce,
-        feedback,
-    );
+    add("least-effort", &least, least_ms, social.clone());
+    let (travel, ms) = plan_for(PairCost::LeastEffort { lambda: 1.0 })?;
+    add("travel-only", &travel, ms, social.clone());
     for (name, cost) in [
         ("euclidean", PairCost::Euclidean),
         ("manhattan", PairCost::Manhattan),
     ] {
         let (plan, ms) = plan_for(cost)?;
-        add(name, &plan, ms, Mover::SocialForce, feedback);
+        add(name, &plan, ms, social.clone());
     }
-    add("no-feedback", &least, 0.0, Mover::SocialForce, false);
-    add("orca", &least, 0.0, Mover::Orca, feedback);
-    if let Some(path) = &c.svg {
-        let title = format!(
-            "{} → {}, {} agents: the measures of formation-transform section 5.1 over time",
-            setup.from_label, setup.to_label, setup.agents
-        );
-        let text = transform_svg::measures_plot(&variants, &title);
-        std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?;
-    }
-    if c.json {
-        let rows: Vec<_> = variants
+    let mut quiet = social.clone();
+    quiet.feedback = false;
+    add("no-feedback", &least, 0.0, quiet);
+    add("orca", &least, 0.0, s.moves.clone().rvo2_orca());
+    Ok((variants, facts))
+}
+
+/// One variant over the seeds.
+struct Row {
+    name: &'static str,
+    cost: &'static str,
+    lambda: Option<f64>,
+    params: MoveParams,
+    seeds: usize,
+    /// Over the runs that arrived.
+    arrival: Interval,
+    arrived_runs: usize,
+    arrived_fraction: Interval,
+    /// I_d, σ_min_dis, σ_curr_eft over the common window.
+    window: (Interval, Interval, Interval),
+    /// The same over each run's own length.
+    progress: (Interval, Interval, Interval),
+    swaps: Interval,
+    overlaps: Interval,
+    min_distance_m: f64,
+    prepare_ms: Interval,
+    step_us_p99: u64,
+}
+
+impl Row {
+    fn of(runs: Vec<&Variant>, window_s: f64) -> Row {
+        let v0 = runs[0];
+        let collect =
+            |f: &dyn Fn(&Variant) -> f64| -> Vec<f64> { runs.iter().map(|v| f(v)).collect() };
+        let arrivals: Vec<f64> = runs.iter().filter_map(|v| v.rec.arrival_s()).collect();
+        let windows: Vec<Option<Measures>> = runs
             .iter()
-            .map(|v| {
-                let sm = &v.rec.summary;
-                json!({
-                    "variant": v.name,
-                    "cost": v.cost.name(),
-                    "mover": mover_name(v.mover),
-                    "feedback": v.feedback,
-                    "subgroups": v.subgroups,
-                    "arrival_s": v.rec.arrival_s(),
-                    "timed_out": sm.timed_out,
-                    "arrived_fraction": sm.arrived_fraction,
-                    "steps": sm.steps,
-                    "simulated_s": sm.simulated_s,
-                    "I_d": sm.mean.i_d,
-                    "sigma_min_dis": sm.mean.sigma_min_dis_m,
-                    "sigma_curr_eft": sm.mean.sigma_curr_eft_m,
-                    "overlapping_pairs": sm.overlapping_pairs,
-                    "min_distance_m": finite_or_null(sm.min_distance_m),
-                    "mean_travel_m": sm.mean_travel_m,
-                    "max_travel_m": sm.max_travel_m,
-                    "prepare_ms": v.prepare_ms,
-                    "step_us_p50": v.rec.step_us_at(0.5),
-                    "step_us_p99": v.rec.step_us_at(0.99),
-                })
-            })
+            .map(|v| window_mean(v.rec.series.iter().map(|&(t, m, _)| (t, m)), window_s))
             .collect();
-        let v = json!({
-            "from": setup.from_label,
-            "to": setup.to_label,
-            "agents": setup.agents,
-            "radius_m": setup.radius_m,
-            "area_m2": setup.place.area_m2,
-            "seed": setup.seed,
-            "lambda": lambda,
-            "variants": rows,
-        });
-        outln!("{v}")?;
-        return Ok(());
-    }
-    outln!(
-        "transform compare {} → {}: {} agents (radius {} m), same start and targets, λ {lambda}",
-        setup.from_label,
-        setup.to_label,
-        setup.agents,
-        setup.radius_m
-    )?;
-    if let Some(note) = &setup.area_note {
-        outln!("area: {note}")?;
-    }
-    outln!(
-        "{:<14} {:<13} {:<13} {:>14} {:>9} {:>14} {:>15} {:>9}",
-        "variant",
-        "pairing",
-        "mover",
-        "arrival",
-        "I_d",
-        "σ_min_dis (m)",
-        "σ_curr_eft (m)",
-        "overlaps"
-    )?;
-    for v in &variants {
-        let sm = &v.rec.summary;
-        let arrival = match v.rec.arrival_s() {
-            Some(t) => format!("{t:.2} s"),
-            None => format!("{:.1} % arrived", 100.0 * sm.arrived_fraction),
+        let w = |f: &dyn Fn(&Measures) -> f64| -> Interval {
+            interval(
+                &windows
+                    .iter()
+                    .map(|m| m.as_ref().map_or(f64::NAN, f))
+                    .collect::<Vec<_>>(),
+            )
         };
-        let mover = match v.mover {
-            Mover::Orca => "ORCA".to_string(),
-            Mover::SocialForce => format!("SF, MI {}", super::transform::on_off(v.feedback)),
+        let p = |f: &dyn Fn(&Measures) -> f64| -> Interval {
+            interval(&collect(&|v| f(&v.rec.summary.mean)))
         };
-        outln!(
-            "{:<14} {:<13} {:<13} {:>14} {:>9.4} {:>14.4} {:>15.4} {:>9}",
-            v.name,
-            v.cost.name(),
-            mover,
-            arrival,
-            sm.mean.i_d,
-            sm.mean.sigma_min_dis_m,
-            sm.mean.sigma_curr_eft_m,
-            sm.overlapping_pairs
-        )?;
+        Row {
+            name: v0.name,
+            cost: v0.cost.name(),
+            lambda: match v0.cost {
+                PairCost::LeastEffort { lambda } => Some(lambda),
+                _ => None,
+            },
+            params: v0.params.clone(),
+            seeds: runs.len(),
+            arrival: interval(&arrivals),
+            arrived_runs: arrivals.len(),
+            arrived_fraction: interval(&collect(&|v| v.rec.summary.arrived_fraction)),
+            window: (
+                w(&|m| m.i_d),
+                w(&|m| m.sigma_min_dis_m),
+                w(&|m| m.sigma_curr_eft_m),
+            ),
+            progress: (
+                p(&|m| m.i_d),
+                p(&|m| m.sigma_min_dis_m),
+                p(&|m| m.sigma_curr_eft_m),
+            ),
+            swaps: interval(&collect(&|v| v.rec.summary.swaps as f64)),
+            overlaps: interval(&collect(&|v| v.rec.summary.overlapping_pairs as f64)),
+            min_distance_m: runs
+                .iter()
+                .map(|v| v.rec.summary.min_distance_m)
+                .fold(f64::INFINITY, f64::min),
+            prepare_ms: interval(&collect(&|v| v.prepare_ms)),
+            step_us_p99: runs
+                .iter()
+                .map(|v| v.rec.step_us_at(0.99))
+                .max()
+                .unwrap_or(0),
+        }
     }
-    outln!(
-        "measures averaged over each run's steps (I_d eq. 17 in bits, σ_min_dis eq. 24, σ_curr_eft eq. 26); SF: social forces, MI: mutual-information feedback"
-    )?;
-    if let Some(path) = &c.svg {
-        outln!("wrote {}", path.display())?;
+
+    fn mover_label(&self) -> String {
+        match self.params.mover {
+            Mover::Orca => "ORCA (RVO2)".to_string(),
+            Mover::SocialForce => format!(
+                "SF, MI {}{}",
+                super::transform::on_off(self.params.feedback),
+                if self.params.exchanges || self.params.settling {
+                    " +ours"
+                } else {
+                    ""
+                }
+            ),
+        }
     }
-    Ok(())
+
+    fn arrival_text(&self) -> String {
+        if self.arrived_runs == self.seeds {
+            pm(&self.arrival, 2)
+        } else {
+            format!(
+                "{}/{} ({:.1} % in)",
+                self.arrived_runs,
+                self.seeds,
+                100.0 * self.arrived_fraction.mean
+            )
+        }
+    }
+
+    fn json(&self) -> Value {
+        let iv = |i: &Interval| json!({"mean": finite_or_null(i.mean), "ci95": finite_or_null(i.ci95), "n": i.n});
+        let p = &self.params;
+        json!({
+            "variant": self.name,
+            "cost": self.cost,
+            "lambda": self.lambda,
+            "mover": mover_name(p.mover),
+            "seeds": self.seeds,
+            "feedback": p.feedback,
+            "exchanges": p.exchanges,
+            "contacts": p.contacts,
+            "settling": p.settling,
+            "fades": p.fades,
+            "subgroup_forces": p.subgroup_forces,
+            "swaps": iv(&self.swaps),
+            "arrival_s": iv(&self.arrival),
+            "arrived_runs": self.arrived_runs,
+            "arrived_fraction": iv(&self.arrived_fraction),
+            "i_d": iv(&self.window.0),
+            "sigma_min_dis": iv(&self.window.1),
+            "sigma_curr_eft": iv(&self.window.2),
+            "progress": {
+                "i_d": iv(&self.progress.0),
+                "sigma_min_dis": iv(&self.progress.1),
+                "sigma_curr_eft": iv(&self.progress.2),
+            },
+            "overlapping_pairs": iv(&self.overlaps),
+            "min_distance_m": finite_or_null(self.min_distance_m),
+            "prepare_ms": iv(&self.prepare_ms),
+            "step_us_p99": self.step_us_p99,
+        })
+    }
+}
+
+/// The least-effort plans' subgroups over the seeds.
+struct GroupSummary {
+    count: Interval,
+    converged: usize,
+    seeds: usize,
+    iterations: Interval,
+    locality: Interval,
+}
+
+impl GroupSummary {
+    fn of(g: &[GroupFacts]) -> GroupSummary {
+        GroupSummary {
+            count: interval(&g.iter().map(|f| f.count as f64).collect::<Vec<_>>()),
+            converged: g.iter().filter(|f| f.converged).count(),
+            seeds: g.len(),
+            iterations: interval(
+                &g.iter()
+                    .map(|f| f64::from(f.iterations))
+                    .collect::<Vec<_>>(),
+            ),
+            locality: interval(&g.iter().map(|f| f.locality).collect::<Vec<_>>()),
+        }
+    }
+
+    fn json(&self) -> Value {
+        let iv = |i: &Interval| json!({"mean": finite_or_null(i.mean), "ci95": finite_or_null(i.ci95), "n": i.n});
+        json!({
+            "count": iv(&self.count),
+            "converged": self.converged == self.seeds,
+            "converged_runs": self.converged,
+            "iterations": iv(&self.iterations),
+            "locality": iv(&self.locality),
+        })
+    }
 }
 
 /// `social-force` or `orca`.

@@ -31,7 +31,9 @@ const CUT_FACTOR: f64 = 3.0;
 /// The time axis is never cut shorter than this (s).
 const MIN_CUT_S: f64 = 10.0;
 /// Colours of the compare variants, in their order.
-const VARIANT_COLOURS: [&str; 5] = ["#1f4e9c", "#e07b00", "#2b9348", "#8e44ad", "#c0392b"];
+const VARIANT_COLOURS: [&str; 6] = [
+    "#1f4e9c", "#17becf", "#e07b00", "#2b9348", "#8e44ad", "#c0392b",
+];
 
 /// Subgroup `k`'s colour: hues a golden angle apart.
 fn group_colour(k: u32) -> String {
@@ -335,11 +337,11 @@ pub fn measures_plot(variants: &[Variant], title: &str) -> String {
             "{}: {} pairing, {}; {arrival}",
             v.name,
             v.cost.name(),
-            match v.mover {
+            match v.mover() {
                 crowdtouch::crowd::transform::Mover::Orca => "ORCA".to_string(),
                 crowdtouch::crowd::transform::Mover::SocialForce => format!(
                     "social forces, feedback {}",
-                    super::transform::on_off(v.feedback)
+                    super::transform::on_off(v.feedback())
                 ),
             }
         );
@@ -365,8 +367,8 @@ pub fn measures_plot(variants: &[Variant], title: &str) -> String {
 /// pairing (no feedback, ORCA) dashed.
 fn dash(i: usize) -> &'static str {
     match i {
-        3 => r##" stroke-dasharray="6 3""##,
-        4 => r##" stroke-dasharray="2 2""##,
+        4 => r##" stroke-dasharray="6 3""##,
+        5 => r##" stroke-dasharray="2 2""##,
         _ => "",
     }
 }

@@ -11,7 +11,9 @@
 //! | social forces with subgroup terms, mutual-information feedback | `run.rs` (the step), `params.rs` (its constants), `social.rs` (forces), `feedback.rs` (eqs. 11–19), `crate::crowd::agents::NeighbourGrid` (neighbours and nearest distances) | 3.3, 3.5, eqs. 7–19, 21–23 |
 //! | the objective measures | `measures.rs` | 5.1, eqs. 17, 24–26 |
 //! | the ORCA baseline of the comparison | `orca.rs` | 5.4 |
+//! | comparing variants over seeds: means with 95 % intervals, a common time window, subgroup locality | `experiment.rs` | 5 |
 
+mod experiment;
 mod feedback;
 mod measures;
 mod orca;
@@ -22,6 +24,7 @@ mod run;
 mod social;
 mod subgroups;
 
+pub use experiment::{interval, locality, t_975, window_mean, Interval};
 pub use measures::Measures;
 pub use pairing::{pair, PairCost};
 pub use prepare::{PreparedTransform, TransformError, TransformPlan, TransformRequest};

@@ -59,6 +59,22 @@ pub struct MoveParams {
     pub feedback: bool,
     /// Subgroup attraction and cross-group repulsion (eqs. 21–23).
     pub subgroup_forces: bool,
+    /// Ours, not the paper's: the forces other than the driving one fade out over
+    /// the last [`fade_m`](Self::fade_m) before the target. Off: they act in full
+    /// until an agent settles (or, without settling, always).
+    pub fades: bool,
+    /// Ours: an arrived agent slow enough settles (stops and holds; no force acts
+    /// on it, and ORCA gives it almost no share of avoidance). Off: arrived agents
+    /// keep being driven to their targets and keep avoiding, as in RVO2, and a run
+    /// ends when every agent is within [`arrive_m`](Self::arrive_m) of its target.
+    pub settling: bool,
+    /// Ours: after each substep, pairs closer than two radii are moved apart
+    /// positionally, by right of way (step 5 of `run.rs`). Off: only the mover
+    /// keeps agents apart (overlaps are then measured, not removed).
+    pub contacts: bool,
+    /// Ours: two blocked agents heading for targets beyond each other exchange
+    /// targets (step 6 of `run.rs`). Off: targets stay as the pairing gave them.
+    pub exchanges: bool,
     /// An agent within this distance of its target has arrived (m).
     pub arrive_m: f64,
     /// An arrived agent slower than this settles: it stops and holds (m/s).
@@ -72,6 +88,31 @@ pub struct MoveParams {
 }
 
 impl MoveParams {
+    /// These parameters with only what formation-transform has: no fades, no
+    /// settling, no positional contacts, no exchanges of targets (the paper's
+    /// method as written: social forces with subgroups and feedback, eqs. 7–23).
+    ///
+    /// Without settling, neighbours' repulsion holds agents a little off their
+    /// targets for good, so an agent counts as arrived within one agent radius of
+    /// its target (its disc covers it) rather than `arrive_m`'s few centimetres.
+    pub fn paper(mut self) -> MoveParams {
+        self.arrive_m = self.arrive_m.max(self.radius_m);
+        self.fades = false;
+        self.settling = false;
+        self.contacts = false;
+        self.exchanges = false;
+        self
+    }
+
+    /// ORCA as RVO2 runs it (the paper's Table 3 baseline): no feedback, no
+    /// exchanges, no positional contacts, and arrived agents keep avoiding.
+    pub fn rvo2_orca(mut self) -> MoveParams {
+        self.mover = Mover::Orca;
+        self.feedback = false;
+        self.subgroup_forces = false;
+        self.paper()
+    }
+
     /// These parameters for agents of radius `radius_m`. Agents smaller than
     /// `self.radius_m` (a crowd shrunk to fit its area) get every length of the
     /// model scaled by the ratio — interaction range, `B`, `B'`, the fade, the
@@ -118,6 +159,10 @@ impl Default for MoveParams {
             sectors: 8,
             feedback: true,
             subgroup_forces: true,
+            fades: true,
+            settling: true,
+            contacts: true,
+            exchanges: true,
             arrive_m: 0.05,
             settle_speed_m_s: 0.6,
             timeout_s: 120.0,

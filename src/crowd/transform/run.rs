@@ -26,15 +26,25 @@
 //!    `WIDE_SWAP_PERIOD_S` any two up to `WIDE_SWAP_RADII` radii apart), each
 //!    heading for a target beyond the other, exchange targets when that shortens the sum of
 //!    their remaining distances by at least [`SWAP_GAIN_RADII`] radii. Agents are
-//!    interchangeable and the exchange lowers the effort the pairing minimises;
-//!    without it, two such agents hemmed in by settled neighbours push against
-//!    each other until the timeout (line → ring at 1,000 agents). Rare: the
-//!    summary counts them (`swaps`);
+//!    interchangeable; the exchange lowers the sum of *linear* remaining
+//!    distances, which is the Euclidean pairing's cost but not ΔE's (eq. 3) nor
+//!    Manhattan's, so it rewrites those pairings a little. Without it, two such
+//!    agents hemmed in by settled neighbours push against each other until the
+//!    timeout (line → ring at 1,000 agents). Not rare with the baselines'
+//!    pairings (tens to hundreds per run at 300 agents): the summary counts them
+//!    (`swaps`);
 //! 7. arrival: an agent within `arrive_m` of its target and slower than
 //!    `settle_speed` settles (the ramp brings it in below that speed, so it stops
 //!    as it enters, without overshoot): velocity zero, no forces act on it; it
 //!    moves again only when a contact pushes it more than `arrive_m` off its
 //!    target.
+//!
+//! The fades (step 3), the positional contacts (5), the exchanges (6) and the
+//! settling (7) are ours, not the paper's; each has a switch in [`MoveParams`]
+//! (`fades`, `contacts`, `exchanges`, `settling`), and [`MoveParams::paper`]
+//! turns them all off. Without settling, arrived agents keep being driven to
+//! their targets and keep interacting, and a run ends when every agent is within
+//! `arrive_m` of its target at once.
 //!
 //! Nothing allocates in a step once [`TransformRun::new`] has sized the buffers
 //! (the set of distinct overlapping pairs grows only past `4 n` such pairs, the
@@ -265,7 +275,9 @@ impl TransformRun {
         let substeps = (dt_s / max_sub).ceil().clamp(1.0, 64.0) as usize;
         let h = dt_s / substeps as f64;
         self.before.copy_from_slice(positions);
-        self.undo_blocks_nearby(positions);
+        if self.p.exchanges {
+            self.undo_blocks_nearby(positions);
+        }
         for k in 0..substeps {
             let t = scene.map(|(s, t0)| (s, t0 + k as f64 * h));
             self.substep(positions, velocities, h, t);
@@ -290,6 +302,8 @@ impl TransformRun {
             self.e[i] = if dn > 1e-12 { d / dn } else { Vec2::zeros() };
             self.fade[i] = if self.settled[i] {
                 0.0
+            } else if !p.fades {
+                1.0
             } else {
                 ((dn - p.arrive_m) / p.fade_m.max(1e-9)).clamp(0.0, 1.0)
             };
@@ -382,8 +396,18 @@ impl TransformRun {
                 pos[i] += v * h;
             }
         }
-        self.resolve_overlaps(pos, vel);
-        self.undo_head_on_blocks(pos);
+        if self.p.contacts {
+            self.resolve_overlaps(pos, vel);
+        }
+        if self.p.exchanges {
+            if !self.p.contacts {
+                // The exchange reads the contact list the overlap rounds make.
+                self.scratch.copy_from_slice(pos);
+                let touch = (2.0 + SWAP_TOUCH_RADII) * self.p.radius_m;
+                self.list_contacts(touch);
+            }
+            self.undo_head_on_blocks(pos);
+        }
         if let Some((s, t)) = scene {
             for x in pos.iter_mut() {
                 if s.signed_distance(*x, t) < self.p.radius_m {
@@ -593,6 +617,9 @@ impl TransformRun {
     /// Step 6: agents near enough and slow enough settle; settled agents pushed
     /// within `arrive_m` of their target stay settled.
     fn settle(&mut self, pos: &[Vec2], vel: &mut [Vec2]) {
+        if !self.p.settling {
+            return;
+        }
         let (arrive, slow) = (self.p.arrive_m, self.p.settle_speed_m_s);
         for i in 0..pos.len() {
             let near = (pos[i] - self.targets[i]).norm() <= arrive;
@@ -663,9 +690,18 @@ impl TransformRun {
         }
     }
 
-    /// Every agent arrived and settled, or the timeout passed.
+    /// Every agent arrived and settled (without settling: every agent within
+    /// `arrive_m` of its target at the last step), or the timeout passed.
     pub fn done(&self) -> bool {
-        self.settled.iter().all(|&s| s) || self.elapsed_s >= self.p.timeout_s
+        self.all_arrived() || self.elapsed_s >= self.p.timeout_s
+    }
+
+    fn all_arrived(&self) -> bool {
+        if self.p.settling {
+            self.settled.iter().all(|&s| s)
+        } else {
+            self.steps > 0 && self.last.arrived == self.targets.len()
+        }
     }
 
     /// Simulated time since the start (s).
@@ -706,7 +742,7 @@ impl TransformRun {
                 sigma_min_dis_m: self.sum.sigma_min_dis_m / steps,
                 sigma_curr_eft_m: self.sum.sigma_curr_eft_m / steps,
             },
-            timed_out: self.elapsed_s >= self.p.timeout_s && !self.settled.iter().all(|&s| s),
+            timed_out: self.elapsed_s >= self.p.timeout_s && !self.all_arrived(),
             swaps: self.swaps,
         }
     }
