@@ -73,7 +73,8 @@ fn a_drag_on_real_tracks_with_avoidance_leaves_no_collision() {
     assert_eq!(v["avoidance"]["pairs_after"], 0);
     let d = &v["drags"][0];
     assert_eq!(d["line"], 3);
-    assert!(d["hull_shape_error"]["edge_length_rms"].as_f64().unwrap() < 0.25);
+    // 0.167 with the locality of eq. 5 bending the cage near the handle (0.110 before).
+    assert!(d["hull_shape_error"]["edge_length_rms"].as_f64().unwrap() < 0.2);
     let corrected = d["speed_ratio_corrected"].as_array().unwrap();
     assert!(
         corrected[0].as_f64().unwrap() > 0.99 && corrected[1].as_f64().unwrap() < 1.01,

@@ -44,3 +44,4 @@ r corridor-group.jsonl --avoid-obstacles corridor --at 6 \
     --title "(e) a group wider than the passage kept out of the walls (section 4.2)" -o e-avoid-obstacles.svg
 r "$root/tests/fixtures/crowd/crowds_zara01.txt" --ops f-zara.ron \
     --title "(f) UCY zara01: the samples of 100-130 s dragged from (5, 6) to (6, 7)" -o f-zara.svg
+r group.jsonl --ops g-turn.ron --title "(g) the path's start held, its end dragged 90 degrees around it (eq. 6)" -o g-turn.svg

@@ -16,7 +16,9 @@
 //! | `error.rs` | [`EditError`]: why an edit was refused | |
 //! | `select.rs` | [`Selection`]: samples by id, rectangle, lasso, time window | 3.2 |
 //! | `hull.rs` | [`concave_hull`]: the cage polygon (geo's concave hull, grown by a margin; convex fallback) | 3.2 |
-//! | `cage.rs` | [`Cage`]: the spatial editor (MVC cage, ARAP mesh, locality and hull-edge energies, exact handle constraints); [`correct_speeds`] | 3.2, eqs. 1–9 |
+//! | `cage.rs` | [`Cage`]: the spatial editor (MVC cage, deformation mesh, exact handle constraints); [`correct_speeds`] | 3.2, eqs. 1–9 |
+//! | `cage_solve.rs` | [`CageParams`]; the deformation solve: cotangent-weighted ARAP, locality (eqs. 3, 5), the rotation-invariant hull-shape term (eqs. 7–8), the local/global iteration to convergence | 3.2, eqs. 1–8 |
+//! | `cage_mvc.rs` | mean value coordinates of many samples w.r.t. one cage polygon | 3.2, eq. 4 |
 //! | `temporal.rs` | [`retime`]: dragging time nodes, intervals kept, locality, times increasing | 3.3, eqs. 10–12 |
 //! | `collide.rs` | [`detect`]: people closer than a threshold in space-time (and the all-pairs reference) | 4.1.1 |
 //! | `clusters.rs` | [`Cluster`]s: identical tracks and people standing together, counted in closed form; the order detection visits people in | 4.1.1 |
@@ -33,6 +35,10 @@ mod avoid_params;
 mod avoid_shift;
 mod avoid_solve;
 mod cage;
+mod cage_mvc;
+mod cage_solve;
+#[cfg(test)]
+mod cage_tests;
 mod clusters;
 mod collide;
 mod error;
@@ -54,8 +60,11 @@ pub use avoid_params::{
     AvoidError, AvoidParams, AvoidReport, Remaining, Stuck, MIN_PACE_LENGTH_M, STILL_SPEED_M_S,
 };
 pub use cage::{
-    correct_speeds, Cage, CageParams, Handle, ShapeError, SpeedReport, MIN_INTERVAL_FRACTION,
-    PAPER_ALPHA, PAPER_BETA, PAPER_K,
+    correct_speeds, Cage, Handle, ShapeError, SolveStats, SpeedReport, MIN_INTERVAL_FRACTION,
+};
+pub use cage_solve::{
+    CageParams, DEFAULT_ALPHA, DEFAULT_BETA, DEFAULT_LOCALITY_RADIUS_M, DEFAULT_MAX_ITERATIONS,
+    DEFAULT_TOLERANCE_M, PAPER_ALPHA, PAPER_BETA, PAPER_K,
 };
 pub use clusters::{Cluster, MIN_STANDING_CLUSTER};
 pub use collide::{

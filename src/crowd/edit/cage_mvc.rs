@@ -1,0 +1,124 @@
+//! Mean value coordinates of many points w.r.t. one cage polygon (crowd-motion-editing
+//! section 3.2, eq. 4's rows): the per-polygon checks done once and the rows written
+//! into a matrix a block at a time.
+
+use crate::crowd::mesh::{MVC_EDGE_EPS, MVC_VERTEX_EPS};
+use crate::geom::{cross, Vec2};
+use nalgebra::DMatrix;
+
+/// Mean value coordinates w.r.t. one polygon, with the per-polygon checks done once:
+/// the same arithmetic as [`crate::crowd::mesh::mean_value_coordinates`] (each `‖v_i − p‖` computed once and
+/// shared by the vertex test and both adjacent edges), so the same coordinates.
+pub(super) struct HullMvc<'a> {
+    poly: &'a [Vec2],
+    /// `MVC_VERTEX_EPS` × the polygon's bounding-box diagonal.
+    vertex_eps: f64,
+}
+
+impl<'a> HullMvc<'a> {
+    /// `None` when `mean_value_coordinates` would fail for every point: fewer than
+    /// three vertices, a non-finite vertex, or a degenerate bounding box.
+    pub(super) fn new(poly: &'a [Vec2]) -> Option<HullMvc<'a>> {
+        if poly.len() < 3 || !poly.iter().all(|v| finite(*v)) {
+            return None;
+        }
+        let (mut lo, mut hi) = (poly[0], poly[0]);
+        for v in poly {
+            lo = lo.inf(v);
+            hi = hi.sup(v);
+        }
+        let scale = (hi - lo).norm();
+        if scale.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            return None;
+        }
+        Some(HullMvc {
+            poly,
+            vertex_eps: MVC_VERTEX_EPS * scale,
+        })
+    }
+
+    /// The coordinates of `p` into `out` (`r` is scratch, both of the polygon's
+    /// length); `None` where `mean_value_coordinates` returns an error.
+    pub(super) fn coordinates(&self, p: Vec2, r: &mut [f64], out: &mut [f64]) -> Option<()> {
+        let poly = self.poly;
+        let n = poly.len();
+        out.fill(0.0);
+        if !finite(p) {
+            return None;
+        }
+        for (ri, v) in r.iter_mut().zip(poly) {
+            *ri = (v - p).norm();
+        }
+        if let Some(i) = r.iter().position(|&ri| ri <= self.vertex_eps) {
+            out[i] = 1.0;
+            return Some(());
+        }
+        let mut tan_prev = 0.0;
+        for i in 0..n {
+            let j = if i + 1 == n { 0 } else { i + 1 };
+            let (di, dj) = (poly[i] - p, poly[j] - p);
+            let (ri, rj) = (r[i], r[j]);
+            let a = cross(di, dj);
+            let d = di.dot(&dj);
+            let rr = ri * rj;
+            if a.abs() <= MVC_EDGE_EPS * rr && d < 0.0 {
+                out.fill(0.0);
+                out[i] = rj / (ri + rj);
+                out[j] = ri / (ri + rj);
+                return Some(());
+            }
+            let t = if d >= 0.0 { a / (rr + d) } else { (rr - d) / a };
+            out[i] = t / ri;
+            if i > 0 {
+                out[i] += tan_prev / ri;
+            }
+            tan_prev = t;
+        }
+        out[0] += tan_prev / r[0];
+        let sum: f64 = out.iter().sum();
+        if !(sum.is_finite() && sum != 0.0) {
+            out.fill(0.0);
+            return None;
+        }
+        for w in out.iter_mut() {
+            *w /= sum;
+        }
+        if !out.iter().all(|w| w.is_finite()) {
+            out.fill(0.0);
+            return None;
+        }
+        Some(())
+    }
+}
+
+pub(super) fn finite(p: Vec2) -> bool {
+    p.x.is_finite() && p.y.is_finite()
+}
+
+/// The MVC of every point of `points` w.r.t. `poly` (N × n), or the index of the first
+/// point whose coordinates are undefined.
+///
+/// # Complexity
+/// O(N n).
+pub(super) fn mvc_matrix(mvc: &HullMvc<'_>, points: &[Vec2]) -> Result<DMatrix<f64>, usize> {
+    let n = mvc.poly.len();
+    // Rows are computed a block of samples at a time into a small row-major buffer
+    // and copied into the column-major matrix column by column.
+    const BLOCK: usize = 32;
+    let mut t = DMatrix::zeros(points.len(), n);
+    let mut rows = vec![0.0; BLOCK * n];
+    let mut r = vec![0.0; n];
+    for (b, block) in points.chunks(BLOCK).enumerate() {
+        let i0 = b * BLOCK;
+        for (k, (p, row)) in block.iter().zip(rows.chunks_exact_mut(n)).enumerate() {
+            mvc.coordinates(*p, &mut r, row).ok_or(i0 + k)?;
+        }
+        for j in 0..n {
+            let col = &mut t.column_mut(j);
+            for k in 0..block.len() {
+                col[i0 + k] = rows[k * n + j];
+            }
+        }
+    }
+    Ok(t)
+}
