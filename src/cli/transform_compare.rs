@@ -51,6 +51,10 @@ pub struct CompareArgs {
     /// The common window of the measures (s); default: the shortest run of all.
     #[arg(long)]
     pub window: Option<f64>,
+    /// End every run after this long if not every agent arrived (s); default:
+    /// the config's `formations.transform.timeout_s`.
+    #[arg(long)]
+    pub timeout: Option<f64>,
 }
 
 /// `--preset`.
@@ -102,9 +106,11 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     if !(1..=MAX_SEEDS).contains(&a.seeds) {
         bail!("--seeds must be 1 to {MAX_SEEDS}, got {}", a.seeds);
     }
-    if let Some(w) = a.window {
-        if !(w.is_finite() && w > 0.0) {
-            bail!("--window must be a positive number of seconds, got {w}");
+    for (name, v) in [("--window", a.window), ("--timeout", a.timeout)] {
+        if let Some(w) = v {
+            if !(w.is_finite() && w > 0.0) {
+                bail!("{name} must be a positive number of seconds, got {w}");
+            }
         }
     }
     let c = &a.common;
@@ -115,7 +121,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         let mut ck = c.clone();
         ck.seed = c.seed.wrapping_add(u64::from(k));
         let setup = Setup::new(&ck)?;
-        let (row, g) = one_seed(&setup, a.preset)?;
+        let (row, g) = one_seed(&setup, a.preset, a.timeout)?;
         runs.push(row);
         groups.push(g);
         if first.is_none() {
@@ -154,6 +160,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             "preset": a.preset.map(|_| "paper"),
             "lambda": lambda,
             "window_s": window_s,
+            "timeout_s": runs[0][0].params.timeout_s,
             "rows": rows.iter().map(Row::json).collect::<Vec<_>>(),
             "subgroups": sub.json(),
         });
@@ -227,7 +234,11 @@ fn pm(i: &Interval, digits: usize) -> String {
 }
 
 /// One seed: the four pairings and the six runs.
-fn one_seed(setup: &Setup, preset: Option<Preset>) -> Result<(Vec<Variant>, GroupFacts)> {
+fn one_seed(
+    setup: &Setup,
+    preset: Option<Preset>,
+    timeout_s: Option<f64>,
+) -> Result<(Vec<Variant>, GroupFacts)> {
     let targets = setup.targets()?;
     let s = &setup.settings;
     let lambda = setup.cfg.formations.lambda;
@@ -244,9 +255,13 @@ fn one_seed(setup: &Setup, preset: Option<Preset>) -> Result<(Vec<Variant>, Grou
         .ok_or_else(|| anyhow!("pairing was cancelled"))?;
         Ok((plan, t0.elapsed().as_secs_f64() * 1e3))
     };
+    let mut moves = s.moves.clone();
+    if let Some(t) = timeout_s {
+        moves.timeout_s = t;
+    }
     let social = match preset {
-        Some(Preset::Paper) => s.moves.clone().paper(),
-        None => s.moves.clone(),
+        Some(Preset::Paper) => moves.clone().paper(),
+        None => moves.clone(),
     };
     let (least, least_ms) = plan_for(PairCost::LeastEffort { lambda })?;
     let facts = GroupFacts {
@@ -279,7 +294,7 @@ fn one_seed(setup: &Setup, preset: Option<Preset>) -> Result<(Vec<Variant>, Grou
     let mut quiet = social.clone();
     quiet.feedback = false;
     add("no-feedback", &least, 0.0, quiet);
-    add("orca", &least, 0.0, s.moves.clone().rvo2_orca());
+    add("orca", &least, 0.0, moves.rvo2_orca());
     Ok((variants, facts))
 }
 

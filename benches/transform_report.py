@@ -1,0 +1,142 @@
+#!/usr/bin/env python3
+"""The reproduction report of formation-transform's comparisons (section 5.2,
+Table 2; 5.3; 5.4, Table 3), made by `crowdtouch transform compare`.
+
+For each formation pair and each preset (the project's movement model, and
+`--preset paper`: only what the paper has), it runs `transform compare --seeds N
+--json` and writes a Markdown section: per variant the arrival time and the three
+measures of section 5.1 over a common window, each a mean with its 95 %
+confidence interval over the seeds, the exchanges of targets per run, the
+subgroups' convergence and locality, and for each of Table 2's orderings whether
+it is reproduced (the intervals are apart in the paper's direction), reversed
+(apart the other way) or not told apart.
+
+    python3 benches/transform_report.py [--binary B] [--seeds N] [--agents N]
+                                        [--timeout S] [--out FILE] [--check]
+
+With --out FILE (docs/transforms.md) the text between the markers
+`<!-- transform-report:begin -->` and `<!-- transform-report:end -->` is replaced;
+otherwise the section is printed. BINARY defaults to target/release/crowdtouch
+(`cargo build --release` first).
+"""
+import argparse
+import json
+import subprocess
+import sys
+import time
+
+PAIRS = [("square", "arrow"), ("ring", "two_groups"), ("line", "heart")]
+PRESETS = [None, "paper"]
+BEGIN = "<!-- transform-report:begin -->"
+END = "<!-- transform-report:end -->"
+
+# Table 2 of the paper: least effort lowest on every column (arrival time, I_d,
+# "Minimum" = σ_min_dis, "Effort" = σ_curr_eft), against Euclidean and Manhattan.
+ORDERINGS = [
+    ("arrival_s", "arrival time"),
+    ("i_d", "I_d"),
+    ("sigma_min_dis", "σ_min_dis"),
+    ("sigma_curr_eft", "σ_curr_eft"),
+]
+
+
+def compare(binary, frm, to, agents, seeds, preset, timeout):
+    cmd = [binary, "transform", "compare", "--from", frm, "--to", to,
+           "--agents", str(agents), "--seeds", str(seeds), "--seed", "1", "--json"]
+    if preset:
+        cmd += ["--preset", preset]
+    if timeout:
+        cmd += ["--timeout", str(timeout)]
+    t0 = time.monotonic()
+    out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+    return json.loads(out), time.monotonic() - t0
+
+
+def iv(x, digits):
+    if x is None or x.get("mean") is None:
+        return "–"
+    return f"{x['mean']:.{digits}f} ± {(x.get('ci95') or 0.0):.{digits}f}"
+
+
+def verdict(a, b):
+    """Least effort `a` against `b`, lower is the paper's better."""
+    if a.get("mean") is None or b.get("mean") is None or a.get("n", 0) < 2 or b.get("n", 0) < 2:
+        return "not measured"
+    if a["mean"] + a["ci95"] < b["mean"] - b["ci95"]:
+        return "reproduced"
+    if b["mean"] + b["ci95"] < a["mean"] - a["ci95"]:
+        return "reversed"
+    return "not told apart"
+
+
+def section(results, seeds, agents, timeout):
+    lines = []
+    say = lines.append
+    say(f"Made by `python3 benches/transform_report.py --seeds {seeds} --agents {agents}"
+        + (f" --timeout {timeout}" if timeout else "") + " --out docs/transforms.md`"
+        " (release build); seeds 1 to " + str(seeds) + ". ± is the 95 % confidence interval "
+        "of the mean over the seeds (Student's t). The measures are averaged over the "
+        "common window: the first seconds that every run of every row of that table lasted. "
+        "Arrival is over the runs in which every agent arrived (`n` of them).")
+    say("")
+    for (frm, to, preset), (v, secs) in results.items():
+        name = "the project's model" if preset is None else "`--preset paper`"
+        say(f"#### {frm} → {to}, {v['agents']} agents, {name}")
+        say("")
+        say(f"Window {v['window_s']:.2f} s; timeout {v['timeout_s']:.0f} s; "
+            f"{secs:.0f} s to run. Subgroups: {iv(v['subgroups']['count'], 1)}, "
+            f"converged in {v['subgroups']['converged_runs']} of {v['seeds']} seeds, locality "
+            f"{iv(v['subgroups']['locality'], 2)}.")
+        say("")
+        say("| variant | arrival (s) [n] | all in (%) | I_d (bits) | σ_min_dis (m) | σ_curr_eft (m) | exchanges a run |")
+        say("|---|---|---|---|---|---|---|")
+        for r in v["rows"]:
+            af = r["arrived_fraction"]["mean"]
+            say(f"| {r['variant']} | {iv(r['arrival_s'], 2)} [{r['arrived_runs']}] | "
+                f"{100 * af:.1f} | {iv(r['i_d'], 3)} | {iv(r['sigma_min_dis'], 4)} | "
+                f"{iv(r['sigma_curr_eft'], 3)} | {r['swaps']['mean']:.1f} |")
+        say("")
+        rows = {r["variant"]: r for r in v["rows"]}
+        le = rows["least-effort"]
+        say("| Table 2 ordering (least effort lower) | against Euclidean | against Manhattan |")
+        say("|---|---|---|")
+        for key, label in ORDERINGS:
+            say(f"| {label} | {verdict(le[key], rows['euclidean'][key])} | "
+                f"{verdict(le[key], rows['manhattan'][key])} |")
+        fb = verdict(le["i_d"], rows["no-feedback"]["i_d"])
+        orca = verdict(le["sigma_min_dis"], rows["orca"]["sigma_min_dis"])
+        say(f"| §5.3: feedback lowers I_d (least effort against no-feedback) | {fb} | |")
+        say(f"| §5.4: σ_min_dis of social forces below ORCA's | {orca} | |")
+        say("")
+    return "\n".join(lines) + "\n"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--binary", default="target/release/crowdtouch")
+    ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--agents", type=int, default=300)
+    ap.add_argument("--timeout", type=float, default=None)
+    ap.add_argument("--out", default=None)
+    a = ap.parse_args()
+    results = {}
+    for frm, to in PAIRS:
+        for preset in PRESETS:
+            results[(frm, to, preset)] = compare(a.binary, frm, to, a.agents, a.seeds, preset, a.timeout)
+            print(f"{frm} -> {to} {preset or 'default'}: {results[(frm, to, preset)][1]:.1f} s", file=sys.stderr)
+    text = section(results, a.seeds, a.agents, a.timeout)
+    if a.out is None:
+        sys.stdout.write(text)
+        return 0
+    doc = open(a.out, encoding="utf-8").read()
+    if BEGIN not in doc or END not in doc:
+        print(f"{a.out}: no {BEGIN} … {END} markers", file=sys.stderr)
+        return 1
+    head, rest = doc.split(BEGIN, 1)
+    _, tail = rest.split(END, 1)
+    open(a.out, "w", encoding="utf-8").write(head + BEGIN + "\n" + text + END + tail)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
