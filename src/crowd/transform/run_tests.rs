@@ -617,3 +617,53 @@ fn two_thousand_small_agents_square_to_arrow() {
     let (runs, failed) = shipped_pairs_seeded(2000, r, 12.0, Some(("square", "arrow")), (7, 3, 5));
     assert_eq!(failed, 0, "{failed} of {runs}");
 }
+
+/// The switches of the project's additions: two agents walking head-on, each
+/// to a target beyond the other, exchange targets with `exchanges` on and never
+/// with it off; without `settling` no agent
+/// is ever settled and the run ends when all are within `arrive_m` at once; the
+/// paper preset has none of the additions.
+#[test]
+fn the_additions_have_switches() {
+    let paper = MoveParams::default().paper();
+    assert!(!paper.fades && !paper.settling && !paper.contacts && !paper.exchanges);
+    assert!(paper.arrive_m >= paper.radius_m);
+    let orca = MoveParams::default().rvo2_orca();
+    assert_eq!(orca.mover, Mover::Orca);
+    assert!(!orca.feedback && !orca.exchanges && !orca.contacts && !orca.settling);
+
+    // Two agents 0.6 m apart on a line, each heading for a target beyond the other.
+    let (a, b) = (Vec2::new(0.0, 0.0), Vec2::new(0.6, 0.0));
+    let (ta, tb) = (Vec2::new(3.0, 0.0), Vec2::new(-2.4, 0.0));
+    let swaps = |exchanges: bool| {
+        let p = MoveParams {
+            exchanges,
+            fluctuation_m_s2: 0.0,
+            ..MoveParams::default()
+        };
+        let mut run = TransformRun::new(&plan(&[a, b], &[ta, tb], vec![0, 0]), &p, 5);
+        let (mut pos, mut vel) = ([a, b], [Vec2::zeros(); 2]);
+        run_out(&mut run, &mut pos, &mut vel, 20.0, None);
+        run.summary().swaps
+    };
+    assert!(swaps(true) >= 1, "a head-on pair exchanges targets");
+    assert_eq!(swaps(false), 0);
+
+    // Without settling: nobody settles, and the run still ends when all arrived.
+    let p = MoveParams {
+        settling: false,
+        ..MoveParams::default()
+    };
+    let t = [Vec2::new(2.0, 0.0), Vec2::new(2.0, 1.0)];
+    let s = [Vec2::new(0.0, 0.0), Vec2::new(0.0, 1.0)];
+    let mut run = TransformRun::new(&plan(&s, &t, vec![0, 0]), &p, 5);
+    let (mut pos, mut vel) = (s, [Vec2::zeros(); 2]);
+    let mut ever_settled = false;
+    while !run.done() {
+        run.step(&mut pos, &mut vel, DT_S, None);
+        ever_settled |= run.settled(0) || run.settled(1);
+    }
+    let sum = run.summary();
+    assert!(!ever_settled);
+    assert!(!sum.timed_out && sum.arrived_fraction == 1.0, "{sum:?}");
+}
