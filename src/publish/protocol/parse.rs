@@ -108,7 +108,7 @@ pub enum ProtocolError {
     },
     /// A command name the daemon does not know.
     #[error(
-        "unknown command `{name}` (known: reset, set_agent_count, set_formation, pause, resume, edit.load, edit.undo, edit.save, edit.retime, edit.exit, touch)"
+        "unknown command `{name}` (known: reset, set_agent_count, set_formation, pause, resume, edit.load, edit.undo, edit.save, edit.retime, edit.select, edit.accept, edit.exit, touch)"
     )]
     UnknownCommand {
         /// The name sent (shortened).
