@@ -74,6 +74,11 @@ impl Engine {
         self.edits.edits
     }
 
+    /// The play time of the tracks being edited (s).
+    pub fn edit_play_t_s(&self) -> Option<f64> {
+        self.edits.mode.as_ref().map(|m| m.play_t_s)
+    }
+
     /// The tracks being edited.
     pub fn edited_tracks(&self) -> Option<&Arc<TrackSet>> {
         self.edits.mode.as_ref().map(|m| &m.set)

@@ -178,9 +178,19 @@ impl Engine {
                 None => (0..shown.len()).min_by(|&a, &b| d2(a).total_cmp(&d2(b))),
             }
         };
-        let on_vertex = fingers
-            .iter()
-            .any(|&(_, p)| near_vertex(m, p, r2).is_some());
+        // A finger is on a vertex when one is within reach and nearer than anyone.
+        let vertex_d2 = |p: Vec2| {
+            near_vertex(m, p, r2)?;
+            let d2 = m
+                .hull
+                .iter()
+                .map(|v| (v - p).norm_squared())
+                .fold(f64::INFINITY, f64::min);
+            let person =
+                nearest(p, None).map_or(f64::INFINITY, |k| (shown[k].0 - p).norm_squared());
+            (d2 < person).then_some(d2)
+        };
+        let on_vertex = fingers.iter().any(|&(_, p)| vertex_d2(p).is_some());
         let (selected, window_s): (Arc<[usize]>, Option<(f64, f64)>) = if on_vertex {
             m.hull_of.clone().expect("near_vertex checked it")
         } else {
@@ -204,7 +214,7 @@ impl Engine {
         };
         let mut held = Vec::with_capacity(fingers.len());
         for &(_, p) in &fingers {
-            let spec = match near_vertex(m, p, r2).filter(|_| on_vertex) {
+            let spec = match vertex_d2(p).filter(|_| on_vertex) {
                 Some(_) => HoldSpec::NearVertex(p),
                 None => {
                     let Some(k) = nearest(p, Some(&selected)) else {
@@ -267,30 +277,34 @@ impl Engine {
         };
         let mut pins: Vec<HoldSpec> = g.pins.to_vec();
         for p in places {
-            let on_hull = m.hull.iter().any(|v| (v - p).norm_squared() <= r2);
-            let spec = if on_hull {
-                HoldSpec::NearVertex(p)
-            } else {
-                let person = g
-                    .selected
-                    .iter()
-                    .copied()
-                    .map(|k| {
-                        (
-                            k,
-                            (shown_position(&m.set.tracks[k], t).0 - p).norm_squared(),
-                        )
-                    })
-                    .filter(|&(_, d2)| d2 <= r2)
-                    .min_by(|a, b| a.1.total_cmp(&b.1));
-                match person {
-                    Some((k, _)) => HoldSpec::Sample(sample_in_window(m, k, g.window_s)),
-                    None => {
-                        log::info!(
-                            "edit: a second control landed on nothing of the grab; nothing pinned"
-                        );
-                        continue;
-                    }
+            // The nearer of the hull's vertices and the grab's people.
+            let vertex = m
+                .hull
+                .iter()
+                .map(|v| (v - p).norm_squared())
+                .fold(f64::INFINITY, f64::min);
+            let person = g
+                .selected
+                .iter()
+                .copied()
+                .map(|k| {
+                    (
+                        k,
+                        (shown_position(&m.set.tracks[k], t).0 - p).norm_squared(),
+                    )
+                })
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .filter(|&(_, d2)| d2 <= r2);
+            let spec = match person {
+                Some((k, d2)) if d2 <= vertex => {
+                    HoldSpec::Sample(sample_in_window(m, k, g.window_s))
+                }
+                _ if vertex <= r2 => HoldSpec::NearVertex(p),
+                _ => {
+                    log::info!(
+                        "edit: a second control landed on nothing of the grab; nothing pinned"
+                    );
+                    continue;
                 }
             };
             if !pins.contains(&spec) && !g.held.contains(&spec) {
@@ -335,7 +349,7 @@ impl Engine {
             || g.sent
                 .iter()
                 .zip(&g.latest)
-                .any(|(a, b)| (a - b).norm() > 1e-4);
+                .any(|(a, b)| (a - b).norm() > STILL_M);
         if g.out || !moved || g.latest.is_empty() {
             return;
         }
@@ -379,8 +393,10 @@ impl Engine {
         }
         let g = m.grab.take().expect("checked above");
         m.hull_of = Some((Arc::clone(&g.selected), g.window_s));
-        let Some(edited) = g.edited else {
-            // A touch without a move: nothing changed.
+        let still = g.sent.iter().all(|d| d.norm() <= STILL_M);
+        let Some(edited) = g.edited.filter(|_| !still) else {
+            // A touch without a move (pins alone hold points where they are):
+            // nothing changed.
             self.edits.view_dirty = true;
             self.edit_grab_queued();
             return;
@@ -408,6 +424,9 @@ impl Engine {
         self.edits.view_dirty = true;
     }
 }
+
+/// Fingers that moved less than this from where they landed did not drag (m).
+const STILL_M: f64 = 1e-4;
 
 /// Remembers a control that landed while a release settles.
 fn queue(m: &mut EditMode, id: u32) {

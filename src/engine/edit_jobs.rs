@@ -8,13 +8,14 @@ use super::edit_state::{
     Settled,
 };
 use crate::crowd::edit::{
-    avoid_around, avoid_obstacles, correct_speeds, detect_keeping, point_in_polygon,
+    avoid_around_leaving, avoid_obstacles, correct_speeds, detect_keeping, point_in_polygon,
     push_samples_out, retime, samples_in_obstacles, AvoidParams, AvoidReport, Cage, Collisions,
     Handle, ObstacleParams, RetimeParams, SampleRef, Selection, TimeDrag, Track, TrackSet,
 };
 use crate::crowd::environment::Obstacle;
 use crate::geom::Vec2;
 use crate::vocab::{CollisionView, PreviewView, TrackView, TracksView};
+use std::collections::HashSet;
 use std::sync::Arc;
 
 /// Pushes per sample at most when a sample the cage left inside an obstacle is
@@ -102,7 +103,7 @@ impl EditJob {
                 );
                 let result = pushed.and_then(|pushed| {
                     correct_speeds(&base, &mut set, &selected).map_err(|e| e.to_string())?;
-                    settle(set, avoid, &selected, version, &source, pushed)
+                    settle(&base, set, avoid, &selected, version, &source, pushed)
                 });
                 EditDoneKind::Settled {
                     result,
@@ -127,8 +128,9 @@ impl EditJob {
                 source,
             } => {
                 let mut set = (*base).clone();
-                let result = retime_people(&mut set, &people, at_s, to_s)
-                    .and_then(|()| settle(set, avoid, &people, version, &source, Vec::new()));
+                let result = retime_people(&mut set, &people, at_s, to_s).and_then(|()| {
+                    settle(&base, set, avoid, &people, version, &source, Vec::new())
+                });
                 EditDoneKind::Settled {
                     result,
                     release: false,
@@ -260,10 +262,13 @@ fn keep_out(
         .collect())
 }
 
-/// Collisions avoided around `people` (everyone when empty), then the result as
-/// the engine shows it: the tracks, the collisions left, the `tracks` message and
-/// the preview's summary (`pushed`: the people obstacle avoidance moved).
+/// Collisions avoided around `people` (everyone when empty), leaving the pairs
+/// that were pairs in `base` (the tracks before the edit: the edit did not bring
+/// them), then the result as the engine shows it: the tracks, the collisions
+/// left, the `tracks` message and the preview's summary (`pushed`: the people
+/// obstacle avoidance moved).
 fn settle(
+    base: &TrackSet,
     mut set: TrackSet,
     avoid: AvoidSettings,
     people: &[usize],
@@ -272,7 +277,18 @@ fn settle(
     pushed: Vec<usize>,
 ) -> Result<Settled, String> {
     let times: Vec<Vec<f64>> = set.tracks.iter().map(|t| t.times_s.clone()).collect();
-    let (report, collisions) = keep_apart(&mut set, avoid, people)?;
+    let leave: HashSet<(usize, usize)> = if people.is_empty() {
+        HashSet::new()
+    } else {
+        let old = detect_keeping(base, avoid.threshold_m, usize::MAX)
+            .map_err(|e| format!("collision detection: {e}"))?;
+        old.pairs
+            .iter()
+            .filter(|q| people.binary_search(&q.a).is_ok() || people.binary_search(&q.b).is_ok())
+            .map(|q| (q.a.min(q.b), q.a.max(q.b)))
+            .collect()
+    };
+    let (report, collisions) = keep_apart(&mut set, avoid, people, &leave)?;
     let retimed = set
         .tracks
         .iter()
@@ -460,13 +476,14 @@ fn keep_apart(
     set: &mut TrackSet,
     settings: AvoidSettings,
     people: &[usize],
+    leave: &HashSet<(usize, usize)>,
 ) -> Result<(AvoidReport, Vec<CollisionView>), String> {
     let params = AvoidParams {
         threshold_m: settings.threshold_m,
         ..AvoidParams::default()
     };
-    let report =
-        avoid_around(set, &params, people).map_err(|e| format!("collision avoidance: {e}"))?;
+    let report = avoid_around_leaving(set, &params, people, leave)
+        .map_err(|e| format!("collision avoidance: {e}"))?;
     Ok((report, collisions_of(set, settings.threshold_m)))
 }
 

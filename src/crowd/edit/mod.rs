@@ -46,8 +46,8 @@ mod tracks;
 
 pub use apply::{run_script, ApplyParams, ApplyReport, DragReport, HANDLE_RADIUS_M};
 pub use avoid::{
-    avoid, avoid_around, AvoidError, AvoidParams, AvoidReport, Remaining, Stuck, MIN_PACE_LENGTH_M,
-    STILL_SPEED_M_S,
+    avoid, avoid_around, avoid_around_leaving, AvoidError, AvoidParams, AvoidReport, Remaining,
+    Stuck, MIN_PACE_LENGTH_M, STILL_SPEED_M_S,
 };
 pub use cage::{
     correct_speeds, Cage, CageParams, Handle, ShapeError, SpeedReport, MIN_INTERVAL_FRACTION,
