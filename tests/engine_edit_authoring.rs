@@ -626,6 +626,18 @@ fn a_lasso_in_open_space_selects_the_people_inside_it() {
         ids: None,
     });
     assert!(s.view().selection.ids.is_empty());
+    // A retime of an empty selection is refused (it would retime everyone).
+    let e =
+        s.e.command(
+            &Command::EditRetime {
+                at_s: 5.0,
+                to_s: 6.0,
+                ids: None,
+            },
+            Micros(s.now),
+        )
+        .unwrap_err();
+    assert!(e.to_string().contains("no one to retime"), "{e}");
 }
 
 /// `edit.retime` with ids retimes only those people (the paper's Fig. 14: three

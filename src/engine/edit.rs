@@ -313,11 +313,17 @@ impl Engine {
                 "an edit is under way; retime when the fingers have lifted".into(),
             ));
         }
+        // Empty means everyone to the job: an empty list or selection is refused.
         let people: Arc<[usize]> = match (ids, &m.selection) {
             (Some(ids), _) => super::edit_select::indices_of(&m.set, ids, "edit.retime")?.into(),
             (None, Some(s)) => Arc::clone(&s.tracks),
             (None, None) => Arc::from([]),
         };
+        if people.is_empty() && (ids.is_some() || m.selection.is_some()) {
+            return Err(CommandError::Edit(
+                "edit.retime: no one to retime (the `ids` or the selection are empty)".into(),
+            ));
+        }
         if m.preview.take().is_some() {
             self.edits.edits += 1;
         }
