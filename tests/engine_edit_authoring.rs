@@ -835,3 +835,50 @@ fn a_release_keeps_the_group_out_of_the_scenes_obstacles() {
     assert!(!p.pushed.is_empty(), "the preview names the people pushed");
     assert!(p.pushed.iter().all(|id| people.contains(id)));
 }
+
+/// A second control on a vertex of the grab's hull (away from anyone) pins the
+/// vertex: the `edit` message shows it, and it stays where it was through the
+/// rest of the drag.
+#[test]
+fn a_second_control_on_a_hull_vertex_pins_the_vertex() {
+    let mut s = Session::new(parade(2, 3));
+    let t = s.play_t();
+    let held = Vec2::new(2.0 + t, 2.0);
+    s.touch(&[(1, held, DOWN)]);
+    s.ticks(12);
+    s.drag(1, held, Vec2::new(0.0, 0.2), &[]);
+    // The hull vertex farthest from the finger: the far end of the tracks.
+    let hull = s.view().hull.clone();
+    let v = *hull
+        .iter()
+        .max_by(|a, b| (*a - held).norm().total_cmp(&(*b - held).norm()))
+        .unwrap();
+    s.touch(&[(1, held + Vec2::new(0.0, 0.2), MOVE), (2, v, DOWN)]);
+    s.ticks(3);
+    s.drag(
+        1,
+        held + Vec2::new(0.0, 0.2),
+        Vec2::new(0.0, 1.0),
+        &[(2, v)],
+    );
+    let first = s.view().pins.clone();
+    assert_eq!(first.len(), 1, "the vertex is pinned");
+    s.drag(
+        1,
+        held + Vec2::new(0.0, 1.2),
+        Vec2::new(-0.5, 0.5),
+        &[(2, v)],
+    );
+    let then = s.view().pins.clone();
+    assert_eq!(then.len(), 1);
+    assert!(
+        (then[0] - first[0]).norm() < 1e-9,
+        "the pinned vertex stays: {:?} then {:?}",
+        first[0],
+        then[0]
+    );
+    assert!(
+        (first[0] - v).norm() < 0.5,
+        "near where the finger pinned it"
+    );
+}
