@@ -208,6 +208,142 @@ fn a_recorded_drag_through_the_daemon_changes_the_tracks_a_client_receives() {
     daemon.shutdown();
 }
 
+/// Through the daemon's socket, as the viewer page does it: `edit.select` picks
+/// two people of the block, a client's `touch` on one of them grabs the two (not
+/// the block), the lift shows the edit as a preview (`state: "preview"`, a
+/// `tracks` message with `preview: true`, the `preview` object), and `edit.accept`
+/// keeps it. A bad selection is an `error` naming what is wrong.
+#[test]
+fn a_client_selects_drags_and_accepts_through_the_socket() {
+    let dir = tempfile::tempdir().unwrap();
+    let tracks_path = dir.path().join("block.jsonl");
+    write_tracks(
+        &block(),
+        &tracks_path,
+        Format::Jsonl,
+        &ReadOptions::default(),
+        false,
+    )
+    .unwrap();
+    let socket = dir.path().join("ct.sock");
+    let mut cfg = Config::from_str(
+        &crowdtouch::config::DEFAULT_CONFIG_RON.replace(
+            "    pipeline: (",
+            &format!(
+                "    edit: Some((tracks: {:?}, threshold_m: 0.3)),\n    pipeline: (",
+                tracks_path.display().to_string(),
+            ),
+        ),
+        Path::new("<test>"),
+    )
+    .expect("config with an edit section");
+    cfg.pipeline.realtime = Default::default();
+    let (daemon, _tx) = daemon_on_channel(cfg, &socket, 64);
+    let stream = UnixStream::connect(&socket).unwrap();
+    let mut w = stream.try_clone().unwrap();
+    let mut r = BufReader::new(stream);
+    writeln!(
+        w,
+        r#"{{"type":"hello","protocol":1,"subscribe":["edit"],"max_rate_hz":30}}"#
+    )
+    .unwrap();
+    read_until(&mut r, 3.0, |v| v["type"] == "hello");
+    let answer = |r: &mut BufReader<UnixStream>, id: u64| {
+        read_until(r, 5.0, |v| {
+            (v["type"] == "ack" || v["type"] == "error") && v["id"] == id
+        })
+        .pop()
+        .unwrap()
+    };
+    writeln!(w, r#"{{"type":"command","id":1,"name":"pause"}}"#).unwrap();
+    assert_eq!(answer(&mut r, 1)["type"], "ack");
+    writeln!(
+        w,
+        r#"{{"type":"command","id":2,"name":"edit.select","lasso":[[0,0],[1,1]]}}"#
+    )
+    .unwrap();
+    let e = answer(&mut r, 2);
+    assert_eq!(e["type"], "error");
+    assert!(e["message"].as_str().unwrap().contains("3 to"), "{e}");
+    writeln!(
+        w,
+        r#"{{"type":"command","id":3,"name":"edit.select","ids":[12,13]}}"#
+    )
+    .unwrap();
+    assert_eq!(answer(&mut r, 3)["type"], "ack");
+    let sel = read_until(&mut r, 5.0, |v| {
+        v["type"] == "edit" && v["selection"]["ids"] == serde_json::json!([12, 13])
+    });
+    let sel = sel.last().unwrap();
+    assert_eq!(sel["selection"]["ids"], serde_json::json!([12, 13]));
+    let t = sel["play_t_s"].as_f64().unwrap();
+    // Person 12 (the block's centre) at the play time, in table units.
+    let at = Vec2::new(9.9 + 0.05 * t, 4.5);
+    let touch = |w: &mut UnixStream, id: u64, p: Option<Vec2>| {
+        let contacts = match p {
+            Some(p) => format!(r#"[{{"id":1,"x":{},"y":{}}}]"#, p.x / 16.0, p.y / 9.0),
+            None => "[]".to_string(),
+        };
+        writeln!(
+            w,
+            r#"{{"type":"command","id":{id},"name":"touch","contacts":{contacts}}}"#
+        )
+        .unwrap();
+    };
+    touch(&mut w, 10, Some(at));
+    let grabbed = read_until(&mut r, 5.0, |v| {
+        v["type"] == "edit" && v["state"] == "grabbed"
+    });
+    assert_eq!(
+        grabbed.last().unwrap()["selected"],
+        serde_json::json!([12, 13]),
+        "the selection, not the block"
+    );
+    for k in 1..=10u64 {
+        std::thread::sleep(Duration::from_millis(30));
+        touch(&mut w, 10 + k, Some(at + Vec2::new(0.0, 0.1 * k as f64)));
+    }
+    std::thread::sleep(Duration::from_millis(100));
+    touch(&mut w, 30, None);
+    let msgs = read_until(&mut r, 10.0, |v| {
+        v["type"] == "edit" && v["state"] == "preview"
+    });
+    let preview = msgs.last().unwrap();
+    assert_eq!(preview["state"], "preview", "{preview}");
+    assert!(preview["preview"]["retimed"].is_array());
+    assert!(preview["preview"]["pairs_after"].is_u64());
+    let tracks = msgs
+        .iter()
+        .rev()
+        .find(|v| v["type"] == "tracks" && v["full"] == true)
+        .expect("the previewed tracks");
+    assert_eq!(tracks["preview"], true);
+    let y_of = |id: u64| {
+        tracks["tracks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|t| t["id"] == id)
+            .unwrap()["points"][0][1]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(y_of(12) - 4.5 > 0.5, "the held person moved: {}", y_of(12));
+    assert_eq!(
+        y_of(7),
+        block().tracks[7].points[0].y,
+        "not selected, not moved"
+    );
+    writeln!(w, r#"{{"type":"command","id":40,"name":"edit.accept"}}"#).unwrap();
+    assert_eq!(answer(&mut r, 40)["type"], "ack");
+    let idle = read_until(&mut r, 5.0, |v| v["type"] == "edit" && v["state"] == "idle");
+    let idle = idle.last().unwrap();
+    assert_eq!(idle["state"], "idle");
+    assert!(idle["preview"].is_null());
+    assert_eq!(idle["undo_depth"], 1);
+    daemon.shutdown();
+}
+
 /// A client that subscribes to `edit` after the tracks were loaded (a renderer or a
 /// viewer page opened later) gets them at once, every person, then the edit state;
 /// one that leaves `edit` out gets neither.

@@ -183,9 +183,20 @@ fn a_drag_moves_the_held_person_with_the_finger_and_the_group_with_them() {
     s.ticks(10);
     let after = s.set();
     let last = s.views.last().unwrap();
-    assert_eq!(last.state, "idle");
+    assert_eq!(last.state, "preview", "the release is shown as a preview");
     assert_eq!(last.undo_depth, 1);
     assert!(s.tracks.last().unwrap().full);
+    assert!(s.tracks.last().unwrap().preview);
+    s.e.command(&Command::EditAccept, Micros(s.now)).unwrap();
+    s.tick();
+    let last = s.views.last().unwrap();
+    assert_eq!(last.state, "idle", "accepted");
+    assert!(last.preview.is_none());
+    assert_eq!(s.e.edits_applied(), 1);
+    assert!(
+        s.e.command(&Command::EditAccept, Micros(s.now)).is_err(),
+        "nothing left to accept"
+    );
     // Speeds corrected (eq. 9): every segment within 1 % of its speed before.
     for (a, b) in after.tracks.iter().zip(&before.tracks) {
         for jj in 0..a.len() - 1 {
@@ -220,6 +231,7 @@ fn retime_moves_time_nodes_and_exit_brings_the_crowd_back() {
         &Command::EditRetime {
             at_s: 5.0,
             to_s: 7.0,
+            ids: None,
         },
         Micros(s.now),
     )
@@ -292,6 +304,7 @@ fn a_retime_keeps_colliding_people_apart() {
         &Command::EditRetime {
             at_s: 2.0,
             to_s: 2.0,
+            ids: None,
         },
         Micros(s.now),
     )
@@ -561,7 +574,7 @@ fn a_release_retimes_no_stranger_who_collided_already() {
     }
     s.touch(&[(1, held + Vec2::new(0.0, 1.0), ContactFlags::UP)]);
     s.ticks(10);
-    assert_eq!(s.views.last().unwrap().state, "idle");
+    assert_eq!(s.views.last().unwrap().state, "preview");
     let after = s.set();
     for id in [500, 501, 999] {
         let k = after.index_of(id).unwrap();

@@ -120,7 +120,7 @@ pub const FIELDS: &[FieldClass] = &[
     ),
     live(
         "edit",
-        "the track file is read again; tracks that changed are loaded (unsaved edits are dropped), the threshold applies from the next edit, `dir` and `allow_overwrite` from the next edit.load or edit.save",
+        "the track file is read again; tracks that changed are loaded (unsaved edits are dropped), the threshold and `preview` apply from the next edit, `dir` and `allow_overwrite` from the next edit.load or edit.save",
     ),
     live("formations.lambda", "from the next switch"),
     live("formations.shapes", "from the next switch"),
@@ -427,6 +427,7 @@ mod tests {
             threshold_m: 0.4,
             dir: Some(PathBuf::from("/nonexistent/tracks")),
             allow_overwrite: true,
+            preview: false,
         });
         c.pipeline.realtime.priority = Some(30);
         c.pipeline.realtime.input_cpus = Some(vec![0]);

@@ -419,10 +419,18 @@ pub struct EditConfig {
     /// apart (m).
     #[serde(default = "default_edit_threshold_m")]
     pub threshold_m: f64,
+    /// Whether a release or a retime is shown as a preview that `edit.accept`
+    /// keeps and `edit.undo` drops (default true); `false`: applied at once.
+    #[serde(default = "default_edit_preview")]
+    pub preview: bool,
 }
 
 fn default_edit_threshold_m() -> f64 {
     0.3
+}
+
+fn default_edit_preview() -> bool {
+    true
 }
 
 /// The first directory of a systemd directory variable (`$RUNTIME_DIRECTORY`,
@@ -504,15 +512,16 @@ impl Config {
     pub fn set_edit_tracks(&mut self, tracks: Option<(Arc<TrackSet>, PathBuf)>, threshold_m: f64) {
         match tracks {
             Some((set, source)) => {
-                let (dir, allow_overwrite) = self
-                    .edit
-                    .as_ref()
-                    .map_or((None, false), |e| (e.dir.clone(), e.allow_overwrite));
+                let (dir, allow_overwrite, preview) =
+                    self.edit.as_ref().map_or((None, false, true), |e| {
+                        (e.dir.clone(), e.allow_overwrite, e.preview)
+                    });
                 self.edit = Some(EditConfig {
                     tracks: source,
                     threshold_m,
                     dir,
                     allow_overwrite,
+                    preview,
                 });
                 self.loaded_tracks = Some(set);
             }
@@ -556,6 +565,7 @@ mod edit_dir_tests {
             threshold_m: 0.3,
             dir: Some(PathBuf::from("/srv/tracks")),
             allow_overwrite: false,
+            preview: true,
         };
         assert_eq!(
             EditConfig::dir_in(Some(&set), &with(&all)),

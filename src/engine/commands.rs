@@ -50,7 +50,15 @@ impl Engine {
             Command::EditLoad { entry } => self.edit_load(entry),
             Command::EditUndo => self.edit_undo(),
             Command::EditSave { entry, overwrite } => self.edit_save(entry.as_deref(), *overwrite),
-            Command::EditRetime { at_s, to_s } => self.edit_retime(*at_s, *to_s),
+            Command::EditRetime { at_s, to_s, ids } => {
+                self.edit_retime(*at_s, *to_s, ids.as_deref())
+            }
+            Command::EditSelect {
+                lasso,
+                window_s,
+                ids,
+            } => self.edit_select(lasso.as_deref(), *window_s, ids.as_deref()),
+            Command::EditAccept => self.edit_accept(),
             Command::EditExit => self.edit_exit(now),
             Command::CollectSkip
             | Command::CollectUndo

@@ -11,9 +11,18 @@
 //!  fingers move ──► EditJob::Drag: cage built once per grab (hull, mesh, MVC,
 //!      section 3.2), solved for the fingers (eqs. 1–8) ──► `tracks` (changed
 //!      people), `edit` (hull)
-//!  fingers lift ──► EditJob::Release: speeds corrected (eq. 9), collisions
-//!      avoided by retiming (section 4.1.2) ──► `tracks` (full), `edit` (collisions)
-//!  edit.retime, or a contract / expand gesture in open space ──► EditJob::Retime
+//!  a second control on the group or its hull ──► pins (eq. 6) for the grab
+//!  a touch on a vertex of the last hull ──► that cage's people, by the vertex
+//!  fingers lift ──► EditJob::Release: the group kept out of the scene's
+//!      obstacles (section 4.2), speeds corrected (eq. 9), collisions avoided by
+//!      retiming around the edited people (section 4.1.2) ──► a preview:
+//!      `tracks` (full, preview), `edit` (state preview, what it did)
+//!      ──► edit.accept keeps it; edit.undo (byte for byte) drops it; a new grab
+//!      or retime keeps it
+//!  edit.select, or a one-finger lasso in open space ──► EditJob::Select: the
+//!      next grab on a selected person grabs the selection (its window)
+//!  edit.retime (ids, the selection, or everyone), or a contract / expand
+//!      gesture in open space (the selection, or everyone) ──► EditJob::Retime
 //!  edit.undo / edit.save / edit.exit
 //! ```
 //!
@@ -25,20 +34,22 @@
 //! | file | what |
 //! |---|---|
 //! | `edit.rs` | the commands (`edit.load`, `.undo`, `.save`, `.retime`, `.exit`), the config's tracks, a gesture's retime, results of jobs applied, what is published |
-//! | `edit_grab.rs` | fingers: touches on people, a group grabbed, drags sent, the release |
+//! | `edit_select.rs` | `edit.select`, the lasso drawn on the table, `edit.accept` |
+//! | `edit_grab.rs` | fingers: touches on people or hull vertices, a group or selection grabbed, pins, queued touches, drags sent, the release |
 //! | `edit_jobs.rs` | [`EditJob::run`]: the slow work (cage, drag, speeds, retiming, collisions), and the tracks' views |
 //! | `edit_state.rs` | the state, the jobs and their results |
 
 use super::edit_jobs::{shown_position, tracks_view, velocity_at};
 use super::edit_state::{
-    EditDone, EditDoneKind, EditFileJob, EditJob, EditJobKind, EditMode, MAX_UNDO,
+    EditDone, EditDoneKind, EditFileJob, EditJob, EditJobKind, EditMode, HoldSpec, Settled,
+    MAX_UNDO,
 };
 use super::error::CommandError;
 use super::state::Engine;
 use crate::crowd::edit::TrackSet;
 use crate::geom::Vec2;
 use crate::gesture::library::MotionClass;
-use crate::vocab::{AgentView, EditView, Micros, TracksView};
+use crate::vocab::{AgentView, EditView, Micros, SelectionView, TracksView};
 use std::sync::Arc;
 
 /// While fingers hold people, their `tracks` message goes out at most this often
@@ -63,6 +74,11 @@ impl Engine {
         self.edits.edits
     }
 
+    /// The play time of the tracks being edited (s).
+    pub fn edit_play_t_s(&self) -> Option<f64> {
+        self.edits.mode.as_ref().map(|m| m.play_t_s)
+    }
+
     /// The tracks being edited.
     pub fn edited_tracks(&self) -> Option<&Arc<TrackSet>> {
         self.edits.mode.as_ref().map(|m| &m.set)
@@ -77,6 +93,7 @@ impl Engine {
             .edit
             .as_ref()
             .map_or(super::edit_state::EDIT_THRESHOLD_M, |e| e.threshold_m);
+        self.edits.avoid.preview = cfg.edit.as_ref().is_none_or(|e| e.preview);
         let tracks = cfg.loaded_tracks();
         let same = match (tracks, &self.edits.from_config) {
             (Some(a), Some(b)) => a == b,
@@ -177,8 +194,12 @@ impl Engine {
             collisions: Vec::new(),
             settling: false,
             hull: Vec::new(),
+            hull_of: None,
+            selection: None,
+            preview: None,
+            queued: Vec::new(),
         }));
-        self.edits.outbox = None;
+        self.edits.outbox.clear();
         self.check_collisions();
         self.publish_tracks();
         self.edits.view_dirty = true;
@@ -190,7 +211,7 @@ impl Engine {
         let epoch = self.edits.epoch;
         let threshold_m = self.edits.avoid.threshold_m;
         if let Some(m) = &self.edits.mode {
-            self.edits.outbox = Some(EditJob {
+            self.edits.outbox.push_back(EditJob {
                 epoch,
                 grab: 0,
                 kind: EditJobKind::Check {
@@ -202,7 +223,8 @@ impl Engine {
         }
     }
 
-    /// `edit.undo`.
+    /// `edit.undo`: the tracks before the last edit come back (the very tracks:
+    /// an edit shown as a preview is dropped, byte for byte).
     pub(super) fn edit_undo(&mut self) -> Result<(), CommandError> {
         let m = self.edit_mode_mut()?;
         if m.grab.is_some() || m.settling {
@@ -215,6 +237,7 @@ impl Engine {
         };
         m.set = prev;
         m.version += 1;
+        m.preview = None;
         m.hull.clear();
         m.collisions.clear();
         self.check_collisions();
@@ -241,6 +264,11 @@ impl Engine {
         let dir = self.edit_dir("edit.save")?;
         let loaded = self.edits.loaded_entry.clone();
         let m = self.edit_mode_mut()?;
+        if m.preview.is_some() {
+            return Err(CommandError::Edit(
+                "an edit is shown as a preview: edit.accept or edit.undo it before saving".into(),
+            ));
+        }
         let entry = match (entry, loaded) {
             (Some(e), _) if !e.is_empty() => e.to_string(),
             (_, Some(l)) if overwrite => l,
@@ -263,8 +291,15 @@ impl Engine {
         Ok(())
     }
 
-    /// `edit.retime`: a temporal edit of every person, then collisions avoided.
-    pub(super) fn edit_retime(&mut self, at_s: f64, to_s: f64) -> Result<(), CommandError> {
+    /// `edit.retime`: a temporal edit of the people `ids` (else the selection's,
+    /// else everyone), then collisions avoided around them. A preview shown is
+    /// accepted first.
+    pub(super) fn edit_retime(
+        &mut self,
+        at_s: f64,
+        to_s: f64,
+        ids: Option<&[u64]>,
+    ) -> Result<(), CommandError> {
         if !at_s.is_finite() || !to_s.is_finite() {
             return Err(CommandError::Edit(
                 "edit.retime needs finite `at_s` and `to_s`".into(),
@@ -278,15 +313,31 @@ impl Engine {
                 "an edit is under way; retime when the fingers have lifted".into(),
             ));
         }
+        // Empty means everyone to the job: an empty list or selection is refused.
+        let people: Arc<[usize]> = match (ids, &m.selection) {
+            (Some(ids), _) => super::edit_select::indices_of(&m.set, ids, "edit.retime")?.into(),
+            (None, Some(s)) => Arc::clone(&s.tracks),
+            (None, None) => Arc::from([]),
+        };
+        if people.is_empty() && (ids.is_some() || m.selection.is_some()) {
+            return Err(CommandError::Edit(
+                "edit.retime: no one to retime (the `ids` or the selection are empty)".into(),
+            ));
+        }
+        if m.preview.take().is_some() {
+            self.edits.edits += 1;
+        }
+        let m = self.edit_mode_mut()?;
         m.settling = true;
         let base = Arc::clone(&m.set);
         Engine::push_undo(m, Arc::clone(&base));
         let (version, source) = (m.version + 1, Arc::clone(&m.source));
-        self.edits.outbox = Some(EditJob {
+        self.edits.outbox.push_back(EditJob {
             epoch,
             grab: 0,
             kind: EditJobKind::Retime {
                 base,
+                people,
                 at_s,
                 to_s,
                 avoid,
@@ -299,7 +350,8 @@ impl Engine {
     }
 
     /// A gesture recognised in edit mode (in open space, not on a person): `contract`
-    /// plays the next [`GESTURE_RETIME_S`] of every track faster, `expand` slower
+    /// plays the next [`GESTURE_RETIME_S`] of the selection's tracks (everyone's
+    /// without a selection) faster, `expand` slower
     /// (a temporal edit, section 3.3, dragging each person's node nearest that
     /// horizon by the factor; the first and last times stay), then collisions are
     /// avoided. Other classes (and a library's classes of other names) do nothing
@@ -317,7 +369,7 @@ impl Engine {
             return;
         };
         let (at, to) = (play + GESTURE_RETIME_S, play + GESTURE_RETIME_S * factor);
-        match self.edit_retime(at, to) {
+        match self.edit_retime(at, to, None) {
             Ok(()) => {
                 log::info!("gesture {id}: {class} retimes the tracks ({at:.1} s → {to:.1} s)")
             }
@@ -334,14 +386,14 @@ impl Engine {
         self.edits.load_epoch += 1;
         self.edits.mode = None;
         self.edits.loading = None;
-        self.edits.outbox = None;
+        self.edits.outbox.clear();
         self.segmenter.cancel_all(now, &mut self.seg_out);
         self.reset(true, now);
         self.queue_reset_event(true, now);
         Ok(())
     }
 
-    fn edit_mode_mut(&mut self) -> Result<&mut EditMode, CommandError> {
+    pub(super) fn edit_mode_mut(&mut self) -> Result<&mut EditMode, CommandError> {
         self.edits
             .mode
             .as_deref_mut()
@@ -362,14 +414,30 @@ impl Engine {
                 cage,
                 edited,
                 hull,
-                targets,
+                deltas,
+                handles,
+                pins,
+                handles_at,
+                pins_at,
             } => {
                 let Some(g) = m.grab.as_mut().filter(|g| g.id == done.grab) else {
                     return;
                 };
                 g.out = false;
                 g.cage = cage;
-                g.spare = targets;
+                g.spare = deltas;
+                // Vertices asked for by place are known now: the later drags and
+                // the release hold the same ones.
+                if handles.len() == g.held.len() && g.held.iter().any(unresolved) {
+                    g.held = handles.into();
+                }
+                if pins.len() <= g.pins.len() && g.pins[..pins.len()].iter().any(unresolved) {
+                    let mut all = pins;
+                    all.extend_from_slice(&g.pins[all.len()..]);
+                    g.pins = all.into();
+                }
+                g.handles_at = handles_at;
+                g.pins_at = pins_at;
                 match edited {
                     Ok((set, view)) => {
                         g.edited = Some(Arc::clone(&set));
@@ -403,10 +471,19 @@ impl Engine {
             EditDoneKind::Settled { result, release } => {
                 m.settling = false;
                 match result {
-                    Ok((set, collisions, view)) => {
+                    Ok(Settled {
+                        set,
+                        collisions,
+                        view,
+                        preview,
+                    }) => {
                         m.collisions = collisions;
                         m.version = view.version;
-                        self.edits.edits += 1;
+                        if self.edits.avoid.preview {
+                            m.preview = Some(preview);
+                        } else {
+                            self.edits.edits += 1;
+                        }
                         m.set = set;
                         self.edits.tracks_out = Some(view);
                     }
@@ -424,7 +501,13 @@ impl Engine {
                     }
                 }
                 self.edits.view_dirty = true;
+                self.edit_grab_queued();
             }
+            EditDoneKind::Selected {
+                result,
+                request,
+                version,
+            } => self.apply_selection(result, request, version),
         }
     }
 
@@ -473,8 +556,20 @@ impl Engine {
                 g.selected.iter().map(|&k| m.set.tracks[k].id).collect(),
             ),
             None if m.settling => ("settling", Vec::new()),
+            None if m.preview.is_some() => ("preview", Vec::new()),
             None => ("idle", Vec::new()),
         };
+        let (pins, handles) = m.grab.as_ref().map_or((Vec::new(), Vec::new()), |g| {
+            (g.pins_at.clone(), g.handles_at.clone())
+        });
+        let selection = m
+            .selection
+            .as_ref()
+            .map_or_else(SelectionView::default, |s| SelectionView {
+                ids: s.ids.clone(),
+                window_s: s.window_s,
+                lasso: s.lasso.clone(),
+            });
         Some(Arc::new(EditView {
             seq,
             version: m.version,
@@ -485,6 +580,10 @@ impl Engine {
             collisions: m.collisions.clone(),
             threshold_m,
             undo_depth: m.undo.len() as u32,
+            pins,
+            handles,
+            selection,
+            preview: m.preview.clone(),
         }))
     }
 
@@ -523,4 +622,9 @@ impl Engine {
         }
         m.undo.push(before);
     }
+}
+
+/// Whether a handle is a vertex still asked for by place.
+fn unresolved(h: &HoldSpec) -> bool {
+    matches!(h, HoldSpec::NearVertex(_))
 }

@@ -4,8 +4,10 @@
 
 use crate::crowd::agents::NeighbourGrid;
 use crate::crowd::edit::{Cage, CageParams, SampleRef, TrackSet};
+use crate::crowd::environment::Scene;
 use crate::geom::Vec2;
-use crate::vocab::{CollisionView, Micros, TracksView};
+use crate::vocab::{CollisionView, Micros, PreviewView, TracksView};
+use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -18,6 +20,47 @@ pub const GROUP_LINK_M: f64 = 2.0;
 pub const EDIT_THRESHOLD_M: f64 = 0.3;
 /// Seconds the playback rests at the end of the set before it loops.
 pub const LOOP_REST_S: f64 = 1.0;
+/// Controls landing while a release settles that are remembered, and grabbed
+/// when its result arrives (more are dropped, and logged).
+pub const MAX_QUEUED_CONTROLS: usize = 4;
+
+/// What a finger holds, as the control thread knows it (the cage, and so its
+/// vertices, exists only on the formation thread).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(super) enum HoldSpec {
+    /// A selected sample.
+    Sample(SampleRef),
+    /// A hull vertex of the grab's cage.
+    Hull(usize),
+    /// The hull vertex of the grab's cage nearest this place (m), as deformed
+    /// when the job that resolves it runs; the job says which vertex it was.
+    NearVertex(Vec2),
+}
+
+/// People grabbed (track indices, ascending) and the time window of their samples
+/// in the cage (s; `None`: every sample).
+pub(super) type Grabbed = (Arc<[usize]>, Option<(f64, f64)>);
+
+/// The people selected for the next grab (`edit.select`, or a lasso on the table).
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct EditSelection {
+    /// Track indices, ascending.
+    pub(super) tracks: Arc<[usize]>,
+    /// Their ids, in the same order.
+    pub(super) ids: Vec<u64>,
+    /// Only samples in this window (s) are grabbed.
+    pub(super) window_s: Option<(f64, f64)>,
+    /// The lasso the people were selected with (m).
+    pub(super) lasso: Option<Vec<Vec2>>,
+}
+
+/// What `edit.select` (or a lasso) asks for: worked out on the formation thread.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct SelectRequest {
+    pub(super) ids: Option<Vec<u64>>,
+    pub(super) lasso: Option<Vec<Vec2>>,
+    pub(super) window_s: Option<(f64, f64)>,
+}
 
 /// A grab's cage, travelling between the control thread and the formation thread.
 pub(super) struct CageBox(pub(super) Box<Cage>);
@@ -38,6 +81,8 @@ impl std::fmt::Debug for CageBox {
 pub(super) struct AvoidSettings {
     /// Two people closer than this collide (m).
     pub(super) threshold_m: f64,
+    /// Show a release's or a retime's result as a preview (`edit.preview`).
+    pub(super) preview: bool,
 }
 
 /// A file job for the daemon's formation thread: reading or writing tracks is file
@@ -81,20 +126,33 @@ pub(super) enum EditJobKind {
     Drag {
         base: Arc<TrackSet>,
         selected: Arc<[usize]>,
+        /// Only samples in this window (s) are in the cage.
+        window_s: Option<(f64, f64)>,
         cage: Option<CageBox>,
         params: CageParams,
-        handles: Arc<[SampleRef]>,
-        targets: Vec<Vec2>,
+        handles: Arc<[HoldSpec]>,
+        /// Each handle's displacement since its finger landed (m).
+        deltas: Vec<Vec2>,
+        /// Points held where they were before the grab (eq. 6).
+        pins: Arc<[HoldSpec]>,
         /// The tracks' version the result will have.
         version: u64,
         source: Arc<str>,
     },
-    /// The fingers lifted: speeds corrected (eq. 9) and collisions avoided by
-    /// retiming (section 4.1.2) on the edited tracks.
+    /// The fingers lifted: the group kept out of the scene's obstacles (section
+    /// 4.2, by the grab's cage, then sample by sample), speeds corrected (eq. 9)
+    /// and collisions avoided by retiming (section 4.1.2) on the edited tracks.
     Release {
         base: Arc<TrackSet>,
         edited: Arc<TrackSet>,
         selected: Arc<[usize]>,
+        /// The grab's cage with its handles, their displacements and the pins
+        /// (`None` when a drag job failed to build it).
+        cage: Option<CageBox>,
+        handles: Arc<[HoldSpec]>,
+        deltas: Vec<Vec2>,
+        pins: Arc<[HoldSpec]>,
+        obstacles: Option<Arc<Scene>>,
         avoid: AvoidSettings,
         version: u64,
         source: Arc<str>,
@@ -106,14 +164,21 @@ pub(super) enum EditJobKind {
         /// The tracks' version they are of.
         version: u64,
     },
-    /// A temporal edit of every person (section 3.3).
+    /// A temporal edit (section 3.3) of `people` (track indices; empty: everyone).
     Retime {
         base: Arc<TrackSet>,
+        people: Arc<[usize]>,
         at_s: f64,
         to_s: f64,
         avoid: AvoidSettings,
         version: u64,
         source: Arc<str>,
+    },
+    /// The people an `edit.select` or a lasso picks.
+    Select {
+        set: Arc<TrackSet>,
+        request: SelectRequest,
+        version: u64,
     },
 }
 
@@ -132,7 +197,13 @@ pub(super) enum EditDoneKind {
         /// The edited tracks and their `tracks` message (the grabbed people).
         edited: Result<(Arc<TrackSet>, Arc<TracksView>), String>,
         hull: Vec<Vec2>,
-        targets: Vec<Vec2>,
+        deltas: Vec<Vec2>,
+        /// The handles and pins the job had, resolved (no `NearVertex` left).
+        handles: Vec<HoldSpec>,
+        pins: Vec<HoldSpec>,
+        /// Where the handles and pins are now (m).
+        handles_at: Vec<Vec2>,
+        pins_at: Vec<Vec2>,
     },
     Checked {
         collisions: Vec<CollisionView>,
@@ -143,11 +214,23 @@ pub(super) enum EditDoneKind {
         /// Whether it was a release (else a retime command).
         release: bool,
     },
+    Selected {
+        /// The people picked (track indices, ascending).
+        result: Result<Vec<usize>, String>,
+        request: SelectRequest,
+        version: u64,
+    },
 }
 
-/// What a release or retime leaves: the tracks, the collisions that remain, and
-/// the `tracks` message.
-pub(super) type Settled = (Arc<TrackSet>, Vec<CollisionView>, Arc<TracksView>);
+/// What a release or retime leaves: the tracks, the collisions that remain, the
+/// `tracks` message, and what the preview shows.
+#[derive(Debug)]
+pub(super) struct Settled {
+    pub(super) set: Arc<TrackSet>,
+    pub(super) collisions: Vec<CollisionView>,
+    pub(super) view: Arc<TracksView>,
+    pub(super) preview: PreviewView,
+}
 
 /// The fingers holding a selection.
 #[derive(Debug)]
@@ -160,19 +243,29 @@ pub(super) struct Grab {
     pub(super) base: Arc<TrackSet>,
     /// The grabbed people (track indices).
     pub(super) selected: Arc<[usize]>,
-    /// Per finger (contact id): the sample it holds and where it was when it landed.
-    pub(super) handles: Vec<(u64, SampleRef, Vec2)>,
+    /// Only their samples in this window (s) are grabbed (a selection's window).
+    pub(super) window_s: Option<(f64, f64)>,
+    /// Per finger (contact id): where it was when it landed (the handle it holds
+    /// is the same entry of `held`).
+    pub(super) fingers: Vec<(u64, Vec2)>,
     /// The cage between drags (`None` while a job has it, or before it is built).
     pub(super) cage: Option<CageBox>,
     /// A drag job is out.
     pub(super) out: bool,
-    /// The targets the last job was sent with.
+    /// The displacements the last job was sent with.
     pub(super) sent: Vec<Vec2>,
-    /// The fingers' targets now (kept after a lift).
+    /// The fingers' displacements now (kept after a lift).
     pub(super) latest: Vec<Vec2>,
-    /// The samples the fingers hold, in the order of `handles` (shared with jobs).
-    pub(super) held: Arc<[SampleRef]>,
-    /// A targets buffer back from the last job, reused for the next.
+    /// What the fingers hold, in the order of `fingers` (shared with jobs).
+    pub(super) held: Arc<[HoldSpec]>,
+    /// Points pinned by a second control (eq. 6), for the rest of the grab.
+    pub(super) pins: Arc<[HoldSpec]>,
+    /// How many pins the last job was sent with.
+    pub(super) pins_sent: usize,
+    /// Where the handles and the pins were after the last drag (m).
+    pub(super) handles_at: Vec<Vec2>,
+    pub(super) pins_at: Vec<Vec2>,
+    /// A displacements buffer back from the last job, reused for the next.
     pub(super) spare: Vec<Vec2>,
     /// The newest edited tracks.
     pub(super) edited: Option<Arc<TrackSet>>,
@@ -194,6 +287,16 @@ pub(super) struct EditMode {
     pub(super) settling: bool,
     /// Hull of the last grab, deformed (m).
     pub(super) hull: Vec<Vec2>,
+    /// The people and window of `hull`'s cage: a touch on one of its vertices
+    /// grabs them again by that vertex.
+    pub(super) hull_of: Option<Grabbed>,
+    /// The selection for the next grab.
+    pub(super) selection: Option<EditSelection>,
+    /// The edit shown as a preview (its tracks are `set`; the tracks before it
+    /// are on top of `undo`).
+    pub(super) preview: Option<PreviewView>,
+    /// Controls that landed while a release settled, grabbed when it is back.
+    pub(super) queued: Vec<u32>,
 }
 
 /// Edit mode: off (no tracks) or on.
@@ -215,7 +318,10 @@ pub(super) struct Edits {
     /// for the config's track file).
     pub(super) loaded_entry: Option<String>,
     pub(super) file_out: Option<EditFileJob>,
-    pub(super) outbox: Option<EditJob>,
+    /// Jobs for the formation thread, in order (the pipeline sends one at a
+    /// time; at most one drag, release or retime is out per grab, a selection
+    /// replaces a waiting one).
+    pub(super) outbox: VecDeque<EditJob>,
     pub(super) tracks_out: Option<Arc<TracksView>>,
     /// When the last `tracks` message went out.
     pub(super) tracks_sent_at: Option<Micros>,
@@ -255,13 +361,14 @@ impl Edits {
             allow_overwrite: false,
             loaded_entry: None,
             file_out: None,
-            outbox: None,
+            outbox: VecDeque::new(),
             tracks_out: None,
             tracks_sent_at: None,
             view_dirty: false,
             cage: CageParams::default(),
             avoid: AvoidSettings {
                 threshold_m: EDIT_THRESHOLD_M,
+                preview: true,
             },
             edits: 0,
             from_config: None,

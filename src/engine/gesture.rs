@@ -70,6 +70,25 @@ impl Engine {
         let g = &mut self.gestures;
         let captured = g.capture.finish(id, &mut g.tracks);
         g.windows_out.retain(|&w| w != id);
+        if self.edits.active() && !cancelled && !matches!(captured, Err(Rejected::NotCaptured)) {
+            // Edit mode: a one-finger loop in open space selects the people in it.
+            let tracks = std::mem::take(&mut self.gestures.tracks);
+            let lasso = self.edit_lasso(&tracks);
+            self.gestures.tracks = tracks;
+            if lasso {
+                return Some(Event::GestureEnd {
+                    id,
+                    fingers,
+                    contacts,
+                    duration_us,
+                    cancelled,
+                    recognition: None,
+                    rejected: Some(LASSO.to_string()),
+                    t: now,
+                });
+            }
+        }
+        let g = &mut self.gestures;
         let end = |recognition, rejected| Event::GestureEnd {
             id,
             fingers,
@@ -569,6 +588,10 @@ fn recognition_view(m: &GestureMotion, synth_us: u64) -> Recognition {
 /// The `rejected` reason of a recognised gesture whose class `gestures.disabled`
 /// names.
 pub const CLASS_DISABLED: &str = "class_disabled";
+
+/// The `rejected` reason of a gesture that was a lasso in edit mode: it selected
+/// the people inside it instead of being recognised.
+pub const LASSO: &str = "lasso";
 
 fn set_rejected(e: &mut Event, why: String) {
     if let Event::GestureEnd { rejected, .. } = e {

@@ -26,6 +26,7 @@ mod commands;
 mod edit;
 mod edit_grab;
 mod edit_jobs;
+mod edit_select;
 mod edit_state;
 mod error;
 mod gesture;

@@ -335,6 +335,7 @@ mod tests {
                 dir: Some(dir.to_path_buf()),
                 allow_overwrite: false,
                 threshold_m: 0.3,
+                preview: true,
             });
             edit_dir_finding(&cfg)
         };

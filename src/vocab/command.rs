@@ -59,15 +59,40 @@ pub enum Command {
         #[serde(default)]
         overwrite: bool,
     },
-    /// A temporal edit of every person (section 3.3): the time node nearest
-    /// `at_s` goes to `to_s`, the first and last nodes stay.
+    /// A temporal edit (section 3.3) of the people `ids`, or of the selection
+    /// when there is one, or of everyone: each one's time node nearest `at_s`
+    /// goes to `to_s`, the first and last nodes stay (the paper's Fig. 14 retimes
+    /// three people this way).
     #[serde(rename = "edit.retime")]
     EditRetime {
         /// The node nearest this time (s).
         at_s: f64,
         /// Goes here (s).
         to_s: f64,
+        /// Only these people (ids, at most [`MAX_SELECT_IDS`]).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        ids: Option<Vec<u64>>,
     },
+    /// Selects people for the next grab (crowd-motion-editing section 3.2's
+    /// selection): those with a sample inside `lasso` (metres, a closed polygon)
+    /// and within `window_s` (seconds), among `ids`; every criterion is optional,
+    /// and none clears the selection. The next grab on a selected person grabs
+    /// the selection's samples in the window instead of the person's group.
+    #[serde(rename = "edit.select")]
+    EditSelect {
+        /// The polygon, at least 3 and at most [`MAX_LASSO_VERTICES`] points `[x, y]` (m).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        lasso: Option<Vec<[f64; 2]>>,
+        /// The time window `[start, end]` (s).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        window_s: Option<[f64; 2]>,
+        /// Only these people (ids, at most [`MAX_SELECT_IDS`]).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        ids: Option<Vec<u64>>,
+    },
+    /// Keeps the edit shown as a preview (after a release or a retime).
+    #[serde(rename = "edit.accept")]
+    EditAccept,
     /// Leave edit mode: the crowd comes back.
     #[serde(rename = "edit.exit")]
     EditExit,
@@ -93,6 +118,12 @@ pub enum Command {
         contacts: Vec<ClientContact>,
     },
 }
+
+/// Most points an `edit.select` lasso has.
+pub const MAX_LASSO_VERTICES: usize = 1024;
+
+/// Most ids an `edit.select` or `edit.retime` lists.
+pub const MAX_SELECT_IDS: usize = 4096;
 
 /// Most contacts one `touch` command lists.
 pub const MAX_CLIENT_CONTACTS: usize = 10;
@@ -150,6 +181,8 @@ impl Command {
             Command::EditUndo => "edit.undo",
             Command::EditSave { .. } => "edit.save",
             Command::EditRetime { .. } => "edit.retime",
+            Command::EditSelect { .. } => "edit.select",
+            Command::EditAccept => "edit.accept",
             Command::EditExit => "edit.exit",
             Command::CollectSkip => "collect.skip",
             Command::CollectUndo => "collect.undo",
@@ -160,7 +193,7 @@ impl Command {
     }
 
     /// Every command name, in the order the protocol doc lists them.
-    pub const NAMES: [&'static str; 15] = [
+    pub const NAMES: [&'static str; 17] = [
         "reset",
         "set_agent_count",
         "set_formation",
@@ -170,6 +203,8 @@ impl Command {
         "edit.undo",
         "edit.save",
         "edit.retime",
+        "edit.select",
+        "edit.accept",
         "edit.exit",
         "touch",
         "collect.skip",

@@ -30,6 +30,9 @@ pub struct TracksView {
     pub full: bool,
     /// The first and last time of the set (s).
     pub span_s: (f64, f64),
+    /// `true`: these are the tracks of an edit shown as a preview (`edit.accept`
+    /// keeps them, `edit.undo` drops them).
+    pub preview: bool,
 }
 
 /// Two people closer than the threshold at some time (a collision, section 4.1.1).
@@ -47,6 +50,36 @@ pub struct CollisionView {
     pub distance_m: f64,
 }
 
+/// The people selected for the next grab (`edit.select`, or a lasso drawn on the
+/// table).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SelectionView {
+    /// The people selected (ids; empty: no selection).
+    pub ids: Vec<u64>,
+    /// The time window of the selection (s), if any.
+    pub window_s: Option<(f64, f64)>,
+    /// The lasso it was made with (m), if any.
+    pub lasso: Option<Vec<Vec2>>,
+}
+
+/// What an edit shown as a preview did (after a release or a retime).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PreviewView {
+    /// The people collision avoidance retimed (ids).
+    pub retimed: Vec<u64>,
+    /// The people obstacle avoidance moved (ids).
+    pub pushed: Vec<u64>,
+    /// Colliding pairs before collision avoidance (after the edit itself).
+    pub pairs_before: usize,
+    /// Colliding pairs after it.
+    pub pairs_after: usize,
+    /// The closest two people came before collision avoidance (m; `None`: no pair
+    /// within the threshold).
+    pub closest_before_m: Option<f64>,
+    /// The closest after it (m).
+    pub closest_after_m: Option<f64>,
+}
+
 /// What the edit is doing (an `edit` message).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EditView {
@@ -54,8 +87,10 @@ pub struct EditView {
     pub seq: u64,
     /// The tracks' version this describes.
     pub version: u64,
-    /// `idle`, `grabbed` (fingers hold a selection), `avoiding` (collision
-    /// avoidance after a release is running), `loading`.
+    /// `idle`, `grabbed` (fingers hold a selection), `settling` (speeds,
+    /// obstacles and collisions after a release or a retime are being worked
+    /// out), `preview` (an edit is shown, waiting for `edit.accept` or
+    /// `edit.undo`), `loading`, `off`.
     pub state: &'static str,
     /// The playback time (s).
     pub play_t_s: f64,
@@ -69,4 +104,14 @@ pub struct EditView {
     pub threshold_m: f64,
     /// Edits that `edit.undo` can take back.
     pub undo_depth: u32,
+    /// Where the pins of the grab are held (m): points a second control put down
+    /// on the grabbed group or its hull (eq. 6's fixed points, kept where they were
+    /// before the grab).
+    pub pins: Vec<Vec2>,
+    /// Where the fingers of the grab hold the tracks now (m), deformed.
+    pub handles: Vec<Vec2>,
+    /// The selection for the next grab.
+    pub selection: SelectionView,
+    /// The edit shown as a preview, if any.
+    pub preview: Option<PreviewView>,
 }

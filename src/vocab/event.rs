@@ -90,7 +90,8 @@ pub enum Event {
         recognition: Option<Recognition>,
         /// Why no motion was made (`tap`, `too_long`, `not_captured`, `still`,
         /// `weak_vote`, `far`, `not_recognised`, `no_library`, `no_motion`,
-        /// `no_agents`, `superseded`, `disabled`, `class_disabled`: docs/protocol.md).
+        /// `no_agents`, `superseded`, `disabled`, `class_disabled`, `lasso`:
+        /// docs/protocol.md).
         rejected: Option<String>,
         /// When it ended.
         t: Micros,

@@ -24,10 +24,10 @@ mod transform;
 
 pub use command::{
     ClientContact, ClientId, Command, CommandRequest, FormationMethod, MAX_CLIENT_CONTACTS,
-    MAX_CLIENT_CONTACT_ID,
+    MAX_CLIENT_CONTACT_ID, MAX_LASSO_VERTICES, MAX_SELECT_IDS,
 };
 pub use device::parse_vendor_product;
-pub use edit::{CollisionView, EditView, TrackView, TracksView};
+pub use edit::{CollisionView, EditView, PreviewView, SelectionView, TrackView, TracksView};
 pub use event::{CollectState, CollectView, ControlKind, DeviceState, Event};
 pub use motion::MotionType;
 pub use plan::{MotionPhase, NeighbourView, PlanOrigin, PlanView, Recognition};

@@ -72,6 +72,23 @@ pub fn avoid_around(
     params: &AvoidParams,
     people: &[usize],
 ) -> Result<AvoidReport, AvoidError> {
+    avoid_around_leaving(set, params, people, &HashSet::new())
+}
+
+/// As [`avoid_around`], but the pairs in `leave` (track indices, the smaller
+/// first) are left as they are, like strangers' pairs: the daemon's edit mode
+/// leaves the pairs a drag did not bring (two people who walked together before
+/// the edit and still do), so that only the people the edit brought into
+/// collision are retimed.
+///
+/// # Errors
+/// As [`avoid`].
+pub fn avoid_around_leaving(
+    set: &mut TrackSet,
+    params: &AvoidParams,
+    people: &[usize],
+    leave: &HashSet<(usize, usize)>,
+) -> Result<AvoidReport, AvoidError> {
     check_params(params)?;
     let n = set.tracks.len();
     let original: Vec<Vec<f64>> = set.tracks.iter().map(|t| t.times_s.clone()).collect();
@@ -119,7 +136,10 @@ pub fn avoid_around(
         }
     }
     let workable = |q: &PairCollision| {
-        !in_cluster[q.a] && !in_cluster[q.b] && (in_scope[q.a] || in_scope[q.b])
+        !in_cluster[q.a]
+            && !in_cluster[q.b]
+            && (in_scope[q.a] || in_scope[q.b])
+            && !leave.contains(&(q.a.min(q.b), q.a.max(q.b)))
     };
     // The colliding pairs as retimings change them: a retiming changes two people,
     // so only their pairs are detected again, as long as every pair is known

@@ -55,7 +55,7 @@ mod temporal;
 mod tracks;
 
 pub use apply::{run_script, ApplyParams, ApplyReport, DragReport, HANDLE_RADIUS_M};
-pub use avoid::{avoid, avoid_around};
+pub use avoid::{avoid, avoid_around, avoid_around_leaving};
 pub use avoid_params::{
     AvoidError, AvoidParams, AvoidReport, Remaining, Stuck, MIN_PACE_LENGTH_M, STILL_SPEED_M_S,
 };

@@ -5,9 +5,14 @@
 //! `edit` when the edit's state changes (the selection's cage, the collisions).
 //!
 //! ```text
-//! {"type":"tracks","version":3,"source":"parade.jsonl","full":true,"span_s":[0.0,42.0],"tracks":[{"id":1,"points":[[1.0,2.0],…],"times_s":[0.0,0.4,…]},…]}
-//! {"type":"edit","seq":812,"version":3,"state":"grabbed","play_t_s":12.4,"selected":[1,2,5],"hull":[[0.5,1.0],…],"threshold_m":0.3,"undo_depth":1,"collisions":[{"a":1,"b":5,"t_s":14.2,"x":3.1,"y":4.0,"distance_m":0.21}]}
+//! {"type":"tracks","version":3,"source":"parade.jsonl","full":true,"span_s":[0.0,42.0],"preview":false,"tracks":[{"id":1,"points":[[1.0,2.0],…],"times_s":[0.0,0.4,…]},…]}
+//! {"type":"edit","seq":812,"version":3,"state":"grabbed","play_t_s":12.4,"selected":[1,2,5],"hull":[[0.5,1.0],…],"threshold_m":0.3,"undo_depth":1,"collisions":[{"a":1,"b":5,"t_s":14.2,"x":3.1,"y":4.0,"distance_m":0.21}],"pins":[[2.8,2.0]],"handles":[[4.1,3.3]],"selection":{"ids":[],"window_s":null,"lasso":null},"preview":null}
 //! ```
+//!
+//! After a release or a retime the result is a preview (`state: "preview"`, a
+//! `tracks` message with `preview: true`, and in `edit` a `preview` object with
+//! the people retimed and pushed and the pairs and closest distances before and
+//! after collision avoidance) until `edit.accept` or `edit.undo`.
 //!
 //! Places are written to the millimetre, times to 0.1 ms; non-finite numbers as `null`.
 
@@ -70,6 +75,7 @@ struct TracksWire<'a> {
     source: &'a str,
     full: bool,
     span_s: [f64; 2],
+    preview: bool,
     tracks: Vec<TrackWire<'a>>,
 }
 
@@ -96,6 +102,27 @@ struct EditWire<'a> {
     threshold_m: f64,
     undo_depth: u32,
     collisions: Vec<CollisionWire>,
+    pins: Points<'a>,
+    handles: Points<'a>,
+    selection: SelectionWire<'a>,
+    preview: Option<PreviewWire<'a>>,
+}
+
+#[derive(Serialize)]
+struct SelectionWire<'a> {
+    ids: &'a [u64],
+    window_s: Option<[f64; 2]>,
+    lasso: Option<Points<'a>>,
+}
+
+#[derive(Serialize)]
+struct PreviewWire<'a> {
+    retimed: &'a [u64],
+    pushed: &'a [u64],
+    pairs_before: usize,
+    pairs_after: usize,
+    closest_before_m: Option<f64>,
+    closest_after_m: Option<f64>,
 }
 
 /// Appends one `tracks` line.
@@ -106,6 +133,7 @@ pub fn encode_tracks_json(v: &TracksView, out: &mut Vec<u8>) {
         source: &v.source,
         full: v.full,
         span_s: [v.span_s.0, v.span_s.1],
+        preview: v.preview,
         tracks: v
             .tracks
             .iter()
@@ -145,6 +173,21 @@ pub fn encode_edit_json(v: &EditView, out: &mut Vec<u8>) {
                 distance_m: c.distance_m,
             })
             .collect(),
+        pins: Points(&v.pins),
+        handles: Points(&v.handles),
+        selection: SelectionWire {
+            ids: &v.selection.ids,
+            window_s: v.selection.window_s.map(|(a, b)| [a, b]),
+            lasso: v.selection.lasso.as_deref().map(Points),
+        },
+        preview: v.preview.as_ref().map(|p| PreviewWire {
+            retimed: &p.retimed,
+            pushed: &p.pushed,
+            pairs_before: p.pairs_before,
+            pairs_after: p.pairs_after,
+            closest_before_m: p.closest_before_m.map(|d| round_to(d, 1e4)),
+            closest_after_m: p.closest_after_m.map(|d| round_to(d, 1e4)),
+        }),
     };
     let _ = serde_json::to_writer(&mut *out, &w);
     out.push(b'\n');
@@ -169,6 +212,7 @@ mod tests {
             }],
             full: true,
             span_s: (0.0, 0.4),
+            preview: true,
         };
         let mut out = Vec::new();
         encode_tracks_json(&v, &mut out);
@@ -192,6 +236,21 @@ mod tests {
             }],
             threshold_m: 0.3,
             undo_depth: 1,
+            pins: vec![Vec2::new(2.0, 3.0)],
+            handles: vec![Vec2::new(4.0, 5.0)],
+            selection: crate::vocab::SelectionView {
+                ids: vec![7, 9],
+                window_s: Some((1.0, 2.5)),
+                lasso: None,
+            },
+            preview: Some(crate::vocab::PreviewView {
+                retimed: vec![9],
+                pushed: vec![],
+                pairs_before: 2,
+                pairs_after: 0,
+                closest_before_m: Some(0.12345678),
+                closest_after_m: None,
+            }),
         };
         out.clear();
         encode_edit_json(&e, &mut out);
@@ -199,5 +258,18 @@ mod tests {
         assert_eq!(j["state"], "grabbed");
         assert_eq!(j["collisions"][0]["b"], 9);
         assert!(j["collisions"][0]["distance_m"].is_null());
+        assert_eq!(j["pins"][0][1], 3.0);
+        assert_eq!(j["handles"][0][0], 4.0);
+        assert_eq!(j["selection"]["ids"][1], 9);
+        assert_eq!(j["selection"]["window_s"][1], 2.5);
+        assert!(j["selection"]["lasso"].is_null());
+        assert_eq!(j["preview"]["retimed"][0], 9);
+        assert_eq!(j["preview"]["pairs_before"], 2);
+        assert_eq!(j["preview"]["closest_before_m"], 0.1235);
+        assert!(j["preview"]["closest_after_m"].is_null());
+        out.clear();
+        encode_tracks_json(&v, &mut out);
+        let j: serde_json::Value = serde_json::from_slice(&out).unwrap();
+        assert_eq!(j["preview"], true);
     }
 }

@@ -108,7 +108,7 @@ pub enum ProtocolError {
     },
     /// A command name the daemon does not know.
     #[error(
-        "unknown command `{name}` (known: reset, set_agent_count, set_formation, pause, resume, edit.load, edit.undo, edit.save, edit.retime, edit.exit, touch)"
+        "unknown command `{name}` (known: reset, set_agent_count, set_formation, pause, resume, edit.load, edit.undo, edit.save, edit.retime, edit.select, edit.accept, edit.exit, touch)"
     )]
     UnknownCommand {
         /// The name sent (shortened).
@@ -458,6 +458,15 @@ fn parse_command(mut map: Map<String, Value>) -> Result<ClientMessage, ProtocolE
             }
         }
     }
+    if name == "edit.select" || name == "edit.retime" {
+        // serde's message would not name the key or the element.
+        if let Err(reason) = edit_lists(&map) {
+            return Err(in_command(
+                id,
+                ProtocolError::CommandArguments { name, reason },
+            ));
+        }
+    }
     if name == "edit.load" || name == "edit.save" {
         if let Err(reason) = edit_entry(&name, &map) {
             return Err(in_command(
@@ -515,6 +524,44 @@ fn edit_entry(name: &str, map: &Map<String, Value>) -> Result<(), String> {
             quote(v)
         )),
     }
+}
+
+/// The lists of `edit.select` and `edit.retime`, checked element by element so
+/// that the error names the key and the element (`lasso[1] must be a point [x,
+/// y] of two numbers (m), got [0,null]`); `null` is the key left out.
+fn edit_lists(map: &Map<String, Value>) -> Result<(), String> {
+    let list = |key: &str| match map.get(key) {
+        None | Some(Value::Null) => Ok(None),
+        Some(Value::Array(a)) => Ok(Some(a)),
+        Some(v) => Err(format!("`{key}` must be a list, got {}", quote(v))),
+    };
+    let pair = |v: &Value| {
+        v.as_array()
+            .is_some_and(|a| a.len() == 2 && a.iter().all(Value::is_number))
+    };
+    if let Some(l) = list("lasso")? {
+        if let Some((i, v)) = l.iter().enumerate().find(|(_, v)| !pair(v)) {
+            return Err(format!(
+                "lasso[{i}] must be a point [x, y] of two numbers (m), got {}",
+                quote(v)
+            ));
+        }
+    }
+    if let Some(w) = map.get("window_s").filter(|v| !v.is_null() && !pair(v)) {
+        return Err(format!(
+            "`window_s` must be [start, end], two numbers of seconds, got {}",
+            quote(w)
+        ));
+    }
+    if let Some(l) = list("ids")? {
+        if let Some((i, v)) = l.iter().enumerate().find(|(_, v)| !v.is_u64()) {
+            return Err(format!(
+                "ids[{i}] must be a person id (an integer >= 0), got {}",
+                quote(v)
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The contacts of a `touch` command, checked one by one so that the error names

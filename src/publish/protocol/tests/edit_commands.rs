@@ -81,3 +81,64 @@ fn entries_that_are_not_names_are_refused() {
         }
     }
 }
+
+/// `edit.select`, `edit.accept` and `edit.retime` with `ids` as a client sends
+/// them (docs/protocol.md); a bad value or an unknown key is refused at its key.
+#[test]
+fn selection_accept_and_group_retime_parse() {
+    assert_eq!(
+        command(
+            r#"{"type":"command","id":1,"name":"edit.select","lasso":[[2,1],[6.5,1],[6,4]],"window_s":[10,20],"ids":[3,7]}"#
+        ),
+        Ok(Command::EditSelect {
+            lasso: Some(vec![[2.0, 1.0], [6.5, 1.0], [6.0, 4.0]]),
+            window_s: Some([10.0, 20.0]),
+            ids: Some(vec![3, 7]),
+        })
+    );
+    assert_eq!(
+        command(r#"{"type":"command","id":1,"name":"edit.select"}"#),
+        Ok(Command::EditSelect {
+            lasso: None,
+            window_s: None,
+            ids: None,
+        })
+    );
+    assert_eq!(
+        command(r#"{"type":"command","id":1,"name":"edit.accept"}"#),
+        Ok(Command::EditAccept)
+    );
+    assert_eq!(
+        command(r#"{"type":"command","id":1,"name":"edit.retime","at_s":1,"to_s":2,"ids":[4]}"#),
+        Ok(Command::EditRetime {
+            at_s: 1.0,
+            to_s: 2.0,
+            ids: Some(vec![4]),
+        })
+    );
+    for (line, why) in [
+        (
+            r#"{"type":"command","id":1,"name":"edit.select","lasso":[[0,0],[0,null],[2,0]]}"#,
+            "lasso[1] must be a point [x, y] of two numbers (m), got [0,null]",
+        ),
+        (
+            r#"{"type":"command","id":1,"name":"edit.select","window_s":[1]}"#,
+            "`window_s` must be [start, end]",
+        ),
+        (
+            r#"{"type":"command","id":1,"name":"edit.retime","at_s":1,"to_s":2,"ids":[4,-1]}"#,
+            "ids[1] must be a person id",
+        ),
+        (
+            r#"{"type":"command","id":1,"name":"edit.select","rect":[0,0,1,1]}"#,
+            "rect",
+        ),
+        (
+            r#"{"type":"command","id":1,"name":"edit.accept","now":true}"#,
+            "now",
+        ),
+    ] {
+        let e = command(line).unwrap_err();
+        assert!(e.contains(why), "{line}: {e}");
+    }
+}
