@@ -160,10 +160,6 @@ impl Engine {
         if fingers.is_empty() {
             return false;
         }
-        if m.preview.take().is_some() {
-            // A new grab keeps what the preview shows (edit.undo drops it).
-            self.edits.edits += 1;
-        }
         let t = m.play_t_s;
         let shown: Vec<(Vec2, bool)> = m
             .set
@@ -224,6 +220,10 @@ impl Engine {
                 }
             };
             held.push(spec);
+        }
+        if m.preview.take().is_some() {
+            // A new grab keeps what the preview shows (edit.undo drops it).
+            self.edits.edits += 1;
         }
         self.edits.next_grab += 1;
         if !on_vertex {
