@@ -787,30 +787,67 @@ fn the_edit_mode_draws_the_tracks_and_a_mouse_drag_edits_them() {
             assert_eq!(st["stats"]["edit"]["points"], 26 * 121, "{}", st["stats"]);
             assert_eq!(st["stats"]["edit"]["version"], loaded["version"]);
 
-            // A mouse drag on the block's middle person, 1.5 m to the right.
             let shot = browser.call(json!({"cmd": "stats"}));
             let map = Mapping::new(&hello, &shot["view"]);
+            let people = |watcher: &Watcher| {
+                let mark = watcher.len();
+                points(&watcher.wait_for(mark, |v| v["type"] == "snapshot")["positions"])
+            };
+            // A pin mark (Shift+click) on the block's corner person, then a mouse drag
+            // of its middle person 1.5 m to the right: the mark goes down as a second
+            // finger once the drag moves, and the daemon pins it.
+            let now = people(&watcher);
+            let corner = map.to_page(now[0]);
+            browser.call(json!({"cmd": "stroke", "points": [[corner.0, corner.1]], "shift": true}));
+            let st = browser.call(json!({"cmd": "wait", "until": "edit.pinMarks", "min": 1}));
+            assert_eq!(st["stats"]["edit"]["pinMarks"], 1);
+            let drag = |browser: &mut Browser, watcher: &Watcher| {
+                let middle = people(watcher)[12];
+                let (from, to) = (map.to_page(middle), map.to_page((middle.0 + 1.5, middle.1)));
+                browser.call(json!({"cmd": "drag", "from": [from.0, from.1],
+                    "to": [to.0, to.1], "steps": 30, "ms": 1500, "hold_ms": 400}));
+            };
             let mark = watcher.len();
-            let snap = watcher.wait_for(mark, |v| v["type"] == "snapshot");
-            let middle = points(&snap["positions"])[12];
-            let (from, to) = (map.to_page(middle), map.to_page((middle.0 + 1.5, middle.1)));
-            browser.call(
-                json!({"cmd": "drag", "from": [from.0, from.1], "to": [to.0, to.1],
-            "steps": 30, "ms": 1500, "hold_ms": 400}),
-            );
-            let grabbed =
-                watcher.wait_for(mark, |v| v["type"] == "edit" && v["state"] == "grabbed");
-            assert_eq!(
-                grabbed["selected"].as_array().unwrap().len(),
-                25,
-                "{grabbed}"
-            );
-            // The edited tracks, as the socket client got them and as the page drew them.
-            let edited = watcher.wait_for(mark, |v| {
-                v["type"] == "tracks" && v["full"] == true && v["version"] != loaded["version"]
+            drag(&mut browser, &watcher);
+            let pinned = watcher.wait_for(mark, |v| {
+                v["type"] == "edit"
+                    && v["state"] == "grabbed"
+                    && v["pins"].as_array().is_some_and(|p| !p.is_empty())
             });
-            let want = mean_of_tracks(&edited);
+            assert_eq!(pinned["selected"].as_array().unwrap().len(), 25, "{pinned}");
+            assert_eq!(pinned["pins"].as_array().unwrap().len(), 1, "{pinned}");
+            // The release is a preview: the page shows it; Undo restores the tracks.
+            let preview =
+                watcher.wait_for(mark, |v| v["type"] == "edit" && v["state"] == "preview");
+            assert!(preview["preview"].is_object(), "{preview}");
+            let st = browser.call(json!({"cmd": "wait", "until": "edit.previewTracks", "min": 1}));
+            assert_eq!(st["stats"]["edit"]["state"], "preview");
+            let mark = watcher.len();
+            browser.call(json!({"cmd": "click", "selector": "#btn-edit-undo"}));
+            let back = watcher.wait_for(mark, |v| v["type"] == "tracks" && v["full"] == true);
             let before = mean_of_tracks(&loaded);
+            assert!(
+                dist(mean_of_tracks(&back), before) < 1e-6,
+                "undo restores the tracks"
+            );
+            watcher.wait_for(mark, |v| v["type"] == "edit" && v["state"] == "idle");
+            // The mark removed (Shift+click on it again), the same drag, accepted.
+            browser.call(json!({"cmd": "stroke", "points": [[corner.0, corner.1]], "shift": true}));
+            let st = browser.call(json!({"cmd": "stats"}));
+            assert_eq!(st["stats"]["edit"]["pinMarks"], 0);
+            let mark = watcher.len();
+            drag(&mut browser, &watcher);
+            let edited = watcher.wait_for(mark, |v| {
+                v["type"] == "tracks" && v["full"] == true && v["preview"] == true
+            });
+            watcher.wait_for(mark, |v| v["type"] == "edit" && v["state"] == "preview");
+            browser.call(json!({"cmd": "wait", "until": "edit.previewTracks", "min": 1}));
+            browser.call(json!({"cmd": "click", "selector": "#btn-edit-accept"}));
+            watcher.wait_for(mark, |v| {
+                v["type"] == "edit" && v["state"] == "idle" && v["preview"].is_null()
+            });
+            // The tracks the socket client got, as the page drew them.
+            let want = mean_of_tracks(&edited);
             assert!(
                 want.0 - before.0 > 0.5,
                 "the block's tracks did not move right: mean x {} -> {}",
@@ -818,9 +855,10 @@ fn the_edit_mode_draws_the_tracks_and_a_mouse_drag_edits_them() {
                 want.0
             );
             let st = browser.call(json!({"cmd": "wait", "until": "edit.version",
-            "min": edited["version"]}));
+                "min": edited["version"]}));
             let page = &st["stats"]["edit"];
             assert_eq!(page["version"], edited["version"], "{page}");
+            assert_eq!(page["previewTracks"], 0, "{page}");
             let got = (
                 page["meanX"].as_f64().unwrap(),
                 page["meanY"].as_f64().unwrap(),
@@ -829,6 +867,27 @@ fn the_edit_mode_draws_the_tracks_and_a_mouse_drag_edits_them() {
                 dist(got, want) < 1e-3,
                 "the page drew tracks with mean {got:?}, the socket's are at {want:?}"
             );
+            // A lasso drawn with the mouse around the far person selects them.
+            let far = people(&watcher)[25];
+            let ring: Vec<[f64; 2]> = (0..=16)
+                .map(|k| {
+                    let a = f64::from(k) * std::f64::consts::TAU / 16.0;
+                    let p = map.to_page((far.0 + 0.8 * a.cos(), far.1 + 0.8 * a.sin()));
+                    [p.0, p.1]
+                })
+                .collect();
+            let mark = watcher.len();
+            browser.call(json!({"cmd": "click", "selector": "#btn-edit-lasso"}));
+            browser.call(json!({"cmd": "stroke", "points": ring, "ms": 800}));
+            let sel = watcher.wait_for(mark, |v| {
+                v["type"] == "edit"
+                    && v["selection"]["ids"]
+                        .as_array()
+                        .is_some_and(|i| !i.is_empty())
+            });
+            assert_eq!(sel["selection"]["ids"], json!([100]), "{sel}");
+            let st = browser.call(json!({"cmd": "wait", "until": "edit.selection.ids", "min": 1}));
+            assert_eq!(st["stats"]["edit"]["lassoSent"], 1);
             let stats = browser.call(json!({"cmd": "stats"}));
             assert_eq!(
                 stats["stats"]["lastError"],
@@ -836,6 +895,9 @@ fn the_edit_mode_draws_the_tracks_and_a_mouse_drag_edits_them() {
                 "{}",
                 stats["text"]
             );
+            if let Ok(keep) = std::env::var("CROWDTOUCH_VIEWER_EDIT_SCREENSHOT") {
+                browser.call(json!({"cmd": "screenshot", "path": keep}));
+            }
         },
     );
 }
