@@ -85,7 +85,7 @@ pub use flat::{
 };
 pub use hull::{
     concave_hull, grid_cell, grid_subsample, is_simple, Hull, HullParams, DEFAULT_CONCAVITY,
-    DEFAULT_MAX_EDGE_CELLS, DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M,
+    DEFAULT_MAX_EDGE_CELLS, DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M, DENSE_GRID_FACTOR,
 };
 pub use obstacles::{
     avoid_obstacles, crowd_width, crowd_width_at, push_samples_out, samples_in_obstacles,
