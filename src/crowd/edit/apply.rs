@@ -56,7 +56,8 @@ pub struct DragReport {
     /// The same after the correction (`(1, 1)` when it was not asked for or nothing
     /// moved).
     pub speed_ratio_corrected: (f64, f64),
-    /// The cage after the drag (m), counter-clockwise.
+    /// The cage after the drag (m), counter-clockwise: with several time windows,
+    /// the window holding the handle (`Cage::window_of`).
     pub hull: Vec<Vec2>,
     /// The cage before it (m).
     pub hull_rest: Vec<Vec2>,
@@ -163,6 +164,8 @@ pub fn run_script(
                     (r.edited_ratio, r.edited_ratio)
                 };
                 let shape = cage.hull_shape_error();
+                // The cage drawn is the time window holding the handle.
+                let win = cage.window(cage.window_of(handle).unwrap_or(0));
                 report.drags.push(DragReport {
                     line,
                     handle: handle.to_string(),
@@ -171,10 +174,10 @@ pub fn run_script(
                     shape_angle_rms_rad: shape.angle_rms_rad,
                     speed_ratio_edited: speeds.0,
                     speed_ratio_corrected: speeds.1,
-                    hull: cage.deformed_hull(),
-                    hull_rest: cage.hull().to_vec(),
-                    mesh_triangles: cage.mesh_triangles().to_vec(),
-                    mesh_vertices: cage.mesh_vertices().to_vec(),
+                    hull: win.deformed_hull(),
+                    hull_rest: win.hull().to_vec(),
+                    mesh_triangles: win.mesh_triangles().to_vec(),
+                    mesh_vertices: win.mesh_vertices().to_vec(),
                 });
                 report.touched.extend(touched);
             }

@@ -1,308 +1,472 @@
-//! The spatial editor: a concave-hull cage deformed as rigidly as possible
-//! (crowd-motion-editing section 3.2, eqs. 1–9).
+//! The spatial editor (crowd-motion-editing section 3.2, eqs. 1–9): a selection's
+//! cages, one per time window, deformed as rigidly as possible and chained at their
+//! borders.
 //!
-//! The cage vertices `v̂` (`n` of them, the hull of `hull.rs`) are the unknowns. Every
-//! selected sample is tied to them by its mean value coordinates (MVC, `cage_mvc.rs`)
-//! with respect to the rest hull, so its deformed position is `λᵀ v̂`. The deformation
-//! mesh is the Delaunay triangulation (spade) of the hull vertices and one selected
-//! sample per occupied grid cell (the hull's representatives), keeping the triangles
-//! whose centroid lies inside the hull; its vertex positions are `T v̂` with `T` the
-//! `m × n` matrix of eq. 4 (MVC rows for the samples, identity rows for the hull
-//! vertices). Deforming the mesh on a thinned point set and applying the MVC to every
-//! selected sample keeps a drag cheap however many samples are selected.
+//! A selection whose paths do not come back to a place gets one cage
+//! ([`CageWindow`], `cage_window.rs`: the concave hull, the mean value coordinates,
+//! the deformation mesh and the solve of eqs. 1–8), exactly as §3.2 builds it. A
+//! selection where a person revisits a place — a U-turn, a loop, someone pacing — is
+//! cut into time windows none of which holds a revisit (`cage_split.rs` says how and
+//! why: one cage ties samples by position only, so it welds a path's early and late
+//! visits of a place), and each window gets its own cage.
 //!
-//! A drag solves eq. 1 (no fixed handle) or eq. 6 (with fixed handles):
+//! # Chaining the windows
+//! Consecutive windows share the samples of their overlap (half the revisit gap, by
+//! default 1 s). Up to [`MAX_SHARED_HANDLES`] of them, spread over the overlap, are the
+//! border's *shared handles*. A drag is solved first in the windows that hold a
+//! dragged handle (the user's fixed handles are kept in the windows that hold
+//! them), then outwards along the chain: a window takes the shared handles of its
+//! neighbours solved before it as dragged handles with targets where those
+//! neighbours put them, and is solved by eq. 1 (or eq. 6 with fixed handles), so the
+//! drag spreads through the shared handles and eq. 5's locality fades it within the
+//! window. A window whose shared handles did not move (within
+//! [`CageParams::tolerance_m`]) stays at rest and the spreading stops there. A
+//! sample of an overlap takes the blend of its two windows' positions, linear in
+//! time across the overlap (all of the earlier window's at the overlap's start, all
+//! of the later one's at its end), so tracks stay continuous across the borders;
+//! at a shared handle both windows agree exactly.
 //!
-//! ```text
-//! min  ω_D² E_D + ω_F² E_F          (eq. 1)      min  ω_D² E_D + ω_S² E_S     (eq. 6)
-//! s.t. M v̂ = h                                   s.t. M v̂ = h
-//!
-//! E_D = Σ_t Σ_edges c_e^t ‖(T v̂)_i − (T v̂)_j − R_t (p_i − p_j)‖²     ARAP, eq. 2
-//! E_F = ‖C (T v̂ − c)‖²,  C_ii = α d_i e^{c_i − k} + β c_i              eqs. 3, 5
-//! E_S = ‖D v̂ − R_S D v̂_rest‖²  (hull edge vectors)                    eqs. 7, 8
-//! ```
-//!
-//! `c_e^t` are cotangent weights and `R_S` one rotation fitted to the whole hull, so
-//! that a turned hull costs nothing (`cage_solve.rs` says why). `c_i` is the
-//! breadth-first layer of mesh vertex `i` from the dragged vertices and `d_i` its
-//! distance to the nearest of them (rest positions); the dragged vertices get
-//! coefficient 0. By default `k` is [`CageParams::locality_radius_m`] in layers, so a
-//! drag bends the cage within about that distance and leaves the rest
-//! ([`CageParams::paper`] has the paper's values, which do not localise on our cages).
-//! Each handle (a hull vertex, or a selected sample through its MVC row) contributes
-//! one row of `M`; dragged handles take their targets, fixed handles keep their rest
-//! positions. The local/global iteration fits the rotations (closed-form 2-D
-//! Procrustes) and then solves the equality-constrained least squares exactly through
-//! its KKT system
-//!
-//! ```text
-//! ⎡ A  Mᵀ ⎤ ⎡ v̂ ⎤   ⎡ ω_D² Tᵀ b_D(R_t) + b_F or b_S(R_S) ⎤
-//! ⎣ M  0  ⎦ ⎣ μ ⎦ = ⎣ h                                  ⎦ ,
-//! A = ω_D² Tᵀ L T + ω_F² Tᵀ C² T   (or + ω_S² Dᵀ D),
-//! ```
-//!
-//! one LU factorisation shared by x and y, until no cage vertex moves more than
-//! [`CageParams::tolerance_m`] (at most [`CageParams::max_iterations`];
-//! [`Cage::last_solve`] says how many ran). `Tᵀ L T` (`L` the mesh's weighted
-//! Laplacian) is computed once per cage; the KKT factorisation once per handle set,
-//! so a continuing drag of the same handles costs `iterations` × (two `m × n`
-//! products and two triangular solves) plus one `N × n` product for the `N` selected
-//! samples, with no allocation. A first drag with fixed handles starts from the rigid
-//! motion that best takes the handles to their targets, so a turn needs few
-//! iterations.
+//! Hull handles ([`Handle::Hull`]) number the windows' hull vertices one window
+//! after another ([`Cage::hull_range`]); [`Cage::hull`] and [`Cage::deformed_hull`]
+//! are that concatenation (one polygon when there is one window; draw
+//! [`Cage::window`]'s polygons otherwise).
 
-use super::cage_mvc::{finite, mvc_matrix, HullMvc};
+use super::cage_mvc::finite;
 pub use super::cage_solve::{CageParams, PAPER_ALPHA, PAPER_BETA, PAPER_K};
-use super::cage_solve::{Deformer, Mode};
+pub use super::cage_speed::correct_speeds;
+use super::cage_split::{cut, revisits, TimeWindow};
+pub use super::cage_window::{CageWindow, Handle, ShapeError, SolveStats};
 use super::error::EditError;
-use super::hull::{concave_hull, Hull};
-use super::select::{point_in_polygon, SampleRef, Selection};
+use super::select::{SampleRef, Selection};
 use super::tracks::TrackSet;
-use crate::geom::{cross, Vec2};
-use nalgebra::DMatrix;
-use spade::{DelaunayTriangulation, Point2, Triangulation};
+use crate::geom::Vec2;
+use std::ops::Range;
 
-/// Fewest speed-corrected interval, as a fraction of the pre-edit interval: a segment
-/// the edit shrank to (nearly) nothing keeps at least this share of its time, so times
-/// stay strictly increasing.
-pub const MIN_INTERVAL_FRACTION: f64 = 1e-3;
+/// Most shared handles at one border between time windows: enough to carry a
+/// translation and a turn across it, few enough to leave a window's cage free.
+pub const MAX_SHARED_HANDLES: usize = 3;
 
-/// A hull vertex whose mean value coordinate in a dragged sample's row is at least
-/// this fraction of the row's largest is a source of eq. 5's layers (dimensionless):
-/// moving the sample moves it, so the mesh around it must stay free.
-pub const SUPPORT_FRACTION: f64 = 0.25;
+/// Shared handles of one border are at least this many hull cells apart (the larger
+/// cell of the two windows), so that their constraint rows are independent.
+pub const SHARED_SPACING_CELLS: f64 = 2.0;
 
-/// Something a drag can hold: a cage vertex, or a selected sample (held through its
-/// mean value coordinates).
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
-pub enum Handle {
-    /// Hull vertex index.
-    Hull(usize),
-    /// A selected sample.
-    Sample(SampleRef),
+/// The narrowest locality a drag keeps in a window it reaches through shared
+/// handles, in hull cells of that window: the border's move fades within a few
+/// mesh layers.
+pub const MIN_REACHED_RADIUS_CELLS: f64 = 2.0;
+
+/// Fewest samples a time window keeps; a window with fewer is merged into its
+/// neighbour (a cage needs three distinct points).
+const MIN_WINDOW_SAMPLES: usize = 3;
+
+/// Where a selected sample lives in the windows: its first window and index there,
+/// and for a sample of an overlap the second (later) window, index and blend weight.
+#[derive(Copy, Clone, Debug)]
+struct Member {
+    first: (u32, u32),
+    second: Option<(u32, u32, f64)>,
 }
 
-impl std::fmt::Display for Handle {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Handle::Hull(i) => write!(f, "hull vertex {i}"),
-            Handle::Sample(r) => write!(f, "track {} sample {}", r.track, r.sample),
-        }
-    }
+/// A shared handle of the border between windows `b` and `b + 1`: the sample and its
+/// indices in the two windows' selections.
+#[derive(Copy, Clone, Debug)]
+struct Shared {
+    sample: SampleRef,
+    left: usize,
+    right: usize,
 }
 
-/// How far the deformed hull's shape is from the rest hull's.
-#[derive(Copy, Clone, Debug, PartialEq)]
-pub struct ShapeError {
-    /// `sqrt(mean_i ((‖e'_i‖ − ‖e_i‖) / ‖e_i‖)²)` over the hull edges (dimensionless).
-    pub edge_length_rms: f64,
-    /// `sqrt(mean_i (θ'_i − θ_i)²)` over the hull's turning angles, radians.
-    pub angle_rms_rad: f64,
-}
+/// The windows holding a handle, with the handle as each names it: the first, and
+/// the second for a sample of an overlap.
+type Homes = ((usize, Handle), Option<(usize, Handle)>);
 
-/// How the last drag's local/global iteration went.
-#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
-pub struct SolveStats {
-    /// Iterations run.
-    pub iterations: usize,
-    /// Whether the last iteration moved no cage vertex more than
-    /// [`CageParams::tolerance_m`] (false: stopped at [`CageParams::max_iterations`]).
-    pub converged: bool,
-}
-
-/// The handle set the deformer is factorised for.
-struct HandleSet {
-    drags: Vec<Handle>,
-    fixed: Vec<Handle>,
-    /// The rest position of every handle, drags first (m).
-    rest: Vec<Vec2>,
-    /// The targets of the solve, drags' then the fixed handles' rest positions (m).
-    targets: Vec<Vec2>,
+/// How a window fared in the drag being solved.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+enum Fate {
+    Pending,
+    Moved,
+    Quiet,
 }
 
 /// The spatial editor of one selection (see the module documentation).
 pub struct Cage {
-    params: CageParams,
-    hull: Hull,
-    deformed: DMatrix<f64>,
-    /// The deformation before the drag in progress, restored when it fails.
-    backup: DMatrix<f64>,
+    windows: Vec<CageWindow>,
+    spans: Vec<TimeWindow>,
     selection: Vec<SampleRef>,
-    rest_points: Vec<Vec2>,
-    points: DMatrix<f64>,
-    /// MVC of every selected sample w.r.t. the rest hull (N × n).
-    t_all: DMatrix<f64>,
-    deformer: Deformer,
-    /// Eq. 5's k for this cage (layers).
-    k_layers: f64,
-    handles: Option<HandleSet>,
-    at_rest: bool,
+    /// Per selected sample (empty when there is one window: sample `i` is window 0's
+    /// sample `i`).
+    members: Vec<Member>,
+    /// `borders[b]`: the shared handles between windows `b` and `b + 1`.
+    borders: Vec<Vec<Shared>>,
+    /// Window `w`'s hull vertices are `hull_offsets[w]..hull_offsets[w + 1]`.
+    hull_offsets: Vec<usize>,
+    /// Every window's rest hull, mesh and triangles one after another (empty when
+    /// there is one window).
+    hull_all: Vec<Vec2>,
+    mesh_all: Vec<Vec2>,
+    triangles_all: Vec<[u32; 3]>,
+    /// The blended deformed samples (empty when there is one window).
+    points: Vec<Vec2>,
+    // A drag's scratch, kept between drags so a continuing drag does not allocate.
+    drags: Vec<Vec<(Handle, Vec2)>>,
+    fixed: Vec<Vec<Handle>>,
+    order: Vec<(usize, usize)>,
+    fate: Vec<Fate>,
+    /// Per window, how far (m, at rest) the drag has travelled to reach it.
+    reach_m: Vec<f64>,
     last: SolveStats,
+    tolerance_m: f64,
+    locality_radius_m: Option<f64>,
+    world: Option<crate::geom::Rect>,
 }
 
 impl Cage {
-    /// Builds the cage, the mesh, the MVC of every selected sample and `Tᵀ L T`.
+    /// Builds the selection's cages: the time windows (when
+    /// a path revisits a place, see [`CageParams::windows`]), then per window
+    /// the hull, the mesh, the MVC of its samples and `Tᵀ L T`.
     ///
     /// # Complexity
-    /// O(N n) for the MVC of N samples and n hull vertices, O(m n²) for `Tᵀ L T` on m
-    /// mesh vertices.
+    /// O(N) to find revisits; per window O(N_w n_w) for the MVC of its N_w samples
+    /// and n_w hull vertices, O(m_w n_w²) for `Tᵀ L T` on m_w mesh vertices.
     ///
     /// # Errors
-    /// [`EditError::SelectionMismatch`] when `sel` was made on another set; the
-    /// errors of [`concave_hull`]; [`EditError::DegenerateHull`] when a sample's MVC
-    /// are undefined or the mesh has no triangle.
+    /// [`EditError::SelectionMismatch`] when `sel` was made on another set;
+    /// [`EditError::BadCageParams`] for unusable window parameters; the errors of
+    /// [`concave_hull`](super::concave_hull); [`EditError::DegenerateHull`] when a
+    /// sample's MVC are undefined or a mesh has no triangle.
     pub fn new(set: &TrackSet, sel: &Selection, params: &CageParams) -> Result<Cage, EditError> {
         let rest_points = sel.points(set)?;
-        let hull = concave_hull(&rest_points, &params.hull)?;
-        let n = hull.vertices.len();
-        let undefined = EditError::DegenerateHull {
-            reason: "mean value coordinates undefined for a selected sample",
-        };
-        let mvc = HullMvc::new(&hull.vertices).ok_or(undefined.clone())?;
-        let t_all = mvc_matrix(&mvc, &rest_points).map_err(|_| undefined)?;
-        // Mesh: hull vertices then the representatives, duplicates skipped.
-        let mut dt: DelaunayTriangulation<Point2<f64>> = DelaunayTriangulation::new();
-        let mut spade_to_mesh: Vec<u32> = Vec::new();
-        let mut mesh_rest: Vec<Vec2> = Vec::new();
-        let mut mesh_source: Vec<Option<usize>> = Vec::new();
-        let candidates = hull.vertices.iter().map(|v| (*v, None)).chain(
-            hull.representatives
-                .iter()
-                .map(|&i| (rest_points[i], Some(i))),
-        );
-        for (p, src) in candidates {
-            let h = dt
-                .insert(Point2::new(p.x, p.y))
-                .map_err(|_| EditError::DegenerateHull {
-                    reason: "a mesh vertex cannot be triangulated",
-                })?;
-            if h.index() >= spade_to_mesh.len() {
-                spade_to_mesh.resize(h.index() + 1, u32::MAX);
-            }
-            if spade_to_mesh[h.index()] == u32::MAX {
-                spade_to_mesh[h.index()] = mesh_rest.len() as u32;
-                mesh_rest.push(p);
-                mesh_source.push(src);
-            }
+        let samples = sel.samples();
+        let mut times_s = Vec::with_capacity(samples.len());
+        for r in samples {
+            let t = set.tracks[r.track].times_s.get(r.sample).copied().ok_or(
+                EditError::SelectionMismatch {
+                    track: r.track,
+                    sample: r.sample,
+                },
+            )?;
+            times_s.push(t);
         }
-        let m = mesh_rest.len();
-        let mut triangles = Vec::new();
-        for f in dt.inner_faces() {
-            let t = f.vertices().map(|h| spade_to_mesh[h.fix().index()]);
-            let c =
-                (mesh_rest[t[0] as usize] + mesh_rest[t[1] as usize] + mesh_rest[t[2] as usize])
-                    / 3.0;
-            if point_in_polygon(&hull.vertices, c) {
-                triangles.push(t);
-            }
-        }
-        if triangles.is_empty() {
-            return Err(EditError::DegenerateHull {
-                reason: "the deformation mesh has no triangle inside the hull",
+        let (t_min, t_max) = times_s
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &t| {
+                (a.min(t), b.max(t))
             });
+        let mut spans = vec![TimeWindow {
+            start_s: t_min,
+            end_s: t_max,
+        }];
+        let wp = &params.windows;
+        if let Some(what) = wp.problem() {
+            return Err(EditError::BadCageParams { what });
         }
-        let mut t_mesh = DMatrix::zeros(m, n);
-        for (i, src) in mesh_source.iter().enumerate() {
-            match src {
-                None => t_mesh[(i, i)] = 1.0,
-                Some(s) => t_mesh.row_mut(i).copy_from(&t_all.row(*s)),
+        let person: Vec<usize> = samples.iter().map(|r| r.track).collect();
+        let mut forbidden = revisits(&rest_points, &times_s, &person, wp);
+        if !forbidden.is_empty() {
+            spans = cut(&mut forbidden, t_min, t_max, wp);
+            merge_small(&mut spans, &times_s);
+        }
+        if spans.len() == 1 {
+            let w = CageWindow::new(rest_points, samples.to_vec(), params)?;
+            return Ok(Cage::assemble(
+                vec![w],
+                spans,
+                samples.to_vec(),
+                Vec::new(),
+                params,
+            ));
+        }
+        // Per window: its samples (selection order) and each sample's homes.
+        let mut windows = Vec::with_capacity(spans.len());
+        let mut members = vec![
+            Member {
+                first: (u32::MAX, 0),
+                second: None,
+            };
+            samples.len()
+        ];
+        for (w, span) in spans.iter().enumerate() {
+            let last = w + 1 == spans.len();
+            let mut pts = Vec::new();
+            let mut refs = Vec::new();
+            for (i, &t) in times_s.iter().enumerate() {
+                if !span.holds(t, last) {
+                    continue;
+                }
+                let home = (w as u32, refs.len() as u32);
+                let m = &mut members[i];
+                if m.first.0 == u32::MAX {
+                    m.first = home;
+                } else {
+                    // The overlap with the previous window: blend linearly in time.
+                    let overlap = spans[w - 1].end_s - span.start_s;
+                    let weight = if overlap > 0.0 {
+                        ((t - span.start_s) / overlap).clamp(0.0, 1.0)
+                    } else {
+                        1.0
+                    };
+                    m.second = Some((home.0, home.1, weight));
+                }
+                pts.push(rest_points[i]);
+                refs.push(samples[i]);
+            }
+            windows.push(CageWindow::new(pts, refs, params)?);
+        }
+        let mut cage = Cage::assemble(windows, spans, samples.to_vec(), members, params);
+        cage.borders = cage.shared_handles(&rest_points);
+        Ok(cage)
+    }
+
+    fn assemble(
+        windows: Vec<CageWindow>,
+        spans: Vec<TimeWindow>,
+        selection: Vec<SampleRef>,
+        members: Vec<Member>,
+        params: &CageParams,
+    ) -> Cage {
+        let count = windows.len();
+        let mut hull_offsets = vec![0];
+        let (mut hull_all, mut mesh_all, mut triangles_all) = (Vec::new(), Vec::new(), Vec::new());
+        for w in &windows {
+            hull_offsets.push(hull_offsets.last().copied().unwrap_or(0) + w.hull().len());
+            if count > 1 {
+                hull_all.extend_from_slice(w.hull());
+                let base = mesh_all.len() as u32;
+                mesh_all.extend_from_slice(w.mesh_vertices());
+                triangles_all.extend(w.mesh_triangles().iter().map(|t| t.map(|v| v + base)));
             }
         }
-        let deformer = Deformer::new(hull.vertices.clone(), mesh_rest, triangles, t_mesh);
-        let k_layers = match params.locality_radius_m {
-            Some(r) => r / deformer.mean_edge_m(),
-            None => params.k,
+        let points = if count > 1 {
+            (0..selection.len())
+                .map(|i| {
+                    windows[members[i].first.0 as usize].rest_sample(members[i].first.1 as usize)
+                })
+                .collect()
+        } else {
+            Vec::new()
         };
-        let deformed = DMatrix::from_fn(n, 2, |i, c| hull.vertices[i][c]);
-        let mut points = DMatrix::zeros(rest_points.len(), 2);
-        points.gemm(1.0, &t_all, &deformed, 0.0);
-        Ok(Cage {
-            params: *params,
-            backup: deformed.clone(),
-            deformed,
-            selection: sel.samples().to_vec(),
-            rest_points,
+        Cage {
+            windows,
+            spans,
+            selection,
+            members,
+            borders: vec![Vec::new(); count.saturating_sub(1)],
+            hull_offsets,
+            hull_all,
+            mesh_all,
+            triangles_all,
             points,
-            t_all,
-            deformer,
-            k_layers,
-            handles: None,
-            at_rest: true,
+            drags: vec![Vec::new(); count],
+            fixed: vec![Vec::new(); count],
+            order: Vec::with_capacity(count),
+            fate: vec![Fate::Pending; count],
+            reach_m: vec![0.0; count],
             last: SolveStats::default(),
-            hull,
-        })
+            tolerance_m: params.tolerance_m,
+            locality_radius_m: params.locality_radius_m,
+            world: params.world,
+        }
     }
 
-    /// The rest hull (counter-clockwise, m).
+    /// Each border's shared handles: farthest-point picks among the overlap's
+    /// samples, at least [`SHARED_SPACING_CELLS`] cells apart.
+    fn shared_handles(&self, rest: &[Vec2]) -> Vec<Vec<Shared>> {
+        let mut borders = vec![Vec::new(); self.windows.len() - 1];
+        for (b, border) in borders.iter_mut().enumerate() {
+            let cand: Vec<(usize, usize, usize)> = self
+                .members
+                .iter()
+                .enumerate()
+                .filter_map(|(i, m)| match m.second {
+                    Some((w2, j2, _)) if m.first.0 as usize == b && w2 as usize == b + 1 => {
+                        Some((i, m.first.1 as usize, j2 as usize))
+                    }
+                    _ => None,
+                })
+                .collect();
+            let Some(&first) = cand.get(cand.len() / 2) else {
+                continue;
+            };
+            let spacing =
+                SHARED_SPACING_CELLS * self.windows[b].cell_m().max(self.windows[b + 1].cell_m());
+            let mut picked = vec![first];
+            while picked.len() < MAX_SHARED_HANDLES {
+                let far = cand
+                    .iter()
+                    .map(|c| {
+                        let d = picked
+                            .iter()
+                            .map(|p| (rest[p.0] - rest[c.0]).norm())
+                            .fold(f64::INFINITY, f64::min);
+                        (d, *c)
+                    })
+                    .max_by(|a, b| a.0.total_cmp(&b.0));
+                match far {
+                    Some((d, c)) if d >= spacing => picked.push(c),
+                    _ => break,
+                }
+            }
+            picked.sort_unstable();
+            *border = picked
+                .into_iter()
+                .map(|(i, left, right)| Shared {
+                    sample: self.selection[i],
+                    left,
+                    right,
+                })
+                .collect();
+        }
+        borders
+    }
+
+    /// The number of time windows (1 when the selection revisits no place).
+    pub fn window_count(&self) -> usize {
+        self.windows.len()
+    }
+
+    /// Time window `w`'s cage.
+    ///
+    /// # Panics
+    /// When `w >= window_count()`.
+    pub fn window(&self, w: usize) -> &CageWindow {
+        &self.windows[w]
+    }
+
+    /// Time window `w`'s span (s): its samples have `start_s <= t < end_s` (the last
+    /// window's also `t == end_s`).
+    ///
+    /// # Panics
+    /// When `w >= window_count()`.
+    pub fn window_span(&self, w: usize) -> TimeWindow {
+        self.spans[w]
+    }
+
+    /// The shared handles between windows `b` and `b + 1` (see the module doc).
+    ///
+    /// # Panics
+    /// When `b + 1 >= window_count()`.
+    pub fn shared_samples(&self, b: usize) -> impl Iterator<Item = SampleRef> + '_ {
+        self.borders[b].iter().map(|s| s.sample)
+    }
+
+    /// The hull handles of window `w` ([`Handle::Hull`] indices).
+    ///
+    /// # Panics
+    /// When `w >= window_count()`.
+    pub fn hull_range(&self, w: usize) -> Range<usize> {
+        self.hull_offsets[w]..self.hull_offsets[w + 1]
+    }
+
+    /// The first window holding a handle.
+    pub fn window_of(&self, h: Handle) -> Option<usize> {
+        self.homes(h).ok().map(|(a, _)| a.0)
+    }
+
+    /// The windows holding a handle and the handle there: one, or two for a sample
+    /// of an overlap.
+    fn homes(&self, h: Handle) -> Result<Homes, EditError> {
+        let unknown = || EditError::UnknownHandle {
+            handle: h.to_string(),
+        };
+        match h {
+            Handle::Hull(g) => {
+                let w = self.hull_offsets.partition_point(|&o| o <= g);
+                if w == 0 || w > self.windows.len() {
+                    return Err(unknown());
+                }
+                Ok(((w - 1, Handle::Hull(g - self.hull_offsets[w - 1])), None))
+            }
+            Handle::Sample(r) => {
+                let i = self.selection.binary_search(&r).map_err(|_| unknown())?;
+                if self.members.is_empty() {
+                    return Ok(((0, h), None));
+                }
+                let m = self.members[i];
+                Ok(((m.first.0 as usize, h), m.second.map(|s| (s.0 as usize, h))))
+            }
+        }
+    }
+
+    /// Every window's rest hull, one after another ([`Cage::hull_range`]; the hull
+    /// polygon when there is one window) (m).
     pub fn hull(&self) -> &[Vec2] {
-        &self.hull.vertices
+        if self.windows.len() == 1 {
+            self.windows[0].hull()
+        } else {
+            &self.hull_all
+        }
     }
 
-    /// Whether the hull is the convex fallback (see `hull.rs`).
+    /// Whether a window's hull is the convex fallback (see `hull.rs`).
     pub fn hull_is_convex_fallback(&self) -> bool {
-        self.hull.convex_fallback
+        self.windows.iter().any(|w| w.hull_is_convex_fallback())
     }
 
-    /// The deformed hull vertex `i` (m).
+    /// The deformed hull vertex `i` ([`Handle::Hull`] numbering) (m).
+    ///
+    /// # Panics
+    /// When `i >= hull().len()`.
     pub fn deformed_vertex(&self, i: usize) -> Vec2 {
-        Vec2::new(self.deformed[(i, 0)], self.deformed[(i, 1)])
+        let w = self.hull_offsets.partition_point(|&o| o <= i) - 1;
+        self.windows[w].deformed_vertex(i - self.hull_offsets[w])
     }
 
-    /// The deformed hull (m).
+    /// Every window's deformed hull, one after another (m).
     pub fn deformed_hull(&self) -> Vec<Vec2> {
-        (0..self.hull.vertices.len())
-            .map(|i| self.deformed_vertex(i))
+        self.windows
+            .iter()
+            .flat_map(|w| w.deformed_hull())
             .collect()
     }
 
-    /// The mesh vertices at rest (hull vertices first) (m).
+    /// Every window's mesh vertices at rest, one after another (m).
     pub fn mesh_vertices(&self) -> &[Vec2] {
-        self.deformer.mesh_rest()
+        if self.windows.len() == 1 {
+            self.windows[0].mesh_vertices()
+        } else {
+            &self.mesh_all
+        }
     }
 
-    /// The mesh triangles (indices into [`Cage::mesh_vertices`], counter-clockwise).
+    /// Every window's mesh triangles (indices into [`Cage::mesh_vertices`]).
     pub fn mesh_triangles(&self) -> &[[u32; 3]] {
-        self.deformer.triangles()
+        if self.windows.len() == 1 {
+            self.windows[0].mesh_triangles()
+        } else {
+            &self.triangles_all
+        }
     }
 
-    /// Eq. 2's weight `c_e^t` of every triangle's edges `(t[e], t[e + 1])`, in the
-    /// order of [`Cage::mesh_triangles`] (cotangent weights, clamped).
-    pub fn edge_weights(&self) -> &[[f64; 3]] {
-        self.deformer.edge_weights()
-    }
-
-    /// Eq. 4's `T` for the mesh vertices (m × n).
-    pub fn mesh_matrix(&self) -> &DMatrix<f64> {
-        self.deformer.t_mesh()
-    }
-
-    /// The MVC of every selected sample w.r.t. the rest hull (N × n, selection order).
-    pub fn sample_matrix(&self) -> &DMatrix<f64> {
-        &self.t_all
-    }
-
-    /// The selected samples, in the order of [`Cage::sample_matrix`]'s rows.
+    /// The selected samples.
     pub fn selection(&self) -> &[SampleRef] {
         &self.selection
     }
 
     /// The deformed position of the `i`-th selected sample (m).
+    ///
+    /// # Panics
+    /// When `i >= selection().len()`.
     pub fn deformed_sample(&self, i: usize) -> Vec2 {
-        Vec2::new(self.points[(i, 0)], self.points[(i, 1)])
+        if self.members.is_empty() {
+            self.windows[0].deformed_sample(i)
+        } else {
+            self.points[i]
+        }
     }
 
     /// The rest position of the `i`-th selected sample (m).
+    ///
+    /// # Panics
+    /// When `i >= selection().len()`.
     pub fn rest_sample(&self, i: usize) -> Vec2 {
-        self.rest_points[i]
+        match self.members.get(i) {
+            None => self.windows[0].rest_sample(i),
+            Some(m) => self.windows[m.first.0 as usize].rest_sample(m.first.1 as usize),
+        }
     }
 
-    /// Eq. 5's `k` of this cage (layers): [`CageParams::locality_radius_m`] over the
-    /// mesh's mean edge length, or [`CageParams::k`].
-    pub fn locality_k_layers(&self) -> f64 {
-        self.k_layers
-    }
-
-    /// How the last drag's iteration went.
+    /// How the last drag's iteration went: the most iterations any window ran, and
+    /// whether every window solved converged.
     pub fn last_solve(&self) -> SolveStats {
         self.last
     }
@@ -313,7 +477,7 @@ impl Cage {
     /// [`EditError::UnknownHandle`].
     pub fn handle_position(&self, h: Handle) -> Result<Vec2, EditError> {
         match h {
-            Handle::Hull(i) if i < self.hull.vertices.len() => Ok(self.deformed_vertex(i)),
+            Handle::Hull(i) if i < self.hull().len() => Ok(self.deformed_vertex(i)),
             Handle::Sample(r) => match self.selection.binary_search(&r) {
                 Ok(i) => Ok(self.deformed_sample(i)),
                 Err(_) => Err(EditError::UnknownHandle {
@@ -331,7 +495,7 @@ impl Cage {
     pub fn handle_near(&self, p: Vec2, radius_m: f64) -> Option<Handle> {
         let r2 = radius_m * radius_m;
         let mut best: Option<(f64, Handle)> = None;
-        for i in 0..self.hull.vertices.len() {
+        for i in 0..self.hull().len() {
             let d2 = (self.deformed_vertex(i) - p).norm_squared();
             if d2 <= r2 && best.is_none_or(|(b, _)| d2 < b) {
                 best = Some((d2, Handle::Hull(i)));
@@ -349,223 +513,166 @@ impl Cage {
         best.map(|b| b.1)
     }
 
-    /// The row of `M` for a handle (its MVC row, or a unit row), into `out`.
-    fn handle_row(&self, h: Handle, out: &mut [f64]) -> Result<(), EditError> {
-        out.fill(0.0);
-        match h {
-            Handle::Hull(i) if i < out.len() => out[i] = 1.0,
-            Handle::Sample(r) => {
-                let i = self
-                    .selection
-                    .binary_search(&r)
-                    .map_err(|_| EditError::UnknownHandle {
-                        handle: h.to_string(),
-                    })?;
-                for (j, o) in out.iter_mut().enumerate() {
-                    *o = self.t_all[(i, j)];
-                }
-            }
-            _ => {
-                return Err(EditError::UnknownHandle {
-                    handle: h.to_string(),
-                })
-            }
-        }
-        Ok(())
-    }
-
-    /// The mesh vertices a dragged handle starts the breadth-first search from: a hull
-    /// vertex itself; for a sample, the mesh vertex nearest it and the hull vertices
-    /// that carry its mean value coordinates (at least [`SUPPORT_FRACTION`] of its
-    /// largest), which a drag of it must move.
-    fn source_vertices(&self, h: Handle, out: &mut Vec<usize>) {
-        let mesh = self.deformer.mesh_rest();
-        match h {
-            Handle::Hull(i) => out.push(i),
-            Handle::Sample(r) => {
-                let i = self.selection.binary_search(&r).unwrap_or(0);
-                let p = self.rest_points[i];
-                let nearest = (0..mesh.len())
-                    .min_by(|&a, &b| {
-                        (mesh[a] - p)
-                            .norm_squared()
-                            .total_cmp(&(mesh[b] - p).norm_squared())
-                    })
-                    .unwrap_or(0);
-                out.push(nearest);
-                let row = self.t_all.row(i);
-                let top = row.iter().copied().fold(0.0, f64::max);
-                out.extend((0..row.len()).filter(|&j| row[j] >= SUPPORT_FRACTION * top));
-            }
-        }
-    }
-
-    /// Eq. 5's coefficient for every mesh vertex, from the dragged handles (with this
-    /// cage's `k`, [`Cage::locality_k_layers`]).
-    pub fn locality_coefficients(&self, drags: &[Handle]) -> Vec<f64> {
-        let mut sources = Vec::new();
-        for h in drags {
-            self.source_vertices(*h, &mut sources);
-        }
-        let p = &self.params;
-        self.deformer
-            .locality_coefficients(&sources, p.alpha, self.k_layers, p.beta)
-    }
-
-    fn build_solver(&mut self, drags: &[Handle], fixed: &[Handle]) -> Result<(), EditError> {
-        self.handles = None;
-        self.deformer.clear();
-        let n = self.hull.vertices.len();
-        let all: Vec<Handle> = drags.iter().chain(fixed).copied().collect();
-        for (i, h) in all.iter().enumerate() {
-            if all[..i].contains(h) {
-                return Err(EditError::ConflictingHandles {
-                    reason: "a handle appears twice among the dragged and fixed handles",
-                });
-            }
-        }
-        let k = all.len();
-        if k > n {
-            return Err(EditError::ConflictingHandles {
-                reason: "more handles than cage vertices",
-            });
-        }
-        let mut rows = DMatrix::zeros(k, n);
-        let mut row = vec![0.0; n];
-        let mut rest = Vec::with_capacity(k);
-        for (r, h) in all.iter().enumerate() {
-            self.handle_row(*h, &mut row)?;
-            let mut at = Vec2::zeros();
-            for (j, w) in row.iter().enumerate() {
-                rows[(r, j)] = *w;
-                at += self.hull.vertices[j] * *w;
-            }
-            rest.push(at);
-        }
-        let (mode, coef) = if fixed.is_empty() {
-            (Mode::Locality, self.locality_coefficients(drags))
-        } else {
-            (Mode::HullShape, Vec::new())
-        };
-        if !self.deformer.factor(&rows, mode, &coef, &self.params) {
-            return Err(EditError::ConflictingHandles {
-                reason: "the constraint rows are linearly dependent",
-            });
-        }
-        self.handles = Some(HandleSet {
-            drags: drags.to_vec(),
-            fixed: fixed.to_vec(),
-            targets: rest.clone(),
-            rest,
-        });
-        Ok(())
-    }
-
-    /// Sets the deformation to the rigid motion that best takes the handles' rest
-    /// positions to their targets (2-D Procrustes), when they span a distance.
-    fn rigid_start(&mut self) {
-        let Some(hs) = self.handles.as_ref() else {
-            return;
-        };
-        let k = hs.rest.len() as f64;
-        let pc: Vec2 = hs.rest.iter().sum::<Vec2>() / k;
-        let qc: Vec2 = hs.targets.iter().sum::<Vec2>() / k;
-        let (mut sd, mut sc) = (0.0, 0.0);
-        for (p, q) in hs.rest.iter().zip(&hs.targets) {
-            sd += (p - pc).dot(&(q - qc));
-            sc += cross(p - pc, q - qc);
-        }
-        let len = (sd * sd + sc * sc).sqrt();
-        if !(len > 0.0 && len.is_finite()) {
-            return;
-        }
-        let (co, si) = (sd / len, sc / len);
-        for (i, v) in self.hull.vertices.iter().enumerate() {
-            let d = v - pc;
-            self.deformed[(i, 0)] = qc.x + co * d.x - si * d.y;
-            self.deformed[(i, 1)] = qc.y + si * d.x + co * d.y;
-        }
-    }
-
     /// Moves the dragged handles to their targets (exactly) and keeps the fixed
-    /// handles at their rest positions, deforming from the rest cage by eq. 1 (no fixed
-    /// handle) or eq. 6 (with fixed handles); then updates every selected sample's
-    /// deformed position. The previous deformation is the starting guess, so a
-    /// continuing drag converges across calls; a first drag with fixed handles starts
-    /// from the handles' best rigid motion.
+    /// handles at their rest positions, deforming from the rest cage by eq. 1 (no
+    /// fixed handle) or eq. 6 (with fixed handles); then updates every selected
+    /// sample's deformed position. With several time windows the drag is solved in
+    /// the windows holding a dragged handle and spread through the shared handles
+    /// (see the module documentation). The previous deformation is the starting
+    /// guess, so a continuing drag converges across calls.
     ///
     /// # Complexity
-    /// The first call for a handle set factorises the KKT system, O(m n² + (n + K)³);
-    /// later calls with the same handles cost O(iterations · m n + N n) and do not
-    /// allocate.
+    /// The first call for a handle set factorises each solved window's KKT system,
+    /// O(m n² + (n + K)³); later calls with the same handles cost
+    /// O(iterations · m n + N n) per solved window and do not allocate.
     ///
     /// # Errors
     /// [`EditError::DragNotFinite`], [`EditError::DragOutsideWorld`],
     /// [`EditError::UnknownHandle`], [`EditError::ConflictingHandles`] (a handle twice,
-    /// more handles than cage vertices, or dependent constraint rows). On error the
-    /// cage keeps its previous deformation.
+    /// more handles than a window's cage vertices, or dependent constraint rows). On
+    /// error the cage keeps its previous deformation.
     pub fn drag(&mut self, drags: &[(Handle, Vec2)], fixed: &[Handle]) -> Result<(), EditError> {
+        if self.windows.len() == 1 {
+            let r = self.windows[0].drag(drags, fixed);
+            self.last = self.windows[0].last_solve();
+            return r;
+        }
         for (_, t) in drags {
             if !finite(*t) {
                 return Err(EditError::DragNotFinite { x: t.x, y: t.y });
             }
-            if self.params.world.is_some_and(|w| !w.contains(*t)) {
+            if self.world.is_some_and(|w| !w.contains(*t)) {
                 return Err(EditError::DragOutsideWorld { x: t.x, y: t.y });
             }
         }
-        if drags.is_empty() && fixed.is_empty() {
+        for list in &mut self.drags {
+            list.clear();
+        }
+        for list in &mut self.fixed {
+            list.clear();
+        }
+        for &(h, t) in drags {
+            let (a, b) = self.homes(h)?;
+            for (w, local) in std::iter::once(a).chain(b) {
+                self.drags[w].push((local, t));
+            }
+        }
+        for &h in fixed {
+            let (a, b) = self.homes(h)?;
+            for (w, local) in std::iter::once(a).chain(b) {
+                self.fixed[w].push(local);
+            }
+        }
+        if drags.is_empty() {
+            // Fixed handles alone keep the rest pose.
             self.reset();
             return Ok(());
         }
-        let same = self.handles.as_ref().is_some_and(|s| {
-            s.drags.iter().eq(drags.iter().map(|d| &d.0)) && s.fixed.as_slice() == fixed
-        });
-        if !same {
-            let handles: Vec<Handle> = drags.iter().map(|d| d.0).collect();
-            self.build_solver(&handles, fixed)?;
+        // Windows by chain distance to the nearest window holding a dragged handle.
+        let count = self.windows.len();
+        self.order.clear();
+        for w in 0..count {
+            let dist = (0..count)
+                .filter(|&s| !self.drags[s].is_empty())
+                .map(|s| s.abs_diff(w))
+                .min()
+                .unwrap_or(usize::MAX);
+            self.order.push((dist, w));
         }
-        let Some(hs) = self.handles.as_mut() else {
-            return Ok(());
+        self.order.sort_unstable();
+        for w in &mut self.windows {
+            w.save();
+        }
+        self.fate.fill(Fate::Pending);
+        let mut stats = SolveStats {
+            iterations: 0,
+            converged: true,
         };
-        for (t, (_, to)) in hs.targets.iter_mut().zip(drags) {
-            *t = *to;
-        }
-        self.backup.copy_from(&self.deformed);
-        if self.at_rest && !fixed.is_empty() {
-            self.rigid_start();
-        }
-        let hs = self.handles.as_ref().map_or(&[][..], |h| &h.targets[..]);
-        match self.deformer.solve(&mut self.deformed, hs, &self.params) {
-            Some((iterations, converged)) => {
-                self.last = SolveStats {
-                    iterations,
-                    converged,
-                };
-            }
-            None => {
-                self.deformed.copy_from(&self.backup);
-                if !same {
-                    self.handles = None;
-                    self.deformer.clear();
+        for k in 0..count {
+            let (dist, w) = self.order[k];
+            let mut moved = dist == 0;
+            let mut reach = if dist == 0 { 0.0 } else { f64::INFINITY };
+            for u in [w.wrapping_sub(1), w + 1] {
+                if u >= count || self.fate[u] == Fate::Pending {
+                    continue;
                 }
-                return Err(EditError::ConflictingHandles {
-                    reason: "the constraint rows are linearly dependent",
-                });
+                let b = u.min(w);
+                for s in &self.borders[b] {
+                    let (iu, iw) = if u < w {
+                        (s.left, s.right)
+                    } else {
+                        (s.right, s.left)
+                    };
+                    if self.fate[u] == Fate::Moved {
+                        // How far the drag travelled: from what drove window u to
+                        // this shared handle, at rest.
+                        let at = self.windows[u].rest_sample(iu);
+                        for (d, _) in &self.drags[u] {
+                            if let Some(q) = self.windows[u].handle_rest(*d) {
+                                reach = reach.min(self.reach_m[u] + (q - at).norm());
+                            }
+                        }
+                    }
+                    let h = Handle::Sample(s.sample);
+                    if self.drags[w].iter().any(|d| d.0 == h) || self.fixed[w].contains(&h) {
+                        continue;
+                    }
+                    let target = self.windows[u].deformed_sample(iu);
+                    if (target - self.windows[w].rest_sample(iw)).norm() > self.tolerance_m {
+                        moved = true;
+                    }
+                    self.drags[w].push((h, target));
+                }
             }
+            if !moved {
+                self.windows[w].reset();
+                self.fate[w] = Fate::Quiet;
+                continue;
+            }
+            self.reach_m[w] = reach;
+            // Eq. 5's radius in a reached window: what is left of the drag's.
+            let radius = match self.locality_radius_m {
+                Some(r) if dist > 0 => {
+                    Some((r - reach).max(MIN_REACHED_RADIUS_CELLS * self.windows[w].cell_m()))
+                }
+                _ => None,
+            };
+            if let Err(e) = self.windows[w].drag_within(&self.drags[w], &self.fixed[w], radius) {
+                for win in &mut self.windows {
+                    win.restore();
+                }
+                self.blend();
+                return Err(e);
+            }
+            let s = self.windows[w].last_solve();
+            stats.iterations = stats.iterations.max(s.iterations);
+            stats.converged &= s.converged;
+            self.fate[w] = Fate::Moved;
         }
-        self.at_rest = false;
-        self.points.gemm(1.0, &self.t_all, &self.deformed, 0.0);
+        self.last = stats;
+        self.blend();
         Ok(())
+    }
+
+    /// Every selected sample's position from its windows (see the module doc).
+    fn blend(&mut self) {
+        for (p, m) in self.points.iter_mut().zip(&self.members) {
+            let a = self.windows[m.first.0 as usize].deformed_sample(m.first.1 as usize);
+            *p = match m.second {
+                None => a,
+                Some((w, i, t)) => {
+                    a * (1.0 - t) + self.windows[w as usize].deformed_sample(i as usize) * t
+                }
+            };
+        }
     }
 
     /// Returns to the rest cage.
     pub fn reset(&mut self) {
-        for (i, v) in self.hull.vertices.iter().enumerate() {
-            self.deformed[(i, 0)] = v.x;
-            self.deformed[(i, 1)] = v.y;
+        for w in &mut self.windows {
+            w.reset();
         }
-        self.at_rest = true;
-        self.points.gemm(1.0, &self.t_all, &self.deformed, 0.0);
+        self.blend();
     }
 
     /// Writes the deformed positions into the selected samples of `set` (the set the
@@ -575,6 +682,9 @@ impl Cage {
     /// [`EditError::SelectionMismatch`] when `set` lacks a selected sample (nothing is
     /// written then).
     pub fn apply(&self, set: &mut TrackSet) -> Result<(), EditError> {
+        if self.members.is_empty() {
+            return self.windows[0].apply(set);
+        }
         for r in &self.selection {
             if set
                 .tracks
@@ -587,35 +697,22 @@ impl Cage {
                 });
             }
         }
-        for (i, r) in self.selection.iter().enumerate() {
-            set.tracks[r.track].points[r.sample] = self.deformed_sample(i);
+        for (r, p) in self.selection.iter().zip(&self.points) {
+            set.tracks[r.track].points[r.sample] = *p;
         }
         Ok(())
     }
 
-    /// How much the hull's shape changed (see [`ShapeError`]): a rigid motion gives 0.
+    /// How much the hulls' shape changed (see [`ShapeError`], over every window's
+    /// edges and turns): a rigid motion of each window gives 0.
     pub fn hull_shape_error(&self) -> ShapeError {
-        let n = self.hull.vertices.len();
-        let rest = &self.hull.vertices;
-        let def = self.deformed_hull();
-        let turn = |p: &[Vec2], i: usize| {
-            let (a, b, c) = (p[(i + n - 1) % n], p[i], p[(i + 1) % n]);
-            let (u, v) = (b - a, c - b);
-            cross(u, v).atan2(u.dot(&v))
-        };
-        let (mut el, mut an) = (0.0, 0.0);
-        for i in 0..n {
-            let j = (i + 1) % n;
-            let l0 = (rest[j] - rest[i]).norm();
-            let l1 = (def[j] - def[i]).norm();
-            el += ((l1 - l0) / l0).powi(2);
-            let mut d = turn(&def, i) - turn(rest, i);
-            if d > std::f64::consts::PI {
-                d -= 2.0 * std::f64::consts::PI;
-            } else if d < -std::f64::consts::PI {
-                d += 2.0 * std::f64::consts::PI;
-            }
-            an += d * d;
+        let (mut el, mut an, mut n) = (0.0, 0.0, 0usize);
+        for w in &self.windows {
+            let e = w.hull_shape_error();
+            let k = w.hull().len();
+            el += e.edge_length_rms.powi(2) * k as f64;
+            an += e.angle_rms_rad.powi(2) * k as f64;
+            n += k;
         }
         ShapeError {
             edge_length_rms: (el / n as f64).sqrt(),
@@ -624,84 +721,23 @@ impl Cage {
     }
 }
 
-/// Speed ratios (after / before) of the retimed segments.
-#[derive(Copy, Clone, Debug, PartialEq)]
-pub struct SpeedReport {
-    /// Segments considered (linked, moving before the edit).
-    pub segments: usize,
-    /// Smallest and largest speed ratio after the spatial edit, before correction.
-    pub edited_ratio: (f64, f64),
-    /// Smallest and largest speed ratio after correction.
-    pub corrected_ratio: (f64, f64),
-}
-
-/// Re-times the touched tracks so every linked segment's speed returns to its pre-edit
-/// speed (eq. 9).
-///
-/// # Formula
-/// Eq. 9's terms are independent, one per segment, and each vanishes at
-/// `Δt'_j = Δt_j ‖p'_{j+1} − p'_j‖ / ‖p_{j+1} − p_j‖`, its unconstrained minimiser,
-/// which is used; it is clamped below at [`MIN_INTERVAL_FRACTION`] `· Δt_j` so that
-/// times stay strictly increasing. A segment that did not move before the edit
-/// (`‖p‖ = 0`) and every gap (unlinked pair) keeps its interval. The first time of each
-/// track is kept; later samples shift by the accumulated change.
-///
-/// # Errors
-/// [`EditError::SelectionMismatch`] when `before` and `after` differ in shape for a
-/// touched track (`sample` then names the first missing sample).
-pub fn correct_speeds(
-    before: &TrackSet,
-    after: &mut TrackSet,
-    touched: &[usize],
-) -> Result<SpeedReport, EditError> {
-    let mut rep = SpeedReport {
-        segments: 0,
-        edited_ratio: (f64::INFINITY, f64::NEG_INFINITY),
-        corrected_ratio: (f64::INFINITY, f64::NEG_INFINITY),
-    };
-    for &ti in touched {
-        let (Some(b), Some(a)) = (before.tracks.get(ti), after.tracks.get(ti)) else {
-            return Err(EditError::SelectionMismatch {
-                track: ti,
-                sample: 0,
-            });
+/// Merges every window with fewer than [`MIN_WINDOW_SAMPLES`] samples into its
+/// neighbour (the previous one, or the next for the first).
+fn merge_small(spans: &mut Vec<TimeWindow>, times_s: &[f64]) {
+    loop {
+        let count = spans.len();
+        let small = (0..count).find(|&w| {
+            let last = w + 1 == count;
+            times_s.iter().filter(|&&t| spans[w].holds(t, last)).count() < MIN_WINDOW_SAMPLES
+        });
+        let Some(w) = small.filter(|_| count > 1) else {
+            return;
         };
-        if b.len() != a.len() || a.times_s.len() != a.len() || b.linked.len() != a.linked.len() {
-            return Err(EditError::SelectionMismatch {
-                track: ti,
-                sample: b.len().min(a.len()),
-            });
-        }
-        let a = &mut after.tracks[ti];
-        let mut t = a.times_s[0];
-        for j in 0..b.len().saturating_sub(1) {
-            let dt = b.times_s[j + 1] - b.times_s[j];
-            let l0 = (b.points[j + 1] - b.points[j]).norm();
-            let l1 = (a.points[j + 1] - a.points[j]).norm();
-            let new_dt = if b.linked[j] && l0 > 0.0 {
-                let r = l1 / l0;
-                rep.segments += 1;
-                rep.edited_ratio.0 = rep.edited_ratio.0.min(r);
-                rep.edited_ratio.1 = rep.edited_ratio.1.max(r);
-                (dt * r).max(MIN_INTERVAL_FRACTION * dt)
-            } else {
-                dt
-            };
-            a.times_s[j] = t;
-            t += new_dt;
-            if b.linked[j] && l0 > 0.0 {
-                let r = (l1 / new_dt) / (l0 / dt);
-                rep.corrected_ratio.0 = rep.corrected_ratio.0.min(r);
-                rep.corrected_ratio.1 = rep.corrected_ratio.1.max(r);
-            }
-        }
-        if let Some(last) = a.times_s.last_mut() {
-            *last = t;
-        }
+        let (a, b) = if w == 0 { (0, 1) } else { (w - 1, w) };
+        spans[a] = TimeWindow {
+            start_s: spans[a].start_s,
+            end_s: spans[b].end_s,
+        };
+        spans.remove(b);
     }
-    if rep.segments == 0 {
-        rep.edited_ratio = (1.0, 1.0);
-        rep.corrected_ratio = (1.0, 1.0);
-    }
-    Ok(rep)
 }

@@ -95,28 +95,95 @@ pub(super) fn finite(p: Vec2) -> bool {
     p.x.is_finite() && p.y.is_finite()
 }
 
+/// Samples per block of [`mvc_matrix`]: the inner loops run over a block's samples,
+/// which the compiler vectorises.
+const BLOCK: usize = 16;
+
 /// The MVC of every point of `points` w.r.t. `poly` (N × n), or the index of the first
 /// point whose coordinates are undefined.
+///
+/// # Formula
+/// [`HullMvc::coordinates`], computed for [`BLOCK`] samples at once, one hull vertex
+/// at a time (structure of arrays), with the same operations in the same order, so
+/// the same bits. A sample on a vertex or an edge, or whose weights are not finite,
+/// is redone by [`HullMvc::coordinates`].
 ///
 /// # Complexity
 /// O(N n).
 pub(super) fn mvc_matrix(mvc: &HullMvc<'_>, points: &[Vec2]) -> Result<DMatrix<f64>, usize> {
-    let n = mvc.poly.len();
-    // Rows are computed a block of samples at a time into a small row-major buffer
-    // and copied into the column-major matrix column by column.
-    const BLOCK: usize = 32;
+    let poly = mvc.poly;
+    let n = poly.len();
     let mut t = DMatrix::zeros(points.len(), n);
-    let mut rows = vec![0.0; BLOCK * n];
-    let mut r = vec![0.0; n];
+    // r[i * BLOCK + k] = ‖v_i − p_k‖, w[i * BLOCK + k] the unnormalised weight.
+    let mut r = vec![0.0; n * BLOCK];
+    let mut w = vec![0.0; n * BLOCK];
+    let (mut row_r, mut row) = (vec![0.0; n], vec![0.0; n]);
     for (b, block) in points.chunks(BLOCK).enumerate() {
         let i0 = b * BLOCK;
-        for (k, (p, row)) in block.iter().zip(rows.chunks_exact_mut(n)).enumerate() {
-            mvc.coordinates(*p, &mut r, row).ok_or(i0 + k)?;
+        let (mut px, mut py) = ([0.0; BLOCK], [0.0; BLOCK]);
+        for k in 0..BLOCK {
+            // The tail block repeats its last point; the extra rows are not written.
+            let p = block[k.min(block.len() - 1)];
+            px[k] = p.x;
+            py[k] = p.y;
         }
-        for j in 0..n {
-            let col = &mut t.column_mut(j);
+        let mut redo = [false; BLOCK];
+        for (i, v) in poly.iter().enumerate() {
+            let ri = &mut r[i * BLOCK..(i + 1) * BLOCK];
+            for k in 0..BLOCK {
+                let (dx, dy) = (v.x - px[k], v.y - py[k]);
+                ri[k] = (dx * dx + dy * dy).sqrt();
+                redo[k] |= ri[k] <= mvc.vertex_eps;
+            }
+        }
+        let mut tan_prev = [0.0; BLOCK];
+        for i in 0..n {
+            let j = if i + 1 == n { 0 } else { i + 1 };
+            let (vi, vj) = (poly[i], poly[j]);
+            for k in 0..BLOCK {
+                let (dix, diy) = (vi.x - px[k], vi.y - py[k]);
+                let (djx, djy) = (vj.x - px[k], vj.y - py[k]);
+                let (ri, rj) = (r[i * BLOCK + k], r[j * BLOCK + k]);
+                let a = dix * djy - diy * djx;
+                let d = dix * djx + diy * djy;
+                let rr = ri * rj;
+                redo[k] |= a.abs() <= MVC_EDGE_EPS * rr && d < 0.0;
+                let (num, den) = if d >= 0.0 { (a, rr + d) } else { (rr - d, a) };
+                let tk = num / den;
+                let mut wk = tk / ri;
+                if i > 0 {
+                    wk += tan_prev[k] / ri;
+                }
+                w[i * BLOCK + k] = wk;
+                tan_prev[k] = tk;
+            }
+        }
+        let mut sum = [0.0; BLOCK];
+        for k in 0..BLOCK {
+            w[k] += tan_prev[k] / r[k];
+        }
+        for i in 0..n {
+            for k in 0..BLOCK {
+                sum[k] += w[i * BLOCK + k];
+            }
+        }
+        for k in 0..BLOCK {
+            redo[k] |= !(sum[k].is_finite() && sum[k] != 0.0);
+        }
+        for i in 0..n {
+            let col = &mut t.column_mut(i);
             for k in 0..block.len() {
-                col[i0 + k] = rows[k * n + j];
+                let v = w[i * BLOCK + k] / sum[k];
+                redo[k] |= !v.is_finite();
+                col[i0 + k] = v;
+            }
+        }
+        for (k, p) in block.iter().enumerate() {
+            if redo[k] {
+                mvc.coordinates(*p, &mut row_r, &mut row).ok_or(i0 + k)?;
+                for (i, v) in row.iter().enumerate() {
+                    t[(i0 + k, i)] = *v;
+                }
             }
         }
     }

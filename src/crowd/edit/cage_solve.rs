@@ -102,10 +102,17 @@ pub struct CageParams {
     pub max_iterations: usize,
     /// Drag targets must lie inside this rectangle, when given (m).
     pub world: Option<crate::geom::Rect>,
+    /// How a selection whose paths revisit a place is cut into time windows, one
+    /// cage each (`cage_split.rs`); [`WindowParams::one_cage`] builds one cage
+    /// whatever the paths do.
+    ///
+    /// [`WindowParams::one_cage`]: super::WindowParams::one_cage
+    pub windows: super::cage_split::WindowParams,
 }
 
 impl Default for CageParams {
-    /// Localising eq. 5 (see [`DEFAULT_ALPHA`]), iterated to 0.1 mm.
+    /// Localising eq. 5 (see [`DEFAULT_ALPHA`]), iterated to 0.1 mm, cut into time
+    /// windows where a path revisits a place.
     fn default() -> Self {
         CageParams {
             hull: super::hull::HullParams::default(),
@@ -119,6 +126,7 @@ impl Default for CageParams {
             tolerance_m: DEFAULT_TOLERANCE_M,
             max_iterations: DEFAULT_MAX_ITERATIONS,
             world: None,
+            windows: super::cage_split::WindowParams::default(),
         }
     }
 }

@@ -35,7 +35,7 @@ fn cage(set: &TrackSet) -> Cage {
 fn mvc_rows_sum_to_one_and_reproduce_the_rest_points() {
     let set = band(8, 25);
     let c = cage(&set);
-    let t = c.sample_matrix();
+    let t = c.window(0).sample_matrix();
     for i in 0..t.nrows() {
         let s: f64 = t.row(i).iter().sum();
         assert!((s - 1.0).abs() < 1e-9, "row {i} sums to {s}");
@@ -43,7 +43,7 @@ fn mvc_rows_sum_to_one_and_reproduce_the_rest_points() {
         assert!((q - c.rest_sample(i)).norm() < 1e-9);
         assert!((c.deformed_sample(i) - c.rest_sample(i)).norm() < 1e-9);
     }
-    let tm = c.mesh_matrix();
+    let tm = c.window(0).mesh_matrix();
     for i in 0..c.hull().len() {
         assert_eq!(tm[(i, i)], 1.0);
     }
@@ -53,7 +53,7 @@ fn mvc_rows_sum_to_one_and_reproduce_the_rest_points() {
 fn sample_matrix_equals_mean_value_coordinates_exactly() {
     let set = band(8, 25);
     let c = cage(&set);
-    let t = c.sample_matrix();
+    let t = c.window(0).sample_matrix();
     let mut row = vec![0.0; c.hull().len()];
     for i in 0..t.nrows() {
         crate::crowd::mesh::mean_value_coordinates(c.hull(), c.rest_sample(i), &mut row).unwrap();
@@ -325,7 +325,7 @@ fn cotangent_weights_of_known_triangles() {
     // the hypotenuse opposite the right angle gets the floor.
     let set = band(2, 4);
     let c = cage(&set);
-    for (t, w) in c.mesh_triangles().iter().zip(c.edge_weights()) {
+    for (t, w) in c.mesh_triangles().iter().zip(c.window(0).edge_weights()) {
         let p = t.map(|i| c.mesh_vertices()[i as usize]);
         for e in 0..3 {
             let (a, b, o) = (p[e], p[(e + 1) % 3], p[(e + 2) % 3]);
@@ -363,8 +363,8 @@ fn the_paper_locality_slides_the_cage_and_the_default_does_not() {
     assert!(ends[0] > 0.3, "paper: ends moved {} m", ends[0]);
     assert!(ends[1] < 0.15, "default: ends moved {} m", ends[1]);
     let c = cage(&set);
-    let coef = c.locality_coefficients(&[Handle::Hull(0)]);
+    let coef = c.window(0).locality_coefficients(&[Handle::Hull(0)]);
     assert_eq!(coef[0], 0.0, "the dragged vertex is free");
-    let k = c.locality_k_layers();
+    let k = c.window(0).locality_k_layers();
     assert!(k > 5.0 && k < 40.0, "k = {k} layers");
 }

@@ -75,6 +75,12 @@ pub enum EditError {
         /// What conflicts.
         reason: &'static str,
     },
+    /// A cage parameter is out of its range.
+    #[error("cage parameter {what} is not finite and positive")]
+    BadCageParams {
+        /// Which parameter.
+        what: &'static str,
+    },
     /// A time target is NaN or infinite.
     #[error("time target {t_s} s is not finite")]
     TimeNotFinite {

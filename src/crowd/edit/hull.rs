@@ -40,6 +40,9 @@ pub const DEFAULT_MAX_POINTS: usize = 1000;
 /// cage has vertices all along the crowd's boundary for a drag to act locally.
 pub const DEFAULT_MAX_EDGE_CELLS: f64 = 4.0;
 
+/// Most cells per point for [`grid_subsample`]'s dense grid (one byte each).
+pub const DENSE_GRID_FACTOR: usize = 16;
+
 /// Two consecutive hull vertices closer than this fraction of the cell are merged;
 /// a vertex whose turn (|sin|) is below it is dropped as collinear.
 const MERGE_FRACTION: f64 = 1e-3;
@@ -99,12 +102,38 @@ pub fn grid_cell(points: &[Vec2], params: &HullParams) -> f64 {
 /// One representative per occupied grid cell of side `cell_m`: the first position in
 /// input order that falls in the cell. Every position is within one cell in x and y of
 /// its representative.
+///
+/// # Complexity
+/// O(N) on a dense grid over the cells' bounding box when it has at most
+/// [`DENSE_GRID_FACTOR`] cells per point, else through a hash map.
 pub fn grid_subsample(points: &[Vec2], cell_m: f64) -> Vec<usize> {
-    let mut seen: HashMap<(i64, i64), ()> = HashMap::with_capacity(points.len() / 4 + 1);
+    let key = |p: &Vec2| ((p.x / cell_m).floor() as i64, (p.y / cell_m).floor() as i64);
     let mut reps = Vec::new();
+    let Some(first) = points.first() else {
+        return reps;
+    };
+    let (mut lo, mut hi) = (key(first), key(first));
+    for p in points {
+        let (i, j) = key(p);
+        lo = (lo.0.min(i), lo.1.min(j));
+        hi = (hi.0.max(i), hi.1.max(j));
+    }
+    let (w, h) = ((hi.0 - lo.0 + 1) as u128, (hi.1 - lo.1 + 1) as u128);
+    if w * h <= (DENSE_GRID_FACTOR * points.len() + 1024) as u128 {
+        let mut seen = vec![false; (w * h) as usize];
+        for (i, p) in points.iter().enumerate() {
+            let (a, b) = key(p);
+            let c = (b - lo.1) as usize * w as usize + (a - lo.0) as usize;
+            if !seen[c] {
+                seen[c] = true;
+                reps.push(i);
+            }
+        }
+        return reps;
+    }
+    let mut seen: HashMap<(i64, i64), ()> = HashMap::with_capacity(points.len() / 4 + 1);
     for (i, p) in points.iter().enumerate() {
-        let key = ((p.x / cell_m).floor() as i64, (p.y / cell_m).floor() as i64);
-        if seen.insert(key, ()).is_none() {
+        if seen.insert(key(p), ()).is_none() {
             reps.push(i);
         }
     }
@@ -238,12 +267,17 @@ pub fn concave_hull(points: &[Vec2], params: &HullParams) -> Result<Hull, EditEr
             reason: "a selected point is not finite",
         });
     }
-    let mut distinct: Vec<[u64; 2]> = points
-        .iter()
-        .map(|p| [(p.x + 0.0).to_bits(), (p.y + 0.0).to_bits()])
-        .collect();
-    distinct.sort_unstable();
-    distinct.dedup();
+    // Three distinct points are enough; fewer are counted exactly.
+    let mut distinct: Vec<[u64; 2]> = Vec::with_capacity(3);
+    for p in points {
+        let k = [(p.x + 0.0).to_bits(), (p.y + 0.0).to_bits()];
+        if !distinct.contains(&k) {
+            distinct.push(k);
+            if distinct.len() == 3 {
+                break;
+            }
+        }
+    }
     if distinct.len() < 3 {
         return Err(EditError::NoHull {
             distinct: distinct.len(),

@@ -16,7 +16,10 @@
 //! | `error.rs` | [`EditError`]: why an edit was refused | |
 //! | `select.rs` | [`Selection`]: samples by id, rectangle, lasso, time window | 3.2 |
 //! | `hull.rs` | [`concave_hull`]: the cage polygon (geo's concave hull, grown by a margin; convex fallback) | 3.2 |
-//! | `cage.rs` | [`Cage`]: the spatial editor (MVC cage, deformation mesh, exact handle constraints); [`correct_speeds`] | 3.2, eqs. 1–9 |
+//! | `cage.rs` | [`Cage`]: the spatial editor: one cage per time window, chained by shared handles and blended across the overlaps | 3.2, eqs. 1–9 |
+//! | `cage_window.rs` | [`CageWindow`]: one cage (concave hull, MVC, deformation mesh, exact handle constraints) | 3.2, eqs. 1–8 |
+//! | `cage_split.rs` | [`WindowParams`]: where a person revisits a place, and the time windows cut so that none holds a revisit | 3.2 (ours) |
+//! | `cage_speed.rs` | [`correct_speeds`]: segments re-timed to their pre-edit speeds | 3.2, eq. 9 |
 //! | `cage_solve.rs` | [`CageParams`]; the deformation solve: cotangent-weighted ARAP, locality (eqs. 3, 5), the rotation-invariant hull-shape term (eqs. 7–8), the local/global iteration to convergence | 3.2, eqs. 1–8 |
 //! | `cage_mvc.rs` | mean value coordinates of many samples w.r.t. one cage polygon | 3.2, eq. 4 |
 //! | `temporal.rs` | [`retime`]: dragging time nodes, intervals kept, locality, times increasing | 3.3, eqs. 10–12 |
@@ -37,8 +40,11 @@ mod avoid_solve;
 mod cage;
 mod cage_mvc;
 mod cage_solve;
+mod cage_speed;
+mod cage_split;
 #[cfg(test)]
 mod cage_tests;
+mod cage_window;
 mod clusters;
 mod collide;
 mod error;
@@ -59,13 +65,14 @@ pub use avoid::{avoid, avoid_around, avoid_around_leaving};
 pub use avoid_params::{
     AvoidError, AvoidParams, AvoidReport, Remaining, Stuck, MIN_PACE_LENGTH_M, STILL_SPEED_M_S,
 };
-pub use cage::{
-    correct_speeds, Cage, Handle, ShapeError, SolveStats, SpeedReport, MIN_INTERVAL_FRACTION,
-};
+pub use cage::{Cage, MAX_SHARED_HANDLES, SHARED_SPACING_CELLS};
 pub use cage_solve::{
     CageParams, DEFAULT_ALPHA, DEFAULT_BETA, DEFAULT_LOCALITY_RADIUS_M, DEFAULT_MAX_ITERATIONS,
     DEFAULT_TOLERANCE_M, PAPER_ALPHA, PAPER_BETA, PAPER_K,
 };
+pub use cage_speed::{correct_speeds, SpeedReport, MIN_INTERVAL_FRACTION};
+pub use cage_split::{TimeWindow, WindowParams, DEFAULT_REVISIT_GAP_S, DEFAULT_REVISIT_RADIUS_M};
+pub use cage_window::{CageWindow, Handle, ShapeError, SolveStats};
 pub use clusters::{Cluster, MIN_STANDING_CLUSTER};
 pub use collide::{
     collisions_all_pairs, detect, detect_keeping, Approach, CollideError, CollisionEvent,
@@ -78,7 +85,7 @@ pub use flat::{
 };
 pub use hull::{
     concave_hull, grid_cell, grid_subsample, is_simple, Hull, HullParams, DEFAULT_CONCAVITY,
-    DEFAULT_MAX_EDGE_CELLS, DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M,
+    DEFAULT_MAX_EDGE_CELLS, DEFAULT_MAX_POINTS, DEFAULT_MIN_CELL_M, DENSE_GRID_FACTOR,
 };
 pub use obstacles::{
     avoid_obstacles, crowd_width, crowd_width_at, push_samples_out, samples_in_obstacles,

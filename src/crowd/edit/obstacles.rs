@@ -91,7 +91,6 @@ pub fn avoid_obstacles(
     keep: &[(Handle, Vec2)],
     params: &ObstacleParams,
 ) -> Result<ObstacleReport, EditError> {
-    let n = cage.hull().len();
     let mut rep = ObstacleReport {
         targets: Vec::new(),
         rounds: 0,
@@ -104,6 +103,8 @@ pub fn avoid_obstacles(
     let inside_tol = 0.5 * params.clearance_m;
     let mut drags: Vec<(Handle, Vec2)> = keep.to_vec();
     for round in 0..=params.max_rounds {
+        // Hull indices run over every time window's hull (`Cage::hull_range`);
+        // edges close each window's polygon.
         let hull = cage.deformed_hull();
         let mut found: Vec<(usize, Vec2)> = Vec::new();
         for (i, v) in hull.iter().enumerate() {
@@ -113,8 +114,12 @@ pub fn avoid_obstacles(
                 }
             }
         }
-        for i in 0..n {
-            let j = (i + 1) % n;
+        let edges = (0..cage.window_count()).flat_map(|w| {
+            let r = cage.hull_range(w);
+            r.clone()
+                .map(move |i| (i, if i + 1 == r.end { r.start } else { i + 1 }))
+        });
+        for (i, j) in edges {
             let (a, b) = (hull[i], hull[j]);
             let mut worst: Option<(f64, Vec2)> = None;
             for s in 1..EDGE_SAMPLES {
