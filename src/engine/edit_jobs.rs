@@ -68,9 +68,19 @@ impl EditJob {
                     }
                     Err(e) => Err(e.clone()),
                 };
+                // The outline shown: the cage of the time window the fingers hold
+                // (a path that comes back to a place has one cage per window, and
+                // their hulls one after another are no polygon).
                 let hull = cage
                     .as_ref()
-                    .map(|c| c.0.deformed_hull())
+                    .map(|c| {
+                        let c = &c.0;
+                        let held = resolved.0.iter().find_map(|&s| handle_of(s));
+                        match held.and_then(|h| c.window_of(h)) {
+                            Some(w) if c.window_count() > 1 => c.window(w).deformed_hull(),
+                            _ => c.deformed_hull(),
+                        }
+                    })
                     .unwrap_or_default();
                 EditDoneKind::Dragged {
                     cage: cage.ok(),
