@@ -104,9 +104,11 @@ const BLOCK: usize = 16;
 ///
 /// # Formula
 /// [`HullMvc::coordinates`], computed for [`BLOCK`] samples at once, one hull vertex
-/// at a time (structure of arrays), with the same operations in the same order, so
-/// the same bits. A sample on a vertex or an edge, or whose weights are not finite,
-/// is redone by [`HullMvc::coordinates`].
+/// at a time (structure of arrays), with each `1 / r_i` and `1 / Σw` computed once and
+/// multiplied (one division per sample and vertex instead of three): the same
+/// coordinates to within a few units in the last place (a test holds them to 1e-13
+/// of the per-point formula). A sample on a vertex or an edge, or whose weights are
+/// not finite, is redone by [`HullMvc::coordinates`].
 ///
 /// # Complexity
 /// O(N n).
@@ -116,6 +118,8 @@ pub(super) fn mvc_matrix(mvc: &HullMvc<'_>, points: &[Vec2]) -> Result<DMatrix<f
     let mut t = DMatrix::zeros(points.len(), n);
     // r[i * BLOCK + k] = ‖v_i − p_k‖, w[i * BLOCK + k] the unnormalised weight.
     let mut r = vec![0.0; n * BLOCK];
+    // 1 / r: one division per sample and vertex instead of three.
+    let mut inv_r = vec![0.0; n * BLOCK];
     let mut w = vec![0.0; n * BLOCK];
     let (mut row_r, mut row) = (vec![0.0; n], vec![0.0; n]);
     for (b, block) in points.chunks(BLOCK).enumerate() {
@@ -130,9 +134,11 @@ pub(super) fn mvc_matrix(mvc: &HullMvc<'_>, points: &[Vec2]) -> Result<DMatrix<f
         let mut redo = [false; BLOCK];
         for (i, v) in poly.iter().enumerate() {
             let ri = &mut r[i * BLOCK..(i + 1) * BLOCK];
+            let inv = &mut inv_r[i * BLOCK..(i + 1) * BLOCK];
             for k in 0..BLOCK {
                 let (dx, dy) = (v.x - px[k], v.y - py[k]);
                 ri[k] = (dx * dx + dy * dy).sqrt();
+                inv[k] = 1.0 / ri[k];
                 redo[k] |= ri[k] <= mvc.vertex_eps;
             }
         }
@@ -150,30 +156,29 @@ pub(super) fn mvc_matrix(mvc: &HullMvc<'_>, points: &[Vec2]) -> Result<DMatrix<f
                 redo[k] |= a.abs() <= MVC_EDGE_EPS * rr && d < 0.0;
                 let (num, den) = if d >= 0.0 { (a, rr + d) } else { (rr - d, a) };
                 let tk = num / den;
-                let mut wk = tk / ri;
-                if i > 0 {
-                    wk += tan_prev[k] / ri;
-                }
-                w[i * BLOCK + k] = wk;
+                let prev = if i > 0 { tan_prev[k] } else { 0.0 };
+                w[i * BLOCK + k] = (tk + prev) * inv_r[i * BLOCK + k];
                 tan_prev[k] = tk;
             }
         }
         let mut sum = [0.0; BLOCK];
         for k in 0..BLOCK {
-            w[k] += tan_prev[k] / r[k];
+            w[k] += tan_prev[k] * inv_r[k];
         }
         for i in 0..n {
             for k in 0..BLOCK {
                 sum[k] += w[i * BLOCK + k];
             }
         }
+        let mut inv_sum = [0.0; BLOCK];
         for k in 0..BLOCK {
             redo[k] |= !(sum[k].is_finite() && sum[k] != 0.0);
+            inv_sum[k] = 1.0 / sum[k];
         }
         for i in 0..n {
             let col = &mut t.column_mut(i);
             for k in 0..block.len() {
-                let v = w[i * BLOCK + k] / sum[k];
+                let v = w[i * BLOCK + k] * inv_sum[k];
                 redo[k] |= !v.is_finite();
                 col[i0 + k] = v;
             }
