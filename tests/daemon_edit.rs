@@ -52,6 +52,42 @@ fn block() -> TrackSet {
     }
 }
 
+/// The block's tracks written to a temporary directory and the default config
+/// with an edit section playing them (its `edit.dir` that directory when
+/// `with_dir`); the directory (kept alive by the caller), the config and a socket
+/// path in it.
+fn block_config(with_dir: bool) -> (tempfile::TempDir, Config, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let tracks_path = dir.path().join("block.jsonl");
+    write_tracks(
+        &block(),
+        &tracks_path,
+        Format::Jsonl,
+        &ReadOptions::default(),
+        false,
+    )
+    .unwrap();
+    let edit_dir = if with_dir {
+        format!(", dir: Some({:?})", dir.path().display().to_string())
+    } else {
+        String::new()
+    };
+    let mut cfg = Config::from_str(
+        &crowdtouch::config::DEFAULT_CONFIG_RON.replace(
+            "    pipeline: (",
+            &format!(
+                "    edit: Some((tracks: {:?}, threshold_m: 0.3{edit_dir})),\n    pipeline: (",
+                tracks_path.display().to_string(),
+            ),
+        ),
+        Path::new("<test>"),
+    )
+    .expect("config with an edit section");
+    cfg.pipeline.realtime = Default::default();
+    let socket = dir.path().join("ct.sock");
+    (dir, cfg, socket)
+}
+
 fn x_of(msg: &Value, id: u64, k: usize) -> f64 {
     let t = msg["tracks"]
         .as_array()
@@ -64,30 +100,7 @@ fn x_of(msg: &Value, id: u64, k: usize) -> f64 {
 
 #[test]
 fn a_recorded_drag_through_the_daemon_changes_the_tracks_a_client_receives() {
-    let dir = tempfile::tempdir().unwrap();
-    let tracks_path = dir.path().join("block.jsonl");
-    write_tracks(
-        &block(),
-        &tracks_path,
-        Format::Jsonl,
-        &ReadOptions::default(),
-        false,
-    )
-    .unwrap();
-    let socket = dir.path().join("ct.sock");
-    let mut cfg = Config::from_str(
-        &crowdtouch::config::DEFAULT_CONFIG_RON.replace(
-            "    pipeline: (",
-            &format!(
-                "    edit: Some((tracks: {:?}, threshold_m: 0.3, dir: Some({:?}))),\n    pipeline: (",
-                tracks_path.display().to_string(),
-                dir.path().display().to_string()
-            ),
-        ),
-        Path::new("<test>"),
-    )
-    .expect("config with an edit section");
-    cfg.pipeline.realtime = Default::default();
+    let (dir, cfg, socket) = block_config(true);
     assert!(cfg.loaded_tracks().is_some());
     let (daemon, tx) = daemon_on_channel(cfg, &socket, 64);
     let stream = UnixStream::connect(&socket).unwrap();
@@ -215,29 +228,7 @@ fn a_recorded_drag_through_the_daemon_changes_the_tracks_a_client_receives() {
 /// keeps it. A bad selection is an `error` naming what is wrong.
 #[test]
 fn a_client_selects_drags_and_accepts_through_the_socket() {
-    let dir = tempfile::tempdir().unwrap();
-    let tracks_path = dir.path().join("block.jsonl");
-    write_tracks(
-        &block(),
-        &tracks_path,
-        Format::Jsonl,
-        &ReadOptions::default(),
-        false,
-    )
-    .unwrap();
-    let socket = dir.path().join("ct.sock");
-    let mut cfg = Config::from_str(
-        &crowdtouch::config::DEFAULT_CONFIG_RON.replace(
-            "    pipeline: (",
-            &format!(
-                "    edit: Some((tracks: {:?}, threshold_m: 0.3)),\n    pipeline: (",
-                tracks_path.display().to_string(),
-            ),
-        ),
-        Path::new("<test>"),
-    )
-    .expect("config with an edit section");
-    cfg.pipeline.realtime = Default::default();
+    let (_dir, cfg, socket) = block_config(false);
     let (daemon, _tx) = daemon_on_channel(cfg, &socket, 64);
     let stream = UnixStream::connect(&socket).unwrap();
     let mut w = stream.try_clone().unwrap();
@@ -349,29 +340,7 @@ fn a_client_selects_drags_and_accepts_through_the_socket() {
 /// one that leaves `edit` out gets neither.
 #[test]
 fn a_client_subscribing_later_gets_the_tracks_as_they_are() {
-    let dir = tempfile::tempdir().unwrap();
-    let tracks_path = dir.path().join("block.jsonl");
-    write_tracks(
-        &block(),
-        &tracks_path,
-        Format::Jsonl,
-        &ReadOptions::default(),
-        false,
-    )
-    .unwrap();
-    let socket = dir.path().join("ct.sock");
-    let mut cfg = Config::from_str(
-        &crowdtouch::config::DEFAULT_CONFIG_RON.replace(
-            "    pipeline: (",
-            &format!(
-                "    edit: Some((tracks: {:?}, threshold_m: 0.3)),\n    pipeline: (",
-                tracks_path.display().to_string(),
-            ),
-        ),
-        Path::new("<test>"),
-    )
-    .expect("config with an edit section");
-    cfg.pipeline.realtime = Default::default();
+    let (_dir, cfg, socket) = block_config(false);
     let (daemon, _tx) = daemon_on_channel(cfg, &socket, 64);
     let hello = |subscribe: &str| {
         let stream = UnixStream::connect(&socket).unwrap();
