@@ -9,12 +9,12 @@ use crowdtouch::config::Config;
 use crowdtouch::crowd::edit::{detect, Track, TrackSet};
 use crowdtouch::engine::Engine;
 use crowdtouch::geom::Vec2;
-use crowdtouch::vocab::{
-    Command, Contact, ContactFlags, ContactId, EditView, Micros, TouchFrame, TracksView,
-};
+use crowdtouch::vocab::{Command, Contact, ContactFlags, ContactId, Micros, TouchFrame};
 use std::sync::Arc;
 
-const TICK_US: u64 = 16_667;
+mod common;
+
+use common::edit_session::{Session, TICK_US};
 
 /// A parade: `rows × cols` people 0.8 m apart walking +x at 1 m/s for 10 s,
 /// sampled every 0.2 s, starting at x = 2 m; and one person far away (id 999).
@@ -41,77 +41,9 @@ fn parade(rows: usize, cols: usize) -> TrackSet {
     }
 }
 
-struct Session {
-    e: Engine,
-    now: u64,
-    tracks: Vec<Arc<TracksView>>,
-    views: Vec<Arc<EditView>>,
-}
-
-impl Session {
-    fn new(set: TrackSet) -> Session {
-        let cfg = Config::embedded_default();
-        let mut e = Engine::new(&cfg, None, true);
-        e.tick(Micros(TICK_US));
-        e.clear_events();
-        e.load_tracks(set, "parade", Micros(TICK_US));
-        let mut s = Session {
-            e,
-            now: TICK_US,
-            tracks: Vec::new(),
-            views: Vec::new(),
-        };
-        s.tick();
-        s
-    }
-    fn tick(&mut self) {
-        self.now += TICK_US;
-        let o = self.e.tick(Micros(self.now));
-        if let Some(t) = &o.tracks {
-            self.tracks.push(Arc::clone(t));
-        }
-        if let Some(v) = &o.edit {
-            self.views.push(Arc::clone(v));
-        }
-        self.e.clear_events();
-    }
-    fn ticks(&mut self, n: usize) {
-        for _ in 0..n {
-            self.tick();
-        }
-    }
-    /// Fingers at world positions (default world 16 × 9 m on the unit square).
-    fn touch(&mut self, fingers: &[(u32, Vec2, ContactFlags)]) {
-        let mut f = TouchFrame::new(Micros(self.now + 1));
-        for &(id, p, flags) in fingers {
-            f.push(Contact {
-                id: ContactId(id),
-                x: (p.x / 16.0) as f32,
-                y: (p.y / 9.0) as f32,
-                pressure: None,
-                major_mm: None,
-                minor_mm: None,
-                flags,
-            })
-            .expect("room");
-        }
-        self.e.push_frame(&f);
-    }
-    fn set(&self) -> Arc<TrackSet> {
-        Arc::clone(self.e.edited_tracks().expect("editing"))
-    }
-    fn agents(&mut self) -> Vec<Vec2> {
-        self.now += TICK_US;
-        let o = self.e.tick(Micros(self.now));
-        let a = o.snapshot.agents.iter().map(|a| a.pos).collect();
-        self.e.clear_events();
-        a
-    }
-}
-
 #[test]
 fn the_crowd_plays_the_loaded_people() {
-    let mut s = Session::new(parade(3, 4));
+    let mut s = Session::playing(parade(3, 4));
     assert!(s.e.editing());
     let first = s.tracks.first().expect("a tracks message at load");
     assert!(first.full);
@@ -130,7 +62,7 @@ fn the_crowd_plays_the_loaded_people() {
 
 #[test]
 fn a_drag_moves_the_held_person_with_the_finger_and_the_group_with_them() {
-    let mut s = Session::new(parade(3, 4));
+    let mut s = Session::playing(parade(3, 4));
     s.e.command(&Command::Pause, Micros(s.now)).unwrap();
     s.tick();
     let before = s.set();
@@ -225,7 +157,7 @@ fn a_drag_moves_the_held_person_with_the_finger_and_the_group_with_them() {
 
 #[test]
 fn retime_moves_time_nodes_and_exit_brings_the_crowd_back() {
-    let mut s = Session::new(parade(2, 2));
+    let mut s = Session::playing(parade(2, 2));
     let before = s.set();
     s.e.command(
         &Command::EditRetime {
@@ -297,7 +229,7 @@ fn a_retime_keeps_colliding_people_apart() {
         1,
         "they meet at (7, 4) at t = 5 s"
     );
-    let mut s = Session::new(set.clone());
+    let mut s = Session::playing(set.clone());
     let v = s.views.last().expect("an edit view at load").clone();
     assert_eq!(v.collisions.len(), 1, "the collision is published at load");
     s.e.command(
@@ -504,7 +436,7 @@ fn a_crowd_at_one_point_is_published_as_one_collision() {
     let mut tracks: Vec<Track> = (0..5_000)
         .map(|id| Track::linked(id, vec![Vec2::new(5.0, 5.0); 2], vec![0.0, 1.0]))
         .collect();
-    let s = Session::new(TrackSet {
+    let s = Session::playing(TrackSet {
         tracks: tracks.clone(),
         step_s: 1.0,
     });
@@ -527,7 +459,7 @@ fn a_crowd_at_one_point_is_published_as_one_collision() {
             vec![0.0, 1.0],
         ));
     }
-    let s = Session::new(TrackSet {
+    let s = Session::playing(TrackSet {
         tracks,
         step_s: 1.0,
     });
@@ -556,7 +488,7 @@ fn a_release_retimes_no_stranger_who_collided_already() {
     }
     let strangers = detect(&set, 0.3).unwrap();
     assert_eq!(strangers.pair_count(), 1, "the strangers collide");
-    let mut s = Session::new(set);
+    let mut s = Session::playing(set);
     s.e.command(&Command::Pause, Micros(s.now)).unwrap();
     s.tick();
     let before = s.set();

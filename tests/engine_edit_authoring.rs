@@ -11,19 +11,14 @@
 use crowdtouch::config::Config;
 use crowdtouch::crowd::edit::io::{read_tracks, ReadOptions};
 use crowdtouch::crowd::edit::{correct_speeds, detect, samples_in_obstacles, Track, TrackSet};
-use crowdtouch::engine::Engine;
 use crowdtouch::geom::Vec2;
-use crowdtouch::vocab::{
-    Command, Contact, ContactFlags, ContactId, EditView, Event, Micros, TouchFrame, TracksView,
-};
+use crowdtouch::vocab::{Command, ContactFlags, Event, Micros};
 use std::collections::BTreeSet;
 use std::path::Path;
-use std::sync::Arc;
 
-const TICK_US: u64 = 16_667;
-const DOWN: ContactFlags = ContactFlags::DOWN;
-const MOVE: ContactFlags = ContactFlags::NONE;
-const UP: ContactFlags = ContactFlags::UP;
+mod common;
+
+use common::edit_session::{Session, DOWN, MOVE, UP};
 
 /// A person walking from `from` by `step` every 0.2 s for 10 s.
 fn walker(id: u64, from: Vec2, step_per_s: Vec2) -> Track {
@@ -49,127 +44,6 @@ fn parade(rows: usize, cols: usize) -> TrackSet {
     TrackSet {
         tracks,
         step_s: 0.2,
-    }
-}
-
-struct Session {
-    e: Engine,
-    now: u64,
-    tracks: Vec<Arc<TracksView>>,
-    views: Vec<Arc<EditView>>,
-    events: Vec<Event>,
-    /// Jobs wait for [`Session::run_jobs`] (as on the daemon's formation thread).
-    manual: bool,
-}
-
-impl Session {
-    fn new(set: TrackSet) -> Session {
-        Session::with(set, Config::embedded_default(), false)
-    }
-    fn with(set: TrackSet, cfg: Config, manual: bool) -> Session {
-        let mut e = Engine::new(&cfg, None, !manual);
-        e.set_switch_worker(manual);
-        e.tick(Micros(TICK_US));
-        e.clear_events();
-        e.load_tracks(set, "authored", Micros(TICK_US));
-        e.command(&Command::Pause, Micros(TICK_US)).unwrap();
-        let mut s = Session {
-            e,
-            now: TICK_US,
-            tracks: Vec::new(),
-            views: Vec::new(),
-            events: Vec::new(),
-            manual,
-        };
-        s.tick();
-        s.run_jobs();
-        s
-    }
-    fn tick(&mut self) {
-        self.now += TICK_US;
-        let o = self.e.tick(Micros(self.now));
-        if let Some(t) = &o.tracks {
-            self.tracks.push(Arc::clone(t));
-        }
-        if let Some(v) = &o.edit {
-            self.views.push(Arc::clone(v));
-        }
-        self.events.extend(o.events.iter().cloned());
-        self.e.clear_events();
-    }
-    fn ticks(&mut self, n: usize) {
-        for _ in 0..n {
-            self.tick();
-        }
-    }
-    fn run_jobs(&mut self) {
-        while let Some(j) = self.e.take_edit_job() {
-            let done = j.run();
-            self.e.apply_edit(done, Micros(self.now));
-        }
-        self.tick();
-    }
-    /// Fingers at world positions (the default world is 16 × 9 m on the unit square).
-    fn touch(&mut self, fingers: &[(u32, Vec2, ContactFlags)]) {
-        let mut f = TouchFrame::new(Micros(self.now + 1));
-        for &(id, p, flags) in fingers {
-            f.push(Contact {
-                id: ContactId(id),
-                x: (p.x / 16.0) as f32,
-                y: (p.y / 9.0) as f32,
-                pressure: None,
-                major_mm: None,
-                minor_mm: None,
-                flags,
-            })
-            .expect("room");
-        }
-        self.e.push_frame(&f);
-    }
-    /// One finger dragged from `from` by `by` in ten steps (two ticks each),
-    /// other fingers `also` held still.
-    fn drag(&mut self, id: u32, from: Vec2, by: Vec2, also: &[(u32, Vec2)]) {
-        for k in 1..=10 {
-            let mut f = vec![(id, from + by * (k as f64 / 10.0), MOVE)];
-            f.extend(also.iter().map(|&(i, p)| (i, p, MOVE)));
-            self.touch(&f);
-            self.ticks(2);
-            if self.manual {
-                self.run_jobs();
-            }
-        }
-        // Still: the newest drag's `tracks` message goes out (at most every 100 ms).
-        let mut f = vec![(id, from + by, MOVE)];
-        f.extend(also.iter().map(|&(i, p)| (i, p, MOVE)));
-        self.touch(&f);
-        self.ticks(8);
-        if self.manual {
-            self.run_jobs();
-        }
-    }
-    fn command(&mut self, c: Command) {
-        self.e.command(&c, Micros(self.now)).unwrap();
-        self.tick();
-        if self.manual {
-            self.run_jobs();
-        }
-    }
-    fn set(&self) -> Arc<TrackSet> {
-        Arc::clone(self.e.edited_tracks().expect("editing"))
-    }
-    fn view(&self) -> &EditView {
-        self.views.last().expect("an edit view")
-    }
-    /// Plays until the play time is `t_s` (paused again then).
-    fn play_to(&mut self, t_s: f64) {
-        self.command(Command::Resume);
-        while self.play_t() < t_s - 0.5 * TICK_US as f64 / 1e6 {
-            self.tick();
-        }
-        self.command(Command::Pause);
-    }
-    fn play_t(&self) -> f64 {
-        self.e.edit_play_t_s().expect("editing")
     }
 }
 

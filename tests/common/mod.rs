@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod edit_session;
+
 use crowdtouch::config::Config;
 use crowdtouch::engine::{replay_virtual, Engine, VirtualClock};
 use crowdtouch::geom::Vec2;
