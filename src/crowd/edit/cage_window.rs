@@ -321,48 +321,6 @@ impl CageWindow {
         self.last
     }
 
-    /// The current (deformed) position of a handle.
-    ///
-    /// # Errors
-    /// [`EditError::UnknownHandle`].
-    pub fn handle_position(&self, h: Handle) -> Result<Vec2, EditError> {
-        match h {
-            Handle::Hull(i) if i < self.hull.vertices.len() => Ok(self.deformed_vertex(i)),
-            Handle::Sample(r) => match self.selection.binary_search(&r) {
-                Ok(i) => Ok(self.deformed_sample(i)),
-                Err(_) => Err(EditError::UnknownHandle {
-                    handle: h.to_string(),
-                }),
-            },
-            _ => Err(EditError::UnknownHandle {
-                handle: h.to_string(),
-            }),
-        }
-    }
-
-    /// The handle nearest to `p` within `radius_m` in the deformed state: a hull vertex
-    /// when one is that close, else the nearest selected sample.
-    pub fn handle_near(&self, p: Vec2, radius_m: f64) -> Option<Handle> {
-        let r2 = radius_m * radius_m;
-        let mut best: Option<(f64, Handle)> = None;
-        for i in 0..self.hull.vertices.len() {
-            let d2 = (self.deformed_vertex(i) - p).norm_squared();
-            if d2 <= r2 && best.is_none_or(|(b, _)| d2 < b) {
-                best = Some((d2, Handle::Hull(i)));
-            }
-        }
-        if best.is_some() {
-            return best.map(|b| b.1);
-        }
-        for (i, r) in self.selection.iter().enumerate() {
-            let d2 = (self.deformed_sample(i) - p).norm_squared();
-            if d2 <= r2 && best.is_none_or(|(b, _)| d2 < b) {
-                best = Some((d2, Handle::Sample(*r)));
-            }
-        }
-        best.map(|b| b.1)
-    }
-
     /// The row of `M` for a handle (its MVC row, or a unit row), into `out`.
     fn handle_row(&self, h: Handle, out: &mut [f64]) -> Result<(), EditError> {
         out.fill(0.0);
