@@ -3,12 +3,12 @@
 //! into a matrix a block at a time.
 
 use crate::crowd::mesh::{MVC_EDGE_EPS, MVC_VERTEX_EPS};
-use crate::geom::{cross, Vec2};
+use crate::geom::Vec2;
 use nalgebra::DMatrix;
 
-/// Mean value coordinates w.r.t. one polygon, with the per-polygon checks done once:
-/// the same arithmetic as [`crate::crowd::mesh::mean_value_coordinates`] (each `‖v_i − p‖` computed once and
-/// shared by the vertex test and both adjacent edges), so the same coordinates.
+/// Mean value coordinates w.r.t. one polygon, with the per-polygon checks (finite,
+/// not degenerate, the vertex tolerance) done once for [`mvc_matrix`]; a point it
+/// cannot do in a block gets [`crate::crowd::mesh::mean_value_coordinates`].
 pub(super) struct HullMvc<'a> {
     poly: &'a [Vec2],
     /// `MVC_VERTEX_EPS` × the polygon's bounding-box diagonal.
@@ -37,57 +37,11 @@ impl<'a> HullMvc<'a> {
         })
     }
 
-    /// The coordinates of `p` into `out` (`r` is scratch, both of the polygon's
-    /// length); `None` where `mean_value_coordinates` returns an error.
-    pub(super) fn coordinates(&self, p: Vec2, r: &mut [f64], out: &mut [f64]) -> Option<()> {
-        let poly = self.poly;
-        let n = poly.len();
-        out.fill(0.0);
-        if !finite(p) {
-            return None;
-        }
-        for (ri, v) in r.iter_mut().zip(poly) {
-            *ri = (v - p).norm();
-        }
-        if let Some(i) = r.iter().position(|&ri| ri <= self.vertex_eps) {
-            out[i] = 1.0;
-            return Some(());
-        }
-        let mut tan_prev = 0.0;
-        for i in 0..n {
-            let j = if i + 1 == n { 0 } else { i + 1 };
-            let (di, dj) = (poly[i] - p, poly[j] - p);
-            let (ri, rj) = (r[i], r[j]);
-            let a = cross(di, dj);
-            let d = di.dot(&dj);
-            let rr = ri * rj;
-            if a.abs() <= MVC_EDGE_EPS * rr && d < 0.0 {
-                out.fill(0.0);
-                out[i] = rj / (ri + rj);
-                out[j] = ri / (ri + rj);
-                return Some(());
-            }
-            let t = if d >= 0.0 { a / (rr + d) } else { (rr - d) / a };
-            out[i] = t / ri;
-            if i > 0 {
-                out[i] += tan_prev / ri;
-            }
-            tan_prev = t;
-        }
-        out[0] += tan_prev / r[0];
-        let sum: f64 = out.iter().sum();
-        if !(sum.is_finite() && sum != 0.0) {
-            out.fill(0.0);
-            return None;
-        }
-        for w in out.iter_mut() {
-            *w /= sum;
-        }
-        if !out.iter().all(|w| w.is_finite()) {
-            out.fill(0.0);
-            return None;
-        }
-        Some(())
+    /// The coordinates of `p` into `out` (of the polygon's length): those of
+    /// [`crate::crowd::mesh::mean_value_coordinates`] (one-hot on a vertex, linear on
+    /// an edge); `None` where it returns an error.
+    pub(super) fn coordinates(&self, p: Vec2, out: &mut [f64]) -> Option<()> {
+        crate::crowd::mesh::mean_value_coordinates(self.poly, p, out).ok()
     }
 }
 
@@ -121,7 +75,7 @@ pub(super) fn mvc_matrix(mvc: &HullMvc<'_>, points: &[Vec2]) -> Result<DMatrix<f
     // 1 / r: one division per sample and vertex instead of three.
     let mut inv_r = vec![0.0; n * BLOCK];
     let mut w = vec![0.0; n * BLOCK];
-    let (mut row_r, mut row) = (vec![0.0; n], vec![0.0; n]);
+    let mut row = vec![0.0; n];
     for (b, block) in points.chunks(BLOCK).enumerate() {
         let i0 = b * BLOCK;
         let (mut px, mut py) = ([0.0; BLOCK], [0.0; BLOCK]);
@@ -185,7 +139,7 @@ pub(super) fn mvc_matrix(mvc: &HullMvc<'_>, points: &[Vec2]) -> Result<DMatrix<f
         }
         for (k, p) in block.iter().enumerate() {
             if redo[k] {
-                mvc.coordinates(*p, &mut row_r, &mut row).ok_or(i0 + k)?;
+                mvc.coordinates(*p, &mut row).ok_or(i0 + k)?;
                 for (i, v) in row.iter().enumerate() {
                     t[(i0 + k, i)] = *v;
                 }
