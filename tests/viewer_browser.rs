@@ -459,6 +459,17 @@ impl Browser {
         }
     }
 
+    /// The page noted no error (its `lastError`), or the test fails with its text.
+    fn assert_no_error(&mut self) {
+        let stats = self.call(json!({"cmd": "stats"}));
+        assert_eq!(
+            stats["stats"]["lastError"],
+            Value::Null,
+            "{}",
+            stats["text"]
+        );
+    }
+
     fn call(&mut self, req: Value) -> Value {
         writeln!(self.stdin, "{req}").unwrap();
         let mut line = String::new();
@@ -689,13 +700,7 @@ fn the_page_draws_the_crowd_and_a_mouse_drag_moves_it() {
             (after.1 - c.1).abs() < 0.5,
             "a horizontal drag moved the crowd from {c:?} to {after:?}"
         );
-        let stats = browser.call(json!({"cmd": "stats"}));
-        assert_eq!(
-            stats["stats"]["lastError"],
-            Value::Null,
-            "{}",
-            stats["text"]
-        );
+        browser.assert_no_error();
     });
 }
 
@@ -888,13 +893,7 @@ fn the_edit_mode_draws_the_tracks_and_a_mouse_drag_edits_them() {
             assert_eq!(sel["selection"]["ids"], json!([100]), "{sel}");
             let st = browser.call(json!({"cmd": "wait", "until": "edit.selection.ids", "min": 1}));
             assert_eq!(st["stats"]["edit"]["lassoSent"], 1);
-            let stats = browser.call(json!({"cmd": "stats"}));
-            assert_eq!(
-                stats["stats"]["lastError"],
-                Value::Null,
-                "{}",
-                stats["text"]
-            );
+            browser.assert_no_error();
             if let Ok(keep) = std::env::var("CROWDTOUCH_VIEWER_EDIT_SCREENSHOT") {
                 browser.call(json!({"cmd": "screenshot", "path": keep}));
             }
@@ -1355,13 +1354,7 @@ fn the_collection_mode_shows_the_motion_and_records_the_mouse_gestures() {
                     "client touches (viewer or touch commands)".to_string()
                 )]
             );
-            let stats = browser.call(json!({"cmd": "stats"}));
-            assert_eq!(
-                stats["stats"]["lastError"],
-                Value::Null,
-                "{}",
-                stats["text"]
-            );
+            browser.assert_no_error();
         },
     );
 }
