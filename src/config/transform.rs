@@ -164,7 +164,8 @@ pub struct SubgroupsConfig {
     pub max_iterations: u32,
     /// Iterations with unchanged exemplars that count as converged, at least 1.
     pub convergence_iterations: u32,
-    /// The preference `s(k, k)`; `None`: the median similarity (Frey & Dueck).
+    /// The preference `s(k, k)`; `None`: the smallest candidate similarity (`local`)
+    /// or the median similarity (`paper`; Frey & Dueck's default).
     pub preference: Option<f64>,
     /// Candidate pairs of a large crowd: the Delaunay k-ring of each agent, `1..=8`.
     pub ring: u32,

@@ -12,9 +12,6 @@
 //! formation (eq. 20 averaged on those edges). Subgroups stay connected in the
 //! source triangulation, hence spatially coherent.
 
-use super::subgroups::{delta_dis, Pairs};
-use crate::geom::Vec2;
-
 /// Agents per `√n` of the smallest subgroup kept by the merge.
 ///
 /// With it the subgroups hold at least `1.5·√n` agents (15 at 100 agents, 26 at
@@ -32,8 +29,9 @@ pub fn min_group_size(n: usize) -> usize {
 }
 
 /// Merges subgroups smaller than `min_size` into neighbouring ones (module
-/// documentation) until none is left or one subgroup remains. `s`, `t`: the
-/// agents' finite sources and paired targets (m); `group_of[i]` in
+/// documentation) until none is left or one subgroup remains. `edges`: the
+/// adjacency of the agents (the Delaunay edges of the sources), each `(i, k,
+/// s(i, k))` with eq. 20's similarity `−Δdis` (−m²); `group_of[i]` in
 /// `0..exemplars.len()`, updated; `exemplars` keeps the absorbing subgroups'
 /// exemplars, renumbered in their order.
 ///
@@ -44,10 +42,9 @@ pub fn min_group_size(n: usize) -> usize {
 /// one point) stays.
 ///
 /// # Complexity
-/// One triangulation, then `O(merges · (edges + n))`.
+/// `O(merges · (edges + n))`.
 pub fn merge_small(
-    s: &[Vec2],
-    t: &[Vec2],
+    edges: &[(u32, u32, f64)],
     group_of: &mut [u32],
     exemplars: &mut Vec<u32>,
     min_size: usize,
@@ -56,17 +53,6 @@ pub fn merge_small(
     let n = group_of.len();
     if groups <= 1 || n == 0 {
         return;
-    }
-    let ring = Pairs::delaunay_rings(s, 1);
-    // Delaunay edges (i < k) with eq. 20's similarity (−m²).
-    let mut edges: Vec<(u32, u32, f64)> = Vec::new();
-    for i in 0..n {
-        for e in ring.start[i]..ring.start[i + 1] {
-            let k = ring.col[e] as usize;
-            if k > i {
-                edges.push((i as u32, k as u32, delta_dis(s, t, i, k)));
-            }
-        }
     }
     let mut size = vec![0usize; groups];
     for &g in group_of.iter() {
@@ -84,7 +70,7 @@ pub fn merge_small(
             break;
         };
         near.clear();
-        for &(i, k, d) in &edges {
+        for &(i, k, d) in edges {
             let (gi, gk) = (group_of[i as usize], group_of[k as usize]);
             let h = match (gi as usize == g, gk as usize == g) {
                 (true, false) => gk,
@@ -132,6 +118,22 @@ pub fn merge_small(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geom::Vec2;
+
+    /// The pairs of `s` at most `reach` apart, with eq. 20's similarity to `t`.
+    fn edges(s: &[Vec2], t: &[Vec2], reach: f64) -> Vec<(u32, u32, f64)> {
+        let w = |p: Vec2, q: Vec2| (p.x - q.x).abs() + (p.y - q.y).abs();
+        let mut e = Vec::new();
+        for i in 0..s.len() {
+            for k in i + 1..s.len() {
+                if (s[i] - s[k]).norm() <= reach {
+                    let d = w(s[i], s[k]) - w(t[i], t[k]);
+                    e.push((i as u32, k as u32, -(d * d)));
+                }
+            }
+        }
+        e
+    }
 
     #[test]
     fn min_size_grows_with_the_square_root() {
@@ -163,17 +165,17 @@ mod tests {
         let t = s.clone();
         let mut g = group_of.clone();
         let mut ex = vec![0, 10, 22];
-        merge_small(&s, &t, &mut g, &mut ex, 5);
+        merge_small(&edges(&s, &t, 1.1), &mut g, &mut ex, 5);
         assert_eq!(ex, vec![10, 22]);
         assert!(g[..16].iter().all(|&x| x == 0) && g[16..].iter().all(|&x| x == 1));
         let mut g = group_of.clone();
         let mut ex = vec![0, 10, 22];
-        merge_small(&s, &t, &mut g, &mut ex, 9);
+        merge_small(&edges(&s, &t, 1.1), &mut g, &mut ex, 9);
         assert_eq!((ex, g), (vec![10], vec![0; 24]));
         // Already large enough: nothing changes.
         let mut g = group_of.clone();
         let mut ex = vec![0, 10, 22];
-        merge_small(&s, &t, &mut g, &mut ex, 1);
+        merge_small(&edges(&s, &t, 1.1), &mut g, &mut ex, 1);
         assert_eq!((ex, g), (vec![0, 10, 22], group_of));
     }
 
@@ -193,7 +195,7 @@ mod tests {
             .collect();
         let mut g = vec![0, 0, 0, 0, 1, 2, 2, 2, 2];
         let mut ex = vec![1, 4, 6];
-        merge_small(&s, &t, &mut g, &mut ex, 2);
+        merge_small(&edges(&s, &t, 1.1), &mut g, &mut ex, 2);
         assert_eq!(ex, vec![1, 6]);
         assert_eq!(g, vec![0, 0, 0, 0, 0, 1, 1, 1, 1]);
     }
