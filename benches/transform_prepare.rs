@@ -1,8 +1,10 @@
 //! Preparing a formation transform (formation-transform sections 3.2 and 3.4), one
 //! core: the exact pairing by each cost (`transform_pair/<cost>/{1000,2000,5000}`),
-//! the affinity-propagation subgroups at 2,000 agents (`transform_subgroups/2000`)
-//! and the whole plan at 2,000 (`transform_plan/2000`: least-effort pairing, then
-//! subgroups with the default parameters). The budget: the whole
+//! the affinity-propagation subgroups at 2,000 agents (`transform_subgroups/local/2000`
+//! with the default local similarity, `transform_subgroups/paper/2000` with eq. 20 as
+//! written) and the whole plan at 2,000 (`transform_plan/2000`: least-effort
+//! pairing, then subgroups with the default parameters). Each subgroup bench prints
+//! the subgroup count, the iterations and whether the messages converged. The budget: the whole
 //! preparation (sampling + triangulations + pairing + subgroups) ≤ 300 ms at 2,000
 //! agents; the sampling is `Formation::sample`'s and is not in these figures.
 //!
@@ -14,7 +16,9 @@
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use crowdtouch::crowd::assign::Cancel;
-use crowdtouch::crowd::transform::{pair, subgroups, ApParams, PairCost, TransformPlan};
+use crowdtouch::crowd::transform::{
+    pair, subgroups, ApParams, PairCost, Similarity, TransformPlan,
+};
 use crowdtouch::geom::Vec2;
 use crowdtouch::rng::SplitMix64;
 
@@ -110,10 +114,22 @@ fn transform_subgroups(c: &mut Criterion) {
     let (s, t) = instance(n);
     let to = pair(&s, &t, PairCost::LeastEffort { lambda: 0.5 }, Cancel::NEVER).unwrap();
     let paired: Vec<Vec2> = to.iter().map(|&j| t[j as usize]).collect();
-    let p = ApParams::default();
-    g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
-        b.iter(|| black_box(subgroups(&s, &paired, &p, Cancel::NEVER).unwrap()))
-    });
+    for (name, similarity) in [("local", Similarity::Local), ("paper", Similarity::Paper)] {
+        let p = ApParams {
+            similarity,
+            ..ApParams::default()
+        };
+        let once = subgroups(&s, &paired, &p, Cancel::NEVER).unwrap();
+        println!(
+            "transform_subgroups/{name}/{n}: {} subgroups, {} iterations, converged {}",
+            once.count(),
+            once.iterations,
+            once.converged
+        );
+        g.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {
+            b.iter(|| black_box(subgroups(&s, &paired, &p, Cancel::NEVER).unwrap()))
+        });
+    }
     g.finish();
 }
 

@@ -140,6 +140,18 @@ pub const DEFAULT_AP_RING: u32 = 2;
 /// Default `subgroups.dense_up_to`.
 pub const DEFAULT_AP_DENSE_UP_TO: usize = 300;
 
+/// The similarity of `formations.subgroups` (formation-transform section 3.4).
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SubgroupSimilarity {
+    /// Eq. 20 plus a spatial term, on the Delaunay ring, small subgroups merged
+    /// into neighbours (spatially coherent subgroups).
+    #[default]
+    Local,
+    /// Eq. 20 as written (dense up to `dense_up_to` agents).
+    Paper,
+}
+
 /// Subgroups by affinity propagation (formation-transform section 3.4).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -152,12 +164,16 @@ pub struct SubgroupsConfig {
     pub max_iterations: u32,
     /// Iterations with unchanged exemplars that count as converged, at least 1.
     pub convergence_iterations: u32,
-    /// The preference `s(k, k)`; `None`: the median similarity (Frey & Dueck).
+    /// The preference `s(k, k)`; `None`: the smallest candidate similarity (`local`)
+    /// or the median similarity (`paper`; Frey & Dueck's default).
     pub preference: Option<f64>,
     /// Candidate pairs of a large crowd: the Delaunay k-ring of each agent, `1..=8`.
     pub ring: u32,
-    /// Crowds up to this size use every pair.
+    /// Crowds up to this size use every pair (`paper` similarity only).
     pub dense_up_to: usize,
+    /// `local` (default: eq. 20 with a spatial term, coherent subgroups) or `paper`
+    /// (eq. 20 as written).
+    pub similarity: SubgroupSimilarity,
 }
 
 impl Default for SubgroupsConfig {
@@ -170,6 +186,7 @@ impl Default for SubgroupsConfig {
             preference: None,
             ring: DEFAULT_AP_RING,
             dense_up_to: DEFAULT_AP_DENSE_UP_TO,
+            similarity: SubgroupSimilarity::Local,
         }
     }
 }

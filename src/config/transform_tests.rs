@@ -30,6 +30,16 @@ fn the_shipped_config_documents_the_defaults() {
     assert_eq!(f.cost, crate::config::TransformCost::LeastEffort);
     assert_eq!(f.transform, crate::config::TransformMoveConfig::default());
     assert_eq!(f.subgroups, crate::config::SubgroupsConfig::default());
+    assert_eq!(
+        f.subgroups.similarity,
+        crate::config::SubgroupSimilarity::Local
+    );
+    let paper = DEFAULT_CONFIG_RON.replace("similarity: local", "similarity: paper");
+    let c = Config::from_str(&paper, Path::new("p.ron")).unwrap();
+    assert_eq!(
+        c.formations.subgroups.similarity,
+        crate::config::SubgroupSimilarity::Paper
+    );
     assert!(f.gestures.is_empty());
     // A config without the new fields gets the same.
     let old = DEFAULT_CONFIG_RON
@@ -67,6 +77,12 @@ fn bad_transform_values_are_errors_at_their_place() {
     assert!(
         e.contains(&at(&t, "damping: 1.0"))
             && e.contains("field `formations.subgroups.damping`: damping must be in [0.5, 1)"),
+        "{e}"
+    );
+    let t = DEFAULT_CONFIG_RON.replace("similarity: local", "similarity: nearest");
+    let e = err(&t);
+    assert!(
+        e.contains("nearest") && e.contains("paper") && e.contains("t.ron:"),
         "{e}"
     );
     let t = DEFAULT_CONFIG_RON.replace("method: transform", "method: teleport");

@@ -1,12 +1,12 @@
 //! The one place where the config becomes the parameters of the crowd, gesture and
 //! assignment code, which know nothing of the config.
 
-use crate::config::{AssignmentCost, Config, TransformCost};
+use crate::config::{AssignmentCost, Config, SubgroupSimilarity, TransformCost};
 use crate::crowd::agents::AgentParams;
 use crate::crowd::assign::PointMetric;
 use crate::crowd::control::DirectParams;
 use crate::crowd::environment::{FieldParams, Planner, PlannerParams, Scene, MESH_FIELD_RANGE_M};
-use crate::crowd::transform::{ApParams, MoveParams, Mover, PairCost, Preference};
+use crate::crowd::transform::{ApParams, MoveParams, Mover, PairCost, Preference, Similarity};
 use crate::gesture::capture::TapThresholds;
 use crate::gesture::dtw::Weights;
 use crate::gesture::knn::SearchParams;
@@ -172,5 +172,9 @@ pub fn ap_params(cfg: &Config) -> Option<ApParams> {
         preference: s.preference.map_or(Preference::Median, Preference::Value),
         ring: s.ring,
         dense_up_to: s.dense_up_to,
+        similarity: match s.similarity {
+            SubgroupSimilarity::Local => Similarity::Local,
+            SubgroupSimilarity::Paper => Similarity::Paper,
+        },
     })
 }

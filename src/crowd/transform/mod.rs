@@ -6,7 +6,7 @@
 //! |---|---|---|
 //! | target points sampled in the shape | [`crate::crowd::formation`] (`sample.rs`) | 3.1, eq. 1 |
 //! | agents paired with targets (least effort, Euclidean, Manhattan) | `pairing.rs` | 3.2, eqs. 2–6; 5.2 |
-//! | subgroups by affinity propagation | `subgroups.rs` | 3.4, eq. 20 |
+//! | subgroups by affinity propagation (eq. 20 as written, or with a spatial term and a merge of small subgroups) | `subgroups.rs`, `subgroup_merge.rs`; tests on the shipped pairs in `subgroups_shipped.rs` | 3.4, eq. 20 |
 //! | a request prepared off the control thread | `prepare.rs` | 3 |
 //! | social forces with subgroup terms, mutual-information feedback | `run.rs` (the step), `params.rs` (its constants), `social.rs` (forces), `feedback.rs` (eqs. 11–19), `crate::crowd::agents::NeighbourGrid` (neighbours and nearest distances) | 3.3, 3.5, eqs. 7–19, 21–23 |
 //! | the objective measures | `measures.rs` | 5.1, eqs. 17, 24–26 |
@@ -22,11 +22,15 @@ mod params;
 mod prepare;
 mod run;
 mod social;
+mod subgroup_merge;
 mod subgroups;
+#[cfg(test)]
+mod subgroups_shipped;
 
 pub use experiment::{interval, locality, t_975, window_mean, Interval};
 pub use measures::Measures;
 pub use pairing::{pair, PairCost};
 pub use prepare::{PreparedTransform, TransformError, TransformPlan, TransformRequest};
 pub use run::{MoveParams, Mover, RunSummary, StepReport, TransformRun, OVERLAP_TOLERANCE_M};
-pub use subgroups::{subgroups, ApParams, Preference, Subgroups};
+pub use subgroup_merge::{min_group_size, MIN_SIZE_PER_SQRT_N};
+pub use subgroups::{subgroups, ApParams, Preference, Similarity, Subgroups, SPATIAL_WEIGHT};

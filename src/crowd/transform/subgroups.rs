@@ -8,11 +8,19 @@
 //! in the Delaunay triangulation of the sources (sparse affinity propagation: a pair
 //! left out has similarity `−∞`). Dense and sparse run the same code, so a ring that
 //! covers the whole crowd gives the dense answer bit for bit.
+//!
+//! Two similarities ([`Similarity`]): the paper's eq. 20 as written (`Paper`), and
+//! the project's `Local` one, which adds a spatial term so that neighbours are
+//! preferred over far agents whose distance happens not to change, always runs on
+//! the Delaunay ring, and merges subgroups smaller than [`min_group_size`] into a
+//! neighbouring one (`subgroup_merge.rs`). Eq. 20 alone has no notion of distance:
+//! at 300 agents its subgroups are spread over the whole formation.
 
 // NaN-aware comparisons (`!(a > b)` is true for NaN) are deliberate; the message
 // loops index several per-pair arrays by the same compressed-row range.
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
 
+use super::subgroup_merge::{merge_small, min_group_size};
 use crate::crowd::assign::Cancel;
 use crate::geom::Vec2;
 use spade::{DelaunayTriangulation, Point2, Triangulation};
@@ -20,11 +28,33 @@ use spade::{DelaunayTriangulation, Point2, Triangulation};
 /// The preference `s(k, k)` of affinity propagation.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub enum Preference {
-    /// The median of the similarities (Frey & Dueck's default).
+    /// The median of the similarities (Frey & Dueck's default) for
+    /// [`Similarity::Paper`]; the smallest candidate similarity (Frey & Dueck's
+    /// choice for few clusters) for [`Similarity::Local`].
     Median,
     /// This value.
     Value(f64),
 }
+
+/// The similarity affinity propagation clusters by.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Similarity {
+    /// Eq. 20 as written, `−Δdis(s_i, s_j)`: every pair up to
+    /// [`ApParams::dense_up_to`] agents, the Delaunay ring above; no merge. It
+    /// groups a rigid far pair as readily as two neighbours.
+    Paper,
+    /// `−Δdis(s_i, s_j) − μ·w(s_i, s_j)²` ([`SPATIAL_WEIGHT`] `μ`) on the Delaunay
+    /// ring at every crowd size, then subgroups smaller than [`min_group_size`]
+    /// merged into the neighbouring subgroup whose shared Delaunay edges change
+    /// least (eq. 20 on those edges).
+    Local,
+}
+
+/// `μ` of [`Similarity::Local`], dimensionless: a metre between two agents costs
+/// as much similarity as a metre of change of their distance (eq. 20's Manhattan
+/// weights). With it a far pair (`w` the formation's size) is never more similar
+/// than two neighbours (`w` about one spacing), whatever the distance changes.
+pub const SPATIAL_WEIGHT: f64 = 1.0;
 
 /// Affinity propagation's parameters.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -39,15 +69,20 @@ pub struct ApParams {
     pub preference: Preference,
     /// Candidate pairs of a large crowd: the Delaunay `ring`-ring of each source point.
     pub ring: u32,
-    /// Crowds up to this size use every pair (dense).
+    /// Crowds up to this size use every pair (dense; [`Similarity::Paper`] only).
     pub dense_up_to: usize,
+    /// Which similarity.
+    pub similarity: Similarity,
 }
 
 impl Default for ApParams {
-    /// Damping 0.7, at most 200 iterations, converged after 15 with the same
-    /// exemplars, the median preference, the 2-ring of the triangulation above 300
-    /// agents (2,000 agents: 97 ms against 167 ms with the 3-ring on a loaded
-    /// machine, 377 subgroups against 253; neither converged in 200 iterations).
+    /// The local similarity, damping 0.7, at most 200 iterations, converged after 15
+    /// with the same exemplars, the default preference ([`Preference::Median`]), the
+    /// 2-ring of the triangulation (above 300 agents with the paper's similarity).
+    /// Bench `transform_subgroups` (2,000 agents, a jittered grid turning into a
+    /// ring, release build): local 63 ms, 12 subgroups, not converged in 200
+    /// iterations; paper 51 ms, 377 subgroups, not converged (with the paper's
+    /// 3-ring: 167 ms against 97 ms on a loaded machine, 253 subgroups).
     fn default() -> ApParams {
         ApParams {
             damping: 0.7,
@@ -56,6 +91,7 @@ impl Default for ApParams {
             preference: Preference::Median,
             ring: 2,
             dense_up_to: 300,
+            similarity: Similarity::Local,
         }
     }
 }
@@ -115,13 +151,31 @@ fn pair_noise(i: usize, j: usize) -> f64 {
     (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
 }
 
-/// The similarity the messages use: [`delta_dis`] (the preference on the diagonal)
-/// plus a perturbation at rounding level that breaks the ties of symmetric crowds
-/// (as scikit-learn's `AffinityPropagation` does with its random state; here a
-/// hash of the pair, so every run and both layouts see the same values).
+/// The similarity of two distinct agents: [`delta_dis`] (eq. 20), minus
+/// `μ·w(s_i, s_j)²` when `local` ([`Similarity::Local`]). −m².
 #[inline]
-fn similarity(s: &[Vec2], t: &[Vec2], pref: f64, i: usize, j: usize) -> f64 {
-    let v = if i == j { pref } else { delta_dis(s, t, i, j) };
+fn base_similarity(s: &[Vec2], t: &[Vec2], local: bool, i: usize, j: usize) -> f64 {
+    let d = delta_dis(s, t, i, j);
+    if local {
+        let w = (s[i].x - s[j].x).abs() + (s[i].y - s[j].y).abs();
+        d - SPATIAL_WEIGHT * w * w
+    } else {
+        d
+    }
+}
+
+/// The similarity the messages use: [`base_similarity`] (the preference on the
+/// diagonal) plus a perturbation at rounding level that breaks the ties of
+/// symmetric crowds (as scikit-learn's `AffinityPropagation` does with its random
+/// state; here a hash of the pair, so every run and both layouts see the same
+/// values).
+#[inline]
+fn similarity(s: &[Vec2], t: &[Vec2], local: bool, pref: f64, i: usize, j: usize) -> f64 {
+    let v = if i == j {
+        pref
+    } else {
+        base_similarity(s, t, local, i, j)
+    };
     v + (f64::EPSILON * v.abs() + 100.0 * f64::MIN_POSITIVE) * pair_noise(i, j)
 }
 
@@ -303,7 +357,8 @@ fn cluster(s: &[Vec2], t: &[Vec2], p: &ApParams, cancel: Cancel<'_>) -> Option<S
     if n <= 1 {
         return Some(Subgroups::single(n));
     }
-    let pairs = if n <= p.dense_up_to {
+    let local = p.similarity == Similarity::Local;
+    let pairs = if n <= p.dense_up_to && !local {
         Pairs::dense(n)
     } else {
         Pairs::delaunay_rings(s, p.ring.max(1))
@@ -313,25 +368,29 @@ fn cluster(s: &[Vec2], t: &[Vec2], p: &ApParams, cancel: Cancel<'_>) -> Option<S
     }
     let row = |i: usize| pairs.start[i]..pairs.start[i + 1];
     // Off-diagonal similarities (without the perturbation): preference and the
-    // all-equal test.
+    // all-equal test (on eq. 20 alone: a rigid motion is one subgroup).
     let mut off = Vec::with_capacity(pairs.col.len().saturating_sub(n));
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for i in 0..n {
         for e in row(i) {
             let k = pairs.col[e] as usize;
             if k != i {
-                off.push(delta_dis(s, t, i, k));
+                let d = delta_dis(s, t, i, k);
+                (lo, hi) = (lo.min(d), hi.max(d));
+                off.push(base_similarity(s, t, local, i, k));
             }
         }
     }
+    let top = off.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let pref = match p.preference {
         Preference::Value(v) if v.is_finite() => v,
+        // The smallest candidate similarity (Frey & Dueck's choice for few
+        // clusters): the median of a ring's similarities makes an exemplar of about
+        // every fifth agent, and the many small subgroups keep the messages from
+        // settling at 1,000 agents and more.
+        _ if local => off.iter().copied().fold(f64::INFINITY, f64::min),
         _ => median(&mut off),
     };
-    let (lo, hi) = off
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-            (a.min(x), b.max(x))
-        });
     // Similarities equal up to rounding: distance changes below 1e-9 of the extent.
     let extent = s
         .iter()
@@ -343,7 +402,7 @@ fn cluster(s: &[Vec2], t: &[Vec2], p: &ApParams, cancel: Cancel<'_>) -> Option<S
     if off.is_empty() || hi - lo <= flat {
         // Nothing tells the agents apart (a rigid motion keeps every distance): one
         // subgroup, unless the preference is above every similarity.
-        if off.is_empty() || !(pref > hi + flat) {
+        if off.is_empty() || !(pref > top + flat) {
             return Some(Subgroups::single(n));
         }
         return Some(Subgroups {
@@ -361,7 +420,7 @@ fn cluster(s: &[Vec2], t: &[Vec2], p: &ApParams, cancel: Cancel<'_>) -> Option<S
     };
     let sim: Vec<f64> = (0..n)
         .flat_map(|i| row(i).map(move |e| (i, e)))
-        .map(|(i, e)| similarity(s, t, pref, i, pairs.col[e] as usize))
+        .map(|(i, e)| similarity(s, t, local, pref, i, pairs.col[e] as usize))
         .collect();
     let m = sim.len();
     let (mut r, mut a) = (vec![0.0f64; m], vec![0.0f64; m]);
@@ -436,7 +495,7 @@ fn cluster(s: &[Vec2], t: &[Vec2], p: &ApParams, cancel: Cancel<'_>) -> Option<S
             ..Subgroups::single(n)
         });
     }
-    let sij = |i: usize, k: usize| similarity(s, t, pref, i, k);
+    let sij = |i: usize, k: usize| similarity(s, t, local, pref, i, k);
     // Join the most similar exemplar; refine each subgroup's exemplar; join again.
     let mut is_ex = vec![u32::MAX; n];
     let mut group_of = vec![0u32; n];
@@ -482,6 +541,20 @@ fn cluster(s: &[Vec2], t: &[Vec2], p: &ApParams, cancel: Cancel<'_>) -> Option<S
     }
     for g in &mut group_of {
         *g = renum[*g as usize];
+    }
+    if local {
+        // The Delaunay edges (i < k) with eq. 20's similarity, for the merge.
+        let ring = Pairs::delaunay_rings(s, 1);
+        let mut edges: Vec<(u32, u32, f64)> = Vec::new();
+        for i in 0..n {
+            for e in ring.start[i]..ring.start[i + 1] {
+                let k = ring.col[e] as usize;
+                if k > i {
+                    edges.push((i as u32, k as u32, delta_dis(s, t, i, k)));
+                }
+            }
+        }
+        merge_small(&edges, &mut group_of, &mut kept, min_group_size(n));
     }
     Some(Subgroups {
         group_of,
@@ -602,7 +675,11 @@ mod tests {
         }
         let pref = median(&mut off);
         let sm: Vec<Vec<f64>> = (0..n)
-            .map(|i| (0..n).map(|k| similarity(s, t, pref, i, k)).collect())
+            .map(|i| {
+                (0..n)
+                    .map(|k| similarity(s, t, false, pref, i, k))
+                    .collect()
+            })
             .collect();
         let (mut r, mut a) = (vec![vec![0.0; n]; n], vec![vec![0.0; n]; n]);
         let l = p.damping;
@@ -667,7 +744,10 @@ mod tests {
         for n in [30usize, 60] {
             let s = points(&mut rng, n, 1.0);
             let t = deform(&mut rng, &s);
-            let p = ApParams::default();
+            let p = ApParams {
+                similarity: Similarity::Paper,
+                ..ApParams::default()
+            };
             let (ex, iters) = reference(&s, &t, &p);
             let g = subgroups(&s, &t, &p, Cancel::NEVER).unwrap();
             assert_eq!(g.iterations, iters, "n={n}");
@@ -694,12 +774,13 @@ mod tests {
             let t = deform(&mut rng, &s);
             let dense = ApParams {
                 dense_up_to: n,
+                similarity: Similarity::Paper,
                 ..ApParams::default()
             };
             let sparse = ApParams {
                 dense_up_to: 0,
                 ring: n as u32,
-                ..ApParams::default()
+                ..dense
             };
             let a = subgroups(&s, &t, &dense, Cancel::NEVER).unwrap();
             let b = subgroups(&s, &t, &sparse, Cancel::NEVER).unwrap();
@@ -734,9 +815,14 @@ mod tests {
                 }
             })
             .collect();
-        for dense_up_to in [n, 0] {
+        for (dense_up_to, similarity) in [
+            (n, Similarity::Paper),
+            (0, Similarity::Paper),
+            (n, Similarity::Local),
+        ] {
             let p = ApParams {
                 dense_up_to,
+                similarity,
                 ..ApParams::default()
             };
             let g = subgroups(&s, &t, &p, Cancel::NEVER).unwrap();
