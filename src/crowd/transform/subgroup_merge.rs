@@ -22,7 +22,7 @@
 /// has ≥ 0.8 at 100 to 2,000 agents (`subgroups_shipped.rs`).
 pub const MIN_SIZE_PER_SQRT_N: f64 = 1.5;
 
-/// The smallest subgroup [`merge_small`] keeps in a crowd of `n`:
+/// The smallest subgroup `merge_small` keeps in a crowd of `n`:
 /// `⌈MIN_SIZE_PER_SQRT_N·√n⌉`, within `1..=n` (1 for no agent).
 pub fn min_group_size(n: usize) -> usize {
     ((MIN_SIZE_PER_SQRT_N * (n as f64).sqrt()).ceil() as usize).clamp(1, n.max(1))
