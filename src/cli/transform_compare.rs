@@ -29,7 +29,8 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, ValueEnum};
 use crowdtouch::crowd::assign::Cancel;
 use crowdtouch::crowd::transform::{
-    interval, locality, window_mean, Interval, Measures, MoveParams, Mover, PairCost, TransformPlan,
+    interval, locality, window_mean, Interval, Measures, MoveParams, Mover, PairCost,
+    TransformPlan, REST_HOLD_S, REST_SPEED_M_S,
 };
 use serde_json::{json, Value};
 use std::time::Instant;
@@ -212,7 +213,9 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         )?;
     }
     outln!(
-        "measures averaged over the first {window_s:.2} s of every run (I_d eq. 17 in bits, σ_min_dis eq. 24, σ_curr_eft eq. 26); ± is the 95 % confidence interval over the seeds; SF: social forces, MI: mutual-information feedback, +ours: fades, settling, contacts and exchanges of targets"
+        "measures averaged over the first {window_s:.2} s of every run (I_d eq. 17 in bits, σ_min_dis eq. 24, σ_curr_eft eq. 26); ± is the 95 % confidence interval over the seeds; SF: social forces, MI: mutual-information feedback, +ours: fades, settling, contacts and exchanges of targets; rest T: without settling, the crowd came to rest (no agent faster than {} m/s for {} s) at T s short of its targets",
+        REST_SPEED_M_S,
+        REST_HOLD_S
     )?;
     outln!(
         "subgroups (least effort): {:.1} ± {:.1}, converged in {} of {} seeds, locality {} (agents whose nearest neighbour is in their own subgroup)",
@@ -309,6 +312,14 @@ struct Row {
     arrival: Interval,
     arrived_runs: usize,
     arrived_fraction: Interval,
+    /// The paper's "time": until every agent arrived or (without settling) the
+    /// crowd came to rest, over the runs that did either.
+    finish: Interval,
+    finished_runs: usize,
+    /// Over the runs that ended with the crowd at rest short of its targets.
+    rest_runs: usize,
+    /// Mean distance of the agents from their targets at the end (m).
+    offset_m: Interval,
     /// I_d, σ_min_dis, σ_curr_eft over the common window.
     window: (Interval, Interval, Interval),
     /// The same over each run's own length.
@@ -326,6 +337,10 @@ impl Row {
         let collect =
             |f: &dyn Fn(&Variant) -> f64| -> Vec<f64> { runs.iter().map(|v| f(v)).collect() };
         let arrivals: Vec<f64> = runs.iter().filter_map(|v| v.rec.arrival_s()).collect();
+        let finishes: Vec<f64> = runs
+            .iter()
+            .filter_map(|v| v.rec.arrival_s().or(v.rec.summary.rest_s))
+            .collect();
         let windows: Vec<Option<Measures>> = runs
             .iter()
             .map(|v| window_mean(v.rec.series.iter().map(|&(t, m, _)| (t, m)), window_s))
@@ -353,6 +368,13 @@ impl Row {
             arrival: interval(&arrivals),
             arrived_runs: arrivals.len(),
             arrived_fraction: interval(&collect(&|v| v.rec.summary.arrived_fraction)),
+            finish: interval(&finishes),
+            finished_runs: finishes.len(),
+            rest_runs: runs
+                .iter()
+                .filter(|v| v.rec.arrival_s().is_none() && v.rec.summary.rest_s.is_some())
+                .count(),
+            offset_m: interval(&collect(&|v| v.rec.summary.mean_offset_m)),
             window: (
                 w(&|m| m.i_d),
                 w(&|m| m.sigma_min_dis_m),
@@ -396,6 +418,8 @@ impl Row {
     fn arrival_text(&self) -> String {
         if self.arrived_runs == self.seeds {
             pm(&self.arrival, 2)
+        } else if self.finished_runs == self.seeds {
+            format!("rest {}", pm(&self.finish, 2))
         } else {
             format!(
                 "{}/{} ({:.1} % in)",
@@ -425,6 +449,10 @@ impl Row {
             "arrival_s": iv(&self.arrival),
             "arrived_runs": self.arrived_runs,
             "arrived_fraction": iv(&self.arrived_fraction),
+            "finish_s": iv(&self.finish),
+            "finished_runs": self.finished_runs,
+            "rest_runs": self.rest_runs,
+            "mean_offset_m": iv(&self.offset_m),
             "i_d": iv(&self.window.0),
             "sigma_min_dis": iv(&self.window.1),
             "sigma_curr_eft": iv(&self.window.2),

@@ -31,6 +31,9 @@ pub use experiment::{interval, locality, t_975, window_mean, Interval};
 pub use measures::Measures;
 pub use pairing::{pair, PairCost};
 pub use prepare::{PreparedTransform, TransformError, TransformPlan, TransformRequest};
-pub use run::{MoveParams, Mover, RunSummary, StepReport, TransformRun, OVERLAP_TOLERANCE_M};
+pub use run::{
+    MoveParams, Mover, RunSummary, StepReport, TransformRun, OVERLAP_TOLERANCE_M, REST_HOLD_S,
+    REST_SPEED_M_S,
+};
 pub use subgroup_merge::{min_group_size, MIN_SIZE_PER_SQRT_N};
 pub use subgroups::{subgroups, ApParams, Preference, Similarity, Subgroups, SPATIAL_WEIGHT};
