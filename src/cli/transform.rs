@@ -34,7 +34,7 @@ pub const DT_S: f64 = 1.0 / 60.0;
 /// Seed of a run when `--seed` is not given.
 pub const DEFAULT_SEED: u64 = 16;
 /// Longest step recorded in the step-time histogram (µs).
-const MAX_STEP_US: u64 = 60_000_000;
+pub const MAX_STEP_US: u64 = 60_000_000;
 
 /// `transform`: run one formation transform, or `transform compare`.
 #[derive(Args, Debug)]

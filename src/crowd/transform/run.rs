@@ -59,7 +59,7 @@
 //! reported positions and velocities.
 
 use super::feedback::{Feedback, Information};
-use super::measures::{nearest_distances, sigma_curr_eft, spread_and_min, Measures};
+use super::measures::{nearest_distances, sigma_curr_eft, spread_and_min, HeadingChange, Measures};
 use super::orca::Orca;
 pub use super::params::{MoveParams, Mover};
 use super::prepare::TransformPlan;
@@ -193,6 +193,8 @@ pub struct TransformRun {
     travel: Vec<f64>,
     nearest: Vec<f64>,
     overlapped: HashSet<(u32, u32)>,
+    /// The previous step's velocities, for the heading-change rate.
+    heading: HeadingChange,
     /// Positions and velocities the last report measured, with what it found:
     /// while the next step starts from them bit for bit, its first substep takes
     /// `I_d`, `I_v` (and the bins they left in `feedback`) from the report
@@ -256,6 +258,7 @@ impl TransformRun {
             travel: vec![0.0; n],
             nearest: vec![0.0; n],
             overlapped: HashSet::with_capacity(4 * n),
+            heading: HeadingChange::new(n),
             reported_pos: vec![Vec2::zeros(); n],
             reported_vel: vec![Vec2::zeros(); n],
             reported: None,
@@ -310,7 +313,7 @@ impl TransformRun {
         }
         self.elapsed_s += dt_s;
         self.steps += 1;
-        let report = self.report(positions, velocities);
+        let report = self.report(positions, velocities, dt_s);
         self.last = report;
         if !self.p.settling {
             let fastest2 = velocities
@@ -667,7 +670,7 @@ impl TransformRun {
     }
 
     /// The measures and contacts now.
-    fn report(&mut self, pos: &[Vec2], vel: &[Vec2]) -> StepReport {
+    fn report(&mut self, pos: &[Vec2], vel: &[Vec2], dt_s: f64) -> StepReport {
         let n = pos.len();
         let two_r = 2.0 * self.p.radius_m;
         let mut arrived = 0usize;
@@ -710,11 +713,13 @@ impl TransformRun {
             i_v: info.i_v,
             sigma_min_dis_m,
             sigma_curr_eft_m: sigma_curr_eft(&self.sources, pos),
+            heading_change_rad_s: self.heading.rate(vel, dt_s),
         };
         self.sum.i_d += measures.i_d;
         self.sum.i_v += measures.i_v;
         self.sum.sigma_min_dis_m += measures.sigma_min_dis_m;
         self.sum.sigma_curr_eft_m += measures.sigma_curr_eft_m;
+        self.sum.heading_change_rad_s += measures.heading_change_rad_s;
         self.min_distance_m = self.min_distance_m.min(min_d);
         StepReport {
             arrived,
@@ -761,6 +766,16 @@ impl TransformRun {
         &self.targets
     }
 
+    /// Moves every target by `by_m` (a formation whose anchor travels, the
+    /// transforms along a path of section 4, Figs. 6–7); the subgroups' target
+    /// layouts move with them. Settled agents whose target left them walk again.
+    pub fn shift_targets(&mut self, by_m: Vec2) {
+        for t in &mut self.targets {
+            *t += by_m;
+        }
+        self.groups.shift_targets(by_m);
+    }
+
     /// Whether agent `i` has arrived and settled.
     pub fn settled(&self, i: usize) -> bool {
         self.settled[i]
@@ -788,6 +803,7 @@ impl TransformRun {
                 i_v: self.sum.i_v / steps,
                 sigma_min_dis_m: self.sum.sigma_min_dis_m / steps,
                 sigma_curr_eft_m: self.sum.sigma_curr_eft_m / steps,
+                heading_change_rad_s: self.sum.heading_change_rad_s / steps,
             },
             timed_out: self.elapsed_s >= self.p.timeout_s
                 && !self.all_arrived()

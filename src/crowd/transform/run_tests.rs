@@ -715,3 +715,32 @@ fn without_settling_a_crowd_held_off_its_targets_ends_at_rest() {
     assert_eq!(run.summary().rest_s, None);
     assert!(run.summary().timed_out);
 }
+
+#[test]
+fn a_lone_agent_follows_shifted_targets_and_walks_straight() {
+    // Without fluctuation a lone agent walks a straight line: no heading change
+    // in any step. Its target moved 5 m sideways while it walks, it turns (a
+    // positive rate) and arrives at the moved target; the summary averages it.
+    let p = MoveParams {
+        fluctuation_m_s2: 0.0,
+        ..MoveParams::default()
+    };
+    let (s, t) = (Vec2::new(0.0, 0.0), Vec2::new(8.0, 0.0));
+    let mut run = TransformRun::new(&plan(&[s], &[t], vec![0]), &p, 1);
+    let (mut pos, mut vel) = ([s], [Vec2::zeros()]);
+    for _ in 0..60 {
+        let r = run.step(&mut pos, &mut vel, DT_S, None);
+        assert!(r.measures.heading_change_rad_s.abs() < 1e-9, "{r:?}");
+    }
+    run.shift_targets(Vec2::new(0.0, 5.0));
+    assert_eq!(run.targets()[0], Vec2::new(8.0, 5.0));
+    let mut turned: f64 = 0.0;
+    while !run.done() {
+        let r = run.step(&mut pos, &mut vel, DT_S, None);
+        turned = turned.max(r.measures.heading_change_rad_s);
+    }
+    let sum = run.summary();
+    assert!(!sum.timed_out && (pos[0] - Vec2::new(8.0, 5.0)).norm() <= p.arrive_m);
+    assert!(turned > 0.1, "{turned}");
+    assert!(sum.mean.heading_change_rad_s > 0.0 && sum.mean.heading_change_rad_s < turned);
+}
