@@ -588,3 +588,127 @@ fn a_bad_scenario_is_a_clear_error() {
     );
     assert!(err.contains("direct, path, obstacles, crossing"), "{err}");
 }
+
+/// `compare --lambdas`: a raw and a normalised least-effort row per λ, with the
+/// pairing's terms; λ changes the pairing (λ = 0 pairs most agents elsewhere
+/// than λ = 1 and travels further) and the measures; at λ = 0 and 1 the raw
+/// and normalised costs are the same.
+#[test]
+fn a_lambda_sweep_changes_the_pairing_and_the_measures() {
+    let dir = tempfile::tempdir().unwrap();
+    let svg = dir.path().join("sweep.svg");
+    let out = bin()
+        .args(["transform", "compare", "--from", "square", "--to", "arrow"])
+        .args(["--agents", "60", "--lambdas", "0,0.5,1", "--json", "--svg"])
+        .arg(&svg)
+        .output()
+        .unwrap();
+    let v = json_of(&out);
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 6, "{v}");
+    let find = |cost: &str, lambda: f64| {
+        rows.iter()
+            .find(|r| r["cost"] == cost && r["lambda"].as_f64() == Some(lambda))
+            .unwrap_or_else(|| panic!("no {cost} λ {lambda} row: {v}"))
+    };
+    let mean = |r: &Value, k: &str| r[k]["mean"].as_f64().unwrap();
+    let pairing = |r: &Value, k: &str| r["pairing"][k]["mean"].as_f64().unwrap();
+    for cost in ["least-effort", "least-effort-normalised"] {
+        let (zero, one) = (find(cost, 0.0), find(cost, 1.0));
+        assert_eq!(pairing(one, "changed_vs_travel_only"), 0.0, "{one}");
+        assert!(pairing(zero, "changed_vs_travel_only") > 0.5, "{zero}");
+        assert!(
+            pairing(zero, "travel_m2") > 2.0 * pairing(one, "travel_m2"),
+            "{zero} {one}"
+        );
+        assert!(
+            pairing(zero, "local_m2") < pairing(one, "local_m2"),
+            "{zero} {one}"
+        );
+        // The measures move with it: local structure alone scatters the
+        // efforts less (σ_curr_eft) but the crowd takes longer.
+        assert!(
+            mean(zero, "sigma_curr_eft") != mean(one, "sigma_curr_eft"),
+            "{zero} {one}"
+        );
+        assert!(
+            mean(zero, "finish_s") > mean(one, "finish_s"),
+            "{zero} {one}"
+        );
+    }
+    // At the ends the two costs are the same cost.
+    for l in [0.0, 1.0] {
+        assert_eq!(
+            find("least-effort", l)["pairing"],
+            find("least-effort-normalised", l)["pairing"]
+        );
+    }
+    // The normalised λ = 0.5 trades travel for local structure; the raw one
+    // barely does.
+    let (raw, norm, one) = (
+        find("least-effort", 0.5),
+        find("least-effort-normalised", 0.5),
+        find("least-effort", 1.0),
+    );
+    assert!(
+        pairing(norm, "travel_m2") > pairing(raw, "travel_m2")
+            && pairing(raw, "travel_m2") < 1.02 * pairing(one, "travel_m2"),
+        "{raw} {norm} {one}"
+    );
+    let text = std::fs::read_to_string(&svg).unwrap();
+    well_formed(&text).unwrap();
+    assert!(text.contains("λ") && text.contains("normalised"), "{text}");
+}
+
+#[test]
+fn bad_compare_options_are_clear_errors() {
+    let compare = |extra: &[&str]| {
+        bin()
+            .args(["transform", "compare", "--from", "square", "--to", "arrow"])
+            .args(["--agents", "20"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    assert_error(
+        &compare(&["--window", "0"]),
+        &["--window must be a positive number of seconds, got 0"],
+    );
+    assert_error(
+        &compare(&["--window", "NaN"]),
+        &["--window must be a positive number of seconds, got NaN"],
+    );
+    assert_error(
+        &compare(&["--timeout=-3"]),
+        &["--timeout must be a positive number of seconds, got -3"],
+    );
+    let clap_error = |out: &Output, want: &str| {
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(!err.contains("panicked") && err.contains(want), "{err}");
+    };
+    clap_error(
+        &compare(&["--timeout", "soon"]),
+        "invalid value 'soon' for '--timeout",
+    );
+    assert_error(
+        &compare(&["--seeds", "0"]),
+        &["--seeds must be 1 to 100, got 0"],
+    );
+    assert_error(
+        &compare(&["--lambdas", "0,1.5"]),
+        &["--lambdas: each λ must be in [0, 1], got 1.5"],
+    );
+    clap_error(
+        &compare(&["--lambdas", "0,x"]),
+        "invalid value 'x' for '--lambdas",
+    );
+    assert_error(
+        &bin()
+            .args(["transform", "--from", "square", "--to", "arrow"])
+            .args(["--timeout", "inf"])
+            .output()
+            .unwrap(),
+        &["--timeout must be a positive number of seconds, got inf"],
+    );
+}

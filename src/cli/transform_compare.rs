@@ -32,8 +32,8 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, ValueEnum};
 use crowdtouch::crowd::assign::Cancel;
 use crowdtouch::crowd::transform::{
-    interval, locality, window_mean, Interval, Measures, MoveParams, Mover, PairCost,
-    TransformPlan, REST_HOLD_S, REST_SPEED_M_S,
+    interval, locality, pairing_terms, window_mean, Interval, Measures, MoveParams, Mover,
+    PairCost, TransformPlan, REST_HOLD_S, REST_SPEED_M_S,
 };
 use serde_json::{json, Value};
 use std::time::Instant;
@@ -65,6 +65,13 @@ pub struct CompareArgs {
     /// through each other, Fig. 9).
     #[arg(long, value_enum, default_value_t = Scenario::Direct)]
     pub scenario: Scenario,
+    /// A sweep of eq. 3's λ instead of the comparison's rows: for each λ given
+    /// (comma-separated, each in [0, 1]) a least-effort row on the raw terms
+    /// and one on the normalised terms (`least-effort-normalised`), with the
+    /// pairing's two terms and how many agents it pairs differently from
+    /// λ = 1; `--svg` then plots the measures against λ.
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
+    pub lambdas: Option<Vec<f64>>,
 }
 
 /// `--preset`.
@@ -76,6 +83,9 @@ pub enum Preset {
 
 /// Most seeds of one comparison.
 const MAX_SEEDS: u32 = 100;
+
+/// Most values of `--lambdas`.
+const MAX_LAMBDAS: usize = 21;
 
 /// One row of the comparison, one seed's run.
 pub struct Variant {
@@ -91,6 +101,9 @@ pub struct Variant {
     pub rec: Recorded,
     /// What the run showed of its scenario.
     pub facts: Facts,
+    /// The pairing's two terms of eq. 3 (`Σ|s t|²`, `Σ(δs − δt)²`, m²) and the
+    /// fraction of agents it sends elsewhere than the travel-only pairing.
+    pub terms: (f64, f64, f64),
 }
 
 impl Variant {
@@ -125,6 +138,14 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             }
         }
     }
+    if let Some(ls) = &a.lambdas {
+        if let Some(bad) = ls.iter().find(|l| !(0.0..=1.0).contains(*l)) {
+            bail!("--lambdas: each λ must be in [0, 1], got {bad}");
+        }
+        if ls.is_empty() || ls.len() > MAX_LAMBDAS {
+            bail!("--lambdas: 1 to {MAX_LAMBDAS} values, got {}", ls.len());
+        }
+    }
     let c = &a.common;
     let mut runs: Vec<Vec<Variant>> = Vec::new();
     let mut groups = Vec::new();
@@ -133,7 +154,13 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         let mut ck = c.clone();
         ck.seed = c.seed.wrapping_add(u64::from(k));
         let setup = Setup::new(&ck)?;
-        let (row, g, stage) = one_seed(&setup, a.preset, a.timeout, a.scenario)?;
+        let (row, g, stage) = one_seed(
+            &setup,
+            a.preset,
+            a.timeout,
+            a.scenario,
+            a.lambdas.as_deref(),
+        )?;
         runs.push(row);
         groups.push(g);
         if first.is_none() {
@@ -148,17 +175,37 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             .map(|v| v.rec.summary.simulated_s)
             .fold(f64::INFINITY, f64::min)
     });
+    let rows: Vec<Row> = (0..runs[0].len())
+        .map(|r| Row::of(runs.iter().map(|seed| &seed[r]).collect(), window_s))
+        .collect();
     if let Some(path) = &c.svg {
         let title = format!(
             "{} → {}, {} agents, seed {}: the measures of formation-transform section 5.1 over time",
             setup.from_label, setup.to_label, setup.agents, c.seed
         );
-        let text = transform_svg::measures_plot(&runs[0], &title);
+        let text = if a.lambdas.is_some() {
+            let title = format!(
+                "{} → {}, {} agents, {} seed{}{}: eq. 3's λ, raw and normalised",
+                setup.from_label,
+                setup.to_label,
+                setup.agents,
+                a.seeds,
+                if a.seeds == 1 { "" } else { "s" },
+                if a.preset.is_some() {
+                    ", preset paper"
+                } else {
+                    ""
+                }
+            );
+            transform_svg::lambda_plot(
+                &rows.iter().map(Row::sweep_point).collect::<Vec<_>>(),
+                &title,
+            )
+        } else {
+            transform_svg::measures_plot(&runs[0], &title)
+        };
         std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?;
     }
-    let rows: Vec<Row> = (0..runs[0].len())
-        .map(|r| Row::of(runs.iter().map(|seed| &seed[r]).collect(), window_s))
-        .collect();
     let sub = GroupSummary::of(&groups);
     if c.json {
         let v = json!({
@@ -200,8 +247,14 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         outln!("area: {note}")?;
     }
     outln!("{}", stage.text())?;
+    let nw = rows
+        .iter()
+        .map(|r| r.name.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(13);
     outln!(
-        "{:<13} {:<12} {:<13} {:>17} {:>15} {:>17} {:>17} {:>15} {:>8} {:>9}",
+        "{:<nw$} {:<12} {:<13} {:>17} {:>15} {:>17} {:>17} {:>15} {:>8} {:>9}",
         "variant",
         "pairing",
         "mover",
@@ -215,9 +268,9 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     )?;
     for r in &rows {
         outln!(
-            "{:<13} {:<12} {:<13} {:>17} {:>15} {:>17} {:>17} {:>15} {:>8.1} {:>9.1}",
+            "{:<nw$} {:<12} {:<13} {:>17} {:>15} {:>17} {:>17} {:>15} {:>8.1} {:>9.1}",
             r.name,
-            r.cost,
+            r.cost_label(),
             r.mover_label(),
             r.arrival_text(),
             pm(&r.window.0, 3),
@@ -229,7 +282,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         )?;
     }
     for r in rows.iter().filter(|r| !r.facts_text.is_empty()) {
-        outln!("{:<13} {}", r.name, r.facts_text)?;
+        outln!("{:<nw$} {}", r.name, r.facts_text)?;
     }
     outln!(
         "measures averaged over the first {window_s:.2} s of every run (I_d eq. 17 in bits, σ_min_dis eq. 24, σ_curr_eft eq. 26, turn: the moving agents' mean heading-change rate, section 5.3); ± is the 95 % confidence interval over the seeds; SF: social forces, MI: mutual-information feedback, +ours: fades, settling, contacts and exchanges of targets; rest T: without settling, the crowd came to rest (no agent faster than {} m/s for {} s) at T s short of its targets",
@@ -261,6 +314,7 @@ fn one_seed(
     preset: Option<Preset>,
     timeout_s: Option<f64>,
     scenario: Scenario,
+    lambdas: Option<&[f64]>,
 ) -> Result<(Vec<Variant>, GroupFacts, Stage)> {
     let sampled = setup.targets()?;
     let s = &setup.settings;
@@ -295,9 +349,17 @@ fn one_seed(
         iterations: least.subgroups.iterations,
         locality: locality(&least.sources_m, &least.subgroups.group_of),
     };
+    let (travel, travel_ms) = plan_for(PairCost::LeastEffort { lambda: 1.0 })?;
     let mut variants = Vec::new();
     let mut add = |name, plan: &TransformPlan, ms, params: MoveParams| {
         let (rec, facts) = stage.run(plan, &params, setup.seed);
+        let (tr, local) = pairing_terms(&plan.sources_m, &plan.targets_m);
+        let moved = plan
+            .targets_m
+            .iter()
+            .zip(&travel.targets_m)
+            .filter(|(a, b)| a != b)
+            .count();
         variants.push(Variant {
             name,
             cost: plan.cost,
@@ -305,11 +367,23 @@ fn one_seed(
             prepare_ms: ms,
             rec,
             facts,
+            terms: (tr, local, moved as f64 / plan.targets_m.len().max(1) as f64),
         });
     };
+    if let Some(ls) = lambdas {
+        for &lambda in ls {
+            for cost in [
+                PairCost::LeastEffort { lambda },
+                PairCost::LeastEffortNormalised { lambda },
+            ] {
+                let (plan, ms) = plan_for(cost)?;
+                add(cost.name(), &plan, ms, social.clone());
+            }
+        }
+        return Ok((variants, facts, stage));
+    }
     add("least-effort", &least, least_ms, social.clone());
-    let (travel, ms) = plan_for(PairCost::LeastEffort { lambda: 1.0 })?;
-    add("travel-only", &travel, ms, social.clone());
+    add("travel-only", &travel, travel_ms, social.clone());
     for (name, cost) in [
         ("euclidean", PairCost::Euclidean),
         ("manhattan", PairCost::Manhattan),
@@ -329,6 +403,9 @@ struct Row {
     name: &'static str,
     cost: &'static str,
     lambda: Option<f64>,
+    /// The pairing's travel and local-structure terms (m²) and the fraction of
+    /// agents paired differently from travel-only.
+    terms: (Interval, Interval, Interval),
     params: MoveParams,
     seeds: usize,
     /// Over the runs that arrived.
@@ -387,10 +464,12 @@ impl Row {
         Row {
             name: v0.name,
             cost: v0.cost.name(),
-            lambda: match v0.cost {
-                PairCost::LeastEffort { lambda } => Some(lambda),
-                _ => None,
-            },
+            lambda: v0.cost.lambda(),
+            terms: (
+                interval(&collect(&|v| v.terms.0)),
+                interval(&collect(&|v| v.terms.1)),
+                interval(&collect(&|v| v.terms.2)),
+            ),
             params: v0.params.clone(),
             seeds: runs.len(),
             arrival: interval(&arrivals),
@@ -434,6 +513,37 @@ impl Row {
         }
     }
 
+    /// The pairing column: the cost, with λ for the least-effort ones (`ΔE'`:
+    /// normalised terms).
+    fn cost_label(&self) -> String {
+        match (self.cost, self.lambda) {
+            ("least-effort", Some(l)) => format!("ΔE λ{l}"),
+            ("least-effort-normalised", Some(l)) => format!("ΔE' λ{l}"),
+            (c, _) => c.to_string(),
+        }
+    }
+
+    /// This row as a point of the λ plot.
+    fn sweep_point(&self) -> transform_svg::SweepPoint {
+        let pair = |i: &Interval| (i.mean, i.ci95);
+        transform_svg::SweepPoint {
+            lambda: self.lambda.unwrap_or(f64::NAN),
+            normalised: self.cost == "least-effort-normalised",
+            values: [
+                pair(&Interval {
+                    mean: 100.0 * self.terms.2.mean,
+                    ci95: 100.0 * self.terms.2.ci95,
+                    n: self.terms.2.n,
+                }),
+                pair(&self.terms.0),
+                pair(&self.finish),
+                pair(&self.window.0),
+                pair(&self.window.1),
+                pair(&self.window.2),
+            ],
+        }
+    }
+
     fn mover_label(&self) -> String {
         match self.params.mover {
             Mover::Orca => "ORCA (RVO2)".to_string(),
@@ -471,6 +581,11 @@ impl Row {
             "variant": self.name,
             "cost": self.cost,
             "lambda": self.lambda,
+            "pairing": {
+                "travel_m2": iv(&self.terms.0),
+                "local_m2": iv(&self.terms.1),
+                "changed_vs_travel_only": iv(&self.terms.2),
+            },
             "mover": mover_name(p.mover),
             "seeds": self.seeds,
             "feedback": p.feedback,

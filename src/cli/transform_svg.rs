@@ -363,6 +363,165 @@ pub fn measures_plot(variants: &[Variant], title: &str) -> String {
     s
 }
 
+/// One row of a `--lambdas` sweep for [`lambda_plot`]: its λ, whether on the
+/// normalised terms, and (mean, 95 % half-width) of, in order, the agents paired
+/// differently from travel-only (%), the travel term `Σ|s t|²` (m²), the time
+/// (s), `I_d` (bits), `σ_min_dis` (m) and `σ_curr_eft` (m).
+pub struct SweepPoint {
+    /// λ of eq. 3.
+    pub lambda: f64,
+    /// On the normalised terms.
+    pub normalised: bool,
+    /// The six values, each (mean, 95 % half-width).
+    pub values: [(f64, f64); 6],
+}
+
+/// A λ sweep: six panels against λ (the pairing's change and travel, the time,
+/// the three measures of section 5.1), one curve for the raw terms of eq. 3 and
+/// one for the normalised terms, each point with its 95 % interval.
+pub fn lambda_plot(points: &[SweepPoint], title: &str) -> String {
+    const PANELS: [(&str, &str); 6] = [
+        ("paired differently from λ = 1", "agents (%)"),
+        ("travel term Σ|s t|²", "m²"),
+        ("time (arrival, or rest)", "s"),
+        ("I_d, eq. 17", "bits"),
+        ("σ_min_dis, eq. 24", "m"),
+        ("σ_curr_eft, eq. 26", "m"),
+    ];
+    const COLS: usize = 3;
+    let (pw, ph) = (PANEL_W_PX, PANEL_H_PX);
+    let legend_h = 40.0;
+    let (w, h) = (COLS as f64 * pw, 34.0 + 2.0 * ph + legend_h);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r##"<svg xmlns="http://www.w3.org/2000/svg" width="{w:.0}" height="{h:.0}" viewBox="0 0 {w:.0} {h:.0}" font-family="sans-serif" font-size="12">"##
+    );
+    let _ = writeln!(
+        s,
+        r##"<rect width="100%" height="100%" fill="#ffffff"/><text x="10" y="20" font-size="14" fill="#222">{}</text>"##,
+        xml_escape(title)
+    );
+    let series = |normalised: bool| -> Vec<&SweepPoint> {
+        let mut v: Vec<&SweepPoint> = points
+            .iter()
+            .filter(|p| p.normalised == normalised && p.lambda.is_finite())
+            .collect();
+        v.sort_by(|a, b| a.lambda.total_cmp(&b.lambda));
+        v
+    };
+    let curves = [
+        (series(false), VARIANT_COLOURS[0], ""),
+        (
+            series(true),
+            VARIANT_COLOURS[2],
+            r##" stroke-dasharray="6 3""##,
+        ),
+    ];
+    for (k, (name, unit)) in PANELS.iter().enumerate() {
+        let (ox, oy) = ((k % COLS) as f64 * pw, 34.0 + (k / COLS) as f64 * ph);
+        let (x0, x1) = (ox + AXIS_LEFT_PX, ox + pw - 16.0);
+        let (y0, y1) = (oy + ph - AXIS_BOTTOM_PX, oy + 18.0);
+        let y_max = points
+            .iter()
+            .map(|p| p.values[k].0 + p.values[k].1.max(0.0))
+            .filter(|v| v.is_finite())
+            .fold(0.0f64, f64::max);
+        let (yt, y_top) = axis(y_max.max(1e-6), 5);
+        let sx = |l: f64| x0 + (x1 - x0) * l;
+        let sy = |v: f64| y0 - (y0 - y1) * v / y_top;
+        let _ = writeln!(
+            s,
+            r##"<text x="{:.1}" y="{:.1}" font-size="13" font-weight="bold" fill="#222" text-anchor="middle">{}</text>"##,
+            0.5 * (x0 + x1),
+            oy + 10.0,
+            xml_escape(name)
+        );
+        let step_y = if yt.len() > 1 { yt[1] - yt[0] } else { 1.0 };
+        for v in &yt {
+            let y = sy(*v);
+            let _ = writeln!(
+                s,
+                r##"<line x1="{x0:.1}" y1="{y:.1}" x2="{x1:.1}" y2="{y:.1}" stroke="#eeeeee"/><text x="{:.1}" y="{:.1}" text-anchor="end" fill="#444">{}</text>"##,
+                x0 - 5.0,
+                y + 4.0,
+                tick_label(*v, step_y)
+            );
+        }
+        for l in [0.0, 0.25, 0.5, 0.75, 1.0] {
+            let x = sx(l);
+            let _ = writeln!(
+                s,
+                r##"<line x1="{x:.1}" y1="{y0:.1}" x2="{x:.1}" y2="{:.1}" stroke="#444"/><text x="{x:.1}" y="{:.1}" text-anchor="middle" fill="#444">{}</text>"##,
+                y0 + 4.0,
+                y0 + 17.0,
+                tick_label(l, 0.25)
+            );
+        }
+        let _ = writeln!(
+            s,
+            r##"<path d="M{x0:.1},{y1:.1}L{x0:.1},{y0:.1}L{x1:.1},{y0:.1}" fill="none" stroke="#444"/><text x="{:.1}" y="{:.1}" text-anchor="middle" fill="#222">λ</text><text transform="translate({:.1},{:.1}) rotate(-90)" text-anchor="middle" fill="#222">{}</text>"##,
+            0.5 * (x0 + x1),
+            y0 + 34.0,
+            ox + 16.0,
+            0.5 * (y0 + y1),
+            xml_escape(unit)
+        );
+        for (pts, colour, dash) in &curves {
+            let mut d = String::new();
+            for p in pts {
+                let (m, ci) = p.values[k];
+                if !m.is_finite() {
+                    continue;
+                }
+                let (x, y) = (sx(p.lambda), sy(m));
+                let _ = write!(d, "{}{x:.1},{y:.1}", if d.is_empty() { 'M' } else { 'L' });
+                if ci.is_finite() && ci > 0.0 {
+                    let _ = writeln!(
+                        s,
+                        r##"<line x1="{x:.1}" y1="{:.1}" x2="{x:.1}" y2="{:.1}" stroke="{colour}" stroke-width="1.2"/>"##,
+                        sy(m - ci),
+                        sy(m + ci)
+                    );
+                }
+                let _ = writeln!(
+                    s,
+                    r##"<circle cx="{x:.1}" cy="{y:.1}" r="3" fill="{colour}"/>"##
+                );
+            }
+            if !d.is_empty() {
+                let _ = writeln!(
+                    s,
+                    r##"<path d="{d}" fill="none" stroke="{colour}" stroke-width="2"{dash}/>"##
+                );
+            }
+        }
+    }
+    let y = 34.0 + 2.0 * ph + 8.0;
+    for (i, (label, (_, colour, dash))) in [
+        "ΔE, eq. 3 as printed (raw terms, m²)",
+        "ΔE′: each term over its mean over every pair",
+    ]
+    .iter()
+    .zip(&curves)
+    .enumerate()
+    {
+        let x = AXIS_LEFT_PX + i as f64 * 1.5 * pw;
+        let _ = writeln!(
+            s,
+            r##"<line x1="{x:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{colour}" stroke-width="2.5"{dash}/><text x="{:.1}" y="{:.1}" fill="#222">{}</text>"##,
+            y + 8.0,
+            x + 34.0,
+            y + 8.0,
+            x + 42.0,
+            y + 12.0,
+            xml_escape(label)
+        );
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
 /// The dash of variant `i`'s curve: the variants sharing the least-effort
 /// pairing (no feedback, ORCA) dashed.
 fn dash(i: usize) -> &'static str {

@@ -24,15 +24,21 @@ pub enum TransformCost {
     Euclidean,
     /// The Manhattan distance.
     Manhattan,
+    /// `ΔE(i, j)` of eq. 3 with both terms normalised by their means over every
+    /// pair, so that `formations.lambda` weighs travel and local structure as
+    /// the paper means it (0.5: alike); see `crowd::transform::raw_lambda`.
+    LeastEffortNormalised,
 }
 
 impl TransformCost {
-    /// The name on the wire and in files (`least_effort`, `euclidean`, `manhattan`).
+    /// The name on the wire and in files (`least_effort`, `euclidean`,
+    /// `manhattan`, `least_effort_normalised`).
     pub fn as_str(self) -> &'static str {
         match self {
             TransformCost::LeastEffort => "least_effort",
             TransformCost::Euclidean => "euclidean",
             TransformCost::Manhattan => "manhattan",
+            TransformCost::LeastEffortNormalised => "least_effort_normalised",
         }
     }
 }

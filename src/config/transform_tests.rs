@@ -40,6 +40,13 @@ fn the_shipped_config_documents_the_defaults() {
         c.formations.subgroups.similarity,
         crate::config::SubgroupSimilarity::Paper
     );
+    let normalised =
+        DEFAULT_CONFIG_RON.replace("cost: least_effort", "cost: least_effort_normalised");
+    let c = Config::from_str(&normalised, Path::new("n.ron")).unwrap();
+    assert_eq!(
+        c.formations.cost,
+        crate::config::TransformCost::LeastEffortNormalised
+    );
     assert!(f.gestures.is_empty());
     // A config without the new fields gets the same.
     let old = DEFAULT_CONFIG_RON

@@ -126,6 +126,9 @@ pub fn pair_cost(cfg: &Config) -> PairCost {
         },
         TransformCost::Euclidean => PairCost::Euclidean,
         TransformCost::Manhattan => PairCost::Manhattan,
+        TransformCost::LeastEffortNormalised => PairCost::LeastEffortNormalised {
+            lambda: cfg.formations.lambda,
+        },
     }
 }
 

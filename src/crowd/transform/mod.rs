@@ -29,7 +29,7 @@ mod subgroups_shipped;
 
 pub use experiment::{interval, locality, t_975, window_mean, Interval};
 pub use measures::{HeadingChange, Measures, MOVING_SPEED_M_S};
-pub use pairing::{pair, PairCost};
+pub use pairing::{pair, pairing_terms, raw_lambda, term_means, PairCost};
 pub use prepare::{PreparedTransform, TransformError, TransformPlan, TransformRequest};
 pub use run::{
     MoveParams, Mover, RunSummary, StepReport, TransformRun, OVERLAP_TOLERANCE_M, REST_HOLD_S,

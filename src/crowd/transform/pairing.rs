@@ -37,6 +37,15 @@ pub enum PairCost {
     Euclidean,
     /// The Manhattan distance `|x_i − x_j| + |y_i − y_j|`.
     Manhattan,
+    /// `ΔE(i, j)` of eq. 3 with both terms normalised: each divided by its mean
+    /// over every (agent, target) pair, so that `λ = 0.5` weighs travel and
+    /// local structure alike ([`raw_lambda`]). The raw terms differ by orders of
+    /// magnitude (m² of travel against m² of edge-length change), so at the raw
+    /// `λ = 0.5` the local-structure term has no effect.
+    LeastEffortNormalised {
+        /// `λ` of eq. 3 on the normalised terms.
+        lambda: f64,
+    },
 }
 
 impl PairCost {
@@ -46,6 +55,7 @@ impl PairCost {
             PairCost::LeastEffort { .. } => "least-effort",
             PairCost::Euclidean => "euclidean",
             PairCost::Manhattan => "manhattan",
+            PairCost::LeastEffortNormalised { .. } => "least-effort-normalised",
         }
     }
 
@@ -55,9 +65,106 @@ impl PairCost {
             "least-effort" => Some(PairCost::LeastEffort { lambda }),
             "euclidean" => Some(PairCost::Euclidean),
             "manhattan" => Some(PairCost::Manhattan),
+            "least-effort-normalised" => Some(PairCost::LeastEffortNormalised { lambda }),
             _ => None,
         }
     }
+
+    /// `λ` of eq. 3, for the two least-effort costs.
+    pub fn lambda(&self) -> Option<f64> {
+        match *self {
+            PairCost::LeastEffort { lambda } | PairCost::LeastEffortNormalised { lambda } => {
+                Some(lambda)
+            }
+            PairCost::Euclidean | PairCost::Manhattan => None,
+        }
+    }
+}
+
+/// The means over every (agent, target) pair of eq. 3's two terms:
+/// `D² = mean_{i,j} |s_i − t_j|²` (m²) and `Δ² = mean_{i,j} (δs_i − δt_j)²` (m²),
+/// `δ` the mean Delaunay edge lengths of eqs. 4–5.
+///
+/// # Closed form
+/// `mean_{i,j} |s_i − t_j|² = mean|s|² + mean|t|² − 2 mean(s)·mean(t)`, and the
+/// same for `δ`: `O(n)` after the two triangulations, no `n²` sum.
+pub fn term_means(agents: &[Vec2], goals: &[Vec2]) -> (f64, f64) {
+    let (mut ds, mut dt) = (Vec::new(), Vec::new());
+    mean_edge_lengths(agents, &mut ds);
+    mean_edge_lengths(goals, &mut dt);
+    (
+        pair_mean_square(
+            agents.iter().map(|p| (p.x, p.y)),
+            goals.iter().map(|p| (p.x, p.y)),
+        ),
+        pair_mean_square(ds.iter().map(|&d| (d, 0.0)), dt.iter().map(|&d| (d, 0.0))),
+    )
+}
+
+/// `mean_{i,j} |a_i − b_j|²` of two sets of plane vectors (0 for an empty set).
+fn pair_mean_square(
+    a: impl Iterator<Item = (f64, f64)> + Clone,
+    b: impl Iterator<Item = (f64, f64)> + Clone,
+) -> f64 {
+    let moments = |it: &mut dyn Iterator<Item = (f64, f64)>| {
+        let (mut n, mut sx, mut sy, mut s2) = (0usize, 0.0, 0.0, 0.0);
+        for (x, y) in it {
+            n += 1;
+            sx += x;
+            sy += y;
+            s2 += x * x + y * y;
+        }
+        if n == 0 {
+            None
+        } else {
+            let k = n as f64;
+            Some((sx / k, sy / k, s2 / k))
+        }
+    };
+    match (moments(&mut a.clone()), moments(&mut b.clone())) {
+        (Some((ax, ay, a2)), Some((bx, by, b2))) => (a2 + b2 - 2.0 * (ax * bx + ay * by)).max(0.0),
+        _ => 0.0,
+    }
+}
+
+/// The `λ` of eq. 3 on the raw terms that pairs as `lambda` does on the
+/// normalised terms ([`PairCost::LeastEffortNormalised`]).
+///
+/// # Normalisation
+/// `ΔE'(i, j) = λ |s_i t_j|² / D² + (1 − λ)(δs_i − δt_j)² / Δ²` ([`term_means`]).
+/// Multiplying by the positive constant `D² Δ² / (λ Δ² + (1 − λ) D²)` gives
+/// eq. 3's raw form with `λ_raw = λ Δ² / (λ Δ² + (1 − λ) D²)`, and a positive
+/// factor changes no optimal pairing. So the normalised cost is solved as the
+/// raw one at `λ_raw`. Where a term has no spread (`D²` or `Δ²` zero, or not
+/// finite) it cannot be normalised and `lambda` is returned as given.
+pub fn raw_lambda(lambda: f64, agents: &[Vec2], goals: &[Vec2]) -> f64 {
+    let (d2, delta2) = term_means(agents, goals);
+    let lambda = lambda.clamp(0.0, 1.0);
+    if !(d2.is_finite() && delta2.is_finite() && d2 > 0.0 && delta2 > 0.0) {
+        return lambda;
+    }
+    let den = lambda * delta2 + (1.0 - lambda) * d2;
+    if den > 0.0 {
+        lambda * delta2 / den
+    } else {
+        lambda
+    }
+}
+
+/// The two terms of eq. 3 summed over a pairing (agent `i` to `targets[i]`):
+/// `Σ |s_i t_i|²` and `Σ (δs_i − δt_i)²` (m²), `δ` the mean Delaunay edge
+/// lengths of the agents' and of the targets' own triangulations (eqs. 4–5).
+pub fn pairing_terms(agents: &[Vec2], targets: &[Vec2]) -> (f64, f64) {
+    let (mut ds, mut dt) = (Vec::new(), Vec::new());
+    mean_edge_lengths(agents, &mut ds);
+    mean_edge_lengths(targets, &mut dt);
+    let travel = agents
+        .iter()
+        .zip(targets)
+        .map(|(s, t)| (s - t).norm_squared())
+        .sum();
+    let local = ds.iter().zip(&dt).map(|(a, b)| (a - b).powi(2)).sum();
+    (travel, local)
 }
 
 /// The Manhattan distance `|x_i − x_j| + |y_i − y_j|` (m) between agents and
@@ -207,6 +314,15 @@ pub fn pair(
             let c = LeastEffort::new(lambda).costs(sources, targets);
             solver.solve_with_cancel(&c, cancel)?
         }
+        PairCost::LeastEffortNormalised { lambda } => {
+            let raw = raw_lambda(lambda, sources, targets);
+            return pair(
+                sources,
+                targets,
+                PairCost::LeastEffort { lambda: raw },
+                cancel,
+            );
+        }
         PairCost::Euclidean => {
             let mut c = PointCosts::new(PointMetric::Euclidean);
             c.set(sources, targets);
@@ -249,6 +365,13 @@ mod tests {
                 let c = ManhattanCosts::new(s, t);
                 Box::new(move |i, j| c.get(i, j))
             }
+            PairCost::LeastEffortNormalised { lambda } => source(
+                s,
+                t,
+                PairCost::LeastEffort {
+                    lambda: raw_lambda(lambda, s, t),
+                },
+            ),
         }
     }
 
@@ -282,11 +405,12 @@ mod tests {
         best
     }
 
-    const COSTS: [PairCost; 4] = [
+    const COSTS: [PairCost; 5] = [
         PairCost::LeastEffort { lambda: 0.5 },
         PairCost::LeastEffort { lambda: 0.0 },
         PairCost::Euclidean,
         PairCost::Manhattan,
+        PairCost::LeastEffortNormalised { lambda: 0.5 },
     ];
 
     #[test]
@@ -421,5 +545,128 @@ mod tests {
                 Err(AssignError::Cancelled)
             );
         }
+    }
+
+    /// The closed forms of [`term_means`] against the sum over every pair.
+    #[test]
+    fn term_means_are_the_means_over_every_pair() {
+        let mut rng = SplitMix64::new(0x7e);
+        let s = points(&mut rng, 60, 3.0);
+        let t: Vec<Vec2> = points(&mut rng, 60, 5.0)
+            .into_iter()
+            .map(|p| p + Vec2::new(4.0, 1.0))
+            .collect();
+        let (mut ds, mut dt) = (Vec::new(), Vec::new());
+        mean_edge_lengths(&s, &mut ds);
+        mean_edge_lengths(&t, &mut dt);
+        let (mut d2, mut delta2) = (0.0, 0.0);
+        for i in 0..60 {
+            for j in 0..60 {
+                d2 += (s[i] - t[j]).norm_squared();
+                delta2 += (ds[i] - dt[j]).powi(2);
+            }
+        }
+        let (d2, delta2) = (d2 / 3600.0, delta2 / 3600.0);
+        let (a, b) = term_means(&s, &t);
+        assert!((a - d2).abs() <= 1e-9 * d2, "{a} {d2}");
+        assert!((b - delta2).abs() <= 1e-9 * delta2, "{b} {delta2}");
+        // The raw terms differ by orders of magnitude: why λ needs normalising.
+        assert!(d2 > 100.0 * delta2, "{d2} {delta2}");
+    }
+
+    /// The normalised cost's pairing is optimal for `ΔE'` itself, computed
+    /// directly from its definition (each term over its mean), by brute force
+    /// over every permutation of small instances.
+    #[test]
+    fn the_normalised_pairing_is_optimal_for_the_normalised_cost() {
+        let mut rng = SplitMix64::new(0x4e0);
+        for round in 0..12 {
+            let n = 7;
+            let s = points(&mut rng, n, 2.0);
+            let t: Vec<Vec2> = points(&mut rng, n, 3.0 + round as f64)
+                .into_iter()
+                .map(|p| p + Vec2::new(1.0, 0.0))
+                .collect();
+            let (d2, delta2) = term_means(&s, &t);
+            let (mut ds, mut dt) = (Vec::new(), Vec::new());
+            mean_edge_lengths(&s, &mut ds);
+            mean_edge_lengths(&t, &mut dt);
+            for lambda in [0.0, 0.1, 0.5, 0.9, 1.0] {
+                let c = |i: usize, j: usize| {
+                    lambda * (s[i] - t[j]).norm_squared() / d2
+                        + (1.0 - lambda) * (ds[i] - dt[j]).powi(2) / delta2
+                };
+                let got = pair(
+                    &s,
+                    &t,
+                    PairCost::LeastEffortNormalised { lambda },
+                    Cancel::NEVER,
+                )
+                .unwrap();
+                let (a, b) = (total(&c, &got), brute_force(n, &c));
+                assert!(
+                    a <= b + 1e-9 * b.max(1.0),
+                    "round {round} λ {lambda}: {a} vs {b}"
+                );
+            }
+        }
+    }
+
+    /// Across a sweep of the normalised `λ` the pairing changes, and as `λ`
+    /// rises the travel term of the optimum never grows and the local-structure
+    /// term never shrinks (the optimum of `λA + (1 − λ)B` over a fixed set of
+    /// pairings moves monotonically). At the raw `λ`, 0.25 to 1 all give the
+    /// travel-only pairing: the local term is too small to matter.
+    #[test]
+    fn the_lambda_sweep_changes_the_pairing_monotonically() {
+        let mut rng = SplitMix64::new(0x1a3b);
+        // A dense square to a sparser ring-like band: local edge lengths change.
+        let s = points(&mut rng, 200, 4.0);
+        let t: Vec<Vec2> = (0..200)
+            .map(|_| {
+                let a = std::f64::consts::TAU * rng.unit();
+                let r = 3.0 + 2.0 * rng.unit() * rng.unit();
+                Vec2::new(2.0 + r * a.cos(), 2.0 + r * a.sin())
+            })
+            .collect();
+        let sweep = [0.0, 0.25, 0.5, 0.75, 1.0];
+        let terms = |cost: PairCost| {
+            let to = pair(&s, &t, cost, Cancel::NEVER).unwrap();
+            let paired: Vec<Vec2> = to.iter().map(|&j| t[j as usize]).collect();
+            (to, pairing_terms(&s, &paired))
+        };
+        let norm: Vec<_> = sweep
+            .iter()
+            .map(|&lambda| terms(PairCost::LeastEffortNormalised { lambda }))
+            .collect();
+        for w in norm.windows(2) {
+            let ((_, (ta, la)), (_, (tb, lb))) = (&w[0], &w[1]);
+            assert!(tb <= &(ta * (1.0 + 1e-9)), "travel {ta} then {tb}");
+            assert!(lb >= &(la * (1.0 - 1e-9)), "local {la} then {lb}");
+        }
+        let distinct: std::collections::HashSet<&Vec<u32>> =
+            norm.iter().map(|(to, _)| to).collect();
+        assert!(distinct.len() >= 4, "{} distinct pairings", distinct.len());
+        let (t0, l0) = norm[0].1;
+        let (t1, l1) = norm[4].1;
+        assert!(t0 > 1.5 * t1, "travel at λ 0: {t0}, at λ 1: {t1}");
+        assert!(l1 > 1.3 * l0, "local at λ 1: {l1}, at λ 0: {l0}");
+        // Raw λ: from 0.25 up the travel term decides, within 1 % of the
+        // travel-only optimum (the local term only picks among near-ties of
+        // travel); the normalised λ = 0.5 trades more than 5 % of travel for a
+        // lower local term.
+        let (t_half, l_half) = norm[2].1;
+        for lambda in [0.25, 0.5, 0.75] {
+            let (_, (tr, lr)) = terms(PairCost::LeastEffort { lambda });
+            assert!(tr <= 1.01 * t1, "raw λ {lambda}: travel {tr}, λ 1: {t1}");
+            assert!(
+                lr > l_half,
+                "raw λ {lambda}: local {lr}, normalised 0.5: {l_half}"
+            );
+        }
+        assert!(
+            t_half > 1.05 * t1,
+            "normalised λ 0.5: travel {t_half}, λ 1: {t1}"
+        );
     }
 }
