@@ -13,11 +13,16 @@ it is reproduced (the intervals are apart in the paper's direction), reversed
 (apart the other way) or not told apart.
 
     python3 benches/transform_report.py [--binary B] [--seeds N] [--agents N]
-                                        [--timeout S] [--scenario NAME] [--out FILE]
+                                        [--timeout S] [--scenario NAME] [--out FILE | --check FILE]
 
 With --out FILE (docs/transforms.md) the text between the markers
 `<!-- transform-report:begin -->` and `<!-- transform-report:end -->` is replaced;
-otherwise the section is printed. BINARY defaults to target/release/crowdtouch
+otherwise the section is printed. With --check FILE nothing is written: the runs
+are made again (they are seeded: the same seeds give the same runs) and every
+verdict of the report in FILE (reproduced, reversed, not told apart) must come out
+the same, and every row must carry its switches and swap count, the ORCA row
+without feedback or exchanges of targets; exit status 1 and the differences
+otherwise. CI runs it with the release build. BINARY defaults to target/release/crowdtouch
 (`cargo build --release` first).
 """
 import argparse
@@ -69,6 +74,39 @@ def verdict(a, b):
     if b["mean"] + b["ci95"] < a["mean"] - a["ci95"]:
         return "reversed"
     return "not told apart"
+
+
+def check_rows(v, where):
+    """The JSON contract the report relies on; a list of what is wrong."""
+    bad = []
+    for r in v["rows"]:
+        name = f"{where}: row {r.get('variant')}"
+        for k in ["feedback", "exchanges", "contacts", "settling", "fades"]:
+            if not isinstance(r.get(k), bool):
+                bad.append(f"{name}: `{k}` is not a boolean")
+        if not isinstance((r.get("swaps") or {}).get("mean"), (int, float)):
+            bad.append(f"{name}: no swap count")
+        for k in ["finish_s", "arrival_s", "i_d", "sigma_min_dis", "sigma_curr_eft"]:
+            if not isinstance(r.get(k), dict) or "mean" not in r[k] or "ci95" not in r[k]:
+                bad.append(f"{name}: `{k}` has no mean and ci95")
+        if r.get("mover") == "orca" and (r.get("feedback") or r.get("exchanges")):
+            bad.append(f"{name}: ORCA runs with feedback or exchanges of targets")
+    return bad
+
+
+def verdicts(text):
+    """(section heading, verdict row) for every verdict row of a report."""
+    out, heading, in_table = [], None, False
+    for line in text.splitlines():
+        if line.startswith("#### "):
+            heading, in_table = line[5:].strip(), False
+        elif line.startswith("| Table 2 ordering"):
+            in_table = True
+        elif in_table and line.startswith("|") and not line.startswith("|---"):
+            out.append((heading, " ".join(line.split())))
+        elif not line.startswith("|"):
+            in_table = False
+    return out
 
 
 def section(results, seeds, agents, timeout, scenario="direct"):
@@ -132,6 +170,7 @@ def main():
     ap.add_argument("--scenario", default="direct",
                     help="where every row runs: direct, path, obstacles or crossing")
     ap.add_argument("--out", default=None)
+    ap.add_argument("--check", default=None, metavar="FILE")
     a = ap.parse_args()
     results = {}
     for frm, to in PAIRS:
@@ -140,6 +179,28 @@ def main():
                                                  a.timeout, a.scenario)
             print(f"{frm} -> {to} {preset or 'default'}: {results[(frm, to, preset)][1]:.1f} s", file=sys.stderr)
     text = section(results, a.seeds, a.agents, a.timeout, a.scenario)
+    if a.check is not None:
+        bad = []
+        for (frm, to, preset), (v, _) in results.items():
+            bad += check_rows(v, f"{frm} -> {to} {preset or 'default'}")
+        doc = open(a.check, encoding="utf-8").read()
+        if BEGIN not in doc or END not in doc:
+            print(f"{a.check}: no {BEGIN} … {END} markers", file=sys.stderr)
+            return 1
+        claimed = verdicts(doc.split(BEGIN, 1)[1].split(END, 1)[0])
+        now = verdicts(text)
+        if not claimed:
+            bad.append(f"{a.check}: the report has no verdicts")
+        for c, n in zip(claimed, now):
+            if c != n:
+                bad.append(f"{c[0]}: the docs say {c[1]!r}, the runs give {n[1]!r}")
+        if len(claimed) != len(now):
+            bad.append(f"{len(claimed)} verdicts in the docs, {len(now)} from the runs")
+        for b in bad:
+            print(f"transform report: {b}", file=sys.stderr)
+        print(f"transform report: {len(now)} verdicts checked, {len(bad)} problems",
+              file=sys.stderr)
+        return 1 if bad else 0
     if a.out is None:
         sys.stdout.write(text)
         return 0
