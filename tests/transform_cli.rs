@@ -712,3 +712,32 @@ fn bad_compare_options_are_clear_errors() {
         &["--timeout must be a positive number of seconds, got inf"],
     );
 }
+
+#[test]
+fn subgroup_attraction_as_printed_runs_and_is_reported() {
+    let args = ["--from", "square", "--to", "arrow", "--agents", "40"];
+    // Eq. 21 as printed holds every group in a heap short of its targets: the
+    // runs end at the timeout.
+    let args = [&args[..], &["--seed", "1", "--json", "--timeout", "4"]].concat();
+    let tail = ["--subgroup-attraction", "as-printed"];
+    let one = json_of(&run(&[&args[..], &tail[..]].concat()));
+    assert_eq!(one["subgroup_attraction"], "as-printed", "{one}");
+    assert!(one["steps"].as_u64().unwrap() > 0, "{one}");
+    let cmp = ["compare", "--seeds", "1"];
+    let v = json_of(&run(&[&cmp[..], &args[..], &tail[..]].concat()));
+    for r in v["rows"].as_array().unwrap() {
+        let want = if r["variant"] == "orca" {
+            Value::Null
+        } else {
+            Value::from("as-printed")
+        };
+        assert_eq!(r["subgroup_attraction"], want, "{r}");
+        let spread = r["subgroup_spread"]["end"]["mean"].as_f64().unwrap();
+        assert!(spread.is_finite() && spread > 0.0, "{r}");
+    }
+    // A bad name is clap's error, with the choices.
+    let out = run(&[&args[..], &["--subgroup-attraction", "glue"]].concat());
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("place, as-printed, decaying, dt"), "{err}");
+}

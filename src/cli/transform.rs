@@ -21,7 +21,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use crowdtouch::crowd::assign::Cancel;
 use crowdtouch::crowd::transform::{
-    Measures, MoveParams, PairCost, RunSummary, TransformPlan, TransformRun,
+    Measures, MoveParams, PairCost, RunSummary, SubgroupAttraction, TransformPlan, TransformRun,
 };
 use crowdtouch::geom::Vec2;
 use hdrhistogram::Histogram;
@@ -113,6 +113,36 @@ pub struct TransformArgs {
     /// config's `formations.transform.timeout_s`.
     #[arg(long)]
     pub timeout: Option<f64>,
+    /// What holds a subgroup together (default: the config's
+    /// `formations.transform.subgroup_attraction`, `place`).
+    #[arg(long, value_enum)]
+    pub subgroup_attraction: Option<AttractionArg>,
+}
+
+/// `--subgroup-attraction`: eq. 21 three ways, or the subgroup as a whole on
+/// its Delaunay graph (`crowd/transform/social_groups.rs`).
+#[derive(ValueEnum, Copy, Clone, Debug, PartialEq, Eq)]
+pub enum AttractionArg {
+    /// Ours: a bounded pull towards the agent's place in its group.
+    Place,
+    /// Eq. 21 as printed: A' e^d towards every other member (d in metres).
+    AsPrinted,
+    /// A' e^(−d/B') towards every other member (a guess at a misprint).
+    Decaying,
+    /// Damped springs on the Delaunay edges of each group (section 3, step 3).
+    Dt,
+}
+
+impl AttractionArg {
+    /// The model's variant.
+    pub fn attraction(self) -> SubgroupAttraction {
+        match self {
+            AttractionArg::Place => SubgroupAttraction::Place,
+            AttractionArg::AsPrinted => SubgroupAttraction::AsPrinted,
+            AttractionArg::Decaying => SubgroupAttraction::Decaying,
+            AttractionArg::Dt => SubgroupAttraction::DelaunayGraph,
+        }
+    }
 }
 
 /// `--cost`.
@@ -248,6 +278,9 @@ fn single(a: &TransformArgs) -> Result<()> {
     }
     params.feedback = params.feedback && !a.no_feedback;
     params.subgroup_forces = params.subgroup_forces && !a.no_subgroups;
+    if let Some(x) = a.subgroup_attraction {
+        params.subgroup_attraction = x.attraction();
+    }
     let t0 = Instant::now();
     let prepared = setup
         .request(cost, ap)
@@ -279,6 +312,11 @@ fn single(a: &TransformArgs) -> Result<()> {
             "cost": cost.name(),
             "feedback": params.feedback,
             "subgroups": plan.subgroups.count(),
+            "subgroup_attraction": params
+                .subgroup_forces
+                .then(|| params.subgroup_attraction.name()),
+            "subgroup_spread": sm.subgroup_spread,
+            "subgroup_spread_mean": sm.subgroup_spread_mean,
             "seed": setup.seed,
             "agents": sm.agents,
             "radius_m": setup.radius_m,

@@ -33,7 +33,7 @@ use clap::{Args, ValueEnum};
 use crowdtouch::crowd::assign::Cancel;
 use crowdtouch::crowd::transform::{
     interval, locality, pairing_terms, window_mean, Interval, Measures, MoveParams, Mover,
-    PairCost, TransformPlan, REST_HOLD_S, REST_SPEED_M_S,
+    PairCost, SubgroupAttraction, TransformPlan, REST_HOLD_S, REST_SPEED_M_S,
 };
 use serde_json::{json, Value};
 use std::time::Instant;
@@ -72,6 +72,10 @@ pub struct CompareArgs {
     /// λ = 1; `--svg` then plots the measures against λ.
     #[arg(long, value_delimiter = ',', num_args = 1..)]
     pub lambdas: Option<Vec<f64>>,
+    /// What holds a subgroup together in every social-force row (default: the
+    /// config's `formations.transform.subgroup_attraction`, `place`).
+    #[arg(long, value_enum)]
+    pub subgroup_attraction: Option<super::transform::AttractionArg>,
 }
 
 /// `--preset`.
@@ -160,6 +164,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             a.timeout,
             a.scenario,
             a.lambdas.as_deref(),
+            a.subgroup_attraction.map(|x| x.attraction()),
         )?;
         runs.push(row);
         groups.push(g);
@@ -229,7 +234,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         return Ok(());
     }
     outln!(
-        "transform compare {} → {}: {} agents (radius {} m), λ {lambda}, {} seed{} from {}{}",
+        "transform compare {} → {}: {} agents (radius {} m), λ {lambda}, {} seed{} from {}{}, subgroup attraction {}",
         setup.from_label,
         setup.to_label,
         setup.agents,
@@ -241,7 +246,8 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             ", preset paper"
         } else {
             ""
-        }
+        },
+        runs[0][0].params.subgroup_attraction.name()
     )?;
     if let Some(note) = &setup.area_note {
         outln!("area: {note}")?;
@@ -315,6 +321,7 @@ fn one_seed(
     timeout_s: Option<f64>,
     scenario: Scenario,
     lambdas: Option<&[f64]>,
+    attraction: Option<SubgroupAttraction>,
 ) -> Result<(Vec<Variant>, GroupFacts, Stage)> {
     let sampled = setup.targets()?;
     let s = &setup.settings;
@@ -337,6 +344,9 @@ fn one_seed(
     let mut moves = s.moves.clone();
     if let Some(t) = timeout_s {
         moves.timeout_s = t;
+    }
+    if let Some(x) = attraction {
+        moves.subgroup_attraction = x;
     }
     let social = match preset {
         Some(Preset::Paper) => moves.clone().paper(),
@@ -430,6 +440,8 @@ struct Row {
     facts: Value,
     facts_text: String,
     swaps: Interval,
+    /// The subgroups' spread at the end and over the run (`RunSummary`).
+    spread: (Interval, Interval),
     overlaps: Interval,
     min_distance_m: f64,
     prepare_ms: Interval,
@@ -499,6 +511,14 @@ impl Row {
             facts: facts_json(&runs.iter().map(|v| &v.facts).collect::<Vec<_>>()),
             facts_text: facts_text(&runs.iter().map(|v| &v.facts).collect::<Vec<_>>()),
             swaps: interval(&collect(&|v| v.rec.summary.swaps as f64)),
+            spread: (
+                interval(&collect(&|v| {
+                    v.rec.summary.subgroup_spread.unwrap_or(f64::NAN)
+                })),
+                interval(&collect(&|v| {
+                    v.rec.summary.subgroup_spread_mean.unwrap_or(f64::NAN)
+                })),
+            ),
             overlaps: interval(&collect(&|v| v.rec.summary.overlapping_pairs as f64)),
             min_distance_m: runs
                 .iter()
@@ -594,6 +614,9 @@ impl Row {
             "settling": p.settling,
             "fades": p.fades,
             "subgroup_forces": p.subgroup_forces,
+            "subgroup_attraction": (p.mover == Mover::SocialForce && p.subgroup_forces)
+                .then(|| p.subgroup_attraction.name()),
+            "subgroup_spread": {"end": iv(&self.spread.0), "run": iv(&self.spread.1)},
             "swaps": iv(&self.swaps),
             "arrival_s": iv(&self.arrival),
             "arrived_runs": self.arrived_runs,

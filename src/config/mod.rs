@@ -56,7 +56,7 @@ pub use outputs::{
     MAX_TUIO_DATAGRAM_BYTES, MIN_TUIO_DATAGRAM_BYTES,
 };
 pub use transform::{
-    GestureFormation, SubgroupSimilarity, SubgroupsConfig, TransformCost, TransformMoveConfig,
-    DEFAULT_METHOD, MAX_DESIRED_SPEED_M_S,
+    GestureFormation, SubgroupSimilarity, SubgroupsConfig, TransformAttraction, TransformCost,
+    TransformMoveConfig, DEFAULT_METHOD, MAX_DESIRED_SPEED_M_S,
 };
 pub use validate::MAX_AGENTS;

@@ -43,6 +43,23 @@ impl TransformCost {
     }
 }
 
+/// What holds a subgroup together in a transform (`transform.subgroup_attraction`;
+/// formation-transform eq. 21 and section 3's "each subgroup is manipulated as a
+/// whole using a DT graph"; the formulas in `crowd/transform/social_groups.rs`).
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TransformAttraction {
+    /// The project's bounded pull towards each agent's place in its group.
+    #[default]
+    Place,
+    /// Eq. 21 as printed: `A' e^d` towards every other member (d in metres).
+    AsPrinted,
+    /// `A' e^{−d/B'}` towards every other member (a guess at a misprint).
+    Decaying,
+    /// Damped springs on the Delaunay edges of each group's source layout.
+    Dt,
+}
+
 /// Default `transform.desired_speed_m_s` (m/s): the paper's walking speed.
 pub const DEFAULT_DESIRED_SPEED_M_S: f64 = 1.3;
 /// Default `transform.arrive_m` (m).
@@ -95,6 +112,9 @@ pub struct TransformMoveConfig {
     pub subgroup_a_m_s2: f64,
     /// `B'` of eqs. 21–22 (m).
     pub subgroup_b_m: f64,
+    /// What holds a subgroup together: `place` (default), `as_printed`,
+    /// `decaying` or `dt`.
+    pub subgroup_attraction: TransformAttraction,
     /// No social force beyond this distance (m).
     pub interaction_range_m: f64,
     /// `ξ`, the fluctuation of eq. 7 (m/s²).
@@ -126,6 +146,7 @@ impl Default for TransformMoveConfig {
             obstacle_a_m_s2: 3.0,
             subgroup_a_m_s2: 1.0,
             subgroup_b_m: 0.5,
+            subgroup_attraction: TransformAttraction::Place,
             interaction_range_m: 1.2,
             fluctuation_m_s2: 0.1,
             bin_m: 2.0,

@@ -141,3 +141,31 @@ fn the_gesture_map_names_known_classes_and_formations() {
         "{e}"
     );
 }
+
+#[test]
+fn the_subgroup_attraction_is_read_and_a_bad_one_is_located() {
+    use crate::config::TransformAttraction;
+    let cfg = |text: &str| Config::from_str(text, Path::new("t.ron")).unwrap();
+    let shipped = cfg(DEFAULT_CONFIG_RON);
+    assert_eq!(
+        shipped.formations.transform.subgroup_attraction,
+        TransformAttraction::Place
+    );
+    for (name, want) in [
+        ("as_printed", TransformAttraction::AsPrinted),
+        ("decaying", TransformAttraction::Decaying),
+        ("dt", TransformAttraction::Dt),
+    ] {
+        let t = DEFAULT_CONFIG_RON.replace(
+            "subgroup_attraction: place",
+            &format!("subgroup_attraction: {name}"),
+        );
+        assert_eq!(cfg(&t).formations.transform.subgroup_attraction, want);
+    }
+    let t = DEFAULT_CONFIG_RON.replace("subgroup_attraction: place", "subgroup_attraction: glue");
+    let e = err(&t);
+    assert!(
+        e.contains("t.ron:") && e.contains("glue") && e.contains("as_printed"),
+        "{e}"
+    );
+}

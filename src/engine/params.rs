@@ -1,12 +1,16 @@
 //! The one place where the config becomes the parameters of the crowd, gesture and
 //! assignment code, which know nothing of the config.
 
-use crate::config::{AssignmentCost, Config, SubgroupSimilarity, TransformCost};
+use crate::config::{
+    AssignmentCost, Config, SubgroupSimilarity, TransformAttraction, TransformCost,
+};
 use crate::crowd::agents::AgentParams;
 use crate::crowd::assign::PointMetric;
 use crate::crowd::control::DirectParams;
 use crate::crowd::environment::{FieldParams, Planner, PlannerParams, Scene, MESH_FIELD_RANGE_M};
-use crate::crowd::transform::{ApParams, MoveParams, Mover, PairCost, Preference, Similarity};
+use crate::crowd::transform::{
+    ApParams, MoveParams, Mover, PairCost, Preference, Similarity, SubgroupAttraction,
+};
 use crate::gesture::capture::TapThresholds;
 use crate::gesture::dtw::Weights;
 use crate::gesture::knn::SearchParams;
@@ -155,6 +159,12 @@ pub fn move_params(cfg: &Config, radius_m: f64) -> MoveParams {
         obstacle_a_m_s2: t.obstacle_a_m_s2,
         subgroup_a_m_s2: t.subgroup_a_m_s2,
         subgroup_b_m: t.subgroup_b_m,
+        subgroup_attraction: match t.subgroup_attraction {
+            TransformAttraction::Place => SubgroupAttraction::Place,
+            TransformAttraction::AsPrinted => SubgroupAttraction::AsPrinted,
+            TransformAttraction::Decaying => SubgroupAttraction::Decaying,
+            TransformAttraction::Dt => SubgroupAttraction::DelaunayGraph,
+        },
         interaction_range_m: t.interaction_range_m,
         fluctuation_m_s2: t.fluctuation_m_s2,
         bin_m: t.bin_m,

@@ -12,6 +12,53 @@ pub enum Mover {
     Orca,
 }
 
+/// The subgroup attraction of eq. 21 (formation-transform section 3.5), or the
+/// paper's manipulation of a subgroup as a whole on its Delaunay graph (section 3,
+/// pipeline step 3). `social_groups.rs` has the formulas.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub enum SubgroupAttraction {
+    /// Ours: a bounded pull towards the agent's place in its group (the group's
+    /// centroid plus its offset blended from source to target layout), at most `A'`.
+    #[default]
+    Place,
+    /// Eq. 21 as printed: `A' e^{d}` towards every other member, `d` in metres;
+    /// unbounded, only the run's `max_accel` clamp bounds the total.
+    AsPrinted,
+    /// A guess at a misprint in eq. 21: `A' e^{−d/B'}` towards every other
+    /// member (eq. 22 without its `1/d`, attracting).
+    Decaying,
+    /// Our reading of section 3's "each subgroup is manipulated as a whole using a
+    /// DT graph" (no equation given): the Delaunay edges of each group's source
+    /// layout are damped springs whose rest length goes from the source to the
+    /// target length as the group advances.
+    DelaunayGraph,
+}
+
+impl SubgroupAttraction {
+    /// Every variant, in the order the CLI lists them.
+    pub const ALL: [SubgroupAttraction; 4] = [
+        SubgroupAttraction::Place,
+        SubgroupAttraction::AsPrinted,
+        SubgroupAttraction::Decaying,
+        SubgroupAttraction::DelaunayGraph,
+    ];
+
+    /// The name the CLI, the config and the JSON use.
+    pub fn name(self) -> &'static str {
+        match self {
+            SubgroupAttraction::Place => "place",
+            SubgroupAttraction::AsPrinted => "as-printed",
+            SubgroupAttraction::Decaying => "decaying",
+            SubgroupAttraction::DelaunayGraph => "dt",
+        }
+    }
+
+    /// The variant named `name` (see [`name`](Self::name)).
+    pub fn from_name(name: &str) -> Option<SubgroupAttraction> {
+        Self::ALL.into_iter().find(|a| a.name() == name)
+    }
+}
+
 /// How a transform moves the agents. Lengths in metres, times in seconds,
 /// accelerations (forces on a unit mass) in m/s².
 #[derive(Clone, Debug, PartialEq)]
@@ -47,6 +94,15 @@ pub struct MoveParams {
     pub subgroup_a_m_s2: f64,
     /// `B'` of eqs. 21–22 (m).
     pub subgroup_b_m: f64,
+    /// Which subgroup attraction acts (with [`subgroup_forces`](Self::subgroup_forces)).
+    pub subgroup_attraction: SubgroupAttraction,
+    /// [`SubgroupAttraction::DelaunayGraph`]: each edge's spring stiffness, the
+    /// acceleration per metre of stretch ((m/s²)/m); not scaled by
+    /// [`with_radius`](Self::with_radius).
+    pub subgroup_dt_stiffness_m_s2_per_m: f64,
+    /// [`SubgroupAttraction::DelaunayGraph`]: each edge's damping, the
+    /// acceleration per m/s of relative speed along the edge ((m/s²)/(m/s)).
+    pub subgroup_dt_damping_m_s2_per_m_s: f64,
     /// Agents (and obstacles) farther apart than this exert no social force (m).
     pub interaction_range_m: f64,
     /// `ξ`: the fluctuation of eq. 7, uniform in a disc of this radius (m/s²).
@@ -153,6 +209,9 @@ impl Default for MoveParams {
             obstacle_a_m_s2: 3.0,
             subgroup_a_m_s2: 1.0,
             subgroup_b_m: 0.5,
+            subgroup_attraction: SubgroupAttraction::Place,
+            subgroup_dt_stiffness_m_s2_per_m: 10.0,
+            subgroup_dt_damping_m_s2_per_m_s: 5.0,
             interaction_range_m: 1.2,
             fluctuation_m_s2: 0.1,
             bin_m: 2.0,

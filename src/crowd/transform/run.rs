@@ -61,9 +61,10 @@
 use super::feedback::{Feedback, Information};
 use super::measures::{nearest_distances, sigma_curr_eft, spread_and_min, HeadingChange, Measures};
 use super::orca::Orca;
-pub use super::params::{MoveParams, Mover};
+pub use super::params::{MoveParams, Mover, SubgroupAttraction};
 use super::prepare::TransformPlan;
-use super::social::{self, Groups};
+use super::social;
+use super::social_groups::Groups;
 use crate::crowd::agents::{unit_or_fixed, NeighbourGrid};
 use crate::crowd::environment::Scene;
 use crate::geom::Vec2;
@@ -156,6 +157,13 @@ pub struct RunSummary {
     pub rest_s: Option<f64>,
     /// Mean distance of the agents from their targets at the end (m).
     pub mean_offset_m: f64,
+    /// How spread out the subgroups were at the end: the members' distance from
+    /// their group's centroid over that of the layout the group should have at
+    /// its progress (1: the layout's size, below 1 contracted; `social_groups.rs`).
+    /// `None` without a group of two or more.
+    pub subgroup_spread: Option<f64>,
+    /// The same averaged over the steps.
+    pub subgroup_spread_mean: Option<f64>,
 }
 
 /// A transform in progress; the agents' positions and velocities stay the caller's.
@@ -212,6 +220,11 @@ pub struct TransformRun {
     rest_since_s: Option<f64>,
     /// Mean distance to target at the last report (m).
     mean_offset_m: f64,
+    /// The subgroups' spread at the last report, and its sum and count over
+    /// the reports that had one.
+    spread: Option<f64>,
+    spread_sum: f64,
+    spread_steps: u64,
     sum: Measures,
     min_distance_m: f64,
     last: StepReport,
@@ -238,7 +251,12 @@ impl TransformRun {
             .collect();
         let orca = (params.mover == Mover::Orca).then(|| Orca::new(n));
         TransformRun {
-            groups: Groups::new(&plan.subgroups.group_of, &sources, &targets),
+            groups: Groups::new(
+                &plan.subgroups.group_of,
+                &sources,
+                &targets,
+                params.subgroup_attraction,
+            ),
             feedback: Feedback::new(n, params.bin_m, params.sectors),
             orca,
             grid: NeighbourGrid::with_capacity(n),
@@ -268,6 +286,9 @@ impl TransformRun {
             swaps: 0,
             rest_since_s: None,
             mean_offset_m: 0.0,
+            spread: None,
+            spread_sum: 0.0,
+            spread_steps: 0,
             sum: Measures::default(),
             min_distance_m: f64::INFINITY,
             last: StepReport::default(),
@@ -315,6 +336,11 @@ impl TransformRun {
         self.steps += 1;
         let report = self.report(positions, velocities, dt_s);
         self.last = report;
+        self.spread = self.groups.spread(positions, &self.sources, &self.targets);
+        if let Some(r) = self.spread {
+            self.spread_sum += r;
+            self.spread_steps += 1;
+        }
         if !self.p.settling {
             let fastest2 = velocities
                 .iter()
@@ -482,6 +508,7 @@ impl TransformRun {
         if p.subgroup_forces {
             self.groups.attract(
                 pos,
+                vel,
                 &self.sources,
                 &self.targets,
                 &self.fade,
@@ -811,6 +838,9 @@ impl TransformRun {
             swaps: self.swaps,
             rest_s: self.rested(),
             mean_offset_m: self.mean_offset_m,
+            subgroup_spread: self.spread,
+            subgroup_spread_mean: (self.spread_steps > 0)
+                .then(|| self.spread_sum / self.spread_steps as f64),
         }
     }
 }

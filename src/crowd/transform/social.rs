@@ -6,16 +6,9 @@
 //!   [`MoveParams::interaction_range_m`] (found with the grid, never all pairs).
 //! - Cross-subgroup repulsion, eq. 22: `A' e^{−d/B'} / d` on the same pairs when
 //!   the two are in different subgroups.
-//! - Subgroup attraction, eq. 21. As printed, `A' e^{|pos(a) − pos(b)|}` grows
-//!   without bound with the distance and sums over every member, O(N²) and
-//!   explosive. It is read here as a bounded pull towards the agent's place in its
-//!   subgroup: the group's current centroid `c_g` plus the agent's offset in the
-//!   group, blended from its source layout to its target layout as the group
-//!   advances (`α_g = 1 − |c_g − t̂_g| / |ŝ_g − t̂_g|`, clamped to `[0, 1]`, `ŝ_g`,
-//!   `t̂_g` the group's source and target centroids):
-//!   `p_a = c_g + (1 − α_g)(s_a − ŝ_g) + α_g (t_a − t̂_g)` and
-//!   `f = A' (1 − e^{−|p_a − x_a| / B'}) (p_a − x_a) / |p_a − x_a|`, at most `A'`.
-//!   Members that strayed from the group are pulled back towards it, O(N) a step.
+//! - Subgroup attraction, eq. 21, and the subgroup moved as a whole on its
+//!   Delaunay graph: `social_groups.rs` (four variants, chosen by
+//!   [`MoveParams::subgroup_attraction`]).
 //! - Obstacles, eq. 9: `A e^{−d/B}` along the obstacle's outward normal, `d` the
 //!   distance from the centre to the nearest obstacle boundary (zero inside).
 //!
@@ -29,114 +22,6 @@ use super::params::MoveParams;
 use crate::crowd::agents::{unit_or_fixed, NeighbourGrid};
 use crate::crowd::environment::Scene;
 use crate::geom::Vec2;
-
-/// Per-subgroup layout: source and target centroids, and the current centroid.
-#[derive(Clone, Debug)]
-pub(crate) struct Groups {
-    /// `group_of[i]`.
-    pub group_of: Vec<u32>,
-    src_c: Vec<Vec2>,
-    tgt_c: Vec<Vec2>,
-    now_c: Vec<Vec2>,
-    count: Vec<u32>,
-}
-
-impl Groups {
-    /// The layout of `group_of` (values `>= n` are taken as their own group `0`)
-    /// between `sources` and `targets`.
-    pub(crate) fn new(group_of: &[u32], sources: &[Vec2], targets: &[Vec2]) -> Groups {
-        let n = sources.len();
-        let group_of: Vec<u32> = (0..n)
-            .map(|i| {
-                group_of
-                    .get(i)
-                    .copied()
-                    .filter(|&g| (g as usize) < n.max(1))
-                    .unwrap_or(0)
-            })
-            .collect();
-        let m = group_of.iter().map(|&g| g as usize + 1).max().unwrap_or(1);
-        let mut g = Groups {
-            group_of,
-            src_c: vec![Vec2::zeros(); m],
-            tgt_c: vec![Vec2::zeros(); m],
-            now_c: vec![Vec2::zeros(); m],
-            count: vec![0; m],
-        };
-        for i in 0..n {
-            let k = g.group_of[i] as usize;
-            g.src_c[k] += sources[i];
-            g.tgt_c[k] += targets[i];
-            g.count[k] += 1;
-        }
-        for k in 0..m {
-            let c = g.count[k].max(1) as f64;
-            g.src_c[k] /= c;
-            g.tgt_c[k] /= c;
-        }
-        g
-    }
-
-    /// Agents `i` and `j` exchanged targets `ti` and `tj` (`i` had `ti`): the
-    /// groups' target centroids follow.
-    /// Every target moved by `by_m`: the target centroids with them.
-    pub(crate) fn shift_targets(&mut self, by_m: Vec2) {
-        for c in &mut self.tgt_c {
-            *c += by_m;
-        }
-    }
-
-    pub(crate) fn swapped(&mut self, i: usize, j: usize, ti: Vec2, tj: Vec2) {
-        let (gi, gj) = (self.group_of[i] as usize, self.group_of[j] as usize);
-        if gi != gj {
-            self.tgt_c[gi] += (tj - ti) / self.count[gi].max(1) as f64;
-            self.tgt_c[gj] += (ti - tj) / self.count[gj].max(1) as f64;
-        }
-    }
-
-    /// Adds the bounded subgroup attraction (eq. 21 as read in the module docs) to
-    /// `acc[i] · fade[i]` for every agent with `fade[i] > 0`.
-    pub(crate) fn attract(
-        &mut self,
-        pos: &[Vec2],
-        sources: &[Vec2],
-        targets: &[Vec2],
-        fade: &[f64],
-        p: &MoveParams,
-        acc: &mut [Vec2],
-    ) {
-        self.now_c.fill(Vec2::zeros());
-        for (i, x) in pos.iter().enumerate() {
-            self.now_c[self.group_of[i] as usize] += x;
-        }
-        for k in 0..self.now_c.len() {
-            self.now_c[k] /= self.count[k].max(1) as f64;
-        }
-        let b = p.subgroup_b_m.max(1e-6);
-        for i in 0..pos.len() {
-            if fade[i] <= 0.0 {
-                continue;
-            }
-            let k = self.group_of[i] as usize;
-            if self.count[k] < 2 {
-                continue;
-            }
-            let (c, s, t) = (self.now_c[k], self.src_c[k], self.tgt_c[k]);
-            let span = (s - t).norm();
-            let alpha = if span > 1e-9 {
-                (1.0 - (c - t).norm() / span).clamp(0.0, 1.0)
-            } else {
-                1.0
-            };
-            let place = c + (sources[i] - s) * (1.0 - alpha) + (targets[i] - t) * alpha;
-            let d = place - pos[i];
-            let dn = d.norm();
-            if dn > 1e-9 {
-                acc[i] += d * (p.subgroup_a_m_s2 * (1.0 - (-dn / b).exp()) / dn * fade[i]);
-            }
-        }
-    }
-}
 
 /// Adds eq. 10's repulsion (and eq. 22's cross-subgroup repulsion when `groups`)
 /// between every pair closer than the interaction range, to both agents, each
