@@ -33,12 +33,15 @@ impl Baseline {
     }
 
     /// Sets `vel[i]` of every agent not `settled` to the mover's velocity for the
-    /// wanted `wanted[i]` over a substep of `h` seconds; settled agents get zero.
+    /// wanted `wanted[i]` (`dist[i]` from its target) over a substep of `h`
+    /// seconds; settled agents get zero.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn velocities(
         &mut self,
         pos: &[Vec2],
         vel: &mut [Vec2],
         wanted: &[Vec2],
+        dist: &[f64],
         settled: &[bool],
         p: &MoveParams,
         h: f64,
@@ -46,7 +49,7 @@ impl Baseline {
         match self {
             Baseline::Orca(m) => m.velocities(pos, vel, wanted, settled, p, h),
             Baseline::Rvo(m) => m.velocities(pos, vel, wanted, settled, p, h),
-            Baseline::Steering(m) => m.velocities(pos, vel, wanted, settled, p, h),
+            Baseline::Steering(m) => m.velocities(pos, vel, wanted, dist, settled, p, h),
         }
     }
 }

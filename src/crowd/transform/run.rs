@@ -369,7 +369,7 @@ impl TransformRun {
             let Some(baseline) = &mut self.baseline else {
                 return;
             };
-            baseline.velocities(pos, vel, &self.acc, &self.settled, &self.p, h);
+            baseline.velocities(pos, vel, &self.acc, &self.dist, &self.settled, &self.p, h);
             for i in 0..n {
                 if !self.settled[i] {
                     pos[i] += vel[i] * h;

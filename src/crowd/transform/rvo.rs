@@ -21,7 +21,7 @@
 //! `tc(v')` the time at which `A` moving at `2 v' − v_A` relative to a static `B`
 //! (the reciprocal relative velocity `2 v' − v_A − v_B`) first touches any
 //! neighbour's disc (∞ outside every RVO, so the penalty is then the distance to
-//! `v_pref` alone), and `w` the aggressiveness factor [`SAFETY_FACTOR_M`]. The
+//! `v_pref` alone), and `w` the aggressiveness factor [`SAFETY_FACTOR_RADII`] radii. The
 //! change of velocity is then limited to `max_accel · h` (the admissible
 //! velocities of section 5.1) and the speed to `max_speed`.
 //!
@@ -35,7 +35,14 @@
 //! sized in [`Rvo::new`]; a step allocates nothing.
 //!
 //! # What it is not
-//! No static obstacles (the scene's circles are handled by `run.rs` projecting
+//! The velocity obstacle is the whole cone, with no time horizon (ORCA's is
+//! truncated): a collision however far ahead costs `w / tc`. Walking at speed `s`
+//! towards a neighbour standing with a gap `g` between the discs, `tc = g / 2s`
+//! (reciprocal: the closing speed counts twice), so the penalty is `2 w s / g +
+//! ‖v_pref − v'‖`, which grows with `s` while `g < 2 w` (ten radii): an agent with
+//! a neighbour standing in line beyond its target stops short of it rather than
+//! walk in, and a packed formation fills slowly or not at all (docs/transforms.md,
+//! "Baselines", has the numbers). No static obstacles (the scene's circles are handled by `run.rs` projecting
 //! agents out of them, as for ORCA), no kinematic model beyond the acceleration
 //! and speed limits, no hybrid RVO (HRVO) and no ORCA half-planes: a velocity
 //! inside an RVO may be chosen when every sample is (a crowd pressed together),
@@ -49,10 +56,13 @@ use crate::rng::SplitMix64;
 
 /// Candidate velocities drawn per agent and step (the RVO library's 250).
 pub const SAMPLES: usize = 250;
-/// `w` of the penalty (VdBLM08 section 5.2): how much a short time to collision
-/// weighs against leaving the preferred velocity (m, so that `w / tc` is m/s).
-/// 7.5, the RVO library's default safety factor.
-pub const SAFETY_FACTOR_M: f64 = 7.5;
+/// `w` of the penalty (VdBLM08 section 5.2), in agent radii: how much a short
+/// time to collision weighs against leaving the preferred velocity (a length, so
+/// that `w / tc` is a speed). The RVO library's default safety factor is 7.5 for
+/// its example agents of radius 1.5: five radii (0.75 m at 0.15 m). Taken in
+/// metres as it stands, 7.5 m would make agents of 0.15 m stop short of any
+/// target with a neighbour standing beyond it.
+pub const SAFETY_FACTOR_RADII: f64 = 5.0;
 /// Most neighbours an agent avoids at once (the library's `maxNeighbors`).
 pub const MAX_NEIGHBOURS: usize = 10;
 /// Neighbours farther than this many agent radii are not avoided (the library's
@@ -111,7 +121,7 @@ impl Rvo {
             tc = tc.min(time_to_collision(pos[j] - pos[i], w, 2.0 * r));
         }
         let avoid = if tc.is_finite() {
-            SAFETY_FACTOR_M / tc.max(TC_FLOOR_S)
+            SAFETY_FACTOR_RADII * r / tc.max(TC_FLOOR_S)
         } else {
             0.0
         };
