@@ -10,10 +10,12 @@
 //! | a request prepared off the control thread | `prepare.rs` | 3 |
 //! | social forces with subgroup terms, mutual-information feedback | `run.rs` (the step), `params.rs` (its constants), `social.rs` (forces), `feedback.rs` (eqs. 11–19), `crate::crowd::agents::NeighbourGrid` (neighbours and nearest distances) | 3.3, 3.5, eqs. 7–19, 21–23 |
 //! | the objective measures | `measures.rs` | 5.1, eqs. 17, 24–26 |
-//! | the baselines of the comparison (Table 3): ORCA, RVO, OpenSteer-style steering | `baseline.rs` (one call for `run.rs`), `orca.rs`, `rvo.rs`, `steer.rs`, `nearest.rs` (their neighbour lists) | 5.4 |
+//! | the baselines of the comparison (Table 3): ORCA, RVO, OpenSteer-style steering | `baseline.rs` (one call for `run.rs`), `orca.rs`, `rvo.rs`, `steer.rs`, `nearest.rs` (their neighbour lists); runs under them in `baseline_tests.rs` | 5.4 |
 //! | comparing variants over seeds: means with 95 % intervals, a common time window, subgroup locality | `experiment.rs` | 5 |
 
 mod baseline;
+#[cfg(test)]
+mod baseline_tests;
 mod experiment;
 mod feedback;
 mod measures;

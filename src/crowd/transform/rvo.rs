@@ -186,58 +186,6 @@ impl Rvo {
 mod tests {
     use super::*;
 
-    use super::super::baseline::testing::{closest, off_line, run};
-
-    /// Slack on the discs' overlap in the runs below (m): a few centimetres.
-    const OVERLAP_SLACK_M: f64 = 0.03;
-
-    #[test]
-    fn a_lone_agent_walks_straight_to_its_target() {
-        let p = MoveParams::default().rvo();
-        let (s, t) = (Vec2::new(0.0, 0.0), Vec2::new(6.0, 2.0));
-        let (sum, track) = run(&[s], &[t], &p, 1, 60.0);
-        assert!(!sum.timed_out && sum.arrived_fraction == 1.0, "{sum:?}");
-        assert!(off_line(&track, s, t) < 1e-6, "{}", off_line(&track, s, t));
-        assert!((sum.mean_travel_m - (t - s).norm()).abs() < 0.3, "{sum:?}");
-    }
-
-    #[test]
-    fn two_agents_head_on_pass_each_other_and_arrive() {
-        let p = MoveParams::default().rvo();
-        let (a, b) = (Vec2::new(0.0, 0.0), Vec2::new(5.0, 0.0));
-        for seed in 1..4 {
-            let (sum, track) = run(&[a, b], &[b, a], &p, seed, 60.0);
-            assert!(
-                !sum.timed_out && sum.arrived_fraction == 1.0,
-                "{seed}: {sum:?}"
-            );
-            let c = closest(&track);
-            assert!(
-                c > 2.0 * p.radius_m - OVERLAP_SLACK_M,
-                "{seed}: closest {c}"
-            );
-        }
-    }
-
-    #[test]
-    fn the_same_seed_gives_the_same_trajectory() {
-        let p = MoveParams::default().rvo();
-        // Four agents crossing the square's centre to the opposite corners.
-        let s = [
-            Vec2::new(0.0, 0.0),
-            Vec2::new(3.0, 0.0),
-            Vec2::new(3.0, 3.0),
-            Vec2::new(0.0, 3.0),
-        ];
-        let t = [s[2], s[3], s[0], s[1]];
-        let (sum_a, a) = run(&s, &t, &p, 7, 30.0);
-        let (_, b) = run(&s, &t, &p, 7, 30.0);
-        let (_, c) = run(&s, &t, &p, 8, 30.0);
-        assert!(sum_a.arrived_fraction == 1.0, "{sum_a:?}");
-        assert_eq!(a, b);
-        assert_ne!(a, c);
-    }
-
     #[test]
     fn time_to_collision_is_the_first_touch() {
         // Disc of radius 1 at 5 m ahead, closing at 2 m/s: touches at 2 s.
