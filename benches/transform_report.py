@@ -5,14 +5,15 @@ Table 2; 5.3; 5.4, Table 3), made by `crowdtouch transform compare`.
 For each formation pair and each preset (the project's movement model, and
 `--preset paper`: only what the paper has), it runs `transform compare --seeds N
 --json` and writes a Markdown section: per variant the arrival time and the three
-measures of section 5.1 over a common window, each a mean with its 95 %
-confidence interval over the seeds, the exchanges of targets per run, the
+measures of section 5.1 and the heading-change rate (section 5.3's fluctuation)
+over a common window, each a mean with its 95 % confidence interval over the
+seeds, the exchanges of targets per run, the
 subgroups' convergence and locality, and for each of Table 2's orderings whether
 it is reproduced (the intervals are apart in the paper's direction), reversed
 (apart the other way) or not told apart.
 
     python3 benches/transform_report.py [--binary B] [--seeds N] [--agents N]
-                                        [--timeout S] [--out FILE] [--check]
+                                        [--timeout S] [--scenario NAME] [--out FILE]
 
 With --out FILE (docs/transforms.md) the text between the markers
 `<!-- transform-report:begin -->` and `<!-- transform-report:end -->` is replaced;
@@ -36,16 +37,17 @@ END = "<!-- transform-report:end -->"
 BASELINES = [("orca", "ORCA"), ("rvo", "RVO"), ("steering", "OpenSteer-style steering")]
 
 ORDERINGS = [
-    ("arrival_s", "arrival time"),
+    ("finish_s", "time (arrival, or rest)"),
     ("i_d", "I_d"),
     ("sigma_min_dis", "σ_min_dis"),
     ("sigma_curr_eft", "σ_curr_eft"),
 ]
 
 
-def compare(binary, frm, to, agents, seeds, preset, timeout):
+def compare(binary, frm, to, agents, seeds, preset, timeout, scenario="direct"):
     cmd = [binary, "transform", "compare", "--from", frm, "--to", to,
-           "--agents", str(agents), "--seeds", str(seeds), "--seed", "1", "--json"]
+           "--agents", str(agents), "--seeds", str(seeds), "--seed", "1", "--json",
+           "--scenario", scenario]
     if preset:
         cmd += ["--preset", preset]
     if timeout:
@@ -72,15 +74,21 @@ def verdict(a, b):
     return "not told apart"
 
 
-def section(results, seeds, agents, timeout):
+def section(results, seeds, agents, timeout, scenario="direct"):
     lines = []
     say = lines.append
     say(f"Made by `python3 benches/transform_report.py --seeds {seeds} --agents {agents}"
-        + (f" --timeout {timeout}" if timeout else "") + " --out docs/transforms.md`"
+        + (f" --timeout {timeout}" if timeout else "")
+        + (f" --scenario {scenario}" if scenario != "direct" else "")
+        + " --out docs/transforms.md`"
         " (release build); seeds 1 to " + str(seeds) + ". ± is the 95 % confidence interval "
         "of the mean over the seeds (Student's t). The measures are averaged over the "
         "common window: the first seconds that every run of every row of that table lasted. "
-        "Arrival is over the runs in which every agent arrived (`n` of them).")
+        "Time is the paper's simulation time: until every agent arrived (within "
+        "`arrive_m` of its target; with `--preset paper`, within one agent radius) or, "
+        "without settling, until the crowd came to rest (no agent faster than 0.1 m/s "
+        "for 1 s) short of its targets; over the runs that did either (`n`), with how "
+        "many ended at rest, and the mean distance from target at the end.")
     say("")
     for (frm, to, preset), (v, secs) in results.items():
         name = "the project's model" if preset is None else "`--preset paper`"
@@ -91,13 +99,14 @@ def section(results, seeds, agents, timeout):
             f"converged in {v['subgroups']['converged_runs']} of {v['seeds']} seeds, locality "
             f"{iv(v['subgroups']['locality'], 2)}.")
         say("")
-        say("| variant | arrival (s) [n] | all in (%) | I_d (bits) | σ_min_dis (m) | σ_curr_eft (m) | exchanges a run |")
-        say("|---|---|---|---|---|---|---|")
+        say("| variant | time (s) [n, at rest] | all in (%) | off target (m) | I_d (bits) | σ_min_dis (m) | σ_curr_eft (m) | turn (rad/s) | exchanges a run |")
+        say("|---|---|---|---|---|---|---|---|---|")
         for r in v["rows"]:
             af = r["arrived_fraction"]["mean"]
-            say(f"| {r['variant']} | {iv(r['arrival_s'], 2)} [{r['arrived_runs']}] | "
-                f"{100 * af:.1f} | {iv(r['i_d'], 3)} | {iv(r['sigma_min_dis'], 4)} | "
-                f"{iv(r['sigma_curr_eft'], 3)} | {r['swaps']['mean']:.1f} |")
+            say(f"| {r['variant']} | {iv(r['finish_s'], 2)} [{r['finished_runs']}, {r['rest_runs']}] | "
+                f"{100 * af:.1f} | {iv(r['mean_offset_m'], 3)} | {iv(r['i_d'], 3)} | "
+                f"{iv(r['sigma_min_dis'], 4)} | {iv(r['sigma_curr_eft'], 3)} | "
+                f"{iv(r.get('heading_change_rad_s'), 3)} | {r['swaps']['mean']:.1f} |")
         say("")
         rows = {r["variant"]: r for r in v["rows"]}
         le = rows["least-effort"]
@@ -108,6 +117,9 @@ def section(results, seeds, agents, timeout):
                 f"{verdict(le[key], rows['manhattan'][key])} |")
         fb = verdict(le["i_d"], rows["no-feedback"]["i_d"])
         say(f"| §5.3: feedback lowers I_d (least effort against no-feedback) | {fb} | |")
+        if "heading_change_rad_s" in le:
+            turn = verdict(le["heading_change_rad_s"], rows["no-feedback"]["heading_change_rad_s"])
+            say(f"| §5.3, Fig. 12: feedback lowers the heading-change rate | {turn} | |")
         # Table 3's baselines, those the binary has rows for.
         for base, label in BASELINES:
             if base in rows:
@@ -123,14 +135,17 @@ def main():
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--agents", type=int, default=300)
     ap.add_argument("--timeout", type=float, default=None)
+    ap.add_argument("--scenario", default="direct",
+                    help="where every row runs: direct, path, obstacles or crossing")
     ap.add_argument("--out", default=None)
     a = ap.parse_args()
     results = {}
     for frm, to in PAIRS:
         for preset in PRESETS:
-            results[(frm, to, preset)] = compare(a.binary, frm, to, a.agents, a.seeds, preset, a.timeout)
+            results[(frm, to, preset)] = compare(a.binary, frm, to, a.agents, a.seeds, preset,
+                                                 a.timeout, a.scenario)
             print(f"{frm} -> {to} {preset or 'default'}: {results[(frm, to, preset)][1]:.1f} s", file=sys.stderr)
-    text = section(results, a.seeds, a.agents, a.timeout)
+    text = section(results, a.seeds, a.agents, a.timeout, a.scenario)
     if a.out is None:
         sys.stdout.write(text)
         return 0

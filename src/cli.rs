@@ -47,6 +47,7 @@ mod soak;
 mod svg;
 mod transform;
 mod transform_compare;
+mod transform_scenario;
 mod transform_setup;
 mod transform_svg;
 mod unit;

@@ -446,3 +446,155 @@ fn bad_input_is_a_clear_error() {
         &["--from coin", "do not fit"],
     );
 }
+
+/// `transform compare` in `scenario` of `from` → `to`, `agents`, one seed, as JSON;
+/// checked for what every scenario reports: its name and layout, and in every row
+/// the measures (with the heading-change rate) as intervals.
+fn scenario_json(scenario: &str, from: &str, to: &str, agents: &str) -> Value {
+    let v = json_of(
+        &bin()
+            .args(["transform", "compare", "--from", from, "--to", to])
+            .args(["--agents", agents, "--seeds", "1", "--json"])
+            .args(["--scenario", scenario])
+            .output()
+            .unwrap(),
+    );
+    assert_eq!(v["scenario"], scenario);
+    assert_eq!(v["scenario_layout"]["name"], scenario);
+    for key in [
+        "from",
+        "to",
+        "agents",
+        "seeds",
+        "window_s",
+        "rows",
+        "subgroups",
+    ] {
+        assert!(v.get(key).is_some(), "no `{key}` in {v}");
+    }
+    let rows = v["rows"].as_array().unwrap();
+    assert!(rows.len() >= 6, "{v}");
+    for r in rows {
+        for k in [
+            "i_d",
+            "sigma_min_dis",
+            "sigma_curr_eft",
+            "heading_change_rad_s",
+            "arrived_fraction",
+            "swaps",
+        ] {
+            let m = r[k]["mean"].as_f64().unwrap_or(f64::NAN);
+            assert!(m.is_finite() && m >= 0.0, "`{k}` of {r}");
+            assert!(r[k]["ci95"].as_f64().is_some(), "`{k}` of {r}");
+        }
+        let turn = r["progress"]["heading_change_rad_s"]["mean"].as_f64();
+        assert!(turn.is_some_and(f64::is_finite), "{r}");
+        assert!(r["arrival_s"].get("mean").is_some(), "{r}");
+    }
+    v
+}
+
+/// The row of `variant`.
+fn row<'a>(v: &'a Value, variant: &str) -> &'a Value {
+    v["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["variant"] == variant)
+        .unwrap_or_else(|| panic!("no row `{variant}` in {v}"))
+}
+
+#[test]
+fn the_direct_scenario_is_the_default_and_path_completes_on_the_way() {
+    let direct = scenario_json("direct", "square", "arrow", "40");
+    assert!(direct["rows"][0]["scenario"].is_null());
+    let plain = json_of(
+        &bin()
+            .args(["transform", "compare", "--from", "square", "--to", "arrow"])
+            .args(["--agents", "40", "--seeds", "1", "--json"])
+            .output()
+            .unwrap(),
+    );
+    assert_eq!(plain["scenario"], "direct");
+    assert_eq!(plain["rows"][0]["i_d"], direct["rows"][0]["i_d"]);
+    assert_eq!(
+        plain["rows"][0]["arrival_s"],
+        direct["rows"][0]["arrival_s"]
+    );
+
+    let path = scenario_json("path", "square", "arrow", "40");
+    let layout = &path["scenario_layout"];
+    let pts = layout["path_m"].as_array().unwrap();
+    assert_eq!(pts.len(), 3, "{layout}");
+    let speed = layout["anchor_speed_m_s"].as_f64().unwrap();
+    assert!(speed > 0.5, "{layout}");
+    // The targets ride on the anchor: no row arrives before it stops (20 m of
+    // path), and the project's model arrives then.
+    let anchor_s = 20.0 / speed;
+    for r in path["rows"].as_array().unwrap() {
+        if let Some(t) = r["arrival_s"]["mean"].as_f64() {
+            assert!(t >= anchor_s - 1e-6, "{r}");
+        }
+    }
+    let least = row(&path, "least-effort");
+    assert_eq!(least["arrived_runs"], 1, "{least}");
+    assert!(least["arrival_s"]["mean"].as_f64().unwrap() < anchor_s + 10.0);
+}
+
+#[test]
+fn in_the_obstacles_scenario_no_agent_enters_the_obstacle() {
+    let v = scenario_json("obstacles", "square", "arrow", "40");
+    let discs = v["scenario_layout"]["obstacles"].as_array().unwrap();
+    assert_eq!(discs.len(), 1, "{v}");
+    let d = v["scenario_layout"]["target_offset_m"][0].as_f64().unwrap();
+    let x = discs[0]["centre_m"][0].as_f64().unwrap();
+    // The disc lies half way along the way to the target, which is 20 m or more
+    // ahead.
+    assert!(d >= 20.0 && x > 8.0 && x < 8.0 + d, "{v}");
+    for r in v["rows"].as_array().unwrap() {
+        let s = &r["scenario"];
+        assert_eq!(s["agents_entered_obstacle"]["mean"], 0.0, "{r}");
+        assert_eq!(s["agents_inside_obstacle_at_end"]["mean"], 0.0, "{r}");
+    }
+    assert_eq!(row(&v, "least-effort")["arrived_runs"], 1);
+}
+
+#[test]
+fn in_the_crossing_scenario_both_groups_arrive() {
+    let v = scenario_json("crossing", "square", "arrow", "20");
+    assert!(v["scenario_layout"]["mirror_x_m"].as_f64().is_some(), "{v}");
+    // The project's model (least effort, with its additions) gets both groups
+    // to the other side.
+    let least = row(&v, "least-effort");
+    let s = &least["scenario"];
+    assert_eq!(s["both_arrived"], true, "{least}");
+    let groups = s["groups"].as_array().unwrap();
+    assert_eq!(groups.len(), 2);
+    for (g, name) in groups.iter().zip(["a", "b"]) {
+        assert_eq!(g["group"], name);
+        assert_eq!(g["arrived_fraction"]["mean"], 1.0, "{g}");
+        let changed = g["changed_group"]["mean"].as_f64().unwrap();
+        assert!((0.0..=20.0).contains(&changed), "{g}");
+    }
+    // ORCA exchanges no targets: no agent changes group.
+    for g in row(&v, "orca")["scenario"]["groups"].as_array().unwrap() {
+        assert_eq!(g["changed_group"]["mean"], 0.0, "{g}");
+    }
+}
+
+#[test]
+fn a_bad_scenario_is_a_clear_error() {
+    let out = bin()
+        .args(["transform", "compare", "--from", "square", "--to", "arrow"])
+        .args(["--scenario", "sideways"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("invalid value 'sideways' for '--scenario"),
+        "{err}"
+    );
+    assert!(err.contains("direct, path, obstacles, crossing"), "{err}");
+}

@@ -17,7 +17,7 @@
 use super::output::outln;
 use super::transform_setup::{run_seed, Setup};
 use super::transform_svg;
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use crowdtouch::crowd::assign::Cancel;
 use crowdtouch::crowd::transform::{
@@ -34,7 +34,7 @@ pub const DT_S: f64 = 1.0 / 60.0;
 /// Seed of a run when `--seed` is not given.
 pub const DEFAULT_SEED: u64 = 16;
 /// Longest step recorded in the step-time histogram (µs).
-const MAX_STEP_US: u64 = 60_000_000;
+pub const MAX_STEP_US: u64 = 60_000_000;
 
 /// `transform`: run one formation transform, or `transform compare`.
 #[derive(Args, Debug)]
@@ -105,6 +105,15 @@ pub struct TransformArgs {
     /// Without subgroups (no clustering, no forces of eqs. 21–22).
     #[arg(long)]
     pub no_subgroups: bool,
+    /// `paper`: without the project's additions to the movement (no fades, no
+    /// settling, no positional contacts, no exchanges of targets), as
+    /// `transform compare --preset paper`.
+    #[arg(long, value_enum)]
+    pub preset: Option<super::transform_compare::Preset>,
+    /// End the run after this long if not every agent arrived (s); default: the
+    /// config's `formations.transform.timeout_s`.
+    #[arg(long)]
+    pub timeout: Option<f64>,
 }
 
 /// `--cost`.
@@ -154,9 +163,11 @@ impl Recorded {
         self.step_us.value_at_quantile(q)
     }
 
-    /// Arrival time (s), `None` when the run timed out.
+    /// Arrival time (s): when every agent had arrived; `None` when the run timed
+    /// out or ended with the crowd at rest short of its targets.
     pub fn arrival_s(&self) -> Option<f64> {
-        (!self.summary.timed_out).then_some(self.summary.simulated_s)
+        let s = &self.summary;
+        (!s.timed_out && s.rest_s.is_none()).then_some(s.simulated_s)
     }
 }
 
@@ -226,7 +237,16 @@ fn single(a: &TransformArgs) -> Result<()> {
         Some(CostArg::Manhattan) => PairCost::Manhattan,
     };
     let ap = if a.no_subgroups { None } else { s.ap };
-    let mut params = s.moves.clone();
+    let mut params = match a.preset {
+        Some(super::transform_compare::Preset::Paper) => s.moves.clone().paper(),
+        None => s.moves.clone(),
+    };
+    if let Some(t) = a.timeout {
+        if !(t.is_finite() && t > 0.0) {
+            bail!("--timeout must be a positive number of seconds, got {t}");
+        }
+        params.timeout_s = t;
+    }
     params.feedback = params.feedback && !a.no_feedback;
     params.subgroup_forces = params.subgroup_forces && !a.no_subgroups;
     let t0 = Instant::now();
@@ -267,7 +287,9 @@ fn single(a: &TransformArgs) -> Result<()> {
             "steps": sm.steps,
             "simulated_s": sm.simulated_s,
             "timed_out": sm.timed_out,
+            "rest_s": sm.rest_s,
             "arrived_fraction": sm.arrived_fraction,
+            "mean_offset_m": sm.mean_offset_m,
             "min_distance_m": finite_or_null(sm.min_distance_m),
             "overlapping_pairs": sm.overlapping_pairs,
             "swaps": sm.swaps,
@@ -310,9 +332,17 @@ fn single(a: &TransformArgs) -> Result<()> {
             "  steps               {} of 1/60 s = {:.2} s simulated{}",
             sm.steps,
             sm.simulated_s,
-            if sm.timed_out { " (timed out)" } else { "" }
+            match (sm.timed_out, sm.rest_s) {
+                (true, _) => " (timed out)".to_string(),
+                (false, Some(t)) => format!(" (the crowd came to rest at {t:.2} s)"),
+                (false, None) => String::new(),
+            }
         )?;
-        outln!("  arrived             {:.1} %", 100.0 * sm.arrived_fraction)?;
+        outln!(
+            "  arrived             {:.1} % (mean distance from target {:.3} m)",
+            100.0 * sm.arrived_fraction,
+            sm.mean_offset_m
+        )?;
         if !rec.short.is_empty() {
             let listed: Vec<String> = rec
                 .short

@@ -22,18 +22,22 @@
 //! 95 % confidence interval of the arrival time, of the three measures of section
 //! 5.1 averaged over a *common window* (the first seconds every run of every row
 //! lasted, or `--window`) and over each run's own length (normalised progress), the
-//! exchanges of targets per run and the overlaps. `--svg` plots the first seed's
-//! measures over time.
+//! heading-change rate (section 5.3's fluctuation) over the same window, the
+//! exchanges of targets per run and the overlaps. `--scenario` runs every row in
+//! one of the paper's section 4 scenarios (`transform_scenario.rs`). `--svg`
+//! plots the first seed's measures over time.
 
 use super::output::outln;
-use super::transform::{finite_or_null, run, Common, Recorded};
+use super::transform::{finite_or_null, Common, Recorded};
+use super::transform_scenario::{facts_json, facts_text, Facts, Scenario, Stage};
 use super::transform_setup::Setup;
 use super::transform_svg;
 use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, ValueEnum};
 use crowdtouch::crowd::assign::Cancel;
 use crowdtouch::crowd::transform::{
-    interval, locality, window_mean, Interval, Measures, MoveParams, Mover, PairCost, TransformPlan,
+    interval, locality, window_mean, Interval, Measures, MoveParams, Mover, PairCost,
+    TransformPlan, REST_HOLD_S, REST_SPEED_M_S,
 };
 use serde_json::{json, Value};
 use std::time::Instant;
@@ -59,6 +63,12 @@ pub struct CompareArgs {
     /// the config's `formations.transform.timeout_s`.
     #[arg(long)]
     pub timeout: Option<f64>,
+    /// Where every row runs: `direct` (the target where the source is), `path`
+    /// (the target's anchor walks a path with a turn, Figs. 6–7), `obstacles` (a
+    /// disc between source and target, Fig. 8), `crossing` (two mirrored groups
+    /// through each other, Fig. 9).
+    #[arg(long, value_enum, default_value_t = Scenario::Direct)]
+    pub scenario: Scenario,
 }
 
 /// `--preset`.
@@ -83,6 +93,8 @@ pub struct Variant {
     pub prepare_ms: f64,
     /// The run.
     pub rec: Recorded,
+    /// What the run showed of its scenario.
+    pub facts: Facts,
 }
 
 impl Variant {
@@ -120,19 +132,19 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     let c = &a.common;
     let mut runs: Vec<Vec<Variant>> = Vec::new();
     let mut groups = Vec::new();
-    let mut first: Option<Setup> = None;
+    let mut first: Option<(Setup, Stage)> = None;
     for k in 0..a.seeds {
         let mut ck = c.clone();
         ck.seed = c.seed.wrapping_add(u64::from(k));
         let setup = Setup::new(&ck)?;
-        let (row, g) = one_seed(&setup, a.preset, a.timeout)?;
+        let (row, g, stage) = one_seed(&setup, a.preset, a.timeout, a.scenario)?;
         runs.push(row);
         groups.push(g);
         if first.is_none() {
-            first = Some(setup);
+            first = Some((setup, stage));
         }
     }
-    let setup = first.ok_or_else(|| anyhow!("no seed ran"))?;
+    let (setup, stage) = first.ok_or_else(|| anyhow!("no seed ran"))?;
     let lambda = setup.cfg.formations.lambda;
     let window_s = a.window.unwrap_or_else(|| {
         runs.iter()
@@ -161,6 +173,8 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             "area_m2": setup.place.area_m2,
             "seed": c.seed,
             "seeds": a.seeds,
+            "scenario": a.scenario.name(),
+            "scenario_layout": stage.json(),
             "preset": a.preset.map(|_| "paper"),
             "lambda": lambda,
             "window_s": window_s,
@@ -189,8 +203,9 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
     if let Some(note) = &setup.area_note {
         outln!("area: {note}")?;
     }
+    outln!("{}", stage.text())?;
     outln!(
-        "{:<13} {:<12} {:<13} {:>17} {:>15} {:>17} {:>17} {:>8} {:>9}",
+        "{:<13} {:<12} {:<13} {:>17} {:>15} {:>17} {:>17} {:>15} {:>8} {:>9}",
         "variant",
         "pairing",
         "mover",
@@ -198,12 +213,13 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         "I_d",
         "σ_min_dis (m)",
         "σ_curr_eft (m)",
+        "turn (rad/s)",
         "swaps",
         "overlaps"
     )?;
     for r in &rows {
         outln!(
-            "{:<13} {:<12} {:<13} {:>17} {:>15} {:>17} {:>17} {:>8.1} {:>9.1}",
+            "{:<13} {:<12} {:<13} {:>17} {:>15} {:>17} {:>17} {:>15} {:>8.1} {:>9.1}",
             r.name,
             r.cost,
             r.mover_label(),
@@ -211,12 +227,18 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             pm(&r.window.0, 3),
             pm(&r.window.1, 4),
             pm(&r.window.2, 4),
+            pm(&r.heading.0, 3),
             r.swaps.mean,
             r.overlaps.mean
         )?;
     }
+    for r in rows.iter().filter(|r| !r.facts_text.is_empty()) {
+        outln!("{:<13} {}", r.name, r.facts_text)?;
+    }
     outln!(
-        "measures averaged over the first {window_s:.2} s of every run (I_d eq. 17 in bits, σ_min_dis eq. 24, σ_curr_eft eq. 26); ± is the 95 % confidence interval over the seeds; SF: social forces, MI: mutual-information feedback, +ours: fades, settling, contacts and exchanges of targets"
+        "measures averaged over the first {window_s:.2} s of every run (I_d eq. 17 in bits, σ_min_dis eq. 24, σ_curr_eft eq. 26, turn: the moving agents' mean heading-change rate, section 5.3); ± is the 95 % confidence interval over the seeds; SF: social forces, MI: mutual-information feedback, +ours: fades, settling, contacts and exchanges of targets; rest T: without settling, the crowd came to rest (no agent faster than {} m/s for {} s) at T s short of its targets",
+        REST_SPEED_M_S,
+        REST_HOLD_S
     )?;
     outln!(
         "subgroups (least effort): {:.1} ± {:.1}, converged in {} of {} seeds, locality {} (agents whose nearest neighbour is in their own subgroup)",
@@ -237,15 +259,18 @@ fn pm(i: &Interval, digits: usize) -> String {
     format!("{:.digits$} ± {:.digits$}", i.mean, i.ci95)
 }
 
-/// One seed: the four pairings and the eight runs.
+/// One seed: the four pairings and the eight runs, in `scenario`.
 fn one_seed(
     setup: &Setup,
     preset: Option<Preset>,
     timeout_s: Option<f64>,
-) -> Result<(Vec<Variant>, GroupFacts)> {
-    let targets = setup.targets()?;
+    scenario: Scenario,
+) -> Result<(Vec<Variant>, GroupFacts, Stage)> {
+    let sampled = setup.targets()?;
     let s = &setup.settings;
     let lambda = setup.cfg.formations.lambda;
+    let stage = Stage::new(scenario, &setup.place, &setup.sources, &sampled, &s.moves)?;
+    let targets = stage.targets(&sampled);
     let plan_for = |cost: PairCost| -> Result<(TransformPlan, f64)> {
         let t0 = Instant::now();
         let plan = TransformPlan::new(
@@ -257,7 +282,7 @@ fn one_seed(
         )
         .map_err(|e| anyhow!("--to {}: {e}", setup.to_label))?
         .ok_or_else(|| anyhow!("pairing was cancelled"))?;
-        Ok((plan, t0.elapsed().as_secs_f64() * 1e3))
+        Ok((stage.complete(plan), t0.elapsed().as_secs_f64() * 1e3))
     };
     let mut moves = s.moves.clone();
     if let Some(t) = timeout_s {
@@ -276,13 +301,14 @@ fn one_seed(
     };
     let mut variants = Vec::new();
     let mut add = |name, plan: &TransformPlan, ms, params: MoveParams| {
-        let rec = run(plan, &params, setup.seed, false);
+        let (rec, facts) = stage.run(plan, &params, setup.seed);
         variants.push(Variant {
             name,
             cost: plan.cost,
             params,
             prepare_ms: ms,
             rec,
+            facts,
         });
     };
     add("least-effort", &least, least_ms, social.clone());
@@ -301,7 +327,7 @@ fn one_seed(
     add("orca", &least, 0.0, moves.clone().rvo2_orca());
     add("rvo", &least, 0.0, moves.clone().rvo());
     add("steering", &least, 0.0, moves.steering());
-    Ok((variants, facts))
+    Ok((variants, facts, stage))
 }
 
 /// One variant over the seeds.
@@ -315,10 +341,23 @@ struct Row {
     arrival: Interval,
     arrived_runs: usize,
     arrived_fraction: Interval,
+    /// The paper's "time": until every agent arrived or (without settling) the
+    /// crowd came to rest, over the runs that did either.
+    finish: Interval,
+    finished_runs: usize,
+    /// Over the runs that ended with the crowd at rest short of its targets.
+    rest_runs: usize,
+    /// Mean distance of the agents from their targets at the end (m).
+    offset_m: Interval,
     /// I_d, σ_min_dis, σ_curr_eft over the common window.
     window: (Interval, Interval, Interval),
     /// The same over each run's own length.
     progress: (Interval, Interval, Interval),
+    /// The heading-change rate over the common window and over each run's length.
+    heading: (Interval, Interval),
+    /// The scenario's facts over the seeds.
+    facts: Value,
+    facts_text: String,
     swaps: Interval,
     overlaps: Interval,
     min_distance_m: f64,
@@ -332,6 +371,10 @@ impl Row {
         let collect =
             |f: &dyn Fn(&Variant) -> f64| -> Vec<f64> { runs.iter().map(|v| f(v)).collect() };
         let arrivals: Vec<f64> = runs.iter().filter_map(|v| v.rec.arrival_s()).collect();
+        let finishes: Vec<f64> = runs
+            .iter()
+            .filter_map(|v| v.rec.arrival_s().or(v.rec.summary.rest_s))
+            .collect();
         let windows: Vec<Option<Measures>> = runs
             .iter()
             .map(|v| window_mean(v.rec.series.iter().map(|&(t, m, _)| (t, m)), window_s))
@@ -359,6 +402,13 @@ impl Row {
             arrival: interval(&arrivals),
             arrived_runs: arrivals.len(),
             arrived_fraction: interval(&collect(&|v| v.rec.summary.arrived_fraction)),
+            finish: interval(&finishes),
+            finished_runs: finishes.len(),
+            rest_runs: runs
+                .iter()
+                .filter(|v| v.rec.arrival_s().is_none() && v.rec.summary.rest_s.is_some())
+                .count(),
+            offset_m: interval(&collect(&|v| v.rec.summary.mean_offset_m)),
             window: (
                 w(&|m| m.i_d),
                 w(&|m| m.sigma_min_dis_m),
@@ -369,6 +419,12 @@ impl Row {
                 p(&|m| m.sigma_min_dis_m),
                 p(&|m| m.sigma_curr_eft_m),
             ),
+            heading: (
+                w(&|m| m.heading_change_rad_s),
+                p(&|m| m.heading_change_rad_s),
+            ),
+            facts: facts_json(&runs.iter().map(|v| &v.facts).collect::<Vec<_>>()),
+            facts_text: facts_text(&runs.iter().map(|v| &v.facts).collect::<Vec<_>>()),
             swaps: interval(&collect(&|v| v.rec.summary.swaps as f64)),
             overlaps: interval(&collect(&|v| v.rec.summary.overlapping_pairs as f64)),
             min_distance_m: runs
@@ -404,6 +460,8 @@ impl Row {
     fn arrival_text(&self) -> String {
         if self.arrived_runs == self.seeds {
             pm(&self.arrival, 2)
+        } else if self.finished_runs == self.seeds {
+            format!("rest {}", pm(&self.finish, 2))
         } else {
             format!(
                 "{}/{} ({:.1} % in)",
@@ -433,14 +491,21 @@ impl Row {
             "arrival_s": iv(&self.arrival),
             "arrived_runs": self.arrived_runs,
             "arrived_fraction": iv(&self.arrived_fraction),
+            "finish_s": iv(&self.finish),
+            "finished_runs": self.finished_runs,
+            "rest_runs": self.rest_runs,
+            "mean_offset_m": iv(&self.offset_m),
             "i_d": iv(&self.window.0),
             "sigma_min_dis": iv(&self.window.1),
             "sigma_curr_eft": iv(&self.window.2),
+            "heading_change_rad_s": iv(&self.heading.0),
             "progress": {
                 "i_d": iv(&self.progress.0),
                 "sigma_min_dis": iv(&self.progress.1),
                 "sigma_curr_eft": iv(&self.progress.2),
+                "heading_change_rad_s": iv(&self.heading.1),
             },
+            "scenario": self.facts,
             "overlapping_pairs": iv(&self.overlaps),
             "min_distance_m": finite_or_null(self.min_distance_m),
             "prepare_ms": iv(&self.prepare_ms),

@@ -89,6 +89,7 @@ pub fn window_mean(
         sum.i_v += m.i_v;
         sum.sigma_min_dis_m += m.sigma_min_dis_m;
         sum.sigma_curr_eft_m += m.sigma_curr_eft_m;
+        sum.heading_change_rad_s += m.heading_change_rad_s;
         n += 1;
     }
     (n > 0).then(|| {
@@ -98,6 +99,7 @@ pub fn window_mean(
             i_v: sum.i_v / k,
             sigma_min_dis_m: sum.sigma_min_dis_m / k,
             sigma_curr_eft_m: sum.sigma_curr_eft_m / k,
+            heading_change_rad_s: sum.heading_change_rad_s / k,
         }
     })
 }
@@ -165,10 +167,12 @@ mod tests {
             i_v: 2.0 * x,
             sigma_min_dis_m: 3.0 * x,
             sigma_curr_eft_m: 4.0 * x,
+            heading_change_rad_s: 5.0 * x,
         };
         let series = (1..=10).map(|k| (k as f64 * 0.5, m(k as f64)));
         let w = window_mean(series.clone(), 2.0).unwrap();
         assert!((w.i_d - 2.5).abs() < 1e-12 && (w.sigma_curr_eft_m - 10.0).abs() < 1e-12);
+        assert!((w.heading_change_rad_s - 12.5).abs() < 1e-12);
         assert!(window_mean(series, 0.1).is_none());
     }
 

@@ -1,7 +1,9 @@
 //! The objective measures of formation-transform section 5.1: `I_d` (eq. 17, with
 //! `I_v` beside it; computed in `feedback.rs`), the spread of the agents' nearest
 //! neighbour distances `σ_min_dis` (eq. 24) and the spread of their current efforts
-//! `σ_curr_eft` (eqs. 25–26).
+//! `σ_curr_eft` (eqs. 25–26); and the crowd's heading-change rate, the
+//! "fluctuation" of moving directions section 5.3 (Fig. 12) says the feedback
+//! removes.
 
 use crate::crowd::agents::NeighbourGrid;
 use crate::geom::Vec2;
@@ -17,6 +19,59 @@ pub struct Measures {
     pub sigma_min_dis_m: f64,
     /// `σ_curr_eft`, eq. 26 (m).
     pub sigma_curr_eft_m: f64,
+    /// The mean absolute heading-change rate of the moving agents (rad/s),
+    /// [`HeadingChange`]: section 5.3's fluctuation.
+    pub heading_change_rad_s: f64,
+}
+
+/// An agent moves, for the heading-change rate, when faster than this at both
+/// ends of a step (m/s): slower, its direction is mostly the fluctuation `ξ` and
+/// the contacts' pushes, not where it walks.
+pub const MOVING_SPEED_M_S: f64 = 0.1;
+
+/// The crowd's mean absolute heading-change rate (section 5.3, Fig. 12: the
+/// "fluctuation" of the moving directions): over the agents faster than
+/// [`MOVING_SPEED_M_S`] at both the previous and the current step, the mean of
+/// `|Δθ_a| / Δt`, `Δθ_a ∈ (−π, π]` the signed angle from the previous velocity's
+/// direction to the current one (`atan2(v_prev × v, v_prev · v)`, so the wrap is
+/// exact). An agent walking a circle of radius `r` at speed `v` gives `v / r`; one
+/// walking straight 0. Zero when no agent qualifies. Keeps the previous step's
+/// velocities in a buffer sized once: no allocation per step.
+#[derive(Clone, Debug)]
+pub struct HeadingChange {
+    previous: Vec<Vec2>,
+}
+
+impl HeadingChange {
+    /// For `n` agents, all at rest before the first step.
+    pub fn new(n: usize) -> HeadingChange {
+        HeadingChange {
+            previous: vec![Vec2::zeros(); n],
+        }
+    }
+
+    /// The rate (rad/s) between the velocities of the last call and `velocities`,
+    /// `dt_s` apart; `velocities` kept for the next call. Zero for a `dt_s` that is
+    /// not positive and finite, or another number of agents (nothing kept then).
+    pub fn rate(&mut self, velocities: &[Vec2], dt_s: f64) -> f64 {
+        if velocities.len() != self.previous.len() || !(dt_s.is_finite() && dt_s > 0.0) {
+            return 0.0;
+        }
+        let moving2 = MOVING_SPEED_M_S * MOVING_SPEED_M_S;
+        let (mut sum_rad, mut k) = (0.0, 0usize);
+        for (p, v) in self.previous.iter_mut().zip(velocities) {
+            if p.norm_squared() > moving2 && v.norm_squared() > moving2 {
+                sum_rad += crate::geom::cross(*p, *v).atan2(p.dot(v)).abs();
+                k += 1;
+            }
+            *p = *v;
+        }
+        if k == 0 {
+            0.0
+        } else {
+            sum_rad / k as f64 / dt_s
+        }
+    }
 }
 
 /// Population standard deviation `sqrt(Σ (x − μ)² / N)` of the values `f(i)`,
@@ -147,6 +202,66 @@ mod tests {
             .collect();
         assert_eq!(seen, want);
         assert!(nearest[200..220].iter().any(|&d| d > c));
+    }
+
+    #[test]
+    fn heading_change_of_circle_walkers_is_speed_over_radius() {
+        // Agents on circles of radius 2 m at 1.2 m/s, starting at different
+        // angles and turning either way: v / r = 0.6 rad/s; a straight walker 0.
+        let (r_m, v_m_s, dt_s) = (2.0, 1.2, 1.0 / 60.0);
+        let omega = v_m_s / r_m;
+        let vel_at = |t: f64, k: usize| {
+            let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+            let a = k as f64 * 0.7 + sign * omega * t;
+            Vec2::new(-a.sin(), a.cos()) * (sign * v_m_s)
+        };
+        let mut h = HeadingChange::new(8);
+        let mut vel = vec![Vec2::zeros(); 8];
+        // From rest: no agent moved before, nothing to measure.
+        vel.iter_mut()
+            .enumerate()
+            .for_each(|(k, v)| *v = vel_at(0.0, k));
+        assert_eq!(h.rate(&vel, dt_s), 0.0);
+        for step in 1..=100 {
+            let t = step as f64 * dt_s;
+            vel.iter_mut()
+                .enumerate()
+                .for_each(|(k, v)| *v = vel_at(t, k));
+            let rate = h.rate(&vel, dt_s);
+            assert!((rate - omega).abs() < 1e-9, "step {step}: {rate}");
+        }
+        let mut straight = HeadingChange::new(2);
+        let walk = [Vec2::new(1.3, 0.4), Vec2::new(-0.2, 0.9)];
+        for _ in 0..10 {
+            assert_eq!(straight.rate(&walk, dt_s), 0.0);
+        }
+    }
+
+    #[test]
+    fn heading_change_wraps_and_skips_slow_agents() {
+        let dt_s = 0.5;
+        let mut h = HeadingChange::new(3);
+        let before = [
+            Vec2::new(1.0, 0.0),
+            Vec2::new(-1.0, 1e-9),
+            Vec2::new(0.05, 0.0),
+        ];
+        let _ = h.rate(&before, dt_s);
+        // Agent 0 turns a quarter left, agent 1 crosses the ±π seam by a small
+        // angle (not 2π), agent 2 is too slow to count.
+        let after = [
+            Vec2::new(0.0, 2.0),
+            Vec2::new(-1.0, -1e-9),
+            Vec2::new(0.0, 0.05),
+        ];
+        let want = (std::f64::consts::FRAC_PI_2 + 2e-9) / 2.0 / dt_s;
+        assert!((h.rate(&after, dt_s) - want).abs() < 1e-9);
+        // A reversal is π, and a wrong length or step measures nothing.
+        let back = [-after[0], -after[1], after[2]];
+        let pi_rate = std::f64::consts::PI / dt_s;
+        assert!((h.rate(&back, dt_s) - pi_rate).abs() < 1e-9);
+        assert_eq!(h.rate(&back[..2], dt_s), 0.0);
+        assert_eq!(h.rate(&back, 0.0), 0.0);
     }
 
     #[test]

@@ -9,7 +9,7 @@
 //! | subgroups by affinity propagation (eq. 20 as written, or with a spatial term and a merge of small subgroups) | `subgroups.rs`, `subgroup_merge.rs`; tests on the shipped pairs in `subgroups_shipped.rs` | 3.4, eq. 20 |
 //! | a request prepared off the control thread | `prepare.rs` | 3 |
 //! | social forces with subgroup terms, mutual-information feedback | `run.rs` (the step), `params.rs` (its constants), `social.rs` (forces), `feedback.rs` (eqs. 11–19), `crate::crowd::agents::NeighbourGrid` (neighbours and nearest distances) | 3.3, 3.5, eqs. 7–19, 21–23 |
-//! | the objective measures | `measures.rs` | 5.1, eqs. 17, 24–26 |
+//! | the objective measures, and the heading-change rate (fluctuation) | `measures.rs` | 5.1, eqs. 17, 24–26; 5.3, Fig. 12 |
 //! | the baselines of the comparison (Table 3): ORCA, RVO, OpenSteer-style steering | `baseline.rs` (one call for `run.rs`), `orca.rs`, `rvo.rs`, `steer.rs`, `nearest.rs` (their neighbour lists); runs under them in `baseline_tests.rs` | 5.4 |
 //! | comparing variants over seeds: means with 95 % intervals, a common time window, subgroup locality | `experiment.rs` | 5 |
 
@@ -34,9 +34,12 @@ mod subgroups;
 mod subgroups_shipped;
 
 pub use experiment::{interval, locality, t_975, window_mean, Interval};
-pub use measures::Measures;
+pub use measures::{HeadingChange, Measures, MOVING_SPEED_M_S};
 pub use pairing::{pair, PairCost};
 pub use prepare::{PreparedTransform, TransformError, TransformPlan, TransformRequest};
-pub use run::{MoveParams, Mover, RunSummary, StepReport, TransformRun, OVERLAP_TOLERANCE_M};
+pub use run::{
+    MoveParams, Mover, RunSummary, StepReport, TransformRun, OVERLAP_TOLERANCE_M, REST_HOLD_S,
+    REST_SPEED_M_S,
+};
 pub use subgroup_merge::{min_group_size, MIN_SIZE_PER_SQRT_N};
 pub use subgroups::{subgroups, ApParams, Preference, Similarity, Subgroups, SPATIAL_WEIGHT};

@@ -60,7 +60,7 @@
 
 use super::baseline::Baseline;
 use super::feedback::{Feedback, Information};
-use super::measures::{nearest_distances, sigma_curr_eft, spread_and_min, Measures};
+use super::measures::{nearest_distances, sigma_curr_eft, spread_and_min, HeadingChange, Measures};
 pub use super::params::{MoveParams, Mover};
 use super::prepare::TransformPlan;
 use super::social::{self, Groups};
@@ -92,6 +92,15 @@ const WIDE_SWAP_PERIOD_S: f64 = 0.25;
 
 /// How far apart two agents may be for that wider exchange, in agent radii.
 const WIDE_SWAP_RADII: f64 = 4.0;
+
+/// Without settling, the crowd is at rest when no agent is faster than this
+/// (m/s): the fluctuation `ξ` alone keeps a standing agent below `ξ τ` (0.04 m/s
+/// at the defaults), an agent still walking is far above.
+pub const REST_SPEED_M_S: f64 = 0.1;
+
+/// Without settling, a run ends once the crowd has stayed at rest this long (s);
+/// it came to rest when this began.
+pub const REST_HOLD_S: f64 = 1.0;
 
 /// Cell side of the grid the report finds nearest neighbours with, in agent radii.
 const NEAREST_CELL_RADII: f64 = 3.0;
@@ -140,6 +149,13 @@ pub struct RunSummary {
     pub timed_out: bool,
     /// Pairs of agents that exchanged targets to undo a head-on block (step 6).
     pub swaps: u64,
+    /// Without settling: when the crowd came to rest (no agent faster than
+    /// [`REST_SPEED_M_S`] from then on, for [`REST_HOLD_S`] at least), whether or
+    /// not every agent is at its target then (s). `None` with settling, or when it
+    /// never rested that long.
+    pub rest_s: Option<f64>,
+    /// Mean distance of the agents from their targets at the end (m).
+    pub mean_offset_m: f64,
 }
 
 /// A transform in progress; the agents' positions and velocities stay the caller's.
@@ -178,6 +194,8 @@ pub struct TransformRun {
     travel: Vec<f64>,
     nearest: Vec<f64>,
     overlapped: HashSet<(u32, u32)>,
+    /// The previous step's velocities, for the heading-change rate.
+    heading: HeadingChange,
     /// Positions and velocities the last report measured, with what it found:
     /// while the next step starts from them bit for bit, its first substep takes
     /// `I_d`, `I_v` (and the bins they left in `feedback`) from the report
@@ -190,6 +208,11 @@ pub struct TransformRun {
     next_wide_swap_s: f64,
     steps: u64,
     swaps: u64,
+    /// Without settling: since when no agent has been faster than
+    /// [`REST_SPEED_M_S`] (s of the run).
+    rest_since_s: Option<f64>,
+    /// Mean distance to target at the last report (m).
+    mean_offset_m: f64,
     sum: Measures,
     min_distance_m: f64,
     last: StepReport,
@@ -236,6 +259,7 @@ impl TransformRun {
             travel: vec![0.0; n],
             nearest: vec![0.0; n],
             overlapped: HashSet::with_capacity(4 * n),
+            heading: HeadingChange::new(n),
             reported_pos: vec![Vec2::zeros(); n],
             reported_vel: vec![Vec2::zeros(); n],
             reported: None,
@@ -243,6 +267,8 @@ impl TransformRun {
             next_wide_swap_s: WIDE_SWAP_PERIOD_S,
             steps: 0,
             swaps: 0,
+            rest_since_s: None,
+            mean_offset_m: 0.0,
             sum: Measures::default(),
             min_distance_m: f64::INFINITY,
             last: StepReport::default(),
@@ -288,8 +314,19 @@ impl TransformRun {
         }
         self.elapsed_s += dt_s;
         self.steps += 1;
-        let report = self.report(positions, velocities);
+        let report = self.report(positions, velocities, dt_s);
         self.last = report;
+        if !self.p.settling {
+            let fastest2 = velocities
+                .iter()
+                .map(|v| v.norm_squared())
+                .fold(0.0, f64::max);
+            self.rest_since_s = if fastest2 < REST_SPEED_M_S * REST_SPEED_M_S {
+                self.rest_since_s.or(Some(self.elapsed_s))
+            } else {
+                None
+            };
+        }
         report
     }
 
@@ -634,12 +671,17 @@ impl TransformRun {
     }
 
     /// The measures and contacts now.
-    fn report(&mut self, pos: &[Vec2], vel: &[Vec2]) -> StepReport {
+    fn report(&mut self, pos: &[Vec2], vel: &[Vec2], dt_s: f64) -> StepReport {
         let n = pos.len();
         let two_r = 2.0 * self.p.radius_m;
-        let arrived = (0..n)
-            .filter(|&i| (pos[i] - self.targets[i]).norm() <= self.p.arrive_m)
-            .count();
+        let mut arrived = 0usize;
+        let mut offset_sum_m = 0.0;
+        for (p, t) in pos.iter().zip(&self.targets) {
+            let d = (p - t).norm();
+            offset_sum_m += d;
+            arrived += usize::from(d <= self.p.arrive_m);
+        }
+        self.mean_offset_m = if n == 0 { 0.0 } else { offset_sum_m / n as f64 };
         // The nearest neighbour of an agent in a crowd is almost always within a
         // few radii: a grid of that cell side visits far fewer pairs than one of
         // the interaction range (a tenth in a packed crowd), and the ring search
@@ -672,11 +714,13 @@ impl TransformRun {
             i_v: info.i_v,
             sigma_min_dis_m,
             sigma_curr_eft_m: sigma_curr_eft(&self.sources, pos),
+            heading_change_rad_s: self.heading.rate(vel, dt_s),
         };
         self.sum.i_d += measures.i_d;
         self.sum.i_v += measures.i_v;
         self.sum.sigma_min_dis_m += measures.sigma_min_dis_m;
         self.sum.sigma_curr_eft_m += measures.sigma_curr_eft_m;
+        self.sum.heading_change_rad_s += measures.heading_change_rad_s;
         self.min_distance_m = self.min_distance_m.min(min_d);
         StepReport {
             arrived,
@@ -692,9 +736,17 @@ impl TransformRun {
     }
 
     /// Every agent arrived and settled (without settling: every agent within
-    /// `arrive_m` of its target at the last step), or the timeout passed.
+    /// `arrive_m` of its target at the last step, or the crowd at rest for
+    /// [`REST_HOLD_S`]), or the timeout passed.
     pub fn done(&self) -> bool {
-        self.all_arrived() || self.elapsed_s >= self.p.timeout_s
+        self.all_arrived() || self.rested().is_some() || self.elapsed_s >= self.p.timeout_s
+    }
+
+    /// Without settling: when the crowd came to rest, once it has stayed so for
+    /// [`REST_HOLD_S`] (s of the run).
+    fn rested(&self) -> Option<f64> {
+        self.rest_since_s
+            .filter(|&t| self.elapsed_s - t >= REST_HOLD_S - 1e-9)
     }
 
     fn all_arrived(&self) -> bool {
@@ -713,6 +765,16 @@ impl TransformRun {
     /// Agent `i`'s target is `targets()[i]` (m).
     pub fn targets(&self) -> &[Vec2] {
         &self.targets
+    }
+
+    /// Moves every target by `by_m` (a formation whose anchor travels, the
+    /// transforms along a path of section 4, Figs. 6–7); the subgroups' target
+    /// layouts move with them. Settled agents whose target left them walk again.
+    pub fn shift_targets(&mut self, by_m: Vec2) {
+        for t in &mut self.targets {
+            *t += by_m;
+        }
+        self.groups.shift_targets(by_m);
     }
 
     /// Whether agent `i` has arrived and settled.
@@ -742,9 +804,14 @@ impl TransformRun {
                 i_v: self.sum.i_v / steps,
                 sigma_min_dis_m: self.sum.sigma_min_dis_m / steps,
                 sigma_curr_eft_m: self.sum.sigma_curr_eft_m / steps,
+                heading_change_rad_s: self.sum.heading_change_rad_s / steps,
             },
-            timed_out: self.elapsed_s >= self.p.timeout_s && !self.all_arrived(),
+            timed_out: self.elapsed_s >= self.p.timeout_s
+                && !self.all_arrived()
+                && self.rested().is_none(),
             swaps: self.swaps,
+            rest_s: self.rested(),
+            mean_offset_m: self.mean_offset_m,
         }
     }
 }

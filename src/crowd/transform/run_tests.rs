@@ -667,3 +667,80 @@ fn the_additions_have_switches() {
     assert!(!ever_settled);
     assert!(!sum.timed_out && sum.arrived_fraction == 1.0, "{sum:?}");
 }
+
+/// Without settling, a crowd held off its targets comes to rest short of them:
+/// the run ends then (not at the timeout), says when, and how far off the
+/// agents stand. Three agents sent to one point cannot all be within a radius
+/// of it (their discs would overlap); repulsion (eq. 10) holds them apart.
+#[test]
+fn without_settling_a_crowd_held_off_its_targets_ends_at_rest() {
+    const N: usize = 3;
+    let p = MoveParams::default().with_radius(0.15).paper();
+    let s = [
+        Vec2::new(0.0, 0.0),
+        Vec2::new(4.0, 0.0),
+        Vec2::new(2.0, 3.5),
+    ];
+    let t = [Vec2::new(2.0, 1.2); N];
+    let mut run = TransformRun::new(&plan(&s, &t, vec![0; N]), &p, 3);
+    let (mut pos, mut vel) = (s, [Vec2::zeros(); N]);
+    let last = run_out(&mut run, &mut pos, &mut vel, p.timeout_s + 1.0, None);
+    let sum = run.summary();
+    assert!(!sum.timed_out, "{sum:?}");
+    let rest = sum
+        .rest_s
+        .unwrap_or_else(|| panic!("came to rest: {sum:?} {last:?}"));
+    assert!(
+        rest > 1.0 && rest + REST_HOLD_S <= sum.simulated_s + 1e-6,
+        "{sum:?}"
+    );
+    assert!(last.arrived < N, "some stand off their targets: {last:?}");
+    assert!(vel.iter().all(|v| v.norm() < REST_SPEED_M_S), "{vel:?}");
+    let offset = pos.iter().zip(&t).map(|(a, b)| (a - b).norm()).sum::<f64>() / N as f64;
+    assert!(
+        (sum.mean_offset_m - offset).abs() < 1e-9,
+        "{sum:?} {offset}"
+    );
+    assert!(offset > p.radius_m && offset < 1.0, "{offset}");
+
+    // With settling the same three still cannot all arrive, and the run goes on
+    // to its timeout: no rest is reported.
+    let q = MoveParams {
+        timeout_s: 5.0,
+        ..MoveParams::default().with_radius(0.15)
+    };
+    let mut run = TransformRun::new(&plan(&s, &t, vec![0; N]), &q, 3);
+    let (mut pos, mut vel) = (s, [Vec2::zeros(); N]);
+    run_out(&mut run, &mut pos, &mut vel, q.timeout_s + 1.0, None);
+    assert_eq!(run.summary().rest_s, None);
+    assert!(run.summary().timed_out);
+}
+
+#[test]
+fn a_lone_agent_follows_shifted_targets_and_walks_straight() {
+    // Without fluctuation a lone agent walks a straight line: no heading change
+    // in any step. Its target moved 5 m sideways while it walks, it turns (a
+    // positive rate) and arrives at the moved target; the summary averages it.
+    let p = MoveParams {
+        fluctuation_m_s2: 0.0,
+        ..MoveParams::default()
+    };
+    let (s, t) = (Vec2::new(0.0, 0.0), Vec2::new(8.0, 0.0));
+    let mut run = TransformRun::new(&plan(&[s], &[t], vec![0]), &p, 1);
+    let (mut pos, mut vel) = ([s], [Vec2::zeros()]);
+    for _ in 0..60 {
+        let r = run.step(&mut pos, &mut vel, DT_S, None);
+        assert!(r.measures.heading_change_rad_s.abs() < 1e-9, "{r:?}");
+    }
+    run.shift_targets(Vec2::new(0.0, 5.0));
+    assert_eq!(run.targets()[0], Vec2::new(8.0, 5.0));
+    let mut turned: f64 = 0.0;
+    while !run.done() {
+        let r = run.step(&mut pos, &mut vel, DT_S, None);
+        turned = turned.max(r.measures.heading_change_rad_s);
+    }
+    let sum = run.summary();
+    assert!(!sum.timed_out && (pos[0] - Vec2::new(8.0, 5.0)).norm() <= p.arrive_m);
+    assert!(turned > 0.1, "{turned}");
+    assert!(sum.mean.heading_change_rad_s > 0.0 && sum.mean.heading_change_rad_s < turned);
+}

@@ -79,6 +79,13 @@ impl Groups {
 
     /// Agents `i` and `j` exchanged targets `ti` and `tj` (`i` had `ti`): the
     /// groups' target centroids follow.
+    /// Every target moved by `by_m`: the target centroids with them.
+    pub(crate) fn shift_targets(&mut self, by_m: Vec2) {
+        for c in &mut self.tgt_c {
+            *c += by_m;
+        }
+    }
+
     pub(crate) fn swapped(&mut self, i: usize, j: usize, ti: Vec2, tj: Vec2) {
         let (gi, gj) = (self.group_of[i] as usize, self.group_of[j] as usize);
         if gi != gj {
