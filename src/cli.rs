@@ -172,7 +172,7 @@ enum Cmd {
     /// Run a formation transform headless (formation-transform): `--from A --to B`
     /// (formation names or files) on a virtual clock, reporting arrival, contacts,
     /// travel, the paper's measures and step times; `transform compare` runs the
-    /// paper's comparisons (pairing costs, feedback off, ORCA).
+    /// paper's comparisons (pairing costs, feedback off, ORCA, RVO, steering).
     Transform(transform::TransformCmd),
     /// Crowd motion editing (crowd-motion-editing) on track files: `edit check` finds
     /// collisions between people in space-time.

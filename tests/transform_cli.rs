@@ -302,7 +302,9 @@ fn compare_json_has_a_row_per_variant_with_intervals_and_switches() {
                 "euclidean",
                 "manhattan",
                 "no-feedback",
-                "orca"
+                "orca",
+                "rvo",
+                "steering"
             ]
         );
         for r in rows {
@@ -319,7 +321,7 @@ fn compare_json_has_a_row_per_variant_with_intervals_and_switches() {
                 assert!(r[k]["ci95"].as_f64().unwrap() >= 0.0, "`{k}` of {r}");
             }
             assert!(r["arrival_s"].get("mean").is_some() && r["arrival_s"].get("ci95").is_some());
-            let paper = preset.is_some() || r["mover"] == "orca";
+            let paper = preset.is_some() || r["mover"] != "social-force";
             for k in ["exchanges", "contacts", "settling", "fades"] {
                 assert_eq!(r[k], !paper, "`{k}` of {r}");
             }
@@ -327,9 +329,17 @@ fn compare_json_has_a_row_per_variant_with_intervals_and_switches() {
                 assert_eq!(r["swaps"]["mean"], 0.0, "{r}");
             }
         }
-        let orca = &rows[5];
-        assert_eq!(orca["mover"], "orca");
-        assert_eq!(orca["feedback"], false);
+        // The Table 3 baselines: on the least-effort pairing, without feedback,
+        // exchanges or any other addition of the project.
+        for (row, mover) in [(5, "orca"), (6, "rvo"), (7, "steering")] {
+            let b = &rows[row];
+            assert_eq!(b["mover"], mover, "{b}");
+            assert_eq!(b["cost"], rows[0]["cost"], "{b}");
+            assert_eq!(b["feedback"], false, "{b}");
+            assert_eq!(b["exchanges"], false, "{b}");
+            assert_eq!(b["subgroup_forces"], false, "{b}");
+            assert_eq!(b["swaps"]["mean"], 0.0, "{b}");
+        }
         assert_eq!(rows[4]["feedback"], false);
         assert_eq!(rows[0]["feedback"], true);
         assert_eq!(rows[1]["lambda"], 1.0);
@@ -726,7 +736,8 @@ fn subgroup_attraction_as_printed_runs_and_is_reported() {
     let cmp = ["compare", "--seeds", "1"];
     let v = json_of(&run(&[&cmp[..], &args[..], &tail[..]].concat()));
     for r in v["rows"].as_array().unwrap() {
-        let want = if r["variant"] == "orca" {
+        // The baselines (ORCA, RVO, steering) have no subgroup forces.
+        let want = if r["subgroup_forces"] == false {
             Value::Null
         } else {
             Value::from("as-printed")

@@ -53,8 +53,9 @@ pub struct TransformCmd {
 pub enum TransformSub {
     /// The paper's comparisons over `--seeds` starts: least-effort (and λ = 1),
     /// Euclidean and Manhattan pairing (section 5.2, Table 2), without the
-    /// mutual-information feedback (section 5.3), and ORCA as RVO2 runs it on
-    /// the least-effort pairing (section 5.4); means and 95 % intervals of the
+    /// mutual-information feedback (section 5.3), and the Table 3 baselines on
+    /// the least-effort pairing (section 5.4): ORCA as RVO2 runs it, RVO as its
+    /// library ran it, OpenSteer-style steering; means and 95 % intervals of the
     /// arrival time, the three measures over a common window and the exchanges of
     /// targets; `--preset paper` without the project's additions; `--svg` plots
     /// the first seed's measures over time.

@@ -10,11 +10,15 @@
 //! | `manhattan` | Manhattan | social forces | on | 5.2, Table 2 |
 //! | `no-feedback` | ΔE, eq. 3 | social forces | off | 5.3 |
 //! | `orca` | ΔE, eq. 3 | ORCA as RVO2 runs it | off | 5.4, Table 3 |
+//! | `rvo` | ΔE, eq. 3 | RVO as the RVO library ran it | off | 5.4, Table 3 |
+//! | `steering` | ΔE, eq. 3 | OpenSteer-style steering | off | 5.4, Table 3 |
 //!
 //! The social-force rows use the config's movement model, with the project's
 //! additions (fades, settling, positional contacts, exchanges of targets) unless
-//! `--preset paper` turns them off; the ORCA row never has them
-//! ([`MoveParams::rvo2_orca`]). Each row gives, over the seeds, the mean and the
+//! `--preset paper` turns them off; the baseline rows never have them
+//! ([`MoveParams::rvo2_orca`], [`MoveParams::rvo`], [`MoveParams::steering`]).
+//! The baselines, what they are and are not, are in docs/transforms.md
+//! ("Baselines"). Each row gives, over the seeds, the mean and the
 //! 95 % confidence interval of the arrival time, of the three measures of section
 //! 5.1 averaged over a *common window* (the first seconds every run of every row
 //! lasted, or `--window`) and over each run's own length (normalised progress), the
@@ -314,7 +318,7 @@ fn pm(i: &Interval, digits: usize) -> String {
     format!("{:.digits$} ± {:.digits$}", i.mean, i.ci95)
 }
 
-/// One seed: the four pairings and the six runs, in `scenario`.
+/// One seed: the four pairings and the eight runs, in `scenario`.
 fn one_seed(
     setup: &Setup,
     preset: Option<Preset>,
@@ -404,7 +408,9 @@ fn one_seed(
     let mut quiet = social.clone();
     quiet.feedback = false;
     add("no-feedback", &least, 0.0, quiet);
-    add("orca", &least, 0.0, moves.rvo2_orca());
+    add("orca", &least, 0.0, moves.clone().rvo2_orca());
+    add("rvo", &least, 0.0, moves.clone().rvo());
+    add("steering", &least, 0.0, moves.steering());
     Ok((variants, facts, stage))
 }
 
@@ -567,6 +573,8 @@ impl Row {
     fn mover_label(&self) -> String {
         match self.params.mover {
             Mover::Orca => "ORCA (RVO2)".to_string(),
+            Mover::Rvo => "RVO (sampled)".to_string(),
+            Mover::Steering => "steering".to_string(),
             Mover::SocialForce => format!(
                 "SF, MI {}{}",
                 super::transform::on_off(self.params.feedback),
@@ -680,10 +688,12 @@ impl GroupSummary {
     }
 }
 
-/// `social-force` or `orca`.
+/// `social-force`, `orca`, `rvo` or `steering`.
 pub fn mover_name(m: Mover) -> &'static str {
     match m {
         Mover::SocialForce => "social-force",
         Mover::Orca => "orca",
+        Mover::Rvo => "rvo",
+        Mover::Steering => "steering",
     }
 }

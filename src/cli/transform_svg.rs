@@ -31,8 +31,8 @@ const CUT_FACTOR: f64 = 3.0;
 /// The time axis is never cut shorter than this (s).
 const MIN_CUT_S: f64 = 10.0;
 /// Colours of the compare variants, in their order.
-const VARIANT_COLOURS: [&str; 6] = [
-    "#1f4e9c", "#17becf", "#e07b00", "#2b9348", "#8e44ad", "#c0392b",
+const VARIANT_COLOURS: [&str; 8] = [
+    "#1f4e9c", "#17becf", "#e07b00", "#2b9348", "#8e44ad", "#c0392b", "#7f6000", "#555555",
 ];
 
 /// Subgroup `k`'s colour: hues a golden angle apart.
@@ -339,6 +339,8 @@ pub fn measures_plot(variants: &[Variant], title: &str) -> String {
             v.cost.name(),
             match v.mover() {
                 crowdtouch::crowd::transform::Mover::Orca => "ORCA".to_string(),
+                crowdtouch::crowd::transform::Mover::Rvo => "RVO".to_string(),
+                crowdtouch::crowd::transform::Mover::Steering => "steering".to_string(),
                 crowdtouch::crowd::transform::Mover::SocialForce => format!(
                     "social forces, feedback {}",
                     super::transform::on_off(v.feedback())
@@ -523,11 +525,13 @@ pub fn lambda_plot(points: &[SweepPoint], title: &str) -> String {
 }
 
 /// The dash of variant `i`'s curve: the variants sharing the least-effort
-/// pairing (no feedback, ORCA) dashed.
+/// pairing (no feedback, ORCA, RVO, steering) dashed.
 fn dash(i: usize) -> &'static str {
     match i {
         4 => r##" stroke-dasharray="6 3""##,
         5 => r##" stroke-dasharray="2 2""##,
+        6 => r##" stroke-dasharray="8 2 2 2""##,
+        7 => r##" stroke-dasharray="1 3""##,
         _ => "",
     }
 }

@@ -10,21 +10,27 @@
 //! | a request prepared off the control thread | `prepare.rs` | 3 |
 //! | social forces with subgroup terms, mutual-information feedback | `run.rs` (the step), `params.rs` (its constants), `social.rs` (forces), `social_groups.rs` (eq. 21 three ways, the subgroup as a whole on its Delaunay graph), `feedback.rs` (eqs. 11–19), `crate::crowd::agents::NeighbourGrid` (neighbours and nearest distances) | 3.3, 3.5, eqs. 7–19, 21–23; 3 step 3 |
 //! | the objective measures, and the heading-change rate (fluctuation) | `measures.rs` | 5.1, eqs. 17, 24–26; 5.3, Fig. 12 |
-//! | the ORCA baseline of the comparison | `orca.rs` | 5.4 |
+//! | the baselines of the comparison (Table 3): ORCA, RVO, OpenSteer-style steering | `baseline.rs` (one call for `run.rs`), `orca.rs`, `rvo.rs`, `steer.rs`, `nearest.rs` (their neighbour lists); runs under them in `baseline_tests.rs` | 5.4 |
 //! | comparing variants over seeds: means with 95 % intervals, a common time window, subgroup locality | `experiment.rs` | 5 |
 
+mod baseline;
+#[cfg(test)]
+mod baseline_tests;
 mod experiment;
 mod feedback;
 mod measures;
+mod nearest;
 mod orca;
 mod pairing;
 mod params;
 mod prepare;
 mod run;
+mod rvo;
 mod social;
 mod social_groups;
 #[cfg(test)]
 mod social_groups_tests;
+mod steer;
 mod subgroup_merge;
 mod subgroups;
 #[cfg(test)]

@@ -1,5 +1,5 @@
 //! How a transform moves the agents: the mover and its parameters (SI units),
-//! apart from `run.rs` so that the force and ORCA modules read them without an
+//! apart from `run.rs` so that the force and baseline modules read them without an
 //! import cycle.
 
 /// What moves the agents.
@@ -10,6 +10,10 @@ pub enum Mover {
     SocialForce,
     /// ORCA (the comparison of section 5.4) on the same pairing.
     Orca,
+    /// RVO (VdBLM08) by sampled velocities, as its library ran it (`rvo.rs`).
+    Rvo,
+    /// OpenSteer-style steering behaviours (Reynolds 1999; `steer.rs`).
+    Steering,
 }
 
 /// The subgroup attraction of eq. 21 (formation-transform section 3.5), or the
@@ -167,6 +171,24 @@ impl MoveParams {
         self.feedback = false;
         self.subgroup_forces = false;
         self.paper()
+    }
+
+    /// RVO as the RVO library ran it (the paper's Table 3 baseline, `rvo.rs`):
+    /// like [`rvo2_orca`](Self::rvo2_orca), none of the project's additions.
+    pub fn rvo(self) -> MoveParams {
+        MoveParams {
+            mover: Mover::Rvo,
+            ..self.rvo2_orca()
+        }
+    }
+
+    /// OpenSteer-style steering (the paper's Table 3 baseline, `steer.rs`): like
+    /// [`rvo2_orca`](Self::rvo2_orca), none of the project's additions.
+    pub fn steering(self) -> MoveParams {
+        MoveParams {
+            mover: Mover::Steering,
+            ..self.rvo2_orca()
+        }
     }
 
     /// These parameters for agents of radius `radius_m`. Agents smaller than

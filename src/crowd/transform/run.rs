@@ -1,8 +1,8 @@
 //! A transform running: each agent walks to its target by the social force model
 //! with subgroup terms and mutual-information feedback (formation-transform
-//! sections 3.3, 3.5; forces in `social.rs`, feedback in `feedback.rs`), or by ORCA
-//! (`orca.rs`, the comparison of section 5.4); the measures of section 5.1 every
-//! step.
+//! sections 3.3, 3.5; forces in `social.rs`, feedback in `feedback.rs`), or by one
+//! of the baselines of section 5.4 (`baseline.rs`: ORCA, RVO, steering); the
+//! measures of section 5.1 every step.
 //!
 //! # One step
 //! In substeps of at most [`MoveParams::max_substep_s`]:
@@ -58,9 +58,9 @@
 //! the next step reuses the report's `I_d`, `I_v` while it starts from exactly the
 //! reported positions and velocities.
 
+use super::baseline::Baseline;
 use super::feedback::{Feedback, Information};
 use super::measures::{nearest_distances, sigma_curr_eft, spread_and_min, HeadingChange, Measures};
-use super::orca::Orca;
 pub use super::params::{MoveParams, Mover, SubgroupAttraction};
 use super::prepare::TransformPlan;
 use super::social;
@@ -175,7 +175,8 @@ pub struct TransformRun {
     rng: SplitMix64,
     groups: Groups,
     feedback: Feedback,
-    orca: Option<Orca>,
+    /// ORCA, RVO or steering; `None`: social forces.
+    baseline: Option<Baseline>,
     grid: NeighbourGrid,
     /// Grid for the candidate contact pairs of the overlap rounds.
     contact_grid: NeighbourGrid,
@@ -249,7 +250,7 @@ impl TransformRun {
                     .clamp(0.0, params.max_speed_m_s)
             })
             .collect();
-        let orca = (params.mover == Mover::Orca).then(|| Orca::new(n));
+        let baseline = Baseline::new(params.mover, n, seed);
         TransformRun {
             groups: Groups::new(
                 &plan.subgroups.group_of,
@@ -258,7 +259,7 @@ impl TransformRun {
                 params.subgroup_attraction,
             ),
             feedback: Feedback::new(n, params.bin_m, params.sectors),
-            orca,
+            baseline,
             grid: NeighbourGrid::with_capacity(n),
             contact_grid: NeighbourGrid::with_capacity(n),
             contacts: vec![(0, 0); 4 * n],
@@ -419,8 +420,8 @@ impl TransformRun {
     ) {
         let n = pos.len();
         self.desire(pos, vel);
-        if self.orca.is_some() {
-            // ORCA: the wanted velocity made collision-free for a time horizon.
+        if self.baseline.is_some() {
+            // ORCA, RVO or steering: the wanted velocity made (or steered) clear.
             for i in 0..n {
                 self.acc[i] = if self.settled[i] {
                     Vec2::zeros()
@@ -428,10 +429,10 @@ impl TransformRun {
                     self.wanted(i)
                 };
             }
-            let Some(orca) = &mut self.orca else {
+            let Some(baseline) = &mut self.baseline else {
                 return;
             };
-            orca.velocities(pos, vel, &self.acc, &self.settled, &self.p, h);
+            baseline.velocities(pos, vel, &self.acc, &self.dist, &self.settled, &self.p, h);
             for i in 0..n {
                 if !self.settled[i] {
                     pos[i] += vel[i] * h;
