@@ -10,7 +10,11 @@ over a common window, each a mean with its 95 % confidence interval over the
 seeds, the exchanges of targets per run, the
 subgroups' convergence and locality, and for each of Table 2's orderings whether
 it is reproduced (the intervals are apart in the paper's direction), reversed
-(apart the other way) or not told apart.
+(apart the other way) or not told apart. The Table 2 tables have the rows
+least-effort, travel-only, euclidean, manhattan, no-feedback and orca; one more
+table (Table 3) puts least effort with `--preset paper` against the baselines
+ORCA, RVO and steering on square → arrow, with 5 seeds and a 30 s timeout (RVO
+steps cost about 60 ms at 300 agents and its runs go to the timeout).
 
     python3 benches/transform_report.py [--binary B] [--seeds N] [--agents N]
                                         [--timeout S] [--scenario NAME] [--out FILE | --check FILE]
@@ -41,6 +45,14 @@ END = "<!-- transform-report:end -->"
 # Table 3 of the paper: "our method" against these rows of `compare`.
 BASELINES = [("orca", "ORCA"), ("rvo", "RVO"), ("steering", "OpenSteer-style steering")]
 
+# The rows of the Table 2 tables; the slow baselines (RVO above all) get a table
+# of their own with fewer seeds (`BASELINE_*`).
+TABLE2_VARIANTS = "least-effort,travel-only,euclidean,manhattan,no-feedback,orca"
+BASELINE_PAIR = ("square", "arrow")
+BASELINE_VARIANTS = "least-effort,orca,rvo,steering"
+BASELINE_SEEDS = 5
+BASELINE_TIMEOUT_S = 30.0
+
 ORDERINGS = [
     ("finish_s", "time (arrival, or rest)"),
     ("i_d", "I_d"),
@@ -49,10 +61,11 @@ ORDERINGS = [
 ]
 
 
-def compare(binary, frm, to, agents, seeds, preset, timeout, scenario="direct"):
+def compare(binary, frm, to, agents, seeds, preset, timeout, scenario="direct",
+            variants=TABLE2_VARIANTS):
     cmd = [binary, "transform", "compare", "--from", frm, "--to", to,
            "--agents", str(agents), "--seeds", str(seeds), "--seed", "1", "--json",
-           "--scenario", scenario]
+           "--scenario", scenario, "--variants", variants]
     if preset:
         cmd += ["--preset", preset]
     if timeout:
@@ -103,7 +116,7 @@ def verdicts(text):
     for line in text.splitlines():
         if line.startswith("#### "):
             heading, in_table = line[5:].strip(), False
-        elif line.startswith("| Table 2 ordering"):
+        elif line.startswith("| Table 2 ordering") or line.startswith("| Table 3 ordering"):
             in_table = True
         elif in_table and line.startswith("|") and not line.startswith("|---"):
             out.append((heading, " ".join(line.split())))
@@ -167,6 +180,41 @@ def section(results, seeds, agents, timeout, scenario="direct"):
     return "\n".join(lines) + "\n"
 
 
+def baseline_section(v, secs, scenario="direct"):
+    """Table 3: the paper's method (least effort, `--preset paper`) against the
+    baselines, fewer seeds."""
+    lines = []
+    say = lines.append
+    frm, to = BASELINE_PAIR
+    say(f"#### Table 3: {frm} → {to}, {v['agents']} agents, `--preset paper` against the baselines")
+    say("")
+    say(f"`transform compare --from {frm} --to {to} --agents {v['agents']} --seeds {v['seeds']} "
+        f"--seed 1 --preset paper --timeout {BASELINE_TIMEOUT_S:.0f} --variants {BASELINE_VARIANTS}"
+        + (f" --scenario {scenario}" if scenario != "direct" else "")
+        + f" --json`: {v['seeds']} seeds (the RVO rows run to the timeout at about 60 ms a "
+        f"step), window {v['window_s']:.2f} s; {secs:.0f} s to run.")
+    say("")
+    say("| variant | time (s) [n, at rest] | all in (%) | off target (m) | I_d (bits) | σ_min_dis (m) | σ_curr_eft (m) | turn (rad/s) | overlapping pairs a run |")
+    say("|---|---|---|---|---|---|---|---|---|")
+    for r in v["rows"]:
+        af = r["arrived_fraction"]["mean"]
+        say(f"| {r['variant']} | {iv(r['finish_s'], 2)} [{r['finished_runs']}, {r['rest_runs']}] | "
+            f"{100 * af:.1f} | {iv(r['mean_offset_m'], 3)} | {iv(r['i_d'], 3)} | "
+            f"{iv(r['sigma_min_dis'], 4)} | {iv(r['sigma_curr_eft'], 3)} | "
+            f"{iv(r.get('heading_change_rad_s'), 3)} | {iv(r.get('overlapping_pairs'), 1)} |")
+    say("")
+    rows = {r["variant"]: r for r in v["rows"]}
+    le = rows["least-effort"]
+    present = [(b, label) for b, label in BASELINES if b in rows]
+    say("| Table 3 ordering (social forces lower) | "
+        + " | ".join(f"against {label}" for _, label in present) + " |")
+    say("|---" * (len(present) + 1) + "|")
+    for key, label in ORDERINGS:
+        say(f"| {label} | " + " | ".join(verdict(le[key], rows[b][key]) for b, _ in present) + " |")
+    say("")
+    return "\n".join(lines) + "\n"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--binary", default="target/release/crowdtouch")
@@ -184,11 +232,16 @@ def main():
             results[(frm, to, preset)] = compare(a.binary, frm, to, a.agents, a.seeds, preset,
                                                  a.timeout, a.scenario)
             print(f"{frm} -> {to} {preset or 'default'}: {results[(frm, to, preset)][1]:.1f} s", file=sys.stderr)
-    text = section(results, a.seeds, a.agents, a.timeout, a.scenario)
+    frm, to = BASELINE_PAIR
+    base = compare(a.binary, frm, to, a.agents, min(a.seeds, BASELINE_SEEDS), "paper",
+                   BASELINE_TIMEOUT_S, a.scenario, BASELINE_VARIANTS)
+    print(f"{frm} -> {to} baselines: {base[1]:.1f} s", file=sys.stderr)
+    text = section(results, a.seeds, a.agents, a.timeout, a.scenario) + "\n" + baseline_section(*base, a.scenario)
     if a.check is not None:
         bad = []
         for (frm, to, preset), (v, _) in results.items():
             bad += check_rows(v, f"{frm} -> {to} {preset or 'default'}")
+        bad += check_rows(base[0], "baselines")
         doc = open(a.check, encoding="utf-8").read()
         if BEGIN not in doc or END not in doc:
             print(f"{a.check}: no {BEGIN} … {END} markers", file=sys.stderr)

@@ -670,6 +670,48 @@ fn a_lambda_sweep_changes_the_pairing_and_the_measures() {
     assert!(text.contains("λ") && text.contains("normalised"), "{text}");
 }
 
+/// `compare --variants` runs the rows named, in the table's order, each as it
+/// runs among all of them (the same seeded runs).
+#[test]
+fn compare_runs_the_rows_named() {
+    let compare = |extra: &[&str]| {
+        let out = bin()
+            .args(["transform", "compare", "--from", "square", "--to", "arrow"])
+            .args([
+                "--agents",
+                "30",
+                "--seeds",
+                "2",
+                "--json",
+                "--timeout",
+                "20",
+            ])
+            .args(extra)
+            .output()
+            .unwrap();
+        json_of(&out)
+    };
+    let some = compare(&["--variants", "orca,least-effort"]);
+    let names: Vec<&str> = some["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["variant"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["least-effort", "orca"], "{some}");
+    assert_eq!(some["subgroups"]["count"]["n"], 2, "{some}");
+    let all = compare(&[]);
+    let rows = all["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 8, "{all}");
+    for r in some["rows"].as_array().unwrap() {
+        let same = rows.iter().find(|x| x["variant"] == r["variant"]).unwrap();
+        // Per-run figures (the windowed measures depend on every row's length).
+        for k in ["finish_s", "arrived_fraction", "swaps", "mean_offset_m"] {
+            assert_eq!(r[k], same[k], "{k}: {r} against {same}");
+        }
+    }
+}
+
 #[test]
 fn bad_compare_options_are_clear_errors() {
     let compare = |extra: &[&str]| {
@@ -712,6 +754,14 @@ fn bad_compare_options_are_clear_errors() {
     clap_error(
         &compare(&["--lambdas", "0,x"]),
         "invalid value 'x' for '--lambdas",
+    );
+    assert_error(
+        &compare(&["--variants", "least-effort,rvo2"]),
+        &["--variants: no row \"rvo2\"; the rows are least-effort, travel-only"],
+    );
+    assert_error(
+        &compare(&["--variants", "orca", "--lambdas", "0.5"]),
+        &["--variants and --lambdas do not go together"],
     );
     assert_error(
         &bin()

@@ -80,7 +80,25 @@ pub struct CompareArgs {
     /// config's `formations.transform.subgroup_attraction`, `place`).
     #[arg(long, value_enum)]
     pub subgroup_attraction: Option<super::transform::AttractionArg>,
+    /// The rows to run (comma-separated, in the table's order whatever the order
+    /// given): `least-effort`, `travel-only`, `euclidean`, `manhattan`,
+    /// `no-feedback`, `orca`, `rvo`, `steering`; default every one. Not with
+    /// `--lambdas`.
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
+    pub variants: Option<Vec<String>>,
 }
+
+/// The rows of a comparison, in order (`--variants`).
+pub const VARIANTS: [&str; 8] = [
+    "least-effort",
+    "travel-only",
+    "euclidean",
+    "manhattan",
+    "no-feedback",
+    "orca",
+    "rvo",
+    "steering",
+];
 
 /// `--preset`.
 #[derive(ValueEnum, Copy, Clone, Debug, PartialEq, Eq)]
@@ -154,6 +172,20 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             bail!("--lambdas: 1 to {MAX_LAMBDAS} values, got {}", ls.len());
         }
     }
+    if let Some(vs) = &a.variants {
+        if a.lambdas.is_some() {
+            bail!("--variants and --lambdas do not go together: a λ sweep has its own rows");
+        }
+        if let Some(bad) = vs.iter().find(|v| !VARIANTS.contains(&v.as_str())) {
+            bail!(
+                "--variants: no row {bad:?}; the rows are {}",
+                VARIANTS.join(", ")
+            );
+        }
+        if vs.is_empty() {
+            bail!("--variants: name at least one of {}", VARIANTS.join(", "));
+        }
+    }
     let c = &a.common;
     let mut runs: Vec<Vec<Variant>> = Vec::new();
     let mut groups = Vec::new();
@@ -169,6 +201,7 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
             a.scenario,
             a.lambdas.as_deref(),
             a.subgroup_attraction.map(|x| x.attraction()),
+            a.variants.as_deref(),
         )?;
         runs.push(row);
         groups.push(g);
@@ -326,7 +359,9 @@ fn one_seed(
     scenario: Scenario,
     lambdas: Option<&[f64]>,
     attraction: Option<SubgroupAttraction>,
+    only: Option<&[String]>,
 ) -> Result<(Vec<Variant>, GroupFacts, Stage)> {
+    let want = |name: &str| only.is_none_or(|o| o.iter().any(|x| x == name));
     let sampled = setup.targets()?;
     let s = &setup.settings;
     let lambda = setup.cfg.formations.lambda;
@@ -365,7 +400,10 @@ fn one_seed(
     };
     let (travel, travel_ms) = plan_for(PairCost::LeastEffort { lambda: 1.0 })?;
     let mut variants = Vec::new();
-    let mut add = |name, plan: &TransformPlan, ms, params: MoveParams| {
+    let mut add = |name: &'static str, plan: &TransformPlan, ms, params: MoveParams| {
+        if lambdas.is_none() && !want(name) {
+            return;
+        }
         let (rec, facts) = stage.run(plan, &params, setup.seed);
         let (tr, local) = pairing_terms(&plan.sources_m, &plan.targets_m);
         let moved = plan
@@ -402,6 +440,9 @@ fn one_seed(
         ("euclidean", PairCost::Euclidean),
         ("manhattan", PairCost::Manhattan),
     ] {
+        if !want(name) {
+            continue;
+        }
         let (plan, ms) = plan_for(cost)?;
         add(name, &plan, ms, social.clone());
     }

@@ -159,7 +159,7 @@ impl Default for TransformMoveConfig {
 /// Default `subgroups.damping`.
 pub const DEFAULT_AP_DAMPING: f64 = 0.7;
 /// Default `subgroups.max_iterations`.
-pub const DEFAULT_AP_MAX_ITERATIONS: u32 = 200;
+pub const DEFAULT_AP_MAX_ITERATIONS: u32 = 500;
 /// Default `subgroups.convergence_iterations`.
 pub const DEFAULT_AP_CONVERGENCE_ITERATIONS: u32 = 15;
 /// Default `subgroups.ring`.

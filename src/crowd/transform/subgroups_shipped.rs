@@ -153,3 +153,46 @@ fn the_paper_similarity_groups_a_rigid_far_pair() {
     assert!(!both(&gl), "local: {gl:?}");
     assert!(locality(&s, &gl.group_of) > locality(&s, &gp.group_of));
 }
+
+/// The default subgroups over ten seeds on each of the three pairs at 100 to 2,000
+/// agents (120 crowds; release build, about a minute:
+/// `cargo test --release --lib subgroups_over_ten_seeds -- --ignored --nocapture`).
+/// Every one converges within `max_iterations`; from 300 agents every one has
+/// locality ≥ 0.8. At 100 agents the subgroups (3 to 6 of at least 15 agents)
+/// have borders as long as themselves, and locality is printed, not required:
+/// cutting the 100-agent line into as many slabs as affinity propagation finds
+/// subgroups gives 0.77 to 0.91 itself.
+#[test]
+#[ignore]
+fn subgroups_over_ten_seeds() {
+    for n in [100usize, 300, 1000, 2000] {
+        let (mut converged, mut local, mut lowest, mut most) = (0, 0, 1.0f64, 0u32);
+        for (from, to) in [
+            ("square", "arrow"),
+            ("ring", "two_groups"),
+            ("line", "heart"),
+        ] {
+            for seed in 1..=10u64 {
+                let (s, t) = shipped_pair(from, to, n, seed * 7919);
+                let g = subgroups(&s, &t, &ApParams::default(), Cancel::NEVER).unwrap();
+                let loc = locality(&s, &g.group_of);
+                assert!(
+                    g.converged,
+                    "{from} -> {to} n={n} seed {seed}: not converged in {} iterations",
+                    g.iterations
+                );
+                assert!(
+                    n < 300 || loc >= 0.8,
+                    "{from} -> {to} n={n} seed {seed}: locality {loc:.3}"
+                );
+                converged += 1;
+                local += usize::from(loc >= 0.8);
+                lowest = lowest.min(loc);
+                most = most.max(g.iterations);
+            }
+        }
+        eprintln!(
+            "n={n}: converged {converged} of 30, locality >= 0.8 in {local} of 30 (lowest {lowest:.3}), at most {most} iterations"
+        );
+    }
+}
