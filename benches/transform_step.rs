@@ -1,7 +1,9 @@
 //! One step of a running formation transform (formation-transform sections 3.3,
 //! 3.5): social forces with subgroup terms and mutual-information feedback, overlap
 //! resolution, arrival and the section 5.1 measures, at 2,000 and 10,000 agents;
-//! the ORCA baseline at 2,000. One core.
+//! the same at 2,000 with each subgroup moved as a whole on its Delaunay graph
+//! (`SubgroupAttraction::DelaunayGraph`); the ORCA, RVO and steering baselines at
+//! 2,000. One core.
 //!
 //! `cargo bench --bench transform_step -- --warm-up-time 1 --measurement-time 3`
 //!
@@ -12,7 +14,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion};
 use crowdtouch::crowd::transform::{
-    MoveParams, Mover, PairCost, Subgroups, TransformPlan, TransformRun,
+    MoveParams, Mover, PairCost, SubgroupAttraction, Subgroups, TransformPlan, TransformRun,
 };
 use crowdtouch::geom::Vec2;
 use crowdtouch::rng::SplitMix64;
@@ -29,7 +31,11 @@ fn jittered(rng: &mut SplitMix64, n: usize, cols: usize, spacing: f64, origin: V
 }
 
 /// A transform of `n` agents 1 s in: the run, positions, velocities.
-fn walking(n: usize, mover: Mover) -> (TransformRun, Vec<Vec2>, Vec<Vec2>) {
+fn walking(
+    n: usize,
+    mover: Mover,
+    attraction: SubgroupAttraction,
+) -> (TransformRun, Vec<Vec2>, Vec<Vec2>) {
     let mut rng = SplitMix64::new(0x5EED ^ n as u64);
     let side = (n as f64).sqrt().ceil() as usize;
     let sources = jittered(&mut rng, n, side, 0.7, Vec2::zeros());
@@ -53,6 +59,7 @@ fn walking(n: usize, mover: Mover) -> (TransformRun, Vec<Vec2>, Vec<Vec2>) {
     };
     let p = MoveParams {
         mover,
+        subgroup_attraction: attraction,
         ..MoveParams::default()
     };
     let mut run = TransformRun::new(&plan, &p, 1);
@@ -66,20 +73,27 @@ fn walking(n: usize, mover: Mover) -> (TransformRun, Vec<Vec2>, Vec<Vec2>) {
 fn transform_step(cr: &mut Criterion) {
     let mut g = cr.benchmark_group("transform_step");
     g.sample_size(20);
-    let cases: &[(&str, usize, Mover)] = if cfg!(debug_assertions) {
+    use SubgroupAttraction::{DelaunayGraph, Place};
+    let cases: &[(&str, usize, Mover, SubgroupAttraction)] = if cfg!(debug_assertions) {
         &[
-            ("social_force", 200, Mover::SocialForce),
-            ("orca", 200, Mover::Orca),
+            ("social_force", 200, Mover::SocialForce, Place),
+            ("social_force_dt", 200, Mover::SocialForce, DelaunayGraph),
+            ("orca", 200, Mover::Orca, Place),
+            ("rvo", 200, Mover::Rvo, Place),
+            ("steering", 200, Mover::Steering, Place),
         ]
     } else {
         &[
-            ("social_force", 2000, Mover::SocialForce),
-            ("social_force", 10_000, Mover::SocialForce),
-            ("orca", 2000, Mover::Orca),
+            ("social_force", 2000, Mover::SocialForce, Place),
+            ("social_force", 10_000, Mover::SocialForce, Place),
+            ("social_force_dt", 2000, Mover::SocialForce, DelaunayGraph),
+            ("orca", 2000, Mover::Orca, Place),
+            ("rvo", 2000, Mover::Rvo, Place),
+            ("steering", 2000, Mover::Steering, Place),
         ]
     };
-    for &(name, n, mover) in cases {
-        let state = walking(n, mover);
+    for &(name, n, mover, attraction) in cases {
+        let state = walking(n, mover, attraction);
         g.bench_with_input(BenchmarkId::new(name, n), &state, |b, state| {
             b.iter_batched(
                 || state.clone(),
