@@ -7,10 +7,15 @@
 //! * `formation_sample/{square,ring,heart}/{500,2000}`: the points for N agents in a
 //!   shipped shape of N m² (0.5 m apart, 60 relaxation steps; the ring has a hole,
 //!   the heart is a traced bitmap).
+//! * `sample_goals/{1000,5000,10000}`: one goal sample per agent on a mesh
+//!   (mesh-formation-control section 6.1: candidates, farthest-point picks, Lloyd
+//!   relaxation), what a formation switch and a resize prepare: a 10 m square
+//!   meshed 9 × 9.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use crowdtouch::crowd::formation::{FormationLibrary, Placement, SampleParams};
-use crowdtouch::geom::Vec2;
+use crowdtouch::crowd::mesh::{sample_goals, TriMesh};
+use crowdtouch::geom::{Rect, Vec2};
 
 fn formation_sample(cr: &mut Criterion) {
     let lib = FormationLibrary::shipped();
@@ -36,5 +41,24 @@ fn formation_sample(cr: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, formation_sample);
+fn goals(cr: &mut Criterion) {
+    let mut g = cr.benchmark_group("sample_goals");
+    g.sample_size(10);
+    let mesh = TriMesh::grid(
+        Rect {
+            min: [0.0, 0.0],
+            max: [10.0, 10.0],
+        },
+        9,
+        9,
+    );
+    for n in [1000usize, 5000, 10_000] {
+        g.bench_function(n.to_string(), |b| {
+            b.iter(|| black_box(sample_goals(&mesh, n).len()))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, formation_sample, goals);
 criterion_main!(benches);
