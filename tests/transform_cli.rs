@@ -283,7 +283,8 @@ fn compare_json_has_a_row_per_variant_with_intervals_and_switches() {
     for preset in [None, Some("paper")] {
         let mut cmd = bin();
         cmd.args(["transform", "compare", "--from", "line", "--to", "square"])
-            .args(["--agents", "20", "--seeds", "3", "--json"]);
+            .args(["--agents", "20", "--seeds", "3", "--json"])
+            .args(["--variants", "all", "--timeout", "10"]);
         if let Some(p) = preset {
             cmd.args(["--preset", p]);
         }
@@ -700,9 +701,11 @@ fn compare_runs_the_rows_named() {
         .collect();
     assert_eq!(names, ["least-effort", "orca"], "{some}");
     assert_eq!(some["subgroups"]["count"]["n"], 2, "{some}");
+    // Without --variants: Table 2's rows and ORCA.
     let all = compare(&[]);
     let rows = all["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 8, "{all}");
+    assert_eq!(rows.len(), 6, "{all}");
+    assert_eq!(rows[5]["variant"], "orca", "{all}");
     for r in some["rows"].as_array().unwrap() {
         let same = rows.iter().find(|x| x["variant"] == r["variant"]).unwrap();
         // Per-run figures (the windowed measures depend on every row's length).
@@ -757,7 +760,10 @@ fn bad_compare_options_are_clear_errors() {
     );
     assert_error(
         &compare(&["--variants", "least-effort,rvo2"]),
-        &["--variants: no row \"rvo2\"; the rows are least-effort, travel-only"],
+        &[
+            "--variants: no row \"rvo2\"; the rows are least-effort, travel-only",
+            "or all",
+        ],
     );
     assert_error(
         &compare(&["--variants", "orca", "--lambdas", "0.5"]),

@@ -82,13 +82,17 @@ pub struct CompareArgs {
     pub subgroup_attraction: Option<super::transform::AttractionArg>,
     /// The rows to run (comma-separated, in the table's order whatever the order
     /// given): `least-effort`, `travel-only`, `euclidean`, `manhattan`,
-    /// `no-feedback`, `orca`, `rvo`, `steering`; default every one. Not with
-    /// `--lambdas`.
+    /// `no-feedback`, `orca`, `rvo`, `steering`, or `all`; default the first six
+    /// (RVO and steering cost 10 to 60 times a social-force step and mostly run
+    /// to the timeout). Not with `--lambdas`.
     #[arg(long, value_delimiter = ',', num_args = 1..)]
     pub variants: Option<Vec<String>>,
 }
 
-/// The rows of a comparison, in order (`--variants`).
+/// The rows a comparison runs without `--variants`: Table 2's and ORCA.
+pub const DEFAULT_VARIANTS: usize = 6;
+
+/// The rows of a comparison, in order (`--variants`; `all` is every one).
 pub const VARIANTS: [&str; 8] = [
     "least-effort",
     "travel-only",
@@ -176,9 +180,12 @@ pub fn compare(a: &CompareArgs) -> Result<()> {
         if a.lambdas.is_some() {
             bail!("--variants and --lambdas do not go together: a λ sweep has its own rows");
         }
-        if let Some(bad) = vs.iter().find(|v| !VARIANTS.contains(&v.as_str())) {
+        if let Some(bad) = vs
+            .iter()
+            .find(|v| *v != "all" && !VARIANTS.contains(&v.as_str()))
+        {
             bail!(
-                "--variants: no row {bad:?}; the rows are {}",
+                "--variants: no row {bad:?}; the rows are {}, or all",
                 VARIANTS.join(", ")
             );
         }
@@ -361,7 +368,10 @@ fn one_seed(
     attraction: Option<SubgroupAttraction>,
     only: Option<&[String]>,
 ) -> Result<(Vec<Variant>, GroupFacts, Stage)> {
-    let want = |name: &str| only.is_none_or(|o| o.iter().any(|x| x == name));
+    let want = |name: &str| match only {
+        None => VARIANTS[..DEFAULT_VARIANTS].contains(&name),
+        Some(o) => o.iter().any(|x| x == name || x == "all"),
+    };
     let sampled = setup.targets()?;
     let s = &setup.settings;
     let lambda = setup.cfg.formations.lambda;

@@ -662,6 +662,21 @@ fn lloyd_relax(
             best[s] = Some((d2, ci));
         }
     }
+    // Each site's candidates in index order (a counting sort by owner), for the
+    // sites that do not lie in their nearest candidate's triangle.
+    let mut start = vec![0u32; n + 1];
+    for &o in &owner {
+        start[o as usize + 1] += 1;
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut owned = vec![0u32; cands.len()];
+    for (ci, &o) in owner.iter().enumerate() {
+        owned[fill[o as usize] as usize] = ci as u32;
+        fill[o as usize] += 1;
+    }
     let mut tried: Vec<u32> = Vec::new();
     let samples = (0..n)
         .map(|i| {
@@ -673,8 +688,9 @@ fn lloyd_relax(
                 return g;
             }
             tried.clear();
-            for (ci, c) in cands.iter().enumerate() {
-                if owner[ci] as usize == i && !tried.contains(&c.sample.tri) {
+            for &ci in &owned[start[i] as usize..start[i + 1] as usize] {
+                let c = &cands[ci as usize];
+                if !tried.contains(&c.sample.tri) {
                     tried.push(c.sample.tri);
                     if let Some(g) = locate_in(mesh, c.sample.tri, sites[i]) {
                         return g;
