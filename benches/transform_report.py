@@ -92,6 +92,21 @@ def verdict(a, b):
     return "not told apart"
 
 
+def measure_table(rows, last_label, last_cell):
+    """A table's rows: per variant the time, the share in, the offset, the
+    measures with their intervals, and a last column `last_label` (`last_cell(r)`)."""
+    out = ["| variant | time (s) [n, at rest] | all in (%) | off target (m) | I_d (bits) | σ_min_dis (m) | σ_curr_eft (m) | turn (rad/s) | "
+           + last_label + " |",
+           "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        af = r["arrived_fraction"]["mean"]
+        out.append(f"| {r['variant']} | {iv(r['finish_s'], 2)} [{r['finished_runs']}, {r['rest_runs']}] | "
+                   f"{100 * af:.1f} | {iv(r['mean_offset_m'], 3)} | {iv(r['i_d'], 3)} | "
+                   f"{iv(r['sigma_min_dis'], 4)} | {iv(r['sigma_curr_eft'], 3)} | "
+                   f"{iv(r.get('heading_change_rad_s'), 3)} | {last_cell(r)} |")
+    return out
+
+
 def check_rows(v, where):
     """The JSON contract the report relies on; a list of what is wrong."""
     bad = []
@@ -150,14 +165,7 @@ def section(results, seeds, agents, timeout, scenario="direct"):
             f"converged in {v['subgroups']['converged_runs']} of {v['seeds']} seeds, locality "
             f"{iv(v['subgroups']['locality'], 2)}.")
         say("")
-        say("| variant | time (s) [n, at rest] | all in (%) | off target (m) | I_d (bits) | σ_min_dis (m) | σ_curr_eft (m) | turn (rad/s) | exchanges a run |")
-        say("|---|---|---|---|---|---|---|---|---|")
-        for r in v["rows"]:
-            af = r["arrived_fraction"]["mean"]
-            say(f"| {r['variant']} | {iv(r['finish_s'], 2)} [{r['finished_runs']}, {r['rest_runs']}] | "
-                f"{100 * af:.1f} | {iv(r['mean_offset_m'], 3)} | {iv(r['i_d'], 3)} | "
-                f"{iv(r['sigma_min_dis'], 4)} | {iv(r['sigma_curr_eft'], 3)} | "
-                f"{iv(r.get('heading_change_rad_s'), 3)} | {r['swaps']['mean']:.1f} |")
+        lines += measure_table(v["rows"], "exchanges a run", lambda r: f"{r['swaps']['mean']:.1f}")
         say("")
         rows = {r["variant"]: r for r in v["rows"]}
         le = rows["least-effort"]
@@ -194,14 +202,8 @@ def baseline_section(v, secs, scenario="direct"):
         + f" --json`: {v['seeds']} seeds (the RVO rows run to the timeout at about 60 ms a "
         f"step), window {v['window_s']:.2f} s; {secs:.0f} s to run.")
     say("")
-    say("| variant | time (s) [n, at rest] | all in (%) | off target (m) | I_d (bits) | σ_min_dis (m) | σ_curr_eft (m) | turn (rad/s) | overlapping pairs a run |")
-    say("|---|---|---|---|---|---|---|---|---|")
-    for r in v["rows"]:
-        af = r["arrived_fraction"]["mean"]
-        say(f"| {r['variant']} | {iv(r['finish_s'], 2)} [{r['finished_runs']}, {r['rest_runs']}] | "
-            f"{100 * af:.1f} | {iv(r['mean_offset_m'], 3)} | {iv(r['i_d'], 3)} | "
-            f"{iv(r['sigma_min_dis'], 4)} | {iv(r['sigma_curr_eft'], 3)} | "
-            f"{iv(r.get('heading_change_rad_s'), 3)} | {iv(r.get('overlapping_pairs'), 1)} |")
+    lines += measure_table(v["rows"], "overlapping pairs a run",
+                           lambda r: iv(r.get("overlapping_pairs"), 1))
     say("")
     rows = {r["variant"]: r for r in v["rows"]}
     le = rows["least-effort"]
