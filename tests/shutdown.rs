@@ -220,8 +220,8 @@ fn stage<'a>(r: &'a StatsReport, name: &str) -> Option<&'a crowdtouch::vocab::St
 #[test]
 fn a_stale_solve_is_abandoned_and_fresh_results_flow_after_shrinking_back() {
     let dir = tempfile::tempdir().unwrap();
-    // The largest square crowd allowed (70 × 70 at 5,000).
-    let side = (MAX_AGENTS as f64).sqrt().floor() as u32;
+    // A big square crowd (70 × 70): its solve takes long enough to be overtaken.
+    let side = 70;
     let big = side * side;
     let (mut daemon, _tx) = quiet_daemon(dir.path(), side);
     let (mut r, mut w) = client(&daemon, &["events"], None);
@@ -276,14 +276,16 @@ fn a_stale_solve_is_abandoned_and_fresh_results_flow_after_shrinking_back() {
     daemon.shutdown();
 }
 
-/// The control thread goes on publishing at the old size while a large resize is
-/// prepared, and the resize is acknowledged when the crowd has its new size.
+/// The control thread goes on publishing at the old size while a resize to the
+/// largest crowd the default budgets allow (10,000) is prepared, and the resize is
+/// acknowledged when the crowd has its new size.
 #[test]
 fn snapshots_keep_flowing_while_a_large_resize_is_prepared() {
     let dir = tempfile::tempdir().unwrap();
     let (daemon, _tx) = quiet_daemon(dir.path(), 10);
     let (mut r, mut w) = client(&daemon, &["snapshot", "events"], Some(r#"["positions"]"#));
-    let count = 5000.min(MAX_AGENTS);
+    let count = MAX_AGENTS;
+    assert!(count >= 10_000, "the daemon takes 10,000 agents");
     command(
         &mut w,
         3,
@@ -297,8 +299,8 @@ fn snapshots_keep_flowing_while_a_large_resize_is_prepared() {
         v["id"] == 3
     });
     assert_eq!(ack.expect("an answer")["type"], "ack");
-    // Drawing 5,000 goals takes most of a second in a release build (seconds in a
-    // debug one): at 120 ticks per second, dozens of snapshots. A control thread
+    // Drawing 10,000 goals takes about half a second in a release build (seconds
+    // in a debug one): at 120 ticks per second, dozens of snapshots. A control thread
     // that drew them itself would have published none meanwhile.
     assert!(
         during >= 30,

@@ -372,11 +372,11 @@ fn bad_input_is_a_clear_error() {
     // Agent counts out of range.
     assert_error(
         &run(&["--from", "square", "--to", "arrow", "--agents", "0"]),
-        &["--agents must be 1 to 5000, got 0"],
+        &["--agents must be 1 to 10000, got 0"],
     );
     assert_error(
-        &run(&["--from", "square", "--to", "arrow", "--agents", "5001"]),
-        &["--agents must be 1 to 5000, got 5001"],
+        &run(&["--from", "square", "--to", "arrow", "--agents", "10001"]),
+        &["--agents must be 1 to 10000, got 10001"],
     );
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

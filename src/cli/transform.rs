@@ -73,7 +73,7 @@ pub struct Common {
     /// Target formation, as --from.
     #[arg(long, required = true)]
     pub to: Option<String>,
-    /// Agents (default: the config's crowd.agents), 1 to 5000.
+    /// Agents (default: the config's crowd.agents), 1 to 10000.
     #[arg(long)]
     pub agents: Option<u32>,
     /// Config (default: the embedded default).

@@ -88,7 +88,7 @@ impl Setup {
     /// # Errors
     /// An unreadable or invalid config, an unknown formation name (with the known
     /// ones), a formation file that cannot be read or is not valid (named), an
-    /// agent count out of `1..=5000`, more agents than fit in the source (the
+    /// agent count out of `1..=MAX_AGENTS`, more agents than fit in the source (the
     /// sampling's message).
     pub fn new(c: &Common) -> Result<Setup> {
         let cfg = match &c.config {

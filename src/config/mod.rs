@@ -59,4 +59,4 @@ pub use transform::{
     GestureFormation, SubgroupSimilarity, SubgroupsConfig, TransformAttraction, TransformCost,
     TransformMoveConfig, DEFAULT_METHOD, MAX_DESIRED_SPEED_M_S,
 };
-pub use validate::MAX_AGENTS;
+pub use validate::{LARGE_CROWD_BUDGETS, MAX_AGENTS, MAX_AGENTS_LARGE};

@@ -6,12 +6,35 @@ use crate::crowd::environment::MESH_FIELD_RANGE_M;
 use crate::geom::Rect;
 use crate::vocab::parse_vendor_product;
 
-/// Most agents the daemon accepts: the largest crowd it serves within its default
-/// budgets on the reference machine (control tick ≤ 1 ms and input → bytes written
-/// ≤ 4 ms at p99, in every format and field set; `crowdtouch bench e2e --agents N
-/// --format F --fields S`, figures in docs/benchmarks.md#large-crowds). At 10,000
-/// agents the control tick alone takes about 1 ms at p50 and 1.2–1.9 ms at p99.
-pub const MAX_AGENTS: u32 = 5_000;
+/// Most agents the daemon accepts with the default budgets: the largest crowd it
+/// serves within them on the reference machine (control tick ≤ 1 ms and input →
+/// bytes written ≤ 4 ms at p99, in every format and field set; `crowdtouch bench
+/// e2e --agents N --format F --fields S`, `crowdtouch bench scale`, figures in
+/// docs/benchmarks.md#large-crowds).
+pub const MAX_AGENTS: u32 = 10_000;
+
+/// Most agents the daemon accepts when the config's budgets allow a large crowd
+/// ([`LARGE_CROWD_BUDGETS`]): at 20,000 agents the control tick takes about 1.6 ms
+/// at p50 and 2.5 ms at p99 on the reference machine, input → bytes written 5.5 ms
+/// at p99 (docs/benchmarks.md#large-crowds).
+pub const MAX_AGENTS_LARGE: u32 = 20_000;
+
+/// The least `(pipeline.budgets.control_us, pipeline.budgets.end_to_end_us)` a config
+/// states to run more than [`MAX_AGENTS`] agents (up to [`MAX_AGENTS_LARGE`]).
+pub const LARGE_CROWD_BUDGETS: (u64, u64) = (3_000, 8_000);
+
+impl Config {
+    /// The most agents this config allows: [`MAX_AGENTS_LARGE`] when its budgets are
+    /// at least [`LARGE_CROWD_BUDGETS`], else [`MAX_AGENTS`].
+    pub fn max_agents(&self) -> u32 {
+        let b = &self.pipeline.budgets;
+        if b.control_us >= LARGE_CROWD_BUDGETS.0 && b.end_to_end_us >= LARGE_CROWD_BUDGETS.1 {
+            MAX_AGENTS_LARGE
+        } else {
+            MAX_AGENTS
+        }
+    }
+}
 
 impl Config {
     /// Range checks; returns `(field path, message)` for every problem.
@@ -47,10 +70,20 @@ impl Config {
             );
         }
         let c = &self.crowd;
+        let max = self.max_agents();
         check(
-            (1..=MAX_AGENTS).contains(&c.agents),
+            (1..=max).contains(&c.agents),
             "crowd.agents",
-            format!("agent count must be 1..={MAX_AGENTS}, got {}", c.agents),
+            if max < MAX_AGENTS_LARGE && (max..=MAX_AGENTS_LARGE).contains(&c.agents) {
+                format!(
+                    "agent count must be 1..={max} with these budgets, got {}; up to \
+                     {MAX_AGENTS_LARGE} when pipeline.budgets.control_us ≥ {} and \
+                     end_to_end_us ≥ {}",
+                    c.agents, LARGE_CROWD_BUDGETS.0, LARGE_CROWD_BUDGETS.1
+                )
+            } else {
+                format!("agent count must be 1..={max}, got {}", c.agents)
+            },
         );
         check(
             c.agent_radius_m > 0.0 && c.agent_radius_m <= 5.0,
@@ -481,6 +514,40 @@ mod tests {
         assert_eq!(is[0].line, expect_line);
         assert!(is[0].column > 1);
         assert!(is[0].message.contains("1..="), "{}", is[0].message);
+    }
+
+    #[test]
+    fn a_crowd_above_ten_thousand_needs_the_large_crowd_budgets() {
+        let at = |agents: u32, control: u64, e2e: u64| {
+            DEFAULT_CONFIG_RON
+                .replacen("agents: 100", &format!("agents: {agents}"), 1)
+                .replacen("control_us: 1000", &format!("control_us: {control}"), 1)
+                .replacen("end_to_end_us: 4000", &format!("end_to_end_us: {e2e}"), 1)
+        };
+        let ok = |text: &str| Config::from_str(text, Path::new("t.ron")).is_ok();
+        assert!(
+            ok(&at(MAX_AGENTS, 1000, 4000)),
+            "10,000 with the default budgets"
+        );
+        let is = issues(&at(MAX_AGENTS + 1, 1000, 4000));
+        assert_eq!(is[0].field, "crowd.agents");
+        assert!(
+            is[0]
+                .message
+                .contains("up to 20000 when pipeline.budgets.control_us ≥ 3000"),
+            "{}",
+            is[0].message
+        );
+        // Only one of the two budgets raised is not enough.
+        assert!(!ok(&at(MAX_AGENTS_LARGE, 3000, 4000)));
+        assert!(!ok(&at(MAX_AGENTS_LARGE, 1000, 8000)));
+        assert!(ok(&at(MAX_AGENTS_LARGE, 3000, 8000)));
+        let is = issues(&at(MAX_AGENTS_LARGE + 1, 3000, 8000));
+        assert!(
+            is[0].message.contains("1..=20000, got 20001"),
+            "{}",
+            is[0].message
+        );
     }
 
     #[test]

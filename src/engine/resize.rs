@@ -17,7 +17,6 @@
 
 use super::error::CommandError;
 use super::state::Engine;
-use crate::config::MAX_AGENTS;
 use crate::crowd::agents::Agents;
 use crate::crowd::assign::Cancel;
 use crate::crowd::control::{PreparedResize, ResizeRequest};
@@ -52,10 +51,10 @@ impl Engine {
     /// # Errors
     /// [`CommandError::AgentCount`] when out of range (nothing is asked for then).
     pub fn request_resize(&mut self, count: u32) -> Result<(), CommandError> {
-        if count == 0 || count > MAX_AGENTS {
+        if count == 0 || count > self.max_agents {
             return Err(CommandError::AgentCount {
                 count,
-                max: MAX_AGENTS,
+                max: self.max_agents,
             });
         }
         self.resize.ticket += 1;

@@ -66,6 +66,8 @@ pub struct Engine {
     pub(super) formation: Rect,
     pub(super) agent_params: AgentParams,
     pub(super) configured_radius_m: f64,
+    /// Most agents `set_agent_count` accepts ([`Config::max_agents`]).
+    pub(super) max_agents: u32,
     pub(super) segmenter: Segmenter,
     pub(super) direct: DirectController,
     pub(super) agents: Agents,
@@ -160,6 +162,7 @@ impl Engine {
             formation: cfg.crowd.formation,
             agent_params: agent_params(cfg),
             configured_radius_m: cfg.crowd.agent_radius_m,
+            max_agents: cfg.max_agents(),
             segmenter: Segmenter::new(segment_params(cfg)),
             direct,
             agents,
@@ -298,6 +301,7 @@ impl Engine {
         self.grab_radius_m = cfg.controls.grab_radius_m;
         self.field_step_m = cfg.mesh.field_step_m;
         self.configured_radius_m = cfg.crowd.agent_radius_m;
+        self.max_agents = cfg.max_agents();
         self.formations = Arc::clone(cfg.formation_library());
         self.formation_lambda = cfg.formations.lambda;
         self.agent_params = agent_params(cfg);

@@ -535,6 +535,7 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
     if agents == 0 {
         bail!("--agents must be at least 1");
     }
+    let max_agents = cfg.max_agents();
     if let Some(path) = run.scene {
         let path = if path.extension().is_none() && !path.exists() {
             std::path::PathBuf::from(format!("config/scenes/{}.ron", path.display()))
@@ -708,11 +709,8 @@ pub fn end_to_end(run: &E2eRun<'_>) -> Result<Vec<Row>> {
             FieldChoice::Positions => "positions",
         }
     );
-    let beyond = if agents > crowdtouch::config::MAX_AGENTS {
-        format!(
-            " (beyond the daemon's limit of {})",
-            crowdtouch::config::MAX_AGENTS
-        )
+    let beyond = if agents > max_agents {
+        format!(" (beyond this config's limit of {max_agents})")
     } else {
         String::new()
     };
