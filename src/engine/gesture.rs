@@ -412,7 +412,7 @@ impl Engine {
                     let r = self.agent_params.radius_m;
                     for i in 0..self.agents.len() {
                         let q = self.agents.positions()[i];
-                        if scene.signed_distance(q, t) < r {
+                        if scene.closer_than(q, r, t) {
                             let out = scene.project_out(q, r, t);
                             self.agents.set_position(i, out);
                         }

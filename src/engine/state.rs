@@ -10,7 +10,7 @@ use crate::config::Config;
 use crate::crowd::agents::{AgentParams, Agents};
 use crate::crowd::assign::Assigner;
 use crate::crowd::control::{DirectController, ResizeRequest, SwitchRequest};
-use crate::crowd::environment::{Planner, PlannerParams, Scene};
+use crate::crowd::environment::{Placement, Planner, PlannerParams, Scene};
 use crate::crowd::formation::{FormationLibrary, START};
 use crate::crowd::mesh::{GoalSample, TriMesh};
 use crate::geom::{Rect, Vec2};
@@ -83,6 +83,8 @@ pub struct Engine {
     pub(super) waypoints: Vec<Vec2>,
     pub(super) targets: Vec<Vec2>,
     pub(super) motions: Vec<MotionType>,
+    /// Where the scene's moving parts are this tick ([`Scene::at`]).
+    pub(super) scene_placements: Vec<Placement>,
     pub(super) seq: u64,
     pub(super) last_t: Option<Micros>,
     pub(super) pending_input_t: Option<Micros>,
@@ -178,6 +180,7 @@ impl Engine {
             waypoints: vec![Vec2::repeat(f64::NAN); agents_n],
             targets: Vec::with_capacity(agents_n),
             motions: Vec::with_capacity(agents_n),
+            scene_placements: Vec::new(),
             seq: 0,
             last_t: None,
             pending_input_t: None,

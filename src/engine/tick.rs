@@ -188,13 +188,13 @@ impl Engine {
             }
         }
         if let Some(scene) = &self.scene {
+            let scene = scene.at(self.scene_t_s, &mut self.scene_placements);
             self.motions.clear();
-            let t = self.scene_t_s;
             self.motions.extend(
                 self.agents
                     .positions()
                     .iter()
-                    .map(|&p| scene.terrain_at(p, t).motion),
+                    .map(|&p| scene.terrain_at(p).motion),
             );
         }
         self.pass_checkpoints(now);
@@ -322,7 +322,7 @@ impl Engine {
         let Some(scene) = &self.scene else {
             return;
         };
-        let t = self.scene_t_s;
+        let scene = scene.at(self.scene_t_s, &mut self.scene_placements);
         let goals = self.direct.goals();
         self.targets.clear();
         for (i, &p) in self.agents.positions().iter().enumerate() {
@@ -332,16 +332,16 @@ impl Engine {
                 .get(i)
                 .copied()
                 .unwrap_or(Vec2::repeat(f64::NAN));
-            self.targets.push(steer_target(scene, p, g, w, t));
+            self.targets.push(steer_target(&scene, p, g, w));
         }
-        let speed = |x: Vec2| scene.terrain_at(x, t).speed_factor;
+        let speed = |x: Vec2| scene.terrain_at(x).speed_factor;
         self.agents
             .step_towards(&self.targets, speed, dt, &self.agent_params);
         let r = self.agent_params.radius_m;
         for i in 0..self.agents.len() {
             let p = self.agents.positions()[i];
-            if scene.signed_distance(p, t) < r {
-                let q = scene.project_out(p, r, t);
+            if scene.closer_than(p, r) {
+                let q = scene.project_out(p, r);
                 self.agents.set_position(i, q);
             }
         }

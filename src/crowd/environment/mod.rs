@@ -20,7 +20,7 @@ pub use scene::{
     load_scene, BoundaryPoint, Checkpoint, CheckpointDef, Circle, ConvexPolygon, Dynamic,
     DynamicDef, DynamicKind, DynamicKindDef, GridError, MotionPath, Obstacle, ObstacleDef,
     ObstacleHit, ObstacleId, Part, PartDef, Patch, PatchDef, PathDef, PathMode, Placement, PointM,
-    Pose, Problem, Scene, SceneError, SceneFile, SceneGrid, SceneIssue, Terrain,
+    Pose, Problem, Scene, SceneAt, SceneError, SceneFile, SceneGrid, SceneIssue, Terrain,
     DEFAULT_AGENT_RADIUS_M, LENGTH_TOLERANCE_M, MAX_GRID_CELLS, MAX_PARTS, MAX_POLYGON_VERTICES,
     MAX_PROJECT_ROUNDS, MAX_SCENE_BYTES, MAX_SCENE_ITEMS, MAX_SPEED_FACTOR, MAX_WAYPOINTS,
     MIN_PATH_LENGTH_M, MIN_POLYGON_AREA_M2, MIN_RING_STEP_M, PROJECT_TOLERANCE_M, SCENES,

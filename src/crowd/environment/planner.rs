@@ -32,7 +32,7 @@ use crate::crowd::environment::eikonal::{
     EikonalCosts, EikonalError, EikonalOptions, FieldSources, Grid, DEFAULT_CLUSTER_M,
     MAX_CLUSTERS,
 };
-use crate::crowd::environment::{Scene, SceneGrid};
+use crate::crowd::environment::{Scene, SceneAt, SceneGrid};
 use crate::geom::Vec2;
 use std::sync::Arc;
 
@@ -456,13 +456,13 @@ fn clamp_to((lo, hi): (Vec2, Vec2)) -> impl Fn(Vec2) -> Vec2 {
 }
 
 /// Where the control thread steers an agent at `pos` assigned to `goal`: straight at
-/// the goal when it is visible at `t_s` or there is no waypoint (NaN), else at the
-/// waypoint the planner gave.
+/// the goal when it is visible in the scene at the tick's time or there is no
+/// waypoint (NaN), else at the waypoint the planner gave.
 ///
 /// # Complexity
 /// O(obstacle parts) when the agent has a waypoint, O(1) otherwise.
-pub fn steer_target(scene: &Scene, pos: Vec2, goal: Vec2, waypoint: Vec2, t_s: f64) -> Vec2 {
-    if !waypoint.x.is_finite() || scene.visible(pos, goal, t_s) {
+pub fn steer_target(scene: &SceneAt<'_>, pos: Vec2, goal: Vec2, waypoint: Vec2) -> Vec2 {
+    if !waypoint.x.is_finite() || scene.visible(pos, goal) {
         goal
     } else {
         waypoint

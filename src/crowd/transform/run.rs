@@ -474,7 +474,7 @@ impl TransformRun {
         }
         if let Some((s, t)) = scene {
             for x in pos.iter_mut() {
-                if s.signed_distance(*x, t) < self.p.radius_m {
+                if s.closer_than(*x, self.p.radius_m, t) {
                     *x = s.project_out(*x, self.p.radius_m, t);
                 }
             }

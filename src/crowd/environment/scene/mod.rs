@@ -71,6 +71,7 @@
 
 mod file;
 mod grid;
+mod index;
 mod limits;
 mod load;
 mod model;
@@ -97,7 +98,7 @@ pub use model::{
 };
 pub use problem::{Problem, SceneError, SceneIssue};
 pub use query::{
-    ObstacleHit, ObstacleId, MAX_PROJECT_ROUNDS, MIN_RING_STEP_M, PROJECT_TOLERANCE_M,
+    ObstacleHit, ObstacleId, SceneAt, MAX_PROJECT_ROUNDS, MIN_RING_STEP_M, PROJECT_TOLERANCE_M,
 };
 pub use shape::{BoundaryPoint, Circle, ConvexPolygon, Part, Placement, TOUCH_TOLERANCE_M};
 pub use shipped::{load_scene, SCENES};

@@ -2,6 +2,7 @@
 //! paths, formation checkpoints.
 
 use super::file::{v, PathDef, PathMode};
+use super::index::PartIndex;
 use super::shape::{Part, Placement};
 use crate::geom::{Rect, Vec2};
 use crate::vocab::MotionType;
@@ -238,6 +239,8 @@ pub struct Scene {
     pub(super) patches: Vec<Patch>,
     pub(super) dynamic: Vec<Dynamic>,
     pub(super) checkpoints: Vec<Checkpoint>,
+    /// The static parts by grid cell, for the per-agent queries.
+    pub(super) index: PartIndex,
 }
 
 impl Scene {

@@ -3,6 +3,7 @@
 //! visibility, the terrain under a point, checkpoint crossings, rasterisation.
 
 use super::grid::SceneGrid;
+use super::index::INDEX_REACH_M;
 use super::model::{Checkpoint, DynamicKind, Scene, Terrain};
 use super::shape::{BoundaryPoint, Part, Placement};
 use crate::geom::Vec2;
@@ -35,7 +36,55 @@ pub struct ObstacleHit {
     pub boundary: BoundaryPoint,
 }
 
+/// A scene at one time, its moving parts placed once: the queries the control
+/// thread asks for every agent in a tick, without working out the moving parts'
+/// poses for each ([`Scene::at`]). Each answer is the one the [`Scene`] method of
+/// the same name gives at that time.
+#[derive(Copy, Clone, Debug)]
+pub struct SceneAt<'a> {
+    scene: &'a Scene,
+    t_s: f64,
+    placements: &'a [Placement],
+}
+
+impl SceneAt<'_> {
+    /// [`Scene::closer_than`].
+    pub fn closer_than(&self, p: Vec2, margin_m: f64) -> bool {
+        self.scene
+            .closer_than_with(p, margin_m, |i| self.placements[i])
+    }
+
+    /// [`Scene::terrain_at`].
+    pub fn terrain_at(&self, p: Vec2) -> Terrain {
+        self.scene.terrain_at_with(p, |i| self.placements[i])
+    }
+
+    /// [`Scene::visible`].
+    pub fn visible(&self, a: Vec2, b: Vec2) -> bool {
+        self.scene
+            .segment_hit_with(a, b, |i| self.placements[i])
+            .is_none()
+    }
+
+    /// [`Scene::project_out`] (rare: only for an agent that came too near).
+    pub fn project_out(&self, p: Vec2, margin_m: f64) -> Vec2 {
+        self.scene.project_out(p, margin_m, self.t_s)
+    }
+}
+
 impl Scene {
+    /// The scene at `t_s` with its moving parts placed into `placements` (a buffer
+    /// the caller keeps, so placing allocates nothing once it has grown).
+    pub fn at<'a>(&'a self, t_s: f64, placements: &'a mut Vec<Placement>) -> SceneAt<'a> {
+        placements.clear();
+        placements.extend(self.dynamic.iter().map(|d| d.placement_at(t_s)));
+        SceneAt {
+            scene: self,
+            t_s,
+            placements,
+        }
+    }
+
     /// Calls `f(id, part index, part, placement)` for every obstacle part at time
     /// `t_s`: static ones at the identity placement, dynamic obstacles where their
     /// path puts them.
@@ -100,11 +149,73 @@ impl Scene {
     /// the obstacles; inside a union of overlapping parts it is the depth in the
     /// deepest part.
     pub fn signed_distance(&self, p: Vec2, t_s: f64) -> f64 {
-        let mut d = f64::INFINITY;
-        self.for_each_obstacle_part(t_s, |_, _, part, pl| {
-            d = d.min(part.signed_distance(pl.to_local(p)));
-        });
+        let every_static = || {
+            let parts = self.obstacles.iter().flat_map(|o| &o.parts);
+            parts.fold(f64::INFINITY, |d, part| d.min(part.signed_distance(p)))
+        };
+        // The parts near p answer alone when one is nearer than the index's reach.
+        let mut d = match self.index.obstacles_near(p) {
+            Some(near) => {
+                let d = near.iter().fold(f64::INFINITY, |d, &(o, j)| {
+                    let part = &self.obstacles[o as usize].parts[j as usize];
+                    d.min(part.signed_distance(p))
+                });
+                if d < INDEX_REACH_M {
+                    d
+                } else {
+                    every_static()
+                }
+            }
+            None => every_static(),
+        };
+        for dy in &self.dynamic {
+            if dy.kind == DynamicKind::Obstacle {
+                let local = dy.placement_at(t_s).to_local(p);
+                for part in &dy.parts {
+                    // No point of the part is nearer than |local| − reach.
+                    if local.norm() - part.reach_m() < d {
+                        d = d.min(part.signed_distance(local));
+                    }
+                }
+            }
+        }
         d
+    }
+
+    /// Whether `p` is nearer than `margin_m` to an obstacle at `t_s` (inside one
+    /// included): `signed_distance(p, t_s) < margin_m`, answered from the parts near
+    /// `p` when the margin is within the index's reach (the per-agent test of the
+    /// control thread).
+    pub fn closer_than(&self, p: Vec2, margin_m: f64, t_s: f64) -> bool {
+        self.closer_than_with(p, margin_m, |i| self.dynamic[i].placement_at(t_s))
+    }
+
+    fn closer_than_with(
+        &self,
+        p: Vec2,
+        margin_m: f64,
+        placement: impl Fn(usize) -> Placement,
+    ) -> bool {
+        let near = |part: &Part, local: Vec2| part.signed_distance(local) < margin_m;
+        let static_hit = match self.index.obstacles_near(p) {
+            Some(list) if margin_m <= INDEX_REACH_M => list
+                .iter()
+                .any(|&(o, j)| near(&self.obstacles[o as usize].parts[j as usize], p)),
+            _ => self
+                .obstacles
+                .iter()
+                .any(|o| o.parts.iter().any(|part| near(part, p))),
+        };
+        static_hit
+            || self.dynamic.iter().enumerate().any(|(i, dy)| {
+                dy.kind == DynamicKind::Obstacle && {
+                    let local = placement(i).to_local(p);
+                    let d0 = local.norm();
+                    dy.parts
+                        .iter()
+                        .any(|part| d0 - part.reach_m() < margin_m && near(part, local))
+                }
+            })
     }
 
     /// Moves `p` to a nearby point at least `margin_m` from every obstacle at
@@ -168,14 +279,36 @@ impl Scene {
     /// The first obstacle the segment `a`–`b` meets at `t_s`, with the entry
     /// parameter `s ∈ [0, 1]` (the point `a + s·(b − a)`); `s = 0` when `a` is inside.
     pub fn segment_hit(&self, a: Vec2, b: Vec2, t_s: f64) -> Option<(f64, ObstacleId)> {
+        self.segment_hit_with(a, b, |i| self.dynamic[i].placement_at(t_s))
+    }
+
+    fn segment_hit_with(
+        &self,
+        a: Vec2,
+        b: Vec2,
+        placement: impl Fn(usize) -> Placement,
+    ) -> Option<(f64, ObstacleId)> {
         let mut best: Option<(f64, ObstacleId)> = None;
-        self.for_each_obstacle_part(t_s, |id, _, part, pl| {
+        let mut consider = |id: ObstacleId, part: &Part, pl: &Placement| {
             if let Some(s) = part.segment_entry(pl.to_local(a), pl.to_local(b)) {
                 if best.is_none_or(|(bs, _)| s < bs) {
                     best = Some((s, id));
                 }
             }
-        });
+        };
+        for (i, o) in self.obstacles.iter().enumerate() {
+            for part in &o.parts {
+                consider(ObstacleId::Static(i), part, &Placement::IDENTITY);
+            }
+        }
+        for (i, d) in self.dynamic.iter().enumerate() {
+            if d.kind == DynamicKind::Obstacle {
+                let pl = placement(i);
+                for part in &d.parts {
+                    consider(ObstacleId::Dynamic(i), part, &pl);
+                }
+            }
+        }
         best
     }
 
@@ -189,15 +322,32 @@ impl Scene {
     /// ([`Terrain::OPEN`]). Obstacles are not consulted (see
     /// [`obstacle_at`](Self::obstacle_at)).
     pub fn terrain_at(&self, p: Vec2, t_s: f64) -> Terrain {
+        self.terrain_at_with(p, |i| self.dynamic[i].placement_at(t_s))
+    }
+
+    fn terrain_at_with(&self, p: Vec2, placement: impl Fn(usize) -> Placement) -> Terrain {
         let mut t = Terrain::OPEN;
-        for patch in &self.patches {
-            if patch.parts.iter().any(|part| part.contains(p)) {
-                t = patch.terrain;
+        match self.index.patches_at(p) {
+            // In file order, so the last patch containing p wins as below.
+            Some(near) => {
+                for &(i, j) in near {
+                    let patch = &self.patches[i as usize];
+                    if patch.parts[j as usize].contains(p) {
+                        t = patch.terrain;
+                    }
+                }
+            }
+            None => {
+                for patch in &self.patches {
+                    if patch.parts.iter().any(|part| part.contains(p)) {
+                        t = patch.terrain;
+                    }
+                }
             }
         }
-        for d in &self.dynamic {
+        for (i, d) in self.dynamic.iter().enumerate() {
             if let DynamicKind::Patch(terrain) = d.kind {
-                let pl = d.placement_at(t_s);
+                let pl = placement(i);
                 let local = pl.to_local(p);
                 if d.parts.iter().any(|part| part.contains(local)) {
                     t = terrain;

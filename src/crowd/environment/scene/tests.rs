@@ -503,3 +503,94 @@ mod props {
         }
     }
 }
+
+/// The index's answers are the full scan's: signed distance and terrain at random
+/// points (inside, at the edges and outside the bounds) of every shipped scene, at
+/// several times (moving obstacles and patches), and of a scene with overlapping
+/// patches (the last one wins) and a wall larger than the index's reach.
+#[test]
+fn indexed_queries_equal_the_full_scan() {
+    use super::index::INDEX_REACH_M;
+    use crate::rng::SplitMix64;
+    let overlapping = with(&format!(
+        "    obstacles: [(name: \"wall\", parts: [Polygon(vertices_m: [(0.0, 1.0), (16.0, 1.0), (16.0, 1.2), (0.0, 1.2)])]),\n\
+         (name: \"a\", parts: [{SQUARE_2_2}, Circle(centre_m: (9.0, 7.0), radius_m: 0.3)])],\n\
+    patches: [(name: \"mud\", motion: crawl, speed_factor: Some(0.5), parts: [Polygon(vertices_m: [(5.0, 5.0), (9.0, 5.0), (9.0, 8.0), (5.0, 8.0)])]),\n\
+         (name: \"ice\", motion: swim, speed_factor: Some(0.8), parts: [Circle(centre_m: (8.0, 6.0), radius_m: 1.5)])],"
+    ));
+    let mut scenes: Vec<(String, Scene)> = SCENES
+        .iter()
+        .map(|(n, t)| {
+            let s = Scene::from_str(t, Path::new(n), DEFAULT_AGENT_RADIUS_M).unwrap();
+            (n.to_string(), s)
+        })
+        .collect();
+    scenes.push(("overlapping".into(), scene(&overlapping)));
+    let mut rng = SplitMix64::new(7);
+    for (name, s) in &scenes {
+        let b = s.bounds();
+        for k in 0..4000 {
+            let t = (k % 8) as f64 * 1.7;
+            let p = Vec2::new(
+                rng.uniform(b.min[0] - 2.0, b.max[0] + 2.0),
+                rng.uniform(b.min[1] - 2.0, b.max[1] + 2.0),
+            );
+            let mut want_d = f64::INFINITY;
+            s.for_each_obstacle_part(t, |_, _, part, pl| {
+                want_d = want_d.min(part.signed_distance(pl.to_local(p)));
+            });
+            assert_eq!(s.signed_distance(p, t), want_d, "{name} at {p} t {t}");
+            for margin in [0.0, 0.15, 0.3, INDEX_REACH_M, 2.5] {
+                let want = want_d < margin;
+                assert_eq!(s.closer_than(p, margin, t), want, "{name} at {p} t {t}");
+            }
+            let mut want_t = Terrain::OPEN;
+            for patch in s.patches() {
+                if patch.parts.iter().any(|part| part.contains(p)) {
+                    want_t = patch.terrain;
+                }
+            }
+            for d in s.dynamic() {
+                if let DynamicKind::Patch(terrain) = d.kind {
+                    if d.parts
+                        .iter()
+                        .any(|q| q.contains(d.placement_at(t).to_local(p)))
+                    {
+                        want_t = terrain;
+                    }
+                }
+            }
+            assert_eq!(s.terrain_at(p, t), want_t, "{name} at {p} t {t}");
+        }
+    }
+}
+
+/// A scene placed once at a time answers as the scene asked at that time, moving
+/// obstacles and patches included.
+#[test]
+fn a_scene_at_a_time_answers_as_the_scene_at_that_time() {
+    use crate::rng::SplitMix64;
+    let mut rng = SplitMix64::new(11);
+    let mut placements = Vec::new();
+    for (name, text) in SCENES {
+        let s = Scene::from_str(text, Path::new(name), DEFAULT_AGENT_RADIUS_M).unwrap();
+        let b = s.bounds();
+        let mut point = || {
+            Vec2::new(
+                rng.uniform(b.min[0] - 1.0, b.max[0] + 1.0),
+                rng.uniform(b.min[1] - 1.0, b.max[1] + 1.0),
+            )
+        };
+        for k in 0..10 {
+            let t = k as f64 * 2.3;
+            let at = s.at(t, &mut placements);
+            for _ in 0..300 {
+                let (p, q) = (point(), point());
+                assert_eq!(at.terrain_at(p), s.terrain_at(p, t), "{name} {p} {t}");
+                assert_eq!(at.closer_than(p, 0.15), s.closer_than(p, 0.15, t));
+                assert_eq!(at.visible(p, q), s.visible(p, q, t), "{name} {p}–{q} {t}");
+                assert_eq!(at.project_out(p, 0.15), s.project_out(p, 0.15, t));
+            }
+        }
+    }
+}

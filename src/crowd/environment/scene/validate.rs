@@ -3,6 +3,7 @@
 //! documentation).
 
 use super::file::{v, DynamicDef, DynamicKindDef, PartDef, PointM, SceneFile, SCENE_VERSION};
+use super::index::PartIndex;
 use super::limits::{
     DEFAULT_AGENT_RADIUS_M, LENGTH_TOLERANCE_M, MAX_PARTS, MAX_POLYGON_VERTICES, MAX_SCENE_ITEMS,
     MAX_SPEED_FACTOR, MAX_WAYPOINTS, MIN_PATH_LENGTH_M, MIN_POLYGON_AREA_M2,
@@ -397,6 +398,7 @@ impl Scene {
             Ok(Scene {
                 name: f.name.clone(),
                 bounds: b,
+                index: PartIndex::new(b, &obstacles, &patches),
                 obstacles,
                 patches,
                 dynamic,

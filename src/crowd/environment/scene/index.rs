@@ -1,0 +1,150 @@
+//! A uniform grid over a scene's static obstacle and patch parts, so the per-agent
+//! queries of the control thread ([`Scene::signed_distance`],
+//! [`Scene::terrain_at`]) look at the few parts near a point instead of every part
+//! of the scene.
+//!
+//! Each cell lists, in file order, the static obstacle parts within
+//! [`INDEX_REACH_M`] of it and the static patch parts overlapping it (both by their
+//! axis-aligned boxes, so a list may hold a part a little farther; never misses
+//! one). Points outside the grid, and distance queries that find nothing nearer
+//! than [`INDEX_REACH_M`], fall back to every part, so every answer is the one the
+//! full scan gives. Moving obstacles and patches are not indexed: they are few and
+//! culled by their parts' reach instead.
+//!
+//! [`Scene::signed_distance`]: super::Scene::signed_distance
+//! [`Scene::terrain_at`]: super::Scene::terrain_at
+
+use super::model::{Obstacle, Patch};
+use crate::geom::{Rect, Vec2};
+
+/// Obstacle parts farther than this from a cell are not in its list (m). Distance
+/// queries whose answer is below it are exact from the list alone (an agent's
+/// radius is well below it).
+pub const INDEX_REACH_M: f64 = 1.0;
+/// Side of a grid cell (m) unless the scene is so large that [`MAX_INDEX_CELLS`]
+/// asks for coarser ones.
+const INDEX_CELL_M: f64 = 0.5;
+/// Most cells of the grid.
+const MAX_INDEX_CELLS: usize = 1 << 16;
+/// Patch boxes are widened by this much (m) so a point on a patch's edge is in its
+/// cell's list whatever the rounding.
+const PATCH_SLACK_M: f64 = 1e-6;
+
+/// A static part: `(item, part)` indices into the scene's obstacles or patches.
+pub(super) type PartRef = (u32, u32);
+
+/// The grid; empty (every query falls back) for a scene without static parts.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct PartIndex {
+    origin: Vec2,
+    cell_m: f64,
+    nx: usize,
+    ny: usize,
+    obstacle_start: Vec<u32>,
+    obstacle_parts: Vec<PartRef>,
+    patch_start: Vec<u32>,
+    patch_parts: Vec<PartRef>,
+}
+
+impl PartIndex {
+    /// The index of `obstacles` and `patches` over `bounds` widened by
+    /// [`INDEX_REACH_M`].
+    pub(super) fn new(bounds: Rect, obstacles: &[Obstacle], patches: &[Patch]) -> PartIndex {
+        let (w, h) = (
+            bounds.width() + 2.0 * INDEX_REACH_M,
+            bounds.height() + 2.0 * INDEX_REACH_M,
+        );
+        if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
+            return PartIndex::default();
+        }
+        let mut cell = INDEX_CELL_M;
+        while ((w / cell).ceil() * (h / cell).ceil()) as usize > MAX_INDEX_CELLS {
+            cell *= 2.0;
+        }
+        let mut ix = PartIndex {
+            origin: Vec2::new(bounds.min[0] - INDEX_REACH_M, bounds.min[1] - INDEX_REACH_M),
+            cell_m: cell,
+            nx: ((w / cell).ceil() as usize).max(1),
+            ny: ((h / cell).ceil() as usize).max(1),
+            ..PartIndex::default()
+        };
+        let mut obstacle_boxes = obstacles.iter().enumerate().flat_map(|(i, o)| {
+            o.parts
+                .iter()
+                .enumerate()
+                .map(move |(j, p)| ((i as u32, j as u32), p.aabb()))
+        });
+        (ix.obstacle_start, ix.obstacle_parts) = ix.lists(&mut obstacle_boxes, INDEX_REACH_M);
+        let mut patch_boxes = patches.iter().enumerate().flat_map(|(i, o)| {
+            o.parts
+                .iter()
+                .enumerate()
+                .map(move |(j, p)| ((i as u32, j as u32), p.aabb()))
+        });
+        (ix.patch_start, ix.patch_parts) = ix.lists(&mut patch_boxes, PATCH_SLACK_M);
+        ix
+    }
+
+    /// Per cell, in the order given, the parts whose box widened by `grow` meets it:
+    /// `(start, flat)` with cell `c`'s parts at `flat[start[c]..start[c + 1]]`.
+    fn lists(
+        &self,
+        items: &mut dyn Iterator<Item = (PartRef, Rect)>,
+        grow: f64,
+    ) -> (Vec<u32>, Vec<PartRef>) {
+        let mut per_cell: Vec<Vec<PartRef>> = vec![Vec::new(); self.nx * self.ny];
+        for (r, b) in items {
+            let (x0, y0) = self.cell_xy(Vec2::new(b.min[0] - grow, b.min[1] - grow));
+            let (x1, y1) = self.cell_xy(Vec2::new(b.max[0] + grow, b.max[1] + grow));
+            for cy in y0..=y1 {
+                for cx in x0..=x1 {
+                    per_cell[cy * self.nx + cx].push(r);
+                }
+            }
+        }
+        let mut start = Vec::with_capacity(per_cell.len() + 1);
+        let mut flat = Vec::new();
+        start.push(0u32);
+        for l in per_cell {
+            flat.extend(l);
+            start.push(flat.len() as u32);
+        }
+        (start, flat)
+    }
+
+    /// The cell of `p`, clamped to the grid.
+    fn cell_xy(&self, p: Vec2) -> (usize, usize) {
+        let q = (p - self.origin) / self.cell_m;
+        let cx = (q.x.max(0.0) as usize).min(self.nx - 1);
+        let cy = (q.y.max(0.0) as usize).min(self.ny - 1);
+        (cx, cy)
+    }
+
+    /// The cell holding `p`, `None` outside the grid (or for a non-finite `p`).
+    fn cell(&self, p: Vec2) -> Option<usize> {
+        if self.nx == 0 {
+            return None;
+        }
+        let q = (p - self.origin) / self.cell_m;
+        if !(q.x >= 0.0 && q.y >= 0.0 && q.x < self.nx as f64 && q.y < self.ny as f64) {
+            return None;
+        }
+        Some(q.y as usize * self.nx + q.x as usize)
+    }
+
+    /// The static obstacle parts that may be within [`INDEX_REACH_M`] of `p`, in
+    /// file order; `None` when `p` is outside the grid (ask every part).
+    pub(super) fn obstacles_near(&self, p: Vec2) -> Option<&[PartRef]> {
+        let c = self.cell(p)?;
+        let (a, b) = (self.obstacle_start[c], self.obstacle_start[c + 1]);
+        Some(&self.obstacle_parts[a as usize..b as usize])
+    }
+
+    /// The static patch parts that may contain `p`, in file order; `None` when `p`
+    /// is outside the grid (ask every part).
+    pub(super) fn patches_at(&self, p: Vec2) -> Option<&[PartRef]> {
+        let c = self.cell(p)?;
+        let (a, b) = (self.patch_start[c], self.patch_start[c + 1]);
+        Some(&self.patch_parts[a as usize..b as usize])
+    }
+}
