@@ -453,9 +453,12 @@ impl ClusterCosts {
     fn entry(&self, i: usize, j: usize) -> f64 {
         let x = i * self.source_cells.len() + self.goal_cluster[j] as usize;
         let (gx, gy) = (self.gx[j], self.gy[j]);
-        self.base[x]
-            + self.rate[x] * dist(self.vx[x], self.vy[x], gx, gy)
-            + self.tie_break * dist2(self.ax[i], self.ay[i], gx, gy)
+        let c = self.base[x] + self.rate[x] * dist(self.vx[x], self.vy[x], gx, gy);
+        if self.tie_break == 0.0 {
+            c
+        } else {
+            c + self.tie_break * dist2(self.ax[i], self.ay[i], gx, gy)
+        }
     }
 
     /// Sets the weight `ε` of the tie-break added to every entry (s/m²; 0, the
@@ -602,12 +605,19 @@ impl CostSource for ClusterCosts {
             let (base, rate, vx, vy) = (self.base[x], self.rate[x], self.vx[x], self.vy[x]);
             let (eps, ax, ay) = (self.tie_break, self.ax[i], self.ay[i]);
             let (a, b) = (self.start[c] as usize, self.start[c + 1] as usize);
-            for ((o, &gx), &gy) in tmp[a..b]
+            let goals = tmp[a..b]
                 .iter_mut()
                 .zip(&self.ogx[a..b])
-                .zip(&self.ogy[a..b])
-            {
-                *o = base + rate * dist(vx, vy, gx, gy) + eps * dist2(ax, ay, gx, gy);
+                .zip(&self.ogy[a..b]);
+            // The same operations as `entry`, so both give the same bits.
+            if eps == 0.0 {
+                for ((o, &gx), &gy) in goals {
+                    *o = base + rate * dist(vx, vy, gx, gy);
+                }
+            } else {
+                for ((o, &gx), &gy) in goals {
+                    *o = base + rate * dist(vx, vy, gx, gy) + eps * dist2(ax, ay, gx, gy);
+                }
             }
         }
         for (&j, &v) in self.order.iter().zip(tmp.iter()) {
