@@ -13,9 +13,9 @@
 //!   formation drift by 2 cm per frame (sources change cell about every other frame);
 //!   `static` is the cache with nothing moving; `coarse128` / `coarse64` run the
 //!   provider on the grid coarsened by 2 and 4 (`eikonal::coarsen`).
-//! * `planner/obstacle_course/1000/{cold,drifting}`: the environment-aware plan of
-//!   the assignment worker (goal-cluster fields, solve, waypoints) at 1,000 agents
-//!   in a shipped scene.
+//! * `planner/obstacle_course/{1000,5000}/{cold,drifting}`: the environment-aware
+//!   plan of the assignment worker (goal-cluster fields, solve, waypoints) at 1,000
+//!   and 5,000 agents in a shipped scene.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Solver};
@@ -255,12 +255,13 @@ fn eikonal_costs(cr: &mut Criterion) {
     g.finish();
 }
 
-/// The planner in a shipped scene: 1,000 agents in the start area, their formation
-/// east of it (across the obstacle course's barriers and patches), the formation
-/// drifting 2 cm west per plan and the crowd 1 cm east. `cold` forgets the previous
-/// solution before each plan; `drifting` is the warm chain the worker runs. Both
-/// include the cost grid (density refreshed every 0.5 s of scene time, 20 plans per
-/// second), the cluster fields, the solve and every agent's waypoint.
+/// The planner in a shipped scene: `n` agents (1,000 and 5,000) in the start area,
+/// their formation east of it (across the obstacle course's barriers and patches),
+/// the formation drifting 2 cm west per plan and the crowd 1 cm east. `cold`
+/// forgets the previous solution before each plan; `drifting` is the warm chain the
+/// worker runs. Both include the cost grid (density refreshed every 0.5 s of scene
+/// time, 20 plans per second), the cluster fields, the solve and every agent's
+/// waypoint. The solver's work of the last plan is printed.
 fn planner(cr: &mut Criterion) {
     use crowdtouch::crowd::environment::{load_scene, Planner, PlannerParams};
     let mut g = cr.benchmark_group("planner");
@@ -272,43 +273,52 @@ fn planner(cr: &mut Criterion) {
         )
         .expect("shipped scene"),
     );
-    let mut rng = SplitMix64::new(11);
-    let mut free = |x0: f64, y0: f64, x1: f64, y1: f64| -> Vec<Vec2> {
-        let mut v = Vec::new();
-        while v.len() < 1000 {
-            let p = Vec2::new(x0 + (x1 - x0) * rng.unit(), y0 + (y1 - y0) * rng.unit());
-            if scene.obstacle_at(p, 0.0).is_none() {
-                v.push(p);
-            }
-        }
-        v
-    };
-    let mut agents = free(6.0, 3.0, 10.0, 6.0);
-    let mut goals = free(11.6, 3.0, 15.6, 6.0);
-    let mut p =
-        Planner::new(std::sync::Arc::clone(&scene), PlannerParams::new(1.5)).expect("planner");
-    let (mut goal_of, mut wp) = (Vec::new(), Vec::new());
-    let (mut t, mut k) = (0.0, 0u64);
-    for (name, cold) in [
-        ("obstacle_course/1000/cold", true),
-        ("obstacle_course/1000/drifting", false),
-    ] {
-        g.bench_function(name, |b| {
-            b.iter(|| {
-                // 40 plans (2 s of scene time) of drift, then back to the start.
-                let back = if k % 40 == 39 { -39.0 } else { 1.0 };
-                k += 1;
-                agents.iter_mut().for_each(|a| a.x += 0.01 * back);
-                goals.iter_mut().for_each(|q| q.x -= 0.02 * back);
-                if cold {
-                    p.forget();
+    for n in [1000, 5000] {
+        let mut rng = SplitMix64::new(11);
+        let mut free = |x0: f64, y0: f64, x1: f64, y1: f64| -> Vec<Vec2> {
+            let mut v = Vec::new();
+            while v.len() < n {
+                let p = Vec2::new(x0 + (x1 - x0) * rng.unit(), y0 + (y1 - y0) * rng.unit());
+                if scene.obstacle_at(p, 0.0).is_none() {
+                    v.push(p);
                 }
-                t += 0.05;
-                p.plan(&agents, &goals, t, &mut goal_of, &mut wp)
-                    .expect("plan");
-                black_box(goal_of[0])
-            })
-        });
+            }
+            v
+        };
+        let mut agents = free(6.0, 3.0, 10.0, 6.0);
+        let mut goals = free(11.6, 3.0, 15.6, 6.0);
+        let mut p =
+            Planner::new(std::sync::Arc::clone(&scene), PlannerParams::new(1.5)).expect("planner");
+        let (mut goal_of, mut wp) = (Vec::new(), Vec::new());
+        let (mut t, mut k) = (0.0, 0u64);
+        for (kind, cold) in [("cold", true), ("drifting", false)] {
+            g.bench_function(format!("obstacle_course/{n}/{kind}"), |b| {
+                b.iter(|| {
+                    // 40 plans (2 s of scene time) of drift, then back to the start.
+                    let back = if k % 40 == 39 { -39.0 } else { 1.0 };
+                    k += 1;
+                    agents.iter_mut().for_each(|a| a.x += 0.01 * back);
+                    goals.iter_mut().for_each(|q| q.x -= 0.02 * back);
+                    if cold {
+                        p.forget();
+                    }
+                    t += 0.05;
+                    p.plan(&agents, &goals, t, &mut goal_of, &mut wp)
+                        .expect("plan");
+                    black_box(goal_of[0])
+                })
+            });
+            let st = p.solve_stats();
+            // Nothing to print when the case was filtered out.
+            if st.rows_priced == 0 {
+                continue;
+            }
+            eprintln!(
+                "planner {n} {kind}: last plan kept {} pairs, {} row pricings, {} bids, \
+                 {} rows scanned",
+                st.kept_rows, st.rows_priced, st.bids, st.rows_scanned
+            );
+        }
     }
 }
 

@@ -251,6 +251,10 @@ pub struct Solver {
     pub(super) cancelled: bool,
     /// Sum of the slacks of the pairs freed by pricing passes (sizes the warm auction).
     pub(super) freed_slack: f64,
+    /// Whether a warm start whose broken pairs are far off goes on from the old
+    /// prices instead of starting over cold ([`WARM_COLD_SLACK`];
+    /// [`Solver::set_warm_restarts`]). `false` (restarts on) by default.
+    pub(super) no_warm_restarts: bool,
 }
 
 impl Solver {
@@ -274,6 +278,15 @@ impl Solver {
             k_opt: candidates,
             ..Solver::default()
         }
+    }
+
+    /// Whether a warm start whose broken pairs are off by more than two local cost
+    /// spreads starts over cold (the default, `true`). The answer is optimal either
+    /// way; only the work differs. Travel costs of 5,000 agents in a scene break
+    /// nearly every pair at each plan, and repairing from the old prices is quicker
+    /// there (obstacle course, 5,000 agents: about 1.2 s against 2.0 s restarted).
+    pub fn set_warm_restarts(&mut self, on: bool) {
+        self.no_warm_restarts = !on;
     }
 
     /// The strategy in use.
@@ -709,7 +722,7 @@ impl Solver {
                 && self.local_spread().is_some_and(|spread| {
                     self.freed_slack > WARM_COLD_SLACK * spread * freed as f64
                 });
-            if sparse && far_off {
+            if sparse && far_off && !self.no_warm_restarts {
                 self.restart_cold(costs, cancel);
                 self.halted()?;
                 self.price_all(costs, sparse, true, cancel)?;

@@ -26,7 +26,9 @@
 //!   of the patch under it ([`Scene::terrain_at`]); and after the step projects it
 //!   out of obstacles by one agent radius ([`Scene::project_out`]).
 
-use crate::crowd::assign::{AssignError, Cancel, CostMatrix, PointCosts, PointMetric, Solver};
+use crate::crowd::assign::{
+    AssignError, Cancel, CostMatrix, PointCosts, PointMetric, Solver, Strategy,
+};
 use crate::crowd::environment::eikonal::{
     cost_field_into, discomfort_into, ClusterCosts, CostInputs, CostWeights, DiscomfortParams,
     EikonalCosts, EikonalError, EikonalOptions, FieldSources, Grid, DEFAULT_CLUSTER_M,
@@ -47,6 +49,18 @@ pub const MAX_ROUTE_STEPS: usize = 2048;
 /// Agents whose waypoints are traced between two polls of a plan's [`Cancel`]
 /// check (a waypoint is at most [`MAX_ROUTE_STEPS`] descent steps).
 const WAYPOINTS_PER_POLL: usize = 64;
+/// Weight `ε` of the tie-break `ε · |a_i − g_j|²` added to the clustered travel
+/// costs by default (s/m²): none, the assignment is the travel-cost optimum
+/// ([`ClusterCosts::set_tie_break`] for what a positive weight trades).
+pub const DEFAULT_TIE_BREAK_S_PER_M2: f64 = 0.0;
+/// Plans with more goals than this solve with longer candidate lists and never
+/// restart a warm solve cold ([`solver_for`]).
+pub const LARGE_PLAN_GOALS: usize = 2000;
+/// Candidate lists of a large plan: `goals / LARGE_PLAN_CANDIDATES_DIV` columns per
+/// row, at most [`LARGE_PLAN_CANDIDATES_MAX`].
+const LARGE_PLAN_CANDIDATES_DIV: usize = 20;
+/// See [`LARGE_PLAN_CANDIDATES_DIV`].
+const LARGE_PLAN_CANDIDATES_MAX: usize = 256;
 
 /// Tunables of the planner.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -65,6 +79,11 @@ pub struct PlannerParams {
     /// corrected per goal by the straight last leg ([`ClusterCosts`]). `0`: one
     /// exact field per goal (the reference; about 0.9 s at 1,000 goals).
     pub cluster_m: f64,
+    /// Weight `ε` of the tie-break `ε · |a_i − g_j|²` added to the clustered
+    /// travel costs (s/m²; [`DEFAULT_TIE_BREAK_S_PER_M2`], 0: none). The plan is
+    /// then optimal for travel cost + `ε · d²`, not for the travel cost alone
+    /// ([`ClusterCosts::set_tie_break`]).
+    pub tie_break_s_per_m2: f64,
 }
 
 impl PlannerParams {
@@ -77,6 +96,7 @@ impl PlannerParams {
             discomfort: DiscomfortParams::default(),
             density_refresh_s: DEFAULT_DENSITY_REFRESH_S,
             cluster_m: DEFAULT_CLUSTER_M,
+            tie_break_s_per_m2: DEFAULT_TIE_BREAK_S_PER_M2,
         }
     }
 }
@@ -120,6 +140,8 @@ pub struct Planner {
     matrix: CostMatrix,
     euclidean: PointCosts,
     solver: Solver,
+    /// Candidates per row the solver was made with ([`solver_for`]).
+    solver_k: usize,
     warm: bool,
     agents: Vec<Vec2>,
     goals: Vec<Vec2>,
@@ -149,7 +171,9 @@ impl Planner {
         let clusters = if params.cluster_m == 0.0 {
             None
         } else {
-            Some(ClusterCosts::new(params.cluster_m)?)
+            let mut c = ClusterCosts::new(params.cluster_m)?;
+            c.set_tie_break(params.tie_break_s_per_m2)?;
+            Some(c)
         };
         let costs = EikonalCosts::new(grid, &vec![1.0; n], options)?;
         let mut p = Planner {
@@ -165,6 +189,7 @@ impl Planner {
             matrix: CostMatrix::new(0, 0),
             euclidean: PointCosts::new(PointMetric::Euclidean),
             solver: Solver::new(),
+            solver_k: 0,
             warm: false,
             agents: Vec::new(),
             goals: Vec::new(),
@@ -189,6 +214,11 @@ impl Planner {
     /// The solver's work counters of the last plan.
     pub fn solve_stats(&self) -> crate::crowd::assign::SolveStats {
         self.solver.stats()
+    }
+
+    /// The clustered travel costs of the last plan (`None` with one field per goal).
+    pub fn cluster_costs(&self) -> Option<&ClusterCosts> {
+        self.clusters.as_ref()
     }
 
     /// Goal clusters of the last plan (0 with one field per goal).
@@ -284,6 +314,12 @@ impl Planner {
         self.agents.extend(agents.iter().map(|&p| clamp(p)));
         self.goals.clear();
         self.goals.extend(goals.iter().map(|&p| clamp(p)));
+        let k = candidates_for(goals.len());
+        if k != self.solver_k {
+            self.solver = solver_for(goals.len());
+            self.solver_k = k;
+            self.warm = false;
+        }
         let filled = match &mut self.clusters {
             Some(c) => c.fill_cancellable(&self.costs, &self.agents, &self.goals, cancel),
             None => {
@@ -443,6 +479,30 @@ impl Planner {
         }
         best
     }
+}
+
+/// Candidates per row of the planner's solver for `goals` goals (0: the solver's
+/// automatic choice).
+fn candidates_for(goals: usize) -> usize {
+    if goals > LARGE_PLAN_GOALS {
+        (goals / LARGE_PLAN_CANDIDATES_DIV).min(LARGE_PLAN_CANDIDATES_MAX)
+    } else {
+        0
+    }
+}
+
+/// The planner's solver for `goals` goals. Up to [`LARGE_PLAN_GOALS`] the default
+/// one. Above, travel costs are nearly flat along the direction of travel (the
+/// reduced costs `c − v` of a row stay within a few cost spreads over hundreds of
+/// goals), so the default 64 candidates per row run out again and again in the
+/// auction (each refill a pass over the row); the lists are longer then
+/// (`goals / 20`, at most 256), and a warm start goes on from the old prices
+/// however many pairs broke, which at 5,000 agents is quicker than starting over.
+/// The answer is the optimum either way.
+fn solver_for(goals: usize) -> Solver {
+    let mut s = Solver::with_options(Strategy::Auto, candidates_for(goals));
+    s.set_warm_restarts(goals <= LARGE_PLAN_GOALS);
+    s
 }
 
 fn clamp_to((lo, hi): (Vec2, Vec2)) -> impl Fn(Vec2) -> Vec2 {

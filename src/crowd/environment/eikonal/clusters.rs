@@ -39,6 +39,11 @@
 //! optimum in every shipped scene (figures and the command in
 //! `docs/scenes-and-formations.md`).
 //!
+//! **Tie-break** ([`ClusterCosts::set_tie_break`], off by default): every entry
+//! may carry `+ ε · |a_i − g_j|²`; the assignment is then optimal for that sum, and
+//! its travel cost is within `ε · (D(σ*) − D(σ_ε))` of the travel optimum (see the
+//! method).
+//!
 //! # Complexity
 //! One march per cluster (cached by source cell while the cost grid stays, so a
 //! drifting formation re-marches only the clusters whose source changed), one
@@ -121,6 +126,11 @@ pub struct ClusterCosts {
     stamp: u32,
     chain: Vec<u32>,
     stats: ClusterStats,
+    /// Weight `ε` of the tie-break `ε · |a_i − g_j|²` (s/m²; 0: none).
+    tie_break: f64,
+    /// Per agent: position (single precision, as the goals).
+    ax: Vec<f32>,
+    ay: Vec<f32>,
 }
 
 impl ClusterCosts {
@@ -216,6 +226,10 @@ impl ClusterCosts {
         self.gx.extend(goals.iter().map(|g| g.x as f32));
         self.gy.extend(goals.iter().map(|g| g.y as f32));
         self.agents = agents.len();
+        self.ax.clear();
+        self.ay.clear();
+        self.ax.extend(agents.iter().map(|a| a.x as f32));
+        self.ay.extend(agents.iter().map(|a| a.y as f32));
         // Goals must be valid sources before they are clustered.
         costs.validate_points(agents, goals)?;
         let mut side = self.cluster_m;
@@ -438,7 +452,62 @@ impl ClusterCosts {
     #[inline]
     fn entry(&self, i: usize, j: usize) -> f64 {
         let x = i * self.source_cells.len() + self.goal_cluster[j] as usize;
-        self.base[x] + self.rate[x] * dist(self.vx[x], self.vy[x], self.gx[j], self.gy[j])
+        let (gx, gy) = (self.gx[j], self.gy[j]);
+        let c = self.base[x] + self.rate[x] * dist(self.vx[x], self.vy[x], gx, gy);
+        if self.tie_break == 0.0 {
+            c
+        } else {
+            c + self.tie_break * dist2(self.ax[i], self.ay[i], gx, gy)
+        }
+    }
+
+    /// Sets the weight `ε` of the tie-break added to every entry (s/m²; 0, the
+    /// default: none); it applies from the next read.
+    ///
+    /// # Formula
+    /// The entry becomes `c_ij + ε · |a_i − g_j|²` (`c_ij` the clustered travel cost
+    /// of the module doc). On a square problem `Σ_i |a_i − g_σ(i)|²` is
+    /// `Σ|a|² + Σ|g|² − 2 Σ a_i · g_σ(i)`, so the term ranks assignments by how well
+    /// they keep the crowd's layout, and breaks the ties of agents whose travel
+    /// costs differ by a constant (hidden behind the same corner). Let `σ_ε` be
+    /// optimal for the sum, `σ*` for the travel cost alone, `C` and `D` the total
+    /// travel cost and the total squared distance of an assignment. Then
+    ///
+    /// ```text
+    ///   C(σ*) ≤ C(σ_ε) ≤ C(σ*) + ε · (D(σ*) − D(σ_ε))
+    /// ```
+    ///
+    /// (optimality of `σ_ε` for `C + εD`): the travel cost given up is at most `ε`
+    /// times the squared distance it saves.
+    ///
+    /// # Units
+    /// `ε` in cost units (s) per m².
+    ///
+    /// # Errors
+    /// [`EikonalError::InvalidInput`] when `eps` is not finite and non-negative
+    /// (the weight is unchanged then).
+    ///
+    /// ```
+    /// use crowdtouch::crowd::environment::eikonal::ClusterCosts;
+    /// let mut c = ClusterCosts::new(1.0).unwrap();
+    /// assert!(c.set_tie_break(0.05).is_ok());
+    /// assert_eq!(c.tie_break(), 0.05);
+    /// assert!(c.set_tie_break(-1.0).is_err());
+    /// ```
+    pub fn set_tie_break(&mut self, eps: f64) -> Result<(), EikonalError> {
+        if !(eps.is_finite() && eps >= 0.0) {
+            return Err(EikonalError::InvalidInput {
+                what: "tie_break",
+                index: 0,
+            });
+        }
+        self.tie_break = eps;
+        Ok(())
+    }
+
+    /// The weight `ε` of the tie-break (s/m²; [`Self::set_tie_break`]).
+    pub fn tie_break(&self) -> f64 {
+        self.tie_break
     }
 }
 
@@ -447,6 +516,13 @@ impl ClusterCosts {
 fn dist(vx: f32, vy: f32, gx: f32, gy: f32) -> f64 {
     let (dx, dy) = (vx - gx, vy - gy);
     f64::from((dx * dx + dy * dy).sqrt())
+}
+
+/// `|a − g|²` in single precision (m²), widened.
+#[inline(always)]
+fn dist2(ax: f32, ay: f32, gx: f32, gy: f32) -> f64 {
+    let (dx, dy) = (ax - gx, ay - gy);
+    f64::from(dx * dx + dy * dy)
 }
 
 /// Largest relative difference between the mean unit cost of the straight leg from
@@ -527,13 +603,21 @@ impl CostSource for ClusterCosts {
         for c in 0..k {
             let x = i * k + c;
             let (base, rate, vx, vy) = (self.base[x], self.rate[x], self.vx[x], self.vy[x]);
+            let (eps, ax, ay) = (self.tie_break, self.ax[i], self.ay[i]);
             let (a, b) = (self.start[c] as usize, self.start[c + 1] as usize);
-            for ((o, &gx), &gy) in tmp[a..b]
+            let goals = tmp[a..b]
                 .iter_mut()
                 .zip(&self.ogx[a..b])
-                .zip(&self.ogy[a..b])
-            {
-                *o = base + rate * dist(vx, vy, gx, gy);
+                .zip(&self.ogy[a..b]);
+            // The same operations as `entry`, so both give the same bits.
+            if eps == 0.0 {
+                for ((o, &gx), &gy) in goals {
+                    *o = base + rate * dist(vx, vy, gx, gy);
+                }
+            } else {
+                for ((o, &gx), &gy) in goals {
+                    *o = base + rate * dist(vx, vy, gx, gy) + eps * dist2(ax, ay, gx, gy);
+                }
             }
         }
         for (&j, &v) in self.order.iter().zip(tmp.iter()) {
