@@ -14,7 +14,7 @@
 //! [`Scene::signed_distance`]: super::Scene::signed_distance
 //! [`Scene::terrain_at`]: super::Scene::terrain_at
 
-use super::model::{Obstacle, Patch};
+use super::model::{Dynamic, Obstacle, Patch};
 use crate::geom::{Rect, Vec2};
 
 /// Obstacle parts farther than this from a cell are not in its list (m). Distance
@@ -38,24 +38,44 @@ pub(super) type PartRef = (u32, u32);
 pub(super) struct PartIndex {
     origin: Vec2,
     cell_m: f64,
+    /// `1 / cell_m`, and the grid's size as floats: the per-query cell lookup
+    /// multiplies and compares only.
+    per_cell_m: f64,
+    nx_f: f64,
+    ny_f: f64,
     nx: usize,
     ny: usize,
     obstacle_start: Vec<u32>,
     obstacle_parts: Vec<PartRef>,
     patch_start: Vec<u32>,
     patch_parts: Vec<PartRef>,
+    /// Per moving item, the largest reach of its parts from its frame's origin (m):
+    /// no part is nearer to a point than the point's distance to the origin less it.
+    dynamic_reach_m: Vec<f64>,
 }
 
 impl PartIndex {
     /// The index of `obstacles` and `patches` over `bounds` widened by
     /// [`INDEX_REACH_M`].
-    pub(super) fn new(bounds: Rect, obstacles: &[Obstacle], patches: &[Patch]) -> PartIndex {
+    pub(super) fn new(
+        bounds: Rect,
+        obstacles: &[Obstacle],
+        patches: &[Patch],
+        dynamic: &[Dynamic],
+    ) -> PartIndex {
+        let dynamic_reach_m = dynamic
+            .iter()
+            .map(|d| d.parts.iter().map(|p| p.reach_m()).fold(0.0, f64::max))
+            .collect();
         let (w, h) = (
             bounds.width() + 2.0 * INDEX_REACH_M,
             bounds.height() + 2.0 * INDEX_REACH_M,
         );
         if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
-            return PartIndex::default();
+            return PartIndex {
+                dynamic_reach_m,
+                ..PartIndex::default()
+            };
         }
         let mut cell = INDEX_CELL_M;
         while ((w / cell).ceil() * (h / cell).ceil()) as usize > MAX_INDEX_CELLS {
@@ -66,8 +86,10 @@ impl PartIndex {
             cell_m: cell,
             nx: ((w / cell).ceil() as usize).max(1),
             ny: ((h / cell).ceil() as usize).max(1),
+            dynamic_reach_m,
             ..PartIndex::default()
         };
+        (ix.per_cell_m, ix.nx_f, ix.ny_f) = (1.0 / cell, ix.nx as f64, ix.ny as f64);
         let mut obstacle_boxes = obstacles.iter().enumerate().flat_map(|(i, o)| {
             o.parts
                 .iter()
@@ -121,19 +143,24 @@ impl PartIndex {
     }
 
     /// The cell holding `p`, `None` outside the grid (or for a non-finite `p`).
+    #[inline]
     fn cell(&self, p: Vec2) -> Option<usize> {
-        if self.nx == 0 {
-            return None;
-        }
-        let q = (p - self.origin) / self.cell_m;
-        if !(q.x >= 0.0 && q.y >= 0.0 && q.x < self.nx as f64 && q.y < self.ny as f64) {
+        let q = (p - self.origin) * self.per_cell_m;
+        // False for NaN, and always for the empty grid (nx_f = 0).
+        if !(q.x >= 0.0 && q.y >= 0.0 && q.x < self.nx_f && q.y < self.ny_f) {
             return None;
         }
         Some(q.y as usize * self.nx + q.x as usize)
     }
 
+    /// The largest reach of moving item `i`'s parts from its frame's origin (m).
+    pub(super) fn dynamic_reach_m(&self, i: usize) -> f64 {
+        self.dynamic_reach_m[i]
+    }
+
     /// The static obstacle parts that may be within [`INDEX_REACH_M`] of `p`, in
     /// file order; `None` when `p` is outside the grid (ask every part).
+    #[inline]
     pub(super) fn obstacles_near(&self, p: Vec2) -> Option<&[PartRef]> {
         let c = self.cell(p)?;
         let (a, b) = (self.obstacle_start[c], self.obstacle_start[c + 1]);
@@ -142,6 +169,7 @@ impl PartIndex {
 
     /// The static patch parts that may contain `p`, in file order; `None` when `p`
     /// is outside the grid (ask every part).
+    #[inline]
     pub(super) fn patches_at(&self, p: Vec2) -> Option<&[PartRef]> {
         let c = self.cell(p)?;
         let (a, b) = (self.patch_start[c], self.patch_start[c + 1]);

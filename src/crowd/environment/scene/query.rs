@@ -209,11 +209,13 @@ impl Scene {
         static_hit
             || self.dynamic.iter().enumerate().any(|(i, dy)| {
                 dy.kind == DynamicKind::Obstacle && {
-                    let local = placement(i).to_local(p);
-                    let d0 = local.norm();
-                    dy.parts
-                        .iter()
-                        .any(|part| d0 - part.reach_m() < margin_m && near(part, local))
+                    let pl = placement(i);
+                    // Nearer than the margin needs |p − origin| < reach + margin.
+                    let within = self.index.dynamic_reach_m(i) + margin_m.max(0.0);
+                    (p - pl.position).norm_squared() < within * within && {
+                        let local = pl.to_local(p);
+                        dy.parts.iter().any(|part| near(part, local))
+                    }
                 }
             })
     }

@@ -398,7 +398,7 @@ impl Scene {
             Ok(Scene {
                 name: f.name.clone(),
                 bounds: b,
-                index: PartIndex::new(b, &obstacles, &patches),
+                index: PartIndex::new(b, &obstacles, &patches, &dynamic),
                 obstacles,
                 patches,
                 dynamic,
