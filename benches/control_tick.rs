@@ -82,7 +82,7 @@ fn control_tick(c: &mut Criterion) {
 fn formation_switch(c: &mut Criterion) {
     let mut g = c.benchmark_group("formation_switch");
     g.sample_size(10);
-    for agents in [100u32, 1000] {
+    for agents in [100u32, 1000, 5000] {
         let mut cfg = Config::embedded_default();
         cfg.crowd.agents = agents;
         // The mesh switch (a formation transform is `transform_prepare`'s).
