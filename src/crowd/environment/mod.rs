@@ -10,7 +10,7 @@ mod scene;
 
 pub use planner::{
     steer_target, PlanError, Planner, PlannerParams, DEFAULT_DENSITY_REFRESH_S,
-    DEFAULT_PLAN_CELL_M, MAX_ROUTE_STEPS,
+    DEFAULT_PLAN_CELL_M, DEFAULT_TIE_BREAK_S_PER_M2, MAX_ROUTE_STEPS,
 };
 pub use potential::{
     displace_vertices, field_at, magnitude, part_field, FieldError, FieldGrid, FieldParams,
