@@ -14,7 +14,7 @@
 //! [`Scene::signed_distance`]: super::Scene::signed_distance
 //! [`Scene::terrain_at`]: super::Scene::terrain_at
 
-use super::model::{Dynamic, Obstacle, Patch};
+use super::shape::Part;
 use crate::geom::{Rect, Vec2};
 
 /// Obstacle parts farther than this from a cell are not in its list (m). Distance
@@ -55,17 +55,17 @@ pub(super) struct PartIndex {
 }
 
 impl PartIndex {
-    /// The index of `obstacles` and `patches` over `bounds` widened by
-    /// [`INDEX_REACH_M`].
-    pub(super) fn new(
+    /// The index of the static obstacles' and patches' parts (each item's parts, in
+    /// file order) over `bounds` widened by [`INDEX_REACH_M`], with the reach of
+    /// each moving item's parts.
+    pub(super) fn new<'a>(
         bounds: Rect,
-        obstacles: &[Obstacle],
-        patches: &[Patch],
-        dynamic: &[Dynamic],
+        obstacles: impl Iterator<Item = &'a [Part]> + 'a,
+        patches: impl Iterator<Item = &'a [Part]> + 'a,
+        dynamic: impl Iterator<Item = &'a [Part]>,
     ) -> PartIndex {
         let dynamic_reach_m = dynamic
-            .iter()
-            .map(|d| d.parts.iter().map(|p| p.reach_m()).fold(0.0, f64::max))
+            .map(|parts| parts.iter().map(|p| p.reach_m()).fold(0.0, f64::max))
             .collect();
         let (w, h) = (
             bounds.width() + 2.0 * INDEX_REACH_M,
@@ -90,19 +90,9 @@ impl PartIndex {
             ..PartIndex::default()
         };
         (ix.per_cell_m, ix.nx_f, ix.ny_f) = (1.0 / cell, ix.nx as f64, ix.ny as f64);
-        let mut obstacle_boxes = obstacles.iter().enumerate().flat_map(|(i, o)| {
-            o.parts
-                .iter()
-                .enumerate()
-                .map(move |(j, p)| ((i as u32, j as u32), p.aabb()))
-        });
+        let mut obstacle_boxes = part_boxes(obstacles);
         (ix.obstacle_start, ix.obstacle_parts) = ix.lists(&mut obstacle_boxes, INDEX_REACH_M);
-        let mut patch_boxes = patches.iter().enumerate().flat_map(|(i, o)| {
-            o.parts
-                .iter()
-                .enumerate()
-                .map(move |(j, p)| ((i as u32, j as u32), p.aabb()))
-        });
+        let mut patch_boxes = part_boxes(patches);
         (ix.patch_start, ix.patch_parts) = ix.lists(&mut patch_boxes, PATCH_SLACK_M);
         ix
     }
@@ -175,4 +165,16 @@ impl PartIndex {
         let (a, b) = (self.patch_start[c], self.patch_start[c + 1]);
         Some(&self.patch_parts[a as usize..b as usize])
     }
+}
+
+/// Every part of `items` (each item's parts) with its reference and bounding box.
+fn part_boxes<'a>(
+    items: impl Iterator<Item = &'a [Part]> + 'a,
+) -> impl Iterator<Item = (PartRef, Rect)> + 'a {
+    items.enumerate().flat_map(|(i, parts)| {
+        parts
+            .iter()
+            .enumerate()
+            .map(move |(j, p)| ((i as u32, j as u32), p.aabb()))
+    })
 }

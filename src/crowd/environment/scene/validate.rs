@@ -398,7 +398,12 @@ impl Scene {
             Ok(Scene {
                 name: f.name.clone(),
                 bounds: b,
-                index: PartIndex::new(b, &obstacles, &patches, &dynamic),
+                index: PartIndex::new(
+                    b,
+                    obstacles.iter().map(|o| &o.parts[..]),
+                    patches.iter().map(|p| &p.parts[..]),
+                    dynamic.iter().map(|d| &d.parts[..]),
+                ),
                 obstacles,
                 patches,
                 dynamic,
