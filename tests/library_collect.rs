@@ -13,6 +13,8 @@
 //! has to reach the daemon before the next contract is recorded: the 7.5 s between
 //! the two contracts leave room for a machine busy with other builds (with 3.5 s
 //! the undo once came after the next gesture on a machine running benchmarks).
+//! Whether the undone item is shown again before that contract ends depends on
+//! how fast the worker saves the library, and both orders are accepted.
 
 mod common;
 
@@ -262,23 +264,26 @@ fn a_session_on_a_replay_stores_each_gesture_with_its_participant_and_a_client_u
         .filter(|x| x.0 != "refused")
         .cloned()
         .collect();
-    assert_eq!(
-        steps,
-        vec![
-            s("showing", 0),
-            s("recorded", 0),
-            s("showing", 1),
-            s("recorded", 1),
-            s("showing", 2),
-            s("undone", 1),
-            s("showing", 1),
-            s("recorded", 1),
-            s("showing", 2),
-            s("recorded", 2),
-            s("finished", 3),
-        ],
-        "{states:?}\n{stderr}"
-    );
+    let mut want = vec![
+        s("showing", 0),
+        s("recorded", 0),
+        s("showing", 1),
+        s("recorded", 1),
+        s("showing", 2),
+        s("undone", 1),
+        s("recorded", 1),
+        s("showing", 2),
+        s("recorded", 2),
+        s("finished", 3),
+    ];
+    // After the undo the contract is shown again, unless the replay's next
+    // contract ended before the undo was saved (the worker writes the whole
+    // library, slow in a debug build on a busy machine): that gesture is then
+    // recorded for the undone item at once, and the item is not shown again.
+    if steps.get(6) == Some(&s("showing", 1)) {
+        want.insert(6, s("showing", 1));
+    }
+    assert_eq!(steps, want, "{states:?}\n{stderr}");
     assert_eq!(
         acks,
         vec![

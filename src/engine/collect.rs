@@ -375,8 +375,7 @@ impl Engine {
     fn dispatch_collect(&mut self, now: Micros) {
         let inline = !self.switch_worker;
         loop {
-            let agents = self.agents.positions().to_vec();
-            let speed_m_s = self.gestures.speed_m_s;
+            let (positions, speed_m_s) = (self.agents.positions(), self.gestures.speed_m_s);
             let Some(c) = self.collect.as_mut() else {
                 return;
             };
@@ -385,11 +384,12 @@ impl Engine {
             }
             let wanted = c.queued.remove(0);
             let kind = match wanted {
-                Wanted::Show if c.item >= c.items.len() || agents.is_empty() => continue,
+                Wanted::Show if c.item >= c.items.len() || positions.is_empty() => continue,
+                // The crowd copied only for a job that goes out.
                 Wanted::Show => CollectJobKind::Show {
                     item: c.item,
                     motion: c.items[c.item].0 as usize,
-                    agents,
+                    agents: positions.to_vec(),
                     speed_m_s,
                     seed: c.seed ^ (c.item as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
                 },

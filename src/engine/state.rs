@@ -180,7 +180,9 @@ impl Engine {
             waypoints: vec![Vec2::repeat(f64::NAN); agents_n],
             targets: Vec::with_capacity(agents_n),
             motions: Vec::with_capacity(agents_n),
-            scene_placements: Vec::new(),
+            scene_placements: Vec::with_capacity(
+                cfg.loaded_scene().map_or(0, |s| s.dynamic().len()),
+            ),
             seq: 0,
             last_t: None,
             pending_input_t: None,
@@ -342,6 +344,11 @@ impl Engine {
     /// Swaps the scene (see [`Engine::reconfigure_with`]).
     pub(super) fn set_scene(&mut self, scene: Option<Arc<Scene>>) {
         self.scene = scene;
+        // The moving parts' placements of one tick: reserved here, not on the
+        // control thread's first scene tick.
+        let moving = self.scene.as_ref().map_or(0, |s| s.dynamic().len());
+        self.scene_placements.clear();
+        self.scene_placements.reserve(moving);
         self.scene_out.changed = true;
         self.prev_centroid = None;
         if self.scene.is_none() {

@@ -29,6 +29,9 @@ const MAX_INDEX_CELLS: usize = 1 << 16;
 /// Patch boxes are widened by this much (m) so a point on a patch's edge is in its
 /// cell's list whatever the rounding.
 const PATCH_SLACK_M: f64 = 1e-6;
+/// How far inside a patch part a cell's corners must be for the part to cover
+/// the cell (m).
+const COVER_MARGIN_M: f64 = 1e-6;
 
 /// A static part: `(item, part)` indices into the scene's obstacles or patches.
 pub(super) type PartRef = (u32, u32);
@@ -47,8 +50,15 @@ pub(super) struct PartIndex {
     ny: usize,
     obstacle_start: Vec<u32>,
     obstacle_parts: Vec<PartRef>,
+    /// Per cell: a lower bound of the distance from any point of the cell to any
+    /// static obstacle part (m; at most [`INDEX_REACH_M`]), from the parts' boxes.
+    obstacle_clear_m: Vec<f64>,
     patch_start: Vec<u32>,
     patch_parts: Vec<PartRef>,
+    /// Per cell: whether the first part of its patch list covers the whole cell
+    /// (the parts before it in file order, which it overrides, are dropped from
+    /// the list), so a point in the cell is in that part without a test.
+    patch_covers: Vec<bool>,
     /// Per moving item, the largest reach of its parts from its frame's origin (m):
     /// no part is nearer to a point than the point's distance to the origin less it.
     dynamic_reach_m: Vec<f64>,
@@ -90,11 +100,80 @@ impl PartIndex {
             ..PartIndex::default()
         };
         (ix.per_cell_m, ix.nx_f, ix.ny_f) = (1.0 / cell, ix.nx as f64, ix.ny as f64);
-        let mut obstacle_boxes = part_boxes(obstacles);
+        let obstacles: Vec<&[Part]> = obstacles.collect();
+        let mut obstacle_boxes = part_boxes(obstacles.iter().copied());
         (ix.obstacle_start, ix.obstacle_parts) = ix.lists(&mut obstacle_boxes, INDEX_REACH_M);
-        let mut patch_boxes = part_boxes(patches);
-        (ix.patch_start, ix.patch_parts) = ix.lists(&mut patch_boxes, PATCH_SLACK_M);
+        ix.obstacle_clear_m = ix.clearances(&obstacles);
+        let patches: Vec<&[Part]> = patches.collect();
+        let mut patch_boxes = part_boxes(patches.iter().copied());
+        let (start, flat) = ix.lists(&mut patch_boxes, PATCH_SLACK_M);
+        (ix.patch_start, ix.patch_parts, ix.patch_covers) = ix.covered(&start, &flat, &patches);
         ix
+    }
+
+    /// Per cell, the distance from the cell to the nearest box of a part in its
+    /// obstacle list ([`INDEX_REACH_M`] for an empty list: every other part's box
+    /// is farther), less a relative `1e-9` against rounding. A part's signed
+    /// distance is at least the distance to its box, so no point of the cell is
+    /// nearer to a static obstacle.
+    fn clearances(&self, obstacles: &[&[Part]]) -> Vec<f64> {
+        (0..self.nx * self.ny)
+            .map(|c| {
+                let (cx, cy) = ((c % self.nx) as f64, (c / self.nx) as f64);
+                let lo = self.origin + Vec2::new(cx, cy) * self.cell_m;
+                let hi = lo + Vec2::repeat(self.cell_m);
+                let (a, b) = (self.obstacle_start[c], self.obstacle_start[c + 1]);
+                self.obstacle_parts[a as usize..b as usize]
+                    .iter()
+                    .map(|&(i, j)| {
+                        let bx = obstacles[i as usize][j as usize].aabb();
+                        let gap = |l: f64, h: f64, bl: f64, bh: f64| (bl - h).max(l - bh).max(0.0);
+                        let (gx, gy) = (
+                            gap(lo.x, hi.x, bx.min[0], bx.max[0]),
+                            gap(lo.y, hi.y, bx.min[1], bx.max[1]),
+                        );
+                        (gx * gx + gy * gy).sqrt()
+                    })
+                    .fold(INDEX_REACH_M, f64::min)
+                    * (1.0 - 1e-9)
+            })
+            .collect()
+    }
+
+    /// The patch lists cut at the last part (in file order) that covers the whole
+    /// cell: `(start, flat, covers)` as [`lists`](Self::lists) gives them, with
+    /// `covers[c]` when cell `c`'s list begins with such a part.
+    ///
+    /// A part covers a cell when each of the cell's corners lies at least
+    /// [`COVER_MARGIN_M`] inside it: parts are convex, so the points at least that
+    /// far inside form a convex set, which then holds the whole cell; the margin
+    /// is far above the rounding of a point's cell and of `contains`.
+    fn covered(
+        &self,
+        start: &[u32],
+        flat: &[PartRef],
+        patches: &[&[Part]],
+    ) -> (Vec<u32>, Vec<PartRef>, Vec<bool>) {
+        let mut out_start = Vec::with_capacity(start.len());
+        let mut out = Vec::with_capacity(flat.len());
+        let mut covers = Vec::with_capacity(start.len().saturating_sub(1));
+        out_start.push(0u32);
+        for (c, w) in start.windows(2).enumerate() {
+            let list = &flat[w[0] as usize..w[1] as usize];
+            let (cx, cy) = ((c % self.nx) as f64, (c / self.nx) as f64);
+            let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+                .map(|(dx, dy)| self.origin + Vec2::new(cx + dx, cy + dy) * self.cell_m);
+            let covering = list.iter().rposition(|&(i, j)| {
+                let part = &patches[i as usize][j as usize];
+                corners
+                    .iter()
+                    .all(|&q| part.signed_distance(q) <= -COVER_MARGIN_M)
+            });
+            covers.push(covering.is_some());
+            out.extend_from_slice(&list[covering.unwrap_or(0)..]);
+            out_start.push(out.len() as u32);
+        }
+        (out_start, out, covers)
     }
 
     /// Per cell, in the order given, the parts whose box widened by `grow` meets it:
@@ -157,13 +236,31 @@ impl PartIndex {
         Some(&self.obstacle_parts[a as usize..b as usize])
     }
 
-    /// The static patch parts that may contain `p`, in file order; `None` when `p`
-    /// is outside the grid (ask every part).
+    /// As [`obstacles_near`](Self::obstacles_near), with a lower bound of the
+    /// distance from `p` to every static obstacle part (m, at most
+    /// [`INDEX_REACH_M`]).
     #[inline]
-    pub(super) fn patches_at(&self, p: Vec2) -> Option<&[PartRef]> {
+    pub(super) fn obstacles_near_clear(&self, p: Vec2) -> Option<(f64, &[PartRef])> {
+        let c = self.cell(p)?;
+        let (a, b) = (self.obstacle_start[c], self.obstacle_start[c + 1]);
+        Some((
+            self.obstacle_clear_m[c],
+            &self.obstacle_parts[a as usize..b as usize],
+        ))
+    }
+
+    /// The static patch parts that may contain `p`, in file order, and whether the
+    /// first of them surely contains it (it covers `p`'s cell; the parts it
+    /// overrides are left out); `None` when `p` is outside the grid (ask every
+    /// part).
+    #[inline]
+    pub(super) fn patches_at(&self, p: Vec2) -> Option<(bool, &[PartRef])> {
         let c = self.cell(p)?;
         let (a, b) = (self.patch_start[c], self.patch_start[c + 1]);
-        Some(&self.patch_parts[a as usize..b as usize])
+        Some((
+            self.patch_covers[c],
+            &self.patch_parts[a as usize..b as usize],
+        ))
     }
 }
 

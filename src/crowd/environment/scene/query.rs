@@ -197,8 +197,11 @@ impl Scene {
         placement: impl Fn(usize) -> Placement,
     ) -> bool {
         let near = |part: &Part, local: Vec2| part.signed_distance(local) < margin_m;
-        let static_hit = match self.index.obstacles_near(p) {
-            Some(list) if margin_m <= INDEX_REACH_M => list
+        let static_hit = match self.index.obstacles_near_clear(p) {
+            // Every point of the cell is at least `clear` (> 0) from every static
+            // part: outside them all, and not within a margin up to `clear`.
+            Some((clear, _)) if clear > 0.0 && margin_m <= clear => false,
+            Some((_, list)) if margin_m <= INDEX_REACH_M => list
                 .iter()
                 .any(|&(o, j)| near(&self.obstacles[o as usize].parts[j as usize], p)),
             _ => self
@@ -331,7 +334,12 @@ impl Scene {
         let mut t = Terrain::OPEN;
         match self.index.patches_at(p) {
             // In file order, so the last patch containing p wins as below.
-            Some(near) => {
+            Some((covers, near)) => {
+                let mut near = near;
+                if let (true, Some((&(i, _), rest))) = (covers, near.split_first()) {
+                    t = self.patches[i as usize].terrain;
+                    near = rest;
+                }
                 for &(i, j) in near {
                     let patch = &self.patches[i as usize];
                     if patch.parts[j as usize].contains(p) {

@@ -529,12 +529,30 @@ fn indexed_queries_equal_the_full_scan() {
     let mut rng = SplitMix64::new(7);
     for (name, s) in &scenes {
         let b = s.bounds();
-        for k in 0..4000 {
+        for k in 0..6000 {
             let t = (k % 8) as f64 * 1.7;
-            let p = Vec2::new(
-                rng.uniform(b.min[0] - 2.0, b.max[0] + 2.0),
-                rng.uniform(b.min[1] - 2.0, b.max[1] + 2.0),
-            );
+            let p = if k < 4000 {
+                Vec2::new(
+                    rng.uniform(b.min[0] - 2.0, b.max[0] + 2.0),
+                    rng.uniform(b.min[1] - 2.0, b.max[1] + 2.0),
+                )
+            } else {
+                // On the index's cell lines and corners (its origin is the bounds'
+                // corner less the reach, its cells 0.5 m in these scenes).
+                let line = |lo: f64, hi: f64, rng: &mut SplitMix64| {
+                    let n = ((hi - lo) / 0.5).floor();
+                    lo - INDEX_REACH_M + 0.5 * (rng.uniform(0.0, n + 4.0)).floor()
+                };
+                let (x, y) = (
+                    line(b.min[0], b.max[0], &mut rng),
+                    line(b.min[1], b.max[1], &mut rng),
+                );
+                match k % 3 {
+                    0 => Vec2::new(x, y),
+                    1 => Vec2::new(x, rng.uniform(b.min[1], b.max[1])),
+                    _ => Vec2::new(rng.uniform(b.min[0], b.max[0]), y),
+                }
+            };
             let mut want_d = f64::INFINITY;
             s.for_each_obstacle_part(t, |_, _, part, pl| {
                 want_d = want_d.min(part.signed_distance(pl.to_local(p)));
@@ -563,6 +581,32 @@ fn indexed_queries_equal_the_full_scan() {
             assert_eq!(s.terrain_at(p, t), want_t, "{name} at {p} t {t}");
         }
     }
+}
+
+/// A point inside a patch far from its edges is answered without testing a part:
+/// its cell is covered by the patch, and only the parts drawn over it remain.
+#[test]
+fn cells_inside_a_patch_need_no_test() {
+    let s = scene(&with(
+        "    patches: [(name: \"mud\", motion: crawl, speed_factor: Some(0.5), parts: [Polygon(vertices_m: [(5.0, 5.0), (9.0, 5.0), (9.0, 8.0), (5.0, 8.0)])]),\n\
+         (name: \"ice\", motion: swim, speed_factor: Some(0.8), parts: [Circle(centre_m: (8.0, 6.0), radius_m: 1.5)])],",
+    ));
+    // Inside the mud, clear of the ice's box: covered, nothing left to test.
+    assert_eq!(
+        s.index.patches_at(Vec2::new(5.7, 7.2)),
+        Some((true, &[(0, 0)][..]))
+    );
+    // Inside both: the ice, drawn later, covers the cell; the mud is dropped.
+    assert_eq!(
+        s.index.patches_at(Vec2::new(8.1, 6.1)),
+        Some((true, &[(1, 0)][..]))
+    );
+    // On the mud's edge: both parts' boxes meet the cell, neither covers it.
+    let (covers, near) = s.index.patches_at(Vec2::new(5.0, 6.0)).unwrap();
+    assert!(!covers);
+    assert_eq!(near, &[(0, 0)]);
+    assert_eq!(s.terrain_at(Vec2::new(5.7, 7.2), 0.0).speed_factor, 0.5);
+    assert_eq!(s.terrain_at(Vec2::new(8.1, 6.1), 0.0).speed_factor, 0.8);
 }
 
 /// A scene placed once at a time answers as the scene asked at that time, moving
