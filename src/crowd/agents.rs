@@ -259,7 +259,7 @@ impl Agents {
                 // Back to the agents' order: one scattered write per agent here
                 // instead of scattered reads of position, velocity and target in
                 // the integration (which is bound by memory latency at 10,000).
-                self.push.clear();
+                // `items` is a permutation of the agents: every entry is written.
                 self.push.resize(n, Vec2::zeros());
                 for (&i, &f) in self.grid.items.iter().zip(&self.sorted_push) {
                     self.push[i as usize] = f;

@@ -231,9 +231,7 @@ impl PartIndex {
     /// file order; `None` when `p` is outside the grid (ask every part).
     #[inline]
     pub(super) fn obstacles_near(&self, p: Vec2) -> Option<&[PartRef]> {
-        let c = self.cell(p)?;
-        let (a, b) = (self.obstacle_start[c], self.obstacle_start[c + 1]);
-        Some(&self.obstacle_parts[a as usize..b as usize])
+        self.obstacles_near_clear(p).map(|(_, parts)| parts)
     }
 
     /// As [`obstacles_near`](Self::obstacles_near), with a lower bound of the
