@@ -10,8 +10,14 @@
 //! * a file in a folder no rule covers,
 //!
 //! fails the test, naming the file and line. The same idea as ArchUnit's layer rules or
-//! a cargo-deny ban list, applied to our own modules. The binary (`src/main.rs`,
-//! `src/cli/`) sits above everything and is not checked.
+//! a cargo-deny ban list, applied to our own modules.
+//!
+//! The binary (`src/main.rs`, `src/cli.rs`, `src/cli/`) sits above everything and
+//! imports the library as `crowdtouch::…`; its own files are held to two rules
+//! ([`check_binary`]): no cycle of imports between files, and each command family
+//! (a folder `src/cli/<family>/` or file `src/cli/<family>.rs`) imports only its own
+//! files and the shared `src/cli/common/`, never another family or the dispatch in
+//! `src/cli.rs`; `common` imports no family.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::Path;
@@ -197,6 +203,123 @@ fn threads_and_clocks_in_a_pure_module_are_named() {
     }
 }
 
+#[test]
+fn the_binary_keeps_its_families_apart_and_has_no_cycles() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = BTreeMap::new();
+    for f in ["main.rs", "cli.rs"] {
+        let text = std::fs::read_to_string(src.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+        files.insert(f.to_string(), text);
+    }
+    read_binary_tree(&src, &src.join("cli"), &mut files);
+    assert!(files.len() > 40, "read {} files of the binary", files.len());
+    let problems = std::thread::Builder::new()
+        .stack_size(256 << 20)
+        .spawn(move || check_binary(&files))
+        .expect("checker thread")
+        .join()
+        .expect("checker ran");
+    assert!(
+        problems.is_empty(),
+        "{} problem(s) in the binary (rules: tests/architecture.rs, ARCHITECTURE.md):\n{}",
+        problems.len(),
+        problems.join("\n")
+    );
+}
+
+/// A small binary: the dispatch, two families and `common`.
+fn binary(extra: &[(&str, &str)]) -> BTreeMap<String, String> {
+    let mut files = tree(&[
+        ("main.rs", "mod cli;\nfn main() { cli::main(); }\n"),
+        (
+            "cli.rs",
+            "mod common;\nmod daemon;\nmod scenes;\npub fn main() { daemon::run::run(); scenes::render::render(); }\n",
+        ),
+        ("cli/common/mod.rs", "pub mod output;\n"),
+        ("cli/common/output.rs", "pub fn outln() {}\n"),
+        ("cli/daemon/mod.rs", "pub mod run;\npub mod check;\n"),
+        (
+            "cli/daemon/run.rs",
+            "use crate::cli::common::output::outln;\nuse super::check::check;\npub fn run() { outln(); check(); }\n",
+        ),
+        ("cli/daemon/check.rs", "pub fn check() {}\n"),
+        ("cli/scenes/mod.rs", "pub mod render;\n"),
+        ("cli/scenes/render.rs", "pub fn render() {}\n"),
+    ]);
+    for (p, s) in extra {
+        files.insert(p.to_string(), s.to_string());
+    }
+    files
+}
+
+#[test]
+fn a_planted_import_between_two_families_is_named_with_its_line() {
+    assert_eq!(check_binary(&binary(&[])), Vec::<String>::new());
+    let p = check_binary(&binary(&[(
+        "cli/scenes/render.rs",
+        "\nuse crate::cli::daemon::check::check;\npub fn render() { check(); }\n",
+    )]));
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert!(
+        p[0].starts_with(
+            "src/cli/scenes/render.rs:2: command family `scenes` may not import family `daemon`"
+        ),
+        "{}",
+        p[0]
+    );
+    let p = check_binary(&binary(&[(
+        "cli/common/output.rs",
+        "use crate::cli::scenes::render::render;\npub fn outln() { render(); }\n",
+    )]));
+    assert!(
+        p.iter()
+            .any(|l| l.contains("cli/common is shared by every family")),
+        "{p:?}"
+    );
+}
+
+#[test]
+fn a_planted_cycle_in_cli_is_found() {
+    let p = check_binary(&binary(&[(
+        "cli/daemon/check.rs",
+        "use super::run::run;\npub fn check() { run(); }\n",
+    )]));
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert!(p[0].starts_with("import cycle:"), "{}", p[0]);
+    assert!(
+        p[0].contains("src/cli/daemon/check.rs:1 → src/cli/daemon/run.rs"),
+        "{}",
+        p[0]
+    );
+    assert!(
+        p[0].contains("src/cli/daemon/run.rs:2 → src/cli/daemon/check.rs"),
+        "{}",
+        p[0]
+    );
+}
+
+/// Every `.rs` file of the binary under `dir` (`src/cli/`), by path relative to `src/`.
+fn read_binary_tree(root: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
+    let mut entries: Vec<_> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.expect("directory entry").path())
+        .collect();
+    entries.sort();
+    for p in entries {
+        let rel = p
+            .strip_prefix(root)
+            .expect("under src")
+            .to_string_lossy()
+            .replace('\\', "/");
+        if p.is_dir() {
+            read_binary_tree(root, &p, out);
+        } else if rel.ends_with(".rs") {
+            let text = std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{rel}: {e}"));
+            out.insert(rel, text);
+        }
+    }
+}
+
 fn tree(files: &[(&str, &str)]) -> BTreeMap<String, String> {
     files
         .iter()
@@ -237,7 +360,10 @@ fn module_of(rel: &str) -> Vec<String> {
         .split('/')
         .map(str::to_string)
         .collect();
-    if matches!(segs.last().map(String::as_str), Some("mod" | "lib")) {
+    if matches!(
+        segs.last().map(String::as_str),
+        Some("mod" | "lib" | "main")
+    ) {
         segs.pop();
     }
     segs
@@ -505,8 +631,9 @@ fn starts_with(path: &[String], prefix: &str) -> bool {
     under(path, prefix)
 }
 
-/// Checks the files (paths relative to `src/`); returns one line per problem.
-fn check(files: &BTreeMap<String, String>) -> Vec<String> {
+/// Parses the files (paths relative to `src/`) of one crate: its modules, the
+/// paths each file mentions, and one problem per file that does not parse.
+fn parse(files: &BTreeMap<String, String>) -> (Crate, Vec<(String, Mention)>, Vec<String>) {
     let mut modules = BTreeMap::new();
     let mut mentions: Vec<(String, Mention)> = Vec::new();
     let mut problems = Vec::new();
@@ -531,7 +658,12 @@ fn check(files: &BTreeMap<String, String>) -> Vec<String> {
         c.visit_file(&ast);
         mentions.extend(c.mentions.into_iter().map(|m| (rel.clone(), m)));
     }
-    let krate = Crate { modules };
+    (Crate { modules }, mentions, problems)
+}
+
+/// Checks the files (paths relative to `src/`); returns one line per problem.
+fn check(files: &BTreeMap<String, String>) -> Vec<String> {
+    let (krate, mentions, mut problems) = parse(files);
     let module_of_file: HashMap<&str, Vec<String>> = files
         .keys()
         .map(|rel| (rel.as_str(), module_of(rel)))
@@ -611,8 +743,14 @@ fn check(files: &BTreeMap<String, String>) -> Vec<String> {
         *line = (*line).min(m.line);
     }
     problems.sort_by_key(|p| natural_key(p));
+    problems.extend(cycle_problems(&edges));
+    problems
+}
 
-    for cycle in cycles(&edges) {
+/// One problem per import cycle, each step with its file and line.
+fn cycle_problems(edges: &BTreeMap<String, BTreeMap<String, usize>>) -> Vec<String> {
+    let mut problems = Vec::new();
+    for cycle in cycles(edges) {
         let mut s = String::from("import cycle:");
         for (i, f) in cycle.iter().enumerate() {
             let next = &cycle[(i + 1) % cycle.len()];
@@ -621,6 +759,71 @@ fn check(files: &BTreeMap<String, String>) -> Vec<String> {
         }
         problems.push(s);
     }
+    problems
+}
+
+/// The command family of a binary module: `cli::<family>::…` → `Some(family)`;
+/// `None` for the dispatch (`cli`) and the root (`main`).
+fn family(module: &[String]) -> Option<&str> {
+    match module {
+        [cli, fam, ..] if cli == "cli" => Some(fam.as_str()),
+        _ => None,
+    }
+}
+
+/// The family every other family may import.
+const SHARED_FAMILY: &str = "common";
+
+/// Checks the binary's files (paths relative to `src/`: `main.rs`, `cli.rs`,
+/// `cli/…`): no import cycle between files, and a family imports only itself and
+/// [`SHARED_FAMILY`] (which imports no family); no family imports the dispatch.
+fn check_binary(files: &BTreeMap<String, String>) -> Vec<String> {
+    let (krate, mentions, mut problems) = parse(files);
+    let mut edges: BTreeMap<String, BTreeMap<String, usize>> = BTreeMap::new();
+    let mut seen = BTreeSet::new();
+    for (rel, m) in &mentions {
+        // `crowdtouch::…` (the library) and other crates resolve to nothing here.
+        let Some(abs) = krate.absolute(&m.module, &m.segs) else {
+            continue;
+        };
+        if !m.glob && krate.modules.contains_key(&abs) {
+            continue;
+        }
+        let Some(target) = krate.resolve(&abs, 0) else {
+            continue;
+        };
+        if target == rel {
+            continue;
+        }
+        let (from, to) = (module_of(rel), module_of(target));
+        let why = match (family(&from), family(&to)) {
+            (Some(f), Some(t)) if f == t => None,
+            (Some(f), Some(t)) if f == SHARED_FAMILY => Some(format!(
+                "cli/{f} is shared by every family and may not import family `{t}`"
+            )),
+            (Some(f), Some(t)) if t != SHARED_FAMILY => Some(format!(
+                "command family `{f}` may not import family `{t}`: share it through cli/{SHARED_FAMILY}/"
+            )),
+            (Some(f), None) => Some(format!(
+                "command family `{f}` may not import the dispatch or the root: move what it needs into cli/{SHARED_FAMILY}/"
+            )),
+            _ => None,
+        };
+        if let Some(why) = why {
+            if seen.insert((rel.clone(), m.line, target.to_string())) {
+                problems.push(format!(
+                    "src/{rel}:{}: {why} (`crate::{}` is in src/{target})",
+                    m.line,
+                    abs.join("::")
+                ));
+            }
+        }
+        let e = edges.entry(rel.clone()).or_default();
+        let line = e.entry(target.to_string()).or_insert(m.line);
+        *line = (*line).min(m.line);
+    }
+    problems.sort_by_key(|p| natural_key(p));
+    problems.extend(cycle_problems(&edges));
     problems
 }
 

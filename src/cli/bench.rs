@@ -1,6 +1,6 @@
 //! `crowdtouch bench`: the standard workloads, measured on this machine.
 
-use super::output::outln;
+use crate::cli::common::output::outln;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 use crowdtouch::config::Config;
@@ -9,9 +9,7 @@ use crowdtouch::crowd::mesh::{Arap, Constraint};
 use crowdtouch::engine::Engine;
 use crowdtouch::geom::{Rect, Vec2};
 use crowdtouch::vocab::Micros;
-use crowdtouch::vocab::StageStats;
 use crowdtouch::vocab::{Contact, ContactFlags, ContactId, TouchFrame};
-use serde::Serialize;
 use std::time::Instant;
 
 mod assign;
@@ -19,8 +17,12 @@ mod e2e;
 mod edit;
 mod gesture;
 mod open_space;
+mod rows;
 mod shutdown;
+mod soak;
 mod websocket;
+
+use rows::{quantiles, row_from_samples, Row};
 
 /// Which workload to run.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
@@ -185,54 +187,10 @@ pub struct BenchArgs {
     tuio: bool,
 }
 
-#[derive(Serialize, Debug)]
-pub(crate) struct Row {
-    workload: String,
-    samples: u64,
-    p50_us: f64,
-    p99_us: f64,
-    max_us: f64,
-    note: String,
-}
-
-fn quantiles(mut v: Vec<f64>) -> (f64, f64, f64) {
-    if v.is_empty() {
-        return (0.0, 0.0, 0.0);
-    }
-    v.sort_by(f64::total_cmp);
-    let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
-    (q(0.5), q(0.99), v[v.len() - 1])
-}
-
-pub(crate) fn row_from_samples(name: &str, samples: Vec<f64>, note: String) -> Row {
-    let n = samples.len() as u64;
-    let (p50, p99, max) = quantiles(samples);
-    Row {
-        workload: name.into(),
-        samples: n,
-        p50_us: p50,
-        p99_us: p99,
-        max_us: max,
-        note,
-    }
-}
-
-fn row_from_stage(name: &str, s: Option<&StageStats>, note: String) -> Row {
-    let s = s.cloned().unwrap_or_default();
-    Row {
-        workload: name.into(),
-        samples: s.count,
-        p50_us: s.p50_us as f64,
-        p99_us: s.p99_us as f64,
-        max_us: s.max_us as f64,
-        note,
-    }
-}
-
 /// Runs the chosen workloads and prints a table (or JSON).
 pub fn bench(a: BenchArgs) -> Result<()> {
     if a.workload == Workload::Soak {
-        return super::soak::soak(super::soak::SoakArgs {
+        return soak::soak(soak::SoakArgs {
             minutes: a.minutes,
             agents: a.agents,
             clients: a.clients,

@@ -1,7 +1,7 @@
 //! `crowdtouch bench assign`: exact assignment solves of the standard layouts, cold or
 //! warm, from a cost matrix or from the positions (what the controllers run).
 
-use super::{row_from_samples, Row};
+use super::rows::{row_from_samples, Row};
 use anyhow::{Context, Result};
 use crowdtouch::crowd::assign::{
     Assigner, CostMatrix, CostProvider, Layout, PointMetric, Solver, SquaredDistance,

@@ -10,7 +10,7 @@
 //! output whose datagrams a UDP reader counts: what each received, every drop and
 //! every gap in the sequence numbers, next to the Unix client's latency.
 
-use super::{row_from_samples, row_from_stage, Row};
+use super::rows::{row_from_samples, row_from_stage, Row};
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use crowdtouch::config::Config;

@@ -11,7 +11,7 @@
 //!   their group; the drag's jobs (the formation thread's work in the daemon) are run
 //!   and applied outside the measured time.
 
-use super::{row_from_samples, Row};
+use super::rows::{row_from_samples, Row};
 use anyhow::{Context, Result};
 use crowdtouch::config::Config;
 use crowdtouch::crowd::edit::io::{read_tracks, ReadOptions};

@@ -38,7 +38,7 @@
 //! the thread waited for a core). The quantiles and the budget check are of the CPU
 //! time; the wall clock's p50 and p99 are shown beside them.
 
-use super::super::output::outln;
+use crate::cli::common::output::outln;
 use anyhow::{ensure, Context, Result};
 use crowdtouch::config::{load_recogniser, Config};
 use crowdtouch::crowd::assign::{CoarseToFine, CostMatrix, Solver};

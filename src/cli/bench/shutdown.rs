@@ -7,7 +7,7 @@
 //! gives the part `Daemon::shutdown` took (the rest is the supervisor noticing
 //! the signal, up to its 200 ms wait for stats, and the process exit).
 
-use super::{row_from_samples, Row};
+use super::rows::{row_from_samples, Row};
 use anyhow::{bail, Context, Result};
 use serde_json::Value;
 use std::io::{BufRead, BufReader, Write};

@@ -4,7 +4,7 @@
 //! latency (snapshot made → its last byte written to a client's socket), the
 //! encode time, what every client received and every drop.
 
-use super::{row_from_samples, Row};
+use super::rows::{row_from_samples, Row};
 use crate::cli::bench::e2e::WireFormat;
 use anyhow::{Context, Result};
 use crossbeam_channel::bounded;
