@@ -14,6 +14,9 @@ use std::time::Instant;
 
 mod assign;
 mod e2e;
+mod e2e_clients;
+mod e2e_commander;
+mod e2e_tuio;
 mod edit;
 mod gesture;
 mod open_space;
@@ -172,11 +175,11 @@ pub struct BenchArgs {
     #[arg(long)]
     scene: Option<std::path::PathBuf>,
     /// End-to-end workload: the snapshot format the client reads.
-    #[arg(long, value_enum, default_value_t = e2e::WireFormat::Json)]
-    format: e2e::WireFormat,
+    #[arg(long, value_enum, default_value_t = e2e_clients::WireFormat::Json)]
+    format: e2e_clients::WireFormat,
     /// End-to-end workload: the arrays the client asks for.
-    #[arg(long, value_enum, default_value_t = e2e::FieldChoice::All)]
-    fields: e2e::FieldChoice,
+    #[arg(long, value_enum, default_value_t = e2e_clients::FieldChoice::All)]
+    fields: e2e_clients::FieldChoice,
     /// End-to-end workload: also this many WebSocket clients (a privileged
     /// WebSocket output on a free port) reading what the Unix client reads.
     #[arg(long, default_value_t = 0)]

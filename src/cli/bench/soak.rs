@@ -14,13 +14,14 @@
 //! checks at the end are listed in docs/commands.md ("bench soak").
 
 mod clients;
+mod report;
 
 use crate::cli::common::output::outln;
 use anyhow::{bail, Context, Result};
 use clients::{ChurnTally, Clients, ReadTally, StallTally};
 use crowdtouch::config::{Config, DEFAULT_CONFIG_RON};
 use crowdtouch::pipeline::{sources_from_config, Daemon, DaemonOptions};
-use serde::Serialize;
+use report::{print_table, Check, ReaderRow, Report, Row, Threads};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
@@ -49,139 +50,6 @@ pub const RSS_GROWTH_LIMIT: f64 = 0.05;
 /// A period's p99 latency may be at most this multiple of the median of the
 /// periods' p99s.
 pub const P99_LIMIT: f64 = 2.0;
-
-/// A reading client's figures for one period.
-#[derive(Serialize, Debug, Clone)]
-struct ReaderRow {
-    connections: u64,
-    read: u64,
-    missed: u64,
-    silent: u64,
-    dropped: u64,
-    reordered: u64,
-    lost_connection: u64,
-}
-
-impl From<&ReadTally> for ReaderRow {
-    fn from(t: &ReadTally) -> Self {
-        ReaderRow {
-            connections: t.connections,
-            read: t.read,
-            missed: t.missed,
-            silent: t.silent,
-            dropped: t.dropped,
-            reordered: t.reordered,
-            lost_connection: t.lost_connection,
-        }
-    }
-}
-
-/// How far each thread's counters moved in one period.
-#[derive(Serialize, Debug, Clone, Default)]
-struct Threads {
-    /// Frames the input thread queued.
-    input_frames: u64,
-    /// Control ticks (one snapshot published each).
-    control_ticks: u64,
-    /// Solves the assignment worker finished.
-    assignment_solves: u64,
-    /// Snapshots the socket output wrote to clients.
-    publisher_snapshots_written: u64,
-}
-
-impl Threads {
-    /// The threads whose counter did not move.
-    fn stalled(&self) -> Vec<&'static str> {
-        [
-            ("input", self.input_frames),
-            ("control", self.control_ticks),
-            ("assignment worker", self.assignment_solves),
-            ("publisher", self.publisher_snapshots_written),
-        ]
-        .into_iter()
-        .filter(|(_, n)| *n == 0)
-        .map(|(name, _)| name)
-        .collect()
-    }
-}
-
-/// One report period.
-#[derive(Serialize, Debug, Clone)]
-struct Row {
-    /// 1-based period number.
-    period: usize,
-    /// Seconds since the start at the period's end.
-    t_s: f64,
-    /// RSS of the process (daemon and the soak's clients) at the period's end (MB).
-    rss_mb: f64,
-    /// Latency samples: snapshots with an input time read by the first reader.
-    latency_samples: u64,
-    /// Input → read by the first reader (a thread of its own), µs.
-    latency_p50_us: u64,
-    latency_p99_us: u64,
-    latency_max_us: u64,
-    /// Worst of the daemon's own per-second end-to-end p99 (input → bytes written).
-    daemon_e2e_p99_worst_us: u64,
-    /// Snapshots the control thread published (ticks).
-    published: u64,
-    /// Each continuously reading client.
-    readers: Vec<ReaderRow>,
-    /// The client that reconnects every second (gaps counted within a connection).
-    reconnecting: ReaderRow,
-    /// Connect/close cycles of the churning client (`--churn`), and failed ones.
-    churn_cycles: u64,
-    churn_failed: u64,
-    /// Connections of the stalled client, and how many the daemon closed.
-    stalled_connections: u64,
-    stalled_disconnected: u64,
-    /// Snapshots the daemon dropped for the stalled client: every drop the socket
-    /// output counted minus those the other clients were told about.
-    stalled_dropped: u64,
-    /// Every snapshot drop the socket output counted.
-    dropped_total: u64,
-    /// Touch-down and lift transitions lost on the input queue.
-    transitions_lost: u64,
-    /// Motion frames coalesced on the input queue (allowed).
-    frames_coalesced: u64,
-    threads: Threads,
-    /// Threads whose counter did not move this period.
-    stalled_threads: Vec<&'static str>,
-    /// Most clients the daemon counted in one stats report of the period.
-    daemon_clients_max: u32,
-    /// Config reloads handed to the daemon by the SIGHUP path.
-    reloads: u64,
-    /// Crowd resizes acknowledged (and refused or unanswered ones).
-    resizes: u64,
-    resize_failures: u64,
-    /// Agents at the period's end.
-    agents: u32,
-}
-
-/// One check of the run.
-#[derive(Serialize, Debug, Clone)]
-struct Check {
-    name: &'static str,
-    ok: bool,
-    detail: String,
-}
-
-/// The whole report (`--json`).
-#[derive(Serialize, Debug)]
-struct Report {
-    agents: u32,
-    clients: u32,
-    churn: bool,
-    minutes: f64,
-    period_s: f64,
-    realtime: bool,
-    interrupted: bool,
-    periods: Vec<Row>,
-    rss_first_mb: f64,
-    rss_last_mb: f64,
-    p99_median_us: u64,
-    checks: Vec<Check>,
-    ok: bool,
-}
 
 fn quantiles(mut v: Vec<u64>) -> (u64, u64, u64) {
     if v.is_empty() {
@@ -636,66 +504,6 @@ fn finish(a: &SoakArgs, periods: Vec<Row>, sighups: u64, interrupted: bool) -> R
         ok,
     }
 }
-
-fn print_table(r: &Report) -> Result<()> {
-    outln!(
-        "bench soak: {} agents (resized to {} and back), {} clients{}, {} min, {} s periods, SCHED_FIFO {}",
-        r.agents,
-        r.agents / 2,
-        r.clients,
-        if r.churn { " and connect/close churn" } else { "" },
-        r.minutes,
-        r.period_s,
-        if r.realtime { "on" } else { "off" }
-    )?;
-    outln!(
-        "{:>4} {:>7} {:>8} {:>8} {:>8} {:>9} {:>8} {:>6} {:>13} {:>10} {:>11} {:>9} {:>5} {:>7} {:>4} {:>4} {:>7}",
-        "per", "RSS MB", "p50 ms", "p99 ms", "max ms", "dmn p99", "publ", "miss", "read/reader", "recon", "stall drop", "drops all", "lost", "threads", "hup", "rsz", "churn"
-    )?;
-    for p in &r.periods {
-        let reads: Vec<String> = p.readers.iter().map(|x| x.read.to_string()).collect();
-        let missed: u64 = p.readers.iter().map(|x| x.missed).sum::<u64>() + p.reconnecting.missed;
-        outln!(
-            "{:>4} {:>7.1} {:>8.2} {:>8.2} {:>8.2} {:>9.2} {:>8} {:>6} {:>13} {:>10} {:>11} {:>9} {:>5} {:>7} {:>4} {:>4} {:>7}",
-            p.period,
-            p.rss_mb,
-            p.latency_p50_us as f64 / 1e3,
-            p.latency_p99_us as f64 / 1e3,
-            p.latency_max_us as f64 / 1e3,
-            p.daemon_e2e_p99_worst_us as f64 / 1e3,
-            p.published,
-            missed,
-            reads.join("/"),
-            format!("{}/{}", p.reconnecting.connections, p.reconnecting.read),
-            format!("{}/{}d", p.stalled_dropped, p.stalled_disconnected),
-            p.dropped_total,
-            p.transitions_lost,
-            if p.stalled_threads.is_empty() { "ok" } else { "STALL" },
-            p.reloads,
-            p.resizes,
-            p.churn_cycles,
-        )?;
-    }
-    outln!(
-        "RSS {:.1} → {:.1} MB; p99 median {:.2} ms",
-        r.rss_first_mb,
-        r.rss_last_mb,
-        r.p99_median_us as f64 / 1e3
-    )?;
-    outln!(
-        "latency: input → read by the first reader (p50/p99/max); dmn p99: the worst per-second p99 the daemon measured (input → bytes written); recon: connections/snapshots; stall drop: snapshots dropped for the stalled client / times the daemon disconnected it"
-    )?;
-    for c in &r.checks {
-        outln!(
-            "{} {}: {}",
-            if c.ok { "ok  " } else { "FAIL" },
-            c.name,
-            c.detail
-        )?;
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

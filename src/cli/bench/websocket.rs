@@ -5,7 +5,7 @@
 //! encode time, what every client received and every drop.
 
 use super::rows::{row_from_samples, Row};
-use crate::cli::bench::e2e::WireFormat;
+use crate::cli::bench::e2e_clients::WireFormat;
 use anyhow::{Context, Result};
 use crossbeam_channel::bounded;
 use crowdtouch::geom::{Rect, Vec2};

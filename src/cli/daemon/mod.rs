@@ -4,7 +4,9 @@
 pub mod check;
 pub mod doctor;
 pub mod doctor_check;
+pub mod doctor_daemon;
 pub mod doctor_device;
+pub mod doctor_network;
 pub mod unit;
 
 use crate::cli::common::config::{find_config_with_text, set_agents};

@@ -6,4 +6,7 @@ pub mod edit_apply;
 pub mod edit_check;
 pub mod edit_path;
 pub mod edit_render;
+pub mod edit_render_layers;
+pub mod edit_render_legend;
+pub mod edit_render_svg;
 pub mod track_file;

@@ -4,5 +4,8 @@
 pub mod classes;
 pub mod gesture;
 pub mod library;
+pub mod library_build;
 pub mod library_collect;
+pub mod library_edit;
 pub mod library_eval;
+pub mod library_file;

@@ -4,6 +4,7 @@
 pub mod shared;
 pub mod transform;
 pub mod transform_compare;
+pub mod transform_compare_rows;
 pub mod transform_scenario;
 pub mod transform_setup;
 pub mod transform_svg;
