@@ -211,7 +211,7 @@ fn the_binary_keeps_its_families_apart_and_has_no_cycles() {
         let text = std::fs::read_to_string(src.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
         files.insert(f.to_string(), text);
     }
-    read_binary_tree(&src, &src.join("cli"), &mut files);
+    read_rs_files(&src, &src.join("cli"), &|_| true, &mut files);
     assert!(files.len() > 40, "read {} files of the binary", files.len());
     let problems = std::thread::Builder::new()
         .stack_size(256 << 20)
@@ -298,28 +298,6 @@ fn a_planted_cycle_in_cli_is_found() {
     );
 }
 
-/// Every `.rs` file of the binary under `dir` (`src/cli/`), by path relative to `src/`.
-fn read_binary_tree(root: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
-    let mut entries: Vec<_> = std::fs::read_dir(dir)
-        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
-        .map(|e| e.expect("directory entry").path())
-        .collect();
-    entries.sort();
-    for p in entries {
-        let rel = p
-            .strip_prefix(root)
-            .expect("under src")
-            .to_string_lossy()
-            .replace('\\', "/");
-        if p.is_dir() {
-            read_binary_tree(root, &p, out);
-        } else if rel.ends_with(".rs") {
-            let text = std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{rel}: {e}"));
-            out.insert(rel, text);
-        }
-    }
-}
-
 fn tree(files: &[(&str, &str)]) -> BTreeMap<String, String> {
     files
         .iter()
@@ -330,6 +308,18 @@ fn tree(files: &[(&str, &str)]) -> BTreeMap<String, String> {
 /// Every `.rs` file of the library under `dir`, by path relative to `src/`; the
 /// binary (`main.rs`, `cli/`) is left out.
 fn read_tree(root: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
+    let library = |rel: &str| !matches!(rel, "main.rs" | "cli" | "cli.rs");
+    read_rs_files(root, dir, &library, out);
+}
+
+/// Every `.rs` file under `dir` whose path relative to `root` (and every folder on
+/// the way) `keep` accepts, by that path.
+fn read_rs_files(
+    root: &Path,
+    dir: &Path,
+    keep: &dyn Fn(&str) -> bool,
+    out: &mut BTreeMap<String, String>,
+) {
     let mut entries: Vec<_> = std::fs::read_dir(dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|e| e.expect("directory entry").path())
@@ -341,11 +331,11 @@ fn read_tree(root: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
             .expect("under src")
             .to_string_lossy()
             .replace('\\', "/");
-        if rel == "main.rs" || rel == "cli" || rel == "cli.rs" {
+        if !keep(&rel) {
             continue;
         }
         if p.is_dir() {
-            read_tree(root, &p, out);
+            read_rs_files(root, &p, keep, out);
         } else if rel.ends_with(".rs") {
             let text = std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{rel}: {e}"));
             out.insert(rel, text);
