@@ -1,6 +1,8 @@
 //! One control tick (segment + ARAP + goals + agent step + snapshot), without the
 //! assignment worker, for crowds of 100 to 10,000 agents with a three-finger area
-//! control moving. `crowdtouch bench tick` measures the same workload's distribution.
+//! control moving, and for 5,000 agents in the obstacle course
+//! (`control_tick/obstacle_course/5000`: the terrain under every agent, obstacles).
+//! `crowdtouch bench tick` measures the same workload's distribution.
 //! Also one formation switch (`formation_switch/{prepare,apply}/N`) and one resize
 //! (`resize/{prepare,apply}/N`), each in its two halves.
 //!
@@ -16,10 +18,13 @@ use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criteri
 use crowdtouch::config::Config;
 use crowdtouch::crowd::assign::Cancel;
 use crowdtouch::crowd::edit::{Track, TrackSet};
+use crowdtouch::crowd::environment::load_scene;
 use crowdtouch::engine::Engine;
 use crowdtouch::geom::Vec2;
 use crowdtouch::vocab::{Command, FormationMethod, Micros};
 use crowdtouch::vocab::{Contact, ContactFlags, ContactId, TouchFrame};
+use std::path::Path;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 const PERIOD_US: u64 = 8_333;
@@ -69,7 +74,51 @@ fn control_tick(c: &mut Criterion) {
             })
         });
     }
+    // In a scene: the crowd dragged 2.0 m east and 1.5 m south into the obstacle
+    // course first (some agents in its patches, some against its obstacles), then
+    // the same area control moving there. The step reads the terrain under every
+    // agent (its speed limit, its motion type) and keeps it out of the obstacles.
+    let agents = 5000u32;
+    let mut cfg = Config::embedded_default();
+    cfg.crowd.agents = agents;
+    let scene =
+        load_scene(Path::new("config/scenes/obstacle_course.ron"), 0.15).expect("shipped scene");
+    cfg.set_loaded_scene(Some(Arc::new(scene)));
+    let mut engine = Engine::new(&cfg, None, false);
+    let shift = |k: u64| (k.min(120) as f32 / 120.0) * 0.125;
+    let into = |k: u64, flags| moved(frame(k, flags), shift(k), shift(k) * 1.336);
+    let mut k = 0u64;
+    engine.push_frame(&into(k, ContactFlags::DOWN));
+    for _ in 0..240 {
+        k += 1;
+        engine.push_frame(&into(k, ContactFlags::NONE));
+        drop(engine.tick(Micros(k * PERIOD_US)));
+        engine.clear_events();
+    }
+    g.bench_function(BenchmarkId::new("obstacle_course", agents), |b| {
+        b.iter(|| {
+            k += 1;
+            engine.push_frame(black_box(&into(k, ContactFlags::NONE)));
+            let out = engine.tick(Micros(k * PERIOD_US));
+            black_box(&out.snapshot);
+            drop(out);
+            engine.clear_events();
+        })
+    });
     g.finish();
+}
+
+/// `f` with every contact moved by `(dx, dy)` (unit square).
+fn moved(f: TouchFrame, dx: f32, dy: f32) -> TouchFrame {
+    let mut out = TouchFrame::new(f.t);
+    for c in f.contacts() {
+        let _ = out.push(Contact {
+            x: c.x + dx,
+            y: c.y + dy,
+            ..*c
+        });
+    }
+    out
 }
 
 /// A formation switch (mesh-formation-control section 7.3), as a checkpoint or a

@@ -126,7 +126,10 @@ impl Agents {
         let substeps = (dt_s / MAX_SUBSTEP_S).ceil().clamp(1.0, 64.0) as usize;
         let h = dt_s / substeps as f64;
         for _ in 0..substeps {
-            self.substep(|i| goals[goal_of[i] as usize], |_| 1.0, h, p);
+            self.substep(p, |i, x, v, push| {
+                let g = goals[goal_of[i] as usize];
+                integrate(x, v, g, push, (), |_| (), |()| 1.0, h, p);
+            });
         }
     }
 
@@ -160,7 +163,56 @@ impl Agents {
         let substeps = (dt_s / MAX_SUBSTEP_S).ceil().clamp(1.0, 64.0) as usize;
         let h = dt_s / substeps as f64;
         for _ in 0..substeps {
-            self.substep(|i| targets[i], &speed_factor, h, p);
+            self.substep(p, |i, x, v, push| {
+                let here = speed_factor(*x);
+                integrate(x, v, targets[i], push, here, &speed_factor, |s| s, h, p);
+            });
+        }
+    }
+
+    /// [`step_towards`](Self::step_towards) on ground that `read(x)` describes
+    /// (the terrain of a scene at this tick's time) and `speed_factor` turns into
+    /// the speed factor, with each agent's ground kept in `ground` at the point it
+    /// was read: the ground is read only at points not read before. Afterwards
+    /// `ground` holds every agent's ground at its new position (see
+    /// [`GroundCache::values_at`]).
+    ///
+    /// The motion is bit for bit that of `step_towards` with
+    /// `|x| speed_factor(read(x))`, provided `read` answers a point as it did when
+    /// `ground` kept it (call [`GroundCache::forget`] when the ground changes).
+    ///
+    /// # Complexity
+    /// One read per agent and substep, where the substep ends (the start of a
+    /// substep is where the last one ended, or where the last step left the agent),
+    /// plus one where an agent slowed down for the ground ahead, or was moved
+    /// since its ground was read. No allocation once `ground` has the crowd's
+    /// size.
+    ///
+    /// # Panics
+    /// If `targets` has fewer entries than there are agents.
+    pub fn step_over<T: Copy>(
+        &mut self,
+        targets: &[Vec2],
+        ground: &mut GroundCache<T>,
+        read: impl Fn(Vec2) -> T,
+        speed_factor: impl Fn(T) -> f64,
+        dt_s: f64,
+        p: &AgentParams,
+    ) {
+        if dt_s.is_nan() || dt_s <= 0.0 || self.pos.is_empty() {
+            return;
+        }
+        ground.fit(&self.pos, &read);
+        let substeps = (dt_s / MAX_SUBSTEP_S).ceil().clamp(1.0, 64.0) as usize;
+        let h = dt_s / substeps as f64;
+        for _ in 0..substeps {
+            self.substep(p, |i, x, v, push| {
+                let here = ground.get(i, *x, &read);
+                let there = integrate(x, v, targets[i], push, here, &read, &speed_factor, h, p);
+                if let Some(t) = there {
+                    ground.put(i, *x, t);
+                }
+            });
         }
     }
 
@@ -242,13 +294,9 @@ impl Agents {
         }
     }
 
-    fn substep(
-        &mut self,
-        target: impl Fn(usize) -> Vec2,
-        speed: impl Fn(Vec2) -> f64,
-        h: f64,
-        p: &AgentParams,
-    ) {
+    /// One substep: the push-apart accelerations, then
+    /// `one(i, x, v, push)` integrates agent `i`, in the agents' order.
+    fn substep(&mut self, p: &AgentParams, mut one: impl FnMut(usize, &mut Vec2, &mut Vec2, Vec2)) {
         let n = self.pos.len();
         let two_r = 2.0 * p.radius_m;
         if p.push_stiffness_per_s2 > 0.0 && two_r > 0.0 {
@@ -271,30 +319,37 @@ impl Agents {
                     .zip(&self.push)
                     .enumerate()
                 {
-                    integrate(x, v, target(i), f, &speed, h, p);
+                    one(i, x, v, f);
                 }
                 return;
             }
         }
-        for i in 0..n {
-            let (x, v) = (&mut self.pos[i], &mut self.vel[i]);
-            integrate(x, v, target(i), Vec2::zeros(), &speed, h, p);
+        for (i, (x, v)) in self.pos.iter_mut().zip(self.vel.iter_mut()).enumerate() {
+            one(i, x, v, Vec2::zeros());
         }
     }
 }
 
 /// One agent's substep: PD acceleration towards `g` plus `push`, clamped, then
-/// semi-implicit Euler with the speed limits of [`Agents::step_towards`].
+/// semi-implicit Euler with the speed limits of [`Agents::step_towards`]: the
+/// limit at the start is `speed(here)` (`here` the ground at `x`), the one ahead
+/// `speed(read(x + w h))`.
+///
+/// Returns the ground read ahead when the agent ends exactly there (it did not
+/// slow down for it): the ground at the new `x`.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn integrate(
+fn integrate<T: Copy>(
     x: &mut Vec2,
     v: &mut Vec2,
     g: Vec2,
     push: Vec2,
-    speed: &impl Fn(Vec2) -> f64,
+    here: T,
+    read: impl Fn(Vec2) -> T,
+    speed: impl Fn(T) -> f64,
     h: f64,
     p: &AgentParams,
-) {
+) -> Option<T> {
     let mut a = (g - *x) * p.kp_per_s2 - *v * p.kd_per_s + push;
     // Squared norms first: most agents are under both limits and need no root.
     let amax = p.max_accel_m_s2;
@@ -302,14 +357,16 @@ fn integrate(
     if an2 > amax * amax {
         a *= amax / an2.sqrt();
     }
-    let vmax = p.max_speed_m_s * speed(*x);
+    let vmax = p.max_speed_m_s * speed(here);
     let mut w = *v + a * h;
     let wn2 = w.norm_squared();
     if wn2 > vmax * vmax {
         w *= vmax / wn2.sqrt();
     }
     // Entering a slower patch in this substep: its limit holds from here.
-    let vmax_there = p.max_speed_m_s * speed(*x + w * h);
+    let end = *x + w * h;
+    let there = read(end);
+    let vmax_there = p.max_speed_m_s * speed(there);
     if vmax_there < vmax {
         let wn2 = w.norm_squared();
         if wn2 > vmax_there * vmax_there {
@@ -318,6 +375,133 @@ fn integrate(
     }
     *v = w;
     *x += w * h;
+    same_point(*x, end).then_some(there)
+}
+
+/// Whether `a` and `b` are the same point bit for bit.
+#[inline(always)]
+fn same_point(a: Vec2, b: Vec2) -> bool {
+    a.x.to_bits() == b.x.to_bits() && a.y.to_bits() == b.y.to_bits()
+}
+
+/// What a step reads under each agent (in a scene, the terrain at one time),
+/// kept per agent with the point it was read at, so that the ground is read
+/// again only where the agent has moved since ([`Agents::step_over`]; the
+/// engine's motion types, from the same values).
+///
+/// A kept value is used only for the very point it was read at (compared bit
+/// for bit), however the agent got there, so agents moved by other means (an
+/// obstacle pushing them out, a reset, a formation transform, edit mode) are
+/// read again. What it cannot see is the ground itself changing: call
+/// [`forget`](Self::forget) then (another scene; moving patches at a new time).
+///
+/// Entry `i` belongs to agent `i`; a crowd that grows adds entries (allocating
+/// only beyond [`with_capacity`](Self::with_capacity)), one that shrinks drops
+/// them.
+#[derive(Clone, Debug)]
+pub struct GroundCache<T> {
+    entries: Vec<GroundEntry<T>>,
+    /// Entries of another epoch are stale ([`forget`](Self::forget)).
+    epoch: u64,
+}
+
+/// One agent's ground, read at `at` in `epoch`.
+#[derive(Copy, Clone, Debug)]
+struct GroundEntry<T> {
+    at: Vec2,
+    epoch: u64,
+    value: T,
+}
+
+impl<T> Default for GroundCache<T> {
+    fn default() -> Self {
+        GroundCache {
+            entries: Vec::new(),
+            epoch: 0,
+        }
+    }
+}
+
+impl<T: Copy> GroundCache<T> {
+    /// An empty cache with room for `n` agents.
+    pub fn with_capacity(n: usize) -> GroundCache<T> {
+        GroundCache {
+            entries: Vec::with_capacity(n),
+            epoch: 0,
+        }
+    }
+
+    /// Room for `n` agents in all (a crowd about to grow).
+    pub fn reserve(&mut self, n: usize) {
+        self.entries.reserve(n.saturating_sub(self.entries.len()));
+    }
+
+    /// The ground changed: every value is read again when next asked for.
+    pub fn forget(&mut self) {
+        self.epoch += 1;
+    }
+
+    /// Each agent's ground at `positions` (the same agents, in order), read with
+    /// `read` where it was not read at that very point since the last
+    /// [`forget`](Self::forget), and kept. Lazy: agent `i` is looked at when the
+    /// iterator reaches it.
+    pub fn values_at<'a>(
+        &'a mut self,
+        positions: &'a [Vec2],
+        read: impl Fn(Vec2) -> T + 'a,
+    ) -> impl ExactSizeIterator<Item = T> + 'a {
+        self.fit(positions, &read);
+        let epoch = self.epoch;
+        self.entries
+            .iter_mut()
+            .zip(positions)
+            .map(move |(e, &p)| e.get(epoch, p, &read))
+    }
+
+    /// As many entries as `positions`: extra ones dropped, missing ones read.
+    fn fit(&mut self, positions: &[Vec2], read: impl Fn(Vec2) -> T) {
+        let epoch = self.epoch;
+        self.entries.truncate(positions.len());
+        let have = self.entries.len();
+        self.entries
+            .extend(positions[have..].iter().map(|&at| GroundEntry {
+                at,
+                epoch,
+                value: read(at),
+            }));
+    }
+
+    /// Agent `i`'s ground at `p`: the kept value if it was read at `p`, else read
+    /// and kept.
+    #[inline(always)]
+    fn get(&mut self, i: usize, p: Vec2, read: impl Fn(Vec2) -> T) -> T {
+        let epoch = self.epoch;
+        self.entries[i].get(epoch, p, read)
+    }
+
+    /// Keeps `value` as agent `i`'s ground at `at`.
+    #[inline(always)]
+    fn put(&mut self, i: usize, at: Vec2, value: T) {
+        self.entries[i] = GroundEntry {
+            at,
+            epoch: self.epoch,
+            value,
+        };
+    }
+}
+
+impl<T: Copy> GroundEntry<T> {
+    #[inline(always)]
+    fn get(&mut self, epoch: u64, p: Vec2, read: impl Fn(Vec2) -> T) -> T {
+        if self.epoch != epoch || !same_point(self.at, p) {
+            *self = GroundEntry {
+                at: p,
+                epoch,
+                value: read(p),
+            };
+        }
+        self.value
+    }
 }
 
 /// Most cells per agent; a sparse crowd gets coarser cells instead of more.
@@ -610,6 +794,119 @@ mod tests {
             "reached full speed before the patch: {before}"
         );
         assert!(ticks_in > 100, "went into the patch");
+    }
+
+    /// Ground for the cache tests: open west of x = 2, a slow band to x = 4, mud
+    /// beyond; read as `(speed factor, which)`.
+    fn bands(x: Vec2) -> (f64, u8) {
+        if x.x < 2.0 {
+            (1.0, 0)
+        } else if x.x < 4.0 {
+            (0.3, 1)
+        } else {
+            (0.6, 2)
+        }
+    }
+
+    fn same_bits(a: &[Vec2], b: &[Vec2]) -> bool {
+        a.len() == b.len() && a.iter().zip(b).all(|(p, q)| same_point(*p, *q))
+    }
+
+    /// With the ground kept between substeps and steps, a crowd walking over
+    /// ground of three speeds moves bit for bit as when every point is read
+    /// afresh, in ticks of one substep and of several, while reading the ground
+    /// about once per agent and substep instead of twice; the values kept are the
+    /// ground under every agent, also after agents are moved by other means.
+    #[test]
+    fn kept_ground_moves_agents_bit_for_bit_as_fresh_reads() {
+        use std::cell::Cell;
+        let start = cloud(300, 5, 1.5);
+        let targets: Vec<Vec2> = (0..300)
+            .map(|i| Vec2::new(6.0 + (i % 20) as f64 * 0.1, (i / 20) as f64 * 0.1))
+            .collect();
+        let (mut fresh, mut kept) = (Agents::new(&start), Agents::new(&start));
+        let mut ground = GroundCache::with_capacity(300);
+        let (fresh_reads, kept_reads) = (Cell::new(0usize), Cell::new(0usize));
+        let substeps = Cell::new(0usize);
+        for k in 0..800 {
+            // Mostly one substep a tick, now and then three.
+            let dt = if k % 7 == 3 { 0.04 } else { 1.0 / 120.0 };
+            substeps.set(substeps.get() + if k % 7 == 3 { 3 } else { 1 });
+            let speed = |x: Vec2| {
+                fresh_reads.set(fresh_reads.get() + 1);
+                bands(x).0
+            };
+            fresh.step_towards(&targets, speed, dt, &params());
+            let read = |x: Vec2| {
+                kept_reads.set(kept_reads.get() + 1);
+                bands(x)
+            };
+            kept.step_over(&targets, &mut ground, read, |g| g.0, dt, &params());
+            assert!(same_bits(fresh.positions(), kept.positions()), "tick {k}");
+            assert!(same_bits(fresh.velocities(), kept.velocities()), "tick {k}");
+            if k % 50 == 25 {
+                // Moved some other way (an obstacle's push, say): read again.
+                for i in (0..300).step_by(9) {
+                    let q = fresh.positions()[i] + Vec2::new(0.7, 0.0);
+                    fresh.set_position(i, q);
+                    kept.set_position(i, q);
+                }
+            }
+            let before = kept_reads.get();
+            let under: Vec<(f64, u8)> = ground.values_at(kept.positions(), read).collect();
+            let want: Vec<(f64, u8)> = kept.positions().iter().map(|&x| bands(x)).collect();
+            assert_eq!(under, want, "tick {k}");
+            if k % 50 != 25 {
+                // Only agents that slowed down for the band ahead need a read.
+                assert!(kept_reads.get() - before < 30, "tick {k}");
+            }
+        }
+        let (f, c, n) = (fresh_reads.get(), kept_reads.get(), 300 * substeps.get());
+        eprintln!("ground reads: {f} afresh, {c} kept, {n} agent-substeps");
+        assert_eq!(f, 2 * n);
+        assert!(c < n + n / 10, "{c} reads for {n} agent-substeps");
+        assert!(
+            kept.positions().iter().all(|p| p.x > 4.0),
+            "crossed every band"
+        );
+    }
+
+    /// A kept value is used only at the very point it was read, and not after
+    /// [`GroundCache::forget`]; the cache follows the crowd's size.
+    #[test]
+    fn ground_cache_reads_only_points_it_has_not_read() {
+        use std::cell::Cell;
+        let reads = Cell::new(0usize);
+        let read = |x: Vec2| {
+            reads.set(reads.get() + 1);
+            x.x
+        };
+        let mut pos = vec![
+            Vec2::new(1.0, 0.0),
+            Vec2::new(2.0, 0.0),
+            Vec2::new(3.0, 0.0),
+        ];
+        let mut g = GroundCache::default();
+        assert_eq!(g.values_at(&pos, read).collect::<Vec<_>>(), [1.0, 2.0, 3.0]);
+        assert_eq!(reads.replace(0), 3);
+        assert_eq!(g.values_at(&pos, read).count(), 3);
+        assert_eq!(reads.replace(0), 0);
+        // The next float up is another point; so is −0 against +0.
+        pos[1].x = f64::from_bits(2.0f64.to_bits() + 1);
+        pos[2].y = -0.0;
+        let got: Vec<f64> = g.values_at(&pos, read).collect();
+        assert_eq!(got, [1.0, pos[1].x, 3.0]);
+        assert_eq!(reads.replace(0), 2);
+        g.forget();
+        assert_eq!(g.values_at(&pos, read).count(), 3);
+        assert_eq!(reads.replace(0), 3);
+        // Shrinks and grows with the crowd; new agents are read.
+        assert_eq!(g.values_at(&pos[..1], read).count(), 1);
+        assert_eq!(reads.replace(0), 0);
+        pos.push(Vec2::new(7.0, 0.0));
+        let all: Vec<f64> = g.values_at(&pos, read).collect();
+        assert_eq!(all, [1.0, pos[1].x, 3.0, 7.0]);
+        assert_eq!(reads.replace(0), 3);
     }
 
     #[test]

@@ -402,18 +402,20 @@ impl Engine {
         if !self.paused {
             match &self.scene {
                 Some(scene) => {
-                    let scene = Arc::clone(scene);
-                    self.agents.step_towards(
+                    let scene = scene.at(t, &mut self.scene_placements);
+                    self.agents.step_over(
                         &self.targets,
-                        |x| scene.terrain_at(x, t).speed_factor,
+                        &mut self.terrain,
+                        |x| scene.terrain_at(x),
+                        |g| g.speed_factor,
                         dt,
                         &self.agent_params,
                     );
                     let r = self.agent_params.radius_m;
                     for i in 0..self.agents.len() {
                         let q = self.agents.positions()[i];
-                        if scene.closer_than(q, r, t) {
-                            let out = scene.project_out(q, r, t);
+                        if scene.closer_than(q, r) {
+                            let out = scene.project_out(q, r);
                             self.agents.set_position(i, out);
                         }
                     }

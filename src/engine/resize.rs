@@ -128,6 +128,7 @@ impl Engine {
         self.waypoints.clear();
         self.waypoints
             .resize(count as usize, Vec2::repeat(f64::NAN));
+        self.terrain.reserve(count as usize);
         self.forget_assignments();
         self.fit_radius();
         self.set_mesh_environment();

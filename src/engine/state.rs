@@ -7,10 +7,10 @@ use super::params::{
 };
 use super::pool::ArcPool;
 use crate::config::Config;
-use crate::crowd::agents::{AgentParams, Agents};
+use crate::crowd::agents::{AgentParams, Agents, GroundCache};
 use crate::crowd::assign::Assigner;
 use crate::crowd::control::{DirectController, ResizeRequest, SwitchRequest};
-use crate::crowd::environment::{Placement, Planner, PlannerParams, Scene};
+use crate::crowd::environment::{Placement, Planner, PlannerParams, Scene, Terrain};
 use crate::crowd::formation::{FormationLibrary, START};
 use crate::crowd::mesh::{GoalSample, TriMesh};
 use crate::geom::{Rect, Vec2};
@@ -83,6 +83,11 @@ pub struct Engine {
     pub(super) waypoints: Vec<Vec2>,
     pub(super) targets: Vec<Vec2>,
     pub(super) motions: Vec<MotionType>,
+    /// The terrain under each agent, kept with the point it was read at (what
+    /// `motions` and the scene's speed limits come from): read again only where
+    /// an agent moved. Forgotten when the scene changes, and every tick in a
+    /// scene whose patches move.
+    pub(super) terrain: GroundCache<Terrain>,
     /// Where the scene's moving parts are this tick ([`Scene::at`]).
     pub(super) scene_placements: Vec<Placement>,
     pub(super) seq: u64,
@@ -180,6 +185,7 @@ impl Engine {
             waypoints: vec![Vec2::repeat(f64::NAN); agents_n],
             targets: Vec::with_capacity(agents_n),
             motions: Vec::with_capacity(agents_n),
+            terrain: GroundCache::with_capacity(agents_n),
             scene_placements: Vec::with_capacity(
                 cfg.loaded_scene().map_or(0, |s| s.dynamic().len()),
             ),
@@ -350,6 +356,7 @@ impl Engine {
         self.scene_placements.clear();
         self.scene_placements.reserve(moving);
         self.scene_out.changed = true;
+        self.terrain.forget();
         self.prev_centroid = None;
         if self.scene.is_none() {
             self.motions.clear();

@@ -140,6 +140,10 @@ impl Engine {
         self.poll_collect(now);
         let t0 = *self.scene_t0.get_or_insert(now);
         self.scene_t_s = now.saturating_since(t0).as_secs_f64();
+        if self.scene.as_ref().is_some_and(|s| s.terrain_moves()) {
+            // The terrain kept is last tick's: its patches have moved since.
+            self.terrain.forget();
+        }
         self.direct.set_time(self.scene_t_s);
         let lag = self
             .agents
@@ -189,13 +193,14 @@ impl Engine {
         }
         if let Some(scene) = &self.scene {
             let scene = scene.at(self.scene_t_s, &mut self.scene_placements);
+            // What the step read where each agent ended; read afresh where an
+            // agent was moved after that (out of an obstacle) or some other way
+            // (a transform, edit mode, a reset), or the patches moved.
+            let under = self
+                .terrain
+                .values_at(self.agents.positions(), |p| scene.terrain_at(p));
             self.motions.clear();
-            self.motions.extend(
-                self.agents
-                    .positions()
-                    .iter()
-                    .map(|&p| scene.terrain_at(p).motion),
-            );
+            self.motions.extend(under.map(|t| t.motion));
         }
         self.pass_checkpoints(now);
         self.translate_segments(now);
@@ -334,9 +339,14 @@ impl Engine {
                 .unwrap_or(Vec2::repeat(f64::NAN));
             self.targets.push(steer_target(&scene, p, g, w));
         }
-        let speed = |x: Vec2| scene.terrain_at(x).speed_factor;
-        self.agents
-            .step_towards(&self.targets, speed, dt, &self.agent_params);
+        self.agents.step_over(
+            &self.targets,
+            &mut self.terrain,
+            |x| scene.terrain_at(x),
+            |t| t.speed_factor,
+            dt,
+            &self.agent_params,
+        );
         let r = self.agent_params.radius_m;
         for i in 0..self.agents.len() {
             let p = self.agents.positions()[i];

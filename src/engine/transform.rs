@@ -364,10 +364,12 @@ impl Engine {
             if !self.paused {
                 match &self.scene {
                     Some(scene) => {
-                        let (scene, t) = (Arc::clone(scene), self.scene_t_s);
-                        self.agents.step_towards(
+                        let scene = scene.at(self.scene_t_s, &mut self.scene_placements);
+                        self.agents.step_over(
                             &rm.hold,
-                            |x| scene.terrain_at(x, t).speed_factor,
+                            &mut self.terrain,
+                            |x| scene.terrain_at(x),
+                            |g| g.speed_factor,
                             dt,
                             &self.agent_params,
                         );

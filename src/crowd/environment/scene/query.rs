@@ -330,6 +330,14 @@ impl Scene {
         self.terrain_at_with(p, |i| self.dynamic[i].placement_at(t_s))
     }
 
+    /// Whether the terrain changes with time: some patch moves. Without one,
+    /// [`terrain_at`](Self::terrain_at) answers a point alike at every time.
+    pub fn terrain_moves(&self) -> bool {
+        self.dynamic
+            .iter()
+            .any(|d| matches!(d.kind, DynamicKind::Patch(_)))
+    }
+
     fn terrain_at_with(&self, p: Vec2, placement: impl Fn(usize) -> Placement) -> Terrain {
         let mut t = Terrain::OPEN;
         match self.index.patches_at(p) {
