@@ -109,6 +109,16 @@ fn src_follows_the_layering_rules() {
     let mut files = BTreeMap::new();
     read_tree(&src, &src, &mut files);
     assert!(files.len() > 20, "read {} files under src/", files.len());
+    assert_no_problems(files, check, "layering problem(s) in src/");
+}
+
+/// Runs `check` on `files` and fails listing every problem it finds, `what` naming
+/// them.
+fn assert_no_problems(
+    files: BTreeMap<String, String>,
+    check: fn(&BTreeMap<String, String>) -> Vec<String>,
+    what: &str,
+) {
     // syn's parser and visitor recurse deeply on long expressions in debug builds.
     let problems = std::thread::Builder::new()
         .stack_size(256 << 20)
@@ -118,7 +128,7 @@ fn src_follows_the_layering_rules() {
         .expect("checker ran");
     assert!(
         problems.is_empty(),
-        "{} layering problem(s) in src/ (rules: tests/architecture.rs, ARCHITECTURE.md):\n{}",
+        "{} {what} (rules: tests/architecture.rs, ARCHITECTURE.md):\n{}",
         problems.len(),
         problems.join("\n")
     );
@@ -213,18 +223,7 @@ fn the_binary_keeps_its_families_apart_and_has_no_cycles() {
     }
     read_rs_files(&src, &src.join("cli"), &|_| true, &mut files);
     assert!(files.len() > 40, "read {} files of the binary", files.len());
-    let problems = std::thread::Builder::new()
-        .stack_size(256 << 20)
-        .spawn(move || check_binary(&files))
-        .expect("checker thread")
-        .join()
-        .expect("checker ran");
-    assert!(
-        problems.is_empty(),
-        "{} problem(s) in the binary (rules: tests/architecture.rs, ARCHITECTURE.md):\n{}",
-        problems.len(),
-        problems.join("\n")
-    );
+    assert_no_problems(files, check_binary, "problem(s) in the binary");
 }
 
 /// A small binary: the dispatch, two families and `common`.
