@@ -17,6 +17,7 @@ pub mod geom;
 pub mod gesture;
 pub mod input;
 pub mod located;
+pub mod picture;
 pub mod pipeline;
 pub mod publish;
 pub mod rng;

@@ -42,6 +42,8 @@ const RULES: &[Rule] = &[
     Rule { module: "rng", may_use: &[] },
     Rule { module: "sys", may_use: &[] },
     Rule { module: "located", may_use: &[] },
+    // Pictures draw world geometry and nothing else.
+    Rule { module: "picture", may_use: &["geom"] },
     Rule { module: "vocab", may_use: &["geom"] },
     Rule { module: "rt", may_use: &["vocab"] },
     // The pure cores: plain functions of their inputs and `now`.
@@ -82,7 +84,7 @@ const RULES: &[Rule] = &[
 /// Modules that know nothing of threads, channels, sockets, devices or the clock:
 /// they are given `now` and their inputs, so replays are deterministic and the cores
 /// are tested as plain functions.
-const PURE: &[&str] = &["gesture", "crowd", "engine", "vocab", "geom", "located"];
+const PURE: &[&str] = &["gesture", "crowd", "engine", "vocab", "geom", "located", "picture"];
 
 /// Paths a [`PURE`] module may not name (prefixes, on `::` boundaries).
 const IMPURE_PATHS: &[&str] = &[
