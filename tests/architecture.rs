@@ -84,7 +84,9 @@ const RULES: &[Rule] = &[
 /// Modules that know nothing of threads, channels, sockets, devices or the clock:
 /// they are given `now` and their inputs, so replays are deterministic and the cores
 /// are tested as plain functions.
-const PURE: &[&str] = &["gesture", "crowd", "engine", "vocab", "geom", "located", "picture"];
+const PURE: &[&str] = &[
+    "gesture", "crowd", "engine", "vocab", "geom", "located", "picture",
+];
 
 /// Paths a [`PURE`] module may not name (prefixes, on `::` boundaries).
 const IMPURE_PATHS: &[&str] = &[

@@ -4,9 +4,9 @@
 //! (thin lines, start dot hollow, end dot filled) and the fingers' paths (red).
 
 use crowdtouch::geom::{Rect, Vec2};
+use crowdtouch::picture::{elements, style, Canvas, Frame, Paint};
 use crowdtouch::vocab::{MeshView, Snapshot};
 use std::collections::BTreeMap;
-use std::fmt::Write;
 
 /// Collects what the picture needs while a replay runs.
 #[derive(Default)]
@@ -80,107 +80,52 @@ impl Trace {
 
     /// The SVG document, cropped to what moved (within `world`).
     pub fn render(&mut self, world: Rect, title: &str) -> String {
-        let world = self.extent(world);
         const PX_PER_M: f64 = 90.0;
-        let (w, h) = (world.width() * PX_PER_M, world.height() * PX_PER_M);
-        let x = |p: Vec2| (p.x - world.min[0]) * PX_PER_M;
-        let y = |p: Vec2| (p.y - world.min[1]) * PX_PER_M;
-        let mut s = String::new();
-        let _ = writeln!(
-            s,
-            r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {w:.0} {:.0}" width="{w:.0}" height="{:.0}" font-family="sans-serif">"##,
-            h + 28.0,
-            h + 28.0
-        );
-        let _ = writeln!(
-            s,
-            r##"<rect x="0" y="0" width="{w:.0}" height="{:.0}" fill="#fbfbf8"/>"##,
-            h + 28.0
-        );
-        let mesh_svg = |m: &MeshView, stroke: &str, fill: &str, s: &mut String| {
-            for t in m.triangles.iter() {
-                let pts: Vec<String> = t
-                    .iter()
-                    .map(|&v| {
-                        format!(
-                            "{:.1},{:.1}",
-                            x(m.vertices[v as usize]),
-                            y(m.vertices[v as usize])
-                        )
-                    })
-                    .collect();
-                let _ = writeln!(
-                    s,
-                    r##"<polygon points="{}" fill="{fill}" stroke="{stroke}" stroke-width="0.6"/>"##,
-                    pts.join(" ")
-                );
-            }
+        const CAPTION_PX: f64 = 28.0;
+        let f = Frame {
+            world: self.extent(world),
+            px_per_m: PX_PER_M,
+            left_px: 0.0,
+            top_px: 0.0,
+            y_up: false,
         };
+        let (w, h) = (f.width_px(), f.height_px());
+        let mut c = Canvas::new(w, h + CAPTION_PX);
         if let Some(m) = &self.first_mesh {
-            mesh_svg(m, "#bbb", "none", &mut s);
+            let before = Paint::stroke(style::MESH_BEFORE, style::HAIRLINE_PX).class("mesh-before");
+            elements::mesh(&mut c, &f, &m.vertices, &m.triangles, &before);
         }
         if let Some(m) = &self.last_mesh {
-            mesh_svg(m, "#4a78c2", "#4a78c214", &mut s);
+            let after =
+                Paint::fill_stroke(style::MESH_FILL, style::MESH_STROKE, style::HAIRLINE_PX)
+                    .fill_opacity(0.5)
+                    .class("mesh-after");
+            elements::mesh(&mut c, &f, &m.vertices, &m.triangles, &after);
         }
+        let path = Paint::stroke(style::PATH, 0.8)
+            .stroke_opacity(0.35)
+            .class("path");
+        let start = Paint::stroke(style::AGENT_START, style::HAIRLINE_PX).class("start");
+        let end = Paint::fill(style::AGENT).class("agent");
         for p in &self.agent_paths {
             if p.len() < 2 {
                 continue;
             }
-            let pts: Vec<String> = p
-                .iter()
-                .map(|&q| format!("{:.1},{:.1}", x(q), y(q)))
-                .collect();
-            let _ = writeln!(
-                s,
-                r##"<polyline points="{}" fill="none" stroke="#555" stroke-opacity="0.35" stroke-width="0.8"/>"##,
-                pts.join(" ")
-            );
-            let (a, b) = (p[0], p[p.len() - 1]);
-            let _ = writeln!(
-                s,
-                r##"<circle cx="{:.1}" cy="{:.1}" r="2.2" fill="none" stroke="#777" stroke-width="0.7"/>"##,
-                x(a),
-                y(a)
-            );
-            let _ = writeln!(
-                s,
-                r##"<circle cx="{:.1}" cy="{:.1}" r="2.6" fill="#1d3f7a"/>"##,
-                x(b),
-                y(b)
-            );
+            elements::track(&mut c, &f, p, &path);
+            c.circle(f.pt(p[0]), 2.2, &start);
+            c.circle(f.pt(p[p.len() - 1]), 2.6, &end);
         }
+        let finger = Paint::stroke(style::TOUCH, style::BOLD_PX).class("finger");
         for p in self.touch_paths.values() {
-            let pts: Vec<String> = p
-                .iter()
-                .map(|&q| format!("{:.1},{:.1}", x(q), y(q)))
-                .collect();
-            let _ = writeln!(
-                s,
-                r##"<polyline points="{}" fill="none" stroke="#d33" stroke-width="2" stroke-linecap="round"/>"##,
-                pts.join(" ")
-            );
+            elements::track(&mut c, &f, p, &finger);
             if let Some(&e) = p.last() {
-                let _ = writeln!(
-                    s,
-                    r##"<circle cx="{:.1}" cy="{:.1}" r="6" fill="none" stroke="#d33" stroke-width="2"/>"##,
-                    x(e),
-                    y(e)
-                );
+                c.circle(f.pt(e), 6.0, &finger);
             }
         }
-        let _ = writeln!(
-            s,
-            r##"<text x="6" y="{:.0}" font-size="13" fill="#333">{}: mesh before (grey), after (blue), fingers (red)</text>"##,
-            h + 19.0,
-            xml_escape(title)
+        c.caption(
+            (6.0, h + 19.0),
+            &format!("{title}: mesh before (grey), after (blue), fingers (red)"),
         );
-        s.push_str("</svg>\n");
-        s
+        c.finish()
     }
-}
-
-fn xml_escape(t: &str) -> String {
-    t.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }
