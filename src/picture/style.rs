@@ -29,6 +29,8 @@ pub const PANEL_EDGE: &str = "#dddddd";
 pub const AGENT: &str = "#1d3f7a";
 /// Agents where they started (hollow dots), sources, targets.
 pub const AGENT_START: &str = "#808080";
+/// Target points (where agents are to go).
+pub const TARGET: &str = "#c0392b";
 /// Paths walked, when not coloured by something else.
 pub const PATH: &str = "#555555";
 /// Fingers and touches.

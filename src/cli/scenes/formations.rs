@@ -8,8 +8,8 @@ use anyhow::{Context, Result};
 use crowdtouch::config::Config;
 use crowdtouch::crowd::formation::{Piece, Placement, SampleParams, START};
 use crowdtouch::crowd::mesh::TriMesh;
-use crowdtouch::geom::Vec2;
-use std::fmt::Write as _;
+use crowdtouch::geom::{Rect, Vec2};
+use crowdtouch::picture::{elements, style, Canvas, Frame, Paint};
 use std::path::Path;
 
 /// Pixels per metre in the picture.
@@ -122,90 +122,60 @@ pub fn formations(cfg: &Config, svg: Option<&Path>) -> Result<()> {
 
 fn draw(panels: &[Panel]) -> String {
     let rows = panels.len().div_ceil(PER_ROW);
-    let (w, h) = (
-        PER_ROW as f64 * PANEL_M * PX_PER_M,
-        rows as f64 * PANEL_M * PX_PER_M,
-    );
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r##"<svg xmlns="http://www.w3.org/2000/svg" width="{w:.0}" height="{h:.0}" viewBox="0 0 {w:.0} {h:.0}" font-family="sans-serif" font-size="14"><rect width="100%" height="100%" fill="#ffffff"/>"##
-    );
+    let side_px = PANEL_M * PX_PER_M;
+    let mut c = Canvas::new(PER_ROW as f64 * side_px, rows as f64 * side_px);
+    let mesh = Paint::fill_stroke(style::MESH_FILL, style::MESH_STROKE, 0.8).class("mesh");
+    let target = Paint::fill(style::TARGET).class("target");
     for (k, p) in panels.iter().enumerate() {
-        let (ox, oy) = (
-            (k % PER_ROW) as f64 * PANEL_M * PX_PER_M,
-            (k / PER_ROW) as f64 * PANEL_M * PX_PER_M,
+        let f = Frame {
+            world: Rect {
+                min: [0.0, 0.0],
+                max: [PANEL_M, PANEL_M],
+            },
+            px_per_m: PX_PER_M,
+            left_px: (k % PER_ROW) as f64 * side_px,
+            top_px: (k / PER_ROW) as f64 * side_px,
+            y_up: true,
+        };
+        let (ox, oy) = (f.left_px, f.top_px);
+        c.rect(
+            ox,
+            oy,
+            side_px,
+            side_px,
+            &Paint::stroke(style::PANEL_EDGE, style::LINE_PX),
         );
-        // World y up, picture y down.
-        let px = |p: &Vec2| (ox + p.x * PX_PER_M, oy + (PANEL_M - p.y) * PX_PER_M);
-        let _ = writeln!(
-            s,
-            r##"<rect x="{ox:.1}" y="{oy:.1}" width="{:.1}" height="{:.1}" fill="none" stroke="#dddddd"/>"##,
-            PANEL_M * PX_PER_M,
-            PANEL_M * PX_PER_M
-        );
-        let v = p.mesh.rest();
-        for t in p.mesh.triangles() {
-            let [a, b, c] = t.map(|i| px(&v[i as usize]));
-            let _ = writeln!(
-                s,
-                r##"<path d="M{:.1},{:.1}L{:.1},{:.1}L{:.1},{:.1}Z" fill="#dbe8f7" stroke="#6f9fd8" stroke-width="0.8"/>"##,
-                a.0, a.1, b.0, b.1, c.0, c.1
-            );
-        }
+        elements::mesh(&mut c, &f, p.mesh.rest(), p.mesh.triangles(), &mesh);
         // Outlines solid, holes dashed.
         for piece in &p.pieces {
-            for (ring, dash) in std::iter::once((&piece.outline, "")).chain(
-                piece
-                    .holes
-                    .iter()
-                    .map(|h| (h, r##" stroke-dasharray="6 3""##)),
-            ) {
-                let d: String = ring
-                    .iter()
-                    .enumerate()
-                    .map(|(i, q)| {
-                        let (x, y) = px(q);
-                        format!("{}{x:.1},{y:.1}", if i == 0 { 'M' } else { 'L' })
-                    })
-                    .collect();
-                let _ = writeln!(
-                    s,
-                    r##"<path d="{d}Z" fill="none" stroke="#1f4e8c" stroke-width="2"{dash}/>"##
-                );
+            let outline = Paint::stroke(style::OUTLINE, style::BOLD_PX).class("outline");
+            elements::hull(&mut c, &f, &piece.outline, &outline);
+            let hole = outline.dash("6 3").class("hole");
+            for h in &piece.holes {
+                elements::hull(&mut c, &f, h, &hole);
             }
         }
         let (count, note) = match &p.targets {
             Ok(t) => {
-                for g in t {
-                    let (x, y) = px(g);
-                    let _ = writeln!(
-                        s,
-                        r##"<circle cx="{x:.1}" cy="{y:.1}" r="2.2" fill="#c0392b"/>"##
-                    );
-                }
+                elements::agents(&mut c, &f, t, 2.2, &target);
                 (t.len(), String::new())
             }
             Err(e) => (0, format!(" ({e})")),
         };
-        let _ = writeln!(
-            s,
-            r##"<text x="{:.1}" y="{:.1}" font-weight="bold">{}</text><text x="{:.1}" y="{:.1}" fill="#555555">{} vertices, {count} targets, heading →{}</text>"##,
-            ox + 8.0,
-            oy + 20.0,
-            p.name,
-            ox + 8.0,
-            oy + 38.0,
-            p.mesh.vertex_count(),
-            xml_escape(&note)
+        c.text(
+            (ox + 8.0, oy + 20.0),
+            style::TITLE_PX,
+            style::INK,
+            r#"font-weight="bold""#,
+            &p.name,
+        );
+        c.caption(
+            (ox + 8.0, oy + 38.0),
+            &format!(
+                "{} vertices, {count} targets, heading →{note}",
+                p.mesh.vertex_count()
+            ),
         );
     }
-    s.push_str("</svg>\n");
-    s
-}
-
-fn xml_escape(t: &str) -> String {
-    t.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
+    c.finish()
 }
