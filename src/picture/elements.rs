@@ -293,7 +293,7 @@ pub fn legend_entry(
         }
     };
     let tx = x + w + gap_px;
-    c.text((tx, y + 0.35 * size_px), size_px, style::INK, "", label);
+    c.text((tx, y + size_px / 3.0), size_px, style::INK, "", label);
     tx
 }
 

@@ -6,8 +6,10 @@
 use super::shared::Recorded;
 use super::variant::Variant;
 use crowdtouch::crowd::transform::{Measures, TransformPlan};
-use crowdtouch::geom::Vec2;
-use std::fmt::Write;
+use crowdtouch::geom::Rect;
+use crowdtouch::picture::elements::{self, legend_entry, Chart, Swatch};
+use crowdtouch::picture::scale::{self, axis_from_zero, tick_label};
+use crowdtouch::picture::{style, Canvas, Frame, Paint, PathData};
 
 /// Widest picture of a run (px).
 const RUN_WIDTH_PX: f64 = 960.0;
@@ -23,6 +25,8 @@ const PANEL_H_PX: f64 = 300.0;
 /// Room for the axis labels left of and under a panel's plotting area (px).
 const AXIS_LEFT_PX: f64 = 62.0;
 const AXIS_BOTTOM_PX: f64 = 44.0;
+/// Height of the title band above the panels (px).
+const TITLE_BAND_PX: f64 = 34.0;
 /// Most points drawn per curve.
 const MAX_CURVE_POINTS: usize = 600;
 /// The time axis of the measures plot is cut at this many times the slowest
@@ -30,164 +34,107 @@ const MAX_CURVE_POINTS: usize = 600;
 const CUT_FACTOR: f64 = 3.0;
 /// The time axis is never cut shorter than this (s).
 const MIN_CUT_S: f64 = 10.0;
-/// Colours of the compare variants, in their order.
-const VARIANT_COLOURS: [&str; 8] = [
-    "#1f4e9c", "#17becf", "#e07b00", "#2b9348", "#8e44ad", "#c0392b", "#7f6000", "#555555",
-];
-
-/// Subgroup `k`'s colour: hues a golden angle apart.
-fn group_colour(k: u32) -> String {
-    let hue = (k as f64 * 137.508) % 360.0;
-    format!("hsl({hue:.0},65%,42%)")
-}
-
-fn xml_escape(t: &str) -> String {
-    t.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
 
 /// A run: targets (grey rings of the agent's size), sources (small grey dots),
 /// each agent's path and where it ended, coloured by subgroup.
 pub fn run_picture(plan: &TransformPlan, rec: &Recorded, radius_m: f64, title: &str) -> String {
     let paths = rec.paths.as_deref().unwrap_or(&[]);
-    let mut lo = Vec2::repeat(f64::INFINITY);
-    let mut hi = Vec2::repeat(f64::NEG_INFINITY);
-    for p in plan
+    let everything = plan
         .sources_m
         .iter()
         .chain(&plan.targets_m)
-        .chain(paths.iter().flatten())
-    {
-        lo = lo.inf(p);
-        hi = hi.sup(p);
-    }
-    if !(lo.x.is_finite() && hi.x.is_finite()) {
-        lo = Vec2::zeros();
-        hi = Vec2::new(1.0, 1.0);
-    }
-    lo -= Vec2::repeat(RUN_MARGIN_M);
-    hi += Vec2::repeat(RUN_MARGIN_M);
-    let (wm, hm) = (hi.x - lo.x, hi.y - lo.y);
-    let k = (RUN_WIDTH_PX / wm).clamp(10.0, 120.0);
-    let h = hm * k;
-    // Wide enough for the caption.
-    let w = (wm * k).max(MIN_RUN_WIDTH_PX);
+        .chain(paths.iter().flatten());
+    let world = crowdtouch::picture::canvas::extent(everything, RUN_MARGIN_M).unwrap_or(Rect {
+        min: [-RUN_MARGIN_M, -RUN_MARGIN_M],
+        max: [1.0 + RUN_MARGIN_M, 1.0 + RUN_MARGIN_M],
+    });
+    let k = (RUN_WIDTH_PX / world.width()).clamp(10.0, 120.0);
     // World y up, picture y down.
-    let px = |p: Vec2| ((p.x - lo.x) * k, (hi.y - p.y) * k);
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r##"<svg xmlns="http://www.w3.org/2000/svg" width="{w:.0}" height="{:.0}" viewBox="0 0 {w:.0} {:.0}" font-family="sans-serif" font-size="13">"##,
-        h + CAPTION_PX,
-        h + CAPTION_PX
-    );
-    let _ = writeln!(s, r##"<rect width="100%" height="100%" fill="#fbfbf8"/>"##);
-    let r_px = radius_m * k;
+    let f = Frame {
+        world,
+        px_per_m: k,
+        left_px: 0.0,
+        top_px: 0.0,
+        y_up: true,
+    };
+    let h = f.height_px();
+    // Wide enough for the caption.
+    let mut c = Canvas::new(f.width_px().max(MIN_RUN_WIDTH_PX), h + CAPTION_PX);
+    let r_px = f.len(radius_m);
+    let target = Paint::stroke(style::AGENT_START, 0.8).class("target");
     for t in &plan.targets_m {
-        let (x, y) = px(*t);
-        let _ = writeln!(
-            s,
-            r##"<circle cx="{x:.1}" cy="{y:.1}" r="{r_px:.1}" fill="none" stroke="#9a9a9a" stroke-width="0.8"/>"##
-        );
+        c.circle(f.pt(*t), r_px, &target);
     }
-    for q in &plan.sources_m {
-        let (x, y) = px(*q);
-        let _ = writeln!(
-            s,
-            r##"<circle cx="{x:.1}" cy="{y:.1}" r="1.6" fill="#8a8a8a"/>"##
-        );
-    }
+    elements::agents(
+        &mut c,
+        &f,
+        &plan.sources_m,
+        1.6,
+        &Paint::fill(style::AGENT_START).class("source"),
+    );
     let group_of = &plan.subgroups.group_of;
     for (i, p) in paths.iter().enumerate() {
-        let colour = group_colour(group_of.get(i).copied().unwrap_or(0));
-        if p.len() >= 2 {
-            let pts: Vec<String> = p
-                .iter()
-                .map(|&q| {
-                    let (x, y) = px(q);
-                    format!("{x:.1},{y:.1}")
-                })
-                .collect();
-            let _ = writeln!(
-                s,
-                r##"<polyline points="{}" fill="none" stroke="{colour}" stroke-opacity="0.6" stroke-width="1"/>"##,
-                pts.join(" ")
-            );
-        }
+        let colour = scale::group(group_of.get(i).copied().unwrap_or(0));
+        elements::track(
+            &mut c,
+            &f,
+            p,
+            &Paint::stroke(&colour, style::LINE_PX)
+                .stroke_opacity(0.6)
+                .class("path"),
+        );
         if let Some(&e) = p.last() {
-            let (x, y) = px(e);
-            let _ = writeln!(
-                s,
-                r##"<circle cx="{x:.1}" cy="{y:.1}" r="{:.1}" fill="{colour}" fill-opacity="0.8"/>"##,
-                (0.8 * r_px).max(1.5)
+            c.circle(
+                f.pt(e),
+                (0.8 * r_px).max(1.5),
+                &Paint::fill(&colour).fill_opacity(0.8).class("agent"),
             );
         }
     }
     let sm = &rec.summary;
-    let lines = [
-        (title.to_string(), "#222"),
-        (
-            "grey dots: sources; grey rings: targets (agent size); lines: paths by subgroup; filled: where agents ended".to_string(),
-            "#555",
+    c.title((8.0, h + 18.0), title);
+    c.caption(
+        (8.0, h + 35.0),
+        "grey dots: sources; grey rings: targets (agent size); lines: paths by subgroup; filled: where agents ended",
+    );
+    c.caption(
+        (8.0, h + 52.0),
+        &format!(
+            "{:.1} % arrived in {:.1} s simulated, {} overlapping pairs, closest two agents {:.3} m; 1 m = {k:.0} px",
+            100.0 * sm.arrived_fraction,
+            sm.simulated_s,
+            sm.overlapping_pairs,
+            sm.min_distance_m
         ),
-        (
-            format!(
-                "{:.1} % arrived in {:.1} s simulated, {} overlapping pairs, closest two agents {:.3} m; 1 m = {k:.0} px",
-                100.0 * sm.arrived_fraction,
-                sm.simulated_s,
-                sm.overlapping_pairs,
-                sm.min_distance_m
-            ),
-            "#555",
-        ),
-    ];
-    for (j, (text, colour)) in lines.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            r##"<text x="8" y="{:.0}" fill="{colour}">{}</text>"##,
-            h + 18.0 + 17.0 * j as f64,
-            xml_escape(text)
-        );
+    );
+    c.finish()
+}
+
+/// Tick values with their labels.
+fn labelled(ticks: &[f64]) -> Vec<(f64, String)> {
+    let step = if ticks.len() > 1 {
+        ticks[1] - ticks[0]
+    } else {
+        1.0
+    };
+    ticks.iter().map(|&v| (v, tick_label(v, step))).collect()
+}
+
+/// The plotting area of the panel whose box starts at `(ox, oy)`.
+fn panel(ox: f64, oy: f64, x_range: (f64, f64), y_top: f64) -> Chart {
+    Chart {
+        left: ox + AXIS_LEFT_PX,
+        top: oy + 18.0,
+        right: ox + PANEL_W_PX - 16.0,
+        bottom: oy + PANEL_H_PX - AXIS_BOTTOM_PX,
+        x_range,
+        y_range: (0.0, y_top),
     }
-    s.push_str("</svg>\n");
-    s
 }
 
-/// Round tick values covering `[lo, hi]`, about `n` of them.
-fn ticks(lo: f64, hi: f64, n: usize) -> Vec<f64> {
-    let span = (hi - lo).max(1e-12);
-    let raw = span / n.max(1) as f64;
-    let mag = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 2.5, 5.0, 10.0]
-        .iter()
-        .map(|m| m * mag)
-        .find(|&s| s >= raw)
-        .unwrap_or(10.0 * mag);
-    let first = (lo / step).ceil() * step;
-    (0..)
-        .map(|i| first + i as f64 * step)
-        .take_while(|&v| v <= hi + 1e-9 * step)
-        .collect()
-}
-
-/// A tick label: as few decimals as the step needs (0.025 keeps three).
-fn tick_label(v: f64, step: f64) -> String {
-    let decimals = (0..6)
-        .find(|&d| {
-            let k = 10f64.powi(d as i32);
-            ((step * k).round() - step * k).abs() < 1e-6 * step.abs().max(1e-12) * k
-        })
-        .unwrap_or(6);
-    format!("{v:.decimals$}")
-}
-
-/// Ticks from 0 to the first round value at or above `hi`, that value.
-fn axis(hi: f64, n: usize) -> (Vec<f64>, f64) {
-    let t = ticks(0.0, hi, n);
-    let step = if t.len() > 1 { t[1] - t[0] } else { hi };
-    let top = ((hi / step).ceil() * step).max(step);
-    (ticks(0.0, top, n), top)
+/// Series `i` as a line of width `width_px`, with its dash.
+fn series_paint(i: usize, width_px: f64) -> Paint {
+    Paint::stroke(scale::series(i), width_px).dash(scale::series_dash(i))
 }
 
 /// The three measures over time: one panel each (`I_d` in bits, `σ_min_dis` and
@@ -218,75 +165,35 @@ pub fn measures_plot(variants: &[Variant], title: &str) -> String {
         .then(|| (CUT_FACTOR * slowest_arrival).max(MIN_CUT_S).min(t_max));
     let t_max = cut.unwrap_or(t_max);
     let legend_h = 22.0 * variants.len() as f64 + 16.0;
-    let (w, h) = (3.0 * PANEL_W_PX, 34.0 + PANEL_H_PX + legend_h);
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r##"<svg xmlns="http://www.w3.org/2000/svg" width="{w:.0}" height="{h:.0}" viewBox="0 0 {w:.0} {h:.0}" font-family="sans-serif" font-size="12">"##
-    );
-    let _ = writeln!(
-        s,
-        r##"<rect width="100%" height="100%" fill="#ffffff"/><text x="10" y="20" font-size="14" fill="#222">{}</text>"##,
-        xml_escape(title)
-    );
-    if let Some(c) = cut {
-        let _ = writeln!(
-            s,
-            r##"<text x="{:.1}" y="20" fill="#666" text-anchor="end">time axis cut at {c:.0} s; the runs that had not all arrived go on to their timeout</text>"##,
-            w - 12.0
+    let w = 3.0 * PANEL_W_PX;
+    let mut c = Canvas::new(w, TITLE_BAND_PX + PANEL_H_PX + legend_h);
+    c.title((10.0, 20.0), title);
+    if let Some(cut) = cut {
+        c.text(
+            (w - 12.0, 20.0),
+            style::SMALL_PX,
+            style::INK_SOFT,
+            r#"text-anchor="end""#,
+            &format!("time axis cut at {cut:.0} s; the runs that had not all arrived go on to their timeout"),
         );
     }
-    let top = 34.0;
     for (k, (name, unit, pick)) in panels.iter().enumerate() {
         let ox = k as f64 * PANEL_W_PX;
-        let (x0, x1) = (ox + AXIS_LEFT_PX, ox + PANEL_W_PX - 16.0);
-        let (y0, y1) = (top + PANEL_H_PX - AXIS_BOTTOM_PX, top + 18.0);
         let y_max = variants
             .iter()
             .flat_map(|v| v.rec.series.iter().map(|s| pick(&s.1)))
             .filter(|v| v.is_finite())
             .fold(0.0f64, f64::max);
-        let (yt, y_top) = axis(y_max.max(1e-6), 5);
-        let (xt, x_top) = axis(t_max, 6);
-        let sx = |t: f64| x0 + (x1 - x0) * t / x_top;
-        let sy = |v: f64| y0 - (y0 - y1) * v / y_top;
-        let _ = writeln!(
-            s,
-            r##"<text x="{:.1}" y="{:.1}" font-size="13" font-weight="bold" fill="#222" text-anchor="middle">{}</text>"##,
-            0.5 * (x0 + x1),
-            top + 10.0,
-            xml_escape(name)
-        );
-        let step_y = if yt.len() > 1 { yt[1] - yt[0] } else { 1.0 };
-        for v in &yt {
-            let y = sy(*v);
-            let _ = writeln!(
-                s,
-                r##"<line x1="{x0:.1}" y1="{y:.1}" x2="{x1:.1}" y2="{y:.1}" stroke="#eeeeee"/><text x="{:.1}" y="{:.1}" text-anchor="end" fill="#444">{}</text>"##,
-                x0 - 5.0,
-                y + 4.0,
-                tick_label(*v, step_y)
-            );
-        }
-        let step_x = if xt.len() > 1 { xt[1] - xt[0] } else { 1.0 };
-        for t in &xt {
-            let x = sx(*t);
-            let _ = writeln!(
-                s,
-                r##"<line x1="{x:.1}" y1="{y0:.1}" x2="{x:.1}" y2="{:.1}" stroke="#444"/><text x="{x:.1}" y="{:.1}" text-anchor="middle" fill="#444">{}</text>"##,
-                y0 + 4.0,
-                y0 + 17.0,
-                tick_label(*t, step_x)
-            );
-        }
-        let _ = writeln!(
-            s,
-            r##"<path d="M{x0:.1},{y1:.1}L{x0:.1},{y0:.1}L{x1:.1},{y0:.1}" fill="none" stroke="#444"/><text x="{:.1}" y="{:.1}" text-anchor="middle" fill="#222">time (s)</text><text transform="translate({:.1},{:.1}) rotate(-90)" text-anchor="middle" fill="#222">{}</text>"##,
-            0.5 * (x0 + x1),
-            y0 + 34.0,
-            ox + 16.0,
-            0.5 * (y0 + y1),
-            xml_escape(unit)
+        let (yt, y_top) = axis_from_zero(y_max.max(1e-6), 5);
+        let (xt, x_top) = axis_from_zero(t_max, 6);
+        let ch = panel(ox, TITLE_BAND_PX, (0.0, x_top), y_top);
+        ch.draw_axes(
+            &mut c,
+            (name, 8.0),
+            &labelled(&xt),
+            &labelled(&yt),
+            "time (s)",
+            (unit, ox + 16.0),
         );
         for (i, v) in variants.iter().enumerate() {
             // The steps within the time axis.
@@ -296,33 +203,20 @@ pub fn measures_plot(variants: &[Variant], title: &str) -> String {
                 continue;
             }
             let stride = series.len().div_ceil(MAX_CURVE_POINTS).max(1);
-            let mut d = String::new();
             let last = series.len() - 1;
-            for (j, (t, m, _)) in series.iter().enumerate() {
-                if j % stride != 0 && j != last {
-                    continue;
-                }
-                let val = pick(m);
-                if !val.is_finite() {
-                    continue;
-                }
-                let _ = write!(
-                    d,
-                    "{}{:.1},{:.1}",
-                    if d.is_empty() { 'M' } else { 'L' },
-                    sx(*t),
-                    sy(val)
-                );
-            }
-            let _ = writeln!(
-                s,
-                r##"<path d="{d}" fill="none" stroke="{}" stroke-width="1.4"{}/>"##,
-                VARIANT_COLOURS[i % VARIANT_COLOURS.len()],
-                dash(i)
-            );
+            let pts = series
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| j % stride == 0 || *j == last)
+                .map(|(_, (t, m, _))| (*t, pick(m)))
+                .filter(|(_, val)| val.is_finite())
+                .map(|(t, val)| (ch.x(t), ch.y(val)));
+            let mut d = PathData::new();
+            d.polyline(pts);
+            c.path(&d, &series_paint(i, 1.4).class("curve"));
         }
     }
-    let ly = top + PANEL_H_PX + 8.0;
+    let ly = TITLE_BAND_PX + PANEL_H_PX + 8.0;
     for (i, v) in variants.iter().enumerate() {
         let y = ly + 22.0 * i as f64;
         let sm = &v.rec.summary;
@@ -347,22 +241,21 @@ pub fn measures_plot(variants: &[Variant], title: &str) -> String {
                 ),
             }
         );
-        let _ = writeln!(
-            s,
-            r##"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{}" stroke-width="2.5"{}/><text x="{:.1}" y="{:.1}" fill="#222">{}</text>"##,
-            AXIS_LEFT_PX,
-            y + 8.0,
-            AXIS_LEFT_PX + 34.0,
-            y + 8.0,
-            VARIANT_COLOURS[i % VARIANT_COLOURS.len()],
-            dash(i),
-            AXIS_LEFT_PX + 42.0,
-            y + 12.0,
-            xml_escape(&what)
+        let paint = series_paint(i, 2.5);
+        let swatch = Swatch::Line {
+            paint: &paint,
+            len_px: 34.0,
+        };
+        legend_entry(
+            &mut c,
+            (AXIS_LEFT_PX, y + 8.0),
+            &swatch,
+            8.0,
+            style::SMALL_PX,
+            &what,
         );
     }
-    s.push_str("</svg>\n");
-    s
+    c.finish()
 }
 
 /// One row of a `--lambdas` sweep for [`lambda_plot`]: its λ, whether on the
@@ -393,17 +286,8 @@ pub fn lambda_plot(points: &[SweepPoint], title: &str) -> String {
     const COLS: usize = 3;
     let (pw, ph) = (PANEL_W_PX, PANEL_H_PX);
     let legend_h = 40.0;
-    let (w, h) = (COLS as f64 * pw, 34.0 + 2.0 * ph + legend_h);
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r##"<svg xmlns="http://www.w3.org/2000/svg" width="{w:.0}" height="{h:.0}" viewBox="0 0 {w:.0} {h:.0}" font-family="sans-serif" font-size="12">"##
-    );
-    let _ = writeln!(
-        s,
-        r##"<rect width="100%" height="100%" fill="#ffffff"/><text x="10" y="20" font-size="14" fill="#222">{}</text>"##,
-        xml_escape(title)
-    );
+    let mut c = Canvas::new(COLS as f64 * pw, TITLE_BAND_PX + 2.0 * ph + legend_h);
+    c.title((10.0, 20.0), title);
     let series = |normalised: bool| -> Vec<&SweepPoint> {
         let mut v: Vec<&SweepPoint> = points
             .iter()
@@ -412,94 +296,61 @@ pub fn lambda_plot(points: &[SweepPoint], title: &str) -> String {
         v.sort_by(|a, b| a.lambda.total_cmp(&b.lambda));
         v
     };
+    // Raw terms solid in the first series colour, normalised dashed in the third.
     let curves = [
-        (series(false), VARIANT_COLOURS[0], ""),
-        (
-            series(true),
-            VARIANT_COLOURS[2],
-            r##" stroke-dasharray="6 3""##,
-        ),
+        (series(false), scale::series(0), ""),
+        (series(true), scale::series(2), "6 3"),
     ];
+    let lambdas: Vec<(f64, String)> = [0.0, 0.25, 0.5, 0.75, 1.0]
+        .into_iter()
+        .map(|l| (l, tick_label(l, 0.25)))
+        .collect();
     for (k, (name, unit)) in PANELS.iter().enumerate() {
-        let (ox, oy) = ((k % COLS) as f64 * pw, 34.0 + (k / COLS) as f64 * ph);
-        let (x0, x1) = (ox + AXIS_LEFT_PX, ox + pw - 16.0);
-        let (y0, y1) = (oy + ph - AXIS_BOTTOM_PX, oy + 18.0);
+        let (ox, oy) = (
+            (k % COLS) as f64 * pw,
+            TITLE_BAND_PX + (k / COLS) as f64 * ph,
+        );
         let y_max = points
             .iter()
             .map(|p| p.values[k].0 + p.values[k].1.max(0.0))
             .filter(|v| v.is_finite())
             .fold(0.0f64, f64::max);
-        let (yt, y_top) = axis(y_max.max(1e-6), 5);
-        let sx = |l: f64| x0 + (x1 - x0) * l;
-        let sy = |v: f64| y0 - (y0 - y1) * v / y_top;
-        let _ = writeln!(
-            s,
-            r##"<text x="{:.1}" y="{:.1}" font-size="13" font-weight="bold" fill="#222" text-anchor="middle">{}</text>"##,
-            0.5 * (x0 + x1),
-            oy + 10.0,
-            xml_escape(name)
-        );
-        let step_y = if yt.len() > 1 { yt[1] - yt[0] } else { 1.0 };
-        for v in &yt {
-            let y = sy(*v);
-            let _ = writeln!(
-                s,
-                r##"<line x1="{x0:.1}" y1="{y:.1}" x2="{x1:.1}" y2="{y:.1}" stroke="#eeeeee"/><text x="{:.1}" y="{:.1}" text-anchor="end" fill="#444">{}</text>"##,
-                x0 - 5.0,
-                y + 4.0,
-                tick_label(*v, step_y)
-            );
-        }
-        for l in [0.0, 0.25, 0.5, 0.75, 1.0] {
-            let x = sx(l);
-            let _ = writeln!(
-                s,
-                r##"<line x1="{x:.1}" y1="{y0:.1}" x2="{x:.1}" y2="{:.1}" stroke="#444"/><text x="{x:.1}" y="{:.1}" text-anchor="middle" fill="#444">{}</text>"##,
-                y0 + 4.0,
-                y0 + 17.0,
-                tick_label(l, 0.25)
-            );
-        }
-        let _ = writeln!(
-            s,
-            r##"<path d="M{x0:.1},{y1:.1}L{x0:.1},{y0:.1}L{x1:.1},{y0:.1}" fill="none" stroke="#444"/><text x="{:.1}" y="{:.1}" text-anchor="middle" fill="#222">λ</text><text transform="translate({:.1},{:.1}) rotate(-90)" text-anchor="middle" fill="#222">{}</text>"##,
-            0.5 * (x0 + x1),
-            y0 + 34.0,
-            ox + 16.0,
-            0.5 * (y0 + y1),
-            xml_escape(unit)
+        let (yt, y_top) = axis_from_zero(y_max.max(1e-6), 5);
+        let ch = panel(ox, oy, (0.0, 1.0), y_top);
+        ch.draw_axes(
+            &mut c,
+            (name, 8.0),
+            &lambdas,
+            &labelled(&yt),
+            "λ",
+            (unit, ox + 16.0),
         );
         for (pts, colour, dash) in &curves {
-            let mut d = String::new();
-            for p in pts {
+            let mut d = PathData::new();
+            let bar = Paint::stroke(colour, 1.2).class("interval");
+            let dot = Paint::fill(colour).class("mean");
+            for (j, p) in pts.iter().filter(|p| p.values[k].0.is_finite()).enumerate() {
                 let (m, ci) = p.values[k];
-                if !m.is_finite() {
-                    continue;
+                let at = (ch.x(p.lambda), ch.y(m));
+                if j == 0 {
+                    d.move_to(at);
+                } else {
+                    d.line_to(at);
                 }
-                let (x, y) = (sx(p.lambda), sy(m));
-                let _ = write!(d, "{}{x:.1},{y:.1}", if d.is_empty() { 'M' } else { 'L' });
                 if ci.is_finite() && ci > 0.0 {
-                    let _ = writeln!(
-                        s,
-                        r##"<line x1="{x:.1}" y1="{:.1}" x2="{x:.1}" y2="{:.1}" stroke="{colour}" stroke-width="1.2"/>"##,
-                        sy(m - ci),
-                        sy(m + ci)
-                    );
+                    c.line((at.0, ch.y(m - ci)), (at.0, ch.y(m + ci)), &bar);
                 }
-                let _ = writeln!(
-                    s,
-                    r##"<circle cx="{x:.1}" cy="{y:.1}" r="3" fill="{colour}"/>"##
-                );
+                c.circle(at, 3.0, &dot);
             }
-            if !d.is_empty() {
-                let _ = writeln!(
-                    s,
-                    r##"<path d="{d}" fill="none" stroke="{colour}" stroke-width="2"{dash}/>"##
-                );
-            }
+            c.path(
+                &d,
+                &Paint::stroke(colour, style::BOLD_PX)
+                    .dash(dash)
+                    .class("curve"),
+            );
         }
     }
-    let y = 34.0 + 2.0 * ph + 8.0;
+    let y = TITLE_BAND_PX + 2.0 * ph + 8.0;
     for (i, (label, (_, colour, dash))) in [
         "ΔE, eq. 3 as printed (raw terms, m²)",
         "ΔE′: each term over its mean over every pair",
@@ -508,32 +359,15 @@ pub fn lambda_plot(points: &[SweepPoint], title: &str) -> String {
     .zip(&curves)
     .enumerate()
     {
+        let paint = Paint::stroke(colour, 2.5).dash(dash);
+        let swatch = Swatch::Line {
+            paint: &paint,
+            len_px: 34.0,
+        };
         let x = AXIS_LEFT_PX + i as f64 * 1.5 * pw;
-        let _ = writeln!(
-            s,
-            r##"<line x1="{x:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{colour}" stroke-width="2.5"{dash}/><text x="{:.1}" y="{:.1}" fill="#222">{}</text>"##,
-            y + 8.0,
-            x + 34.0,
-            y + 8.0,
-            x + 42.0,
-            y + 12.0,
-            xml_escape(label)
-        );
+        legend_entry(&mut c, (x, y + 8.0), &swatch, 8.0, style::SMALL_PX, label);
     }
-    s.push_str("</svg>\n");
-    s
-}
-
-/// The dash of variant `i`'s curve: the variants sharing the least-effort
-/// pairing (no feedback, ORCA, RVO, steering) dashed.
-fn dash(i: usize) -> &'static str {
-    match i {
-        4 => r##" stroke-dasharray="6 3""##,
-        5 => r##" stroke-dasharray="2 2""##,
-        6 => r##" stroke-dasharray="8 2 2 2""##,
-        7 => r##" stroke-dasharray="1 3""##,
-        _ => "",
-    }
+    c.finish()
 }
 
 #[cfg(test)]
@@ -541,20 +375,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn ticks_are_round_and_cover_the_range() {
-        let t = ticks(0.0, 1.0, 5);
-        assert_eq!(t.len(), 6);
-        for (k, v) in t.iter().enumerate() {
-            assert!((v - 0.2 * k as f64).abs() < 1e-12, "{t:?}");
-        }
-        let t = ticks(0.0, 37.0, 6);
-        assert_eq!(t.first(), Some(&0.0));
-        assert!(t.len() >= 4 && t.len() <= 9 && *t.last().unwrap() <= 37.0);
-        assert_eq!(tick_label(0.25, 0.05), "0.25");
-        assert_eq!(tick_label(0.025, 0.025), "0.025");
-        assert_eq!(tick_label(0.5, 0.5), "0.5");
-        let (t, top) = axis(1.45, 5);
-        assert_eq!((t.len(), top), (4, 1.5));
-        assert_eq!(tick_label(20.0, 10.0), "20");
+    fn a_panel_puts_zero_at_its_bottom_left_and_the_tops_at_its_corner() {
+        let ch = panel(420.0, 34.0, (0.0, 10.0), 2.5);
+        assert_eq!((ch.x(0.0), ch.y(0.0)), (482.0, 290.0));
+        assert_eq!((ch.x(10.0), ch.y(2.5)), (824.0, 52.0));
+        let l = labelled(&[0.0, 0.25, 0.5]);
+        assert_eq!(l[1].1, "0.25");
     }
 }
