@@ -5,22 +5,22 @@
 //! the dragged handle's arrow, the fixed places, collisions before (hollow red rings)
 //! and after (filled red), the scene's obstacles, axes in metres, a title and a
 //! one-line summary. Optionally everyone's position at given instants, before and
-//! after. Coordinates are written in metres rounded to the millimetre.
+//! after. Drawn through `crowdtouch::picture` with world y up.
 
 use super::edit_apply::{run, EditArgs, Outcome};
 use super::edit_render_layers::{
     cages, collisions, drags_and_fixes, grid, instants, obstacles, tracks_after, tracks_before,
 };
-use super::edit_render_legend::{axes, legend};
+use super::edit_render_legend::legend;
 use super::edit_render_svg::{
-    mm, xml_escape, BOTTOM_PX, LEFT_PX, MARGIN_M, MAX_PX_PER_M, MIN_PX_PER_M, PLOT_WIDTH_PX,
-    RIGHT_PX, TOP_PX,
+    BOTTOM_PX, LEFT_PX, MARGIN_M, MAX_PX_PER_M, MIN_PX_PER_M, PLOT_WIDTH_PX, RIGHT_PX, TOP_PX,
 };
 use crate::cli::common::output::outln;
 use anyhow::{bail, Context, Result};
 use crowdtouch::crowd::edit::{Op, TrackSet};
-use crowdtouch::geom::Vec2;
-use std::fmt::Write;
+use crowdtouch::geom::{Rect, Vec2};
+use crowdtouch::picture::text::px;
+use crowdtouch::picture::{elements, style, Canvas, Frame, Paint};
 use std::path::PathBuf;
 
 /// `edit render`.
@@ -106,65 +106,47 @@ pub fn picture(o: &Outcome, threshold_m: f64, at_s: &[f64], title: &str) -> Stri
     }
     lo -= Vec2::repeat(MARGIN_M);
     hi += Vec2::repeat(MARGIN_M);
-    let (wm, hm) = (hi.x - lo.x, hi.y - lo.y);
-    let k = (PLOT_WIDTH_PX / wm).clamp(MIN_PX_PER_M, MAX_PX_PER_M);
-    let (pw, ph) = (wm * k, hm * k);
-    let width = LEFT_PX + pw.max(PLOT_WIDTH_PX) + RIGHT_PX;
-    let height = TOP_PX + ph + BOTTOM_PX;
-    // A width of `px` pixels in metres.
-    let w = |px: f64| mm((px / k).max(0.001));
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r##"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="sans-serif" font-size="13">"##
+    let k = (PLOT_WIDTH_PX / (hi.x - lo.x)).clamp(MIN_PX_PER_M, MAX_PX_PER_M);
+    let f = Frame {
+        world: Rect {
+            min: [lo.x, lo.y],
+            max: [hi.x, hi.y],
+        },
+        px_per_m: k,
+        left_px: LEFT_PX,
+        top_px: TOP_PX,
+        y_up: true,
+    };
+    let (pw, ph) = (f.width_px(), f.height_px());
+    let mut c = Canvas::new(
+        LEFT_PX + pw.max(PLOT_WIDTH_PX) + RIGHT_PX,
+        TOP_PX + ph + BOTTOM_PX,
     );
-    let _ = writeln!(
-        s,
-        r##"<rect x="0" y="0" width="{width:.0}" height="{height:.0}" fill="#fbfbf8"/>"##
+    c.title((LEFT_PX, 24.0), title);
+    c.raw(&format!(
+        r#"<defs><clipPath id="plot"><rect x="{}" y="{}" width="{}" height="{}"/></clipPath></defs>"#,
+        px(LEFT_PX),
+        px(TOP_PX),
+        px(pw),
+        px(ph)
+    ));
+    c.open_group(
+        r#"class="world" clip-path="url(#plot)" stroke-linejoin="round" stroke-linecap="round""#,
     );
-    let _ = writeln!(
-        s,
-        r##"<text x="{LEFT_PX:.0}" y="24" font-size="16" fill="#222">{}</text>"##,
-        xml_escape(title)
-    );
-    // World metres → picture: y up.
-    let _ = writeln!(
-        s,
-        r##"<defs><clipPath id="plot"><rect x="{}" y="{}" width="{}" height="{}"/></clipPath></defs>"##,
-        mm(lo.x),
-        mm(lo.y),
-        mm(wm),
-        mm(hm)
-    );
-    let _ = writeln!(
-        s,
-        r##"<g id="world" transform="matrix({k:.4},0,0,{:.4},{:.3},{:.3})" clip-path="url(#plot)" stroke-linejoin="round" stroke-linecap="round">"##,
-        -k,
-        LEFT_PX - lo.x * k,
-        TOP_PX + hi.y * k
-    );
-    let _ = writeln!(
-        s,
-        r##"<rect x="{}" y="{}" width="{}" height="{}" fill="#ffffff" stroke="none"/>"##,
-        mm(lo.x),
-        mm(lo.y),
-        mm(wm),
-        mm(hm)
-    );
-    grid(&mut s, lo, hi, k);
-    obstacles(&mut s, o, lo, hi, &w);
-    tracks_before(&mut s, o, &w);
-    cages(&mut s, o, &w);
+    c.rect(LEFT_PX, TOP_PX, pw, ph, &Paint::fill(style::PLOT));
+    grid(&mut c, &f);
+    obstacles(&mut c, &f, o);
+    tracks_before(&mut c, &f, o);
+    cages(&mut c, &f, o);
     let (t0, t1) = time_range(&o.after);
-    tracks_after(&mut s, o, t0, t1, &w);
-    instants(&mut s, o, at_s, t0, t1, k);
-    drags_and_fixes(&mut s, o, k, &w);
-    collisions(&mut s, o, k, &w);
-    s.push_str("</g>\n");
-    axes(&mut s, lo, hi, k, ph);
-    legend(&mut s, o, threshold_m, t0, t1, at_s, TOP_PX + ph + 44.0);
-    s.push_str("</svg>\n");
-    s
+    tracks_after(&mut c, &f, o, t0, t1);
+    instants(&mut c, &f, o, at_s, t0, t1);
+    drags_and_fixes(&mut c, &f, o);
+    collisions(&mut c, &f, o);
+    c.close_group();
+    elements::metre_axes(&mut c, &f, 10);
+    legend(&mut c, o, threshold_m, t0, t1, at_s, TOP_PX + ph + 44.0);
+    c.finish()
 }
 
 fn time_range(set: &TrackSet) -> (f64, f64) {

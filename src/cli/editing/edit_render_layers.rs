@@ -1,17 +1,17 @@
-//! The edit picture's layers in world metres: the grid, the scene's obstacles, the
+//! The edit picture's layers, drawn through the world frame: the grid, the scene's obstacles, the
 //! tracks before and after (thinned, the after ones banded by time), the cages and
 //! their meshes, the positions at given instants, the drags and fixed places, and
 //! the collisions before and after.
 
 use super::edit_apply::Outcome;
 use super::edit_render_svg::{
-    mm, nice_step, pt, time_colour, CAGE_COLOUR, COLLISION_RED, FIXED_BLUE, MAX_POINTS,
-    MAX_TRACK_POINTS, OBSTACLE_FILL, TIME_BANDS,
+    BEFORE_GREY, COLLISION_DARK, MAX_POINTS, MAX_TRACK_POINTS, MESH_EDGE, TIME_BANDS,
 };
 use crowdtouch::crowd::edit::{Op, Track, TrackSet};
 use crowdtouch::crowd::environment::Part;
 use crowdtouch::geom::Vec2;
-use std::fmt::Write;
+use crowdtouch::picture::scale::{nice_step, ticks, time};
+use crowdtouch::picture::{elements, style, Canvas, Frame, Paint, PathData};
 
 /// Every `stride`-th sample of `t` (and its last) as runs of linked samples.
 fn runs(t: &Track, stride: usize) -> Vec<Vec<usize>> {
@@ -39,103 +39,92 @@ fn stride_for(set: &TrackSet) -> impl Fn(&Track) -> usize {
     move |t: &Track| global.max(t.len().div_ceil(MAX_TRACK_POINTS)).max(1)
 }
 
-/// Points of a run, dropping consecutive repeats at millimetre precision.
-fn run_points(t: &Track, run: &[usize]) -> Vec<String> {
-    let mut v: Vec<String> = Vec::with_capacity(run.len());
+/// Page points of a run, dropping consecutive repeats at millimetre precision.
+fn run_points(f: &Frame, t: &Track, run: &[usize]) -> Vec<(f64, f64)> {
+    let mm = |p: Vec2| ((p.x * 1000.0).round() as i64, (p.y * 1000.0).round() as i64);
+    let mut v: Vec<(f64, f64)> = Vec::with_capacity(run.len());
+    let mut last = None;
     for &j in run {
-        let p = pt(t.points[j]);
-        if v.last() != Some(&p) {
-            v.push(p);
+        let p = t.points[j];
+        if last != Some(mm(p)) {
+            last = Some(mm(p));
+            v.push(f.pt(p));
         }
     }
     v
 }
 
-pub fn grid(s: &mut String, lo: Vec2, hi: Vec2, k: f64) {
-    let step = nice_step((hi.x - lo.x).max(hi.y - lo.y), 10.0);
-    let mut d = String::new();
-    let mut x = (lo.x / step).ceil() * step;
-    while x <= hi.x {
-        let _ = write!(d, "M{} {}V{}", mm(x), mm(lo.y), mm(hi.y));
-        x += step;
+/// Grid lines every 1–2–5 step of the longer side (about ten of them).
+pub fn grid(c: &mut Canvas, f: &Frame) {
+    let w = f.world;
+    let step = nice_step(w.width().max(w.height()), 10);
+    let mut d = PathData::new();
+    for x in ticks(w.min[0], w.max[0], step) {
+        d.move_to(f.pt(Vec2::new(x, w.min[1])));
+        d.line_to(f.pt(Vec2::new(x, w.max[1])));
     }
-    let mut y = (lo.y / step).ceil() * step;
-    while y <= hi.y {
-        let _ = write!(d, "M{} {}H{}", mm(lo.x), mm(y), mm(hi.x));
-        y += step;
+    for y in ticks(w.min[1], w.max[1], step) {
+        d.move_to(f.pt(Vec2::new(w.min[0], y)));
+        d.line_to(f.pt(Vec2::new(w.max[0], y)));
     }
-    let _ = writeln!(
-        s,
-        r##"<path id="grid" d="{d}" fill="none" stroke="#e8e8e4" stroke-width="{}"/>"##,
-        mm((0.8 / k).max(0.001))
-    );
+    c.path(&d, &Paint::stroke(style::GRID, 0.8).class("grid"));
 }
 
-pub fn obstacles(s: &mut String, o: &Outcome, lo: Vec2, hi: Vec2, w: &impl Fn(f64) -> String) {
+/// The scene's obstacles that reach into the frame.
+pub fn obstacles(c: &mut Canvas, f: &Frame, o: &Outcome) {
     let Some((scene, _, _)) = &o.obstacles else {
         return;
     };
-    let _ = writeln!(
-        s,
-        r##"<g id="obstacles" fill="{OBSTACLE_FILL}" fill-opacity="0.55" stroke="#333" stroke-width="{}">"##,
-        w(0.8)
-    );
+    let w = f.world;
+    let paint = Paint::fill_stroke(style::OBSTACLE, style::INK, 0.8)
+        .fill_opacity(0.45)
+        .class("obstacle");
+    c.open_group(r#"class="obstacles""#);
     for ob in scene.obstacles() {
         for part in &ob.parts {
             let bb = part.aabb();
-            if bb.max[0] < lo.x || bb.min[0] > hi.x || bb.max[1] < lo.y || bb.min[1] > hi.y {
+            if bb.max[0] < w.min[0]
+                || bb.min[0] > w.max[0]
+                || bb.max[1] < w.min[1]
+                || bb.min[1] > w.max[1]
+            {
                 continue;
             }
             match part {
-                Part::Polygon(p) => {
-                    let pts: Vec<String> = p.vertices().iter().map(|&v| pt(v)).collect();
-                    let _ = writeln!(s, r##"<polygon points="{}"/>"##, pts.join(" "));
-                }
-                Part::Circle(c) => {
-                    let _ = writeln!(
-                        s,
-                        r##"<circle cx="{}" cy="{}" r="{}"/>"##,
-                        mm(c.centre.x),
-                        mm(c.centre.y),
-                        mm(c.radius_m)
-                    );
-                }
+                Part::Polygon(p) => elements::hull(c, f, p.vertices(), &paint),
+                Part::Circle(d) => elements::disc(c, f, d.centre, d.radius_m, &paint),
             }
         }
     }
-    s.push_str("</g>\n");
+    c.close_group();
 }
 
 /// Tracks before, only where they differ in space from after.
-pub fn tracks_before(s: &mut String, o: &Outcome, w: &impl Fn(f64) -> String) {
+pub fn tracks_before(c: &mut Canvas, f: &Frame, o: &Outcome) {
     let stride = stride_for(&o.before);
-    let _ = writeln!(
-        s,
-        r##"<g id="before" fill="none" stroke="#b4b4b4" stroke-width="{}">"##,
-        w(1.0)
-    );
+    let paint = Paint::stroke(BEFORE_GREY, 1.0).class("before");
+    c.open_group(r#"class="before""#);
     for (i, t) in o.before.tracks.iter().enumerate() {
         if o.after.tracks.get(i).map(|a| &a.points) == Some(&t.points) {
             continue;
         }
         for r in runs(t, stride(t)) {
-            let pts = run_points(t, &r);
-            if pts.len() >= 2 {
-                let _ = writeln!(s, r##"<polyline points="{}"/>"##, pts.join(" "));
-            }
+            c.polyline(run_points(f, t, &r), &paint);
         }
     }
-    s.push_str("</g>\n");
+    c.close_group();
 }
 
 /// Tracks after, split into bands of the time scale; tracks the edit did not move
 /// in space are faded.
-pub fn tracks_after(s: &mut String, o: &Outcome, t0: f64, t1: f64, w: &impl Fn(f64) -> String) {
+pub fn tracks_after(c: &mut Canvas, f: &Frame, o: &Outcome, t0: f64, t1: f64) {
     let set = &o.after;
     let stride = stride_for(set);
     let band = |t: f64| (((t - t0) / (t1 - t0) * TIME_BANDS as f64) as usize).min(TIME_BANDS - 1);
-    let mut moved: Vec<String> = vec![String::new(); TIME_BANDS];
-    let mut still: Vec<String> = vec![String::new(); TIME_BANDS];
+    // Per band, the pieces of moved and of still tracks.
+    type Pieces = Vec<Vec<(f64, f64)>>;
+    let mut moved: Vec<Pieces> = vec![Vec::new(); TIME_BANDS];
+    let mut still: Vec<Pieces> = vec![Vec::new(); TIME_BANDS];
     for (i, t) in set.tracks.iter().enumerate() {
         let same = o.before.tracks.get(i).map(|b| &b.points) == Some(&t.points)
             && o.before.tracks[i].times_s == t.times_s;
@@ -148,53 +137,39 @@ pub fn tracks_after(s: &mut String, o: &Outcome, t0: f64, t1: f64, w: &impl Fn(f
                 piece.push(j);
                 let bj = band(t.times_s[j]);
                 if bj != b {
-                    let pts = run_points(t, &piece);
+                    let pts = run_points(f, t, &piece);
                     if pts.len() >= 2 {
-                        let _ = writeln!(by_band[b], r##"<polyline points="{}"/>"##, pts.join(" "));
+                        by_band[b].push(pts);
                     }
                     piece = vec![j];
                     b = bj;
                 }
             }
-            let pts = run_points(t, &piece);
+            let pts = run_points(f, t, &piece);
             if pts.len() >= 2 {
-                let _ = writeln!(by_band[b], r##"<polyline points="{}"/>"##, pts.join(" "));
+                by_band[b].push(pts);
             }
         }
     }
-    let _ = writeln!(
-        s,
-        r##"<g id="after" fill="none" stroke-width="{}">"##,
-        w(1.6)
-    );
-    for (bands, attrs) in [(&still, r#" opacity="0.3""#), (&moved, "")] {
-        if bands.iter().all(|b| b.is_empty()) {
-            continue;
-        }
-        let _ = writeln!(s, "<g{attrs}>");
-        for (b, body) in bands.iter().enumerate() {
-            if body.is_empty() {
-                continue;
+    for (bands, class, opacity) in [(&still, "after-unmoved", 0.3), (&moved, "after", 1.0)] {
+        for (b, pieces) in bands.iter().enumerate() {
+            let colour = time((b as f64 + 0.5) / TIME_BANDS as f64);
+            let paint = Paint::stroke(&colour, 1.6)
+                .stroke_opacity(opacity)
+                .class(class);
+            for p in pieces {
+                c.polyline(p.iter().copied(), &paint);
             }
-            let f = (b as f64 + 0.5) / TIME_BANDS as f64;
-            let _ = writeln!(s, r##"<g stroke="{}">"##, time_colour(f));
-            s.push_str(body);
-            s.push_str("</g>\n");
         }
-        s.push_str("</g>\n");
     }
-    s.push_str("</g>\n");
 }
 
-pub fn cages(s: &mut String, o: &Outcome, w: &impl Fn(f64) -> String) {
+/// Each drag's deformation mesh (its edges once each), its cage at rest (dashed)
+/// and deformed.
+pub fn cages(c: &mut Canvas, f: &Frame, o: &Outcome) {
     if o.report.drags.is_empty() {
         return;
     }
-    let _ = writeln!(
-        s,
-        r##"<g id="mesh" fill="none" stroke="#9aa9c4" stroke-width="{}">"##,
-        w(0.4)
-    );
     for d in &o.report.drags {
         let mut edges: Vec<(u32, u32)> = d
             .mesh_triangles
@@ -204,7 +179,7 @@ pub fn cages(s: &mut String, o: &Outcome, w: &impl Fn(f64) -> String) {
             .collect();
         edges.sort_unstable();
         edges.dedup();
-        let mut path = String::new();
+        let mut path = PathData::new();
         for (a, b) in edges {
             let (Some(&p), Some(&q)) = (
                 d.mesh_vertices.get(a as usize),
@@ -212,189 +187,99 @@ pub fn cages(s: &mut String, o: &Outcome, w: &impl Fn(f64) -> String) {
             ) else {
                 continue;
             };
-            let _ = write!(path, "M{} {}L{} {}", mm(p.x), mm(p.y), mm(q.x), mm(q.y));
+            path.move_to(f.pt(p)).line_to(f.pt(q));
         }
-        let _ = writeln!(s, r##"<path d="{path}"/>"##);
+        c.path(&path, &Paint::stroke(MESH_EDGE, 0.4).class("cage-mesh"));
     }
-    s.push_str("</g>\n");
-    let _ = writeln!(
-        s,
-        r##"<g id="cage-rest" fill="none" stroke="{CAGE_COLOUR}" stroke-width="{}" stroke-dasharray="{} {}">"##,
-        w(1.4),
-        w(6.0),
-        w(4.0)
-    );
+    let rest = Paint::stroke(style::CAGE, 1.4)
+        .dash("6 4")
+        .class("cage-rest");
     for d in &o.report.drags {
-        let pts: Vec<String> = d.hull_rest.iter().map(|&p| pt(p)).collect();
-        let _ = writeln!(s, r##"<polygon points="{}"/>"##, pts.join(" "));
+        elements::hull(c, f, &d.hull_rest, &rest);
     }
-    s.push_str("</g>\n");
-    let _ = writeln!(
-        s,
-        r##"<g id="cage-deformed" fill="none" stroke="{CAGE_COLOUR}" stroke-width="{}">"##,
-        w(1.8)
-    );
+    let deformed = Paint::stroke(style::CAGE, 1.8).class("cage-deformed");
     for d in &o.report.drags {
-        let pts: Vec<String> = d.hull.iter().map(|&p| pt(p)).collect();
-        let _ = writeln!(s, r##"<polygon points="{}"/>"##, pts.join(" "));
+        elements::hull(c, f, &d.hull, &deformed);
     }
-    s.push_str("</g>\n");
 }
 
-pub fn instants(s: &mut String, o: &Outcome, at_s: &[f64], t0: f64, t1: f64, k: f64) {
+/// Everyone's position at each of `at_s`, before (white dots) and after (dots in
+/// the time colour), joined where they differ.
+pub fn instants(c: &mut Canvas, f: &Frame, o: &Outcome, at_s: &[f64], t0: f64, t1: f64) {
     if at_s.is_empty() {
         return;
     }
-    let r = mm(3.5 / k);
-    let _ = writeln!(
-        s,
-        r##"<g id="instants" stroke-width="{}">"##,
-        mm((1.0 / k).max(0.001))
-    );
+    let joint = Paint::stroke(style::PATH, 1.0).class("moved-by");
+    let before = Paint::fill_stroke(style::PLOT, style::AGENT_START, 1.0).class("before-at");
     for &t in at_s {
-        let c = time_colour((t - t0) / (t1 - t0));
+        let after =
+            Paint::fill_stroke(&time((t - t0) / (t1 - t0)), style::INK, 1.0).class("after-at");
         for (b, a) in o.before.tracks.iter().zip(&o.after.tracks) {
             let pb = b.position_at(t);
             let pa = a.position_at(t);
             if let (Some(p), Some(q)) = (pb, pa) {
                 if (p - q).norm() > 0.01 {
-                    let _ = writeln!(
-                        s,
-                        r##"<line x1="{}" y1="{}" x2="{}" y2="{}" stroke="#555"/>"##,
-                        mm(p.x),
-                        mm(p.y),
-                        mm(q.x),
-                        mm(q.y)
-                    );
+                    c.line(f.pt(p), f.pt(q), &joint);
                 }
             }
             if let Some(p) = pb {
-                let _ = writeln!(
-                    s,
-                    r##"<circle cx="{}" cy="{}" r="{r}" fill="#ffffff" stroke="#777"/>"##,
-                    mm(p.x),
-                    mm(p.y)
-                );
+                c.circle(f.pt(p), 3.5, &before);
             }
             if let Some(q) = pa {
-                let _ = writeln!(
-                    s,
-                    r##"<circle cx="{}" cy="{}" r="{r}" fill="{c}" stroke="#222"/>"##,
-                    mm(q.x),
-                    mm(q.y)
-                );
+                c.circle(f.pt(q), 3.5, &after);
             }
         }
     }
-    s.push_str("</g>\n");
 }
 
-pub fn drags_and_fixes(s: &mut String, o: &Outcome, k: f64, w: &impl Fn(f64) -> String) {
-    let mut arrows = String::new();
-    let mut fixed = String::new();
-    let head = 10.0 / k;
+/// Each drag as a handle dot and an arrow to where it went; fixed places as squares.
+pub fn drags_and_fixes(c: &mut Canvas, f: &Frame, o: &Outcome) {
+    const HEAD_PX: f64 = 10.0;
+    let ink = "#111111";
+    let handle = Paint::fill(ink).class("handle");
+    let shaft = Paint::stroke(ink, 2.2).class("drag");
+    let head = Paint::fill_stroke(ink, ink, 2.2).class("drag");
+    let fixed = Paint::fill_stroke(style::FIXED, style::FIXED, 2.0)
+        .fill_opacity(0.25)
+        .class("fixed");
     for (op, _) in &o.script.ops {
-        match op {
-            Op::Drag { from, to, .. } => {
-                let d = *to - *from;
-                let len = d.norm();
-                let _ = writeln!(
-                    arrows,
-                    r##"<circle cx="{}" cy="{}" r="{}" fill="#111"/>"##,
-                    mm(from.x),
-                    mm(from.y),
-                    mm(3.0 / k)
-                );
-                if len < 1e-6 {
-                    continue;
-                }
-                let u = d / len;
-                let n = Vec2::new(-u.y, u.x);
-                let back = *to - u * head.min(len);
-                let _ = writeln!(
-                    arrows,
-                    r##"<line x1="{}" y1="{}" x2="{}" y2="{}"/>"##,
-                    mm(from.x),
-                    mm(from.y),
-                    mm(back.x),
-                    mm(back.y)
-                );
-                let (l, r) = (back + n * head * 0.45, back - n * head * 0.45);
-                let _ = writeln!(
-                    arrows,
-                    r##"<polygon points="{} {} {}" fill="#111"/>"##,
-                    pt(*to),
-                    pt(l),
-                    pt(r)
-                );
+        if let Op::Drag { from, to, .. } = op {
+            let (a, b) = (f.pt(*from), f.pt(*to));
+            c.circle(a, 3.0, &handle);
+            let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+            let len = dx.hypot(dy);
+            if len < 1e-6 * f.px_per_m {
+                continue;
             }
-            Op::Fix(v) => {
-                let h = 5.0 / k;
-                for p in v {
-                    let _ = writeln!(
-                        fixed,
-                        r##"<rect x="{}" y="{}" width="{}" height="{}"/>"##,
-                        mm(p.x - h),
-                        mm(p.y - h),
-                        mm(2.0 * h),
-                        mm(2.0 * h)
-                    );
-                }
-            }
-            _ => {}
+            let (ux, uy) = (dx / len, dy / len);
+            let back_len = HEAD_PX.min(len);
+            let back = (b.0 - ux * back_len, b.1 - uy * back_len);
+            c.line(a, back, &shaft);
+            let (nx, ny) = (-uy * HEAD_PX * 0.45, ux * HEAD_PX * 0.45);
+            c.polygon(
+                [b, (back.0 + nx, back.1 + ny), (back.0 - nx, back.1 - ny)],
+                &head,
+            );
         }
     }
-    if !arrows.is_empty() {
-        let _ = writeln!(
-            s,
-            r##"<g id="drags" stroke="#111" stroke-width="{}">"##,
-            w(2.2)
-        );
-        s.push_str(&arrows);
-        s.push_str("</g>\n");
-    }
-    if !fixed.is_empty() {
-        let _ = writeln!(
-            s,
-            r##"<g id="fixed" fill="{FIXED_BLUE}" fill-opacity="0.25" stroke="{FIXED_BLUE}" stroke-width="{}">"##,
-            w(2.0)
-        );
-        s.push_str(&fixed);
-        s.push_str("</g>\n");
+    for (op, _) in &o.script.ops {
+        if let Op::Fix(v) = op {
+            for p in v {
+                let (x, y) = f.pt(*p);
+                c.rect(x - 5.0, y - 5.0, 10.0, 10.0, &fixed);
+            }
+        }
     }
 }
 
-pub fn collisions(s: &mut String, o: &Outcome, k: f64, w: &impl Fn(f64) -> String) {
-    let r = mm(6.0 / k);
-    let _ = writeln!(
-        s,
-        r##"<g id="collisions-before" fill="none" stroke="{COLLISION_RED}" stroke-width="{}">"##,
-        w(1.6)
-    );
+/// The closest places of the collisions before (hollow rings) and after (filled).
+pub fn collisions(c: &mut Canvas, f: &Frame, o: &Outcome) {
+    let before = Paint::stroke(style::ALERT, 1.6).class("collision-before");
     for e in &o.collisions_before.events {
-        let p = e.closest.place();
-        let _ = writeln!(
-            s,
-            r##"<circle cx="{}" cy="{}" r="{r}"/>"##,
-            mm(p.x),
-            mm(p.y)
-        );
+        c.circle(f.pt(e.closest.place()), 6.0, &before);
     }
-    s.push_str("</g>\n");
-    let _ = writeln!(
-        s,
-        r##"<g id="collisions-after" fill="{COLLISION_RED}" stroke="#7a0000" stroke-width="{}">"##,
-        w(0.8)
-    );
-    let r = mm(4.0 / k);
+    let after = Paint::fill_stroke(style::ALERT, COLLISION_DARK, 0.8).class("collision-after");
     for e in &o.collisions_after.events {
-        let p = e.closest.place();
-        let _ = writeln!(
-            s,
-            r##"<circle cx="{}" cy="{}" r="{r}"/>"##,
-            mm(p.x),
-            mm(p.y)
-        );
+        c.circle(f.pt(e.closest.place()), 4.0, &after);
     }
-    s.push_str("</g>\n");
 }
