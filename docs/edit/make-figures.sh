@@ -3,7 +3,12 @@
 # itself: `edit path` writes the groups (awk only renumbers the second group of
 # the crossing), `edit render` runs and draws every edit.
 #
-#   docs/edit/make-figures.sh        (from anywhere; builds target/release if missing)
+#   docs/edit/make-figures.sh [OUT_DIR]
+#
+# From anywhere; builds target/release if missing (CROWDTOUCH=PATH runs another
+# binary). The tracks and pictures go into docs/edit, or into OUT_DIR with the same
+# names (the edit scripts *.ron are still read from docs/edit; docs/edit is then
+# left as it is).
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -11,7 +16,9 @@ bin="${CROWDTOUCH:-$root/target/release/crowdtouch}"
 if [ ! -x "$bin" ]; then
     (cd "$root" && cargo build --release)
 fi
-cd "$here"
+out="${1:-$here}"
+mkdir -p "$out"
+cd "$out"
 
 # One group of 9 (three rows of three, 0.6 m apart) walking east for 9 m, in the
 # open part of the corridor scene.
@@ -35,13 +42,13 @@ rm -f /tmp/crowdtouch-east.$$.jsonl /tmp/crowdtouch-north.$$.jsonl
     -o corridor-group.jsonl --force
 
 r() { "$bin" edit render "$@" --force; }
-r group.jsonl --ops a-drag.ron --title "(a) a drag without fixed points (eq. 1)" -o a-drag.svg
-r group.jsonl --ops b-drag-fixed.ron --title "(b) a drag with the ends fixed (eq. 6)" -o b-drag-fixed.svg
-r group.jsonl --ops c-retime.ron --at 4 --title "(c) a retime (section 3.3): everyone at 4 s, before and after" -o c-retime.svg
+r group.jsonl --ops "$here/a-drag.ron" --title "(a) a drag without fixed points (eq. 1)" -o a-drag.svg
+r group.jsonl --ops "$here/b-drag-fixed.ron" --title "(b) a drag with the ends fixed (eq. 6)" -o b-drag-fixed.svg
+r group.jsonl --ops "$here/c-retime.ron" --at 4 --title "(c) a retime (section 3.3): everyone at 4 s, before and after" -o c-retime.svg
 r crossing.jsonl --avoid-collisions --threshold 0.4 --at 3.5 \
     --title "(d) two crossing groups kept 0.4 m apart by retiming (section 4.1.2)" -o d-avoid-collisions.svg
 r corridor-group.jsonl --avoid-obstacles corridor --at 6 \
     --title "(e) a group wider than the passage kept out of the walls (section 4.2)" -o e-avoid-obstacles.svg
-r "$root/tests/fixtures/crowd/crowds_zara01.txt" --ops f-zara.ron \
+r "$root/tests/fixtures/crowd/crowds_zara01.txt" --ops "$here/f-zara.ron" \
     --title "(f) UCY zara01: the samples of 100-130 s dragged from (5, 6) to (6, 7)" -o f-zara.svg
-r group.jsonl --ops g-turn.ron --title "(g) the path's start held, its end dragged 90 degrees around it (eq. 6)" -o g-turn.svg
+r group.jsonl --ops "$here/g-turn.ron" --title "(g) the path's start held, its end dragged 90 degrees around it (eq. 6)" -o g-turn.svg
