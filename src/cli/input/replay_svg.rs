@@ -123,7 +123,7 @@ impl Trace {
             }
         }
         c.caption(
-            (6.0, h + 19.0),
+            (6.0, (h + 19.0).round()),
             &format!("{title}: mesh before (grey), after (blue), fingers (red)"),
         );
         c.finish()

@@ -92,13 +92,15 @@ pub fn run_picture(plan: &TransformPlan, rec: &Recorded, radius_m: f64, title: &
         }
     }
     let sm = &rec.summary;
-    c.title((8.0, h + 18.0), title);
+    // Whole pixels under the drawing, however tall it is.
+    let y = (h + 18.0).round();
+    c.title((8.0, y), title);
     c.caption(
-        (8.0, h + 35.0),
+        (8.0, y + 17.0),
         "grey dots: sources; grey rings: targets (agent size); lines: paths by subgroup; filled: where agents ended",
     );
     c.caption(
-        (8.0, h + 52.0),
+        (8.0, y + 34.0),
         &format!(
             "{:.1} % arrived in {:.1} s simulated, {} overlapping pairs, closest two agents {:.3} m; 1 m = {k:.0} px",
             100.0 * sm.arrived_fraction,
