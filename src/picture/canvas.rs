@@ -218,6 +218,11 @@ impl Canvas {
             let _ = writeln!(self.out, "<g {attrs}>");
         }
     }
+    /// A tooltip for the innermost open group (an SVG `<title>`), escaped.
+    pub fn tooltip(&mut self, text: &str) {
+        let _ = writeln!(self.out, "<title>{}</title>", escape(text));
+    }
+
     /// Closes the innermost open group.
     pub fn close_group(&mut self) {
         self.out.push_str("</g>\n");

@@ -297,24 +297,45 @@ pub fn legend_entry(
     tx
 }
 
-/// A colour bar of `bands` equal blocks from `colour(0)` to `colour(1)`, left to
-/// right, with the bar's box.
+/// Which way a colour bar runs from `colour(0)` to `colour(1)`.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Direction {
+    /// Left to right.
+    Across,
+    /// Top to bottom.
+    Down,
+}
+
+/// A colour bar of `bands` equal blocks from `colour(0)` to `colour(1)`, with the
+/// bar's box; `at` is its top left corner and `size` its width and height (px).
 pub fn colour_bar(
     c: &mut Canvas,
     at: (f64, f64),
     size: (f64, f64),
     bands: usize,
+    direction: Direction,
     colour: &dyn Fn(f64) -> String,
 ) {
     let (x, y) = at;
     let (w, h) = size;
     let n = bands.max(1);
-    let bw = w / n as f64;
+    c.open_group(r#"class="colour-bar" shape-rendering="crispEdges""#);
     for k in 0..n {
         let u = (k as f64 + 0.5) / n as f64;
-        c.rect(x + k as f64 * bw, y, bw, h, &Paint::fill(&colour(u)));
+        let paint = Paint::fill(&colour(u));
+        match direction {
+            Direction::Across => {
+                let bw = w / n as f64;
+                c.rect(x + k as f64 * bw, y, bw, h, &paint);
+            }
+            Direction::Down => {
+                let bh = h / n as f64;
+                c.rect(x, y + k as f64 * bh, w, bh, &paint);
+            }
+        }
     }
-    c.rect(x, y, w, h, &Paint::stroke(style::AXIS, style::HAIRLINE_PX));
+    c.close_group();
+    c.rect(x, y, w, h, &Paint::stroke(style::INK, 0.8));
 }
 
 #[cfg(test)]
@@ -386,9 +407,14 @@ mod tests {
     #[test]
     fn a_colour_bar_has_one_block_per_band_and_a_box() {
         let mut c = Canvas::new(100.0, 50.0);
-        colour_bar(&mut c, (0.0, 0.0), (60.0, 10.0), 6, &|u| {
-            super::super::scale::heat(u)
-        });
+        colour_bar(
+            &mut c,
+            (0.0, 0.0),
+            (60.0, 10.0),
+            6,
+            Direction::Across,
+            &|u| super::super::scale::heat(u),
+        );
         let s = c.finish();
         assert_eq!(s.matches("<rect").count(), 1 + 6 + 1);
     }

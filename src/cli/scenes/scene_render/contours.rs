@@ -1,19 +1,4 @@
-//! Iso-time contours (marching squares) and the 1–2–5 step between them.
-
-/// A step of 1, 2 or 5 × 10ⁿ giving at most `max_ticks` intervals up to `max`.
-pub fn nice_step(max: f64, max_ticks: usize) -> f64 {
-    if !(max.is_finite() && max > 0.0) {
-        return 1.0;
-    }
-    let raw = max / max_ticks.max(1) as f64;
-    let mag = 10f64.powf(raw.log10().floor());
-    for m in [1.0, 2.0, 5.0, 10.0] {
-        if m * mag >= raw {
-            return m * mag;
-        }
-    }
-    10.0 * mag
-}
+//! Iso-time contours (marching squares).
 
 /// Marching squares over a lattice of values (`+inf` = no value): the segments of
 /// the iso-line at `level`, in lattice coordinates (corner `(i, j)` at `(i, j)`).
@@ -75,16 +60,6 @@ pub fn iso_segments(vals: &[f64], nx: usize, ny: usize, level: f64) -> Vec<[(f64
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn nice_steps_are_1_2_5() {
-        assert_eq!(nice_step(10.0, 8), 2.0);
-        assert_eq!(nice_step(8.0, 8), 1.0);
-        assert_eq!(nice_step(0.9, 8), 0.2);
-        assert_eq!(nice_step(35.0, 8), 5.0);
-        assert_eq!(nice_step(16.0 / 4.0, 1), 5.0);
-        assert_eq!(nice_step(f64::NAN, 8), 1.0);
-    }
 
     #[test]
     fn iso_segments_of_a_plane_are_one_straight_line() {

@@ -39,7 +39,6 @@ mod legend;
 mod picture;
 mod routes;
 mod svg;
-mod text;
 mod view;
 
 pub use args::{render, RenderArgs};
