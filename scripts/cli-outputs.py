@@ -17,6 +17,11 @@ Usage:
       Byte comparison of every file; prints each differing file with a short
       unified diff, then `N entries, M identical, K differ`. Exit 1 when an
       entry differs or exists on one side only.
+      With --pictures-by-data, an SVG that differs in bytes is compared by
+      what it draws instead (tests/pictures.rs, run over the two
+      directories), and the size of a picture a command prints ("(N bytes)",
+      "N bytes") is not compared when that entry's SVG differs: for a change
+      that restyles pictures and must leave everything else as it was.
   scripts/cli-outputs.py list
       Print every entry with its command line.
 
@@ -62,6 +67,7 @@ times decide the rest of their output.
 
 import argparse
 import difflib
+import filecmp
 import hashlib
 import os
 import re
@@ -830,6 +836,31 @@ def show_difference(rel, a, b, max_lines):
     return True
 
 
+PICTURE_SIZE = re.compile(rb"\b\d+ bytes\b")
+
+
+def same_but_picture_size(a, b):
+    """Whether two files are the same once every "N bytes" is blanked."""
+    with open(a, "rb") as f:
+        da = f.read()
+    with open(b, "rb") as f:
+        db = f.read()
+    return PICTURE_SIZE.sub(b"<N> bytes", da) == PICTURE_SIZE.sub(b"<N> bytes", db)
+
+
+def pictures_by_data(a, b):
+    """Runs the folder comparison of tests/pictures.rs over two run directories."""
+    env = dict(os.environ, CROWDTOUCH_PICTURES_BEFORE=os.path.abspath(a), CROWDTOUCH_PICTURES_AFTER=os.path.abspath(b))
+    cmd = ["cargo", "test", "--release", "--quiet", "--test", "pictures", "--",
+           "--ignored", "--nocapture", "pictures_in_two_folders_show_the_same_data"]
+    print("pictures by what they draw: %s" % " ".join(cmd))
+    run = subprocess.run(cmd, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    for line in run.stdout.splitlines():
+        if "same data" in line or "DIFFERS" in line or "MISSING" in line or "pictures:" in line or "only" in line:
+            print("    " + clip(line))
+    return run.returncode == 0
+
+
 def cmd_compare(args):
     for d in (args.a, args.b):
         if not os.path.isdir(d):
@@ -838,6 +869,7 @@ def cmd_compare(args):
     names = sorted(set(ea) | set(eb))
     identical = differ = 0
     missing = []
+    pictures, sized = [], []
     for n in names:
         if n not in ea or n not in eb:
             side, files = (args.a, ea[n]) if n in ea else (args.b, eb[n])
@@ -846,10 +878,18 @@ def cmd_compare(args):
             continue
         fa, fb = ea[n], eb[n]
         same = True
-        for rel in sorted(set(fa) | set(fb)):
+        rels = sorted(set(fa) | set(fb))
+        restyled = args.pictures_by_data and any(
+            r.endswith(".svg") and r in fa and r in fb and not filecmp.cmp(fa[r], fb[r], shallow=False) for r in rels
+        )
+        for rel in rels:
             if rel not in fa or rel not in fb:
                 print("--- only in %s: %s" % (args.a if rel in fa else args.b, rel))
                 same = False
+            elif restyled and rel.endswith(".svg"):
+                pictures.append(rel)
+            elif restyled and not filecmp.cmp(fa[rel], fb[rel], shallow=False) and same_but_picture_size(fa[rel], fb[rel]):
+                sized.append(rel)
             elif show_difference(rel, fa[rel], fb[rel], args.max_lines):
                 same = False
         if same:
@@ -859,6 +899,12 @@ def cmd_compare(args):
     for m in missing:
         print("--- entry %s" % m)
     print("%d entries, %d identical, %d differ" % (len(names), identical, differ))
+    if args.pictures_by_data:
+        print("%d pictures differ in bytes (compared by what they draw below); %d outputs differ only in "
+              "the size of their picture" % (len(pictures), len(sized)))
+        if pictures and not pictures_by_data(args.a, args.b):
+            print("pictures: some no longer show the same data")
+            return 1
     return 1 if differ else 0
 
 
@@ -886,6 +932,8 @@ def main():
     c.add_argument("a", metavar="DIR_A")
     c.add_argument("b", metavar="DIR_B")
     c.add_argument("--max-lines", type=int, default=20, help="diff lines shown per file (default 20)")
+    c.add_argument("--pictures-by-data", action="store_true",
+                   help="compare SVGs by what they draw (tests/pictures.rs), not their bytes")
     sub.add_parser("list", help="print the entries")
     args = ap.parse_args()
     return {"run": cmd_run, "compare": cmd_compare, "list": cmd_list}[args.command](args)
