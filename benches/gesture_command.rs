@@ -17,7 +17,9 @@
 
 use criterion::{black_box, criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion};
 use crowdtouch::config::Config;
-use crowdtouch::crowd::motion::{build_library, BuildParams, GestureRequest, Synthesiser};
+use crowdtouch::crowd::motion::{
+    build_library, ApplyMode, BuildParams, GestureRequest, KeepParams, Synthesiser,
+};
 use crowdtouch::engine::{search_params, Engine};
 use crowdtouch::gesture::knn::Searcher;
 use crowdtouch::gesture::library::{read_library, shipped, write_library, MotionClass};
@@ -44,6 +46,12 @@ fn requests(rec: &Arc<Recogniser>, cfg: &Config) -> Vec<GestureRequest> {
                 search: search_params(cfg),
                 seed: cfg.gestures.seed ^ i as u64,
                 speed_m_s: cfg.gestures.motion_speed_m_s,
+                // The default, `gestures.apply: keep_formation`.
+                apply: ApplyMode::KeepFormation,
+                keep: KeepParams {
+                    radius_m: cfg.crowd.agent_radius_m,
+                    ..KeepParams::default()
+                },
             }
         })
         .collect()

@@ -2,8 +2,11 @@
 //! ten classes, made by the generator of human-like gestures, written as a JSONL
 //! recording and replayed through the engine on a virtual clock, is recognised as
 //! the class drawn, plays a crowd motion (`gesture_motion` approach → follow → done)
-//! that does what the class says, and leaves a mesh around the crowd where it
-//! stopped (gesture-driven-crowd-motion sections 5–7).
+//! that does what the class says (gesture-driven-crowd-motion sections 5–7), keeps
+//! the crowd's formation (issue 34: `gestures.apply: keep_formation`, the default;
+//! each part's for a split) and leaves a mesh over the formation moved, on which
+//! the agents settle. One test plays the paper's way (`as_sampled`): the mesh is
+//! then rebuilt around the crowd where it stopped.
 //!
 //! Every gesture is drawn with 3 fingers (2 per hand for the two-hand classes),
 //! 150 mm, on the default config's 1210 × 680 mm glass, left of the crowd: the
@@ -35,10 +38,92 @@ const GLASS_MM: (f64, f64) = (1210.0, 680.0);
 /// config's 3 s), the motion (a few seconds at 1 m/s) and the remesh.
 const SETTLE_S: f64 = 16.0;
 
-/// How far an agent may still move once the mesh is rebuilt around the crowd (m):
-/// an agent's diameter (agents still moving at the motion's end settle, and
-/// overlapping ones are pushed apart).
-const DRIFT_M: f64 = 0.3;
+/// How far an agent may be from the rebuilt mesh's vertices (its goals) once the
+/// crowd has settled on it (m).
+const SETTLED_M: f64 = 0.05;
+
+/// `gestures.min_piece_agents` of the default config.
+const MIN_PIECE_AGENTS: usize = crowdtouch::config::DEFAULT_MIN_PIECE_AGENTS as usize;
+
+/// Whether the class divides the crowd in two.
+fn split_class(c: MotionClass) -> bool {
+    matches!(c, MotionClass::Split | MotionClass::SplitThenTranslate)
+}
+
+/// Whether `p` lies inside the closed polygon `poly` (even–odd rule).
+fn point_in_polygon(p: Vec2, poly: &[Vec2]) -> bool {
+    let mut inside = false;
+    for k in 0..poly.len() {
+        let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
+        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+/// The two groups of `pts` (2-means from the ends of the principal axis).
+fn two_parts(pts: &[Vec2]) -> Vec<Vec<usize>> {
+    let c = centroid(pts.iter().copied());
+    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+    for p in pts {
+        let d = p - c;
+        sxx += d.x * d.x;
+        sxy += d.x * d.y;
+        syy += d.y * d.y;
+    }
+    let axis = unit(0.5 * (2.0 * sxy).atan2(sxx - syy));
+    let mut label: Vec<bool> = pts.iter().map(|p| (p - c).dot(&axis) > 0.0).collect();
+    for _ in 0..50 {
+        let mean = |side: bool| {
+            centroid(
+                pts.iter()
+                    .zip(&label)
+                    .filter(|(_, &l)| l == side)
+                    .map(|(p, _)| *p),
+            )
+        };
+        let (m0, m1) = (mean(false), mean(true));
+        let next: Vec<bool> = pts
+            .iter()
+            .map(|p| (p - m1).norm_squared() < (p - m0).norm_squared())
+            .collect();
+        if next == label {
+            break;
+        }
+        label = next;
+    }
+    [false, true]
+        .map(|side| (0..pts.len()).filter(|&i| label[i] == side).collect())
+        .into_iter()
+        .collect()
+}
+
+/// The RMS distance between `b` and `a` moved by the least-squares similarity
+/// (turn, scale, shift) onto it, over `a`'s RMS radius: 0 when `b` is `a`'s
+/// formation moved.
+fn procrustes_residual(a: &[Vec2], b: &[Vec2]) -> f64 {
+    let (ca, cb) = (centroid(a.iter().copied()), centroid(b.iter().copied()));
+    let (mut dot, mut cross, mut var) = (0.0, 0.0, 0.0);
+    for (p, q) in a.iter().zip(b) {
+        let (p, q) = (p - ca, q - cb);
+        dot += p.dot(&q);
+        cross += p.x * q.y - p.y * q.x;
+        var += p.norm_squared();
+    }
+    let (theta, s) = (cross.atan2(dot), (dot * dot + cross * cross).sqrt() / var);
+    let (sn, cs) = theta.sin_cos();
+    let err: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(p, q)| {
+            let d = p - ca;
+            let moved = cb + s * Vec2::new(cs * d.x - sn * d.y, sn * d.x + cs * d.y);
+            (moved - q).norm_squared()
+        })
+        .sum::<f64>();
+    (err / a.len() as f64).sqrt() / (var / a.len() as f64).sqrt()
+}
 
 fn style(class: MotionClass, orientation_rad: f64, clockwise: bool) -> GestureStyle {
     let two_hands = matches!(
@@ -82,7 +167,11 @@ fn replay_file(path: &Path) -> Run {
 /// [`replay_file`]; without `motion`, a gesture that plays none: ticking on until
 /// `AFTER_MESH_S` after its end.
 fn replay(path: &Path, motion: bool) -> Run {
-    let mut cfg = Config::embedded_default();
+    replay_with(path, motion, Config::embedded_default())
+}
+
+/// [`replay`] with `cfg`.
+fn replay_with(path: &Path, motion: bool, mut cfg: Config) -> Run {
     // Timer ticks at 60 Hz (the recording's frames tick at its 120 Hz): half the
     // work of a debug build; motions are timed in seconds, not ticks.
     cfg.pipeline.tick_hz = 60.0;
@@ -246,7 +335,9 @@ fn check_common(class: MotionClass, p: &Played) -> Vec<Vec<Vec2>> {
         ],
         "{class}"
     );
-    // After `done` a mesh arrives whose vertices are at the agents.
+    // After `done` a mesh arrives, built where the motion planned the crowd (the
+    // formation moved, `gestures.apply: keep_formation`), and the agents settle
+    // onto its vertices: the scatter the push-apart left is gone.
     let done_t = run
         .events
         .iter()
@@ -265,33 +356,67 @@ fn check_common(class: MotionClass, p: &Played) -> Vec<Vec<Vec2>> {
         .find(|m| run.at(m.seq).t >= done_t)
         .unwrap_or_else(|| panic!("{class}: no mesh after the motion"));
     let at_mesh = run.at(mesh.seq);
-    let worst = at_mesh
-        .agents
-        .iter()
-        .map(|a| {
-            mesh.vertices
-                .iter()
-                .map(|v| (v - a.pos).norm())
-                .fold(f64::INFINITY, f64::min)
-        })
-        .fold(0.0, f64::max);
-    assert!(
-        worst < 0.01,
-        "{class}: an agent is {worst:.3} m from the rebuilt mesh's vertices"
-    );
-    // Touch control holds the crowd where the mesh was built.
     let last = run.last();
-    let drift = last
-        .agents
-        .iter()
-        .zip(&at_mesh.agents)
-        .map(|(a, b)| (a.pos - b.pos).norm())
-        .fold(0.0, f64::max);
-    eprintln!("{class}: agents drift up to {drift:.3} m after the mesh");
-    assert!(
-        drift < DRIFT_M,
-        "{class}: agents drift {drift:.3} m after the mesh"
+    let off_mesh = |agents: &[crowdtouch::vocab::AgentView]| {
+        agents
+            .iter()
+            .map(|a| {
+                mesh.vertices
+                    .iter()
+                    .map(|v| (v - a.pos).norm())
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max)
+    };
+    let (when_built, settled) = (off_mesh(&at_mesh.agents), off_mesh(&last.agents));
+    eprintln!(
+        "{class}: agents up to {when_built:.3} m off the rebuilt mesh's vertices when it \
+         arrives, {settled:.3} m {AFTER_MESH_S} s later"
     );
+    assert!(
+        settled < SETTLED_M,
+        "{class}: an agent is {settled:.3} m from the rebuilt mesh's vertices {AFTER_MESH_S} s after it"
+    );
+    // Every piece of the mesh holds at least `gestures.min_piece_agents` agents.
+    let pieces = mesh.outlines.len().max(1);
+    if pieces > 1 {
+        for (k, outline) in mesh.outlines.iter().enumerate() {
+            let poly: Vec<Vec2> = outline.iter().map(|&v| mesh.vertices[v as usize]).collect();
+            let inside = last
+                .agents
+                .iter()
+                .filter(|a| point_in_polygon(a.pos, &poly))
+                .count();
+            assert!(
+                inside + 1 >= MIN_PIECE_AGENTS,
+                "{class}: mesh piece {k} of {pieces} holds {inside} agents"
+            );
+        }
+    }
+    // The formation is kept: the crowd after is the crowd before moved by one
+    // similarity (each part's, for a split), within 15 % of its RMS radius.
+    let before = positions(run, 0);
+    let after: Vec<Vec2> = last.agents.iter().map(|a| a.pos).collect();
+    let parts: Vec<Vec<usize>> = if split_class(class) {
+        two_parts(&after)
+    } else {
+        vec![(0..after.len()).collect()]
+    };
+    for (k, part) in parts.iter().enumerate() {
+        let a: Vec<Vec2> = part.iter().map(|&i| before[i]).collect();
+        let b: Vec<Vec2> = part.iter().map(|&i| after[i]).collect();
+        let r = procrustes_residual(&a, &b);
+        eprintln!(
+            "{class}: part {k} of {}: Procrustes residual {:.1} % of its RMS radius",
+            parts.len(),
+            100.0 * r
+        );
+        assert!(
+            r <= 0.15,
+            "{class}: part {k}'s formation is lost: residual {:.1} % of its RMS radius",
+            100.0 * r
+        );
+    }
     let n = run.snapshots[0].agents.len();
     let ticks: Vec<usize> = (0..run.snapshots.len())
         .step_by(4)
@@ -375,6 +500,30 @@ fn twist_turns_the_crowd_the_way_of_the_fingers() {
     }
 }
 
+/// The most a crowd can gather with its formation kept: the scale at which its
+/// nearest neighbours stand two body radii apart (the default crowd, 100 agents in
+/// 4 × 3 m with 0.15 m radii, stands 0.33 m apart: 0.9). A gathering class must
+/// reach 0.8 or, on a crowd that dense, within 0.05 of that floor.
+fn gather_bound(run: &Run) -> f64 {
+    let start = positions(run, 0);
+    let mut nn: Vec<f64> = start
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            start
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, q)| (q - p).norm())
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    nn.sort_by(f64::total_cmp);
+    let radius = Config::embedded_default().crowd.agent_radius_m;
+    let floor = (2.0 * radius / nn[nn.len() / 2]).min(1.0);
+    0.8f64.max(floor + 0.05)
+}
+
 #[test]
 fn contract_gathers_the_crowd() {
     let c = MotionClass::Contract;
@@ -382,9 +531,10 @@ fn contract_gathers_the_crowd() {
     let tracks = check_common(c, &p);
     let m = measure(&tracks, &vec![0; tracks.len()]);
     eprintln!("{c}: {m:?}");
+    let bound = gather_bound(&p.run);
     assert!(
-        m.rms_ratio < 0.8,
-        "{c}: RMS radius ratio {:.2}",
+        m.rms_ratio < bound,
+        "{c}: RMS radius ratio {:.2} (at most {bound:.2})",
         m.rms_ratio
     );
 }
@@ -410,7 +560,11 @@ fn join_brings_the_halves_together() {
     let tracks = check_common(c, &p);
     let group = halves(&p.run, unit(0.0));
     let r = group_ratio(c, &tracks, &group);
-    assert!(r < 0.8, "{c}: halves' distance ratio {r:.2}");
+    let bound = gather_bound(&p.run);
+    assert!(
+        r < bound,
+        "{c}: halves' distance ratio {r:.2} (at most {bound:.2})"
+    );
 }
 
 #[test]
@@ -445,7 +599,11 @@ fn translate_then_join_moves_on_and_joins() {
     let r = group_ratio(c, &tracks, &group);
     let m = measure(&tracks, &group);
     eprintln!("{c}: {m:?}, travel {:?}", finger_travel(&p.tracks));
-    assert!(r < 0.8, "{c}: halves' distance ratio {r:.2}");
+    let bound = gather_bound(&p.run);
+    assert!(
+        r < bound,
+        "{c}: halves' distance ratio {r:.2} (at most {bound:.2})"
+    );
     assert_moved_along(c, m.centroid_shift, finger_travel(&p.tracks));
 }
 
@@ -472,10 +630,77 @@ fn twist_while_contracting_turns_and_gathers() {
     let m = measure(&tracks, &vec![0; tracks.len()]);
     eprintln!("{c}: {m:?}");
     assert_turned(c, m.rotation_rad, true);
+    let bound = gather_bound(&p.run);
     assert!(
-        m.rms_ratio < 0.8,
-        "{c}: RMS radius ratio {:.2}",
+        m.rms_ratio < bound,
+        "{c}: RMS radius ratio {:.2} (at most {bound:.2})",
         m.rms_ratio
+    );
+}
+
+/// Played as the paper does (`gestures.apply: as_sampled`), a translate reshapes
+/// the crowd into the library crowd's shape on its way (the agents walk to sampled
+/// starts first), and the mesh is rebuilt around where the agents stopped: every
+/// agent on a vertex, and the crowd stays there.
+#[test]
+fn as_sampled_moves_the_crowd_and_meshes_it_where_it_stopped() {
+    let c = MotionClass::Translate;
+    let tracks = generate(c, &style(c, 0.4, true), 1501);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("translate.jsonl");
+    write_recording(&tracks, &path);
+    let mut cfg = Config::embedded_default();
+    cfg.gestures.apply = crowdtouch::config::GestureApply::AsSampled;
+    let run = replay_with(&path, true, cfg);
+    let done_t = run
+        .events
+        .iter()
+        .find_map(|e| match e {
+            Event::GestureMotion {
+                phase: MotionPhase::Done,
+                t,
+                ..
+            } => Some(*t),
+            _ => None,
+        })
+        .expect("the motion finishes");
+    let mesh = run
+        .meshes
+        .iter()
+        .find(|m| run.at(m.seq).t >= done_t)
+        .expect("a mesh after the motion");
+    let at_mesh = run.at(mesh.seq);
+    let worst = at_mesh
+        .agents
+        .iter()
+        .map(|a| {
+            mesh.vertices
+                .iter()
+                .map(|v| (v - a.pos).norm())
+                .fold(f64::INFINITY, f64::min)
+        })
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 0.01,
+        "an agent is {worst:.3} m from the rebuilt mesh's vertices"
+    );
+    let drift = run
+        .last()
+        .agents
+        .iter()
+        .zip(&at_mesh.agents)
+        .map(|(a, b)| (a.pos - b.pos).norm())
+        .fold(0.0, f64::max);
+    assert!(drift < 0.3, "agents drift {drift:.3} m after the mesh");
+    let shift = centroid(run.last().agents.iter().map(|a| a.pos))
+        - centroid(run.snapshots[0].agents.iter().map(|a| a.pos));
+    assert_moved_along(c, shift, finger_travel(&tracks));
+    let before = positions(&run, 0);
+    let after: Vec<Vec2> = run.last().agents.iter().map(|a| a.pos).collect();
+    let r = procrustes_residual(&before, &after);
+    eprintln!(
+        "as_sampled translate: Procrustes residual {:.1} % of the RMS radius",
+        100.0 * r
     );
 }
 

@@ -70,7 +70,30 @@ pub struct GesturesConfig {
     /// neighbour count `w` times (1 ..= 100) in the vote and the blend;
     /// `Replace` recognises a class that has people's gestures from those alone.
     pub collected: Collected,
+    /// How a recognised motion moves the crowd: `keep_formation` applies the
+    /// motion's translation, turn and scale (each part's, for a split or a crowd in
+    /// several parts) to the formation as it stands, with a bounded residual;
+    /// `as_sampled` is the paper's section 7.3 (agents walk to trajectory starts
+    /// sampled from the motion, then along them), which reshapes the crowd.
+    pub apply: GestureApply,
+    /// The mesh rebuilt after a motion has no piece of fewer agents: a smaller part
+    /// (a straggler) joins the nearest part (1..=1000).
+    pub min_piece_agents: u32,
 }
+
+/// How a gesture's motion moves the crowd (`gestures.apply`).
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GestureApply {
+    /// The motion's group part applied to the formation as it stands.
+    #[default]
+    KeepFormation,
+    /// Agents walk to sampled trajectory starts, then along the trajectories.
+    AsSampled,
+}
+
+/// Default `min_piece_agents`.
+pub const DEFAULT_MIN_PIECE_AGENTS: u32 = 5;
 
 /// How gestures people drew count against generated ones (`gestures.collected`).
 #[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -126,6 +149,8 @@ impl Default for GesturesConfig {
             motion_speed_m_s: DEFAULT_MOTION_SPEED_M_S,
             continuous: None,
             collected: DEFAULT_COLLECTED,
+            apply: GestureApply::KeepFormation,
+            min_piece_agents: DEFAULT_MIN_PIECE_AGENTS,
         }
     }
 }
@@ -233,6 +258,14 @@ impl GesturesConfig {
                 ),
             );
         }
+        check(
+            (1..=1000).contains(&self.min_piece_agents),
+            "min_piece_agents",
+            format!(
+                "the smallest mesh piece must be 1..=1000 agents, got {}",
+                self.min_piece_agents
+            ),
+        );
         check(
             (1..=MAX_K).contains(&self.k),
             "k",

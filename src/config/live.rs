@@ -171,6 +171,8 @@ pub const FIELDS: &[FieldClass] = &[
     live("gestures.seed", "from the next synthesis"),
     live("gestures.approach_timeout_s", "from the next motion"),
     live("gestures.motion_speed_m_s", "from the next motion"),
+    live("gestures.apply", "from the next motion; a motion under way plays on as it began"),
+    live("gestures.min_piece_agents", "from the next mesh rebuilt after a motion"),
     live(
         "gestures.collected",
         "the library is indexed again and swapped in for the next gesture",

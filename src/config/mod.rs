@@ -31,10 +31,11 @@ mod validate;
 pub use edit::set_calibration_matrix;
 pub use error::{ConfigIssue, EditError, Error};
 pub use gestures::{
-    Collected, ContinuousConfig, GestureWeights, GesturesConfig, DEFAULT_APPROACH_TIMEOUT_S,
-    DEFAULT_COLLECTED, DEFAULT_GMM_COMPONENTS, DEFAULT_K, DEFAULT_MAX_DURATION_S,
-    DEFAULT_MIN_DURATION_MS, DEFAULT_MIN_TRAVEL_MM, DEFAULT_MOTION_SPEED_M_S, MAX_COLLECTED_WEIGHT,
-    MAX_GMM_COMPONENTS, MAX_K,
+    Collected, ContinuousConfig, GestureApply, GestureWeights, GesturesConfig,
+    DEFAULT_APPROACH_TIMEOUT_S, DEFAULT_COLLECTED, DEFAULT_GMM_COMPONENTS, DEFAULT_K,
+    DEFAULT_MAX_DURATION_S, DEFAULT_MIN_DURATION_MS, DEFAULT_MIN_PIECE_AGENTS,
+    DEFAULT_MIN_TRAVEL_MM, DEFAULT_MOTION_SPEED_M_S, MAX_COLLECTED_WEIGHT, MAX_GMM_COMPONENTS,
+    MAX_K,
 };
 pub use inputs::{
     CalibrationConfig, DeviceInterface, DeviceSelect, InputConfig, DEFAULT_PALM_MAX_MM,

@@ -439,7 +439,14 @@ impl Engine {
             self.show_collect_item(now);
             return;
         }
-        self.start_motion(PlanOrigin::Demo { motion }, 0, class, s, now);
+        self.start_motion(
+            PlanOrigin::Demo { motion },
+            0,
+            class,
+            s,
+            super::gesture_state::Kept::default(),
+            now,
+        );
         let plan = self.gestures.plan.clone();
         if let Some(c) = self.collect.as_mut() {
             c.demo_plan = plan;

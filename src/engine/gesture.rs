@@ -26,7 +26,7 @@
 //! the crowd in hand); so do a reset, a resize and a newer gesture's motion. Nothing
 //! here allocates in a steady tick: requests and plans are built once per gesture.
 
-use super::gesture_state::{phase_of, PendingEnd, Playing};
+use super::gesture_state::{phase_of, Kept, PendingEnd, Playing};
 use super::state::Engine;
 use crate::crowd::motion::{
     FollowPhase, Follower, GestureJob, GestureMotion, GestureRequest, PreparedGesture,
@@ -142,6 +142,8 @@ impl Engine {
             search: g.search,
             seed: g.seed ^ u64::from(id).wrapping_mul(0x9e37_79b9_7f4a_7c15),
             speed_m_s: g.speed_m_s,
+            apply: g.apply,
+            keep: g.keep,
         };
         let end = PendingEnd {
             id,
@@ -213,7 +215,11 @@ impl Engine {
                     if disabled {
                         log::info!("gesture {}: {} is disabled", p.id, m.class_name);
                     } else {
-                        self.play(p.id, m.class_name, m.synthesis, now);
+                        let kept = Kept {
+                            parts: m.parts,
+                            ends_m: m.ends_m,
+                        };
+                        self.play(p.id, m.class_name, m.synthesis, kept, now);
                     }
                 }
             }
@@ -253,7 +259,11 @@ impl Engine {
                         return;
                     }
                     self.events.push(event);
-                    self.play(p.id, m.class_name, m.synthesis, now);
+                    let kept = Kept {
+                        parts: m.parts,
+                        ends_m: m.ends_m,
+                    };
+                    self.play(p.id, m.class_name, m.synthesis, kept, now);
                     return;
                 }
             }
@@ -268,6 +278,7 @@ impl Engine {
         id: u32,
         class: String,
         synthesis: crate::crowd::motion::Synthesis,
+        kept: Kept,
         now: Micros,
     ) {
         if self.edits.active() {
@@ -283,7 +294,7 @@ impl Engine {
             let _ = self.request_transform(&name, None, None, heading, now);
             return;
         }
-        self.start_motion(PlanOrigin::Gesture { id }, id, class, synthesis, now);
+        self.start_motion(PlanOrigin::Gesture { id }, id, class, synthesis, kept, now);
     }
 
     /// Starts a synthesised motion on the crowd (a gesture's, or a `library
@@ -295,6 +306,7 @@ impl Engine {
         id: u32,
         class: String,
         synthesis: crate::crowd::motion::Synthesis,
+        kept: Kept,
         now: Micros,
     ) {
         self.cancel_gesture_motion(now);
@@ -346,6 +358,7 @@ impl Engine {
             class,
             follower,
             phase: FollowPhase::Approach,
+            kept,
         });
     }
 
@@ -427,10 +440,20 @@ impl Engine {
         }
         if finished {
             self.gestures.remesh_pending = true;
+            // A motion that kept the formation is meshed where it planned the
+            // crowd, part by part; one played as sampled where the crowd stopped.
+            let (agents, parts) = match &self.gestures.playing {
+                Some(p) if p.kept.ends_m.len() == self.agents.len() => {
+                    (p.kept.ends_m.clone(), p.kept.parts.clone())
+                }
+                _ => (self.agents.positions().to_vec(), Vec::new()),
+            };
             let req = RemeshRequest {
                 epoch: self.gestures.epoch,
-                agents: self.agents.positions().to_vec(),
+                agents,
+                parts,
                 radius_m: self.agent_params.radius_m,
+                min_piece_agents: self.gestures.min_piece_agents,
             };
             if self.gestures.inline.is_some() {
                 self.apply_remesh(req.prepare(), now);
@@ -547,6 +570,8 @@ impl Engine {
                 ^ u64::from(p.id).wrapping_mul(0x9e37_79b9_7f4a_7c15)
                 ^ u64::from(fire.count),
             speed_m_s: g.speed_m_s,
+            apply: g.apply,
+            keep: g.keep,
         };
         let end = PendingEnd {
             id: p.id,

@@ -3,8 +3,10 @@
 //! motion playing.
 
 use super::params::{search_params, tap_thresholds};
-use crate::config::Config;
-use crate::crowd::motion::{FollowParams, FollowPhase, Follower, GestureJob, Synthesiser};
+use crate::config::{Config, GestureApply};
+use crate::crowd::motion::{
+    ApplyMode, FollowParams, FollowPhase, Follower, GestureJob, KeepParams, Synthesiser,
+};
 use crate::gesture::capture::{CaptureParams, GestureCapture, TapThresholds};
 use crate::gesture::continuous::{
     ContinuousParams, ContinuousRecogniser, WindowBuffers, WindowParams,
@@ -37,6 +39,17 @@ pub(super) struct Playing {
     pub(super) class: String,
     pub(super) follower: Follower,
     pub(super) phase: FollowPhase,
+    /// The motion's parts and each agent's planned end when it keeps the
+    /// formation (the mesh afterwards is built there); empty as sampled.
+    pub(super) kept: Kept,
+}
+
+/// Where a motion that keeps the formation plans the crowd: the parts that moved
+/// together and each agent's end (m). Empty for a motion played as sampled.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Kept {
+    pub(super) parts: Vec<Vec<usize>>,
+    pub(super) ends_m: Vec<crate::geom::Vec2>,
 }
 
 /// The engine's gesture commands (see the module doc).
@@ -49,6 +62,11 @@ pub(super) struct Gestures {
     pub(super) disabled: Vec<String>,
     pub(super) search: SearchParams,
     pub(super) follow: FollowParams,
+    /// `gestures.apply`, and what keeping the formation needs.
+    pub(super) apply: ApplyMode,
+    pub(super) keep: KeepParams,
+    /// `gestures.min_piece_agents`.
+    pub(super) min_piece_agents: usize,
     pub(super) speed_m_s: f64,
     pub(super) seed: u64,
     /// Bumped by a reset, a resize or a cancelled motion: a result of another epoch
@@ -94,6 +112,9 @@ impl Gestures {
             disabled: Vec::new(),
             search: SearchParams::default(),
             follow: follow_params(cfg),
+            apply: ApplyMode::KeepFormation,
+            keep: KeepParams::default(),
+            min_piece_agents: 1,
             speed_m_s: 1.0,
             seed: 0,
             epoch: 0,
@@ -128,6 +149,16 @@ impl Gestures {
         self.recogniser = cfg.gesture_recogniser().cloned();
         self.search = search_params(cfg);
         self.follow = follow_params(cfg);
+        self.apply = match gc.apply {
+            GestureApply::KeepFormation => ApplyMode::KeepFormation,
+            GestureApply::AsSampled => ApplyMode::AsSampled,
+        };
+        self.min_piece_agents = gc.min_piece_agents.max(1) as usize;
+        self.keep = KeepParams {
+            min_part_agents: self.min_piece_agents,
+            radius_m: cfg.crowd.agent_radius_m,
+            ..KeepParams::default()
+        };
         self.speed_m_s = gc.motion_speed_m_s;
         self.seed = gc.seed;
         match gc.continuous {

@@ -457,7 +457,9 @@ impl Engine {
         let req = RemeshRequest {
             epoch: self.transforms.epoch,
             agents: hold.clone(),
+            parts: Vec::new(),
             radius_m: self.agent_params.radius_m,
+            min_piece_agents: 0,
         };
         self.transforms.remeshing = Some(Remeshing { announce, hold });
         if self.transforms.inline {

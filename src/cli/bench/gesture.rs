@@ -352,6 +352,20 @@ pub fn gesture(run: &GestureRun) -> Result<()> {
             search: params,
             seed,
             speed_m_s: cfg.gestures.motion_speed_m_s,
+            // What the daemon does with the config's `gestures.apply`.
+            apply: match cfg.gestures.apply {
+                crowdtouch::config::GestureApply::KeepFormation => {
+                    crowdtouch::crowd::motion::ApplyMode::KeepFormation
+                }
+                crowdtouch::config::GestureApply::AsSampled => {
+                    crowdtouch::crowd::motion::ApplyMode::AsSampled
+                }
+            },
+            keep: crowdtouch::crowd::motion::KeepParams {
+                min_part_agents: cfg.gestures.min_piece_agents.max(1) as usize,
+                radius_m: cfg.crowd.agent_radius_m,
+                ..crowdtouch::crowd::motion::KeepParams::default()
+            },
         };
         let t = now();
         let p = req.prepare(&mut searcher, &mut synth);

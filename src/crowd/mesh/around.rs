@@ -516,6 +516,108 @@ fn sculpt(rest: &[Vec2], tris: &mut Vec<[u32; 3]>, max_edge_m: f64) {
     });
 }
 
+/// A mesh around the agents at `positions` made of one piece per part: each of
+/// `parts` (agent indices; every agent in exactly one) meshed on its own with
+/// [`mesh_around`] and the pieces put side by side, so two parts stay two pieces
+/// however close they stand. Within a part, an agent farther than
+/// [`ALPHA_FACTOR`] spacings (the part's median nearest-neighbour distance, at
+/// least two body radii) from every other agent of it — a straggler — has its
+/// goal drawn in to one spacing from the nearest of them, so it joins its part
+/// instead of making a piece of its own. Goal `i` is agent `i`'s (at its vertex,
+/// or where its straggling was drawn in to).
+///
+/// # Errors
+/// As [`mesh_around`]; [`MeshError::Empty`] also when `parts` leaves an agent out
+/// or names one twice or out of range.
+///
+/// # Complexity
+/// O(Σ nₚ²) for the stragglers plus [`mesh_around`] per part.
+pub fn mesh_around_parts(
+    positions: &[Vec2],
+    parts: &[Vec<usize>],
+    radius_m: f64,
+) -> Result<(TriMesh, Vec<GoalSample>), MeshError> {
+    let n = positions.len();
+    let mut seen = vec![false; n];
+    for &i in parts.iter().flatten() {
+        if i >= n || seen[i] {
+            return Err(MeshError::Empty);
+        }
+        seen[i] = true;
+    }
+    if n == 0 || seen.iter().any(|s| !s) {
+        return Err(MeshError::Empty);
+    }
+    let body = if radius_m.is_finite() && radius_m > 0.0 {
+        2.0 * radius_m
+    } else {
+        0.0
+    };
+    let mut rest: Vec<Vec2> = Vec::with_capacity(n);
+    let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(2 * n);
+    let mut samples: Vec<Option<GoalSample>> = vec![None; n];
+    for part in parts {
+        let mut pts: Vec<Vec2> = part.iter().map(|&i| positions[i]).collect();
+        draw_in_stragglers(&mut pts, body);
+        let (mesh, goals) = mesh_around(&pts, radius_m)?;
+        let (v0, t0) = (rest.len() as u32, triangles.len() as u32);
+        rest.extend_from_slice(mesh.rest());
+        triangles.extend(mesh.triangles().iter().map(|t| t.map(|v| v + v0)));
+        for (&i, g) in part.iter().zip(goals) {
+            samples[i] = Some(GoalSample {
+                tri: g.tri + t0,
+                bary: g.bary,
+            });
+        }
+    }
+    let mesh = TriMesh::from_triangles(rest, triangles)?;
+    let samples = samples
+        .into_iter()
+        .map(|s| s.ok_or(MeshError::Empty))
+        .collect::<Result<_, _>>()?;
+    Ok((mesh, samples))
+}
+
+/// Draws every point farther than [`ALPHA_FACTOR`] spacings from all the others in
+/// to one spacing from the nearest of them, nearest stragglers first.
+fn draw_in_stragglers(pts: &mut [Vec2], body_m: f64) {
+    let n = pts.len();
+    if n < 2 {
+        return;
+    }
+    let nearest = |pts: &[Vec2], i: usize| -> (usize, f64) {
+        (0..pts.len())
+            .filter(|&j| j != i)
+            .map(|j| (j, (pts[j] - pts[i]).norm()))
+            .fold((i, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
+    };
+    let mut nn: Vec<f64> = (0..n)
+        .map(|i| nearest(pts, i).1)
+        .filter(|d| d.is_finite())
+        .collect();
+    if nn.is_empty() {
+        return;
+    }
+    nn.sort_by(f64::total_cmp);
+    let spacing = nn[nn.len() / 2].max(body_m);
+    if spacing <= 0.0 {
+        return;
+    }
+    let far = ALPHA_FACTOR * spacing;
+    let mut order: Vec<(f64, usize)> = (0..n)
+        .map(|i| (nearest(pts, i).1, i))
+        .filter(|(d, _)| *d > far)
+        .collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0));
+    for (_, i) in order {
+        let (j, d) = nearest(pts, i);
+        if d > far && d.is_finite() {
+            let dir = (pts[i] - pts[j]) / d;
+            pts[i] = pts[j] + dir * spacing;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -770,5 +872,52 @@ mod tests {
         let (before, after) = ((p[12] - p[0]).norm(), (goals[12] - goals[0]).norm());
         assert!(after > before + 0.2, "{before} -> {after}");
         assert!(goals.iter().all(|q| q.x.is_finite() && q.y.is_finite()));
+    }
+
+    #[test]
+    fn parts_stay_pieces_of_their_own_and_a_straggler_joins_its_part() {
+        let grid = |x0: f64| -> Vec<Vec2> {
+            (0..16)
+                .map(|k| Vec2::new(x0 + (k % 4) as f64 * 0.5, (k / 4) as f64 * 0.5))
+                .collect()
+        };
+        // Two blocks 0.6 m apart (one piece for mesh_around), and a straggler.
+        let mut pts = grid(0.0);
+        pts.extend(grid(2.1));
+        pts.push(Vec2::new(-4.0, 0.0));
+        let (joined, _) = mesh_around(&pts, 0.1).unwrap();
+        assert_eq!(
+            joined.piece_count(),
+            2,
+            "the blocks join, the straggler is alone"
+        );
+        let mut first: Vec<usize> = (0..16).collect();
+        first.push(32);
+        let parts = vec![first, (16..32).collect()];
+        let (mesh, goals) = mesh_around_parts(&pts, &parts, 0.1).unwrap();
+        assert_eq!(mesh.piece_count(), 2);
+        assert_eq!(goals.len(), 33);
+        let at = |g: &GoalSample| {
+            let t = mesh.triangles()[g.tri as usize];
+            (0..3)
+                .map(|k| mesh.rest()[t[k] as usize] * g.bary[k])
+                .sum::<Vec2>()
+        };
+        for i in 0..32 {
+            assert!((at(&goals[i]) - pts[i]).norm() < 1e-9, "agent {i} stays");
+        }
+        let g = at(&goals[32]);
+        assert!(
+            (g - Vec2::new(-0.5, 0.0)).norm() < 1e-9,
+            "the straggler is drawn in: {g:?}"
+        );
+        let pieces: std::collections::BTreeSet<u32> = (0..33)
+            .map(|i| mesh.piece_of_vertex()[mesh.triangles()[goals[i].tri as usize][0] as usize])
+            .collect();
+        assert_eq!(pieces.len(), 2);
+        assert!(
+            mesh_around_parts(&pts, &[(0..32).collect()], 0.1).is_err(),
+            "an agent left out"
+        );
     }
 }

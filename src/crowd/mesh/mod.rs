@@ -14,7 +14,7 @@ mod trimesh;
 pub use arap::{
     Arap, ArapBuffer, ArapError, Constraint, PointConstraint, ANCHOR_WEIGHT, MAX_CONSTRAINT_WEIGHT,
 };
-pub use around::{mesh_around, ALPHA_FACTOR, HELPER_OFFSET_FACTOR};
+pub use around::{mesh_around, mesh_around_parts, ALPHA_FACTOR, HELPER_OFFSET_FACTOR};
 pub use goals::{
     goal_positions, sample_goals, sample_goals_cancellable, GoalSample, GOAL_CANDIDATES_PER_SAMPLE,
     GOAL_LLOYD_ITERATIONS,

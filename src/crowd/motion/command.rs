@@ -29,8 +29,11 @@
 
 use super::blend::blend;
 use super::error::MotionError;
+use super::keep::{
+    is_split_class, keep_formation, parts_of, ApplyMode, KeepParams, GROUP_GAP_FACTOR,
+};
 use super::synth::{Placement, Synthesis, Synthesiser};
-use crate::crowd::mesh::{mesh_around, GoalSample, MeshError, TriMesh};
+use crate::crowd::mesh::{mesh_around_parts, GoalSample, MeshError, TriMesh};
 use crate::geom::Vec2;
 use crate::gesture::continuous::{recognise_window, WindowBuffers, WindowParams};
 use crate::gesture::features::GestureFeatures;
@@ -67,6 +70,11 @@ pub struct GestureRequest {
     /// How fast agents walk a synthesised motion (m/s): the motion lasts as long as
     /// its longest trajectory takes at this speed (within [`MOTION_DURATION_S`]).
     pub speed_m_s: f64,
+    /// How the motion moves the crowd (`gestures.apply`).
+    pub apply: ApplyMode,
+    /// The residual's bound, the smallest part and the body radius for
+    /// [`ApplyMode::KeepFormation`].
+    pub keep: KeepParams,
 }
 
 /// A gesture recognised and its crowd motion synthesised.
@@ -80,6 +88,12 @@ pub struct GestureMotion {
     pub neighbours: Vec<(String, String)>,
     /// One trajectory per agent (m) and how long it plays (s).
     pub synthesis: Synthesis,
+    /// With [`ApplyMode::KeepFormation`], the parts of the crowd that move together
+    /// (agent indices) and each agent's planned end (m), for the mesh rebuilt
+    /// afterwards; empty when the motion is played as sampled.
+    pub parts: Vec<Vec<usize>>,
+    /// Each agent's planned end (m); empty as sampled.
+    pub ends_m: Vec<Vec2>,
 }
 
 /// Why a gesture gave no crowd motion.
@@ -193,13 +207,34 @@ impl GestureRequest {
         }
         let motion = blend(&parts)?;
         let placement = Placement::for_crowd(&self.agents);
-        let mut synthesis = synth.synthesise(&motion, &self.agents, &placement, self.seed)?;
+        let synthesis = synth.synthesise(&motion, &self.agents, &placement, self.seed)?;
+        let class_name = lib.class_name(recognised.class).to_string();
+        let (mut synthesis, parts, ends_m) = match self.apply {
+            ApplyMode::AsSampled => (synthesis, Vec::new(), Vec::new()),
+            ApplyMode::KeepFormation => {
+                let kept = keep_formation(
+                    &synthesis,
+                    &self.agents,
+                    is_split_class(&class_name),
+                    &self.keep,
+                );
+                let ends = kept
+                    .synthesis
+                    .trajectories
+                    .iter()
+                    .map(|t| t[crate::gesture::library::S_H - 1])
+                    .collect();
+                (kept.synthesis, kept.parts, ends)
+            }
+        };
         synthesis.duration_s = play_duration(&synthesis, self.speed_m_s);
         Ok(GestureMotion {
-            class_name: lib.class_name(recognised.class).to_string(),
+            class_name,
             recognised,
             neighbours,
             synthesis,
+            parts,
+            ends_m,
         })
     }
 }
@@ -351,16 +386,26 @@ pub fn play_duration(s: &Synthesis, speed_m_s: f64) -> f64 {
     }
 }
 
-/// A mesh to rebuild around where the agents stopped (after a gesture motion), so
-/// that direct touch control goes on from there (`crate::crowd::mesh::mesh_around`).
+/// A mesh to rebuild around the crowd after a gesture motion, so that direct touch
+/// control goes on from there (`crate::crowd::mesh::mesh_around_parts`): around
+/// where the agents stopped, or, for a motion that kept the formation, around
+/// where it planned them (the formation moved, not the scatter the push-apart
+/// left), one piece per part.
 #[derive(Clone, Debug)]
 pub struct RemeshRequest {
     /// The engine's gesture epoch when asked.
     pub epoch: u64,
-    /// Where the agents are (m).
+    /// Where the mesh's goals go, one per agent (m).
     pub agents: Vec<Vec2>,
+    /// The parts, each its own piece (agent indices); empty: the parts of
+    /// `agents` by proximity ([`GROUP_GAP_FACTOR`] spacings).
+    pub parts: Vec<Vec<usize>>,
     /// Agent radius (m): the mesh's spacing floor.
     pub radius_m: f64,
+    /// No piece has fewer agents: smaller parts join the nearest. 0: the pieces
+    /// [`crate::crowd::mesh::mesh_around`] finds, stragglers included (and `parts`
+    /// ignored).
+    pub min_piece_agents: usize,
 }
 
 /// A rebuilt mesh with one goal per agent at its vertex, or why there is none.
@@ -375,11 +420,45 @@ pub struct PreparedRemesh {
 impl RemeshRequest {
     /// Builds the mesh.
     pub fn prepare(self) -> PreparedRemesh {
+        if self.min_piece_agents == 0 {
+            return PreparedRemesh {
+                epoch: self.epoch,
+                built: crate::crowd::mesh::mesh_around(&self.agents, self.radius_m),
+            };
+        }
+        let parts = if self.parts.is_empty() {
+            let floor = (2.0 * self.radius_m).max(1e-3);
+            let gap = GROUP_GAP_FACTOR * median_spacing(&self.agents, floor);
+            parts_of(&self.agents, gap, self.min_piece_agents)
+        } else {
+            self.parts
+        };
         PreparedRemesh {
             epoch: self.epoch,
-            built: mesh_around(&self.agents, self.radius_m),
+            built: mesh_around_parts(&self.agents, &parts, self.radius_m),
         }
     }
+}
+
+/// The median nearest-neighbour distance of `pts`, at least `floor_m` (O(n²); a
+/// strided sample of 2,000 points beyond that).
+fn median_spacing(pts: &[Vec2], floor_m: f64) -> f64 {
+    let stride = pts.len().div_ceil(2000).max(1);
+    let mut nn: Vec<f64> = (0..pts.len())
+        .step_by(stride)
+        .map(|i| {
+            (0..pts.len())
+                .filter(|&j| j != i)
+                .map(|j| (pts[j] - pts[i]).norm())
+                .fold(f64::INFINITY, f64::min)
+        })
+        .filter(|d| d.is_finite())
+        .collect();
+    if nn.is_empty() {
+        return floor_m;
+    }
+    nn.sort_by(f64::total_cmp);
+    nn[nn.len() / 2].max(floor_m)
 }
 
 /// A live gesture's latest window to recognise (continuous recognition,

@@ -7,6 +7,7 @@ mod build;
 mod command;
 mod follow;
 mod import;
+mod keep;
 mod simulate;
 
 pub use build::{build_library, library_agents, BuildError, BuildParams, SHIPPED_SEED};
@@ -19,6 +20,10 @@ pub use follow::{FollowError, FollowParams, FollowPhase, Follower};
 pub use import::{
     busiest_window, import_motion, ImportError, ImportWindow, ImportedMotion, PersonSamples,
     DEFAULT_IMPORT_DURATION_S, MAX_IMPORT_SAMPLES, MIN_IMPORT_PEOPLE,
+};
+pub use keep::{
+    is_split_class, keep_formation, parts_of, ApplyMode, KeepParams, Kept, Similarity,
+    GROUP_GAP_FACTOR,
 };
 pub use simulate::{
     library_specs, measure, simulate, MotionMeasure, MotionSpec, SimulateError, SimulatedMotion,
