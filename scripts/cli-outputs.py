@@ -269,6 +269,7 @@ def entries():
     # ---- check-config
     add("check-config-crowdtouch", ["check-config", CFG])
     add("check-config-kiosk", ["check-config", "repo/config/kiosk.ron"])
+    add("check-config-no-device", ["check-config", "repo/config/no-device.ron"])
     add("check-config-doc-outputs", ["check-config", "in/doc-outputs.ron"])
     add("check-config-doc-tuio-input", ["check-config", "in/doc-tuio-input.ron"])
     add("check-config-scene", ["check-config", "in/scene.ron"])

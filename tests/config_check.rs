@@ -1,6 +1,8 @@
 //! `check-config` finds what `run` refuses, at the field it comes from, in the
 //! words a user reads: one test per gap the probe found (issue 14, item 6).
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
@@ -386,4 +388,309 @@ fn a_systemd_runtime_directory_not_created_yet_is_a_warning_for_check_config() {
         .unwrap();
     assert_eq!(run.status.code(), Some(1));
     assert!(stderr(&run).contains(&line), "{}", stderr(&run));
+}
+
+/// The top-level fields of a config, in the order of the documented default.
+const TOP_LEVEL: [&str; 15] = [
+    "version",
+    "log_level",
+    "inputs",
+    "surface",
+    "crowd",
+    "mesh",
+    "controls",
+    "assignment",
+    "scene",
+    "formations",
+    "gestures",
+    "edit",
+    "pipeline",
+    "socket",
+    "outputs",
+];
+
+fn repo() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Every daemon config shipped under `config/` (scenes and formation shapes are
+/// other files: a daemon config has top-level `inputs` and `socket`).
+fn shipped_configs() -> Vec<PathBuf> {
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(&p, out);
+            } else if p.extension().is_some_and(|x| x == "ron") {
+                let text = std::fs::read_to_string(&p).unwrap();
+                let top = |k: &str| text.lines().any(|l| l.starts_with(&format!("    {k}:")));
+                if top("inputs") && top("socket") {
+                    out.push(p);
+                }
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(&repo().join("config"), &mut out);
+    out.sort();
+    out
+}
+
+/// The end (exclusive) of the RON value starting at `text[start..]`: a bracketed
+/// value to its matching bracket, anything else to the end of its line; strings
+/// and `//` comments are skipped.
+fn value_end(text: &str, start: usize) -> usize {
+    let b = text.as_bytes();
+    if !matches!(b[start], b'(' | b'[') {
+        return start + text[start..].find('\n').unwrap();
+    }
+    let (mut depth, mut i) = (0usize, start);
+    loop {
+        match b[i] {
+            b'"' => {
+                i += 1;
+                while b[i] != b'"' {
+                    i += if b[i] == b'\\' { 2 } else { 1 };
+                }
+            }
+            b'/' if b[i + 1] == b'/' => i += text[i..].find('\n').unwrap(),
+            b'(' | b'[' => depth += 1,
+            b')' | b']' => {
+                depth -= 1;
+                if depth == 0 {
+                    return i + 1;
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+}
+
+/// The documented default with each top-level entry of `fragment` (`inputs: [...],`
+/// at column 0) in place of its own, or added at the end.
+fn splice(fragment: &[(String, String)]) -> String {
+    let mut text = DEFAULT.to_string();
+    for (key, entry) in fragment {
+        let mut entry: String = entry
+            .trim_end()
+            .lines()
+            .map(|l| format!("    {l}\n"))
+            .collect();
+        if !entry.trim_end().ends_with(',') {
+            entry = format!("{},\n", entry.trim_end());
+        }
+        match text.find(&format!("\n    {key}: ")) {
+            Some(i) => {
+                let value = i + 1 + 4 + key.len() + 2;
+                let mut end = value_end(&text, value);
+                end += usize::from(text[end..].starts_with(','));
+                end += usize::from(text[end..].starts_with('\n'));
+                text.replace_range(i + 1..end, &entry);
+            }
+            None => {
+                let close = text.rfind("\n)").unwrap();
+                text.insert_str(close + 1, &entry);
+            }
+        }
+    }
+    text
+}
+
+/// Every config the docs show (`docs/*.md`, `README.md`), as a whole file: a
+/// fenced RON block that is a whole config as it is, and one made of top-level
+/// config entries (`outputs: [...]`) in the documented default. Other RON blocks
+/// (edit scripts, scenes) are left out. Named `file:line`.
+fn documented_configs() -> Vec<(String, String)> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(repo().join("docs"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "md"))
+        .collect();
+    files.sort();
+    files.push(repo().join("README.md"));
+    let mut out = Vec::new();
+    for f in files {
+        let text = std::fs::read_to_string(&f).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        let mut i = 0;
+        while i < lines.len() {
+            if lines[i].trim() != "```ron" {
+                i += 1;
+                continue;
+            }
+            let first = i + 2;
+            let mut block = String::new();
+            i += 1;
+            while lines[i].trim() != "```" {
+                block.push_str(lines[i]);
+                block.push('\n');
+                i += 1;
+            }
+            let name = format!("{}:{first}", f.strip_prefix(repo()).unwrap().display());
+            let code: Vec<&str> = block
+                .lines()
+                .filter(|l| !l.trim().is_empty() && !l.trim_start().starts_with("//"))
+                .collect();
+            if code.first() == Some(&"(") && block.lines().any(|l| l.starts_with("    version:")) {
+                out.push((name, block));
+                continue;
+            }
+            // Top-level entries: a line at column 0 naming a config field.
+            let mut entries: Vec<(String, String)> = Vec::new();
+            let mut whole = true;
+            for l in block.lines() {
+                let note = l.trim().is_empty() || l.trim_start().starts_with("//");
+                let key = l.split_once(':').map(|(k, _)| k).filter(|k| {
+                    !k.is_empty() && k.chars().all(|c| c.is_ascii_lowercase() || c == '_')
+                });
+                match key {
+                    Some(k) if TOP_LEVEL.contains(&k) => {
+                        entries.push((k.to_string(), String::new()))
+                    }
+                    _ if !note
+                        && l.starts_with(|c: char| !c.is_whitespace() && c != ']' && c != ')') =>
+                    {
+                        whole = false;
+                    }
+                    _ => {}
+                }
+                match entries.last_mut() {
+                    Some((_, e)) => {
+                        e.push_str(l);
+                        e.push('\n');
+                    }
+                    None if note => {}
+                    None => whole = false,
+                }
+            }
+            if whole && !entries.is_empty() {
+                out.push((name, splice(&entries)));
+            }
+        }
+    }
+    out
+}
+
+/// A configuration's verdicts: `check-config`'s and `run`'s start-up.
+#[derive(Debug)]
+struct Verdicts {
+    name: String,
+    check_ok: bool,
+    run_ok: bool,
+    said: String,
+}
+
+fn verdicts(env: &common::run_process::Env, name: &str, file: &Path) -> Verdicts {
+    let check = env.check_config(file);
+    let check_ok = match check.status.code() {
+        Some(0) => true,
+        Some(1) => false,
+        other => panic!("{name}: check-config exit {other:?}: {}", stderr(&check)),
+    };
+    let stdout = String::from_utf8_lossy(&check.stdout).into_owned();
+    let (run_ok, log) = match env.run(file) {
+        Ok(running) => {
+            let (status, log) = running.stop();
+            assert!(
+                status.success(),
+                "{name}: run stopped with {status}:\n{log}"
+            );
+            (true, log)
+        }
+        Err((code, log)) => {
+            assert_eq!(code, Some(1), "{name}: run exit {code:?}:\n{log}");
+            (false, log)
+        }
+    };
+    if check_ok && run_ok {
+        // Where touches come from, in the same words.
+        for line in stdout.lines().skip(1) {
+            assert!(
+                log.lines().any(|l| l.ends_with(line)),
+                "{name}: check-config said {line:?}, run did not:\n{log}"
+            );
+        }
+    }
+    Verdicts {
+        name: name.to_string(),
+        check_ok,
+        run_ok,
+        said: format!("check-config:\n{stdout}{}\nrun:\n{log}", stderr(&check)),
+    }
+}
+
+/// Every daemon config shipped under `config/` and every config the docs show
+/// goes through `check-config` and `run` (the binary, as a user runs it: `run`
+/// until it serves its socket, then SIGTERM): both accept it, and they say in the
+/// same words where its touches come from. A config both refuse shows that a
+/// refusal is told apart.
+#[test]
+fn every_shipped_and_documented_config_gets_the_same_verdict_from_check_config_and_run() {
+    use common::run_process::{free_listen_ports, Env};
+    let env = Env::new();
+    let mut cases: Vec<(String, PathBuf)> = Vec::new();
+    for f in shipped_configs() {
+        let name = f.strip_prefix(repo()).unwrap().display().to_string();
+        let text = std::fs::read_to_string(&f).unwrap();
+        let freed = free_listen_ports(&text);
+        if freed == text {
+            cases.push((name, f));
+        } else {
+            // Its listeners on free ports; beside it in a directory of the test's
+            // (the shipped recordings it names are also in the binary).
+            let copy = env.path().join(f.file_name().unwrap());
+            std::fs::write(&copy, freed).unwrap();
+            cases.push((name, copy));
+        }
+    }
+    let shipped: Vec<String> = cases.iter().map(|(n, _)| n.clone()).collect();
+    for want in [
+        "config/crowdtouch.ron",
+        "config/kiosk.ron",
+        "config/no-device.ron",
+    ] {
+        assert!(
+            shipped.iter().any(|n| n == want),
+            "{want} not in {shipped:?}"
+        );
+    }
+    let documented = documented_configs();
+    assert!(
+        documented
+            .iter()
+            .any(|(n, t)| n.starts_with("docs/devices.md:") && t.contains("    inputs: [],")),
+        "the devices doc's table with no touch device is among {:?}",
+        documented.iter().map(|(n, _)| n).collect::<Vec<_>>()
+    );
+    assert!(documented.len() >= 9, "{}", documented.len());
+    for (k, (name, text)) in documented.into_iter().enumerate() {
+        let file = env.path().join(format!("documented-{k}.ron"));
+        std::fs::write(&file, free_listen_ports(&text)).unwrap();
+        cases.push((name, file));
+    }
+    let refused = env.path().join("refused.ron");
+    std::fs::write(
+        &refused,
+        DEFAULT.replacen(
+            "recordings/02-line-drag.jsonl",
+            "recordings/no-such.jsonl",
+            1,
+        ),
+    )
+    .unwrap();
+    let mut all = Vec::new();
+    for (name, file) in &cases {
+        all.push(verdicts(&env, name, file));
+    }
+    let broken = verdicts(&env, "a missing recording", &refused);
+    assert!(!broken.check_ok && !broken.run_ok, "{broken:#?}");
+    for v in &all {
+        assert_eq!(
+            v.check_ok, v.run_ok,
+            "{}: verdicts differ\n{}",
+            v.name, v.said
+        );
+        assert!(v.check_ok, "{}: refused\n{}", v.name, v.said);
+    }
 }

@@ -367,3 +367,48 @@ fn check_config_warns_when_the_installed_unit_would_block_an_output() {
         "{out:?}"
     );
 }
+
+/// A table with no touch device: the doctor says so and names the clients its
+/// touches come from, probes no node (the tree's digitizer is neither selected nor
+/// required to have the udev rule applied), and with the daemon running every
+/// check passes.
+#[test]
+fn a_table_with_no_touch_device_is_said_to_be_touched_by_its_clients() {
+    let addr = common::free_addr();
+    let k = Kiosk::new(
+        "[]",
+        &format!("[WebSocket(listen: \"{addr}\", privileged: true)]"),
+    );
+    k.daemon_reload();
+    // The digitizer's node is root-only: a device config would fail on it.
+    k.chmod_node(0o600);
+    let socket = k.root().join("run/ct.sock");
+    let mut daemon = k.run_daemon(&socket);
+    let (code, v) = k.doctor();
+    let _ = daemon.kill();
+    let _ = daemon.wait();
+    assert_eq!(code, 0, "{v:#}");
+    for name in ["config", "device", "device_access", "udev_rule", "daemon"] {
+        assert_passes(&v, name);
+    }
+    assert_eq!(
+        check(&v, "device")["detail"],
+        format!(
+            "no touch device configured: touches come only from clients: the viewer page and \
+             the WebSocket clients of http://{addr}/ (`touch` command), privileged clients of \
+             the Unix socket (`touch` command: root, the daemon's user, socket.privileged)"
+        )
+    );
+    assert!(check(&v, "udev_rule")["detail"]
+        .as_str()
+        .unwrap()
+        .ends_with("not needed: the config reads no touch device"));
+    assert!(
+        !v["checks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|c| c["name"].as_str().unwrap().starts_with("device inputs")),
+        "{v:#}"
+    );
+}

@@ -193,3 +193,30 @@ fn kiosk_config_differs_from_the_default_only_in_its_inputs() {
         "config/kiosk.ron drifted from config/crowdtouch.ron"
     );
 }
+
+/// The config of a table with no touch device reads nothing, serves the viewer to
+/// privileged pages, and otherwise matches the documented default.
+#[test]
+fn no_device_config_differs_from_the_default_only_in_its_inputs_and_outputs() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("config");
+    let mut table =
+        crowdtouch::config::Config::load(&dir.join("no-device.ron")).expect("config/no-device.ron");
+    let default = crowdtouch::config::Config::load(&dir.join("crowdtouch.ron")).unwrap();
+    assert!(table.inputs.is_empty());
+    assert!(matches!(
+        table.outputs.as_slice(),
+        [crowdtouch::config::OutputConfig::WebSocket {
+            privileged: true,
+            viewer: true,
+            ..
+        }]
+    ));
+    let ways = crowdtouch::pipeline::TouchSources::of(&table);
+    assert!(!ways.has_device() && ways.websockets[0].touches());
+    table.inputs = default.inputs.clone();
+    table.outputs = default.outputs.clone();
+    assert_eq!(
+        table, default,
+        "config/no-device.ron drifted from config/crowdtouch.ron"
+    );
+}

@@ -340,7 +340,8 @@ pub struct Config {
     pub version: u32,
     /// Log verbosity (`RUST_LOG` overrides).
     pub log_level: LogLevel,
-    /// Input sources.
+    /// Input sources; may be empty: the touches then come only from clients
+    /// (`pipeline::TouchSources`).
     pub inputs: Vec<InputConfig>,
     /// Surface to world mapping.
     pub surface: SurfaceConfig,

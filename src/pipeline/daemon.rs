@@ -146,7 +146,10 @@ impl Start {
 }
 
 impl Daemon {
-    /// Binds the socket and starts every thread.
+    /// Binds the socket and starts every thread: one input thread per source.
+    /// With no source at all the daemon runs on its clients' touches (the
+    /// socket's and the WebSocket outputs' `touch` commands): nothing reads a
+    /// device.
     ///
     /// # Errors
     /// Socket problems ([`Error::Publish`]) and thread creation.
@@ -155,9 +158,6 @@ impl Daemon {
         sources: Vec<SourceSpec>,
         opts: DaemonOptions,
     ) -> Result<Daemon, Error> {
-        if sources.is_empty() {
-            return Err(Error::NoInputs);
-        }
         let glass = sources.iter().find_map(|s| match s {
             SourceSpec::Replay { glass_mm, .. } | SourceSpec::Channel { glass_mm, .. } => *glass_mm,
             SourceSpec::Device { transform, .. } | SourceSpec::Tuio { transform, .. } => {

@@ -32,9 +32,6 @@ pub enum Error {
     /// A TUIO input's listen address is not `ip:port` (the config check refuses it first).
     #[error("TUIO input: listen address must be ip:port, got {0:?}")]
     BadListen(String),
-    /// The config has no input.
-    #[error("the config has no inputs: add a Replay(...) input")]
-    NoInputs,
     /// A `library collect` session that cannot start.
     #[error("library collect: {0}")]
     Collect(String),

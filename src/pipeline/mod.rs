@@ -26,6 +26,7 @@ mod reload;
 mod report;
 mod sources;
 pub mod timing;
+mod touch_sources;
 mod workers;
 
 pub use client_touch::{CLIENT_TOUCH_TIMEOUT_US, MAX_TOUCHING_CLIENTS};
@@ -36,4 +37,5 @@ pub use outputs::socket_options;
 pub use preflight::{online_cpus, preflight, Finding, Preflight, Severity};
 pub use queue::{FrameQueue, InputCounters, BACKLOG_FRAMES};
 pub use sources::{sources_from_config, SourceSpec};
+pub use touch_sources::{TouchSources, WebSocketTouch};
 pub use workers::AssignJob;

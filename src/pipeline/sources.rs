@@ -57,15 +57,13 @@ pub enum SourceSpec {
 }
 
 /// Opens the recordings a config names and reads each through once; their
-/// warnings are logged.
+/// warnings are logged. A config without inputs gives no source: its touches
+/// come from clients ([`TouchSources`](super::TouchSources)).
 ///
 /// # Errors
 /// [`Error::Recording`] naming the file and line; [`Error::TuioInput`] when a TUIO
-/// port cannot be bound; [`Error::NoInputs`].
+/// port cannot be bound.
 pub fn sources_from_config(cfg: &Config) -> Result<Vec<SourceSpec>, Error> {
-    if cfg.inputs.is_empty() {
-        return Err(Error::NoInputs);
-    }
     let mut out = Vec::new();
     for (i, input) in cfg.inputs.iter().enumerate() {
         match input {

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod edit_session;
+pub mod run_process;
 
 use crowdtouch::config::Config;
 use crowdtouch::engine::{replay_virtual, Engine, VirtualClock};

@@ -5,14 +5,15 @@
 //!
 //! Checks, in order: `config` (loads, and what `run` would refuse), `unit` (the
 //! service is installed and reads this config), `service_user`, `device inputs[i]`
-//! (what each `Device` input selects), `device_access` (user `crowdtouch` may open
-//! it), `udev_rule` (installed and applied), `realtime` (the RT priority and memory
-//! lock the config asks for are within the unit's limits), `socket` (the service's
-//! socket path, its directory and mode), one `output …` per network output or
-//! input (a TUIO target resolves and is routable, a WebSocket address can be bound
-//! or is the running daemon's, a token where it is needed, the unit lets it
-//! through), and `daemon` (running, and its last `stats`: latency, drops, touches,
-//! devices).
+//! (what each `Device` input selects; `device` with no `Device` input: that no
+//! touch device is configured, and which clients touch instead), `device_access`
+//! (user `crowdtouch` may open it), `udev_rule` (installed and applied),
+//! `realtime` (the RT priority and memory lock the config asks for are within the
+//! unit's limits), `socket` (the service's socket path, its directory and mode),
+//! one `output …` per network output or input (a TUIO target resolves and is
+//! routable, a WebSocket address can be bound or is the running daemon's, a token
+//! where it is needed, the unit lets it through), and `daemon` (running, and its
+//! last `stats`: latency, drops, touches, devices).
 //!
 //! `--json` prints one object, `{"ok": bool, "checks": [{"name", "ok", "detail",
 //! "fix"}]}` (`fix` is `null` for a check that passed). Exit status 0 only when

@@ -1,6 +1,7 @@
 //! `doctor`'s checks of the service's account and touch devices: the `crowdtouch`
 //! user and group, which device each `Device` input would read, whether the
-//! service user may open it, and the udev rule that gives it the group.
+//! service user may open it, and the udev rule that gives it the group; for a
+//! config without a `Device` input, where its touches come from.
 //!
 //! Access is judged from the node's owner, group and mode against the service
 //! user's uid and groups (from `ROOT/etc/passwd` and `ROOT/etc/group`, where
@@ -13,6 +14,7 @@ use crowdtouch::config::{Config, InputConfig};
 use crowdtouch::input::discover::{discover, select, Found, SelectError};
 use crowdtouch::input::DeviceKind;
 use crowdtouch::pipeline::device::{preference, selector, SystemProber};
+use crowdtouch::pipeline::TouchSources;
 use std::os::unix::fs::MetadataExt;
 use std::path::{Path, PathBuf};
 
@@ -141,9 +143,9 @@ fn may_open(acct: &Account, meta: &std::fs::Metadata, kind: DeviceKind) -> bool 
 
 /// The device checks: `device` (what each `Device` input selects), `device_access`
 /// (the service user may open it), `udev_rule` (installed, and applied to every
-/// touch node found).
+/// touch node found). A config with no `Device` input reads no device: `device`
+/// says where its touches come from instead, and no node is probed.
 pub fn check_devices(cfg: &Config, root: &Path, acct: &Result<Account, String>) -> Vec<Check> {
-    let found = discover(root, &SystemProber);
     let inputs: Vec<(usize, &InputConfig)> = cfg
         .inputs
         .iter()
@@ -154,13 +156,22 @@ pub fn check_devices(cfg: &Config, root: &Path, acct: &Result<Account, String>) 
         .iter()
         .map(|d| root.join(d).join(UDEV_RULE))
         .find(|p| p.is_file());
-    let mut out = Vec::new();
-    if inputs.is_empty() {
-        out.push(Check::ok(
-            "device",
-            "the config reads no touch device (no Device input)",
-        ));
+    if let Some(line) = TouchSources::of(cfg).without_device() {
+        let rule = match &rule {
+            Some(r) => format!("{} installed", r.display()),
+            None => format!("{UDEV_RULE} not installed"),
+        };
+        return vec![
+            Check::ok("device", line),
+            Check::ok("device_access", "no device node to open"),
+            Check::ok(
+                "udev_rule",
+                format!("{rule}; not needed: the config reads no touch device"),
+            ),
+        ];
     }
+    let found = discover(root, &SystemProber);
+    let mut out = Vec::new();
     // The nodes the service will need: each input's pick, or its candidates.
     let mut nodes: Vec<(PathBuf, DeviceKind)> = Vec::new();
     for (i, input) in &inputs {

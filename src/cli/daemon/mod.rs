@@ -17,7 +17,7 @@ use crate::cli::common::process::{
 use anyhow::{bail, Result};
 use clap::Args;
 use crowdtouch::config::{self, Config};
-use crowdtouch::pipeline::{preflight, Preflight, Severity};
+use crowdtouch::pipeline::{Severity, TouchSources};
 use crowdtouch::rt::monotonic_now;
 use crowdtouch::vocab::Micros;
 use std::path::PathBuf;
@@ -84,13 +84,10 @@ pub fn run(a: RunArgs) -> Result<()> {
     // What check-config reports, at the config's fields. The socket is checked here
     // only when it is the config's (`--socket` is checked when it is bound), and the
     // recordings when they are read next.
-    let config_socket = cfg.socket.resolved_path();
-    let findings = preflight(
+    let findings = check::startup_findings(
         &cfg,
-        &Preflight {
-            socket: a.socket.is_none().then_some(config_socket.as_path()),
-            recordings: false,
-            starting: true,
+        check::Asker::Run {
+            socket_given: a.socket.is_some(),
         },
     );
     let shown = path.clone().unwrap_or_else(|| PathBuf::from("<embedded>"));
@@ -102,8 +99,12 @@ pub fn run(a: RunArgs) -> Result<()> {
     if !errors.is_empty() {
         bail!("the config cannot be run:\n{errors}");
     }
+    let touch = TouchSources::of(&cfg).without_device();
     let daemon = start_daemon(cfg, a.socket)?;
     log::info!("listening on {}", daemon.socket_path().display());
+    if let Some(line) = touch {
+        log::info!("{line}");
+    }
     supervise(sig, daemon, path, None, |r| {
         log::debug!("{}", status_line(r));
         Ok(())
