@@ -745,3 +745,184 @@ fn a_creeping_hand_is_rejected_as_still_and_moves_nothing() {
         "no motion for a creeping hand"
     );
 }
+
+/// The gesture classes, each with the seed its test above uses.
+const CLASS_SEEDS: [(MotionClass, u64); 10] = [
+    (MotionClass::Translate, 1501),
+    (MotionClass::Twist, 1502),
+    (MotionClass::Contract, 1503),
+    (MotionClass::Expand, 1504),
+    (MotionClass::Join, 1505),
+    (MotionClass::Split, 1506),
+    (MotionClass::SplitThenTranslate, 1507),
+    (MotionClass::TranslateThenJoin, 1508),
+    (MotionClass::TwistWhileExpanding, 1509),
+    (MotionClass::TwistWhileContracting, 1510),
+];
+
+/// Every class's gesture played on the crowd standing in `formation` (reached by
+/// `set_formation` first): the crowd after is the crowd before moved by the
+/// gesture — one similarity, or one per part for a class recognised as a split —
+/// within 15 % of its RMS radius (issue 34). Returns each class's residual.
+fn classes_keep(formation: &str) -> Vec<(MotionClass, f64)> {
+    let mut cfg = Config::embedded_default();
+    cfg.pipeline.tick_hz = 60.0;
+    let period = (1e6 / cfg.pipeline.tick_hz) as u64;
+    let mut out = Vec::new();
+    for (class, seed) in CLASS_SEEDS {
+        let mut engine = Engine::new(&cfg, Some(GLASS_MM), true);
+        let mut now = 0u64;
+        if formation != crowdtouch::crowd::formation::START {
+            engine.set_formation(formation, Micros(now)).unwrap();
+            let mut reached = false;
+            while !reached && now < 30_000_000 {
+                now += period;
+                let o = engine.tick(Micros(now));
+                reached = o
+                    .events
+                    .iter()
+                    .any(|e| matches!(e, Event::Formation { name, .. } if name == formation));
+                engine.clear_events();
+            }
+            assert!(reached, "{formation}: the switch did not finish");
+            // Touch control settles the crowd on its new mesh.
+            for _ in 0..60 {
+                now += period;
+                engine.tick(Micros(now));
+                engine.clear_events();
+            }
+        }
+        let tracks = generate(class, &style(class, 0.0, true), seed);
+        let frames = to_frames(&tracks, GLASS_MM, Micros(now + 500_000));
+        let mut run = Run {
+            snapshots: vec![],
+            events: vec![],
+            meshes: vec![],
+        };
+        let clock = VirtualClock {
+            period: Micros(period),
+            settle: Micros::from_secs_f64(SETTLE_S),
+            max_gap: Micros(crowdtouch::input::replay::MAX_GAP_US),
+        };
+        let (mut done, mut stop_at) = (false, None::<Micros>);
+        let _ = replay_virtual(
+            &mut engine,
+            frames.into_iter().map(Ok),
+            clock,
+            |_| {},
+            |o| {
+                run.snapshots.push(Arc::clone(&o.snapshot));
+                run.events.extend(o.events.iter().cloned());
+                done |= o.events.iter().any(|e| {
+                    matches!(
+                        e,
+                        Event::GestureMotion {
+                            phase: MotionPhase::Done | MotionPhase::Cancelled,
+                            ..
+                        }
+                    )
+                });
+                if o.mesh.is_some() && done && stop_at.is_none() {
+                    stop_at = Some(o.snapshot.t + Micros::from_secs_f64(AFTER_MESH_S));
+                }
+                match stop_at {
+                    Some(t) if o.snapshot.t >= t => Err(Stop),
+                    _ => Ok(()),
+                }
+            },
+        );
+        let recognised = run.events.iter().find_map(|e| match e {
+            Event::GestureEnd {
+                recognition: Some(r),
+                ..
+            } => Some(r.class.clone()),
+            _ => None,
+        });
+        let Some(recognised) = recognised else {
+            panic!("{formation}/{class}: not recognised");
+        };
+        assert!(done, "{formation}/{class}: the motion did not finish");
+        let before = positions(&run, 0);
+        let after: Vec<Vec2> = run.last().agents.iter().map(|a| a.pos).collect();
+        let split = matches!(recognised.as_str(), "split" | "split_then_translate");
+        let parts = if split {
+            two_parts(&after)
+        } else {
+            vec![(0..after.len()).collect()]
+        };
+        let worst = parts
+            .iter()
+            .map(|part| {
+                let a: Vec<Vec2> = part.iter().map(|&i| before[i]).collect();
+                let b: Vec<Vec2> = part.iter().map(|&i| after[i]).collect();
+                procrustes_residual(&a, &b)
+            })
+            .fold(0.0, f64::max);
+        eprintln!(
+            "{formation}/{class} (recognised {recognised}): residual {:.1} % of the RMS radius",
+            100.0 * worst
+        );
+        assert!(
+            worst <= 0.15,
+            "{formation}/{class} (recognised {recognised}): the formation is lost, residual {:.1} %",
+            100.0 * worst
+        );
+        out.push((class, worst));
+    }
+    out
+}
+
+/// One test per shipped formation (they run side by side).
+macro_rules! keeps_formation {
+    ($($test:ident => $name:literal),* $(,)?) => {$(
+        #[test]
+        fn $test() {
+            let r = classes_keep($name);
+            assert_eq!(r.len(), 10);
+        }
+    )*};
+}
+
+keeps_formation! {
+    every_class_keeps_the_start_grid => "start",
+    every_class_keeps_a_square => "square",
+    every_class_keeps_an_arrow => "arrow",
+    every_class_keeps_a_column => "column",
+    every_class_keeps_a_line => "line",
+    every_class_keeps_a_wedge => "wedge",
+    every_class_keeps_a_diamond => "diamond",
+    every_class_keeps_a_circle => "circle",
+    every_class_keeps_a_ring => "ring",
+    every_class_keeps_two_groups => "two_groups",
+    every_class_keeps_a_letter_a => "letter_a",
+    every_class_keeps_a_heart => "heart",
+}
+
+/// Every formation the shipped config defines has its test above.
+#[test]
+fn the_formation_tests_cover_every_shipped_formation() {
+    let cfg = Config::embedded_default();
+    let mut shipped: Vec<String> = cfg
+        .formation_library()
+        .names()
+        .map(str::to_string)
+        .collect();
+    shipped.push(crowdtouch::crowd::formation::START.to_string());
+    shipped.sort();
+    let mut tested = vec![
+        "start",
+        "square",
+        "arrow",
+        "column",
+        "line",
+        "wedge",
+        "diamond",
+        "circle",
+        "ring",
+        "two_groups",
+        "letter_a",
+        "heart",
+    ];
+    tested.sort_unstable();
+    assert_eq!(shipped, tested);
+}

@@ -309,6 +309,223 @@ pub fn is_split_class(name: &str) -> bool {
     matches!(name, "split" | "split_then_translate")
 }
 
+/// Lists of agent (or trajectory) indices.
+type Groups = Vec<Vec<usize>>;
+
+/// The two parts of a split and the trajectories each takes its motion from: the
+/// synthesised ends in two clusters (2-means), the agents ordered along the axis
+/// from one cluster's centroid to the other's and divided in the clusters'
+/// proportion. A crowd thinner along the axis than its spacing (a line across
+/// it) is ordered along the line instead, so each part is one end of it rather
+/// than every other agent. `None` when a cluster or a part would have fewer than
+/// `min` agents.
+fn split_parts(
+    traj: &[[Vec2; S_H]],
+    agents: &[Vec2],
+    space: f64,
+    min: usize,
+) -> Option<(Groups, Groups)> {
+    let n = agents.len();
+    let ends: Vec<Vec2> = traj.iter().map(|t| t[S_H - 1]).collect();
+    let label = two_means(&ends);
+    let cluster = |l: u8| -> Vec<usize> { (0..n).filter(|&j| label[j] == l).collect() };
+    let (a, b) = (cluster(0), cluster(1));
+    let min = min.max(1);
+    if a.len() < min || b.len() < min {
+        return None;
+    }
+    let mean = |js: &[usize]| js.iter().map(|&j| ends[j]).sum::<Vec2>() / js.len() as f64;
+    let axis = (mean(&b) - mean(&a)).try_normalize(1e-12)?;
+    let across = Vec2::new(-axis.y, axis.x);
+    let proj: Vec<f64> = agents.iter().map(|p| p.dot(&axis)).collect();
+    let m = proj.iter().sum::<f64>() / n as f64;
+    let spread = (proj.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / n as f64).sqrt();
+    let key = |i: usize| {
+        if spread < space {
+            agents[i].dot(&across)
+        } else {
+            proj[i]
+        }
+    };
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&i, &j| key(i).total_cmp(&key(j)).then(i.cmp(&j)));
+    // As many on the first cluster's side as it has trajectories.
+    let take = a.len().clamp(1, n - 1);
+    let mut first = order[..take].to_vec();
+    let mut second = order[take..].to_vec();
+    first.sort_unstable();
+    second.sort_unstable();
+    Some((vec![first, second], vec![a, b]))
+}
+
+/// The least scale that keeps the nearest neighbours of `pts` `floor_m` apart.
+fn least_scale(pts: &[Vec2], floor_m: f64) -> f64 {
+    if pts.len() >= 2 && floor_m > 0.0 {
+        (floor_m / spacing(pts, 1e-9)).min(1.0)
+    } else {
+        0.0
+    }
+}
+
+/// Moves `part` (agents) by the motion of the trajectories `fit`: at each sample
+/// the similarity of their starts onto them, about the part's centroid, shifted as
+/// their centroid moved and by `shift[k]` (when given); with `residual` (the
+/// bound, m), each agent's own trajectory's deviation from it, bounded and faded.
+/// Without `residual` (a split's part) only the centroid's motion is taken: the
+/// part translates. Returns the motion from start to end.
+#[allow(clippy::too_many_arguments)]
+fn move_part(
+    out: &mut [[Vec2; S_H]],
+    agents: &[Vec2],
+    traj: &[[Vec2; S_H]],
+    part: &[usize],
+    fit: &[usize],
+    shift: &[Vec2],
+    floor_m: f64,
+    residual: Option<f64>,
+) -> Similarity {
+    let c = part.iter().map(|&i| agents[i]).sum::<Vec2>() / part.len().max(1) as f64;
+    let pts: Vec<Vec2> = part.iter().map(|&i| agents[i]).collect();
+    let min_scale = least_scale(&pts, floor_m);
+    let from: Vec<Vec2> = fit.iter().map(|&j| traj[j][0]).collect();
+    let c0 = from.iter().sum::<Vec2>() / from.len().max(1) as f64;
+    let mut to: Vec<Vec2> = Vec::with_capacity(fit.len());
+    let mut end = Similarity::IDENTITY;
+    for k in 0..S_H {
+        to.clear();
+        to.extend(fit.iter().map(|&j| traj[j][k]));
+        let f = Similarity::fit(&from, &to);
+        let ck = to.iter().sum::<Vec2>() / to.len().max(1) as f64;
+        let turn = match residual {
+            Some(_) => Similarity {
+                theta_rad: f.theta_rad,
+                scale: f.scale.max(min_scale),
+                t_m: Vec2::zeros(),
+            },
+            None => Similarity::IDENTITY,
+        };
+        let d = shift.get(k).copied().unwrap_or_else(Vec2::zeros);
+        let about = Similarity {
+            t_m: c + (ck - c0) + d - turn.apply(c),
+            ..turn
+        };
+        let fade = (std::f64::consts::PI * k as f64 / (S_H - 1) as f64).sin();
+        for &i in part {
+            let mut y = about.apply(agents[i]);
+            if let (Some(bound), true) = (residual, k > 0 && k < S_H - 1) {
+                let r = traj[i][k] - f.apply(traj[i][0]) - d;
+                let len = r.norm();
+                let r = if len > bound && len > 0.0 {
+                    r * (bound / len)
+                } else {
+                    r
+                };
+                y += r * fade;
+            }
+            out[i][k] = if k == 0 { agents[i] } else { y };
+        }
+        if k == S_H - 1 {
+            end = about;
+        }
+    }
+    end
+}
+
+/// A motion that does not split: the whole crowd's similarity (fitted on every
+/// trajectory, about the crowd's centroid); a crowd in several parts also moves
+/// each part by how its own trajectories' centroid moved beyond that similarity
+/// (the parts of a join close in, those of a twist orbit with the whole).
+fn whole(
+    out: &mut [[Vec2; S_H]],
+    agents: &[Vec2],
+    traj: &[[Vec2; S_H]],
+    space: f64,
+    floor_m: f64,
+    params: &KeepParams,
+) -> (Vec<Vec<usize>>, Vec<Similarity>) {
+    let n = agents.len();
+    let parts = parts_of(agents, GROUP_GAP_FACTOR * space, params.min_part_agents);
+    let all: Vec<usize> = (0..n).collect();
+    let c = agents.iter().sum::<Vec2>() / n.max(1) as f64;
+    let rms = (agents.iter().map(|p| (p - c).norm_squared()).sum::<f64>() / n.max(1) as f64).sqrt();
+    let bound = params.residual_fraction.max(0.0) * rms;
+    if parts.len() <= 1 {
+        let end = move_part(out, agents, traj, &all, &all, &[], floor_m, Some(bound));
+        return (vec![all], vec![end]);
+    }
+    // The whole crowd's fit at each sample, and each part's own shift beyond it.
+    let from: Vec<Vec2> = traj.iter().map(|t| t[0]).collect();
+    let fits: Vec<Similarity> = (0..S_H)
+        .map(|k| {
+            let to: Vec<Vec2> = traj.iter().map(|t| t[k]).collect();
+            Similarity::fit(&from, &to)
+        })
+        .collect();
+    let mut ends = Vec::with_capacity(parts.len());
+    for part in &parts {
+        let centre = |k: usize| part.iter().map(|&j| traj[j][k]).sum::<Vec2>() / part.len() as f64;
+        let shift: Vec<Vec2> = (0..S_H)
+            .map(|k| centre(k) - fits[k].apply(centre(0)))
+            .collect();
+        // The part turns and scales with the whole, about the whole's centre.
+        let end = move_about(out, agents, traj, part, &fits, c, &shift, floor_m, bound);
+        ends.push(end);
+    }
+    (parts, ends)
+}
+
+/// [`whole`]'s move of one part: `fits[k]` about the crowd's centre `c` (its
+/// centroid moved as the trajectories' did), plus `shift[k]`, plus each agent's
+/// residual bounded by `bound` (m) and faded.
+#[allow(clippy::too_many_arguments)]
+fn move_about(
+    out: &mut [[Vec2; S_H]],
+    agents: &[Vec2],
+    traj: &[[Vec2; S_H]],
+    part: &[usize],
+    fits: &[Similarity],
+    c: Vec2,
+    shift: &[Vec2],
+    floor_m: f64,
+    bound: f64,
+) -> Similarity {
+    let min_scale = least_scale(agents, floor_m);
+    let c0 = traj.iter().map(|t| t[0]).sum::<Vec2>() / traj.len().max(1) as f64;
+    let mut end = Similarity::IDENTITY;
+    for k in 0..S_H {
+        let f = fits[k];
+        let ck = traj.iter().map(|t| t[k]).sum::<Vec2>() / traj.len().max(1) as f64;
+        let turn = Similarity {
+            theta_rad: f.theta_rad,
+            scale: f.scale.max(min_scale),
+            t_m: Vec2::zeros(),
+        };
+        let about = Similarity {
+            t_m: c + (ck - c0) + shift[k] - turn.apply(c),
+            ..turn
+        };
+        let fade = (std::f64::consts::PI * k as f64 / (S_H - 1) as f64).sin();
+        for &i in part {
+            let mut y = about.apply(agents[i]);
+            if k > 0 && k < S_H - 1 {
+                let r = traj[i][k] - f.apply(traj[i][0]) - shift[k];
+                let len = r.norm();
+                let r = if len > bound && len > 0.0 {
+                    r * (bound / len)
+                } else {
+                    r
+                };
+                y += r * fade;
+            }
+            out[i][k] = if k == 0 { agents[i] } else { y };
+        }
+        if k == S_H - 1 {
+            end = about;
+        }
+    }
+    end
+}
+
 /// `s` applied to the crowd at `agents` as it stands (module doc). `split`: the
 /// class divides the crowd in two. Trajectory `i` of `s` is agent `i`'s.
 pub fn keep_formation(s: &Synthesis, agents: &[Vec2], split: bool, params: &KeepParams) -> Kept {
@@ -317,101 +534,31 @@ pub fn keep_formation(s: &Synthesis, agents: &[Vec2], split: bool, params: &Keep
     let traj = &s.trajectories[..n];
     let floor = 2.0 * params.radius_m.max(0.0);
     let space = spacing(agents, floor.max(1e-3));
-    // Which agents move together, and which trajectories tell how.
-    let (parts, fit_sets, with_residual): (Vec<Vec<usize>>, Vec<Vec<usize>>, bool) = if split
-        && n >= 2
-    {
-        let ends: Vec<Vec2> = traj.iter().map(|t| t[S_H - 1]).collect();
-        let label = two_means(&ends);
-        let cluster = |l: u8| -> Vec<usize> { (0..n).filter(|&j| label[j] == l).collect() };
-        let (a, b) = (cluster(0), cluster(1));
-        if a.is_empty() || b.is_empty() {
-            ((vec![(0..n).collect()]), vec![(0..n).collect()], true)
-        } else {
-            let mean = |js: &[usize]| js.iter().map(|&j| ends[j]).sum::<Vec2>() / js.len() as f64;
-            let axis = mean(&b) - mean(&a);
-            let mut order: Vec<usize> = (0..n).collect();
-            order.sort_by(|&i, &j| {
-                agents[i]
-                    .dot(&axis)
-                    .total_cmp(&agents[j].dot(&axis))
-                    .then(i.cmp(&j))
-            });
-            // As many on the first cluster's side as it has trajectories.
-            let take = a.len().clamp(1, n - 1);
-            let mut first = order[..take].to_vec();
-            let mut second = order[take..].to_vec();
-            first.sort_unstable();
-            second.sort_unstable();
-            (vec![first, second], vec![a, b], false)
+    let mut out: Vec<[Vec2; S_H]> = vec![[Vec2::zeros(); S_H]; n];
+    let (parts, ends) = if split && n >= 2 {
+        match split_parts(traj, agents, space, params.min_part_agents) {
+            Some((parts, clusters)) => {
+                let mut ends = Vec::with_capacity(2);
+                for (part, cluster) in parts.iter().zip(&clusters) {
+                    // A part takes its cluster's motion, about its own centroid.
+                    ends.push(move_part(
+                        &mut out,
+                        agents,
+                        traj,
+                        part,
+                        cluster,
+                        &[],
+                        floor,
+                        None,
+                    ));
+                }
+                (parts, ends)
+            }
+            None => whole(&mut out, agents, traj, space, floor, params),
         }
     } else {
-        let parts = parts_of(agents, GROUP_GAP_FACTOR * space, params.min_part_agents);
-        (parts.clone(), parts, true)
+        whole(&mut out, agents, traj, space, floor, params)
     };
-    let mut out: Vec<[Vec2; S_H]> = vec![[Vec2::zeros(); S_H]; n];
-    let mut ends = Vec::with_capacity(parts.len());
-    let mut from: Vec<Vec2> = Vec::new();
-    let mut to: Vec<Vec2> = Vec::new();
-    for (part, fit) in parts.iter().zip(&fit_sets) {
-        let c = part.iter().map(|&i| agents[i]).sum::<Vec2>() / part.len().max(1) as f64;
-        let rms = (part
-            .iter()
-            .map(|&i| (agents[i] - c).norm_squared())
-            .sum::<f64>()
-            / part.len().max(1) as f64)
-            .sqrt();
-        // The least scale that keeps nearest neighbours two radii apart.
-        let part_pts: Vec<Vec2> = part.iter().map(|&i| agents[i]).collect();
-        let min_scale = if part.len() >= 2 && floor > 0.0 {
-            (floor / spacing(&part_pts, 1e-9)).min(1.0)
-        } else {
-            0.0
-        };
-        from.clear();
-        from.extend(fit.iter().map(|&j| traj[j][0]));
-        let c0 = from.iter().sum::<Vec2>() / from.len().max(1) as f64;
-        let bound = params.residual_fraction.max(0.0) * rms;
-        let mut end = Similarity::IDENTITY;
-        for k in 0..S_H {
-            to.clear();
-            to.extend(fit.iter().map(|&j| traj[j][k]));
-            let f = Similarity::fit(&from, &to);
-            let ck = to.iter().sum::<Vec2>() / to.len().max(1) as f64;
-            let group = Similarity {
-                theta_rad: f.theta_rad,
-                scale: f.scale.max(min_scale),
-                t_m: Vec2::zeros(),
-            };
-            // About the part's centroid, moved as the trajectories' centroid moved.
-            let about = Similarity {
-                t_m: c + (ck - c0) - group.apply(c),
-                ..group
-            };
-            let fade = (std::f64::consts::PI * k as f64 / (S_H - 1) as f64).sin();
-            for &i in part {
-                let mut y = about.apply(agents[i]);
-                if with_residual && k > 0 && k < S_H - 1 {
-                    let r = traj[i][k] - f.apply(traj[i][0]);
-                    let len = r.norm();
-                    let r = if len > bound && len > 0.0 {
-                        r * (bound / len)
-                    } else {
-                        r
-                    };
-                    y += r * fade;
-                }
-                out[i][k] = y;
-            }
-            if k == S_H - 1 {
-                end = about;
-            }
-        }
-        for &i in part {
-            out[i][0] = agents[i];
-        }
-        ends.push(end);
-    }
     Kept {
         synthesis: Synthesis {
             trajectories: out,
