@@ -7,6 +7,8 @@
 //! * the page draws the agents where the socket says they are (pixels of the agent
 //!   colours on a screenshot, inside the crowd's area and at every agent);
 //! * a mouse drag on the page moves the crowd (seen in the socket's stream);
+//! * on a table with no touch device (`inputs: []`), a mouse swipe in open space
+//!   is recognised and moves the crowd along it with its formation kept (issue 34);
 //! * a page on a non-privileged output cannot pause the crowd nor move it, and shows
 //!   the daemon's error;
 //! * a page of another origin (served from another loopback port) cannot open the
@@ -702,6 +704,96 @@ fn the_page_draws_the_crowd_and_a_mouse_drag_moves_it() {
         );
         browser.assert_no_error();
     });
+}
+
+/// The RMS distance between `b` and `a` moved by the least-squares similarity
+/// onto it (turn, scale, shift), over `a`'s RMS radius.
+fn procrustes_residual(a: &[(f64, f64)], b: &[(f64, f64)]) -> f64 {
+    let (ca, cb) = (centroid(a), centroid(b));
+    let (mut dot, mut cross, mut var) = (0.0, 0.0, 0.0);
+    for (p, q) in a.iter().zip(b) {
+        let (p, q) = ((p.0 - ca.0, p.1 - ca.1), (q.0 - cb.0, q.1 - cb.1));
+        dot += p.0 * q.0 + p.1 * q.1;
+        cross += p.0 * q.1 - p.1 * q.0;
+        var += p.0 * p.0 + p.1 * p.1;
+    }
+    let (theta, s) = (cross.atan2(dot), (dot * dot + cross * cross).sqrt() / var);
+    let (sn, cs) = theta.sin_cos();
+    let err: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(p, q)| {
+            let d = (p.0 - ca.0, p.1 - ca.1);
+            let m = (
+                cb.0 + s * (cs * d.0 - sn * d.1),
+                cb.1 + s * (sn * d.0 + cs * d.1),
+            );
+            (m.0 - q.0).powi(2) + (m.1 - q.1).powi(2)
+        })
+        .sum();
+    (err / a.len() as f64).sqrt() / (var / a.len() as f64).sqrt()
+}
+
+/// A table with no touch device (`inputs: []`, touches only from the viewer): a
+/// mouse swipe to the right in open space is recognised as a gesture and moves the
+/// crowd to the right with its formation kept (issue 34: `gestures.apply:
+/// keep_formation`, the default).
+#[test]
+fn a_swipe_in_open_space_moves_the_crowd_along_it_with_its_formation() {
+    in_browser(
+        "a_swipe_in_open_space_moves_the_crowd_along_it_with_its_formation",
+        || {
+            if bridged() {
+                let _ = writeln!(std::io::stderr(), "bridged: the bridge carries no touches");
+                return;
+            }
+            let (daemon, port) = daemon_with_websocket(100, Some(""), true);
+            let watcher = Watcher::connect(&daemon.socket);
+            let hello = watcher.hello();
+            let before = points(&watcher.at_rest()["positions"]);
+            let c = centroid(&before);
+            let mut browser = open_viewer(port);
+            browser.call(json!({"cmd": "wait", "until": "snapshots", "min": 10}));
+            let shot = browser.call(json!({"cmd": "stats"}));
+            let map = Mapping::new(&hello, &shot["view"]);
+            // 3 m to the right, 2 m below the crowd's lowest agent: open space.
+            let low = before.iter().map(|p| p.1).fold(f64::MIN, f64::max);
+            let y = (low + 2.0).min(8.5);
+            let (from, to) = (map.to_page((c.0 - 2.0, y)), map.to_page((c.0 + 1.0, y)));
+            let mark = watcher.len();
+            browser.call(
+                json!({"cmd": "drag", "from": [from.0, from.1], "to": [to.0, to.1],
+                   "steps": 30, "ms": 700, "hold_ms": 0}),
+            );
+            let end = watcher.wait_for(mark, |v| v["type"] == "gesture" && v["phase"] == "end");
+            assert!(end["rejected"].is_null(), "the swipe was not played: {end}");
+            watcher.wait_for(mark, |v| {
+                v["type"] == "snapshot" && centroid(&points(&v["positions"])).0 > c.0 + 1.0
+            });
+            let after = points(&watcher.at_rest()["positions"]);
+            let moved = centroid(&after);
+            let shift = (moved.0 - c.0, moved.1 - c.1);
+            let cos = shift.0 / shift.0.hypot(shift.1);
+            let residual = procrustes_residual(&before, &after);
+            eprintln!(
+                "swipe: recognised {}, crowd moved ({:.2}, {:.2}) m, Procrustes residual {:.1} %",
+                end["recognition"]["class"],
+                shift.0,
+                shift.1,
+                100.0 * residual
+            );
+            assert!(
+                shift.0.hypot(shift.1) > 1.0 && cos > 0.7,
+                "the crowd moved {shift:?}"
+            );
+            assert!(
+                residual <= 0.15,
+                "the formation is lost: residual {:.1} %",
+                100.0 * residual
+            );
+            browser.assert_no_error();
+        },
+    );
 }
 
 /// The edit mode's people for the page: a block of 5 × 5 people 0.8 m apart
