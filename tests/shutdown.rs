@@ -299,11 +299,12 @@ fn snapshots_keep_flowing_while_a_large_resize_is_prepared() {
         v["id"] == 3
     });
     assert_eq!(ack.expect("an answer")["type"], "ack");
-    // Drawing 10,000 goals takes about half a second in a release build (seconds
-    // in a debug one): at 120 ticks per second, dozens of snapshots. A control thread
-    // that drew them itself would have published none meanwhile.
+    // Drawing 10,000 goals takes a quarter to half a second in a release build
+    // (seconds in a debug one): at 120 ticks per second, dozens of snapshots. A
+    // control thread that drew them itself would have published none meanwhile, so
+    // a handful is the line (how many more depends on the machine, not the daemon).
     assert!(
-        during >= 30,
+        during >= 5,
         "{during} snapshots at the old size while the resize was prepared"
     );
     let next = read_json_until(&mut r, Duration::from_secs(5), |v| v["type"] == "snapshot");
