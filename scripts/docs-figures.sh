@@ -1,7 +1,8 @@
 #!/bin/sh
 # Draws every SVG figure of docs/ again, each with the command the docs give next
 # to it (README.md, docs/transforms.md, docs/scenes-and-formations.md,
-# docs/scenes/README.md; docs/edit/make-figures.sh for docs/edit/).
+# docs/scenes/README.md; docs/edit/make-figures.sh for docs/edit/,
+# docs/gestures/make-figures.sh for docs/gestures/).
 #
 #   scripts/docs-figures.sh [--bin PATH] [--out DIR]
 #
@@ -88,10 +89,15 @@ done
 CROWDTOUCH="$bin" docs/edit/make-figures.sh "$out/edit" > "$scratch/stdout" 2> "$scratch/stderr" || {
     cat "$scratch/stderr" >&2; echo "docs-figures: docs/edit/make-figures.sh failed" >&2; exit 1; }
 for f in "$out"/edit/*.svg; do say "$f"; done
+# docs/gestures.md, "Keeping the formation": each class as_sampled and keep_formation.
+mkdir -p "$out/gestures"
+CROWDTOUCH="$bin" docs/gestures/make-figures.sh "$out/gestures" > "$scratch/stdout" 2> "$scratch/stderr" || {
+    cat "$scratch/stderr" >&2; echo "docs-figures: docs/gestures/make-figures.sh failed" >&2; exit 1; }
+for f in "$out"/gestures/*.svg; do say "$f"; done
 
 if [ "$out" != "$root/docs" ]; then
     same=0; differ=0
-    for f in "$out"/*.svg "$out"/scenes/*.svg "$out"/edit/*.svg; do
+    for f in "$out"/*.svg "$out"/scenes/*.svg "$out"/edit/*.svg "$out"/gestures/*.svg; do
         rel=${f#"$out"/}
         if cmp -s "$f" "docs/$rel"; then
             same=$((same + 1))
