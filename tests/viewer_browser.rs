@@ -8,7 +8,8 @@
 //!   colours on a screenshot, inside the crowd's area and at every agent);
 //! * a mouse drag on the page moves the crowd (seen in the socket's stream);
 //! * on a table with no touch device (`inputs: []`), a mouse swipe in open space
-//!   is recognised and moves the crowd along it with its formation kept (issue 34);
+//!   is recognised and moves the crowd along it with its formation kept, and a
+//!   mouse drag on the crowd moves it (issue 34);
 //! * a page on a non-privileged output cannot pause the crowd nor move it, and shows
 //!   the daemon's error;
 //! * a page of another origin (served from another loopback port) cannot open the
@@ -737,7 +738,7 @@ fn procrustes_residual(a: &[(f64, f64)], b: &[(f64, f64)]) -> f64 {
 /// A table with no touch device (`inputs: []`, touches only from the viewer): a
 /// mouse swipe to the right in open space is recognised as a gesture and moves the
 /// crowd to the right with its formation kept (issue 34: `gestures.apply:
-/// keep_formation`, the default).
+/// keep_formation`, the default); then a mouse drag on the crowd moves it back.
 #[test]
 fn a_swipe_in_open_space_moves_the_crowd_along_it_with_its_formation() {
     in_browser(
@@ -791,6 +792,19 @@ fn a_swipe_in_open_space_moves_the_crowd_along_it_with_its_formation() {
                 "the formation is lost: residual {:.1} %",
                 100.0 * residual
             );
+            // The viewer's mouse drags the crowd: from its centre, 2 m back left.
+            let c = centroid(&after);
+            let (from, to) = (map.to_page(c), map.to_page((c.0 - 2.0, c.1)));
+            let mark = watcher.len();
+            browser.call(
+                json!({"cmd": "drag", "from": [from.0, from.1], "to": [to.0, to.1],
+                       "steps": 40, "ms": 2000, "hold_ms": 400}),
+            );
+            let control = watcher.wait_for(mark, |v| v["type"] == "control");
+            assert_eq!(control["phase"], "begin", "{control}");
+            watcher.wait_for(mark, |v| {
+                v["type"] == "snapshot" && centroid(&points(&v["positions"])).0 < c.0 - 1.5
+            });
             browser.assert_no_error();
         },
     );

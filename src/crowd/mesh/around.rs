@@ -578,21 +578,24 @@ pub fn mesh_around_parts(
     Ok((mesh, samples))
 }
 
-/// Draws every point farther than [`ALPHA_FACTOR`] spacings from all the others in
-/// to one spacing from the nearest of them, nearest stragglers first.
+/// Draws stragglers in: the points fall into groups joined by steps of at most
+/// [`ALPHA_FACTOR`] spacings (the median nearest-neighbour distance, at least
+/// `body_m`); while there is more than one, the smallest group is moved as a block
+/// until its point nearest to the rest stands one spacing from that rest. A lone
+/// straggler, a pair or a small cluster thus joins its part with its own shape.
 fn draw_in_stragglers(pts: &mut [Vec2], body_m: f64) {
     let n = pts.len();
     if n < 2 {
         return;
     }
-    let nearest = |pts: &[Vec2], i: usize| -> (usize, f64) {
+    let nearest = |pts: &[Vec2], i: usize| -> f64 {
         (0..pts.len())
             .filter(|&j| j != i)
-            .map(|j| (j, (pts[j] - pts[i]).norm()))
-            .fold((i, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
+            .map(|j| (pts[j] - pts[i]).norm())
+            .fold(f64::INFINITY, f64::min)
     };
     let mut nn: Vec<f64> = (0..n)
-        .map(|i| nearest(pts, i).1)
+        .map(|i| nearest(pts, i))
         .filter(|d| d.is_finite())
         .collect();
     if nn.is_empty() {
@@ -604,16 +607,49 @@ fn draw_in_stragglers(pts: &mut [Vec2], body_m: f64) {
         return;
     }
     let far = ALPHA_FACTOR * spacing;
-    let mut order: Vec<(f64, usize)> = (0..n)
-        .map(|i| (nearest(pts, i).1, i))
-        .filter(|(d, _)| *d > far)
-        .collect();
-    order.sort_by(|a, b| a.0.total_cmp(&b.0));
-    for (_, i) in order {
-        let (j, d) = nearest(pts, i);
-        if d > far && d.is_finite() {
-            let dir = (pts[i] - pts[j]) / d;
-            pts[i] = pts[j] + dir * spacing;
+    for _ in 0..n {
+        // Single linkage at `far`.
+        let mut label: Vec<usize> = (0..n).collect();
+        loop {
+            let mut changed = false;
+            for i in 0..n {
+                for j in 0..n {
+                    if label[j] < label[i] && (pts[i] - pts[j]).norm() <= far {
+                        label[i] = label[j];
+                        changed = true;
+                    }
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        let mut size: HashMap<usize, usize> = HashMap::new();
+        for &l in &label {
+            *size.entry(l).or_default() += 1;
+        }
+        if size.len() <= 1 {
+            return;
+        }
+        let Some((&small, _)) = size.iter().min_by_key(|(&l, &s)| (s, l)) else {
+            return;
+        };
+        let mut best = (f64::INFINITY, 0, 0);
+        for i in (0..n).filter(|&i| label[i] == small) {
+            for j in (0..n).filter(|&j| label[j] != small) {
+                let d = (pts[i] - pts[j]).norm();
+                if d < best.0 {
+                    best = (d, i, j);
+                }
+            }
+        }
+        let (d, i, j) = best;
+        if !(d.is_finite() && d > 0.0) {
+            return;
+        }
+        let shift = pts[j] + (pts[i] - pts[j]) / d * spacing - pts[i];
+        for k in (0..n).filter(|&k| label[k] == small) {
+            pts[k] += shift;
         }
     }
 }
@@ -918,6 +954,23 @@ mod tests {
         assert!(
             mesh_around_parts(&pts, &[(0..32).collect()], 0.1).is_err(),
             "an agent left out"
+        );
+        // A pair of stragglers joins as a pair, keeping its own spacing.
+        let mut pair = grid(0.0);
+        pair.extend([Vec2::new(-4.0, 0.0), Vec2::new(-4.5, 0.0)]);
+        let (mesh, goals) = mesh_around_parts(&pair, &[(0..18).collect()], 0.1).unwrap();
+        assert_eq!(mesh.piece_count(), 1, "the pair joins its part");
+        let at = |g: &GoalSample| {
+            let t = mesh.triangles()[g.tri as usize];
+            (0..3)
+                .map(|k| mesh.rest()[t[k] as usize] * g.bary[k])
+                .sum::<Vec2>()
+        };
+        let (a, b) = (at(&goals[16]), at(&goals[17]));
+        assert!((a - Vec2::new(-0.5, 0.0)).norm() < 1e-9, "{a:?}");
+        assert!(
+            ((a - b).norm() - 0.5).abs() < 1e-9,
+            "the pair keeps its shape"
         );
     }
 }
