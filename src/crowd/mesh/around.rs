@@ -519,12 +519,12 @@ fn sculpt(rest: &[Vec2], tris: &mut Vec<[u32; 3]>, max_edge_m: f64) {
 /// A mesh around the agents at `positions` made of one piece per part: each of
 /// `parts` (agent indices; every agent in exactly one) meshed on its own with
 /// [`mesh_around`] and the pieces put side by side, so two parts stay two pieces
-/// however close they stand. Within a part, an agent farther than
-/// [`ALPHA_FACTOR`] spacings (the part's median nearest-neighbour distance, at
-/// least two body radii) from every other agent of it — a straggler — has its
-/// goal drawn in to one spacing from the nearest of them, so it joins its part
-/// instead of making a piece of its own. Goal `i` is agent `i`'s (at its vertex,
-/// or where its straggling was drawn in to).
+/// however close they stand. Within a part, a group of fewer than
+/// `min_piece_agents` agents farther than [`ALPHA_FACTOR`] spacings (the part's
+/// median nearest-neighbour distance, at least two body radii) from the rest — a
+/// straggler, or a few — has its goals drawn in as a block to one spacing from
+/// the nearest of the rest, so it joins its part instead of making a piece of its
+/// own. Goal `i` is agent `i`'s: at its vertex, or where it was drawn in to.
 ///
 /// # Errors
 /// As [`mesh_around`]; [`MeshError::Empty`] also when `parts` leaves an agent out
@@ -536,6 +536,7 @@ pub fn mesh_around_parts(
     positions: &[Vec2],
     parts: &[Vec<usize>],
     radius_m: f64,
+    min_piece_agents: usize,
 ) -> Result<(TriMesh, Vec<GoalSample>), MeshError> {
     let n = positions.len();
     let mut seen = vec![false; n];
@@ -558,7 +559,7 @@ pub fn mesh_around_parts(
     let mut samples: Vec<Option<GoalSample>> = vec![None; n];
     for part in parts {
         let mut pts: Vec<Vec2> = part.iter().map(|&i| positions[i]).collect();
-        draw_in_stragglers(&mut pts, body);
+        draw_in_stragglers(&mut pts, body, min_piece_agents);
         let (mesh, goals) = mesh_around(&pts, radius_m)?;
         let (v0, t0) = (rest.len() as u32, triangles.len() as u32);
         rest.extend_from_slice(mesh.rest());
@@ -580,10 +581,11 @@ pub fn mesh_around_parts(
 
 /// Draws stragglers in: the points fall into groups joined by steps of at most
 /// [`ALPHA_FACTOR`] spacings (the median nearest-neighbour distance, at least
-/// `body_m`); while there is more than one, the smallest group is moved as a block
-/// until its point nearest to the rest stands one spacing from that rest. A lone
-/// straggler, a pair or a small cluster thus joins its part with its own shape.
-fn draw_in_stragglers(pts: &mut [Vec2], body_m: f64) {
+/// `body_m`); while a group has fewer than `min` points (and is not the only one),
+/// the smallest is moved as a block until its point nearest to the rest stands one
+/// spacing from that rest. A lone straggler, a pair or a small cluster thus joins
+/// its part with its own shape; groups of `min` or more stay pieces of their own.
+fn draw_in_stragglers(pts: &mut [Vec2], body_m: f64, min: usize) {
     let n = pts.len();
     if n < 2 {
         return;
@@ -631,7 +633,11 @@ fn draw_in_stragglers(pts: &mut [Vec2], body_m: f64) {
         if size.len() <= 1 {
             return;
         }
-        let Some((&small, _)) = size.iter().min_by_key(|(&l, &s)| (s, l)) else {
+        let Some((&small, _)) = size
+            .iter()
+            .filter(|(_, &s)| s < min)
+            .min_by_key(|(&l, &s)| (s, l))
+        else {
             return;
         };
         let mut best = (f64::INFINITY, 0, 0);
@@ -930,7 +936,7 @@ mod tests {
         let mut first: Vec<usize> = (0..16).collect();
         first.push(32);
         let parts = vec![first, (16..32).collect()];
-        let (mesh, goals) = mesh_around_parts(&pts, &parts, 0.1).unwrap();
+        let (mesh, goals) = mesh_around_parts(&pts, &parts, 0.1, 5).unwrap();
         assert_eq!(mesh.piece_count(), 2);
         assert_eq!(goals.len(), 33);
         let at = |g: &GoalSample| {
@@ -952,13 +958,13 @@ mod tests {
             .collect();
         assert_eq!(pieces.len(), 2);
         assert!(
-            mesh_around_parts(&pts, &[(0..32).collect()], 0.1).is_err(),
+            mesh_around_parts(&pts, &[(0..32).collect()], 0.1, 5).is_err(),
             "an agent left out"
         );
         // A pair of stragglers joins as a pair, keeping its own spacing.
         let mut pair = grid(0.0);
         pair.extend([Vec2::new(-4.0, 0.0), Vec2::new(-4.5, 0.0)]);
-        let (mesh, goals) = mesh_around_parts(&pair, &[(0..18).collect()], 0.1).unwrap();
+        let (mesh, goals) = mesh_around_parts(&pair, &[(0..18).collect()], 0.1, 5).unwrap();
         assert_eq!(mesh.piece_count(), 1, "the pair joins its part");
         let at = |g: &GoalSample| {
             let t = mesh.triangles()[g.tri as usize];

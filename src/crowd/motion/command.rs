@@ -435,7 +435,7 @@ impl RemeshRequest {
         };
         PreparedRemesh {
             epoch: self.epoch,
-            built: mesh_around_parts(&self.agents, &parts, self.radius_m),
+            built: mesh_around_parts(&self.agents, &parts, self.radius_m, self.min_piece_agents),
         }
     }
 }

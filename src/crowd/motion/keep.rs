@@ -367,52 +367,77 @@ fn least_scale(pts: &[Vec2], floor_m: f64) -> f64 {
     }
 }
 
-/// Moves `part` (agents) by the motion of the trajectories `fit`: at each sample
-/// the similarity of their starts onto them, about the part's centroid, shifted as
-/// their centroid moved and by `shift[k]` (when given); with `residual` (the
-/// bound, m), each agent's own trajectory's deviation from it, bounded and faded.
-/// Without `residual` (a split's part) only the centroid's motion is taken: the
-/// part translates. Returns the motion from start to end.
-#[allow(clippy::too_many_arguments)]
+/// The group motion of a set of trajectories: at each sample, the similarity of
+/// their starts onto them and their centroid.
+struct GroupMotion {
+    fits: Vec<Similarity>,
+    centres: Vec<Vec2>,
+}
+
+impl GroupMotion {
+    fn of(traj: &[[Vec2; S_H]], set: &[usize]) -> GroupMotion {
+        let from: Vec<Vec2> = set.iter().map(|&j| traj[j][0]).collect();
+        let mut to: Vec<Vec2> = Vec::with_capacity(set.len());
+        let (fits, centres) = (0..S_H)
+            .map(|k| {
+                to.clear();
+                to.extend(set.iter().map(|&j| traj[j][k]));
+                let centre = to.iter().sum::<Vec2>() / to.len().max(1) as f64;
+                (Similarity::fit(&from, &to), centre)
+            })
+            .unzip();
+        GroupMotion { fits, centres }
+    }
+}
+
+/// How a part follows a [`GroupMotion`].
+struct Follow<'a> {
+    /// The point the part turns and scales about (m).
+    pivot: Vec2,
+    /// Whether it turns and scales at all (a split's part only translates).
+    turn: bool,
+    /// The least scale (two radii between nearest neighbours).
+    min_scale: f64,
+    /// Extra shift at each sample (m); empty: none.
+    shift: &'a [Vec2],
+    /// The bound of each agent's residual (m); `None`: no residual.
+    residual: Option<f64>,
+}
+
+/// Moves `part` (agents) by `m`: at each sample its similarity about `how.pivot`,
+/// the pivot moved as the trajectories' centroid moved, plus `how.shift[k]`; with
+/// a residual bound, each agent's own trajectory's deviation from that, bounded
+/// and faded in and out. Sample 0 is where the agent stands. Returns the motion
+/// from start to end.
 fn move_part(
     out: &mut [[Vec2; S_H]],
     agents: &[Vec2],
     traj: &[[Vec2; S_H]],
     part: &[usize],
-    fit: &[usize],
-    shift: &[Vec2],
-    floor_m: f64,
-    residual: Option<f64>,
+    m: &GroupMotion,
+    how: &Follow,
 ) -> Similarity {
-    let c = part.iter().map(|&i| agents[i]).sum::<Vec2>() / part.len().max(1) as f64;
-    let pts: Vec<Vec2> = part.iter().map(|&i| agents[i]).collect();
-    let min_scale = least_scale(&pts, floor_m);
-    let from: Vec<Vec2> = fit.iter().map(|&j| traj[j][0]).collect();
-    let c0 = from.iter().sum::<Vec2>() / from.len().max(1) as f64;
-    let mut to: Vec<Vec2> = Vec::with_capacity(fit.len());
     let mut end = Similarity::IDENTITY;
     for k in 0..S_H {
-        to.clear();
-        to.extend(fit.iter().map(|&j| traj[j][k]));
-        let f = Similarity::fit(&from, &to);
-        let ck = to.iter().sum::<Vec2>() / to.len().max(1) as f64;
-        let turn = match residual {
-            Some(_) => Similarity {
+        let f = m.fits[k];
+        let turn = if how.turn {
+            Similarity {
                 theta_rad: f.theta_rad,
-                scale: f.scale.max(min_scale),
+                scale: f.scale.max(how.min_scale),
                 t_m: Vec2::zeros(),
-            },
-            None => Similarity::IDENTITY,
+            }
+        } else {
+            Similarity::IDENTITY
         };
-        let d = shift.get(k).copied().unwrap_or_else(Vec2::zeros);
+        let d = how.shift.get(k).copied().unwrap_or_else(Vec2::zeros);
         let about = Similarity {
-            t_m: c + (ck - c0) + d - turn.apply(c),
+            t_m: how.pivot + (m.centres[k] - m.centres[0]) + d - turn.apply(how.pivot),
             ..turn
         };
         let fade = (std::f64::consts::PI * k as f64 / (S_H - 1) as f64).sin();
         for &i in part {
             let mut y = about.apply(agents[i]);
-            if let (Some(bound), true) = (residual, k > 0 && k < S_H - 1) {
+            if let (Some(bound), true) = (how.residual, k > 0 && k < S_H - 1) {
                 let r = traj[i][k] - f.apply(traj[i][0]) - d;
                 let len = r.norm();
                 let r = if len > bound && len > 0.0 {
@@ -448,82 +473,29 @@ fn whole(
     let all: Vec<usize> = (0..n).collect();
     let c = agents.iter().sum::<Vec2>() / n.max(1) as f64;
     let rms = (agents.iter().map(|p| (p - c).norm_squared()).sum::<f64>() / n.max(1) as f64).sqrt();
-    let bound = params.residual_fraction.max(0.0) * rms;
-    if parts.len() <= 1 {
-        let end = move_part(out, agents, traj, &all, &all, &[], floor_m, Some(bound));
-        return (vec![all], vec![end]);
-    }
-    // The whole crowd's fit at each sample, and each part's own shift beyond it.
-    let from: Vec<Vec2> = traj.iter().map(|t| t[0]).collect();
-    let fits: Vec<Similarity> = (0..S_H)
-        .map(|k| {
-            let to: Vec<Vec2> = traj.iter().map(|t| t[k]).collect();
-            Similarity::fit(&from, &to)
-        })
-        .collect();
+    let m = GroupMotion::of(traj, &all);
     let mut ends = Vec::with_capacity(parts.len());
     for part in &parts {
-        let centre = |k: usize| part.iter().map(|&j| traj[j][k]).sum::<Vec2>() / part.len() as f64;
-        let shift: Vec<Vec2> = (0..S_H)
-            .map(|k| centre(k) - fits[k].apply(centre(0)))
-            .collect();
-        // The part turns and scales with the whole, about the whole's centre.
-        let end = move_about(out, agents, traj, part, &fits, c, &shift, floor_m, bound);
-        ends.push(end);
+        // Each part's own shift beyond the whole's similarity (none for one part).
+        let shift: Vec<Vec2> = if parts.len() > 1 {
+            let centre =
+                |k: usize| part.iter().map(|&j| traj[j][k]).sum::<Vec2>() / part.len() as f64;
+            (0..S_H)
+                .map(|k| centre(k) - m.fits[k].apply(centre(0)))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let how = Follow {
+            pivot: c,
+            turn: true,
+            min_scale: least_scale(agents, floor_m),
+            shift: &shift,
+            residual: Some(params.residual_fraction.max(0.0) * rms),
+        };
+        ends.push(move_part(out, agents, traj, part, &m, &how));
     }
     (parts, ends)
-}
-
-/// [`whole`]'s move of one part: `fits[k]` about the crowd's centre `c` (its
-/// centroid moved as the trajectories' did), plus `shift[k]`, plus each agent's
-/// residual bounded by `bound` (m) and faded.
-#[allow(clippy::too_many_arguments)]
-fn move_about(
-    out: &mut [[Vec2; S_H]],
-    agents: &[Vec2],
-    traj: &[[Vec2; S_H]],
-    part: &[usize],
-    fits: &[Similarity],
-    c: Vec2,
-    shift: &[Vec2],
-    floor_m: f64,
-    bound: f64,
-) -> Similarity {
-    let min_scale = least_scale(agents, floor_m);
-    let c0 = traj.iter().map(|t| t[0]).sum::<Vec2>() / traj.len().max(1) as f64;
-    let mut end = Similarity::IDENTITY;
-    for k in 0..S_H {
-        let f = fits[k];
-        let ck = traj.iter().map(|t| t[k]).sum::<Vec2>() / traj.len().max(1) as f64;
-        let turn = Similarity {
-            theta_rad: f.theta_rad,
-            scale: f.scale.max(min_scale),
-            t_m: Vec2::zeros(),
-        };
-        let about = Similarity {
-            t_m: c + (ck - c0) + shift[k] - turn.apply(c),
-            ..turn
-        };
-        let fade = (std::f64::consts::PI * k as f64 / (S_H - 1) as f64).sin();
-        for &i in part {
-            let mut y = about.apply(agents[i]);
-            if k > 0 && k < S_H - 1 {
-                let r = traj[i][k] - f.apply(traj[i][0]) - shift[k];
-                let len = r.norm();
-                let r = if len > bound && len > 0.0 {
-                    r * (bound / len)
-                } else {
-                    r
-                };
-                y += r * fade;
-            }
-            out[i][k] = if k == 0 { agents[i] } else { y };
-        }
-        if k == S_H - 1 {
-            end = about;
-        }
-    }
-    end
 }
 
 /// `s` applied to the crowd at `agents` as it stands (module doc). `split`: the
@@ -540,17 +512,19 @@ pub fn keep_formation(s: &Synthesis, agents: &[Vec2], split: bool, params: &Keep
             Some((parts, clusters)) => {
                 let mut ends = Vec::with_capacity(2);
                 for (part, cluster) in parts.iter().zip(&clusters) {
-                    // A part takes its cluster's motion, about its own centroid.
-                    ends.push(move_part(
-                        &mut out,
-                        agents,
-                        traj,
-                        part,
-                        cluster,
-                        &[],
-                        floor,
-                        None,
-                    ));
+                    // A part moves as its cluster's centroid does: the turn and
+                    // scale of a cluster fitted from the starts it was sampled at
+                    // (spread over the library crowd's shape) to the compact group
+                    // it ends in say nothing about the part's own formation.
+                    let how = Follow {
+                        pivot: part.iter().map(|&i| agents[i]).sum::<Vec2>() / part.len() as f64,
+                        turn: false,
+                        min_scale: 0.0,
+                        shift: &[],
+                        residual: None,
+                    };
+                    let m = GroupMotion::of(traj, cluster);
+                    ends.push(move_part(&mut out, agents, traj, part, &m, &how));
                 }
                 (parts, ends)
             }
