@@ -50,6 +50,17 @@ use super::normalise::AffineMap;
 use super::solver::{SolveStats, Solver};
 use crate::geom::Vec2;
 use crate::rng::SplitMix64;
+use nalgebra::Vector3;
+
+/// A point of a level: a position and a third coordinate (0 for the plain squared
+/// distance; the weighted local edge length of the least-effort cost,
+/// [`CoarseToFine::prices_3d`]).
+type P3 = Vector3<f64>;
+
+/// The point `(x, y, 0)`.
+fn flat(p: Vec2) -> P3 {
+    P3::new(p.x, p.y, 0.0)
+}
 
 /// Each coarser level groups `LEVEL_FACTOR` consecutive points (or groups) of
 /// the level above along the Hilbert curve.
@@ -89,10 +100,10 @@ pub struct CoarseStats {
 /// near and far columns come mixed, not far ones first).
 #[derive(Clone, Debug, Default)]
 struct Level {
-    agents: Vec<Vec2>,
-    goals: Vec<Vec2>,
+    agents: Vec<P3>,
+    goals: Vec<P3>,
     /// `cols[c] = goals[rank[c]]`.
-    cols: Vec<Vec2>,
+    cols: Vec<P3>,
     rank: Vec<u32>,
 }
 
@@ -143,6 +154,12 @@ pub struct CoarseToFine {
     prices: Vec<f64>,
     /// The answer, in the callers' indices (agent -> goal).
     goal_of: Vec<usize>,
+    /// The finest level's goal prices in the caller's goal order
+    /// ([`CoarseToFine::prices_3d`]).
+    seed: Vec<f64>,
+    /// The points of the caller's instance in 3-D (`flat` for [`CoarseToFine::solve`]).
+    pts_a: Vec<P3>,
+    pts_g: Vec<P3>,
     stats: CoarseStats,
 }
 
@@ -211,24 +228,20 @@ impl CoarseToFine {
         if let Some(col) = goals.iter().position(|p| !finite(p)) {
             return Err(AssignError::NotFinite { row: 0, col });
         }
-        self.build_levels(agents, goals);
+        let map = if agents.len() == goals.len() {
+            AffineMap::equalising(agents, goals)
+        } else {
+            None
+        };
+        let tf_a = |p: Vec2| flat(map.as_ref().map_or(p, |m| m.agent(p)));
+        let tf_g = |p: Vec2| flat(map.as_ref().map_or(p, |m| m.goal(p)));
+        self.pts_a.clear();
+        self.pts_a.extend(agents.iter().map(|&p| tf_a(p)));
+        self.pts_g.clear();
+        self.pts_g.extend(goals.iter().map(|&p| tf_g(p)));
+        self.build_levels();
         let levels = self.levels.len();
-        if self.solvers.len() < levels {
-            self.solvers.resize_with(levels, Solver::new);
-            self.matrices.resize_with(levels, || CostMatrix::new(0, 0));
-        }
-        for l in (0..levels).rev() {
-            let lv = &mut self.levels[l];
-            lv.scramble_columns();
-            fill_costs(&lv.agents, &lv.cols, &mut self.matrices[l]);
-            if l + 1 == levels {
-                self.solvers[l].solve_with_cancel(&self.matrices[l], cancel)?;
-            } else {
-                self.c_transform(l);
-                let (solvers, prices) = (&mut self.solvers, &self.prices);
-                solvers[l].solve_from_prices_with_cancel(&self.matrices[l], prices, cancel)?;
-            }
-        }
+        self.solve_levels(0, cancel)?;
         let x = self.solvers[0].assignment();
         self.goal_of.clear();
         self.goal_of.resize(n, 0);
@@ -244,46 +257,129 @@ impl CoarseToFine {
         Ok(&self.goal_of)
     }
 
-    /// Level 0: both sets mapped to the equalised coordinates and sorted along a
-    /// Hilbert curve over their common bounding box; level `l + 1`: the centroids
+    /// Column prices that start an exact solve of the square instance
+    /// `c(i, j) = |agents[i] − goals[j]|²` of points in three dimensions near its
+    /// optimum ([`Solver::solve_from_prices`]), one per goal in the caller's order:
+    /// the coarser levels are solved as in [`CoarseToFine::solve`] and the finest
+    /// goals priced by the c-transform of the module doc. The finest level itself
+    /// is left to the caller, who may solve it on costs it computes on the fly
+    /// (an `n × n` matrix at 5,000 agents is 200 MB).
+    ///
+    /// The least-effort cost of formation-transform eq. 3 is such an instance:
+    /// `λ |s − t|² + (1 − λ)(δs − δt)²` is the squared distance between
+    /// `(√λ s, √(1 − λ) δs)` and `(√λ t, √(1 − λ) δt)`.
+    ///
+    /// Returns an empty slice when the instance has no coarser level (too small,
+    /// rectangular, or a set on one spot); a cold solve is then the way.
+    ///
+    /// # Units
+    /// Coordinates in any one unit; prices in that unit squared.
+    ///
+    /// # Errors
+    /// [`AssignError::Empty`] without agents, [`AssignError::MoreRowsThanCols`],
+    /// [`AssignError::NotFinite`] for a coordinate that is not finite,
+    /// [`AssignError::Cancelled`].
+    pub fn prices_3d(
+        &mut self,
+        agents: &[[f64; 3]],
+        goals: &[[f64; 3]],
+        cancel: Cancel<'_>,
+    ) -> Result<&[f64], AssignError> {
+        let n = agents.len();
+        if n == 0 {
+            return Err(AssignError::Empty);
+        }
+        if n > goals.len() {
+            return Err(AssignError::MoreRowsThanCols {
+                rows: n,
+                cols: goals.len(),
+            });
+        }
+        let bad = |p: &[f64; 3]| !p.iter().all(|c| c.is_finite());
+        if let Some(row) = agents.iter().position(bad) {
+            return Err(AssignError::NotFinite { row, col: 0 });
+        }
+        if let Some(col) = goals.iter().position(bad) {
+            return Err(AssignError::NotFinite { row: 0, col });
+        }
+        self.pts_a.clear();
+        self.pts_a.extend(agents.iter().map(|&p| P3::from(p)));
+        self.pts_g.clear();
+        self.pts_g.extend(goals.iter().map(|&p| P3::from(p)));
+        self.build_levels();
+        self.seed.clear();
+        if self.levels.len() < 2 {
+            return Ok(&self.seed);
+        }
+        self.solve_levels(1, cancel)?;
+        self.levels[0].scramble_columns();
+        self.c_transform(0);
+        // `prices[c]` is the price of level 0's column `c`: goal `keys_g[rank[c]]`.
+        self.seed.resize(goals.len(), 0.0);
+        for (&r, &p) in self.levels[0].rank.iter().zip(&self.prices) {
+            self.seed[self.keys_g[r as usize].1 as usize] = p;
+        }
+        Ok(&self.seed)
+    }
+
+    /// Solves the levels from the coarsest down to `finest` (cold the coarsest,
+    /// each other from the prices of the one below).
+    fn solve_levels(&mut self, finest: usize, cancel: Cancel<'_>) -> Result<(), AssignError> {
+        let levels = self.levels.len();
+        if self.solvers.len() < levels {
+            self.solvers.resize_with(levels, Solver::new);
+            self.matrices.resize_with(levels, || CostMatrix::new(0, 0));
+        }
+        for l in (finest..levels).rev() {
+            let lv = &mut self.levels[l];
+            lv.scramble_columns();
+            fill_costs(&lv.agents, &lv.cols, &mut self.matrices[l]);
+            if l + 1 == levels {
+                self.solvers[l].solve_with_cancel(&self.matrices[l], cancel)?;
+            } else {
+                self.c_transform(l);
+                let (solvers, prices) = (&mut self.solvers, &self.prices);
+                solvers[l].solve_from_prices_with_cancel(&self.matrices[l], prices, cancel)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Level 0: the caller's points (`pts_a`, `pts_g`; for [`CoarseToFine::solve`]
+    /// in the equalised coordinates) sorted along a Hilbert curve over their
+    /// common bounding box in the plane; level `l + 1`: the centroids
     /// of `LEVEL_FACTOR` consecutive groups of level `l` (a last incomplete group
     /// is left out of the coarser levels), as long as level `l` has more than
     /// [`COARSEST_MAX`]. A rectangular instance, or one whose agents or goals are
     /// all on one spot, has one level in the given order.
-    fn build_levels(&mut self, agents: &[Vec2], goals: &[Vec2]) {
+    fn build_levels(&mut self) {
+        let (agents, goals) = (&self.pts_a, &self.pts_g);
         // A set on one spot ties every permutation: the coarse levels' rounding
         // (centroids) would only break the ties with noise, which the exact
         // searches then explore (agents on one spot against a grid: 1.5 s against
         // 17 ms in one level).
         let square = agents.len() == goals.len() && !on_one_spot(agents) && !on_one_spot(goals);
-        let map = AffineMap::equalising(agents, goals);
-        let tf_a = |p: Vec2| map.as_ref().map_or(p, |m| m.agent(p));
-        let tf_g = |p: Vec2| map.as_ref().map_or(p, |m| m.goal(p));
         let (mut lo, mut hi) = (
             Vec2::new(f64::INFINITY, f64::INFINITY),
             Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
         );
-        for p in agents
-            .iter()
-            .map(|&p| tf_a(p))
-            .chain(goals.iter().map(|&p| tf_g(p)))
-        {
+        for p in agents.iter().chain(goals) {
+            let p = p.xy();
             lo = lo.inf(&p);
             hi = hi.sup(&p);
         }
         let side = (hi - lo).max().max(f64::MIN_POSITIVE);
         let cells = f64::from((1u32 << HILBERT_BITS) - 1);
-        let key = |p: Vec2| -> u64 {
-            let q = (p - lo) / side * cells;
+        // Along the curve by position; the third coordinate only joins the groups'
+        // centroids.
+        let key = |p: &P3| -> u64 {
+            let q = (p.xy() - lo) / side * cells;
             hilbert_index(q.x.clamp(0.0, cells) as u32, q.y.clamp(0.0, cells) as u32)
         };
-        for (keys, pts, tf) in [
-            (&mut self.keys_a, agents, &tf_a as &dyn Fn(Vec2) -> Vec2),
-            (&mut self.keys_g, goals, &tf_g),
-        ] {
+        for (keys, pts) in [(&mut self.keys_a, agents), (&mut self.keys_g, goals)] {
             keys.clear();
             if square {
-                keys.extend(pts.iter().enumerate().map(|(i, &p)| (key(tf(p)), i as u32)));
+                keys.extend(pts.iter().enumerate().map(|(i, p)| (key(p), i as u32)));
                 keys.sort_unstable();
             } else {
                 keys.extend((0..pts.len()).map(|i| (0, i as u32)));
@@ -296,9 +392,9 @@ impl CoarseToFine {
         l0.agents.clear();
         l0.goals.clear();
         l0.agents
-            .extend(self.keys_a.iter().map(|&(_, i)| tf_a(agents[i as usize])));
+            .extend(self.keys_a.iter().map(|&(_, i)| agents[i as usize]));
         l0.goals
-            .extend(self.keys_g.iter().map(|&(_, j)| tf_g(goals[j as usize])));
+            .extend(self.keys_g.iter().map(|&(_, j)| goals[j as usize]));
         let mut used = 1;
         while square && self.levels[used - 1].agents.len() > COARSEST_MAX && used < MAX_LEVELS {
             if self.levels.len() == used {
@@ -323,7 +419,7 @@ impl CoarseToFine {
             coarse
                 .iter()
                 .zip(u)
-                .map(|(a, &ui)| (a - g).norm_squared() - ui)
+                .map(|(a, &ui)| dist2(a, g) - ui)
                 .fold(f64::INFINITY, f64::min)
         }));
     }
@@ -331,11 +427,11 @@ impl CoarseToFine {
 
 /// The centroids of consecutive groups of [`LEVEL_FACTOR`] points (an incomplete
 /// last group left out).
-fn group_centroids(fine: &[Vec2], out: &mut Vec<Vec2>) {
+fn group_centroids(fine: &[P3], out: &mut Vec<P3>) {
     out.clear();
     out.extend(
         fine.chunks_exact(LEVEL_FACTOR)
-            .map(|g| g.iter().fold(Vec2::zeros(), |s, p| s + p) / LEVEL_FACTOR as f64),
+            .map(|g| g.iter().fold(P3::zeros(), |s, p| s + p) / LEVEL_FACTOR as f64),
     );
 }
 
@@ -363,7 +459,7 @@ fn hilbert_index(mut x: u32, mut y: u32) -> u64 {
 }
 
 /// Whether every point is the first one.
-fn on_one_spot(p: &[Vec2]) -> bool {
+fn on_one_spot(p: &[P3]) -> bool {
     p.iter().all(|q| *q == p[0])
 }
 
@@ -372,14 +468,21 @@ fn finite(p: &Vec2) -> bool {
 }
 
 /// `out[i][j] = |agents[i] − goals[j]|²`.
-fn fill_costs(agents: &[Vec2], goals: &[Vec2], out: &mut CostMatrix) {
+fn fill_costs(agents: &[P3], goals: &[P3], out: &mut CostMatrix) {
     out.resize(agents.len(), goals.len());
     for (i, a) in agents.iter().enumerate() {
         for (c, g) in out.row_mut(i).iter_mut().zip(goals) {
-            let (dx, dy) = (a.x - g.x, a.y - g.y);
-            *c = dx * dx + dy * dy;
+            *c = dist2(a, g);
         }
     }
+}
+
+/// `|a − g|²`, summed in the order x, y, z (with `z = 0` the bits of the plane's
+/// `dx² + dy²`).
+#[inline]
+fn dist2(a: &P3, g: &P3) -> f64 {
+    let (dx, dy, dz) = (a.x - g.x, a.y - g.y, a.z - g.z);
+    dx * dx + dy * dy + dz * dz
 }
 
 #[cfg(test)]
@@ -399,7 +502,8 @@ mod tests {
     /// The dense matrix's optimum by a cold solve.
     fn dense_optimum(agents: &[Vec2], goals: &[Vec2]) -> f64 {
         let mut c = CostMatrix::new(0, 0);
-        fill_costs(agents, goals, &mut c);
+        let flat_all = |p: &[Vec2]| p.iter().map(|&q| flat(q)).collect::<Vec<P3>>();
+        fill_costs(&flat_all(agents), &flat_all(goals), &mut c);
         let mut s = Solver::new();
         let x = s.solve(&c).unwrap().to_vec();
         total(agents, goals, &x)
@@ -547,6 +651,86 @@ mod tests {
             let d = w[0].1.abs_diff(w[1].1) + w[0].2.abs_diff(w[1].2);
             assert_eq!(d, 1, "{:?} -> {:?}", w[0], w[1]);
         }
+    }
+
+    /// Points in three dimensions: a cloud, and the same shape moved and its third
+    /// coordinate varied (a least-effort instance's scaled edge lengths).
+    fn cloud_3d(rng: &mut SplitMix64, n: usize, dx: f64) -> Vec<[f64; 3]> {
+        (0..n)
+            .map(|_| [dx + 4.0 * rng.unit(), 3.0 * rng.unit(), 0.8 * rng.unit()])
+            .collect()
+    }
+
+    /// The dense matrix of squared distances between points in three dimensions.
+    fn matrix_3d(a: &[[f64; 3]], g: &[[f64; 3]]) -> CostMatrix {
+        let mut c = CostMatrix::new(0, 0);
+        let (a, g): (Vec<P3>, Vec<P3>) = (
+            a.iter().map(|&p| P3::from(p)).collect(),
+            g.iter().map(|&p| P3::from(p)).collect(),
+        );
+        fill_costs(&a, &g, &mut c);
+        c
+    }
+
+    #[test]
+    fn prices_3d_start_a_solve_that_ends_at_the_dense_optimum() {
+        let mut rng = SplitMix64::new(0x3d);
+        let mut c2f = CoarseToFine::new();
+        for (n, levels) in [(300usize, 2usize), (1500, 4)] {
+            let (a, g) = (cloud_3d(&mut rng, n, 0.0), cloud_3d(&mut rng, n, 2.5));
+            let c = matrix_3d(&a, &g);
+            let prices = c2f.prices_3d(&a, &g, Cancel::NEVER).unwrap().to_vec();
+            assert_eq!(prices.len(), n);
+            assert_eq!(c2f.levels.len(), levels);
+            let mut seeded = Solver::new();
+            seeded.solve_from_prices(&c, &prices).unwrap();
+            assert!(seeded.stats().seeded);
+            let mut cold = Solver::new();
+            cold.solve(&c).unwrap();
+            let (got, best) = (seeded.total_cost(&c), cold.total_cost(&c));
+            assert!((got - best).abs() <= 1e-9 * best, "n {n}: {got} vs {best}");
+            // The prices are near optimal: most rows take their cheapest goal in
+            // the first pass, so the seeded solve prices far fewer rows than the
+            // cold one.
+            assert!(
+                seeded.stats().rows_priced < cold.stats().rows_priced,
+                "n {n}: {:?} against {:?}",
+                seeded.stats(),
+                cold.stats()
+            );
+        }
+    }
+
+    #[test]
+    fn prices_3d_without_a_coarser_level_are_empty_and_bad_points_refused() {
+        let mut rng = SplitMix64::new(5);
+        let mut c2f = CoarseToFine::new();
+        let (a, g) = (cloud_3d(&mut rng, 100, 0.0), cloud_3d(&mut rng, 100, 1.0));
+        assert!(c2f.prices_3d(&a, &g, Cancel::NEVER).unwrap().is_empty());
+        let (a, g) = (cloud_3d(&mut rng, 300, 0.0), cloud_3d(&mut rng, 400, 1.0));
+        assert!(c2f.prices_3d(&a, &g, Cancel::NEVER).unwrap().is_empty());
+        assert_eq!(
+            c2f.prices_3d(&[], &g, Cancel::NEVER),
+            Err(AssignError::Empty)
+        );
+        assert!(matches!(
+            c2f.prices_3d(&g, &a, Cancel::NEVER),
+            Err(AssignError::MoreRowsThanCols { rows: 400, cols: 300 })
+        ));
+        let mut bad = a.clone();
+        bad[7][2] = f64::NAN;
+        assert_eq!(
+            c2f.prices_3d(&bad, &bad, Cancel::NEVER),
+            Err(AssignError::NotFinite { row: 7, col: 0 })
+        );
+        let stop = || true;
+        let (a, g) = (cloud_3d(&mut rng, 1500, 0.0), cloud_3d(&mut rng, 1500, 1.0));
+        assert_eq!(
+            c2f.prices_3d(&a, &g, Cancel::new(&stop)),
+            Err(AssignError::Cancelled)
+        );
+        // Still usable afterwards.
+        assert_eq!(c2f.prices_3d(&a, &g, Cancel::NEVER).unwrap().len(), 1500);
     }
 
     #[test]

@@ -162,6 +162,25 @@ impl LeastEffort {
     }
 }
 
+impl LeastEffortCosts {
+    /// The points whose squared distances are these costs:
+    /// `(√λ x, √λ y, √(1 − λ) δ)` of every agent and every goal (eq. 3 is
+    /// `λ |s − t|² + (1 − λ)(δs − δt)²`), for a solver that groups them
+    /// ([`crate::crowd::assign::CoarseToFine::prices_3d`]). The entries equal these
+    /// squared distances up to rounding.
+    pub fn points_3d(&self, agents: &mut Vec<[f64; 3]>, goals: &mut Vec<[f64; 3]>) {
+        let (l, m) = (self.l.sqrt(), self.m.sqrt());
+        agents.clear();
+        agents.extend(
+            (0..self.ax.len()).map(|i| [l * self.ax[i], l * self.ay[i], m * self.ds[i]]),
+        );
+        goals.clear();
+        goals.extend(
+            (0..self.gx.len()).map(|j| [l * self.gx[j], l * self.gy[j], m * self.dt[j]]),
+        );
+    }
+}
+
 impl CostSource for LeastEffortCosts {
     fn rows(&self) -> usize {
         self.ax.len()

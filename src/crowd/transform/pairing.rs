@@ -19,10 +19,15 @@
 //! cost matrix when the solver returns (`Solver`'s module documentation).
 
 use crate::crowd::assign::{
-    mean_edge_lengths, AffineMap, AssignError, Cancel, CostSource, LeastEffort, LeastEffortCosts,
-    PointCosts, PointMetric, Solver,
+    mean_edge_lengths, AffineMap, AssignError, Cancel, CoarseToFine, CostSource, LeastEffort,
+    LeastEffortCosts, PointCosts, PointMetric, Solver,
 };
 use crate::geom::Vec2;
+
+/// Least-effort pairings of at least this many agents start from the prices of
+/// coarser groups of the same points ([`CoarseToFine::prices_3d`]) instead of
+/// cold.
+const COARSE_PAIRING_MIN: usize = 1000;
 
 /// The cost that pairs agents with targets (formation-transform section 3.2; the
 /// alternatives of section 5.2).
@@ -308,7 +313,17 @@ pub fn pair(
         // at 5,000 (bench `transform_prepare`'s instance, a loaded machine).
         PairCost::LeastEffort { lambda } if lambda > 0.0 => {
             let c = equalised_least_effort(lambda, sources, targets);
-            solver.solve_with_cancel(&c, cancel)?
+            if sources.len() >= COARSE_PAIRING_MIN && sources.len() == targets.len() {
+                // Started from the prices of coarser groups of the same points
+                // (the answer is the same optimum; only the work differs).
+                let (mut a, mut g) = (Vec::new(), Vec::new());
+                c.points_3d(&mut a, &mut g);
+                let mut c2f = CoarseToFine::new();
+                let prices = c2f.prices_3d(&a, &g, cancel)?;
+                solver.solve_from_prices_with_cancel(&c, prices, cancel)?
+            } else {
+                solver.solve_with_cancel(&c, cancel)?
+            }
         }
         PairCost::LeastEffort { lambda } => {
             let c = LeastEffort::new(lambda).costs(sources, targets);
@@ -427,6 +442,41 @@ mod tests {
         );
         assert_eq!(PairCost::parse("Euclidean", 0.5), None);
         assert_eq!(PairCost::parse("", 0.5), None);
+    }
+
+    /// From `COARSE_PAIRING_MIN` agents on, least effort starts from coarser
+    /// groups' prices; the pairing is still the optimum of a cold solve of the same
+    /// costs (a grid into a ring, and two clouds of different densities).
+    #[test]
+    fn large_least_effort_pairings_equal_the_cold_optimum() {
+        let mut rng = SplitMix64::new(0xc0a5);
+        let n = COARSE_PAIRING_MIN + 200;
+        let side = (n as f64).sqrt().ceil() as usize;
+        let grid: Vec<Vec2> = (0..n)
+            .map(|i| Vec2::new((i % side) as f64 * 0.4, (i / side) as f64 * 0.4))
+            .collect();
+        let ring: Vec<Vec2> = (0..n)
+            .map(|i| {
+                let a = i as f64 * 2.399963;
+                let r = 6.0 + 2.0 * rng.unit();
+                Vec2::new(20.0 + r * a.cos(), r * a.sin())
+            })
+            .collect();
+        let (dense, sparse) = (points(&mut rng, n, 10.0), points(&mut rng, n, 25.0));
+        for (s, t) in [(&grid, &ring), (&dense, &sparse)] {
+            for lambda in [0.5, 0.9] {
+                let to = pair(s, t, PairCost::LeastEffort { lambda }, Cancel::NEVER).unwrap();
+                let c = equalised_least_effort(lambda, s, t);
+                let mut cold = Solver::new();
+                cold.solve_with(&c).unwrap();
+                let want = cold.total_cost(&c);
+                let got: f64 = to.iter().enumerate().map(|(i, &j)| c.get(i, j as usize)).sum();
+                assert!(
+                    (got - want).abs() <= 1e-9 * want,
+                    "λ {lambda}: {got} vs {want}"
+                );
+            }
+        }
     }
 
     #[test]
