@@ -213,21 +213,7 @@ impl CoarseToFine {
         cancel: Cancel<'_>,
     ) -> Result<&[usize], AssignError> {
         let n = agents.len();
-        if n == 0 {
-            return Err(AssignError::Empty);
-        }
-        if n > goals.len() {
-            return Err(AssignError::MoreRowsThanCols {
-                rows: n,
-                cols: goals.len(),
-            });
-        }
-        if let Some(row) = agents.iter().position(|p| !finite(p)) {
-            return Err(AssignError::NotFinite { row, col: 0 });
-        }
-        if let Some(col) = goals.iter().position(|p| !finite(p)) {
-            return Err(AssignError::NotFinite { row: 0, col });
-        }
+        check_points(agents, goals, |p| p.x.is_finite() && p.y.is_finite())?;
         let map = if agents.len() == goals.len() {
             AffineMap::equalising(agents, goals)
         } else {
@@ -285,23 +271,7 @@ impl CoarseToFine {
         goals: &[[f64; 3]],
         cancel: Cancel<'_>,
     ) -> Result<&[f64], AssignError> {
-        let n = agents.len();
-        if n == 0 {
-            return Err(AssignError::Empty);
-        }
-        if n > goals.len() {
-            return Err(AssignError::MoreRowsThanCols {
-                rows: n,
-                cols: goals.len(),
-            });
-        }
-        let bad = |p: &[f64; 3]| !p.iter().all(|c| c.is_finite());
-        if let Some(row) = agents.iter().position(bad) {
-            return Err(AssignError::NotFinite { row, col: 0 });
-        }
-        if let Some(col) = goals.iter().position(bad) {
-            return Err(AssignError::NotFinite { row: 0, col });
-        }
+        check_points(agents, goals, |p| p.iter().all(|c| c.is_finite()))?;
         self.pts_a.clear();
         self.pts_a.extend(agents.iter().map(|&p| P3::from(p)));
         self.pts_g.clear();
@@ -463,8 +433,30 @@ fn on_one_spot(p: &[P3]) -> bool {
     p.iter().all(|q| *q == p[0])
 }
 
-fn finite(p: &Vec2) -> bool {
-    p.x.is_finite() && p.y.is_finite()
+/// The errors of an instance of `agents` and `goals`: none, more agents than
+/// goals, or the first point that is not `finite` (agents first).
+fn check_points<P>(
+    agents: &[P],
+    goals: &[P],
+    finite: impl Fn(&P) -> bool,
+) -> Result<(), AssignError> {
+    let n = agents.len();
+    if n == 0 {
+        return Err(AssignError::Empty);
+    }
+    if n > goals.len() {
+        return Err(AssignError::MoreRowsThanCols {
+            rows: n,
+            cols: goals.len(),
+        });
+    }
+    if let Some(row) = agents.iter().position(|p| !finite(p)) {
+        return Err(AssignError::NotFinite { row, col: 0 });
+    }
+    if let Some(col) = goals.iter().position(|p| !finite(p)) {
+        return Err(AssignError::NotFinite { row: 0, col });
+    }
+    Ok(())
 }
 
 /// `out[i][j] = |agents[i] − goals[j]|²`.
@@ -715,7 +707,10 @@ mod tests {
         );
         assert!(matches!(
             c2f.prices_3d(&g, &a, Cancel::NEVER),
-            Err(AssignError::MoreRowsThanCols { rows: 400, cols: 300 })
+            Err(AssignError::MoreRowsThanCols {
+                rows: 400,
+                cols: 300
+            })
         ));
         let mut bad = a.clone();
         bad[7][2] = f64::NAN;

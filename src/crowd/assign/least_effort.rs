@@ -171,13 +171,9 @@ impl LeastEffortCosts {
     pub fn points_3d(&self, agents: &mut Vec<[f64; 3]>, goals: &mut Vec<[f64; 3]>) {
         let (l, m) = (self.l.sqrt(), self.m.sqrt());
         agents.clear();
-        agents.extend(
-            (0..self.ax.len()).map(|i| [l * self.ax[i], l * self.ay[i], m * self.ds[i]]),
-        );
+        agents.extend((0..self.ax.len()).map(|i| [l * self.ax[i], l * self.ay[i], m * self.ds[i]]));
         goals.clear();
-        goals.extend(
-            (0..self.gx.len()).map(|j| [l * self.gx[j], l * self.gy[j], m * self.dt[j]]),
-        );
+        goals.extend((0..self.gx.len()).map(|j| [l * self.gx[j], l * self.gy[j], m * self.dt[j]]));
     }
 }
 

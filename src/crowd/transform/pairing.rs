@@ -470,7 +470,11 @@ mod tests {
                 let mut cold = Solver::new();
                 cold.solve_with(&c).unwrap();
                 let want = cold.total_cost(&c);
-                let got: f64 = to.iter().enumerate().map(|(i, &j)| c.get(i, j as usize)).sum();
+                let got: f64 = to
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &j)| c.get(i, j as usize))
+                    .sum();
                 assert!(
                     (got - want).abs() <= 1e-9 * want,
                     "λ {lambda}: {got} vs {want}"
