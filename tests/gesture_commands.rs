@@ -63,6 +63,28 @@ fn point_in_polygon(p: Vec2, poly: &[Vec2]) -> bool {
 }
 
 /// The two groups of `pts` (2-means from the ends of the principal axis).
+/// Every piece of `mesh` (one outline each) holds at least
+/// `MIN_PIECE_AGENTS` of `agents`, with one agent of slack for agents on an
+/// outline; `label` names the case in the failure.
+fn assert_every_piece_holds_agents(
+    mesh: &crowdtouch::vocab::MeshView,
+    agents: &[crowdtouch::vocab::AgentView],
+    label: impl std::fmt::Display,
+) {
+    let pieces = mesh.outlines.len();
+    for (k, outline) in mesh.outlines.iter().enumerate() {
+        let poly: Vec<Vec2> = outline.iter().map(|&v| mesh.vertices[v as usize]).collect();
+        let inside = agents
+            .iter()
+            .filter(|a| point_in_polygon(a.pos, &poly))
+            .count();
+        assert!(
+            inside + 1 >= MIN_PIECE_AGENTS,
+            "{label}: mesh piece {k} of {pieces} holds {inside} agents"
+        );
+    }
+}
+
 fn two_parts(pts: &[Vec2]) -> Vec<Vec<usize>> {
     let c = centroid(pts.iter().copied());
     let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
@@ -387,18 +409,7 @@ fn check_common(class: MotionClass, p: &Played) -> Vec<Vec<Vec2>> {
         );
     }
     if pieces > 1 {
-        for (k, outline) in mesh.outlines.iter().enumerate() {
-            let poly: Vec<Vec2> = outline.iter().map(|&v| mesh.vertices[v as usize]).collect();
-            let inside = last
-                .agents
-                .iter()
-                .filter(|a| point_in_polygon(a.pos, &poly))
-                .count();
-            assert!(
-                inside + 1 >= MIN_PIECE_AGENTS,
-                "{class}: mesh piece {k} of {pieces} holds {inside} agents"
-            );
-        }
+        assert_every_piece_holds_agents(mesh, &last.agents, class);
     }
     // The formation is kept: the crowd after is the crowd before moved by one
     // similarity (each part's, for a split), within 15 % of its RMS radius.
@@ -694,19 +705,7 @@ fn as_sampled_moves_the_crowd_and_meshes_it_where_it_stopped() {
         settled < 2.0 * SETTLED_M,
         "an agent is {settled:.3} m from the rebuilt mesh's vertices"
     );
-    for (k, outline) in mesh.outlines.iter().enumerate() {
-        let poly: Vec<Vec2> = outline.iter().map(|&v| mesh.vertices[v as usize]).collect();
-        let inside = run
-            .last()
-            .agents
-            .iter()
-            .filter(|a| point_in_polygon(a.pos, &poly))
-            .count();
-        assert!(
-            inside + 1 >= MIN_PIECE_AGENTS,
-            "mesh piece {k} holds {inside} agents"
-        );
-    }
+    assert_every_piece_holds_agents(mesh, &run.last().agents, "straggler");
     let shift = centroid(run.last().agents.iter().map(|a| a.pos))
         - centroid(run.snapshots[0].agents.iter().map(|a| a.pos));
     assert_moved_along(c, shift, finger_travel(&tracks));

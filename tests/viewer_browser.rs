@@ -686,18 +686,7 @@ fn the_page_draws_the_crowd_and_a_mouse_drag_moves_it() {
         }
         // A mouse drag from the crowd's centre, 3 m to the left.
         let c = centroid(&agents);
-        let from = map.to_page(c);
-        let to = map.to_page((c.0 - 3.0, c.1));
-        let mark = watcher.len();
-        browser.call(
-            json!({"cmd": "drag", "from": [from.0, from.1], "to": [to.0, to.1],
-                            "steps": 40, "ms": 2000, "hold_ms": 400}),
-        );
-        let control = watcher.wait_for(mark, |v| v["type"] == "control");
-        assert_eq!(control["phase"], "begin", "{control}");
-        let moved = watcher.wait_for(mark, |v| {
-            v["type"] == "snapshot" && centroid(&points(&v["positions"])).0 < c.0 - 2.0
-        });
+        let moved = drag_crowd_left(&mut browser, &watcher, &map, c, 3.0, 2.0);
         let after = centroid(&points(&moved["positions"]));
         assert!(
             (after.1 - c.1).abs() < 0.5,
@@ -705,6 +694,30 @@ fn the_page_draws_the_crowd_and_a_mouse_drag_moves_it() {
         );
         browser.assert_no_error();
     });
+}
+
+/// A mouse drag in the viewer from the crowd's centre `c`, `drag_m` metres to the
+/// left: the daemon answers with a control that begins, and the snapshot that
+/// shows the crowd's centre more than `moved_m` metres left of `c` is returned.
+fn drag_crowd_left(
+    browser: &mut Browser,
+    watcher: &Watcher,
+    map: &Mapping,
+    c: (f64, f64),
+    drag_m: f64,
+    moved_m: f64,
+) -> Value {
+    let (from, to) = (map.to_page(c), map.to_page((c.0 - drag_m, c.1)));
+    let mark = watcher.len();
+    browser.call(
+        json!({"cmd": "drag", "from": [from.0, from.1], "to": [to.0, to.1],
+               "steps": 40, "ms": 2000, "hold_ms": 400}),
+    );
+    let control = watcher.wait_for(mark, |v| v["type"] == "control");
+    assert_eq!(control["phase"], "begin", "{control}");
+    watcher.wait_for(mark, |v| {
+        v["type"] == "snapshot" && centroid(&points(&v["positions"])).0 < c.0 - moved_m
+    })
 }
 
 /// The RMS distance between `b` and `a` moved by the least-squares similarity
@@ -794,17 +807,7 @@ fn a_swipe_in_open_space_moves_the_crowd_along_it_with_its_formation() {
             );
             // The viewer's mouse drags the crowd: from its centre, 2 m back left.
             let c = centroid(&after);
-            let (from, to) = (map.to_page(c), map.to_page((c.0 - 2.0, c.1)));
-            let mark = watcher.len();
-            browser.call(
-                json!({"cmd": "drag", "from": [from.0, from.1], "to": [to.0, to.1],
-                       "steps": 40, "ms": 2000, "hold_ms": 400}),
-            );
-            let control = watcher.wait_for(mark, |v| v["type"] == "control");
-            assert_eq!(control["phase"], "begin", "{control}");
-            watcher.wait_for(mark, |v| {
-                v["type"] == "snapshot" && centroid(&points(&v["positions"])).0 < c.0 - 1.5
-            });
+            drag_crowd_left(&mut browser, &watcher, &map, c, 2.0, 1.5);
             browser.assert_no_error();
         },
     );
