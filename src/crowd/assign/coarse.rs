@@ -591,6 +591,8 @@ mod tests {
                 f(&c.levels),
                 f(&c.prices),
                 f(&c.goal_of),
+                f(&c.pts_a),
+                f(&c.pts_g),
             ];
             for l in &c.levels {
                 out.extend([f(&l.agents), f(&l.goals), f(&l.cols), f(&l.rank)]);
