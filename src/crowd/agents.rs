@@ -288,8 +288,7 @@ impl Agents {
                 } else {
                     0..0
                 };
-                for k in a0..a1 {
-                    let pk = sp[k];
+                for (k, &pk) in (a0..a1).zip(&sp[a0..a1]) {
                     run(k, pk, k + 1, same_end);
                     run(k, pk, below.start, below.end);
                 }
