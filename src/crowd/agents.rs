@@ -353,17 +353,19 @@ fn integrate<T: Copy>(
     p: &AgentParams,
 ) -> Option<T> {
     let mut a = (g - *x) * p.kp_per_s2 - *v * p.kd_per_s + push;
-    // Squared norms first: most agents are under both limits and need no root.
+    // Squared norms first: most agents are under both limits and need no root
+    // (the scaling is out of line, so the compiler does not compute it for every
+    // agent and select).
     let amax = p.max_accel_m_s2;
     let an2 = a.norm_squared();
     if an2 > amax * amax {
-        a *= amax / an2.sqrt();
+        a = scaled_to(a, amax, an2);
     }
     let vmax = p.max_speed_m_s * speed(here);
     let mut w = *v + a * h;
     let wn2 = w.norm_squared();
     if wn2 > vmax * vmax {
-        w *= vmax / wn2.sqrt();
+        w = scaled_to(w, vmax, wn2);
     }
     // Entering a slower patch in this substep: its limit holds from here.
     let end = *x + w * h;
@@ -378,6 +380,14 @@ fn integrate<T: Copy>(
     *v = w;
     *x += w * h;
     same_point(*x, end).then_some(there)
+}
+
+/// `u` scaled to length `len` (`n2 = |u|²`), as `u *= len / √n2`.
+#[cold]
+#[inline(never)]
+fn scaled_to(mut u: Vec2, len: f64, n2: f64) -> Vec2 {
+    u *= len / n2.sqrt();
+    u
 }
 
 /// Whether `a` and `b` are the same point bit for bit.
