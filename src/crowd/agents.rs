@@ -586,10 +586,15 @@ impl NeighbourGrid {
         // grid grow again (a no-op after `with_capacity`).
         self.cell_start.reserve(max_cells + 1);
         self.cell_start.resize(cells + 1, 0);
-        for p in pos {
-            let c = self.cell_index(*p);
-            self.cell_of.push(c as u32);
-            self.cell_start[c + 1] += 1;
+        // Cells first, then their counts: two tight loops (one pushing and counting
+        // stored the vector's length and waited on the count's store every agent).
+        self.cell_of.resize(n, 0);
+        let (origin, cell_m, nx, ny) = (self.origin, self.cell_m, self.nx, self.ny);
+        for (c, p) in self.cell_of.iter_mut().zip(pos) {
+            *c = cell_index(origin, cell_m, nx, ny, *p) as u32;
+        }
+        for &c in &self.cell_of {
+            self.cell_start[c as usize + 1] += 1;
         }
         for c in 0..cells {
             self.cell_start[c + 1] += self.cell_start[c];
@@ -609,15 +614,7 @@ impl NeighbourGrid {
     }
 
     fn cell_xy(&self, p: Vec2) -> (usize, usize) {
-        let q = (p - self.origin) / self.cell_m;
-        let cx = (q.x.max(0.0) as usize).min(self.nx - 1);
-        let cy = (q.y.max(0.0) as usize).min(self.ny - 1);
-        (cx, cy)
-    }
-
-    fn cell_index(&self, p: Vec2) -> usize {
-        let (cx, cy) = self.cell_xy(p);
-        cy * self.nx + cx
+        cell_xy(self.origin, self.cell_m, self.nx, self.ny, p)
     }
 
     fn cell_items(&self, c: usize) -> &[u32] {
@@ -725,6 +722,23 @@ impl NeighbourGrid {
         }
         best2.sqrt()
     }
+}
+
+/// The grid cell `(column, row)` of `p` in a grid of `nx × ny` cells of side
+/// `cell_m` from `origin`, points outside clamped to the nearest cell.
+#[inline(always)]
+fn cell_xy(origin: Vec2, cell_m: f64, nx: usize, ny: usize, p: Vec2) -> (usize, usize) {
+    let q = (p - origin) / cell_m;
+    let cx = (q.x.max(0.0) as usize).min(nx - 1);
+    let cy = (q.y.max(0.0) as usize).min(ny - 1);
+    (cx, cy)
+}
+
+/// The row-major index of [`cell_xy`]'s cell.
+#[inline(always)]
+fn cell_index(origin: Vec2, cell_m: f64, nx: usize, ny: usize, p: Vec2) -> usize {
+    let (cx, cy) = cell_xy(origin, cell_m, nx, ny, p);
+    cy * nx + cx
 }
 
 /// `d / dist`, or for coincident agents (`dist ≤ 1e-12`) a unit vector fixed by
