@@ -593,28 +593,32 @@ impl NeighbourGrid {
         for (c, p) in self.cell_of.iter_mut().zip(pos) {
             *c = cell_index(origin, cell_m, nx, ny, *p) as u32;
         }
+        // Counting sort with the cursors at the cells' ends: `cell_start[c]` counts
+        // cell `c`, the running sum turns it into the cell's end, and filling from
+        // the last agent backwards leaves it at the cell's start (agents ascending
+        // within a cell) with no pass to shift the starts back.
         for &c in &self.cell_of {
-            self.cell_start[c as usize + 1] += 1;
-        }
-        for c in 0..cells {
-            self.cell_start[c + 1] += self.cell_start[c];
-        }
-        self.items.resize(n, 0);
-        // Fill using a running cursor per cell, stored temporarily in cell_start.
-        for (i, &c) in self.cell_of.iter().enumerate() {
-            let slot = self.cell_start[c as usize];
-            self.items[slot as usize] = i as u32;
             self.cell_start[c as usize] += 1;
         }
-        // Restore starts: shift right by one bucket.
-        for c in (1..=cells).rev() {
-            self.cell_start[c] = self.cell_start[c - 1];
+        for c in 1..cells {
+            self.cell_start[c] += self.cell_start[c - 1];
         }
-        self.cell_start[0] = 0;
+        self.cell_start[cells] = n as u32;
+        self.items.resize(n, 0);
+        for (i, &c) in self.cell_of.iter().enumerate().rev() {
+            let slot = &mut self.cell_start[c as usize];
+            *slot -= 1;
+            self.items[*slot as usize] = i as u32;
+        }
     }
 
     fn cell_xy(&self, p: Vec2) -> (usize, usize) {
         cell_xy(self.origin, self.cell_m, self.nx, self.ny, p)
+    }
+
+    #[cfg(test)]
+    fn cell_index(&self, p: Vec2) -> usize {
+        cell_index(self.origin, self.cell_m, self.nx, self.ny, p)
     }
 
     fn cell_items(&self, c: usize) -> &[u32] {
@@ -1067,6 +1071,25 @@ mod tests {
             let mut g = NeighbourGrid::default();
             g.build(&pos, r);
             prop_assert_eq!(grid_pairs(&g, &pos, r), brute_pairs(&pos, r));
+        }
+
+        /// Each cell lists exactly the agents in it, in ascending order (the order
+        /// the push-apart sums in), and the cells' starts bracket their lists.
+        #[test]
+        fn grid_cells_hold_their_agents_in_order(pts in proptest::collection::vec((-5.0f64..5.0, -5.0f64..5.0), 1..120), r in 0.05f64..2.0) {
+            let pos: Vec<Vec2> = pts.iter().map(|&(x, y)| Vec2::new(x, y)).collect();
+            let mut g = NeighbourGrid::default();
+            g.build(&pos, r);
+            let cells = g.nx * g.ny;
+            prop_assert_eq!(g.cell_start.len(), cells + 1);
+            prop_assert_eq!(g.cell_start[0], 0);
+            prop_assert_eq!(g.cell_start[cells] as usize, pos.len());
+            for c in 0..cells {
+                let want: Vec<u32> = (0..pos.len() as u32)
+                    .filter(|&i| g.cell_index(pos[i as usize]) == c)
+                    .collect();
+                prop_assert_eq!(g.cell_items(c), &want[..]);
+            }
         }
 
         /// Push-back forces are antisymmetric: with no goal pull, momentum is conserved.
