@@ -127,10 +127,14 @@ impl Scene {
     /// Metres.
     pub fn nearest_obstacle(&self, p: Vec2, t_s: f64) -> Option<ObstacleHit> {
         let mut best: Option<ObstacleHit> = None;
-        self.for_each_obstacle_part(t_s, |id, j, part, pl| {
+        let consider = |best: &mut Option<ObstacleHit>,
+                        id: ObstacleId,
+                        j: usize,
+                        part: &Part,
+                        pl: &Placement| {
             let b = part.boundary_point(pl.to_local(p));
             if best.is_none_or(|h| b.signed_distance_m < h.boundary.signed_distance_m) {
-                best = Some(ObstacleHit {
+                *best = Some(ObstacleHit {
                     id,
                     part: j,
                     boundary: BoundaryPoint {
@@ -140,7 +144,48 @@ impl Scene {
                     },
                 });
             }
-        });
+        };
+        // The static parts near p answer alone when one is nearer than the index's
+        // reach: every part within the reach is listed, in file order, so the first
+        // nearest part is the one the full scan finds (as in `signed_distance`).
+        let indexed = match self.index.obstacles_near(p) {
+            Some(near) => {
+                for &(o, j) in near {
+                    let part = &self.obstacles[o as usize].parts[j as usize];
+                    consider(
+                        &mut best,
+                        ObstacleId::Static(o as usize),
+                        j as usize,
+                        part,
+                        &Placement::IDENTITY,
+                    );
+                }
+                best.is_some_and(|h| h.boundary.signed_distance_m < INDEX_REACH_M)
+            }
+            None => false,
+        };
+        if !indexed {
+            best = None;
+            for (i, o) in self.obstacles.iter().enumerate() {
+                for (j, part) in o.parts.iter().enumerate() {
+                    consider(
+                        &mut best,
+                        ObstacleId::Static(i),
+                        j,
+                        part,
+                        &Placement::IDENTITY,
+                    );
+                }
+            }
+        }
+        for (i, d) in self.dynamic.iter().enumerate() {
+            if d.kind == DynamicKind::Obstacle {
+                let pl = d.placement_at(t_s);
+                for (j, part) in d.parts.iter().enumerate() {
+                    consider(&mut best, ObstacleId::Dynamic(i), j, part, &pl);
+                }
+            }
+        }
         best
     }
 

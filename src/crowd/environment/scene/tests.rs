@@ -558,6 +558,20 @@ fn indexed_queries_equal_the_full_scan() {
                 want_d = want_d.min(part.signed_distance(pl.to_local(p)));
             });
             assert_eq!(s.signed_distance(p, t), want_d, "{name} at {p} t {t}");
+            // The nearest part: the first in file order at the least signed distance.
+            let mut want_hit: Option<(ObstacleId, usize, Vec2)> = None;
+            let mut hit_d = f64::INFINITY;
+            s.for_each_obstacle_part(t, |id, j, part, pl| {
+                let b = part.boundary_point(pl.to_local(p));
+                if want_hit.is_none() || b.signed_distance_m < hit_d {
+                    want_hit = Some((id, j, pl.to_world(b.point)));
+                    hit_d = b.signed_distance_m;
+                }
+            });
+            let got = s
+                .nearest_obstacle(p, t)
+                .map(|h| (h.id, h.part, h.boundary.point));
+            assert_eq!(got, want_hit, "{name} at {p} t {t}");
             for margin in [0.0, 0.15, 0.3, INDEX_REACH_M, 2.5] {
                 let want = want_d < margin;
                 assert_eq!(s.closer_than(p, margin, t), want, "{name} at {p} t {t}");
