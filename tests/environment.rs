@@ -9,7 +9,7 @@
 mod common;
 
 use crowdtouch::config::Config;
-use crowdtouch::crowd::assign::{CostMatrix, CostProvider, Distance, Solver};
+use crowdtouch::crowd::assign::{CostMatrix, CostProvider, CostSource, Distance, Solver};
 use crowdtouch::crowd::environment::load_scene;
 use crowdtouch::crowd::environment::Scene;
 use crowdtouch::crowd::environment::{Planner, PlannerParams};
@@ -942,4 +942,124 @@ fn every_hidden_agent_gets_a_waypoint_at_1000_agents() {
         hidden_total += hidden;
     }
     assert!(hidden_total > 500, "the layouts put obstacles in the way");
+}
+
+/// 5,000 agents in every shipped scene (run with `--ignored --nocapture`): the
+/// grid transport's plan against the exact optimum of the clustered pair costs,
+/// both totalled on the clustered costs, with the time of each.
+#[test]
+#[ignore = "about a minute; the figures of docs/scenes-and-formations.md"]
+fn transported_assignment_at_5000_against_the_exact_optimum() {
+    let n = 5000;
+    for (file, _) in crowdtouch::crowd::environment::SCENES {
+        let name = file.trim_end_matches(".ron");
+        let s = scene(name);
+        let (layout, from, to) = layouts().into_iter().next().unwrap();
+        let agents = free_points(&s, from, n, 17);
+        let goals = free_points(&s, to, n, 117);
+        let mut flow = Planner::new(Arc::clone(&s), PlannerParams::new(1.5)).unwrap();
+        let (mut gf, mut ge, mut wp) = (Vec::new(), Vec::new(), Vec::new());
+        let t0 = std::time::Instant::now();
+        flow.plan(&agents, &goals, 0.0, &mut gf, &mut wp).unwrap();
+        let flow_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let st = flow.transport_stats();
+        let t0 = std::time::Instant::now();
+        flow.plan(&agents, &goals, 0.0, &mut gf, &mut wp).unwrap();
+        let again_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let mut exact_params = PlannerParams::new(1.5);
+        exact_params.transport_above_goals = usize::MAX;
+        let mut exact = Planner::new(Arc::clone(&s), exact_params).unwrap();
+        let t0 = std::time::Instant::now();
+        exact.plan(&agents, &goals, 0.0, &mut ge, &mut wp).unwrap();
+        let exact_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let c = exact.cluster_costs().unwrap();
+        let sum = |g: &[u32]| -> f64 {
+            g.iter()
+                .enumerate()
+                .map(|(i, &j)| c.get(i, j as usize))
+                .sum()
+        };
+        let (best, got) = (sum(&ge), sum(&gf));
+        eprintln!(
+            "{name:>15} {layout}: exact {best:9.1} ({exact_ms:.0} ms), transport {got:9.1} (+{:.3} %, {flow_ms:.0} ms cold, {again_ms:.0} ms again) {st:?}",
+            100.0 * (got / best - 1.0)
+        );
+    }
+}
+
+/// 5,000 agents in the corridor: the clustered entries of 40 goals against the
+/// exact per-goal fields (run with `--ignored --nocapture`).
+#[test]
+#[ignore = "diagnostic"]
+fn clustered_entries_at_5000_against_per_goal_fields() {
+    let n = 5000;
+    for name in ["corridor", "four_blocks"] {
+        let s = scene(name);
+        let (_, from, to) = layouts().into_iter().next().unwrap();
+        let agents = free_points(&s, from, n, 17);
+        let goals = free_points(&s, to, n, 117);
+        let mut exact_params = PlannerParams::new(1.5);
+        exact_params.transport_above_goals = usize::MAX;
+        let mut p = Planner::new(Arc::clone(&s), exact_params).unwrap();
+        let (mut g, mut wp) = (Vec::new(), Vec::new());
+        p.plan(&agents, &goals, 0.0, &mut g, &mut wp).unwrap();
+        let c = p.cluster_costs().unwrap();
+        let some: Vec<usize> = (0..40).map(|k| k * 125).collect();
+        let sub: Vec<Vec2> = some.iter().map(|&j| goals[j]).collect();
+        let mut m = CostMatrix::new(0, 0);
+        p.costs().try_fill(&agents, &sub, &mut m).unwrap();
+        let mut ratios = Vec::new();
+        for i in (0..n).step_by(50) {
+            for (k, &j) in some.iter().enumerate() {
+                ratios.push(c.get(i, j) / m.row(i)[k]);
+            }
+        }
+        ratios.sort_by(|a, b| a.total_cmp(b));
+        let q = |f: f64| ratios[((ratios.len() - 1) as f64 * f) as usize];
+        eprintln!(
+            "{name}: clustered / per-goal: min {:.3} p10 {:.3} median {:.3} p90 {:.3} max {:.3}",
+            q(0.0), q(0.1), q(0.5), q(0.9), q(1.0)
+        );
+    }
+}
+
+/// 5,000 agents: the exact-on-clusters plan and the transport plan, both totalled
+/// on the per-goal Eikonal costs, against the per-goal optimum.
+#[test]
+#[ignore = "diagnostic, minutes"]
+fn plans_at_5000_on_per_goal_costs() {
+    let n = 5000;
+    for name in ["corridor", "four_blocks"] {
+        let s = scene(name);
+        let (_, from, to) = layouts().into_iter().next().unwrap();
+        let agents = free_points(&s, from, n, 17);
+        let goals = free_points(&s, to, n, 117);
+        let mut exact_params = PlannerParams::new(1.5);
+        exact_params.transport_above_goals = usize::MAX;
+        let mut p = Planner::new(Arc::clone(&s), exact_params).unwrap();
+        let (mut gc, mut gt, mut wp) = (Vec::new(), Vec::new(), Vec::new());
+        p.plan(&agents, &goals, 0.0, &mut gc, &mut wp).unwrap();
+        let mut f = Planner::new(Arc::clone(&s), PlannerParams::new(1.5)).unwrap();
+        f.plan(&agents, &goals, 0.0, &mut gt, &mut wp).unwrap();
+        let mut m = CostMatrix::new(0, 0);
+        let t0 = std::time::Instant::now();
+        p.costs().try_fill(&agents, &goals, &mut m).unwrap();
+        let fill_s = t0.elapsed().as_secs_f64();
+        let t0 = std::time::Instant::now();
+        let mut solver = Solver::new();
+        let best: f64 = solver
+            .solve(&m)
+            .unwrap()
+            .iter()
+            .enumerate()
+            .map(|(i, &j)| m.row(i)[j])
+            .sum();
+        let solve_s = t0.elapsed().as_secs_f64();
+        let (c, t) = (total(&m, &gc), total(&m, &gt));
+        eprintln!(
+            "{name}: per-goal optimum {best:.1} (fill {fill_s:.1} s, solve {solve_s:.1} s); exact on clusters {c:.1} (+{:.2} %); transport {t:.1} (+{:.2} %)",
+            100.0 * (c / best - 1.0),
+            100.0 * (t / best - 1.0)
+        );
+    }
 }

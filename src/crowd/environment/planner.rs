@@ -30,9 +30,9 @@ use crate::crowd::assign::{
     AssignError, Cancel, CostMatrix, PointCosts, PointMetric, Solver, Strategy,
 };
 use crate::crowd::environment::eikonal::{
-    cost_field_into, discomfort_into, ClusterCosts, CostInputs, CostWeights, DiscomfortParams,
-    EikonalCosts, EikonalError, EikonalOptions, FieldSources, Grid, DEFAULT_CLUSTER_M,
-    MAX_CLUSTERS,
+    cells_of, cost_field_into, discomfort_into, ClusterCosts, CostInputs, CostWeights,
+    DiscomfortParams, EikonalCosts, EikonalError, EikonalOptions, FieldSources, Grid,
+    GridTransport, TransportError, TransportStats, DEFAULT_CLUSTER_M, MAX_CLUSTERS,
 };
 use crate::crowd::environment::{Scene, SceneAt, SceneGrid};
 use crate::geom::Vec2;
@@ -54,7 +54,9 @@ const WAYPOINTS_PER_POLL: usize = 64;
 /// ([`ClusterCosts::set_tie_break`] for what a positive weight trades).
 pub const DEFAULT_TIE_BREAK_S_PER_M2: f64 = 0.0;
 /// Plans with more goals than this solve with longer candidate lists and never
-/// restart a warm solve cold ([`solver_for`]).
+/// restart a warm solve cold ([`solver_for`]) when they are solved over pairs, and
+/// by default are solved as a transport on the planning grid instead
+/// ([`PlannerParams::transport_above_goals`]).
 pub const LARGE_PLAN_GOALS: usize = 2000;
 /// Candidate lists of a large plan: `goals / LARGE_PLAN_CANDIDATES_DIV` columns per
 /// row, at most [`LARGE_PLAN_CANDIDATES_MAX`].
@@ -84,6 +86,12 @@ pub struct PlannerParams {
     /// then optimal for travel cost + `ε · d²`, not for the travel cost alone
     /// ([`ClusterCosts::set_tie_break`]).
     pub tie_break_s_per_m2: f64,
+    /// Plans with more goals than this are solved as a min-cost flow on the
+    /// planning grid ([`GridTransport`]: the optimum of the grid's path costs, not
+    /// of the eq. 6 costs of the pairs; docs/scenes-and-formations.md gives how far
+    /// apart they are). Default [`LARGE_PLAN_GOALS`]; `usize::MAX`: every plan is
+    /// the exact optimum of the pairs' costs.
+    pub transport_above_goals: usize,
 }
 
 impl PlannerParams {
@@ -97,6 +105,7 @@ impl PlannerParams {
             density_refresh_s: DEFAULT_DENSITY_REFRESH_S,
             cluster_m: DEFAULT_CLUSTER_M,
             tie_break_s_per_m2: DEFAULT_TIE_BREAK_S_PER_M2,
+            transport_above_goals: LARGE_PLAN_GOALS,
         }
     }
 }
@@ -145,6 +154,16 @@ pub struct Planner {
     warm: bool,
     agents: Vec<Vec2>,
     goals: Vec<Vec2>,
+    /// The grid transport of large plans, its graph built for the current cost
+    /// grid when `transport_current`.
+    transport: GridTransport,
+    transport_current: bool,
+    agent_cells: Vec<u32>,
+    goal_cells: Vec<u32>,
+    /// The last plan's goal per agent when the transport made it.
+    transported: Vec<u32>,
+    /// Whether the last plan was made by the transport.
+    by_transport: bool,
     rasterised: bool,
     density_t_s: f64,
     fallbacks: u64,
@@ -193,6 +212,12 @@ impl Planner {
             warm: false,
             agents: Vec::new(),
             goals: Vec::new(),
+            transport: GridTransport::new(),
+            transport_current: false,
+            agent_cells: Vec::new(),
+            goal_cells: Vec::new(),
+            transported: Vec::new(),
+            by_transport: false,
             rasterised: false,
             density_t_s: f64::NEG_INFINITY,
             fallbacks: 0,
@@ -211,9 +236,15 @@ impl Planner {
         &self.costs
     }
 
-    /// The solver's work counters of the last plan.
+    /// The solver's work counters of the last plan solved over pairs.
     pub fn solve_stats(&self) -> crate::crowd::assign::SolveStats {
         self.solver.stats()
+    }
+
+    /// The grid transport's counters of the last plan it made, or `None` when the
+    /// last plan was solved over pairs.
+    pub fn transport_stats(&self) -> Option<TransportStats> {
+        self.by_transport.then(|| self.transport.stats())
     }
 
     /// The clustered travel costs of the last plan (`None` with one field per goal).
@@ -327,9 +358,23 @@ impl Planner {
                     .try_fill_cancellable(&self.agents, &self.goals, &mut self.matrix, cancel)
             }
         };
+        self.by_transport = false;
         let solved = match filled {
             Err(EikonalError::Cancelled) => return Err(self.cancelled()),
             Err(_) => false,
+            Ok(()) if goals.len() > self.params.transport_above_goals => {
+                match self.transport(cancel) {
+                    Ok(()) => true,
+                    Err(TransportError::Cancelled) => return Err(self.cancelled()),
+                    Err(e) => {
+                        log::debug!("planner: grid transport not possible ({e}); solving over pairs");
+                        match self.solve(false, cancel) {
+                            Err(AssignError::Cancelled) => return Err(self.cancelled()),
+                            r => r.is_ok(),
+                        }
+                    }
+                }
+            }
             Ok(()) => match self.solve(false, cancel) {
                 Err(AssignError::Cancelled) => return Err(self.cancelled()),
                 r => r.is_ok(),
@@ -346,9 +391,12 @@ impl Planner {
                 });
             }
         }
-        let a = self.solver.assignment();
         goal_of.clear();
-        goal_of.extend(a.iter().map(|&g| g as u32));
+        if self.by_transport {
+            goal_of.extend_from_slice(&self.transported);
+        } else {
+            goal_of.extend(self.solver.assignment().iter().map(|&g| g as u32));
+        }
         waypoints.clear();
         waypoints.resize(agents.len(), Vec2::repeat(f64::NAN));
         if solved {
@@ -364,6 +412,29 @@ impl Planner {
                 waypoints[i] = self.waypoint(agents[i], goals[g], source, t_s);
             }
         }
+        Ok(())
+    }
+
+    /// Solves as a transport on the planning grid ([`GridTransport`]): every agent
+    /// and goal at the free cell the travel costs snap it to.
+    fn transport(&mut self, cancel: Cancel<'_>) -> Result<(), TransportError> {
+        if !self.transport_current {
+            self.transport.set_grid(&self.grid, &self.cost);
+            self.transport_current = true;
+        }
+        let costs = &self.costs;
+        let snap = |p| costs.source_cell_of(p);
+        cells_of("agent", &self.agents, snap, &mut self.agent_cells)?;
+        cells_of("goal", &self.goals, snap, &mut self.goal_cells)?;
+        self.transport.solve(
+            &self.agent_cells,
+            &self.goal_cells,
+            &mut self.transported,
+            cancel,
+        )?;
+        self.by_transport = true;
+        // The pair solver's prices do not belong to this assignment.
+        self.warm = false;
         Ok(())
     }
 
@@ -408,6 +479,7 @@ impl Planner {
             &mut self.cost,
         )?;
         self.costs.set_cost(&self.cost)?;
+        self.transport_current = false;
         Ok(())
     }
 

@@ -29,7 +29,8 @@
 //! [`descent_direction`]), `sanity` ([`sanity_check`]), `cost_field` (eq. 7 and
 //! [`coarsen`]), `discomfort`, `costs` (the assignment provider, [`EikonalCosts`]),
 //! `clusters` (goal clusters sharing a field, [`ClusterCosts`], for large crowds),
-//! `bench` (the benchmark instance), `error`.
+//! `transport` (the assignment of a large crowd as a min-cost flow on the grid,
+//! [`GridTransport`]), `bench` (the benchmark instance), `error`.
 
 mod bench;
 mod clusters;
@@ -43,6 +44,7 @@ mod march;
 mod reads;
 mod sanity;
 mod segment;
+mod transport;
 #[cfg(test)]
 mod tests;
 
@@ -68,3 +70,4 @@ pub use march::{Fmm, Order, Sources, SOURCE_INIT_RADIUS_CELLS};
 pub use reads::{descent_direction, sample, DEGENERATE_GRADIENT_PER_M};
 pub use sanity::{sanity_check, SANITY_REL_SLACK};
 pub use segment::segment_cost;
+pub use transport::{cells_of, GridTransport, TransportError, TransportStats};
