@@ -1063,3 +1063,30 @@ fn plans_at_5000_on_per_goal_costs() {
         );
     }
 }
+
+/// 5,000 agents in every shipped scene: the planner's time per plan with the
+/// grid transport, cold and along a drifting chain (run with `--ignored --nocapture`).
+#[test]
+#[ignore = "timing"]
+fn transport_plan_times_at_5000() {
+    let n = 5000;
+    for (file, _) in crowdtouch::crowd::environment::SCENES {
+        let name = file.trim_end_matches(".ron");
+        let s = scene(name);
+        let (_, from, to) = layouts().into_iter().next().unwrap();
+        let mut agents = free_points(&s, from, n, 17);
+        let mut goals = free_points(&s, to, n, 117);
+        let mut p = Planner::new(Arc::clone(&s), PlannerParams::new(1.5)).unwrap();
+        let (mut g, mut wp) = (Vec::new(), Vec::new());
+        let mut times = Vec::new();
+        for k in 0..8 {
+            agents.iter_mut().for_each(|a| a.x += 0.01);
+            goals.iter_mut().for_each(|q| q.x -= 0.02);
+            let t0 = std::time::Instant::now();
+            p.plan(&agents, &goals, 0.05 * k as f64, &mut g, &mut wp).unwrap();
+            times.push(t0.elapsed().as_secs_f64() * 1e3);
+        }
+        let st = p.transport_stats();
+        eprintln!("{name:>15}: plans {:?} ms, {st:?}, fallbacks {}", times.iter().map(|t| t.round() as i64).collect::<Vec<_>>(), p.fallbacks());
+    }
+}

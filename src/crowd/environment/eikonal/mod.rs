@@ -44,6 +44,7 @@ mod march;
 mod reads;
 mod sanity;
 mod segment;
+mod simplex;
 mod transport;
 #[cfg(test)]
 mod tests;

@@ -44,6 +44,7 @@
 
 use super::grid::Grid;
 use super::segment::segment_cost;
+use super::simplex::{Simplex, SimplexError};
 use crate::crowd::assign::{Cancel, POLL_WORK};
 use crate::geom::Vec2;
 use std::cmp::Reverse;
@@ -173,6 +174,12 @@ pub struct GridTransport {
     goal_start: Vec<u32>,
     goal_list: Vec<u32>,
     stats: TransportStats,
+    simplex: Simplex,
+    /// The simplex arc of each grid arc (`u32::MAX` for other arcs).
+    simplex_arc: Vec<u32>,
+    supply: Vec<i64>,
+    /// Goals of each cell the agents may take (those the surplus does not fill).
+    open_goals: Vec<i64>,
 }
 
 const GRID: u8 = 0;
@@ -354,6 +361,9 @@ impl GridTransport {
             }
         }
         self.check_parts(agent_cells, goal_cells)?;
+        if std::env::var_os("CT_TRANSPORT_SCALING").is_none() {
+            return self.solve_by_simplex(agent_cells, goal_cells, out, cancel);
+        }
         self.stats = TransportStats {
             arcs: self.stats.arcs,
             ..TransportStats::default()
@@ -392,6 +402,125 @@ impl GridTransport {
             }
         }
         self.decompose(agent_cells, goal_cells, out)?;
+        Ok(self.stats)
+    }
+
+    /// [`GridTransport::solve`] by the network simplex: supplies `agents − goals`
+    /// per cell, and a node that supplies the goals no agent takes, joined to every
+    /// goal cell at no cost.
+    fn solve_by_simplex(
+        &mut self,
+        agent_cells: &[u32],
+        goal_cells: &[u32],
+        out: &mut Vec<u32>,
+        cancel: Cancel<'_>,
+    ) -> Result<TransportStats, TransportError> {
+        let n = self.cells;
+        self.stats = TransportStats {
+            arcs: self.stats.arcs,
+            ..TransportStats::default()
+        };
+        self.simplex.reset(n + 1);
+        self.simplex_arc.clear();
+        self.simplex_arc.resize(self.head.len(), u32::MAX);
+        for u in 0..n {
+            for a in self.first[u] as usize..self.first[u + 1] as usize {
+                if self.kind[a] == GRID {
+                    self.simplex_arc[a] = self.simplex.add_arc(u as u32, self.head[a], self.cost[a]) as u32;
+                }
+            }
+        }
+        self.supply.clear();
+        self.supply.resize(n + 1, 0);
+        self.open_goals.clear();
+        self.open_goals.resize(n, 0);
+        for &c in agent_cells {
+            self.supply[c as usize] += 1;
+        }
+        for &g in goal_cells {
+            self.supply[g as usize] -= 1;
+            self.open_goals[g as usize] += 1;
+        }
+        self.supply[n] = (goal_cells.len() - agent_cells.len()) as i64;
+        // The surplus node's arcs, one per goal cell, remembered in `goal_start`.
+        self.goal_start.clear();
+        self.goal_start.resize(n + 1, u32::MAX);
+        if self.supply[n] > 0 {
+            for c in 0..n {
+                if self.open_goals[c] > 0 {
+                    self.goal_start[c] = self.simplex.add_arc(n as u32, c as u32, 0) as u32;
+                }
+            }
+        }
+        self.simplex
+            .solve(&self.supply, || cancel.cancelled())
+            .map_err(|e| match e {
+                SimplexError::Cancelled => TransportError::Cancelled,
+                _ => TransportError::Unbalanced { cell: n as u32 },
+            })?;
+        self.stats.pushes = self.simplex.pivots;
+        for c in 0..n {
+            if self.goal_start[c] != u32::MAX {
+                self.open_goals[c] -= self.simplex.flow(self.goal_start[c] as usize);
+            }
+        }
+        // Goals by cell, taken from the end of each cell's run.
+        self.goal_start.clear();
+        self.goal_start.resize(n + 1, 0);
+        for &g in goal_cells {
+            self.goal_start[g as usize + 1] += 1;
+        }
+        for c in 0..n {
+            self.goal_start[c + 1] += self.goal_start[c];
+        }
+        self.goal_list.clear();
+        self.goal_list.resize(goal_cells.len(), 0);
+        for (j, &g) in goal_cells.iter().enumerate() {
+            let at = &mut self.goal_start[g as usize];
+            self.goal_list[*at as usize] = j as u32;
+            *at += 1;
+        }
+        for c in 0..n {
+            self.current[c] = self.first[c];
+        }
+        // Each agent follows arcs with flow left until a cell with an open goal.
+        self.excess.clear();
+        self.excess.resize(self.head.len(), 0);
+        for (a, &k) in self.simplex_arc.iter().enumerate() {
+            if k != u32::MAX {
+                self.excess[a] = self.simplex.flow(k as usize);
+            }
+        }
+        let mut cost_units: i64 = 0;
+        out.clear();
+        for &start in agent_cells {
+            let mut u = start as usize;
+            loop {
+                if self.open_goals[u] > 0 {
+                    self.open_goals[u] -= 1;
+                    let at = &mut self.goal_start[u];
+                    *at -= 1;
+                    out.push(self.goal_list[*at as usize]);
+                    break;
+                }
+                let end = self.first[u + 1] as usize;
+                let mut a = self.current[u] as usize;
+                while a < end && self.excess[a] <= 0 {
+                    a += 1;
+                }
+                if a == end {
+                    return Err(TransportError::Unbalanced { cell: u as u32 });
+                }
+                self.current[u] = a as u32;
+                self.excess[a] -= 1;
+                cost_units += self.cost[a];
+                u = self.head[a] as usize;
+            }
+        }
+        self.stats.graph_cost_s = cost_units as f64 / (COST_SCALE * (n + 1) as f64);
+        // `excess` holds arc flows here; the scaling path sizes it per node again.
+        self.excess.clear();
+        self.excess.resize(n + 1, 0);
         Ok(self.stats)
     }
 
