@@ -351,34 +351,10 @@ impl Planner {
             self.solver_k = k;
             self.warm = false;
         }
-        let filled = match &mut self.clusters {
-            Some(c) => c.fill_cancellable(&self.costs, &self.agents, &self.goals, cancel),
-            None => {
-                self.costs
-                    .try_fill_cancellable(&self.agents, &self.goals, &mut self.matrix, cancel)
-            }
-        };
         self.by_transport = false;
-        let solved = match filled {
-            Err(EikonalError::Cancelled) => return Err(self.cancelled()),
-            Err(_) => false,
-            Ok(()) if goals.len() > self.params.transport_above_goals => {
-                match self.transport(cancel) {
-                    Ok(()) => true,
-                    Err(TransportError::Cancelled) => return Err(self.cancelled()),
-                    Err(e) => {
-                        log::debug!("planner: grid transport not possible ({e}); solving over pairs");
-                        match self.solve(false, cancel) {
-                            Err(AssignError::Cancelled) => return Err(self.cancelled()),
-                            r => r.is_ok(),
-                        }
-                    }
-                }
-            }
-            Ok(()) => match self.solve(false, cancel) {
-                Err(AssignError::Cancelled) => return Err(self.cancelled()),
-                r => r.is_ok(),
-            },
+        let solved = match self.transport_plan(goals.len(), cancel)? {
+            Some(solved) => solved,
+            None => self.pair_plan(cancel)?,
         };
         if !solved {
             self.fallbacks += 1;
@@ -405,6 +381,10 @@ impl Planner {
                     return Err(self.cancelled());
                 }
                 let g = g as usize;
+                if self.by_transport {
+                    waypoints[i] = self.waypoint_along(agents[i], goals[g], i, t_s);
+                    continue;
+                }
                 let source = match &self.clusters {
                     Some(c) => c.source_of(g),
                     None => self.goals[g],
@@ -415,6 +395,44 @@ impl Planner {
         Ok(())
     }
 
+    /// A plan of more than [`PlannerParams::transport_above_goals`] goals by the
+    /// grid transport ([`Self::transport`]; its paths give the waypoints, so no
+    /// field is marched). `None`: not a transport plan, or the transport could not
+    /// be solved (the plan is then solved over pairs).
+    fn transport_plan(&mut self, goals: usize, cancel: Cancel<'_>) -> Result<Option<bool>, PlanError> {
+        if goals <= self.params.transport_above_goals {
+            return Ok(None);
+        }
+        match self.transport(cancel) {
+            Ok(()) => Ok(Some(true)),
+            Err(TransportError::Cancelled) => Err(self.cancelled()),
+            Err(e) => {
+                log::debug!("planner: grid transport not possible ({e}); solving over pairs");
+                Ok(None)
+            }
+        }
+    }
+
+    /// A plan solved over pairs: the travel costs filled, then the solver; `false`
+    /// when either fails (the Euclidean fallback follows).
+    fn pair_plan(&mut self, cancel: Cancel<'_>) -> Result<bool, PlanError> {
+        let filled = match &mut self.clusters {
+            Some(c) => c.fill_cancellable(&self.costs, &self.agents, &self.goals, cancel),
+            None => {
+                self.costs
+                    .try_fill_cancellable(&self.agents, &self.goals, &mut self.matrix, cancel)
+            }
+        };
+        match filled {
+            Err(EikonalError::Cancelled) => Err(self.cancelled()),
+            Err(_) => Ok(false),
+            Ok(()) => match self.solve(false, cancel) {
+                Err(AssignError::Cancelled) => Err(self.cancelled()),
+                r => Ok(r.is_ok()),
+            },
+        }
+    }
+
     /// Solves as a transport on the planning grid ([`GridTransport`]): every agent
     /// and goal at the free cell the travel costs snap it to.
     fn transport(&mut self, cancel: Cancel<'_>) -> Result<(), TransportError> {
@@ -422,8 +440,14 @@ impl Planner {
             self.transport.set_grid(&self.grid, &self.cost);
             self.transport_current = true;
         }
-        let costs = &self.costs;
-        let snap = |p| costs.source_cell_of(p);
+        // A point inside an obstacle (a goal on a building, an agent pushed into
+        // one) stands at the nearest free cell, however far.
+        let (costs, transport, grid) = (&self.costs, &self.transport, &self.grid);
+        let snap = |p| {
+            costs
+                .source_cell_of(p)
+                .or_else(|| transport.nearest_free(grid, p).map(|c| c as usize))
+        };
         cells_of("agent", &self.agents, snap, &mut self.agent_cells)?;
         cells_of("goal", &self.goals, snap, &mut self.goal_cells)?;
         self.transport.solve(
@@ -521,6 +545,29 @@ impl Planner {
                 return;
             }
         }
+    }
+
+    /// The waypoint of agent `i` of a transport plan, at `a` bound for `goal`: as
+    /// [`Self::waypoint`], the farthest point of its route that `a` sees (NaN when
+    /// `a` sees its goal), the route being its path on the planning grid
+    /// ([`GridTransport::path`], cell centres) instead of a field's descent.
+    fn waypoint_along(&self, a: Vec2, goal: Vec2, i: usize, t_s: f64) -> Vec2 {
+        let none = Vec2::repeat(f64::NAN);
+        if self.scene.visible(a, goal, t_s) {
+            return none;
+        }
+        let mut best = none;
+        for &cell in self.transport.path(i).iter().skip(1).take(MAX_ROUTE_STEPS) {
+            let q = self.grid.center(cell as usize);
+            if !self.scene.visible(a, q, t_s) {
+                break;
+            }
+            best = q;
+            if self.scene.visible(q, goal, t_s) {
+                break;
+            }
+        }
+        best
     }
 
     /// The farthest point of the agent's route towards `source` (the field its cost

@@ -25,36 +25,30 @@
 //!
 //! # Method
 //!
-//! Cost scaling with push and relabel (Goldberg and Tarjan, "Finding minimum-cost
-//! circulations by successive approximation", 1990; the `refine` of Goldberg, "An
-//! efficient implementation of a scaling minimum-cost flow algorithm", 1997): arc
-//! costs are integers (`COST_SCALE` units per second of travel, times the node
-//! count so that a flow that is ε-optimal with `ε < 1` is optimal), `ε` starts at
-//! the largest arc cost and is divided by `ALPHA` per phase, and each phase pushes
-//! the excess of the phase's saturated arcs along admissible arcs (reduced cost
-//! below 0), relabelling a node when none is left. A super sink takes one unit per
-//! goal, so a crowd with more goals than agents leaves the goals it pleases empty.
+//! The flow is solved by the primal network simplex of [`Simplex`]: every cell
+//! supplies its agents and demands its goals, and a surplus node supplies the goals
+//! no agent takes (joined to every goal cell at no cost), so a crowd with more goals
+//! than agents leaves the goals it pleases empty. Arc costs are integers
+//! (`COST_SCALE` units per second of travel). The optimal flow is then cut into one
+//! path per agent, each ending at a goal of the cell it reaches.
 //!
 //! # Complexity
 //!
-//! `O(n² m log(n C))` in the worst case (`n` cells, `m` arcs, `C` the largest
-//! arc cost); on the planning grids of the shipped scenes (about 5,600 cells and
-//! 80,000 arcs) a solve is tens of milliseconds whatever the crowd size, against
-//! `O(agents × goals)` per pass for the solvers over pairs.
+//! Each pivot walks one cycle of the spanning tree and moves one subtree. On the
+//! planning grids of the shipped scenes (about 5,600 cells and 45,000 arcs) a solve
+//! of 5,000 agents is about 13,000 pivots and tens of milliseconds whatever the
+//! crowd size (`benches/assign.rs`, `grid_transport`), against `O(agents × goals)`
+//! per pass for the solvers over pairs.
 
 use super::grid::Grid;
 use super::segment::segment_cost;
 use super::simplex::{Simplex, SimplexError};
-use crate::crowd::assign::{Cancel, POLL_WORK};
+use crate::crowd::assign::Cancel;
 use crate::geom::Vec2;
-use std::cmp::Reverse;
-use std::collections::{BinaryHeap, VecDeque};
 
-/// Integer cost units per second of travel (before the node-count factor): a
-/// 16 cm arc at 1 s/m is 16,000 units, so rounding moves an arc by at most 3·10⁻⁵.
+/// Integer cost units per second of travel: a 16 cm arc at 1 s/m is 16,000 units,
+/// so rounding moves an arc by at most 3·10⁻⁵ of its cost.
 const COST_SCALE: f64 = 1e5;
-/// Factor `ε` is divided by between phases.
-const ALPHA: i64 = 8;
 /// One of each pair of opposite neighbour offsets `(dc, dr)` of the 16-neighbourhood.
 const OFFSETS: [(isize, isize); 8] = [
     (1, 0),
@@ -129,14 +123,10 @@ pub enum TransportError {
 /// Work counters of the last solve.
 #[derive(Copy, Clone, Debug, Default, PartialEq)]
 pub struct TransportStats {
-    /// Arcs of the graph (both directions of each neighbour pair, without residuals).
+    /// Arcs of the graph (both directions of each neighbour pair).
     pub arcs: usize,
-    /// Scaling phases.
-    pub phases: u32,
-    /// Pushes.
-    pub pushes: u64,
-    /// Relabels.
-    pub relabels: u64,
+    /// Simplex pivots.
+    pub pivots: u64,
     /// Total travel cost of the assignment on the graph (s).
     pub graph_cost_s: f64,
 }
@@ -146,45 +136,34 @@ pub struct TransportStats {
 #[derive(Default)]
 pub struct GridTransport {
     cells: usize,
-    /// Arcs of node `v` are `first[v]..first[v + 1]` (node `cells` is the sink).
+    /// Arcs out of cell `v` are `first[v]..first[v + 1]`, to `head[a]` at `cost[a]`
+    /// units; `first` is empty before [`GridTransport::set_grid`].
     first: Vec<u32>,
     head: Vec<u32>,
     cost: Vec<i64>,
-    cap: Vec<i32>,
-    rev: Vec<u32>,
-    /// What an arc is: a grid arc (`GRID`), its residual (`RESIDUAL`), a cell's arc
-    /// to the sink (`SINK`) or the sink's residual back (`RESIDUAL`).
-    kind: Vec<u8>,
-    /// The arc of each cell to the sink.
-    sink_arc: Vec<u32>,
     /// Connected part of each cell (`u32::MAX`: blocked).
     part: Vec<u32>,
     parts: usize,
-    max_cost: i64,
-    price: Vec<i64>,
-    excess: Vec<i64>,
-    current: Vec<u32>,
-    queued: Vec<bool>,
-    queue: VecDeque<u32>,
-    /// Distances (in units of ε) of the global price update, and its queue.
-    dist: Vec<i64>,
-    heap: BinaryHeap<Reverse<(i64, u32)>>,
     part_agents: Vec<usize>,
     part_goals: Vec<usize>,
+    /// Goals by cell: those of cell `c` are `goal_list[goal_start[c]..]`, taken
+    /// from the end of each cell's run.
     goal_start: Vec<u32>,
     goal_list: Vec<u32>,
+    /// The surplus node's arc to each goal cell (`u32::MAX`: none).
+    surplus_arc: Vec<u32>,
     stats: TransportStats,
     simplex: Simplex,
-    /// The simplex arc of each grid arc (`u32::MAX` for other arcs).
-    simplex_arc: Vec<u32>,
     supply: Vec<i64>,
-    /// Goals of each cell the agents may take (those the surplus does not fill).
+    /// Goals of each cell the agents take (those the surplus does not fill).
     open_goals: Vec<i64>,
+    /// Flow left on each arc while the paths are cut, and the next arc to try per cell.
+    left: Vec<i64>,
+    current: Vec<u32>,
+    /// The cells of agent `i`'s path are `path_cells[path_start[i]..path_start[i + 1]]`.
+    path_cells: Vec<u32>,
+    path_start: Vec<u32>,
 }
-
-const GRID: u8 = 0;
-const RESIDUAL: u8 = 1;
-const SINK: u8 = 2;
 
 impl GridTransport {
     /// An empty transport; call [`GridTransport::set_grid`] before solving.
@@ -197,11 +176,70 @@ impl GridTransport {
         self.stats
     }
 
+    /// The path of agent `i` in the last solve: the cells from its own to its goal's,
+    /// a cheapest path of the graph between them (every arc of an optimal flow has
+    /// reduced cost 0, so a path along the flow costs the difference of its ends'
+    /// potentials, the least any path can). Empty when `i` is out of range.
+    pub fn path(&self, i: usize) -> &[u32] {
+        match (self.path_start.get(i), self.path_start.get(i + 1)) {
+            (Some(&a), Some(&b)) => &self.path_cells[a as usize..b as usize],
+            _ => &[],
+        }
+    }
+
+    /// The free cell of the last [`GridTransport::set_grid`] whose centre is
+    /// nearest `p` (the first in index order on a tie), searched ring by ring around
+    /// `p`'s cell: where an agent or goal inside an obstacle stands for the
+    /// transport. `None` when `p` is outside `grid` or no cell is free.
+    pub fn nearest_free(&self, grid: &Grid, p: Vec2) -> Option<u32> {
+        let start = grid.cell_of(p)?;
+        if self.part.len() != grid.len() {
+            return None;
+        }
+        let (cols, rows) = (grid.cols() as isize, grid.rows() as isize);
+        let (c0, r0) = ((start % grid.cols()) as isize, (start / grid.cols()) as isize);
+        let h = grid.cell_m();
+        let mut best: Option<(f64, usize)> = None;
+        let consider = |c: isize, r: isize, best: &mut Option<(f64, usize)>| {
+            if c < 0 || r < 0 || c >= cols || r >= rows {
+                return;
+            }
+            let i = (r * cols + c) as usize;
+            if self.part[i] == u32::MAX {
+                return;
+            }
+            let d = (grid.center(i) - p).norm();
+            if best.is_none_or(|(bd, bi)| d < bd || (d == bd && i < bi)) {
+                *best = Some((d, i));
+            }
+        };
+        for k in 0..cols.max(rows) {
+            // Every cell of ring k is at least (k − ½) cells from p.
+            if best.is_some_and(|(d, _)| (k as f64 - 0.5) * h > d) {
+                break;
+            }
+            for r in r0 - k..=r0 + k {
+                if r == r0 - k || r == r0 + k {
+                    for c in c0 - k..=c0 + k {
+                        consider(c, r, &mut best);
+                    }
+                } else {
+                    consider(c0 - k, r, &mut best);
+                    consider(c0 + k, r, &mut best);
+                }
+            }
+        }
+        best.map(|(_, i)| i as u32)
+    }
+
     /// Builds the graph for `grid` with unit cost `cost` (s/m per cell, `+inf`
     /// blocked; eq. 7).
     ///
+    /// # Panics
+    /// If `cost` does not have one entry per cell of `grid`.
+    ///
     /// # Complexity
-    /// One [`segment_cost`] per arc: about 45,000 for a 100 × 56 grid.
+    /// One [`segment_cost`] per neighbour pair: about 45,000 for a 100 × 56 grid.
     pub fn set_grid(&mut self, grid: &Grid, cost: &[f64]) {
         let n = grid.len();
         assert_eq!(cost.len(), n, "one cost per cell");
@@ -209,8 +247,8 @@ impl GridTransport {
         let free = |c: isize, r: isize| -> bool {
             c >= 0 && r >= 0 && c < cols && r < rows && cost[(r * cols + c) as usize].is_finite()
         };
-        // Undirected edges with their cost, found once per pair.
-        let mut edges: Vec<(u32, u32, f64)> = Vec::with_capacity(n * OFFSETS.len());
+        // Each neighbour pair once, with its cost in integer units.
+        let mut edges: Vec<(u32, u32, i64)> = Vec::with_capacity(n * OFFSETS.len());
         for r in 0..rows {
             for c in 0..cols {
                 if !free(c, r) {
@@ -224,70 +262,34 @@ impl GridTransport {
                     let v = ((r + dr) * cols + c + dc) as usize;
                     let s = segment_cost(grid, cost, grid.center(u), grid.center(v));
                     if s.is_finite() && s > 0.0 {
-                        edges.push((u as u32, v as u32, s));
+                        let units = (s * COST_SCALE).round().max(1.0) as i64;
+                        edges.push((u as u32, v as u32, units));
                     }
                 }
             }
         }
-        let nodes = n + 1;
-        let scale = COST_SCALE * nodes as f64;
-        let mut degree = vec![0u32; nodes + 1];
-        for &(u, v, _) in &edges {
-            degree[u as usize] += 2;
-            degree[v as usize] += 2;
-        }
-        for (u, d) in degree.iter_mut().enumerate().take(n) {
-            if cost[u].is_finite() {
-                *d += 1;
-            }
-        }
-        degree[n] = cost.iter().filter(|c| c.is_finite()).count() as u32;
         self.first.clear();
-        self.first.push(0);
-        for v in 0..nodes {
-            let f = self.first[v] + degree[v];
-            self.first.push(f);
+        self.first.resize(n + 1, 0);
+        for &(u, v, _) in &edges {
+            self.first[u as usize + 1] += 1;
+            self.first[v as usize + 1] += 1;
         }
-        let m = self.first[nodes] as usize;
+        for v in 0..n {
+            self.first[v + 1] += self.first[v];
+        }
+        let m = 2 * edges.len();
         self.head.clear();
         self.head.resize(m, 0);
         self.cost.clear();
         self.cost.resize(m, 0);
-        self.cap.clear();
-        self.cap.resize(m, 0);
-        self.rev.clear();
-        self.rev.resize(m, 0);
-        self.kind.clear();
-        self.kind.resize(m, RESIDUAL);
-        let mut fill: Vec<u32> = self.first[..nodes].to_vec();
-        let mut add = |tail: usize, head: usize, c: i64, k: u8, this: &mut GridTransport| {
-            let a = fill[tail] as usize;
-            fill[tail] += 1;
-            let b = fill[head] as usize;
-            fill[head] += 1;
-            this.head[a] = head as u32;
-            this.cost[a] = c;
-            this.kind[a] = k;
-            this.rev[a] = b as u32;
-            this.head[b] = tail as u32;
-            this.cost[b] = -c;
-            this.kind[b] = RESIDUAL;
-            this.rev[b] = a as u32;
-            a
-        };
-        self.max_cost = 1;
-        for &(u, v, s) in &edges {
-            let c = ((s * COST_SCALE).round().max(1.0) * nodes as f64) as i64;
-            debug_assert!(c as f64 <= scale * 1e6);
-            self.max_cost = self.max_cost.max(c);
-            add(u as usize, v as usize, c, GRID, self);
-            add(v as usize, u as usize, c, GRID, self);
-        }
-        self.sink_arc.clear();
-        self.sink_arc.resize(n, u32::MAX);
-        for u in 0..n {
-            if cost[u].is_finite() {
-                self.sink_arc[u] = add(u, n, 0, SINK, self) as u32;
+        self.current.clear();
+        self.current.extend_from_slice(&self.first[..n]);
+        for &(u, v, c) in &edges {
+            for (t, h) in [(u, v), (v, u)] {
+                let a = self.current[t as usize] as usize;
+                self.current[t as usize] += 1;
+                self.head[a] = h;
+                self.cost[a] = c;
             }
         }
         // Connected parts (arcs are symmetric), for the feasibility check.
@@ -306,7 +308,7 @@ impl GridTransport {
             while let Some(u) = stack.pop() {
                 for a in self.first[u] as usize..self.first[u + 1] as usize {
                     let w = self.head[a] as usize;
-                    if self.kind[a] == GRID && self.part[w] == u32::MAX {
+                    if self.part[w] == u32::MAX {
                         self.part[w] = p;
                         stack.push(w);
                     }
@@ -314,17 +316,10 @@ impl GridTransport {
             }
         }
         self.cells = n;
-        self.stats.arcs = 2 * edges.len();
-        self.price.clear();
-        self.price.resize(nodes, 0);
-        self.excess.clear();
-        self.excess.resize(nodes, 0);
-        self.current.clear();
-        self.current.resize(nodes, 0);
-        self.queued.clear();
-        self.queued.resize(nodes, false);
-        self.dist.clear();
-        self.dist.resize(nodes, 0);
+        self.stats = TransportStats {
+            arcs: m,
+            ..TransportStats::default()
+        };
     }
 
     /// Assigns agent `i`, standing in cell `agent_cells[i]`, the goal `out[i]` among
@@ -361,73 +356,13 @@ impl GridTransport {
             }
         }
         self.check_parts(agent_cells, goal_cells)?;
-        if std::env::var_os("CT_TRANSPORT_SCALING").is_none() {
-            return self.solve_by_simplex(agent_cells, goal_cells, out, cancel);
-        }
-        self.stats = TransportStats {
-            arcs: self.stats.arcs,
-            ..TransportStats::default()
-        };
-        // Flow 0, every grid arc open to the whole crowd, each cell's sink arc to
-        // its goals.
-        let big = agents as i32;
-        for (&k, c) in self.kind.iter().zip(self.cap.iter_mut()) {
-            *c = if k == GRID { big } else { 0 };
-        }
-        for &g in goal_cells {
-            let a = self.sink_arc[g as usize];
-            if a != u32::MAX {
-                self.cap[a as usize] += 1;
-            }
-        }
-        self.excess.iter_mut().for_each(|e| *e = 0);
-        for &c in agent_cells {
-            self.excess[c as usize] += 1;
-        }
-        self.excess[n] = -(agents as i64);
-        self.price.iter_mut().for_each(|p| *p = 0);
-        let mut eps = self.max_cost;
-        let mut work = 0u64;
-        loop {
-            eps = (eps / ALPHA).max(1);
-            let t0 = std::time::Instant::now();
-            let (p0, r0) = (self.stats.pushes, self.stats.relabels);
-            self.refine(eps, &mut work, cancel)?;
-            if std::env::var_os("CT_TRANSPORT_TRACE").is_some() {
-                eprintln!("eps {eps}: {:?} pushes {} relabels {}", t0.elapsed(), self.stats.pushes - p0, self.stats.relabels - r0);
-            }
-            self.stats.phases += 1;
-            if eps == 1 {
-                break;
-            }
-        }
-        self.decompose(agent_cells, goal_cells, out)?;
-        Ok(self.stats)
-    }
-
-    /// [`GridTransport::solve`] by the network simplex: supplies `agents − goals`
-    /// per cell, and a node that supplies the goals no agent takes, joined to every
-    /// goal cell at no cost.
-    fn solve_by_simplex(
-        &mut self,
-        agent_cells: &[u32],
-        goal_cells: &[u32],
-        out: &mut Vec<u32>,
-        cancel: Cancel<'_>,
-    ) -> Result<TransportStats, TransportError> {
-        let n = self.cells;
-        self.stats = TransportStats {
-            arcs: self.stats.arcs,
-            ..TransportStats::default()
-        };
+        self.stats.pivots = 0;
+        self.stats.graph_cost_s = 0.0;
+        // Grid arcs first, so simplex arc `a` is grid arc `a`.
         self.simplex.reset(n + 1);
-        self.simplex_arc.clear();
-        self.simplex_arc.resize(self.head.len(), u32::MAX);
         for u in 0..n {
             for a in self.first[u] as usize..self.first[u + 1] as usize {
-                if self.kind[a] == GRID {
-                    self.simplex_arc[a] = self.simplex.add_arc(u as u32, self.head[a], self.cost[a]) as u32;
-                }
+                self.simplex.add_arc(u as u32, self.head[a], self.cost[a]);
             }
         }
         self.supply.clear();
@@ -441,30 +376,44 @@ impl GridTransport {
             self.supply[g as usize] -= 1;
             self.open_goals[g as usize] += 1;
         }
-        self.supply[n] = (goal_cells.len() - agent_cells.len()) as i64;
-        // The surplus node's arcs, one per goal cell, remembered in `goal_start`.
-        self.goal_start.clear();
-        self.goal_start.resize(n + 1, u32::MAX);
-        if self.supply[n] > 0 {
+        // The surplus node `n` supplies the goals no agent takes.
+        self.supply[n] = (goals - agents) as i64;
+        self.surplus_arc.clear();
+        self.surplus_arc.resize(n, u32::MAX);
+        if goals > agents {
             for c in 0..n {
                 if self.open_goals[c] > 0 {
-                    self.goal_start[c] = self.simplex.add_arc(n as u32, c as u32, 0) as u32;
+                    self.surplus_arc[c] = self.simplex.add_arc(n as u32, c as u32, 0) as u32;
                 }
             }
         }
-        self.simplex
-            .solve(&self.supply, || cancel.cancelled())
-            .map_err(|e| match e {
-                SimplexError::Cancelled => TransportError::Cancelled,
-                _ => TransportError::Unbalanced { cell: n as u32 },
-            })?;
-        self.stats.pushes = self.simplex.pivots;
+        let solved = self.simplex.solve(&self.supply, || cancel.cancelled());
+        self.stats.pivots = self.simplex.pivots;
+        solved.map_err(|e| match e {
+            SimplexError::Cancelled => TransportError::Cancelled,
+            // Parts were checked and costs are positive: a defect if it happens.
+            SimplexError::Infeasible | SimplexError::Unbounded => {
+                TransportError::Unbalanced { cell: n as u32 }
+            }
+        })?;
         for c in 0..n {
-            if self.goal_start[c] != u32::MAX {
-                self.open_goals[c] -= self.simplex.flow(self.goal_start[c] as usize);
+            if self.surplus_arc[c] != u32::MAX {
+                self.open_goals[c] -= self.simplex.flow(self.surplus_arc[c] as usize);
             }
         }
-        // Goals by cell, taken from the end of each cell's run.
+        self.cut_paths(agent_cells, goal_cells, out)?;
+        Ok(self.stats)
+    }
+
+    /// Cuts the optimal flow into one path per agent: each agent follows arcs with
+    /// flow left until a cell with a goal left, which it takes.
+    fn cut_paths(
+        &mut self,
+        agent_cells: &[u32],
+        goal_cells: &[u32],
+        out: &mut Vec<u32>,
+    ) -> Result<(), TransportError> {
+        let n = self.cells;
         self.goal_start.clear();
         self.goal_start.resize(n + 1, 0);
         for &g in goal_cells {
@@ -480,48 +429,49 @@ impl GridTransport {
             self.goal_list[*at as usize] = j as u32;
             *at += 1;
         }
-        for c in 0..n {
-            self.current[c] = self.first[c];
-        }
-        // Each agent follows arcs with flow left until a cell with an open goal.
-        self.excess.clear();
-        self.excess.resize(self.head.len(), 0);
-        for (a, &k) in self.simplex_arc.iter().enumerate() {
-            if k != u32::MAX {
-                self.excess[a] = self.simplex.flow(k as usize);
-            }
-        }
-        let mut cost_units: i64 = 0;
+        self.current.clear();
+        self.current.extend_from_slice(&self.first[..n]);
+        self.left.clear();
+        self.left.extend((0..self.head.len()).map(|a| self.simplex.flow(a)));
+        let mut units: i64 = 0;
         out.clear();
+        self.path_cells.clear();
+        self.path_start.clear();
+        self.path_start.push(0);
         for &start in agent_cells {
             let mut u = start as usize;
-            loop {
+            self.path_cells.push(start);
+            // A path has at most one arc per cell: flows of an optimum have no cycle
+            // of positive cost, and every arc costs at least one unit.
+            for _ in 0..=n {
                 if self.open_goals[u] > 0 {
-                    self.open_goals[u] -= 1;
-                    let at = &mut self.goal_start[u];
-                    *at -= 1;
-                    out.push(self.goal_list[*at as usize]);
                     break;
                 }
                 let end = self.first[u + 1] as usize;
                 let mut a = self.current[u] as usize;
-                while a < end && self.excess[a] <= 0 {
+                while a < end && self.left[a] <= 0 {
                     a += 1;
                 }
                 if a == end {
                     return Err(TransportError::Unbalanced { cell: u as u32 });
                 }
                 self.current[u] = a as u32;
-                self.excess[a] -= 1;
-                cost_units += self.cost[a];
+                self.left[a] -= 1;
+                units += self.cost[a];
                 u = self.head[a] as usize;
+                self.path_cells.push(u as u32);
             }
+            if self.open_goals[u] <= 0 {
+                return Err(TransportError::Unbalanced { cell: u as u32 });
+            }
+            self.open_goals[u] -= 1;
+            let at = &mut self.goal_start[u];
+            *at -= 1;
+            out.push(self.goal_list[*at as usize]);
+            self.path_start.push(self.path_cells.len() as u32);
         }
-        self.stats.graph_cost_s = cost_units as f64 / (COST_SCALE * (n + 1) as f64);
-        // `excess` holds arc flows here; the scaling path sizes it per node again.
-        self.excess.clear();
-        self.excess.resize(n + 1, 0);
-        Ok(self.stats)
+        self.stats.graph_cost_s = units as f64 / COST_SCALE;
+        Ok(())
     }
 
     fn check_parts(&mut self, agent_cells: &[u32], goal_cells: &[u32]) -> Result<(), TransportError> {
@@ -557,227 +507,6 @@ impl GridTransport {
                 });
             }
         }
-        Ok(())
-    }
-
-    /// One phase: makes the flow `eps`-optimal (Goldberg 1997, `refine`).
-    fn refine(&mut self, eps: i64, work: &mut u64, cancel: Cancel<'_>) -> Result<(), TransportError> {
-        let nodes = self.cells + 1;
-        // Saturate every residual arc of reduced cost below -ε: the flow is then
-        // ε-optimal and no longer balanced.
-        for v in 0..nodes {
-            let pv = self.price[v];
-            for a in self.first[v] as usize..self.first[v + 1] as usize {
-                let d = self.cap[a];
-                if d > 0 {
-                    let w = self.head[a] as usize;
-                    if self.cost[a] + pv - self.price[w] < -eps {
-                        self.cap[a] = 0;
-                        self.cap[self.rev[a] as usize] += d;
-                        self.excess[v] -= i64::from(d);
-                        self.excess[w] += i64::from(d);
-                    }
-                }
-            }
-        }
-        self.queue.clear();
-        for v in 0..nodes {
-            self.current[v] = self.first[v];
-            self.queued[v] = self.excess[v] > 0;
-            if self.queued[v] {
-                self.queue.push_back(v as u32);
-            }
-        }
-        self.update_prices(eps);
-        let mut relabels_since_update = 0usize;
-        while let Some(v) = self.queue.pop_front() {
-            let v = v as usize;
-            self.queued[v] = false;
-            let end = self.first[v + 1] as usize;
-            while self.excess[v] > 0 {
-                let pv = self.price[v];
-                let mut a = self.current[v] as usize;
-                while a < end {
-                    let d = self.cap[a];
-                    if d > 0 {
-                        let w = self.head[a] as usize;
-                        if self.cost[a] + pv - self.price[w] < 0 {
-                            let d = i64::from(d).min(self.excess[v]);
-                            self.cap[a] -= d as i32;
-                            self.cap[self.rev[a] as usize] += d as i32;
-                            self.excess[v] -= d;
-                            let before = self.excess[w];
-                            self.excess[w] += d;
-                            self.stats.pushes += 1;
-                            if before <= 0 && self.excess[w] > 0 && !self.queued[w] {
-                                self.queued[w] = true;
-                                self.queue.push_back(w as u32);
-                            }
-                            if self.excess[v] == 0 {
-                                break;
-                            }
-                        }
-                    }
-                    a += 1;
-                }
-                *work += (a - self.current[v] as usize) as u64 + 1;
-                self.current[v] = a as u32;
-                if self.excess[v] > 0 {
-                    self.relabel(v, eps);
-                    relabels_since_update += 1;
-                    if relabels_since_update >= nodes * update_every() {
-                        relabels_since_update = 0;
-                        self.update_prices(eps);
-                    }
-                }
-                if *work >= POLL_WORK {
-                    *work = 0;
-                    if cancel.cancelled() {
-                        return Err(TransportError::Cancelled);
-                    }
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// The global price update (Goldberg 1997, section 5.2): with the length of a
-    /// residual arc `ℓ = ⌊c_p / ε⌋ + 1` (at least 0 in an ε-optimal flow), `d(v)`
-    /// the shortest length from `v` to a node short of flow, and `p(v) -= ε d(v)`,
-    /// every arc stays ε-optimal and every node with excess gets a path of
-    /// admissible arcs to a node short of flow. The search stops once every node
-    /// with excess is reached; the nodes not reached then move with the last
-    /// distance reached, which keeps ε-optimality as well.
-    fn update_prices(&mut self, eps: i64) {
-        let nodes = self.cells + 1;
-        let mut waiting = 0usize;
-        for v in 0..nodes {
-            self.dist[v] = i64::MAX;
-            if self.excess[v] > 0 {
-                waiting += 1;
-            }
-        }
-        self.heap.clear();
-        for v in 0..nodes {
-            if self.excess[v] < 0 {
-                self.dist[v] = 0;
-                self.heap.push(Reverse((0, v as u32)));
-            }
-        }
-        let mut reached = 0i64;
-        while let Some(Reverse((d, w))) = self.heap.pop() {
-            let w = w as usize;
-            if d > self.dist[w] {
-                continue;
-            }
-            reached = d;
-            if self.excess[w] > 0 {
-                waiting -= 1;
-                if waiting == 0 {
-                    break;
-                }
-            }
-            // Residual arcs into w: the reverses of w's own arcs.
-            let pw = self.price[w];
-            for b in self.first[w] as usize..self.first[w + 1] as usize {
-                let a = self.rev[b] as usize;
-                if self.cap[a] <= 0 {
-                    continue;
-                }
-                let v = self.head[b] as usize;
-                let cp = self.cost[a] + self.price[v] - pw;
-                let nd = d + (cp.div_euclid(eps) + 1).max(0);
-                if nd < self.dist[v] {
-                    self.dist[v] = nd;
-                    self.heap.push(Reverse((nd, v as u32)));
-                }
-            }
-        }
-        for v in 0..nodes {
-            let d = self.dist[v].min(reached);
-            self.price[v] -= eps * d;
-            self.current[v] = self.first[v];
-        }
-    }
-
-    /// Lowers the price of `v` as far as keeps every residual arc out of it
-    /// `eps`-optimal, which makes one of them admissible.
-    fn relabel(&mut self, v: usize, eps: i64) {
-        let (s, e) = (self.first[v] as usize, self.first[v + 1] as usize);
-        let mut best = i64::MIN;
-        for a in s..e {
-            if self.cap[a] > 0 {
-                best = best.max(self.price[self.head[a] as usize] - self.cost[a]);
-            }
-        }
-        // A node with excess always has a residual arc out (the flow that brought
-        // the excess can go back), so `best` is finite.
-        debug_assert!(best > i64::MIN);
-        self.price[v] = best - eps;
-        self.current[v] = s as u32;
-        self.stats.relabels += 1;
-    }
-
-    /// Cuts the flow into one path per agent and gives each agent a goal of the
-    /// cell its path ends in.
-    fn decompose(
-        &mut self,
-        agent_cells: &[u32],
-        goal_cells: &[u32],
-        out: &mut Vec<u32>,
-    ) -> Result<(), TransportError> {
-        let n = self.cells;
-        // Goals by cell (counting sort).
-        self.goal_start.clear();
-        self.goal_start.resize(n + 1, 0);
-        for &g in goal_cells {
-            self.goal_start[g as usize + 1] += 1;
-        }
-        for c in 0..n {
-            self.goal_start[c + 1] += self.goal_start[c];
-        }
-        self.goal_list.clear();
-        self.goal_list.resize(goal_cells.len(), 0);
-        for (j, &g) in goal_cells.iter().enumerate() {
-            let at = &mut self.goal_start[g as usize];
-            self.goal_list[*at as usize] = j as u32;
-            *at += 1;
-        }
-        // `goal_start[c]` is now the end of cell c's goals: take them from the end.
-        for c in 0..n {
-            self.current[c] = self.first[c];
-        }
-        let big = agent_cells.len() as i32;
-        let mut cost_units: i64 = 0;
-        out.clear();
-        for &start in agent_cells {
-            let mut u = start as usize;
-            loop {
-                let s = self.sink_arc[u] as usize;
-                if self.cap[self.rev[s] as usize] > 0 {
-                    // The sink arc's flow is its residual back.
-                    self.cap[self.rev[s] as usize] -= 1;
-                    let at = &mut self.goal_start[u];
-                    *at -= 1;
-                    out.push(self.goal_list[*at as usize]);
-                    break;
-                }
-                let end = self.first[u + 1] as usize;
-                let mut a = self.current[u] as usize;
-                while a < end && !(self.kind[a] == GRID && self.cap[a] < big) {
-                    a += 1;
-                }
-                if a == end {
-                    // Flow conservation says a node with flow in has flow out.
-                    return Err(TransportError::Unbalanced { cell: u as u32 });
-                }
-                self.current[u] = a as u32;
-                self.cap[a] += 1;
-                cost_units += self.cost[a];
-                u = self.head[a] as usize;
-            }
-        }
-        self.stats.graph_cost_s = cost_units as f64 / (COST_SCALE * (n + 1) as f64);
         Ok(())
     }
 }
@@ -822,9 +551,6 @@ mod tests {
                 continue;
             }
             for a in t.first[u] as usize..t.first[u + 1] as usize {
-                if t.kind[a] != GRID {
-                    continue;
-                }
                 let (w, nd) = (t.head[a] as usize, du + t.cost[a]);
                 if nd < d[w] {
                     d[w] = nd;
@@ -902,7 +628,7 @@ mod tests {
             assert!(injective(&out, goals.len()));
             let (total, best) = total_and_optimum(&t, &agents, &goals, &out);
             assert_eq!(total, best, "round {round}");
-            let units = COST_SCALE * (grid.len() + 1) as f64;
+            let units = COST_SCALE;
             assert!((stats.graph_cost_s - total as f64 / units).abs() < 1e-9);
         }
     }
@@ -1014,38 +740,4 @@ mod tests {
             }
         }
     }
-}
-
-#[cfg(test)]
-mod timing {
-    use super::*;
-    #[test]
-    #[ignore]
-    fn timing_5000() {
-        let grid = Grid::new(100, 56, 0.16, Vec2::zeros()).unwrap();
-        let mut cost = vec![1.0; grid.len()];
-        for r in 10..50 {
-            cost[grid.index(50, r)] = f64::INFINITY;
-        }
-        let mut t = GridTransport::new();
-        let t0 = std::time::Instant::now();
-        t.set_grid(&grid, &cost);
-        eprintln!("build {:?}", t0.elapsed());
-        let mut rng = crate::rng::SplitMix64::new(3);
-        for n in [200usize, 1000, 5000] {
-            let agents: Vec<u32> = (0..n)
-                .map(|_| grid.index((rng.next_u64() % 30) as usize, 10 + (rng.next_u64() % 30) as usize) as u32)
-                .collect();
-            let goals: Vec<u32> = (0..n)
-                .map(|_| grid.index(70 + (rng.next_u64() % 25) as usize, 10 + (rng.next_u64() % 30) as usize) as u32)
-                .collect();
-            let mut out = Vec::new();
-            let t0 = std::time::Instant::now();
-            let st = t.solve(&agents, &goals, &mut out, Cancel::NEVER).unwrap();
-            eprintln!("{n}: {:?} {st:?}", t0.elapsed());
-        }
-    }
-}
-fn update_every() -> usize {
-    std::env::var("CT_UPD").ok().and_then(|v| v.parse().ok()).unwrap_or(1)
 }
