@@ -862,6 +862,7 @@ fn clustered_assignment_is_near_the_per_goal_optimum() {
     let n = 300;
     let mut worst = 0.0f64;
     let mut sum = 0.0;
+    let (mut worst_flow, mut sum_flow) = (0.0f64, 0.0);
     let mut count = 0;
     for (file, _) in crowdtouch::crowd::environment::SCENES {
         let name = file.trim_end_matches(".ron");
@@ -873,8 +874,18 @@ fn clustered_assignment_is_near_the_per_goal_optimum() {
             exact_params.cluster_m = 0.0;
             let mut exact = Planner::new(Arc::clone(&s), exact_params).unwrap();
             let mut clustered = Planner::new(Arc::clone(&s), PlannerParams::new(1.5)).unwrap();
-            let (mut ge, mut gc, mut wp) = (Vec::new(), Vec::new(), Vec::new());
+            let mut transport_params = PlannerParams::new(1.5);
+            transport_params.transport_above_goals = 0;
+            let mut transported = Planner::new(Arc::clone(&s), transport_params).unwrap();
+            let (mut ge, mut gc, mut gt, mut wp) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
             exact.plan(&agents, &goals, 0.0, &mut ge, &mut wp).unwrap();
+            transported
+                .plan(&agents, &goals, 0.0, &mut gt, &mut wp)
+                .unwrap();
+            assert!(
+                transported.transport_stats().is_some(),
+                "{name} {layout}: not transported"
+            );
             let t0 = std::time::Instant::now();
             clustered
                 .plan(&agents, &goals, 0.0, &mut gc, &mut wp)
@@ -883,13 +894,26 @@ fn clustered_assignment_is_near_the_per_goal_optimum() {
             assert_eq!((exact.fallbacks(), clustered.fallbacks()), (0, 0));
             let mut m = CostMatrix::new(0, 0);
             exact.costs().try_fill(&agents, &goals, &mut m).unwrap();
-            let (best, got) = (total(&m, &ge), total(&m, &gc));
+            let (best, got, flow) = (total(&m, &ge), total(&m, &gc), total(&m, &gt));
             let excess = got / best - 1.0;
+            let flow_excess = flow / best - 1.0;
             eprintln!(
-                "{name:>15} {layout:>10}: per-goal optimum {best:9.1}, clustered {got:9.1} (+{:.3} %), {} clusters, plan {ms:.1} ms",
+                "{name:>15} {layout:>10}: per-goal optimum {best:9.1}, clustered {got:9.1} (+{:.3} %), {} clusters, plan {ms:.1} ms; grid transport {flow:9.1} (+{:.3} %)",
                 100.0 * excess,
-                clustered.clusters()
+                clustered.clusters(),
+                100.0 * flow_excess
             );
+            assert!(
+                flow_excess > -1e-9,
+                "{name} {layout}: transport below the optimum"
+            );
+            assert!(
+                flow_excess < 0.02,
+                "{name} {layout}: transport {:.2} % above",
+                100.0 * flow_excess
+            );
+            worst_flow = worst_flow.max(flow_excess);
+            sum_flow += flow_excess;
             assert!(excess > -1e-9, "{name} {layout}: below the optimum");
             assert!(
                 excess < 0.02,
@@ -906,6 +930,11 @@ fn clustered_assignment_is_near_the_per_goal_optimum() {
         100.0 * sum / count as f64,
         100.0 * worst
     );
+    eprintln!(
+        "grid transport vs per-goal optimum over {count} plans of {n} agents: mean +{:.3} %, worst +{:.3} %",
+        100.0 * sum_flow / count as f64,
+        100.0 * worst_flow
+    );
 }
 
 /// 1,000 agents (more than the field cache held per goal before clusters): every
@@ -914,34 +943,42 @@ fn clustered_assignment_is_near_the_per_goal_optimum() {
 #[test]
 fn every_hidden_agent_gets_a_waypoint_at_1000_agents() {
     let s = scene("obstacle_course");
-    let mut p = Planner::new(Arc::clone(&s), PlannerParams::new(1.5)).unwrap();
-    let (mut goal_of, mut wp) = (Vec::new(), Vec::new());
-    let mut hidden_total = 0;
-    for (k, (layout, from, to)) in layouts().into_iter().enumerate() {
-        let agents = free_points(&s, from, 1000, 31 + k as u64);
-        let goals = free_points(&s, to, 1000, 131 + k as u64);
-        p.forget();
-        p.plan(&agents, &goals, 0.0, &mut goal_of, &mut wp).unwrap();
-        assert_eq!(p.fallbacks(), 0);
-        let mut hidden = 0;
-        for i in 0..agents.len() {
-            let g = goals[goal_of[i] as usize];
-            if s.visible(agents[i], g, 0.0) {
-                assert!(wp[i].x.is_nan(), "{layout}: agent {i} sees its goal");
-                continue;
+    // The clustered fields' descent, and the grid transport's paths.
+    for transport_above_goals in [usize::MAX, 0] {
+        let mut params = PlannerParams::new(1.5);
+        params.transport_above_goals = transport_above_goals;
+        let mut p = Planner::new(Arc::clone(&s), params).unwrap();
+        let (mut goal_of, mut wp) = (Vec::new(), Vec::new());
+        let mut hidden_total = 0;
+        for (k, (layout, from, to)) in layouts().into_iter().enumerate() {
+            let agents = free_points(&s, from, 1000, 31 + k as u64);
+            let goals = free_points(&s, to, 1000, 131 + k as u64);
+            p.forget();
+            p.plan(&agents, &goals, 0.0, &mut goal_of, &mut wp).unwrap();
+            assert_eq!(p.fallbacks(), 0);
+            let mut hidden = 0;
+            for i in 0..agents.len() {
+                let g = goals[goal_of[i] as usize];
+                if s.visible(agents[i], g, 0.0) {
+                    assert!(wp[i].x.is_nan(), "{layout}: agent {i} sees its goal");
+                    continue;
+                }
+                hidden += 1;
+                assert!(
+                    wp[i].x.is_finite() && wp[i].y.is_finite(),
+                    "{layout}: agent {i} at {:?} hidden from {g:?} has no waypoint",
+                    agents[i]
+                );
+                assert!(s.visible(agents[i], wp[i], 0.0), "{layout}: agent {i}");
             }
-            hidden += 1;
-            assert!(
-                wp[i].x.is_finite() && wp[i].y.is_finite(),
-                "{layout}: agent {i} at {:?} hidden from {g:?} has no waypoint",
-                agents[i]
+            assert_eq!(p.transport_stats().is_some(), transport_above_goals == 0);
+            eprintln!(
+                "{layout}: {hidden} of 1000 agents hidden from their goal, each with a waypoint"
             );
-            assert!(s.visible(agents[i], wp[i], 0.0), "{layout}: agent {i}");
+            hidden_total += hidden;
         }
-        eprintln!("{layout}: {hidden} of 1000 agents hidden from their goal, each with a waypoint");
-        hidden_total += hidden;
+        assert!(hidden_total > 500, "the layouts put obstacles in the way");
     }
-    assert!(hidden_total > 500, "the layouts put obstacles in the way");
 }
 
 /// 5,000 agents in every shipped scene (run with `--ignored --nocapture`): the
@@ -1018,7 +1055,11 @@ fn clustered_entries_at_5000_against_per_goal_fields() {
         let q = |f: f64| ratios[((ratios.len() - 1) as f64 * f) as usize];
         eprintln!(
             "{name}: clustered / per-goal: min {:.3} p10 {:.3} median {:.3} p90 {:.3} max {:.3}",
-            q(0.0), q(0.1), q(0.5), q(0.9), q(1.0)
+            q(0.0),
+            q(0.1),
+            q(0.5),
+            q(0.9),
+            q(1.0)
         );
     }
 }
@@ -1061,32 +1102,5 @@ fn plans_at_5000_on_per_goal_costs() {
             100.0 * (c / best - 1.0),
             100.0 * (t / best - 1.0)
         );
-    }
-}
-
-/// 5,000 agents in every shipped scene: the planner's time per plan with the
-/// grid transport, cold and along a drifting chain (run with `--ignored --nocapture`).
-#[test]
-#[ignore = "timing"]
-fn transport_plan_times_at_5000() {
-    let n = 5000;
-    for (file, _) in crowdtouch::crowd::environment::SCENES {
-        let name = file.trim_end_matches(".ron");
-        let s = scene(name);
-        let (_, from, to) = layouts().into_iter().next().unwrap();
-        let mut agents = free_points(&s, from, n, 17);
-        let mut goals = free_points(&s, to, n, 117);
-        let mut p = Planner::new(Arc::clone(&s), PlannerParams::new(1.5)).unwrap();
-        let (mut g, mut wp) = (Vec::new(), Vec::new());
-        let mut times = Vec::new();
-        for k in 0..8 {
-            agents.iter_mut().for_each(|a| a.x += 0.01);
-            goals.iter_mut().for_each(|q| q.x -= 0.02);
-            let t0 = std::time::Instant::now();
-            p.plan(&agents, &goals, 0.05 * k as f64, &mut g, &mut wp).unwrap();
-            times.push(t0.elapsed().as_secs_f64() * 1e3);
-        }
-        let st = p.transport_stats();
-        eprintln!("{name:>15}: plans {:?} ms, {st:?}, fallbacks {}", times.iter().map(|t| t.round() as i64).collect::<Vec<_>>(), p.fallbacks());
     }
 }

@@ -164,6 +164,8 @@ pub struct Planner {
     transported: Vec<u32>,
     /// Whether the last plan was made by the transport.
     by_transport: bool,
+    /// Agents ordered by cell, for [`uncross`].
+    order: Vec<u32>,
     rasterised: bool,
     density_t_s: f64,
     fallbacks: u64,
@@ -218,6 +220,7 @@ impl Planner {
             goal_cells: Vec::new(),
             transported: Vec::new(),
             by_transport: false,
+            order: Vec::new(),
             rasterised: false,
             density_t_s: f64::NEG_INFINITY,
             fallbacks: 0,
@@ -399,7 +402,11 @@ impl Planner {
     /// grid transport ([`Self::transport`]; its paths give the waypoints, so no
     /// field is marched). `None`: not a transport plan, or the transport could not
     /// be solved (the plan is then solved over pairs).
-    fn transport_plan(&mut self, goals: usize, cancel: Cancel<'_>) -> Result<Option<bool>, PlanError> {
+    fn transport_plan(
+        &mut self,
+        goals: usize,
+        cancel: Cancel<'_>,
+    ) -> Result<Option<bool>, PlanError> {
         if goals <= self.params.transport_above_goals {
             return Ok(None);
         }
@@ -456,6 +463,14 @@ impl Planner {
             &mut self.transported,
             cancel,
         )?;
+        uncross(
+            &self.agents,
+            &self.goals,
+            &self.agent_cells,
+            &self.goal_cells,
+            &mut self.transported,
+            &mut self.order,
+        );
         self.by_transport = true;
         // The pair solver's prices do not belong to this assignment.
         self.warm = false;
@@ -597,6 +612,64 @@ impl Planner {
             }
         }
         best
+    }
+}
+
+/// Rounds of [`uncross`] over the agents' cells and their goals' cells.
+const UNCROSS_ROUNDS: usize = 3;
+
+/// Swaps the goals of two agents when they share a cell, or their goals share one,
+/// and the swap shortens the pair's total squared straight-line distance. Neither
+/// swap changes the grid transport's cost (its paths start and end at cells, so
+/// the two agents' paths are the same set either way), so `goal_of` stays a
+/// cheapest assignment of the graph; what it removes is the crossing of
+/// neighbours inside a cell that the cell-level flow cannot see. Groups are a few
+/// agents each at the shipped densities, `O(Σ group²)` per round.
+fn uncross(
+    agents: &[Vec2],
+    goals: &[Vec2],
+    agent_cells: &[u32],
+    goal_cells: &[u32],
+    goal_of: &mut [u32],
+    order: &mut Vec<u32>,
+) {
+    let d2 = |i: usize, j: u32| (agents[i] - goals[j as usize]).norm_squared();
+    for _ in 0..UNCROSS_ROUNDS {
+        let mut swaps = 0usize;
+        for by_goal in [false, true] {
+            let key = |i: u32, goal_of: &[u32]| {
+                if by_goal {
+                    goal_cells[goal_of[i as usize] as usize]
+                } else {
+                    agent_cells[i as usize]
+                }
+            };
+            order.clear();
+            order.extend(0..agents.len() as u32);
+            order.sort_unstable_by_key(|&i| key(i, goal_of));
+            let mut start = 0;
+            while start < order.len() {
+                let k = key(order[start], goal_of);
+                let mut end = start + 1;
+                while end < order.len() && key(order[end], goal_of) == k {
+                    end += 1;
+                }
+                for x in start..end {
+                    for y in x + 1..end {
+                        let (i, j) = (order[x] as usize, order[y] as usize);
+                        let (gi, gj) = (goal_of[i], goal_of[j]);
+                        if d2(i, gj) + d2(j, gi) < d2(i, gi) + d2(j, gj) {
+                            goal_of.swap(i, j);
+                            swaps += 1;
+                        }
+                    }
+                }
+                start = end;
+            }
+        }
+        if swaps == 0 {
+            break;
+        }
     }
 }
 

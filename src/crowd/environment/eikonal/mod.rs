@@ -45,9 +45,9 @@ mod reads;
 mod sanity;
 mod segment;
 mod simplex;
-mod transport;
 #[cfg(test)]
 mod tests;
+mod transport;
 
 pub use bench::{bench_instance, BENCH_CELL_M};
 pub use clusters::{

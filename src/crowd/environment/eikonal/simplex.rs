@@ -55,7 +55,13 @@ impl Simplex {
         self.head.clear();
         self.cost.clear();
         let n1 = nodes + 1;
-        for v in [&mut self.parent, &mut self.pred, &mut self.first_child, &mut self.next_sib, &mut self.prev_sib] {
+        for v in [
+            &mut self.parent,
+            &mut self.pred,
+            &mut self.first_child,
+            &mut self.next_sib,
+            &mut self.prev_sib,
+        ] {
             v.clear();
             v.resize(n1, NONE);
         }
@@ -109,7 +115,11 @@ impl Simplex {
 
     /// Solves with supplies `supply` (one per node, summing to 0), polling
     /// `cancelled` every few hundred pivots.
-    pub fn solve(&mut self, supply: &[i64], cancelled: impl Fn() -> bool) -> Result<(), SimplexError> {
+    pub fn solve(
+        &mut self,
+        supply: &[i64],
+        cancelled: impl Fn() -> bool,
+    ) -> Result<(), SimplexError> {
         let n = supply.len();
         if supply.iter().sum::<i64>() != 0 || self.parent.len() != n + 1 {
             return Err(SimplexError::Infeasible);
@@ -128,7 +138,11 @@ impl Simplex {
         self.first_child[n] = NONE;
         for (v, &b) in supply.iter().enumerate() {
             let a = m + v;
-            let (t, h) = if b >= 0 { (v as u32, root) } else { (root, v as u32) };
+            let (t, h) = if b >= 0 {
+                (v as u32, root)
+            } else {
+                (root, v as u32)
+            };
             self.tail.push(t);
             self.head.push(h);
             self.cost.push(art);
@@ -248,10 +262,14 @@ impl Simplex {
         let r = self.rc(enter);
         let sigma = if x_in == w { r } else { -r };
         // Reverse the tree path x_in … out and hang it from y_in.
-        let (mut v, mut new_parent, mut new_pred, mut new_up) = (x_in, y_in, enter as u32, x_in == u);
+        let (mut v, mut new_parent, mut new_pred, mut new_up) =
+            (x_in, y_in, enter as u32, x_in == u);
         loop {
-            let (old_parent, old_pred, old_up) =
-                (self.parent[v as usize], self.pred[v as usize], self.up[v as usize]);
+            let (old_parent, old_pred, old_up) = (
+                self.parent[v as usize],
+                self.pred[v as usize],
+                self.up[v as usize],
+            );
             self.remove_child(old_parent, v);
             self.parent[v as usize] = new_parent;
             self.pred[v as usize] = new_pred;

@@ -197,7 +197,10 @@ impl GridTransport {
             return None;
         }
         let (cols, rows) = (grid.cols() as isize, grid.rows() as isize);
-        let (c0, r0) = ((start % grid.cols()) as isize, (start / grid.cols()) as isize);
+        let (c0, r0) = (
+            (start % grid.cols()) as isize,
+            (start / grid.cols()) as isize,
+        );
         let h = grid.cell_m();
         let mut best: Option<(f64, usize)> = None;
         let consider = |c: isize, r: isize, best: &mut Option<(f64, usize)>| {
@@ -297,8 +300,8 @@ impl GridTransport {
         self.part.resize(n, u32::MAX);
         self.parts = 0;
         let mut stack = Vec::new();
-        for s in 0..n {
-            if self.part[s] != u32::MAX || !cost[s].is_finite() {
+        for (s, c) in cost.iter().enumerate() {
+            if self.part[s] != u32::MAX || !c.is_finite() {
                 continue;
             }
             let p = self.parts as u32;
@@ -432,7 +435,8 @@ impl GridTransport {
         self.current.clear();
         self.current.extend_from_slice(&self.first[..n]);
         self.left.clear();
-        self.left.extend((0..self.head.len()).map(|a| self.simplex.flow(a)));
+        self.left
+            .extend((0..self.head.len()).map(|a| self.simplex.flow(a)));
         let mut units: i64 = 0;
         out.clear();
         self.path_cells.clear();
@@ -474,7 +478,11 @@ impl GridTransport {
         Ok(())
     }
 
-    fn check_parts(&mut self, agent_cells: &[u32], goal_cells: &[u32]) -> Result<(), TransportError> {
+    fn check_parts(
+        &mut self,
+        agent_cells: &[u32],
+        goal_cells: &[u32],
+    ) -> Result<(), TransportError> {
         self.part_agents.clear();
         self.part_agents.resize(self.parts, 0);
         self.part_goals.clear();
@@ -563,7 +571,12 @@ mod tests {
 
     /// The total path cost of `out` and the optimum over every assignment (the
     /// exact solver on the Dijkstra costs), in integer units.
-    fn total_and_optimum(t: &GridTransport, agents: &[u32], goals: &[u32], out: &[u32]) -> (i64, i64) {
+    fn total_and_optimum(
+        t: &GridTransport,
+        agents: &[u32],
+        goals: &[u32],
+        out: &[u32],
+    ) -> (i64, i64) {
         let mut m = CostMatrix::new(agents.len(), goals.len());
         let mut total = 0;
         for (i, &a) in agents.iter().enumerate() {
@@ -586,7 +599,8 @@ mod tests {
 
     fn injective(out: &[u32], goals: usize) -> bool {
         let mut seen = vec![false; goals];
-        out.iter().all(|&j| (j as usize) < goals && !std::mem::replace(&mut seen[j as usize], true))
+        out.iter()
+            .all(|&j| (j as usize) < goals && !std::mem::replace(&mut seen[j as usize], true))
     }
 
     /// A 14 × 9 grid of 20 cm cells with a wall (open at the top) and a slow patch.
@@ -605,7 +619,9 @@ mod tests {
     }
 
     fn free_cells(cost: &[f64], picks: &[usize]) -> Vec<u32> {
-        let free: Vec<u32> = (0..cost.len() as u32).filter(|&c| cost[c as usize].is_finite()).collect();
+        let free: Vec<u32> = (0..cost.len() as u32)
+            .filter(|&c| cost[c as usize].is_finite())
+            .collect();
         picks.iter().map(|&p| free[p % free.len()]).collect()
     }
 
@@ -619,9 +635,13 @@ mod tests {
             let n = 10 + 8 * round;
             // Agents left of the wall, goals anywhere; several per cell.
             let agents: Vec<u32> = (0..n)
-                .map(|_| grid.index((rng.next_u64() % 6) as usize, (rng.next_u64() % 9) as usize) as u32)
+                .map(|_| {
+                    grid.index((rng.next_u64() % 6) as usize, (rng.next_u64() % 9) as usize) as u32
+                })
                 .collect();
-            let picks: Vec<usize> = (0..n + round).map(|_| (rng.next_u64() % 1000) as usize).collect();
+            let picks: Vec<usize> = (0..n + round)
+                .map(|_| (rng.next_u64() % 1000) as usize)
+                .collect();
             let goals = free_cells(&cost, &picks);
             let mut out = Vec::new();
             let stats = t.solve(&agents, &goals, &mut out, Cancel::NEVER).unwrap();
@@ -658,7 +678,9 @@ mod tests {
             t.solve(&blocked, &goals, &mut out, Cancel::NEVER),
             Err(TransportError::Unreachable { agent: 0, .. })
         ));
-        let err = t.solve(&agents, &goals[..1], &mut out, Cancel::NEVER).unwrap_err();
+        let err = t
+            .solve(&agents, &goals[..1], &mut out, Cancel::NEVER)
+            .unwrap_err();
         assert_eq!(err.to_string(), "2 agents and only 1 goals");
         let outside = [grid.len() as u32 + 3];
         assert_eq!(
@@ -693,6 +715,40 @@ mod tests {
         // And solves the same instance afterwards.
         t.solve(&agents, &goals, &mut out, Cancel::NEVER).unwrap();
         assert!(injective(&out, goals.len()));
+    }
+
+    #[test]
+    fn a_point_in_an_obstacle_stands_at_the_nearest_free_cell() {
+        let (grid, mut cost) = walled();
+        // A thick block: points deep inside are several cells from free ground.
+        for r in 3..8 {
+            for c in 2..6 {
+                cost[grid.index(c, r)] = f64::INFINITY;
+            }
+        }
+        let mut t = GridTransport::new();
+        assert_eq!(
+            t.nearest_free(&grid, Vec2::new(1.5, -1.5)),
+            None,
+            "no grid yet"
+        );
+        t.set_grid(&grid, &cost);
+        let mut rng = crate::rng::SplitMix64::new(5);
+        for _ in 0..200 {
+            let p = grid.origin()
+                + Vec2::new(rng.uniform(0.0, 14.0 * 0.2), rng.uniform(0.0, 9.0 * 0.2));
+            // Brute force over every free cell.
+            let want = (0..grid.len())
+                .filter(|&i| cost[i].is_finite())
+                .min_by(|&a, &b| {
+                    let (da, db) = ((grid.center(a) - p).norm(), (grid.center(b) - p).norm());
+                    da.total_cmp(&db).then(a.cmp(&b))
+                })
+                .map(|i| i as u32);
+            assert_eq!(t.nearest_free(&grid, p), want, "at {p:?}");
+        }
+        let outside = grid.origin() - Vec2::new(1.0, 1.0);
+        assert_eq!(t.nearest_free(&grid, outside), None);
     }
 
     proptest! {
