@@ -261,7 +261,8 @@ fn eikonal_costs(cr: &mut Criterion) {
 /// forgets the previous solution before each plan; `drifting` is the warm chain the
 /// worker runs. Both include the cost grid (density refreshed every 0.5 s of scene
 /// time, 20 plans per second), the cluster fields, the solve and every agent's
-/// waypoint. The solver's work of the last plan is printed.
+/// waypoint; at 5,000 the plan is the grid transport (no field but the cost grid's,
+/// waypoints along its paths). The solver's work of the last plan is printed.
 fn planner(cr: &mut Criterion) {
     use crowdtouch::crowd::environment::{load_scene, Planner, PlannerParams};
     let mut g = cr.benchmark_group("planner");
@@ -308,6 +309,13 @@ fn planner(cr: &mut Criterion) {
                     black_box(goal_of[0])
                 })
             });
+            if let Some(ts) = p.transport_stats() {
+                eprintln!(
+                    "planner {n} {kind}: grid transport, {} arcs, {} pivots, graph cost {:.1} s",
+                    ts.arcs, ts.pivots, ts.graph_cost_s
+                );
+                continue;
+            }
             let st = p.solve_stats();
             // Nothing to print when the case was filtered out.
             if st.rows_priced == 0 {

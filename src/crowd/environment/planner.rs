@@ -89,7 +89,7 @@ pub struct PlannerParams {
     /// Plans with more goals than this are solved as a min-cost flow on the
     /// planning grid ([`GridTransport`]: the optimum of the grid's path costs, not
     /// of the eq. 6 costs of the pairs; docs/scenes-and-formations.md gives how far
-    /// apart they are). Default [`LARGE_PLAN_GOALS`]; `usize::MAX`: every plan is
+    /// apart they are). Default `LARGE_PLAN_GOALS` (2,000); `usize::MAX`: every plan is
     /// the exact optimum of the pairs' costs.
     pub transport_above_goals: usize,
 }

@@ -37,7 +37,7 @@
 //! Each pivot walks one cycle of the spanning tree and moves one subtree. On the
 //! planning grids of the shipped scenes (about 5,600 cells and 45,000 arcs) a solve
 //! of 5,000 agents is about 13,000 pivots and tens of milliseconds whatever the
-//! crowd size (`benches/assign.rs`, `grid_transport`), against `O(agents × goals)`
+//! crowd size (`cargo bench --bench fmm -- planner/obstacle_course/5000`), against `O(agents × goals)`
 //! per pass for the solvers over pairs.
 
 use super::grid::Grid;
